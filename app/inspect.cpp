@@ -1,0 +1,101 @@
+#include "inspect.hpp"
+
+#include <cmath>
+
+#include <fmt/format.h>
+
+namespace mgrl::app {
+namespace {
+
+double rounded(double value, double step) { return std::round(value / step) * step; }
+
+}  // namespace
+
+FileReport inspectFile(const std::filesystem::path& path, const InspectOptions& options) {
+  const LoadedMotion loaded = loadMotion(path, options.load);
+  const Motion& motion = loaded.motion;
+  const SkeletonRoles roles = findRoles(motion.skeleton(), options.roles, path.string());
+  const Annotation annotation = annotate(motion, roles, options.annotation);
+
+  FileReport report;
+  report.path = path.string();
+  report.joints = motion.skeleton().jointCount();
+  report.frames = motion.frameCount();
+  report.fps = motion.fps();
+  report.fileFps = loaded.fileFps;
+  report.duration_s = motion.duration();
+  report.height_m = roles.restHeight;
+  report.groundY_m = annotation.groundY;
+  report.units = std::string(lengthUnitName(loaded.units));
+  report.glitchFrames = annotation.glitchFrames;
+  report.punches = annotation.punches;
+  for (int s = 0; s < 2; ++s) {
+    report.contactFrames[s] = annotation.contactFrames(static_cast<Side>(s));
+    report.hits[s] = annotation.hitCount(static_cast<Side>(s));
+  }
+  if (!annotation.hits.empty()) {
+    report.hitMin = report.hitMax = annotation.hits.front().tipAvatar;
+    for (const EffectiveHit& hit : annotation.hits) {
+      report.hitMin = report.hitMin.cwiseMin(hit.tipAvatar);
+      report.hitMax = report.hitMax.cwiseMax(hit.tipAvatar);
+      report.peakHitSpeed_mps = std::max(report.peakHitSpeed_mps, hit.speed_mps);
+    }
+  }
+  return report;
+}
+
+nlohmann::json toJson(const std::vector<FileReport>& reports) {
+  nlohmann::json files = nlohmann::json::array();
+  for (const FileReport& r : reports) {
+    auto vec = [](const Eigen::Vector3d& v) {
+      return nlohmann::json::array({rounded(v.x(), 1e-4), rounded(v.y(), 1e-4), rounded(v.z(), 1e-4)});
+    };
+    files.push_back({
+        {"path", r.path},
+        {"joints", r.joints},
+        {"frames", r.frames},
+        {"fps", rounded(r.fps, 1e-6)},
+        {"file_fps", rounded(r.fileFps, 1e-6)},
+        {"duration_s", rounded(r.duration_s, 1e-6)},
+        {"height_m", rounded(r.height_m, 1e-4)},
+        {"units", r.units},
+        {"ground_y_m", rounded(r.groundY_m, 1e-4)},
+        {"contact_frames", {{"left", r.contactFrames[0]}, {"right", r.contactFrames[1]}}},
+        {"effective_hits", {{"left", r.hits[0]}, {"right", r.hits[1]}, {"total", r.hits[0] + r.hits[1]}}},
+        {"punches", {{"left", r.punches[0]}, {"right", r.punches[1]}, {"total", r.punches[0] + r.punches[1]}}},
+        {"peak_hit_speed_mps", rounded(r.peakHitSpeed_mps, 1e-3)},
+        {"glitch_frames", r.glitchFrames},
+        {"hit_bounds_m", r.hits[0] + r.hits[1] == 0 ? nlohmann::json(nullptr)
+                                                     : nlohmann::json{{"min", vec(r.hitMin)}, {"max", vec(r.hitMax)}}},
+    });
+  }
+  return {{"files", files}};
+}
+
+std::string toText(const std::vector<FileReport>& reports) {
+  std::string out;
+  for (const FileReport& r : reports) {
+    out += fmt::format("{}\n", r.path);
+    out += fmt::format("  joints {}, frames {} at {:.4g} fps", r.joints, r.frames, r.fps);
+    if (std::abs(r.fps - r.fileFps) > 1e-9) out += fmt::format(" (file: {:.4g} fps)", r.fileFps);
+    out += fmt::format(", duration {:.2f} s\n", r.duration_s);
+    out += fmt::format("  height {:.3f} m (file units: {}), ground at y = {:.3f} m\n", r.height_m, r.units, r.groundY_m);
+    const double n = static_cast<double>(std::max<std::size_t>(1, r.frames));
+    out += fmt::format("  foot contact frames: left {} ({:.0f}%), right {} ({:.0f}%)\n", r.contactFrames[0],
+                       100.0 * static_cast<double>(r.contactFrames[0]) / n, r.contactFrames[1],
+                       100.0 * static_cast<double>(r.contactFrames[1]) / n);
+    out += fmt::format("  effective hits: left {} in {} punches, right {} in {} punches, total {}\n", r.hits[0],
+                       r.punches[0], r.hits[1], r.punches[1], r.hits[0] + r.hits[1]);
+    if (r.hits[0] + r.hits[1] > 0) {
+      out += fmt::format("  peak hit speed {:.2f} m/s\n", r.peakHitSpeed_mps);
+      out += fmt::format("  hitting points, avatar frame (m): x [{:.2f}, {:.2f}] (left +), y [{:.2f}, {:.2f}], "
+                         "z [{:.2f}, {:.2f}] (forward +)\n",
+                         r.hitMin.x(), r.hitMax.x(), r.hitMin.y(), r.hitMax.y(), r.hitMin.z(), r.hitMax.z());
+    }
+    if (r.glitchFrames > 0)
+      out += fmt::format("  {} fist-speed glitch frames ignored (faster than the glitch threshold)\n", r.glitchFrames);
+  }
+  return out;
+}
+
+}  // namespace mgrl::app

@@ -1,0 +1,44 @@
+#pragma once
+/// \file
+/// `mgrl inspect`: what is in motion files (joints, frames, duration, height, contacts,
+/// effective hits).
+
+#include <filesystem>
+#include <string>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+#include "mgrl/annotation.hpp"
+#include "mgrl/motion_io.hpp"
+#include "mgrl/roles.hpp"
+
+namespace mgrl::app {
+
+struct InspectOptions {
+  std::vector<std::filesystem::path> files;
+  LoadOptions load;
+  RoleOverrides roles;
+  AnnotationParams annotation;
+};
+
+/// Everything inspect reports about one file.
+struct FileReport {
+  std::string path;
+  std::size_t joints = 0, frames = 0;
+  double fps = 0, fileFps = 0, duration_s = 0, height_m = 0, groundY_m = 0;
+  std::string units;
+  std::array<std::size_t, 2> contactFrames{}, hits{};
+  std::array<int, 2> punches{};
+  int glitchFrames = 0;
+  double peakHitSpeed_mps = 0;
+  Eigen::Vector3d hitMin = Eigen::Vector3d::Zero(), hitMax = Eigen::Vector3d::Zero();
+};
+
+/// Loads, annotates and summarises one file. Throws mgrl::Error on bad input.
+FileReport inspectFile(const std::filesystem::path& path, const InspectOptions& options);
+
+nlohmann::json toJson(const std::vector<FileReport>& reports);
+std::string toText(const std::vector<FileReport>& reports);
+
+}  // namespace mgrl::app

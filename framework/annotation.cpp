@@ -1,0 +1,168 @@
+#include "mgrl/annotation.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+#include <fmt/format.h>
+
+#include "mgrl/error.hpp"
+#include "mgrl/kinematics.hpp"
+
+namespace mgrl {
+namespace {
+
+double percentile(std::vector<double> values, double q) {
+  if (values.empty()) return 0;
+  const auto k = static_cast<std::size_t>(q * static_cast<double>(values.size() - 1));
+  std::nth_element(values.begin(), values.begin() + static_cast<std::ptrdiff_t>(k), values.end());
+  return values[k];
+}
+
+}  // namespace
+
+void AnnotationParams::validate() const {
+  auto positive = [](double v, const char* name) {
+    if (!(v > 0) || !std::isfinite(v)) throw Error(fmt::format("annotation: {}: expected a positive value, found {}", name, v));
+  };
+  positive(contactHeightEnter_m, "contact_height_enter_m");
+  positive(contactHeightExit_m, "contact_height_exit_m");
+  positive(contactSpeedEnter_mps, "contact_speed_enter_mps");
+  positive(contactSpeedExit_mps, "contact_speed_exit_mps");
+  positive(punchMinSpeed_mps, "punch_min_speed_mps");
+  positive(punchMaxSpeed_mps, "punch_max_speed_mps");
+  if (contactHeightExit_m < contactHeightEnter_m || contactSpeedExit_mps < contactSpeedEnter_mps)
+    throw Error("annotation: expected exit thresholds at least the enter thresholds (hysteresis), found smaller");
+  if (!(punchMinAlignment >= 0 && punchMinAlignment <= 1))
+    throw Error(fmt::format("annotation: punch_min_alignment: expected a value in [0, 1], found {}", punchMinAlignment));
+  if (punchMaxSpeed_mps <= punchMinSpeed_mps)
+    throw Error("annotation: expected punch_max_speed_mps above punch_min_speed_mps");
+}
+
+Eigen::Vector3d AvatarFrame::toAvatar(const Eigen::Vector3d& world) const {
+  const Eigen::Vector3d d = world - origin;
+  const double c = std::cos(yaw), s = std::sin(yaw);
+  // Rotation by -yaw about +Y.
+  return {c * d.x() - s * d.z(), d.y(), s * d.x() + c * d.z()};
+}
+
+std::size_t Annotation::contactFrames(Side side) const {
+  const auto& c = contact[static_cast<int>(side)];
+  return static_cast<std::size_t>(std::count(c.begin(), c.end(), 1));
+}
+
+std::size_t Annotation::hitCount(Side side) const {
+  return static_cast<std::size_t>(std::count_if(hits.begin(), hits.end(), [side](const EffectiveHit& h) { return h.hand == side; }));
+}
+
+Annotation annotate(const Motion& motion, const SkeletonRoles& roles, const AnnotationParams& params) {
+  params.validate();
+  const Skeleton& skeleton = motion.skeleton();
+  const std::size_t frames = motion.frameCount();
+  const std::size_t n = skeleton.jointCount();
+
+  // Tracked points per frame: ankle L/R, toe L/R, fist tip L/R, wrist L/R, forearm L/R,
+  // toe tip L/R.
+  constexpr std::size_t kPoints = 12;
+  std::vector<Eigen::Vector3d> points(frames * kPoints);
+  std::vector<Eigen::Vector3d> rootPosition(frames), facing(frames);
+  std::vector<Eigen::Quaterniond> rotations(n);
+  std::vector<Eigen::Vector3d> positions(n);
+  for (std::size_t f = 0; f < frames; ++f) {
+    forwardKinematics(motion, f, rotations, positions);
+    Eigen::Vector3d* p = &points[f * kPoints];
+    for (int s = 0; s < 2; ++s) {
+      p[0 + s] = positions[roles.ankle[s]];
+      p[2 + s] = positions[roles.toe[s]];
+      p[4 + s] = pointOnJoint(rotations, positions, roles.fistTipJoint[s], roles.fistTipOffset[s]);
+      p[6 + s] = positions[roles.wrist[s]];
+      p[8 + s] = positions[roles.forearm[s]];
+      p[10 + s] = pointOnJoint(rotations, positions, roles.toe[s], roles.toeTipOffset[s]);
+    }
+    rootPosition[f] = positions[0];
+    facing[f] = rotations[0] * roles.forward;
+  }
+  const auto velocity = velocities(points, kPoints, motion.frameTime());
+
+  Annotation result;
+  // Planted level of each foot joint: the height it rests at most of the time it is down.
+  // A low percentile tolerates frames that dip through the floor (SNU s_019_2_1).
+  std::array<double, 4> planted{};
+  std::vector<double> heights(frames), lowest(frames);
+  for (std::size_t k = 0; k < 4; ++k) {
+    for (std::size_t f = 0; f < frames; ++f) heights[f] = points[f * kPoints + k].y();
+    planted[k] = percentile(heights, 0.10);
+  }
+  for (std::size_t f = 0; f < frames; ++f) {
+    double low = 1e300;
+    for (std::size_t k : {0, 1, 2, 3, 10, 11}) low = std::min(low, points[f * kPoints + k].y());
+    lowest[f] = low;
+  }
+  result.groundY = percentile(lowest, 0.10);
+
+  // Foot contacts with hysteresis: a foot enters contact when its ankle or toe is low and
+  // slow by the enter thresholds, and stays until both leave the exit thresholds.
+  for (int s = 0; s < 2; ++s) {
+    auto& contact = result.contact[s];
+    contact.assign(frames, 0);
+    bool on = false;
+    for (std::size_t f = 0; f < frames; ++f) {
+      auto near = [&](std::size_t k, double height, double speed) {
+        const std::size_t i = f * kPoints + k;
+        return points[i].y() - planted[k] < height && velocity[i].norm() < speed;
+      };
+      const std::size_t ankle = static_cast<std::size_t>(s), toe = 2 + static_cast<std::size_t>(s);
+      if (on)
+        on = near(ankle, params.contactHeightExit_m, params.contactSpeedExit_mps) ||
+             near(toe, params.contactHeightExit_m, params.contactSpeedExit_mps);
+      else
+        on = near(ankle, params.contactHeightEnter_m, params.contactSpeedEnter_mps) ||
+             near(toe, params.contactHeightEnter_m, params.contactSpeedEnter_mps);
+      contact[f] = on ? 1 : 0;
+    }
+  }
+
+  result.frames.resize(frames);
+  for (std::size_t f = 0; f < frames; ++f) {
+    result.frames[f].origin = {rootPosition[f].x(), result.groundY, rootPosition[f].z()};
+    result.frames[f].yaw = std::atan2(facing[f].x(), facing[f].z());
+  }
+
+  // Effective punches (sec. 6.2): fist velocity projected on the forearm axis above a
+  // threshold, and not opposed to it.
+  std::array<bool, 2> previous{false, false};
+  for (std::size_t f = 0; f < frames; ++f) {
+    for (int s = 0; s < 2; ++s) {
+      const std::size_t base = f * kPoints;
+      Eigen::Vector3d axis = points[base + 6 + s] - points[base + 8 + s];
+      bool effective = false;
+      const Eigen::Vector3d& v = velocity[base + 4 + s];
+      const double speed = v.norm();
+      // A one-frame capture glitch is halved by the central difference; the one-sided
+      // speeds on either side show it whole.
+      const double before = f > 0 ? (points[base + 4 + s] - points[base - kPoints + 4 + s]).norm() / motion.frameTime() : 0;
+      const double after = f + 1 < frames ? (points[base + kPoints + 4 + s] - points[base + 4 + s]).norm() / motion.frameTime() : 0;
+      if (std::max({speed, before, after}) > params.punchMaxSpeed_mps) {
+        ++result.glitchFrames;
+      } else if (axis.norm() > 1e-9) {
+        axis.normalize();
+        const double along = v.dot(axis);
+        if (along >= params.punchMinSpeed_mps && along >= params.punchMinAlignment * speed) {
+          effective = true;
+          EffectiveHit hit;
+          hit.frame = static_cast<std::uint32_t>(f);
+          hit.hand = static_cast<Side>(s);
+          hit.tipWorld = points[base + 4 + s];
+          hit.tipAvatar = result.frames[f].toAvatar(hit.tipWorld);
+          hit.speed_mps = speed;
+          hit.alongForearm_mps = along;
+          result.hits.push_back(hit);
+        }
+      }
+      if (effective && !previous[s]) ++result.punches[s];
+      previous[s] = effective;
+    }
+  }
+  return result;
+}
+
+}  // namespace mgrl

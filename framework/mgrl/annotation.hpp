@@ -1,0 +1,81 @@
+#pragma once
+/// \file
+/// Automatic annotation of unlabelled capture (Lee & Lee 2004, sec. 6.2): foot contacts
+/// and effective punches with their hitting points.
+
+#include <array>
+#include <cstdint>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "mgrl/motion.hpp"
+#include "mgrl/roles.hpp"
+
+namespace mgrl {
+
+/// Thresholds in SI units. Defaults suit 30 to 120 fps human capture.
+struct AnnotationParams {
+  /// A foot joint (ankle or toe) is near the ground within this height above its planted
+  /// level (its 10th-percentile height over the clip); entering and leaving a contact use
+  /// different thresholds (hysteresis), so contacts do not flicker.
+  double contactHeightEnter_m = 0.05;
+  double contactHeightExit_m = 0.08;
+  /// ...and slower than this (m/s).
+  double contactSpeedEnter_mps = 0.5;
+  double contactSpeedExit_mps = 0.9;
+  /// A punch is effective when the fist tip's velocity along the forearm axis (elbow to
+  /// wrist) exceeds this (m/s)...
+  double punchMinSpeed_mps = 2.0;
+  /// ...and the velocity is not opposed to the axis: the cosine of the angle between them
+  /// is at least this.
+  double punchMinAlignment = 0.5;
+  /// Fist speeds above this are capture glitches (e.g. a 23 m/s spike in SNU 16_28_1),
+  /// never effective hits.
+  double punchMaxSpeed_mps = 15.0;
+
+  /// Throws mgrl::Error naming the first out-of-range value.
+  void validate() const;
+};
+
+/// Ground-plane frame of the avatar at one frame (DESIGN.md sec. 3): origin below the root
+/// on the ground, +Z facing, +X to the avatar's left, Y up.
+struct AvatarFrame {
+  Eigen::Vector3d origin = Eigen::Vector3d::Zero();
+  double yaw = 0;  ///< facing angle about +Y; 0 faces world +Z
+
+  /// World point -> avatar frame.
+  Eigen::Vector3d toAvatar(const Eigen::Vector3d& world) const;
+};
+
+/// One frame at which a fist moves as an effective punch (an "effective hitting point").
+struct EffectiveHit {
+  std::uint32_t frame = 0;
+  Side hand = Side::Left;
+  Eigen::Vector3d tipWorld = Eigen::Vector3d::Zero();   ///< fist tip, world (m)
+  Eigen::Vector3d tipAvatar = Eigen::Vector3d::Zero();  ///< fist tip, avatar frame of that frame (m)
+  double speed_mps = 0;                                 ///< fist tip speed
+  double alongForearm_mps = 0;                          ///< its component along the forearm axis
+};
+
+struct Annotation {
+  double groundY = 0;  ///< estimated floor height (m)
+  /// contact[side][frame] is 1 while that foot is on the ground.
+  std::array<std::vector<std::uint8_t>, 2> contact;
+  /// Effective hitting points in frame order.
+  std::vector<EffectiveHit> hits;
+  /// Punches per hand: runs of consecutive effective frames.
+  std::array<int, 2> punches{0, 0};
+  /// Frames where a fist moved faster than punchMaxSpeed_mps (ignored as glitches).
+  int glitchFrames = 0;
+  /// Avatar frame at every frame.
+  std::vector<AvatarFrame> frames;
+
+  std::size_t contactFrames(Side side) const;
+  std::size_t hitCount(Side side) const;
+};
+
+/// Annotates `motion` (metres). `roles` must come from the motion's skeleton.
+Annotation annotate(const Motion& motion, const SkeletonRoles& roles, const AnnotationParams& params = {});
+
+}  // namespace mgrl

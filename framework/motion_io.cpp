@@ -1,0 +1,117 @@
+#include "mgrl/motion_io.hpp"
+
+#include <cerrno>
+#include <cstdio>
+#include <cstring>
+#include <fstream>
+#include <random>
+#include <sstream>
+
+#include <fmt/format.h>
+
+#include "mgrl/asf_amc.hpp"
+#include "mgrl/roles.hpp"
+
+namespace mgrl {
+namespace {
+
+std::string lowerExtension(const std::filesystem::path& path) {
+  std::string ext = path.extension().string();
+  for (char& c : ext) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+  return ext;
+}
+
+}  // namespace
+
+std::string readFile(const std::filesystem::path& path) {
+  std::error_code ec;
+  if (std::filesystem::is_directory(path, ec))
+    throw Error(fmt::format("{}: expected a file, found a directory", path.string()));
+  std::FILE* file = std::fopen(path.c_str(), "rb");
+  if (!file) throw Error(fmt::format("{}: cannot open: {}", path.string(), std::strerror(errno)));
+  std::string text;
+  char chunk[1 << 16];
+  std::size_t got = 0;
+  while ((got = std::fread(chunk, 1, sizeof chunk, file)) > 0) text.append(chunk, got);
+  const bool failed = std::ferror(file) != 0;
+  std::fclose(file);
+  if (failed) throw Error(fmt::format("{}: cannot read", path.string()));
+  return text;
+}
+
+void writeFileAtomically(const std::filesystem::path& path, std::string_view text) {
+  const std::filesystem::path folder = path.has_parent_path() ? path.parent_path() : std::filesystem::path(".");
+  std::random_device device;
+  const std::filesystem::path temporary =
+      folder / fmt::format(".{}.tmp-{:08x}", path.filename().string(), device());
+  {
+    std::ofstream out(temporary, std::ios::binary | std::ios::trunc);
+    if (!out) throw Error(fmt::format("{}: cannot write: {}", path.string(), std::strerror(errno)));
+    out.write(text.data(), static_cast<std::streamsize>(text.size()));
+    out.flush();
+    if (!out) {
+      std::error_code ignored;
+      std::filesystem::remove(temporary, ignored);
+      throw Error(fmt::format("{}: cannot write (disk full?)", path.string()));
+    }
+  }
+  std::error_code ec;
+  std::filesystem::rename(temporary, path, ec);
+  if (ec) {
+    std::error_code ignored;
+    std::filesystem::remove(temporary, ignored);
+    throw Error(fmt::format("{}: cannot write: {}", path.string(), ec.message()));
+  }
+}
+
+void writeBvhFile(const std::filesystem::path& path, const Motion& motion, const BvhWriteOptions& options) {
+  std::ostringstream out;
+  writeBvh(out, motion, options);
+  writeFileAtomically(path, out.str());
+}
+
+std::filesystem::path defaultAsfFor(const std::filesystem::path& amc) {
+  const std::string stem = amc.stem().string();
+  return amc.parent_path() / (stem.substr(0, stem.find('_')) + ".asf");
+}
+
+LoadedMotion loadMotion(const std::filesystem::path& path, const LoadOptions& options) {
+  const std::string source = path.string();
+  const std::string ext = lowerExtension(path);
+  std::optional<Motion> raw;
+  LengthUnit units = options.units;
+  double metresPerUnit = 1.0;
+  if (ext == ".bvh") {
+    const std::string text = readFile(path);
+    raw.emplace(parseBvh(text, source, options.warn));
+    if (units == LengthUnit::Auto) units = detectLengthUnit(estimateRestHeight(raw->skeleton()), source);
+    metresPerUnit = metresPer(units);
+  } else if (ext == ".amc") {
+    const std::filesystem::path asfPath = options.asf.empty() ? defaultAsfFor(path) : options.asf;
+    std::error_code ec;
+    if (!std::filesystem::exists(asfPath, ec))
+      throw Error(fmt::format("{}: expected its skeleton {}, found no such file; pass --asf FILE", source,
+                              asfPath.string()));
+    const AsfSkeleton asf = parseAsf(readFile(asfPath), asfPath.string());
+    raw.emplace(parseAmc(readFile(path), source, asf, 1.0 / options.amcFps));
+    if (units == LengthUnit::Auto) {
+      // The ASF states its unit: lengths are inches times `length` (CMU's 0.45).
+      metresPerUnit = 0.0254 / asf.lengthPerInch;
+      units = std::abs(asf.lengthPerInch - 0.45) < 1e-9 ? LengthUnit::Cmu
+              : std::abs(asf.lengthPerInch - 1.0) < 1e-9 ? LengthUnit::Inch
+                                                          : LengthUnit::Auto;
+    } else {
+      metresPerUnit = metresPer(units);
+    }
+  } else if (ext == ".asf") {
+    throw Error(fmt::format("{}: expected a motion (.bvh or .amc), found an ASF skeleton; give its .amc", source));
+  } else {
+    throw Error(fmt::format("{}: expected a .bvh or .amc file, found extension '{}'", source, ext));
+  }
+  const double fileFps = raw->fps();
+  Motion motion = raw->scaled(metresPerUnit);
+  if (options.fps > 0 && std::abs(options.fps - fileFps) > 1e-9) motion = resample(motion, options.fps);
+  return {std::move(motion), units, fileFps};
+}
+
+}  // namespace mgrl
