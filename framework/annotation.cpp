@@ -84,13 +84,21 @@ Annotation annotate(const Motion& motion, const SkeletonRoles& roles, const Anno
   const auto velocity = velocities(points, kPoints, motion.frameTime());
 
   Annotation result;
-  // Planted level of each foot joint: the height it rests at most of the time it is down.
-  // A low percentile tolerates frames that dip through the floor (SNU s_019_2_1).
-  std::array<double, 4> planted{};
-  std::vector<double> heights(frames), lowest(frames);
+  // Planted level of each foot joint at each frame: the height it rests at when down
+  // nearby in time (10th percentile within +-1 s). Local, because capture floors tilt and
+  // drift (CMU 07_05 rises 5 cm over its 4 m walk); a percentile, because some frames dip
+  // through the floor (SNU s_019_2_1).
+  const std::size_t window = std::max<std::size_t>(1, static_cast<std::size_t>(std::lround(1.0 / motion.frameTime())));
+  std::array<std::vector<double>, 4> planted;
+  std::vector<double> heights(frames), lowest(frames), span;
   for (std::size_t k = 0; k < 4; ++k) {
     for (std::size_t f = 0; f < frames; ++f) heights[f] = points[f * kPoints + k].y();
-    planted[k] = percentile(heights, 0.10);
+    planted[k].resize(frames);
+    for (std::size_t f = 0; f < frames; ++f) {
+      const std::size_t lo = f > window ? f - window : 0, hi = std::min(frames, f + window + 1);
+      span.assign(heights.begin() + static_cast<std::ptrdiff_t>(lo), heights.begin() + static_cast<std::ptrdiff_t>(hi));
+      planted[k][f] = percentile(span, 0.10);
+    }
   }
   for (std::size_t f = 0; f < frames; ++f) {
     double low = 1e300;
@@ -108,7 +116,7 @@ Annotation annotate(const Motion& motion, const SkeletonRoles& roles, const Anno
     for (std::size_t f = 0; f < frames; ++f) {
       auto near = [&](std::size_t k, double height, double speed) {
         const std::size_t i = f * kPoints + k;
-        return points[i].y() - planted[k] < height && velocity[i].norm() < speed;
+        return points[i].y() - planted[k][f] < height && velocity[i].norm() < speed;
       };
       const std::size_t ankle = static_cast<std::size_t>(s), toe = 2 + static_cast<std::size_t>(s);
       if (on)

@@ -149,6 +149,14 @@ std::size_t parseDataLine(std::string_view line, std::span<double> out, std::str
   return count;
 }
 
+// Files round the frame time (CMU: 0.00833333 for 1/120 s). Snap a rate within 1e-5 of a
+// multiple of 0.001 fps back to it, so 120 -> 30 fps resampling lands on exact frames.
+double snapFrameTime(double frameTime) {
+  const double fps = 1.0 / frameTime;
+  const double snapped = std::round(fps * 1000.0) / 1000.0;
+  return snapped > 0 && std::abs(fps - snapped) <= 1e-5 * snapped ? 1.0 / snapped : frameTime;
+}
+
 }  // namespace
 
 Motion parseBvh(std::string_view text, std::string_view source, const WarningSink& warn) {
@@ -164,8 +172,9 @@ Motion parseBvh(std::string_view text, std::string_view source, const WarningSin
   const long long declared = in.integer("a frame count", kMaxBvhFrames);
   in.expect("Frame");
   in.expect("Time:");
-  const double frameTime = in.number("a frame time");
+  double frameTime = in.number("a frame time");
   if (!(frameTime > 0)) in.fail("a positive frame time", fmt::format("{}", frameTime));
+  frameTime = snapFrameTime(frameTime);
   const std::string_view tail = trim(in.nextLine());
   if (!tail.empty()) in.fail("the end of the Frame Time line", quoteToken(tail));
 
@@ -296,7 +305,8 @@ void writeBvh(std::ostream& out, const Motion& motion, const BvhWriteOptions& op
       const Eigen::Vector3d t = motion.localTranslation(f, j) * scale;
       std::array<double, 3> angles{};
       if (hasRotation(skeleton.joint(j))) {
-        angles = decomposeEuler(motion.rotation(f, j), axes[j], previous[j]);
+        angles = options.continuousAngles ? decomposeEuler(motion.rotation(f, j), axes[j], previous[j])
+                                          : principalEuler(motion.rotation(f, j), axes[j]);
         previous[j] = angles;
       }
       int rotationIndex = 0;

@@ -32,8 +32,10 @@ double distance(const std::array<double, 3>& a, const std::array<double, 3>& b) 
 
 }  // namespace
 
-std::array<double, 3> decomposeEuler(const Eigen::Quaterniond& q, const std::array<Axis, 3>& axes,
-                                     const std::array<double, 3>& previous) {
+namespace {
+
+// Principal solution, with `lastAtLock` used for the last angle at gimbal lock.
+std::array<double, 3> principal(const Eigen::Quaterniond& q, const std::array<Axis, 3>& axes, double lastAtLock) {
   const int i = static_cast<int>(axes[0]), j = static_cast<int>(axes[1]), k = static_cast<int>(axes[2]);
   assert(i != j && j != k && i != k);
   // R = Ri(a) Rj(b) Rk(c). With s = +1 for cyclic (i, j, k) and -1 otherwise:
@@ -50,13 +52,25 @@ std::array<double, 3> decomposeEuler(const Eigen::Quaterniond& q, const std::arr
   } else {
     // Gimbal lock: only a +/- c is determined; keep c from the previous frame. The
     // remaining rotation Ri(a) then follows from R * Rk(-c) * Rj(-b).
-    c = previous[2];
+    c = lastAtLock;
     const Eigen::Matrix3d m =
         (q.normalized() * axisRotation(axes[2], -c) * axisRotation(axes[1], -b)).toRotationMatrix();
     // m is a rotation about axis i: with (i, p, n) cyclic, m(n, p) = sin a, m(p, p) = cos a.
     const int p = (i + 1) % 3, n = (i + 2) % 3;
     a = std::atan2(m(n, p), m(p, p));
   }
+  return {a, b, c};
+}
+
+}  // namespace
+
+std::array<double, 3> principalEuler(const Eigen::Quaterniond& q, const std::array<Axis, 3>& axes) {
+  return principal(q, axes, 0.0);
+}
+
+std::array<double, 3> decomposeEuler(const Eigen::Quaterniond& q, const std::array<Axis, 3>& axes,
+                                     const std::array<double, 3>& previous) {
+  const auto [a, b, c] = principal(q, axes, previous[2]);
   const std::array<double, 3> first{a, b, c};
   const std::array<double, 3> second{a + std::numbers::pi, std::numbers::pi - b, c + std::numbers::pi};
   std::array<double, 3> best = first;

@@ -19,4 +19,47 @@ LoadedMotion loadMocap(const std::string& relative, const LoadOptions& options) 
   return loadMotion(mocap() / relative, options);
 }
 
+// A small humanoid with the given joint names (pelvis, spine, head, then per side
+// shoulder, forearm, hand, hip, knee, ankle, toe).
+Skeleton humanoid(const std::vector<std::string>& names) {
+  std::vector<Joint> joints;
+  auto add = [&](const std::string& name, int parent, Eigen::Vector3d offset) {
+    Joint j;
+    j.name = name;
+    j.parent = parent;
+    j.offset = offset;
+    joints.push_back(j);
+    return static_cast<int>(joints.size() - 1);
+  };
+  const int pelvis = add(names[0], -1, {0, 1, 0});
+  const int spine = add(names[1], pelvis, {0, 0.3, 0});
+  const int head = add(names[2], spine, {0, 0.3, 0});
+  joints[static_cast<std::size_t>(head)].endSite = Eigen::Vector3d(0, 0.2, 0);
+  for (int s = 0; s < 2; ++s) {
+    const double x = s == 0 ? 1 : -1;
+    const std::size_t o = 3 + static_cast<std::size_t>(s) * 7;
+    const int shoulder = add(names[o], spine, {x * 0.2, 0.2, 0});
+    const int forearm = add(names[o + 1], shoulder, {x * 0.3, 0, 0});
+    const int hand = add(names[o + 2], forearm, {x * 0.25, 0, 0});
+    joints[static_cast<std::size_t>(hand)].endSite = Eigen::Vector3d(x * 0.08, 0, 0);
+    const int hip = add(names[o + 3], pelvis, {x * 0.1, 0, 0});
+    const int knee = add(names[o + 4], hip, {0, -0.45, 0});
+    const int ankle = add(names[o + 5], knee, {0, -0.45, 0});
+    const int toe = add(names[o + 6], ankle, {0, -0.07, 0.12});
+    joints[static_cast<std::size_t>(toe)].endSite = Eigen::Vector3d(0, 0, 0.05);
+  }
+  return Skeleton(joints);
+}
+
+
+}  // namespace mgrl::test
+
+namespace mgrl::test {
+
+std::vector<std::string> humanoidNames() {
+  return {"Hips", "Spine", "Head", "LeftArm", "LeftForeArm", "LeftHand", "LeftUpLeg", "LeftLeg", "LeftFoot",
+          "LeftToeBase", "RightArm", "RightForeArm", "RightHand", "RightUpLeg", "RightLeg", "RightFoot",
+          "RightToeBase"};
+}
+
 }  // namespace mgrl::test

@@ -3,6 +3,7 @@
 
 #include <filesystem>
 #include <string>
+#include <vector>
 
 #include "mgrl/motion_io.hpp"
 
@@ -15,5 +16,12 @@ std::filesystem::path mocap();
 std::filesystem::path testData();
 /// Loads a file under mocap() in metres.
 LoadedMotion loadMocap(const std::string& relative, const LoadOptions& options = {});
+
+/// A small humanoid skeleton standing in Y-up, facing +Z, pelvis 1 m up, named `names`:
+/// pelvis, spine, head, then per side (left, right) shoulder, forearm, hand, hip, knee,
+/// ankle, toe. Hands and toes have end sites.
+Skeleton humanoid(const std::vector<std::string>& names);
+/// Names for humanoid() in CMU-like spelling.
+std::vector<std::string> humanoidNames();
 
 }  // namespace mgrl::test

@@ -17,7 +17,7 @@ namespace mgrl {
 /// Thresholds in SI units. Defaults suit 30 to 120 fps human capture.
 struct AnnotationParams {
   /// A foot joint (ankle or toe) is near the ground within this height above its planted
-  /// level (its 10th-percentile height over the clip); entering and leaving a contact use
+  /// level (its 10th-percentile height within +-1 s); entering and leaving a contact use
   /// different thresholds (hysteresis), so contacts do not flicker.
   double contactHeightEnter_m = 0.05;
   double contactHeightExit_m = 0.08;

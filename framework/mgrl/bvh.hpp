@@ -29,11 +29,15 @@ Motion readBvh(std::istream& in, std::string_view source, const WarningSink& war
 struct BvhWriteOptions {
   /// File length units per metre of the motion (1 writes metres, 100 centimetres).
   double lengthScale = 1.0;
+  /// false: principal Euler angles (middle within +-90 degrees, outer within +-180), the
+  /// usual BVH form, so a file read and written again keeps its channel values. true: the
+  /// solution nearest the previous frame, without 360-degree wraps (smooth curves).
+  bool continuousAngles = false;
 };
 
 /// Writes a standard BVH of `motion`: the skeleton's joints and channel layout (a joint
-/// with one or two rotation channels gets all three), Euler angles chosen continuous from
-/// frame to frame, 7 decimals. Reading it back gives the same joint positions.
+/// with one or two rotation channels gets all three), 7 decimals. Reading it back gives the
+/// same joint positions.
 void writeBvh(std::ostream& out, const Motion& motion, const BvhWriteOptions& options = {});
 
 }  // namespace mgrl

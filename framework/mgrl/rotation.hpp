@@ -22,6 +22,11 @@ Eigen::Quaterniond axisRotation(Axis axis, double radians);
 /// R = R(axes[0], angles[0]) * R(axes[1], angles[1]) * ... (radians). Any number of axes.
 Eigen::Quaterniond composeEuler(std::span<const Axis> axes, std::span<const double> radians);
 
+/// The principal Euler angles (radians) of `q` for three distinct `axes`: middle angle in
+/// [-pi/2, pi/2], outer angles in (-pi, pi], as most BVH files store them (CMU and SNU do).
+/// At gimbal lock the last angle is 0.
+std::array<double, 3> principalEuler(const Eigen::Quaterniond& q, const std::array<Axis, 3>& axes);
+
 /// Decomposes `q` into angles (radians) for three distinct `axes` so that
 /// composeEuler(axes, result) == q. Of the two solutions, and their 2*pi shifts, returns
 /// the one closest to `previous` in summed absolute angle (zeros: the smallest angles).

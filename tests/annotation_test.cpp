@@ -1,0 +1,154 @@
+#include <algorithm>
+
+#include <catch2/catch.hpp>
+
+#include "mgrl/annotation.hpp"
+#include "mgrl/error.hpp"
+#include "test_support.hpp"
+
+using namespace mgrl;
+
+namespace {
+
+Annotation annotateFile(const std::string& file, double fps = 0) {
+  LoadOptions options;
+  options.fps = fps;
+  const Motion m = test::loadMocap(file, options).motion;
+  return annotate(m, findRoles(m.skeleton()));
+}
+
+double hitsPerSecond(const Annotation& a, double duration) { return static_cast<double>(a.hits.size()) / duration; }
+
+// The humanoid standing still except for its pelvis height, which follows `heights`.
+Motion bobbing(const std::vector<double>& heights, double fps) {
+  auto skeleton = std::make_shared<const Skeleton>([] {
+    Skeleton s = test::humanoid(test::humanoidNames());
+    std::vector<Joint> joints(s.joints().begin(), s.joints().end());
+    joints[0].channels = {{Channel::Kind::Position, Axis::X}, {Channel::Kind::Position, Axis::Y},
+                          {Channel::Kind::Position, Axis::Z}};
+    return Skeleton(joints);
+  }());
+  std::vector<Eigen::Quaterniond> rotations(heights.size() * skeleton->jointCount(), Eigen::Quaterniond::Identity());
+  std::vector<Eigen::Vector3d> translations;
+  for (double h : heights) translations.emplace_back(0, 1 + h, 0);
+  return Motion(skeleton, 1.0 / fps, rotations, translations);
+}
+
+int transitions(const std::vector<std::uint8_t>& flags) {
+  int count = 0;
+  for (std::size_t f = 1; f < flags.size(); ++f) count += flags[f] != flags[f - 1];
+  return count;
+}
+
+}  // namespace
+
+TEST_CASE("boxing yields many effective hits at punch speeds; walking few or none", "[annotation][data]") {
+  for (const char* file : {"cmu/bvh/13_17_boxing.bvh", "cmu/bvh/13_18_boxing.bvh"}) {
+    CAPTURE(file);
+    const Annotation a = annotateFile(file);
+    CHECK(a.hits.size() >= 200);
+    CHECK(a.punches[0] + a.punches[1] >= 20);
+    CHECK(a.punches[0] >= 5);
+    CHECK(a.punches[1] >= 5);
+    std::vector<double> speeds;
+    for (const EffectiveHit& h : a.hits) speeds.push_back(h.speed_mps);
+    std::sort(speeds.begin(), speeds.end());
+    const double peak = speeds.back(), median = speeds[speeds.size() / 2];
+    INFO("median hit speed " << median << " m/s, peak " << peak << " m/s");
+    CHECK(median >= 3.0);
+    CHECK(peak >= 6.0);
+    CHECK(peak <= 12.0);
+    // Effective hitting points lie in front of the boxer, between hip and head height.
+    const auto inFront = std::count_if(a.hits.begin(), a.hits.end(), [](const EffectiveHit& h) {
+      return h.tipAvatar.z() > 0 && h.tipAvatar.y() > 0.5 && h.tipAvatar.y() < 1.9;
+    });
+    CHECK(static_cast<double>(inFront) >= 0.9 * static_cast<double>(a.hits.size()));
+  }
+  const double boxingRate = hitsPerSecond(annotateFile("cmu/bvh/13_17_boxing.bvh"), 4840 / 120.0);
+  for (const char* file : {"cmu/bvh/02_02_walk.bvh", "cmu/bvh/07_05_walk.bvh"}) {
+    CAPTURE(file);
+    const Annotation a = annotateFile(file);
+    CHECK(a.hits.size() <= 10);
+    CHECK(a.punches[0] + a.punches[1] <= 5);
+    CHECK(hitsPerSecond(a, 2.0) < 0.5 * boxingRate);
+  }
+}
+
+TEST_CASE("the hit count scales with the frame rate, the punch count does not", "[annotation][data]") {
+  const Annotation full = annotateFile("cmu/bvh/13_17_boxing.bvh");
+  const Annotation low = annotateFile("cmu/bvh/13_17_boxing.bvh", 15);
+  const double ratio = static_cast<double>(full.hits.size()) / static_cast<double>(low.hits.size());
+  CHECK(ratio == Approx(8.0).epsilon(0.35));
+  CHECK(std::abs((full.punches[0] + full.punches[1]) - (low.punches[0] + low.punches[1])) <= 8);
+}
+
+TEST_CASE("in walking, left and right foot contacts alternate", "[annotation][data]") {
+  for (const char* file : {"cmu/bvh/07_05_walk.bvh", "cmu/bvh/02_02_walk.bvh"}) {
+    CAPTURE(file);
+    const Annotation a = annotateFile(file);
+    // Touch-downs (contact starts) in time order must alternate sides.
+    std::vector<std::pair<std::size_t, int>> touchdowns;
+    for (int s = 0; s < 2; ++s)
+      for (std::size_t f = 1; f < a.contact[s].size(); ++f)
+        if (a.contact[s][f] && !a.contact[s][f - 1]) touchdowns.emplace_back(f, s);
+    std::sort(touchdowns.begin(), touchdowns.end());
+    REQUIRE(touchdowns.size() >= 3);
+    for (std::size_t i = 1; i < touchdowns.size(); ++i) {
+      CAPTURE(touchdowns[i].first);
+      CHECK(touchdowns[i].second != touchdowns[i - 1].second);
+    }
+    // A walker always has a foot down.
+    std::size_t supported = 0;
+    for (std::size_t f = 0; f < a.contact[0].size(); ++f) supported += a.contact[0][f] || a.contact[1][f];
+    CHECK(static_cast<double>(supported) >= 0.95 * static_cast<double>(a.contact[0].size()));
+  }
+}
+
+TEST_CASE("foot contacts do not flicker when the foot hovers between the thresholds", "[annotation]") {
+  // 40 planted frames, a slow rise, then 60 frames alternating 6.5 and 7.2 cm up (between
+  // the 5 cm enter and 8 cm exit thresholds, and slow: the central difference of an
+  // alternation is 0), then lifted for good (the last hovering frame already moves fast).
+  std::vector<double> heights(40, 0.0);
+  for (int i = 1; i <= 13; ++i) heights.push_back(0.005 * i);
+  for (int i = 0; i < 61; ++i) heights.push_back(i % 2 ? 0.065 : 0.072);
+  for (int i = 0; i < 40; ++i) heights.push_back(0.3);
+  const Motion m = bobbing(heights, 120);
+  const Annotation a = annotate(m, findRoles(m.skeleton()));
+  for (int s = 0; s < 2; ++s) {
+    CHECK(std::all_of(a.contact[s].begin(), a.contact[s].begin() + 113, [](auto c) { return c == 1; }));
+    CHECK(transitions(a.contact[s]) == 1);
+  }
+  // Coming from above, the same hovering never enters contact.
+  std::vector<double> fromAbove(40, 0.3);
+  for (int i = 0; i < 60; ++i) fromAbove.push_back(i % 2 ? 0.065 : 0.072);
+  for (int i = 0; i < 40; ++i) fromAbove.push_back(0.0);
+  const Motion n = bobbing(fromAbove, 120);
+  const Annotation b = annotate(n, findRoles(n.skeleton()));
+  CHECK(std::none_of(b.contact[0].begin(), b.contact[0].begin() + 100, [](auto c) { return c == 1; }));
+  CHECK(transitions(b.contact[0]) == 1);
+}
+
+TEST_CASE("a capture glitch in the hand is not an effective hit", "[annotation][data]") {
+  // SNU 16_28_1 has a one-frame right-hand jump of about 23 m/s at frames 1-2 (DATA.md).
+  const Annotation a = annotateFile("snu_martial_arts/motion/16_28_1.bvh");
+  CHECK(a.glitchFrames >= 1);
+  CHECK(std::none_of(a.hits.begin(), a.hits.end(), [](const EffectiveHit& h) { return h.frame <= 3; }));
+}
+
+TEST_CASE("floor-dipping frames do not drag the ground estimate down", "[annotation][data]") {
+  // s_019_2_1 dips to -27 cm in places; the floor is still near 0.
+  const Annotation a = annotateFile("snu_martial_arts/motion/s_019_2_1.bvh");
+  CHECK(a.groundY == Approx(0.0).margin(0.04));
+}
+
+TEST_CASE("annotation thresholds are validated", "[annotation]") {
+  AnnotationParams p;
+  p.punchMinSpeed_mps = -1;
+  CHECK_THROWS_WITH(p.validate(), Catch::Contains("punch_min_speed_mps"));
+  p = {};
+  p.contactHeightExit_m = 0.01;
+  CHECK_THROWS_WITH(p.validate(), Catch::Contains("hysteresis"));
+  p = {};
+  p.punchMinAlignment = 2;
+  CHECK_THROWS_AS(p.validate(), Error);
+}
