@@ -7,7 +7,12 @@
 namespace mgrl::app {
 namespace {
 
-double rounded(double value, double step) { return std::round(value / step) * step; }
+// Rounds to `decimals` places; dividing by an exact power of ten yields the double nearest
+// the decimal, so JSON shows 0.5679 rather than 0.5679000000000001.
+double rounded(double value, int decimals) {
+  const double scale = std::pow(10.0, decimals);
+  return std::round(value * scale) / scale;
+}
 
 }  // namespace
 
@@ -48,22 +53,22 @@ nlohmann::json toJson(const std::vector<FileReport>& reports) {
   nlohmann::json files = nlohmann::json::array();
   for (const FileReport& r : reports) {
     auto vec = [](const Eigen::Vector3d& v) {
-      return nlohmann::json::array({rounded(v.x(), 1e-4), rounded(v.y(), 1e-4), rounded(v.z(), 1e-4)});
+      return nlohmann::json::array({rounded(v.x(), 4), rounded(v.y(), 4), rounded(v.z(), 4)});
     };
     files.push_back({
         {"path", r.path},
         {"joints", r.joints},
         {"frames", r.frames},
-        {"fps", rounded(r.fps, 1e-6)},
-        {"file_fps", rounded(r.fileFps, 1e-6)},
-        {"duration_s", rounded(r.duration_s, 1e-6)},
-        {"height_m", rounded(r.height_m, 1e-4)},
+        {"fps", rounded(r.fps, 6)},
+        {"file_fps", rounded(r.fileFps, 6)},
+        {"duration_s", rounded(r.duration_s, 6)},
+        {"height_m", rounded(r.height_m, 4)},
         {"units", r.units},
-        {"ground_y_m", rounded(r.groundY_m, 1e-4)},
+        {"ground_y_m", rounded(r.groundY_m, 4)},
         {"contact_frames", {{"left", r.contactFrames[0]}, {"right", r.contactFrames[1]}}},
         {"effective_hits", {{"left", r.hits[0]}, {"right", r.hits[1]}, {"total", r.hits[0] + r.hits[1]}}},
         {"punches", {{"left", r.punches[0]}, {"right", r.punches[1]}, {"total", r.punches[0] + r.punches[1]}}},
-        {"peak_hit_speed_mps", rounded(r.peakHitSpeed_mps, 1e-3)},
+        {"peak_hit_speed_mps", rounded(r.peakHitSpeed_mps, 3)},
         {"glitch_frames", r.glitchFrames},
         {"hit_bounds_m", r.hits[0] + r.hits[1] == 0 ? nlohmann::json(nullptr)
                                                      : nlohmann::json{{"min", vec(r.hitMin)}, {"max", vec(r.hitMax)}}},
