@@ -1,11 +1,13 @@
 // The mgrl command line (DESIGN.md sec. 5). Errors: one line on stderr, non-zero exit;
 // --json: one JSON object on stdout and nothing else there.
 
+#include <algorithm>
 #include <cstdio>
 #include <iostream>
 
 #include <CLI/CLI.hpp>
 #include <fmt/format.h>
+#include <fmt/ranges.h>
 
 #include "inspect.hpp"
 #include "mgrl/error.hpp"
@@ -55,6 +57,17 @@ int main(int argc, char** argv) {
                              "Effective punch: minimum fist speed along the forearm (m/s)")
       ->default_val(inspect.annotation.punchMinSpeed_mps);
 
+  // CLI11 would call an unknown command a missing one; name it instead.
+  if (argc > 1 && argv[1][0] != '-') {
+    std::vector<std::string> known;
+    for (const CLI::App* command : app.get_subcommands({})) known.push_back(command->get_name());
+    if (std::find(known.begin(), known.end(), argv[1]) == known.end()) {
+      std::cerr << fmt::format("mgrl: expected a command ({}), found '{}' (see mgrl --help)\n", fmt::join(known, ", "),
+                               argv[1]);
+      return kExitUsage;
+    }
+  }
+
   try {
     app.parse(argc, argv);
   } catch (const CLI::Success& e) {
@@ -68,7 +81,11 @@ int main(int argc, char** argv) {
     if (inspectCommand->parsed()) {
       if (inspect.load.fps < 0 || inspect.load.fps > 10000)
         throw mgrl::Error(fmt::format("--fps: expected a frame rate in (0, 10000], found {}", inspect.load.fps));
-      inspect.load.units = mgrl::parseLengthUnit(units);
+      try {
+        inspect.load.units = mgrl::parseLengthUnit(units);
+      } catch (const mgrl::Error& e) {
+        throw mgrl::Error(fmt::format("--units: {}", e.what()));
+      }
       inspect.load.asf = asf;
       inspect.load.warn = [](const std::string& message) { std::cerr << "mgrl: warning: " << message << '\n'; };
       inspect.roles = parseRoles(roles);

@@ -142,6 +142,8 @@ AsfSkeleton parseAsf(std::string_view text, std::string_view source) {
         }
       }
     } else if (token == ":bonedata") {
+      // :hierarchy sized its tables by the bones before it.
+      if (sawHierarchy) in.fail(":bonedata before :hierarchy", "':bonedata' after it");
       sawBones = true;
       for (token = in.next(); token == "begin"; token = in.next()) {
         RawBone bone;
@@ -187,13 +189,14 @@ AsfSkeleton parseAsf(std::string_view text, std::string_view source) {
           }
         }
         if (!sawName) in.fail("a bone name before 'end'", "none");
-        if (bone.name == "root") in.fail("a bone name other than root", "'root'");
+        if (bone.name == "root") throw ParseError(source, bone.line, "a bone name other than root", "'root'");
         if (bone.direction.norm() > 0) bone.direction.normalize();
         if (auto [it, fresh] = boneIndex.emplace(bone.name, bones.size()); !fresh)
           throw ParseError(source, bone.line, "a unique bone name", fmt::format("'{}' again", bone.name));
         bones.push_back(std::move(bone));
       }
     } else if (token == ":hierarchy") {
+      if (sawHierarchy) in.fail("one :hierarchy section", "a second ':hierarchy'");
       sawHierarchy = true;
       children.assign(bones.size() + 1, {});
       parentOf.assign(bones.size(), -2);
@@ -365,7 +368,8 @@ Motion parseAmc(std::string_view text, std::string_view source, const AsfSkeleto
     if (seenInFrame[j] == frames) in.fail(fmt::format("bone '{}' once per frame", bone.name), "it again");
     seenInFrame[j] = frames;
     if (tokens.size() - 1 != bone.dofs.size())
-      in.fail(fmt::format("{} values for bone '{}'", bone.dofs.size(), bone.name), fmt::format("{}", tokens.size() - 1));
+      in.fail(fmt::format("{} value{} for bone '{}'", bone.dofs.size(), bone.dofs.size() == 1 ? "" : "s", bone.name),
+              fmt::format("{}", tokens.size() - 1));
     Eigen::Vector3d shift = Eigen::Vector3d::Zero();
     // Degrees of freedom apply in the order listed: M = R(last) ... R(first).
     Eigen::Quaterniond m = Eigen::Quaterniond::Identity();

@@ -65,20 +65,39 @@ struct HierarchyParser {
     joints.push_back(std::move(joint));
   }
 
+  // A list cut short (OFFSET coordinates, CHANNELS names) is a fault of the keyword's line,
+  // not of the line where the next keyword happens to sit.
+  [[noreturn]] void failShort(std::size_t keywordLine, std::string_view expected, long long found,
+                              std::string_view token) {
+    const std::string next = token.empty() ? std::string("end of file")
+                                           : fmt::format("{} on line {}", quoteToken(token), in.line());
+    throw ParseError(in.source(), keywordLine, expected, fmt::format("{}, then {}", found, next));
+  }
+
   Eigen::Vector3d readOffset() {
+    const std::size_t keywordLine = in.line();
     Eigen::Vector3d v;
-    for (int i = 0; i < 3; ++i) v[i] = in.number("an OFFSET coordinate");
+    for (int i = 0; i < 3; ++i) {
+      const std::string_view token = in.next();
+      if (!parseDouble(token, v[i]) && (token.empty() || in.line() != keywordLine))
+        failShort(keywordLine, "3 OFFSET coordinates", i, token);
+      v[i] = parseFinite(token, "an OFFSET coordinate", in.source(), in.line());
+    }
     return v;
   }
 
   void readChannels(Joint& joint) {
     const long long count = in.integer("a channel count", 6);
+    const std::size_t keywordLine = in.line();
+    const std::string expected = fmt::format("{} channel names (Xposition ... Zrotation)", count);
     bool rotationAxes[3] = {false, false, false}, positionAxes[3] = {false, false, false};
     for (long long i = 0; i < count; ++i) {
       const std::string_view token = in.next();
       Channel channel{};
-      if (!parseChannel(token, channel))
-        in.fail(fmt::format("{} channel names (Xposition ... Zrotation)", count), TextScanner::describe(token));
+      if (!parseChannel(token, channel)) {
+        if (token.empty() || in.line() != keywordLine) failShort(keywordLine, expected, i, token);
+        in.fail(expected, TextScanner::describe(token));
+      }
       bool& used = (channel.kind == Channel::Kind::Rotation ? rotationAxes : positionAxes)[static_cast<int>(channel.axis)];
       if (used) in.fail("each channel once", fmt::format("{} twice", quoteToken(token)));
       used = true;
@@ -178,8 +197,11 @@ Motion parseBvh(std::string_view text, std::string_view source, const WarningSin
   const std::string_view tail = trim(in.nextLine());
   if (!tail.empty()) in.fail("the end of the Frame Time line", quoteToken(tail));
 
+  // Reserve for the frames declared, but never more than the rest of the text can hold (a
+  // value takes at least two bytes): a corrupt Frames: must not allocate gigabytes.
+  const std::size_t fit = (text.size() - in.offset()) / (2 * channels) + 1;
   std::vector<double> values;
-  values.reserve(static_cast<std::size_t>(std::min<long long>(declared, 1'000'000)) * channels);
+  values.reserve(std::min(static_cast<std::size_t>(declared), fit) * channels);
   std::size_t frames = 0;
   while (in.offset() < text.size()) {
     const std::string_view line = in.nextLine();

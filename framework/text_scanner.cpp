@@ -13,6 +13,29 @@ namespace {
 
 bool isBlank(char c) { return c == ' ' || c == '\t' || c == '\f' || c == '\v'; }
 
+// At end of input (`line` counts every line break in `text`), the line of the last
+// non-whitespace character: where an editor should jump for "found end of file", rather
+// than the line after a final line break, which editors do not show.
+std::size_t lastContentLine(std::string_view text, std::size_t line) {
+  std::size_t i = text.size();
+  while (i > 0) {
+    const char c = text[i - 1];
+    if (c == '\n') {
+      --line;
+      --i;
+      if (i > 0 && text[i - 1] == '\r') --i;
+    } else if (c == '\r') {
+      --line;
+      --i;
+    } else if (isBlank(c)) {
+      --i;
+    } else {
+      break;
+    }
+  }
+  return line > 0 ? line : 1;
+}
+
 }  // namespace
 
 void TextScanner::skipBlanks() {
@@ -40,7 +63,7 @@ void TextScanner::skipSpace() {
 
 std::string_view TextScanner::next() {
   skipSpace();
-  tokenLine_ = line_;
+  tokenLine_ = pos_ < text_.size() ? line_ : lastContentLine(text_, line_);
   const std::size_t start = pos_;
   while (pos_ < text_.size()) {
     const char c = text_[pos_];
@@ -61,7 +84,7 @@ std::string_view TextScanner::peek() {
 
 bool TextScanner::atEnd() {
   skipSpace();
-  tokenLine_ = line_;
+  tokenLine_ = pos_ < text_.size() ? line_ : lastContentLine(text_, line_);
   return pos_ >= text_.size();
 }
 

@@ -14,7 +14,7 @@ LengthUnit parseLengthUnit(std::string_view text) {
   if (text == "cm") return LengthUnit::Centimetre;
   if (text == "inch") return LengthUnit::Inch;
   if (text == "cmu") return LengthUnit::Cmu;
-  throw Error(fmt::format("units: expected one of auto, m, cm, inch, cmu, found '{}'", text));
+  throw Error(fmt::format("expected one of auto, m, cm, inch, cmu, found '{}'", text));
 }
 
 std::string_view lengthUnitName(LengthUnit unit) {

@@ -9,7 +9,8 @@ namespace mgrl {
 /// `cmu` is the CMU database's unit: 1/0.45 inch = 5.644 cm.
 enum class LengthUnit : unsigned char { Auto, Metre, Centimetre, Inch, Cmu };
 
-/// Parses "auto", "m", "cm", "inch" or "cmu"; throws mgrl::Error listing them otherwise.
+/// Parses "auto", "m", "cm", "inch" or "cmu"; throws mgrl::Error listing them otherwise
+/// (the message has no prefix: callers say where the text came from).
 LengthUnit parseLengthUnit(std::string_view text);
 std::string_view lengthUnitName(LengthUnit unit);
 /// Metres per unit (not defined for Auto).
