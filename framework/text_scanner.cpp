@@ -73,15 +73,6 @@ std::string_view TextScanner::next() {
   return text_.substr(start, pos_ - start);
 }
 
-std::string_view TextScanner::peek() {
-  const std::size_t pos = pos_, line = line_, tokenLine = tokenLine_;
-  const std::string_view token = next();
-  pos_ = pos;
-  line_ = line;
-  tokenLine_ = tokenLine;
-  return token;
-}
-
 bool TextScanner::atEnd() {
   skipSpace();
   tokenLine_ = pos_ < text_.size() ? line_ : lastContentLine(text_, line_);

@@ -28,7 +28,9 @@ struct LoadOptions {
 
 struct LoadedMotion {
   Motion motion;          ///< in metres, resampled if asked
-  LengthUnit units;       ///< the unit the file was read in (never Auto)
+  /// The unit the file was read in; Auto only for an ASF whose `:units length` is none of
+  /// the named units (its own scale was applied).
+  LengthUnit units;
   double fileFps;         ///< frame rate before resampling
 };
 

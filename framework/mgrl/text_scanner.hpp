@@ -18,8 +18,6 @@ class TextScanner {
 
   /// Next token across line breaks, or an empty view at end of input.
   std::string_view next();
-  /// The token `next()` would return, without consuming it.
-  std::string_view peek();
   /// Next token, which must equal `keyword`; throws ParseError otherwise.
   void expect(std::string_view keyword);
   /// Next token; throws ParseError naming `what` at end of input.
