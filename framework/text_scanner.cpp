@@ -6,6 +6,8 @@
 #include <iterator>
 #include <sstream>
 
+#include <fmt/format.h>
+
 #include "mgrl/error.hpp"
 
 namespace mgrl {
@@ -94,7 +96,7 @@ std::string_view TextScanner::nextLine() {
 
 void TextScanner::expect(std::string_view keyword) {
   const std::string_view token = next();
-  if (token != keyword) fail("'" + std::string(keyword) + "'", describe(token));
+  if (token != keyword) fail(fmt::format("'{}'", keyword), describe(token));
 }
 
 std::string_view TextScanner::require(std::string_view what) {
@@ -116,7 +118,7 @@ long long TextScanner::integer(std::string_view what, long long limit) {
   const auto [end, ec] = std::from_chars(token.data(), token.data() + token.size(), value);
   if (ec == std::errc::result_out_of_range || (ec == std::errc() && end == token.data() + token.size() &&
                                                (value < 0 || value > limit)))
-    fail(std::string(what) + " between 0 and " + std::to_string(limit), describe(token));
+    fail(fmt::format("{} between 0 and {}", what, limit), describe(token));
   if (ec != std::errc() || end != token.data() + token.size()) fail(what, describe(token));
   return value;
 }
