@@ -35,7 +35,8 @@ void AnnotationParams::validate() const {
   if (!(punchMinAlignment >= 0 && punchMinAlignment <= 1))
     throw Error(fmt::format("annotation: punch_min_alignment: expected a value in [0, 1], found {}", punchMinAlignment));
   if (punchMaxSpeed_mps <= punchMinSpeed_mps)
-    throw Error("annotation: expected punch_max_speed_mps above punch_min_speed_mps");
+    throw Error(fmt::format("annotation: punch_max_speed_mps: expected a value above punch_min_speed_mps ({}), found {}",
+                            punchMinSpeed_mps, punchMaxSpeed_mps));
 }
 
 Eigen::Vector3d AvatarFrame::toAvatar(const Eigen::Vector3d& world) const {

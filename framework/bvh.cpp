@@ -275,12 +275,15 @@ void writeBvh(std::ostream& out, const Motion& motion, const BvhWriteOptions& op
   // (a joint with any rotation channel gets three; a joint with none gets none).
   std::vector<std::vector<Channel>> layout(n);
   std::vector<std::array<Axis, 3>> axes(n);
+  std::vector<bool> rotates(n), translates(n);
   for (std::size_t j = 0; j < n; ++j) {
     const Joint& joint = skeleton.joint(j);
     axes[j] = writtenAxes(joint);
+    rotates[j] = hasRotation(joint);
+    translates[j] = hasPositionChannel(joint);
     for (const Channel& c : joint.channels)
       if (c.kind == Channel::Kind::Position) layout[j].push_back(c);
-    if (hasRotation(joint))
+    if (rotates[j])
       for (Axis a : axes[j]) layout[j].push_back({Channel::Kind::Rotation, a});
   }
 
@@ -324,9 +327,9 @@ void writeBvh(std::ostream& out, const Motion& motion, const BvhWriteOptions& op
     bool first = true;
     for (std::size_t j = 0; j < n; ++j) {
       if (layout[j].empty()) continue;
-      const Eigen::Vector3d t = motion.localTranslation(f, j) * scale;
+      const Eigen::Vector3d t = translates[j] ? Eigen::Vector3d(motion.localTranslation(f, j) * scale) : Eigen::Vector3d::Zero();
       std::array<double, 3> angles{};
-      if (hasRotation(skeleton.joint(j))) {
+      if (rotates[j]) {
         angles = options.continuousAngles ? decomposeEuler(motion.rotation(f, j), axes[j], previous[j])
                                           : principalEuler(motion.rotation(f, j), axes[j]);
         previous[j] = angles;

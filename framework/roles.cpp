@@ -65,8 +65,9 @@ std::string roleKey(const RoleSpec& spec, std::optional<Side> side) {
   return side ? fmt::format("{}_{}", sideName(*side), spec.name) : std::string(spec.name);
 }
 
-int findJoint(const Skeleton& skeleton, const RoleSpec& spec, std::optional<Side> side,
-              const RoleOverrides& overrides, std::string_view source) {
+// `normalised[j]` is normalise() of joint j's name, computed once per skeleton.
+int findJoint(const Skeleton& skeleton, const std::vector<std::string>& normalised, const RoleSpec& spec,
+              std::optional<Side> side, const RoleOverrides& overrides, std::string_view source) {
   const std::string key = roleKey(spec, side);
   if (auto it = overrides.find(key); it != overrides.end()) {
     const int index = skeleton.find(it->second);
@@ -75,8 +76,6 @@ int findJoint(const Skeleton& skeleton, const RoleSpec& spec, std::optional<Side
                               it->second, skeleton.jointList()));
     return index;
   }
-  std::vector<std::string> normalised;
-  for (const Joint& joint : skeleton.joints()) normalised.push_back(normalise(joint.name));
   const auto names = candidates(spec, side);
   for (const std::string& name : names)
     for (std::size_t j = 0; j < normalised.size(); ++j)
@@ -133,9 +132,11 @@ SkeletonRoles findRoles(const Skeleton& skeleton, const RoleOverrides& overrides
 
   SkeletonRoles roles;
   const auto& specs = roleSpecs();
+  std::vector<std::string> normalised;
+  for (const Joint& joint : skeleton.joints()) normalised.push_back(normalise(joint.name));
   auto sided = [&](std::size_t spec, std::array<int, 2>& out) {
-    out[0] = findJoint(skeleton, specs[spec], Side::Left, overrides, source);
-    out[1] = findJoint(skeleton, specs[spec], Side::Right, overrides, source);
+    out[0] = findJoint(skeleton, normalised, specs[spec], Side::Left, overrides, source);
+    out[1] = findJoint(skeleton, normalised, specs[spec], Side::Right, overrides, source);
   };
   sided(0, roles.fist);
   sided(1, roles.wrist);
@@ -143,8 +144,8 @@ SkeletonRoles findRoles(const Skeleton& skeleton, const RoleOverrides& overrides
   sided(3, roles.shoulder);
   sided(4, roles.ankle);
   sided(5, roles.toe);
-  roles.head = findJoint(skeleton, specs[6], std::nullopt, overrides, source);
-  roles.pelvis = findJoint(skeleton, specs[7], std::nullopt, overrides, source);
+  roles.head = findJoint(skeleton, normalised, specs[6], std::nullopt, overrides, source);
+  roles.pelvis = findJoint(skeleton, normalised, specs[7], std::nullopt, overrides, source);
 
   const auto rest = restPositions(skeleton);
   const auto children = childLists(skeleton);

@@ -25,12 +25,12 @@ Skeleton::Skeleton(std::vector<Joint> joints) : joints_(std::move(joints)) {
   slot_.assign(joints_.size(), -1);
   for (std::size_t i = 0; i < joints_.size(); ++i) {
     const Joint& joint = joints_[i];
-    if (joint.name.empty()) throw Error(fmt::format("skeleton: joint {} has an empty name", i));
+    if (joint.name.empty()) throw Error(fmt::format("skeleton: joint {}: expected a name, found an empty one", i));
     if (!seen.emplace(joint.name, i).second)
       throw Error(fmt::format("skeleton: expected unique joint names, found '{}' twice", joint.name));
     if (i == 0 ? joint.parent != -1 : (joint.parent < 0 || joint.parent >= static_cast<int>(i)))
-      throw Error(fmt::format("skeleton: joint '{}' must come after its parent (parent index {})",
-                              joint.name, joint.parent));
+      throw Error(fmt::format("skeleton: joint '{}' (index {}): expected a parent index {}, found {}", joint.name, i,
+                              i == 0 ? "of -1 (the root)" : fmt::format("in [0, {})", i), joint.parent));
     if (hasPositionChannel(joint)) {
       slot_[i] = static_cast<int>(translated_.size());
       translated_.push_back(static_cast<int>(i));

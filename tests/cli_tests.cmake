@@ -94,3 +94,12 @@ mgrl_cli_test(unknown_command ARGS frobnicate EXIT 2
 
 mgrl_cli_test(no_subcommand ARGS EXIT 2 REGEX "[^>]*\\(see mgrl --help\\)>")
 mgrl_cli_test(inspect_without_file ARGS inspect EXIT 2 REGEX "FILE is required")
+
+# --- Option values, exit 1 ---------------------------------------------------------------
+
+mgrl_cli_test(fps_negative ARGS inspect tiny.bvh --fps -3 EXIT 1
+  MESSAGE "--fps: expected a frame rate in (0, 10000], found -3")
+mgrl_cli_test(role_without_joint ARGS inspect tiny.bvh --role left_fist EXIT 1
+  MESSAGE "--role: expected ROLE=JOINT, found 'left_fist'")
+mgrl_cli_test(role_unknown_joint ARGS inspect tiny.bvh --role left_fist=Nope EXIT 1
+  REGEX "tiny\\.bvh: role left_fist: expected a joint of the skeleton, found 'Nope'")
