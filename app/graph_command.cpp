@@ -1,0 +1,177 @@
+#include "graph_command.hpp"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdlib>
+
+#include <fmt/format.h>
+
+#include "mgrl/graph_cache.hpp"
+#include "mgrl/hash.hpp"
+#include "mgrl/version.hpp"
+
+namespace mgrl::app {
+
+namespace {
+
+double since(std::chrono::steady_clock::time_point start) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+}
+
+nlohmann::json paramsJson(const Scenario& s) {
+  const GraphParams& g = s.graph;
+  nlohmann::json weights = nlohmann::json::object();
+  for (const auto& [joint, w] : g.jointWeights) weights[joint] = w;
+  nlohmann::json files = nlohmann::json::array();
+  for (const auto& f : s.motion.files) files.push_back(f.filename().string());
+  return {{"files", files},
+          {"fps", s.motion.fps},
+          {"threshold", g.threshold},
+          {"velocity_weight", g.velocityWeight},
+          {"root_height_weight", g.rootHeightWeight},
+          {"contact_event", std::string(contactEventName(g.contactEvent))},
+          {"local_minimum", g.localMinimum},
+          {"blend_frames", g.blendFrames},
+          {"min_states", g.minStates},
+          {"joint_weights", weights}};
+}
+
+}  // namespace
+
+std::filesystem::path defaultCacheDirectory() {
+  if (const char* env = std::getenv("MGRL_CACHE"); env && *env) return env;
+  if (const char* xdg = std::getenv("XDG_CACHE_HOME"); xdg && *xdg) return std::filesystem::path(xdg) / "mgrl";
+  if (const char* home = std::getenv("HOME"); home && *home) return std::filesystem::path(home) / ".cache" / "mgrl";
+  return ".mgrl-cache";
+}
+
+GraphResult obtainGraph(const Scenario& scenario, const GraphOptions& options) {
+  const auto start = std::chrono::steady_clock::now();
+  auto log = [&](const std::string& message) {
+    if (options.log) options.log(message);
+  };
+  GraphResult result;
+  result.db = loadMotionDatabase(scenario.motion, options.log);
+  result.key = graphCacheKey(scenario);
+  const std::filesystem::path cacheDir = options.cacheDir.empty() ? defaultCacheDirectory() : options.cacheDir;
+  // One bundle per scenario file: a changed scenario replaces its bundle instead of piling up.
+  std::error_code ec;
+  const std::filesystem::path canonical = std::filesystem::weakly_canonical(scenario.path, ec);
+  result.bundle = cacheDir / "graphs" /
+                  fmt::format("{}-{}", scenario.name, hexDigest(hashBytes(canonical.string())).substr(0, 8));
+
+  if (!options.noCache) {
+    GraphBundleLoad cached = loadGraphBundle(result.bundle, result.key);
+    if (cached.status == GraphBundleLoad::Ok) {
+      result.model = std::move(cached.model);
+      result.fromCache = true;
+      result.buildSeconds = cached.manifest["provenance"].value("build_seconds", 0.0);
+      result.report.effectiveHits = result.model.hits.size();
+      result.seconds = since(start);
+      log(fmt::format("graph: reused {}", result.bundle.string()));
+      return result;
+    }
+    if (cached.status == GraphBundleLoad::Stale) log(fmt::format("graph: cache is stale, rebuilding ({})", cached.reason));
+    if (cached.status == GraphBundleLoad::Damaged)
+      log(fmt::format("graph: cache is damaged, rebuilding ({})", cached.reason));
+  }
+  log(fmt::format("graph: building from {} frames in {} files", result.db.frameCount(), result.db.clips.size()));
+  const auto buildStart = std::chrono::steady_clock::now();
+  result.model = buildStateActionModel(result.db, scenario.graph, &result.report);
+  result.buildSeconds = since(buildStart);
+
+  nlohmann::json provenance = {{"key", result.key},
+                               {"scenario", scenario.name},
+                               {"scenario_path", canonical.string()},
+                               {"tool_version", std::string(kVersion)},
+                               {"build_seconds", result.buildSeconds},
+                               {"parameters", paramsJson(scenario)},
+                               {"frames_total", result.model.framesTotal},
+                               {"frames_in_scc", result.model.componentFrames.size()},
+                               {"states", result.model.stateCount()},
+                               {"actions", result.model.actionCount()}};
+  try {
+    std::filesystem::create_directories(result.bundle.parent_path());
+    saveGraphBundle(result.bundle, result.model, provenance);
+    log(fmt::format("graph: saved {}", result.bundle.string()));
+  } catch (const std::exception& e) {
+    // The graph is good; only reuse is lost. Say so and go on.
+    log(fmt::format("graph: warning: could not write the cache ({})", e.what()));
+  }
+  result.seconds = since(start);
+  return result;
+}
+
+namespace {
+
+struct LengthStats {
+  std::size_t min = 0, max = 0;
+  double mean = 0;
+};
+
+LengthStats actionLengths(const StateActionModel& m) {
+  LengthStats s;
+  if (m.actionCount() == 0) return s;
+  s.min = SIZE_MAX;
+  double sum = 0;
+  for (std::size_t a = 0; a < m.actionCount(); ++a) {
+    const std::size_t l = m.actionLength(a);
+    s.min = std::min(s.min, l);
+    s.max = std::max(s.max, l);
+    sum += static_cast<double>(l);
+  }
+  s.mean = sum / static_cast<double>(m.actionCount());
+  return s;
+}
+
+double round3(double v) { return std::round(v * 1000) / 1000; }
+
+}  // namespace
+
+nlohmann::json graphJson(const GraphResult& g) {
+  const StateActionModel& m = g.model;
+  const LengthStats l = actionLengths(m);
+  std::size_t hitFrames = 0;
+  for (const Clip& c : g.db.clips) hitFrames += c.annotation.hits.size();
+  return {{"frames_total", m.framesTotal},
+          {"frames_in_scc", m.componentFrames.size()},
+          {"scc_fraction", round3(m.framesTotal ? static_cast<double>(m.componentFrames.size()) / m.framesTotal : 0)},
+          {"transitions", m.transitionDistance.size()},
+          {"states", m.stateCount()},
+          {"actions", m.actionCount()},
+          {"mean_action_frames", round3(l.mean)},
+          {"min_action_frames", l.min},
+          {"max_action_frames", l.max},
+          {"effective_hits", hitFrames},
+          {"action_hits", m.hits.size()},
+          {"fps", round3(1.0 / m.frameTime)},
+          {"build_seconds", round3(g.buildSeconds)},
+          {"seconds", round3(g.seconds)},
+          {"cached", g.fromCache},
+          {"cache", g.bundle.string()}};
+}
+
+std::string graphText(const GraphResult& g) {
+  const StateActionModel& m = g.model;
+  const LengthStats l = actionLengths(m);
+  std::size_t hitFrames = 0;
+  for (const Clip& c : g.db.clips) hitFrames += c.annotation.hits.size();
+  std::string out;
+  out += fmt::format("frames          {} in {} files at {:g} fps ({:.1f} s)\n", m.framesTotal, g.db.clips.size(),
+                     1.0 / m.frameTime, m.framesTotal * m.frameTime);
+  out += fmt::format("component       {} frames ({:.1f} % of the data)\n", m.componentFrames.size(),
+                     m.framesTotal ? 100.0 * static_cast<double>(m.componentFrames.size()) / m.framesTotal : 0.0);
+  out += fmt::format("transitions     {}\n", m.transitionDistance.size());
+  out += fmt::format("states          {}\n", m.stateCount());
+  out += fmt::format("actions         {} ({:.1f} per state)\n", m.actionCount(),
+                     m.stateCount() ? static_cast<double>(m.actionCount()) / m.stateCount() : 0.0);
+  out += fmt::format("action frames   min {}, mean {:.1f}, max {} ({:.2f} s mean)\n", l.min, l.mean, l.max,
+                     l.mean * m.frameTime);
+  out += fmt::format("effective hits  {} in the data, {} inside actions\n", hitFrames, m.hits.size());
+  out += fmt::format("build           {:.3f} s{}\n", g.buildSeconds,
+                     g.fromCache ? fmt::format(" (reused from {})", g.bundle.string()) : std::string());
+  return out;
+}
+
+}  // namespace mgrl::app

@@ -1,0 +1,47 @@
+#pragma once
+/// \file
+/// `mgrl graph SCENARIO`: builds (or reuses from the cache) a scenario's motion graph and
+/// state-action model, and reports its size.
+#include <filesystem>
+#include <string>
+
+#include <nlohmann/json.hpp>
+
+#include "mgrl/error.hpp"
+#include "mgrl/motion_database.hpp"
+#include "mgrl/motion_graph.hpp"
+#include "mgrl/scenario.hpp"
+#include "mgrl/state_action_model.hpp"
+
+namespace mgrl::app {
+
+struct GraphOptions {
+  std::filesystem::path cacheDir;  ///< empty: defaultCacheDirectory()
+  bool noCache = false;            ///< rebuild even when a matching bundle exists
+  WarningSink log;                 ///< progress and cache messages (stderr)
+};
+
+/// A built or cached graph with the capture it indexes.
+struct GraphResult {
+  MotionDatabase db;
+  StateActionModel model;
+  GraphBuildReport report;     ///< zeros when loaded from the cache, except effectiveHits
+  bool fromCache = false;
+  double buildSeconds = 0;     ///< of the build that made the model (the cached one's if reused)
+  double seconds = 0;          ///< this call, loading included
+  std::filesystem::path bundle;
+  std::string key;
+};
+
+/// `--cache`, else MGRL_CACHE, else $XDG_CACHE_HOME/mgrl, else ~/.cache/mgrl, else ./.mgrl-cache.
+std::filesystem::path defaultCacheDirectory();
+
+/// Loads the scenario's capture and returns its graph: from the cache bundle when its key
+/// matches, else built and saved there atomically. A stale or damaged bundle is reported
+/// through options.log and rebuilt, never trusted. Throws mgrl::Error on bad input.
+GraphResult obtainGraph(const Scenario& scenario, const GraphOptions& options);
+
+nlohmann::json graphJson(const GraphResult& graph);
+std::string graphText(const GraphResult& graph);
+
+}  // namespace mgrl::app
