@@ -9,6 +9,7 @@
 
 #include "mgrl/graph_cache.hpp"
 #include "mgrl/hash.hpp"
+#include "mgrl/playback.hpp"
 #include "mgrl/version.hpp"
 
 namespace mgrl::app {
@@ -103,6 +104,12 @@ GraphResult obtainGraph(const Scenario& scenario, const GraphOptions& options) {
   return result;
 }
 
+void measurePlayback(GraphResult& graph, int blendFrames) {
+  graph.blendFrames = blendFrames;
+  graph.playback = checkPlayback(graph.db, graph.model, blendFrames, kPlaybackCheckActions, kPlaybackCheckSeed);
+  graph.sourceSlide = sourceFootSlide(graph.db);
+}
+
 namespace {
 
 struct LengthStats {
@@ -147,6 +154,15 @@ nlohmann::json graphJson(const GraphResult& g) {
           {"action_hits", m.hits.size()},
           {"fps", round3(1.0 / m.frameTime)},
           {"build_seconds", round3(g.buildSeconds)},
+          {"playback",
+           {{"frames", g.playback.frames},
+            {"transitions", g.playback.transitions},
+            {"foot_slide_mps", round3(g.playback.slide.meanSpeed_mps)},
+            {"source_foot_slide_mps", round3(g.playback.sourceSlideSameFrames_mps)},
+            {"capture_foot_slide_mps", round3(g.sourceSlide.meanSpeed_mps)},
+            {"max_joint_step_m", round3(g.playback.maxJointStep_m)},
+            {"source_max_joint_step_m", round3(g.playback.sourceMaxJointStep_m)},
+            {"worst_joint_step_ratio", round3(g.playback.worstJointStepRatio)}}},
           {"seconds", round3(g.seconds)},
           {"cached", g.fromCache},
           {"cache", g.bundle.string()}};
@@ -169,6 +185,10 @@ std::string graphText(const GraphResult& g) {
   out += fmt::format("action frames   min {}, mean {:.1f}, max {} ({:.2f} s mean)\n", l.min, l.mean, l.max,
                      l.mean * m.frameTime);
   out += fmt::format("effective hits  {} in the data, {} inside actions\n", hitFrames, m.hits.size());
+  out += fmt::format("playback check  {} frames, {} transitions blended over {} frames: foot sliding {:.3f} m/s "
+                     "(same frames in the capture: {:.3f}), largest joint step {:.3f} m (capture: {:.3f})\n",
+                     g.playback.frames, g.playback.transitions, g.blendFrames, g.playback.slide.meanSpeed_mps,
+                     g.playback.sourceSlideSameFrames_mps, g.playback.maxJointStep_m, g.playback.sourceMaxJointStep_m);
   out += fmt::format("build           {:.3f} s{}\n", g.buildSeconds,
                      g.fromCache ? fmt::format(" (reused from {})", g.bundle.string()) : std::string());
   return out;

@@ -10,6 +10,7 @@
 #include "mgrl/error.hpp"
 #include "mgrl/motion_database.hpp"
 #include "mgrl/motion_graph.hpp"
+#include "mgrl/playback.hpp"
 #include "mgrl/scenario.hpp"
 #include "mgrl/state_action_model.hpp"
 
@@ -31,7 +32,19 @@ struct GraphResult {
   double seconds = 0;          ///< this call, loading included
   std::filesystem::path bundle;
   std::string key;
+  /// Filled by measurePlayback().
+  PlaybackCheck playback;
+  FootSlide sourceSlide;
+  int blendFrames = 0;
 };
+
+/// The playback check `mgrl graph` reports: a seeded random walk of this many actions.
+inline constexpr std::size_t kPlaybackCheckActions = 200;
+inline constexpr std::uint64_t kPlaybackCheckSeed = 1;
+
+/// Plays a seeded random walk through the graph with blending and measures foot sliding
+/// and joint steps against the capture (see checkPlayback()).
+void measurePlayback(GraphResult& graph, int blendFrames);
 
 /// `--cache`, else MGRL_CACHE, else $XDG_CACHE_HOME/mgrl, else ~/.cache/mgrl, else ./.mgrl-cache.
 std::filesystem::path defaultCacheDirectory();

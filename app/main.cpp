@@ -102,7 +102,8 @@ int main(int argc, char** argv) {
       options.cacheDir = cacheDir;
       options.noCache = noCache;
       options.log = [](const std::string& message) { std::cerr << "mgrl: " << message << '\n'; };
-      const mgrl::app::GraphResult graph = mgrl::app::obtainGraph(scenario, options);
+      mgrl::app::GraphResult graph = mgrl::app::obtainGraph(scenario, options);
+      mgrl::app::measurePlayback(graph, scenario.graph.blendFrames);
       if (json)
         std::cout << mgrl::app::graphJson(graph).dump(2) << '\n';
       else
@@ -129,7 +130,8 @@ int main(int argc, char** argv) {
       options.cacheDir = cacheDir;
       options.noCache = noCache;
       options.log = [](const std::string& message) { std::cerr << "mgrl: " << message << '\n'; };
-      const mgrl::app::GraphResult graph = mgrl::app::obtainGraph(scenario, options);
+      mgrl::app::GraphResult graph = mgrl::app::obtainGraph(scenario, options);
+      mgrl::app::measurePlayback(graph, scenario.graph.blendFrames);
       if (json)
         std::cout << mgrl::app::graphJson(graph).dump(2) << '\n';
       else

@@ -1,0 +1,562 @@
+// The graph cache bundle: a hand-built state-action model round-trips through
+// saveGraphBundle/loadGraphBundle exactly and reproducibly; every way a bundle can be stale
+// or damaged is reported, never trusted; checkModel names the broken array. Also the
+// content hash the bundle relies on (XXH64, checked against the reference digests).
+
+#include <unistd.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <filesystem>
+#include <fstream>
+#include <map>
+#include <string>
+#include <vector>
+
+#include <catch2/catch.hpp>
+#include <fmt/format.h>
+
+#include "mgrl/error.hpp"
+#include "mgrl/graph_cache.hpp"
+#include "mgrl/hash.hpp"
+#include "mgrl/motion_io.hpp"
+#include "mgrl/npy.hpp"
+
+namespace fs = std::filesystem;
+using Catch::Contains;
+using mgrl::GraphBundleLoad;
+using mgrl::StateActionModel;
+using nlohmann::json;
+
+namespace {
+
+// A fresh directory per test, removed afterwards; the pid keeps parallel ctest runs apart.
+struct TempDir {
+  fs::path path;
+  TempDir() {
+    static int counter = 0;
+    path = fs::temp_directory_path() / fmt::format("mgrl-graph-cache-test-{}-{}", ::getpid(), counter++);
+    fs::remove_all(path);
+    fs::create_directories(path);
+  }
+  ~TempDir() {
+    std::error_code ignored;
+    fs::remove_all(path, ignored);
+  }
+  TempDir(const TempDir&) = delete;
+  TempDir& operator=(const TempDir&) = delete;
+};
+
+// Two clips of 10 frames; states at frames 2, 8 and 14; four actions, three of which go
+// through a transition edge; four hits.
+//   a0: s0 -> s1  frames 3 4 5 6 7 8        (clip 0 played on)
+//   a1: s0 -> s2  frames 3 4 | 13 14        (transition 4 -> 13)
+//   a2: s1 -> s2  frames 9 | 12 13 14       (transition 9 -> 12)
+//   a3: s2 -> s0  frames 15 16 | 1 2        (transition 16 -> 1)
+StateActionModel tinyModel() {
+  StateActionModel m;
+  m.frameTime = 1.0 / 30;
+  m.framesTotal = 20;
+  m.clipOffset = {0, 10, 20};
+  for (std::uint32_t f = 1; f <= 16; ++f) m.componentFrames.push_back(f);
+  m.transitions = {4, 13, 9, 12, 16, 1};
+  m.transitionDistance = {0.5f, 0.25f, 0.75f};
+  m.stateFrame = {2, 8, 14};
+  m.actionFrom = {0, 0, 1, 2};
+  m.actionTo = {1, 2, 2, 0};
+  m.actionFrameBegin = {0, 6, 10, 14, 18};
+  for (int a = 0; a < 4; ++a) m.actionDisplacement.insert(m.actionDisplacement.end(), {0.1 * (a + 1), -0.2 * (a + 1), 0.3 / (a + 1)});
+  m.stateActionBegin = {0, 2, 3, 4};
+  m.actionFrames = {3, 4, 5, 6, 7, 8, 3, 4, 13, 14, 9, 12, 13, 14, 15, 16, 1, 2};
+  for (std::size_t i = 0; i < 3 * m.actionFrames.size(); ++i) {
+    m.frameRoot.push_back(0.01 * static_cast<double>(i) - 0.2);
+    m.frameCentroid.push_back(1.0f / static_cast<float>(i + 3));
+  }
+  m.frameEntersTransition.assign(m.actionFrames.size(), 0);
+  for (std::size_t i : {8, 11, 16}) m.frameEntersTransition[i] = 1;
+  m.hits = {{0, 4, 1, 0.1f, 1.2f, 0.6f, 1.0f},
+            {1, 2, 0, -0.3f, 1.1f, 0.5f, 0.5f},
+            {1, 3, 1, 0.2f, 1.3f, 0.7f, 0.75f},
+            {3, 1, 0, 0.0f, 1.0f, 0.4f, 0.25f}};
+  m.actionHitBegin = {0, 1, 3, 3, 4};
+  m.centroid[0] = 0.1;
+  m.centroid[1] = 1.2;
+  m.centroid[2] = 0.35;
+  m.maxHitSpeed_mps = 7.25;
+  return m;
+}
+
+json provenance(const std::string& key) {
+  return {{"key", key}, {"scenario", "boxing.yaml"}, {"seed", 7}};
+}
+
+void requireSameModel(const StateActionModel& a, const StateActionModel& b) {
+  CHECK(a.frameTime == b.frameTime);
+  CHECK(a.framesTotal == b.framesTotal);
+  CHECK(a.clipOffset == b.clipOffset);
+  CHECK(a.componentFrames == b.componentFrames);
+  CHECK(a.transitions == b.transitions);
+  CHECK(a.transitionDistance == b.transitionDistance);
+  CHECK(a.stateFrame == b.stateFrame);
+  CHECK(a.actionFrom == b.actionFrom);
+  CHECK(a.actionTo == b.actionTo);
+  CHECK(a.actionFrameBegin == b.actionFrameBegin);
+  CHECK(a.actionDisplacement == b.actionDisplacement);
+  CHECK(a.stateActionBegin == b.stateActionBegin);
+  CHECK(a.actionFrames == b.actionFrames);
+  CHECK(a.frameRoot == b.frameRoot);
+  CHECK(a.frameCentroid == b.frameCentroid);
+  CHECK(a.frameEntersTransition == b.frameEntersTransition);
+  CHECK(a.actionHitBegin == b.actionHitBegin);
+  REQUIRE(a.hits.size() == b.hits.size());
+  for (std::size_t h = 0; h < a.hits.size(); ++h) {
+    CAPTURE(h);
+    CHECK(a.hits[h].action == b.hits[h].action);
+    CHECK(a.hits[h].offset == b.hits[h].offset);
+    CHECK(a.hits[h].hand == b.hits[h].hand);
+    CHECK(a.hits[h].x == b.hits[h].x);
+    CHECK(a.hits[h].y == b.hits[h].y);
+    CHECK(a.hits[h].z == b.hits[h].z);
+    CHECK(a.hits[h].weight == b.hits[h].weight);
+  }
+  for (int k = 0; k < 3; ++k) CHECK(a.centroid[k] == b.centroid[k]);
+  CHECK(a.maxHitSpeed_mps == b.maxHitSpeed_mps);
+}
+
+void writeBytes(const fs::path& path, const std::string& bytes) {
+  std::ofstream out(path, std::ios::binary | std::ios::trunc);
+  out.write(bytes.data(), static_cast<std::streamsize>(bytes.size()));
+  REQUIRE(out.good());
+}
+
+std::map<std::string, std::string> filesIn(const fs::path& dir) {
+  std::map<std::string, std::string> files;
+  for (const auto& entry : fs::directory_iterator(dir)) files[entry.path().filename().string()] = mgrl::readFile(entry.path());
+  return files;
+}
+
+std::vector<std::string> namesIn(const fs::path& dir) {
+  std::vector<std::string> names;
+  for (const auto& entry : fs::directory_iterator(dir)) names.push_back(entry.path().filename().string());
+  std::sort(names.begin(), names.end());
+  return names;
+}
+
+// Loads with the key the bundle was saved with and requires Damaged with `reason`.
+void requireDamaged(const fs::path& bundle, const std::string& reason) {
+  const GraphBundleLoad load = mgrl::loadGraphBundle(bundle, "k1");
+  CAPTURE(load.reason);
+  REQUIRE(load.status == GraphBundleLoad::Damaged);
+  REQUIRE_THAT(load.reason, Contains(reason));
+  REQUIRE(load.model.actionFrames.empty());
+}
+
+}  // namespace
+
+// --- hash -------------------------------------------------------------------------------
+
+TEST_CASE("hashBytes is XXH64 with seed 0", "[graph_cache][hash]") {
+  // Reference digests from the xxhash library.
+  REQUIRE(mgrl::hashBytes("") == 0xef46db3751d8e999ULL);
+  REQUIRE(mgrl::hashBytes("a") == 0xd24ec4f1a98c6e5bULL);
+  REQUIRE(mgrl::hashBytes("abc") == 0x44bc2cf5ad770999ULL);
+  REQUIRE(mgrl::hashBytes("The quick brown fox jumps over the lazy dog") == 0x0b242d361fda71bcULL);
+  REQUIRE(mgrl::Hasher().hex() == "ef46db3751d8e999");
+  REQUIRE(mgrl::hexDigest(0xabcULL) == "0000000000000abc");
+}
+
+TEST_CASE("Hasher gives the same digest however the bytes are split", "[graph_cache][hash]") {
+  std::string bytes;
+  for (int copy = 0; copy < 3; ++copy)
+    for (int b = 0; b < 256; ++b) bytes.push_back(static_cast<char>(b));
+  bytes += "xyz";
+  REQUIRE(mgrl::hashBytes(bytes) == 0xe921a1b45bd779f8ULL);
+  for (std::size_t step : {1, 3, 7, 8, 31, 32, 33, 100}) {
+    CAPTURE(step);
+    mgrl::Hasher h;
+    for (std::size_t at = 0; at < bytes.size(); at += step) h.updateBytes(std::string_view(bytes).substr(at, step));
+    REQUIRE(h.value() == 0xe921a1b45bd779f8ULL);
+  }
+}
+
+TEST_CASE("Hasher length-prefixes strings and encodes numbers little-endian", "[graph_cache][hash]") {
+  mgrl::Hasher abc;
+  abc.update(std::string_view("ab")).update(std::string_view("c"));
+  mgrl::Hasher split;
+  split.update(std::string_view("a")).update(std::string_view("bc"));
+  REQUIRE(abc.value() != split.value());
+  REQUIRE(abc.value() == 0x7b92a14fbcbf0536ULL);  // XXH64 of le64(2) "ab" le64(1) "c"
+  mgrl::Hasher numbers;
+  numbers.update(std::int64_t{-1}).update(1.5);
+  REQUIRE(numbers.hex() == "c2aa4fae55a97f28");  // XXH64 of le64(-1) le64(bits of 1.5)
+  // Other integer types go through int64.
+  REQUIRE(mgrl::Hasher().update(7).value() == mgrl::Hasher().update(std::int64_t{7}).value());
+  REQUIRE(mgrl::Hasher().update(0.0).value() != mgrl::Hasher().update(-0.0).value());
+}
+
+// --- checkModel -------------------------------------------------------------------------
+
+TEST_CASE("checkModel accepts the hand-built model", "[graph_cache]") {
+  REQUIRE_NOTHROW(mgrl::checkModel(tinyModel(), "tiny"));
+}
+
+TEST_CASE("checkModel names the array and index that break an invariant", "[graph_cache]") {
+  StateActionModel m = tinyModel();
+  std::string message;
+  SECTION("frame time") {
+    m.frameTime = 0;
+    message = "tiny: frameTime: expected a finite number of seconds above 0, found 0";
+  }
+  SECTION("size of actionTo") {
+    m.actionTo.pop_back();
+    message = "tiny: actionTo: expected 4 entries (one per action, as actionFrom), found 3";
+  }
+  SECTION("size of frameCentroid") {
+    m.frameCentroid.push_back(0);
+    message = "tiny: frameCentroid: expected 54 entries";
+  }
+  SECTION("odd transitions") {
+    m.transitions.push_back(3);
+    message = "tiny: transitions: expected an even number of entries";
+  }
+  SECTION("clipOffset not starting at 0") {
+    m.clipOffset[0] = 1;
+    message = "tiny: clipOffset[0]: expected 0, found 1";
+  }
+  SECTION("clipOffset not ending at framesTotal") {
+    m.clipOffset[2] = 19;
+    message = "tiny: clipOffset[2]: expected framesTotal = 20 (the end), found 19";
+  }
+  SECTION("stateActionBegin decreasing") {
+    m.stateActionBegin = {0, 3, 2, 4};
+    message = "tiny: stateActionBegin[2]: expected at least stateActionBegin[1] = 3, found 2";
+  }
+  SECTION("action frame out of range") {
+    m.actionFrames[5] = 20;
+    message = "tiny: actionFrames[5]: expected a frame below framesTotal 20, found 20";
+  }
+  SECTION("action without frames") {
+    m.actionFrameBegin = {0, 6, 6, 14, 18};
+    message = "tiny: actionFrameBegin[2]: expected above actionFrameBegin[1] = 6 (every action has a frame)";
+  }
+  SECTION("action not ending on its end state's frame") {
+    m.actionFrames[9] = 15;
+    message = "tiny: actionFrames[9]: expected frame 14 of state 2 (action 1 ends there), found 15";
+  }
+  SECTION("state out of range") {
+    m.actionTo[3] = 3;
+    message = "tiny: actionTo[3]: expected a state below stateCount 3, found 3";
+  }
+  SECTION("actionFrom disagreeing with stateActionBegin") {
+    m.actionFrom = {0, 1, 1, 2};
+    message = "tiny: actionFrom[1]: expected state 0";
+  }
+  SECTION("stateFrame not ascending") {
+    m.stateFrame = {2, 2, 14};
+    message = "tiny: stateFrame[1]: expected above stateFrame[0] = 2 (strictly ascending), found 2";
+  }
+  SECTION("componentFrames not ascending") {
+    std::swap(m.componentFrames[3], m.componentFrames[4]);
+    message = "tiny: componentFrames[4]";
+  }
+  SECTION("transitions unsorted") {
+    m.transitions = {9, 12, 4, 13, 16, 1};
+    message = "tiny: transitions[2]: expected pairs sorted, at least (9, 12), found (4, 13)";
+  }
+  SECTION("hit offset past its action") {
+    m.hits[1].offset = 5;
+    message = "tiny: hits[1].offset: expected an offset in [1, 4] (the length of action 1), found 5";
+  }
+  SECTION("hit offset 0") {
+    m.hits[0].offset = 0;
+    message = "tiny: hits[0].offset";
+  }
+  SECTION("hit in the wrong action") {
+    m.hits[3].action = 2;
+    message = "tiny: hits[3].action: expected 3 (actionHitBegin), found 2";
+  }
+  SECTION("hand") {
+    m.hits[0].hand = 2;
+    message = "tiny: hits[0].hand: expected 0 (left) or 1 (right), found 2";
+  }
+  SECTION("hit weight") {
+    m.hits[2].weight = 0;
+    message = "tiny: hits[2].weight: expected a weight in (0, 1], found 0";
+  }
+  SECTION("non-finite root") {
+    m.frameRoot[7] = std::nan("");
+    message = "tiny: frameRoot[7]: expected a finite number, found nan";
+  }
+  SECTION("non-finite hit position") {
+    m.hits[2].y = INFINITY;
+    message = "tiny: hits[2].y: expected a finite number, found inf";
+  }
+  SECTION("frameEntersTransition flag") {
+    m.frameEntersTransition[3] = 2;
+    message = "tiny: frameEntersTransition[3]: expected 0 or 1, found 2";
+  }
+  SECTION("an empty model") {
+    m = StateActionModel{};
+    m.frameTime = 0.01;
+    message = "tiny: clipOffset: expected at least one entry, found none";
+  }
+  CAPTURE(message);
+  REQUIRE_THROWS_AS(mgrl::checkModel(m, "tiny"), mgrl::Error);
+  REQUIRE_THROWS_WITH(mgrl::checkModel(m, "tiny"), Contains(message));
+}
+
+// --- saving and loading -----------------------------------------------------------------
+
+TEST_CASE("a graph bundle round-trips every field of the model", "[graph_cache]") {
+  TempDir tmp;
+  const fs::path bundle = tmp.path / "graph";
+  const StateActionModel model = tinyModel();
+  mgrl::saveGraphBundle(bundle, model, provenance("k1"));
+
+  const GraphBundleLoad load = mgrl::loadGraphBundle(bundle, "k1");
+  CAPTURE(load.reason);
+  REQUIRE(load.status == GraphBundleLoad::Ok);
+  REQUIRE(load.reason.empty());
+  requireSameModel(load.model, model);
+
+  const json& manifest = load.manifest;
+  REQUIRE(manifest["format"] == "mgrl.graph");
+  REQUIRE(manifest["version"] == mgrl::kGraphFormatVersion);
+  REQUIRE(manifest["provenance"] == provenance("k1"));
+  REQUIRE(manifest["scalars"]["frames_total"] == 20);
+  REQUIRE(manifest["arrays"].size() == 17);
+  REQUIRE(manifest["arrays"]["hits_index"]["shape"] == json::array({4, 3}));
+  REQUIRE(manifest["arrays"]["hits_value"]["dtype"] == "<f4");
+  REQUIRE(manifest["arrays"]["frame_root"]["shape"] == json::array({18, 3}));
+  REQUIRE(manifest["arrays"]["frame_enters_transition"]["dtype"] == "|u1");
+
+  // One .npy per array plus the manifest, each a plain NumPy file.
+  REQUIRE(namesIn(bundle).size() == 18);
+  std::vector<std::size_t> shape;
+  const auto frames = mgrl::npyDecode<std::uint32_t>(mgrl::readFile(bundle / "action_frames.npy"), "f", &shape);
+  REQUIRE(frames == model.actionFrames);
+  REQUIRE(shape == std::vector<std::size_t>{18});
+  REQUIRE(manifest["arrays"]["action_frames"]["hash"] ==
+          mgrl::hexDigest(mgrl::hashBytes(mgrl::readFile(bundle / "action_frames.npy"))));
+}
+
+TEST_CASE("a graph bundle without hits or transitions round-trips", "[graph_cache]") {
+  StateActionModel model = tinyModel();
+  model.hits.clear();
+  model.actionHitBegin.assign(model.actionCount() + 1, 0);
+  TempDir tmp;
+  mgrl::saveGraphBundle(tmp.path / "graph", model, provenance("k1"));
+  const GraphBundleLoad load = mgrl::loadGraphBundle(tmp.path / "graph/", "k1");
+  CAPTURE(load.reason);
+  REQUIRE(load.status == GraphBundleLoad::Ok);
+  requireSameModel(load.model, model);
+}
+
+TEST_CASE("saving the same model twice writes byte-identical files", "[graph_cache]") {
+  TempDir tmp;
+  mgrl::saveGraphBundle(tmp.path / "a", tinyModel(), provenance("k1"));
+  const auto first = filesIn(tmp.path / "a");
+  mgrl::saveGraphBundle(tmp.path / "a", tinyModel(), provenance("k1"));
+  mgrl::saveGraphBundle(tmp.path / "b", tinyModel(), provenance("k1"));
+  REQUIRE(first.size() == 18);
+  REQUIRE(filesIn(tmp.path / "a") == first);
+  REQUIRE(filesIn(tmp.path / "b") == first);
+}
+
+TEST_CASE("saving over a bundle replaces it and leaves no temporary directory", "[graph_cache]") {
+  TempDir tmp;
+  const fs::path bundle = tmp.path / "graph";
+  mgrl::saveGraphBundle(bundle, tinyModel(), provenance("k1"));
+  StateActionModel other = tinyModel();
+  other.frameTime = 1.0 / 120;
+  other.frameRoot[0] = 42;
+  mgrl::saveGraphBundle(bundle, other, provenance("k2"));
+
+  REQUIRE(namesIn(tmp.path) == std::vector<std::string>{"graph"});
+  const GraphBundleLoad load = mgrl::loadGraphBundle(bundle, "k2");
+  CAPTURE(load.reason);
+  REQUIRE(load.status == GraphBundleLoad::Ok);
+  requireSameModel(load.model, other);
+}
+
+TEST_CASE("saveGraphBundle replaces an empty directory but refuses to delete anything else", "[graph_cache]") {
+  TempDir tmp;
+  fs::create_directories(tmp.path / "empty");
+  mgrl::saveGraphBundle(tmp.path / "empty", tinyModel(), provenance("k1"));
+  REQUIRE(mgrl::loadGraphBundle(tmp.path / "empty", "k1").status == GraphBundleLoad::Ok);
+
+  fs::create_directories(tmp.path / "home");
+  writeBytes(tmp.path / "home" / "notes.txt", "keep me");
+  REQUIRE_THROWS_WITH(mgrl::saveGraphBundle(tmp.path / "home", tinyModel(), provenance("k1")),
+                      Contains("not deleting it"));
+  REQUIRE(mgrl::readFile(tmp.path / "home" / "notes.txt") == "keep me");
+
+  writeBytes(tmp.path / "file", "x");
+  REQUIRE_THROWS_WITH(mgrl::saveGraphBundle(tmp.path / "file", tinyModel(), provenance("k1")),
+                      Contains("expected a graph bundle directory or nothing, found another kind of file"));
+  REQUIRE(namesIn(tmp.path) == std::vector<std::string>{"empty", "file", "home"});
+}
+
+TEST_CASE("saveGraphBundle refuses an invalid model or provenance and writes nothing", "[graph_cache]") {
+  TempDir tmp;
+  StateActionModel broken = tinyModel();
+  broken.actionFrames[0] = 99;
+  REQUIRE_THROWS_WITH(mgrl::saveGraphBundle(tmp.path / "graph", broken, provenance("k1")),
+                      Contains("actionFrames[0]: expected a frame below framesTotal 20, found 99"));
+  REQUIRE_THROWS_WITH(mgrl::saveGraphBundle(tmp.path / "graph", tinyModel(), json{{"seed", 1}}),
+                      Contains("provenance: expected an object with a string \"key\""));
+  REQUIRE(namesIn(tmp.path).empty());
+}
+
+TEST_CASE("loadGraphBundle reports a missing bundle", "[graph_cache]") {
+  TempDir tmp;
+  const GraphBundleLoad load = mgrl::loadGraphBundle(tmp.path / "nothing", "k1");
+  REQUIRE(load.status == GraphBundleLoad::Missing);
+}
+
+TEST_CASE("a bundle made for another key is stale", "[graph_cache]") {
+  TempDir tmp;
+  mgrl::saveGraphBundle(tmp.path / "graph", tinyModel(), provenance("k1"));
+  const GraphBundleLoad load = mgrl::loadGraphBundle(tmp.path / "graph", "k2");
+  REQUIRE(load.status == GraphBundleLoad::Stale);
+  REQUIRE_THAT(load.reason, Contains("manifest.json: expected cache key 'k2', found 'k1'"));
+  REQUIRE(load.model.actionFrames.empty());
+}
+
+TEST_CASE("a bundle of another format version is stale", "[graph_cache]") {
+  TempDir tmp;
+  const fs::path bundle = tmp.path / "graph";
+  mgrl::saveGraphBundle(bundle, tinyModel(), provenance("k1"));
+  json manifest = json::parse(mgrl::readFile(bundle / "manifest.json"));
+  manifest["version"] = 2;
+  writeBytes(bundle / "manifest.json", manifest.dump());
+  const GraphBundleLoad load = mgrl::loadGraphBundle(bundle, "k1");
+  REQUIRE(load.status == GraphBundleLoad::Stale);
+  REQUIRE_THAT(load.reason, Contains("expected format 'mgrl.graph' version 1, found format 'mgrl.graph' version '2'"));
+}
+
+TEST_CASE("a bundle with a flipped byte is damaged", "[graph_cache]") {
+  TempDir tmp;
+  const fs::path bundle = tmp.path / "graph";
+  mgrl::saveGraphBundle(bundle, tinyModel(), provenance("k1"));
+  std::string bytes = mgrl::readFile(bundle / "action_frames.npy");
+  bytes[bytes.size() - 3] ^= 0x10;
+  writeBytes(bundle / "action_frames.npy", bytes);
+  requireDamaged(bundle, "action_frames.npy: expected hash '");
+  requireDamaged(bundle, "(the file was altered)");
+}
+
+TEST_CASE("a bundle with a truncated file is damaged", "[graph_cache]") {
+  TempDir tmp;
+  const fs::path bundle = tmp.path / "graph";
+  mgrl::saveGraphBundle(bundle, tinyModel(), provenance("k1"));
+  const std::string bytes = mgrl::readFile(bundle / "frame_root.npy");
+  writeBytes(bundle / "frame_root.npy", bytes.substr(0, bytes.size() - 8));
+  requireDamaged(bundle, fmt::format("frame_root.npy: expected {} bytes as in manifest.json, found {}", bytes.size(),
+                                     bytes.size() - 8));
+}
+
+TEST_CASE("a bundle with a deleted file is damaged", "[graph_cache]") {
+  TempDir tmp;
+  const fs::path bundle = tmp.path / "graph";
+  mgrl::saveGraphBundle(bundle, tinyModel(), provenance("k1"));
+  fs::remove(bundle / "hits_value.npy");
+  requireDamaged(bundle, "hits_value.npy: expected the file listed in manifest.json, found none");
+}
+
+TEST_CASE("a bundle with a garbage manifest is damaged", "[graph_cache]") {
+  TempDir tmp;
+  const fs::path bundle = tmp.path / "graph";
+  mgrl::saveGraphBundle(bundle, tinyModel(), provenance("k1"));
+  writeBytes(bundle / "manifest.json", "{\"format\": \"mgrl.gr");
+  requireDamaged(bundle, "manifest.json: expected JSON, found a syntax error");
+
+  writeBytes(bundle / "manifest.json", "[1, 2]");
+  requireDamaged(bundle, "manifest.json: manifest: expected a JSON object, found '[1,2]'");
+
+  fs::remove(bundle / "manifest.json");
+  requireDamaged(bundle, "manifest.json");
+}
+
+TEST_CASE("a bundle whose manifest lacks or mistypes a member is damaged", "[graph_cache]") {
+  TempDir tmp;
+  const fs::path bundle = tmp.path / "graph";
+  mgrl::saveGraphBundle(bundle, tinyModel(), provenance("k1"));
+  const json good = json::parse(mgrl::readFile(bundle / "manifest.json"));
+  json manifest = good;
+  std::string reason;
+  SECTION("no scalars") {
+    manifest.erase("scalars");
+    reason = "manifest: expected the key 'scalars', found none";
+  }
+  SECTION("frames_total as a string") {
+    manifest["scalars"]["frames_total"] = "20";
+    reason = "scalars.frames_total: expected an integer in [0, 4294967295], found '\"20\"'";
+  }
+  SECTION("no provenance key") {
+    manifest["provenance"].erase("key");
+    reason = "provenance: expected the key 'key', found none";
+  }
+  SECTION("an array missing from the manifest") {
+    manifest["arrays"].erase("state_frame");
+    reason = "arrays: expected the key 'state_frame', found none";
+  }
+  SECTION("an unknown array") {
+    manifest["arrays"]["extra"] = manifest["arrays"]["state_frame"];
+    reason = "arrays: expected only the arrays of a state-action model, found 'extra'";
+  }
+  SECTION("a file name outside the bundle") {
+    manifest["arrays"]["state_frame"]["file"] = "../state_frame.npy";
+    reason = "arrays.state_frame.file: expected 'state_frame.npy', found '\"../state_frame.npy\"'";
+  }
+  SECTION("another dtype") {
+    manifest["arrays"]["frame_root"]["dtype"] = "<f4";
+    reason = "arrays.frame_root.dtype: expected '<f8'";
+  }
+  SECTION("a shape that disagrees with the file") {
+    manifest["arrays"]["frame_root"]["shape"] = json::array({54});
+    reason = "frame_root.npy: expected shape (54,) as in manifest.json, found (18, 3)";
+  }
+  writeBytes(bundle / "manifest.json", manifest.dump());
+  requireDamaged(bundle, reason);
+}
+
+TEST_CASE("a bundle whose arrays break the model is damaged even with correct hashes", "[graph_cache]") {
+  TempDir tmp;
+  const fs::path bundle = tmp.path / "graph";
+  StateActionModel model = tinyModel();
+  mgrl::saveGraphBundle(bundle, model, provenance("k1"));
+  json manifest = json::parse(mgrl::readFile(bundle / "manifest.json"));
+  // Replaces one array with a well-formed file and updates the manifest to match it.
+  auto rewrite = [&](const std::string& name, const std::string& bytes) {
+    writeBytes(bundle / (name + ".npy"), bytes);
+    manifest["arrays"][name]["bytes"] = bytes.size();
+    manifest["arrays"][name]["hash"] = mgrl::hexDigest(mgrl::hashBytes(bytes));
+    writeBytes(bundle / "manifest.json", manifest.dump());
+  };
+
+  SECTION("a frame index past framesTotal") {
+    model.actionFrames[0] = 20;
+    rewrite("action_frames", mgrl::npyEncode<std::uint32_t>(model.actionFrames, {model.actionFrames.size()}));
+    requireDamaged(bundle, "actionFrames[0]: expected a frame below framesTotal 20, found 20");
+  }
+  SECTION("a hand that uint8 would wrap") {
+    std::vector<std::uint32_t> index;
+    for (const auto& hit : model.hits) index.insert(index.end(), {hit.action, hit.offset, hit.hand});
+    index[2] = 257;
+    rewrite("hits_index", mgrl::npyEncode<std::uint32_t>(index, {4, 3}));
+    requireDamaged(bundle, "hits_index.npy: hit 0: expected hand 0 or 1, found 257");
+  }
+  SECTION("a 1-D file where rows of 3 belong") {
+    rewrite("frame_root", mgrl::npyEncode<double>(model.frameRoot, {model.frameRoot.size()}));
+    manifest["arrays"]["frame_root"]["shape"] = json::array({model.frameRoot.size()});
+    writeBytes(bundle / "manifest.json", manifest.dump());
+    requireDamaged(bundle, "frame_root.npy: expected shape (N, 3), found (54,)");
+  }
+  SECTION("a file of another dtype") {
+    const std::vector<float> frames(model.actionFrames.begin(), model.actionFrames.end());
+    rewrite("action_frames", mgrl::npyEncode<float>(frames, {frames.size()}));
+    requireDamaged(bundle, "action_frames.npy: expected descr '<u4', found '<f4'");
+  }
+}

@@ -1,0 +1,304 @@
+// The motion graph and state-action model on the real capture (paper sec. 3, 6.3).
+#include <algorithm>
+#include <cmath>
+#include <filesystem>
+#include <queue>
+
+#include <catch2/catch.hpp>
+
+#include "mgrl/data_paths.hpp"
+#include "mgrl/graph_cache.hpp"
+#include "mgrl/kinematics.hpp"
+#include "mgrl/motion_graph.hpp"
+#include "mgrl/playback.hpp"
+#include "mgrl/scenario.hpp"
+#include "test_support.hpp"
+
+using namespace mgrl;
+
+namespace {
+
+std::filesystem::path scenarioFile(const std::string& name) {
+  return std::filesystem::path(MGRL_SOURCE_DIR) / "scenarios" / (name + ".yaml");
+}
+
+// The boxing scenario's capture and graph, built once for the file.
+struct Boxing {
+  Scenario scenario = loadScenario(scenarioFile("boxing"), test::mocap());
+  MotionDatabase db = loadMotionDatabase(scenario.motion);
+  GraphBuildReport report;
+  StateActionModel model = buildStateActionModel(db, scenario.graph, &report);
+};
+
+const Boxing& boxing() {
+  static const Boxing instance;
+  return instance;
+}
+
+}  // namespace
+
+TEST_CASE("every state of the boxing graph reaches every other state", "[graph][data]") {
+  const StateActionModel& m = boxing().model;
+  REQUIRE(m.stateCount() > 1);
+  for (std::uint32_t start : {0u, static_cast<std::uint32_t>(m.stateCount() / 2)}) {
+    std::vector<std::uint8_t> seen(m.stateCount(), 0), back(m.stateCount(), 0);
+    std::queue<std::uint32_t> queue;
+    queue.push(start);
+    seen[start] = 1;
+    while (!queue.empty()) {
+      const std::uint32_t s = queue.front();
+      queue.pop();
+      for (std::uint32_t a = m.stateActionBegin[s]; a < m.stateActionBegin[s + 1]; ++a)
+        if (!seen[m.actionTo[a]]) {
+          seen[m.actionTo[a]] = 1;
+          queue.push(m.actionTo[a]);
+        }
+    }
+    CHECK(std::count(seen.begin(), seen.end(), 1) == static_cast<long>(m.stateCount()));
+    // And every state reaches `start`: search the reversed edges.
+    queue.push(start);
+    back[start] = 1;
+    while (!queue.empty()) {
+      const std::uint32_t s = queue.front();
+      queue.pop();
+      for (std::size_t a = 0; a < m.actionCount(); ++a)
+        if (m.actionTo[a] == s && !back[m.actionFrom[a]]) {
+          back[m.actionFrom[a]] = 1;
+          queue.push(m.actionFrom[a]);
+        }
+    }
+    CHECK(std::count(back.begin(), back.end(), 1) == static_cast<long>(m.stateCount()));
+  }
+}
+
+TEST_CASE("every action ends at a state and the actions cover the component", "[graph][data]") {
+  const StateActionModel& m = boxing().model;
+  REQUIRE_NOTHROW(checkModel(m, "boxing"));
+  std::vector<std::uint8_t> covered(m.framesTotal, 0);
+  std::size_t frameSum = 0;
+  for (std::size_t a = 0; a < m.actionCount(); ++a) {
+    const auto frames = m.framesOf(a);
+    REQUIRE(!frames.empty());
+    CHECK(frames.back() == m.stateFrame[m.actionTo[a]]);
+    // Only the last frame of an action is a state.
+    for (std::size_t i = 0; i + 1 < frames.size(); ++i)
+      CHECK_FALSE(std::binary_search(m.stateFrame.begin(), m.stateFrame.end(), frames[i]));
+    for (std::uint32_t f : frames) covered[f] = 1;
+    frameSum += frames.size();
+  }
+  std::vector<std::uint32_t> union_;
+  for (std::uint32_t f = 0; f < m.framesTotal; ++f)
+    if (covered[f]) union_.push_back(f);
+  CHECK(union_ == m.componentFrames);
+  CHECK(frameSum >= m.componentFrames.size());
+  // The paper's boxer: tens to hundreds of states, thousands of actions.
+  CHECK(m.stateCount() >= 30);
+  CHECK(m.stateCount() <= 1000);
+  CHECK(m.actionCount() >= 1000);
+  CHECK(m.componentFrames.size() >= m.framesTotal * 8 / 10);
+}
+
+TEST_CASE("an action's root displacement matches forward kinematics of its frames", "[graph][data]") {
+  const Boxing& b = boxing();
+  const StateActionModel& m = b.model;
+  const Skeleton& skeleton = *b.db.skeleton;
+  std::vector<Eigen::Quaterniond> rot(skeleton.jointCount());
+  std::vector<Eigen::Vector3d> pos(skeleton.jointCount());
+  // Avatar frame straight from FK: the root projected on the ground, facing its forward axis.
+  auto avatarFromFk = [&](std::uint32_t frame) {
+    const std::size_t c = b.db.clipOf(frame);
+    forwardKinematics(b.db.clips[c].motion, frame - b.db.offsets[c], rot, pos);
+    const Eigen::Vector3d facing = rot[0] * b.db.roles.forward;
+    return std::array<double, 3>{pos[0].x(), pos[0].z(), std::atan2(facing.x(), facing.z())};
+  };
+  std::size_t checked = 0;
+  for (std::size_t a = 0; a < m.actionCount(); ++a) {
+    const auto frames = m.framesOf(a);
+    const std::size_t begin = m.actionFrameBegin[a];
+    // Walk the action edge by edge: each played frame v continues its clip from v - 1.
+    double x = 0, z = 0, yaw = 0;
+    for (std::size_t i = 0; i < frames.size(); ++i) {
+      const auto p = avatarFromFk(frames[i] - 1), q = avatarFromFk(frames[i]);
+      const double c = std::cos(p[2]), s = std::sin(p[2]);
+      const double dx = q[0] - p[0], dz = q[1] - p[1];
+      const double lx = c * dx - s * dz, lz = s * dx + c * dz;  // world step in the avatar frame of v - 1
+      const double cy = std::cos(yaw), sy = std::sin(yaw);
+      x += cy * lx + sy * lz;
+      z += -sy * lx + cy * lz;
+      yaw += std::remainder(q[2] - p[2], 2 * M_PI);
+      CHECK(m.frameRoot[3 * (begin + i)] == Approx(x).margin(1e-6));
+      CHECK(m.frameRoot[3 * (begin + i) + 1] == Approx(z).margin(1e-6));
+    }
+    const GroundMotion d = m.displacement(a);
+    CHECK(d.dx == Approx(x).margin(1e-6));
+    CHECK(d.dz == Approx(z).margin(1e-6));
+    CHECK(std::remainder(d.dyaw - yaw, 2 * M_PI) == Approx(0).margin(1e-6));
+    if (++checked == 200) break;
+  }
+  // An action inside one clip without transitions: its displacement is simply the
+  // relative avatar frame from its decision frame to its end.
+  for (std::size_t a = 0; a < m.actionCount(); ++a) {
+    const auto frames = m.framesOf(a);
+    const std::uint32_t from = m.stateFrame[m.actionFrom[a]];
+    if (frames.front() != from + 1 || frames.back() != from + frames.size()) continue;
+    const auto p = avatarFromFk(from), q = avatarFromFk(frames.back());
+    const double c = std::cos(p[2]), s = std::sin(p[2]);
+    const double dx = q[0] - p[0], dz = q[1] - p[1];
+    CHECK(m.displacement(a).dx == Approx(c * dx - s * dz).margin(1e-6));
+    CHECK(m.displacement(a).dz == Approx(s * dx + c * dz).margin(1e-6));
+    CHECK(std::remainder(m.displacement(a).dyaw - (q[2] - p[2]), 2 * M_PI) == Approx(0).margin(1e-6));
+  }
+}
+
+TEST_CASE("hits inside actions are the data's effective hits carried into the decision frame", "[graph][data]") {
+  const Boxing& b = boxing();
+  const StateActionModel& m = b.model;
+  REQUIRE(!m.hits.empty());
+  REQUIRE(m.maxHitSpeed_mps > 2);
+  float heaviest = 0;
+  for (std::size_t a = 0; a < m.actionCount(); ++a)
+    for (const ActionHit& h : m.hitsOf(a)) {
+      REQUIRE(h.action == a);
+      REQUIRE(h.offset >= 1);
+      REQUIRE(h.offset <= m.actionLength(a));
+      const std::uint32_t v = m.actionFrames[m.actionFrameBegin[a] + h.offset - 1];
+      const Clip& clip = b.db.clipAt(v);
+      const auto it = std::find_if(clip.annotation.hits.begin(), clip.annotation.hits.end(), [&](const EffectiveHit& e) {
+        return e.frame == b.db.localFrame(v) && static_cast<int>(e.hand) == h.hand;
+      });
+      REQUIRE(it != clip.annotation.hits.end());
+      CHECK(h.weight == Approx(it->speed_mps / m.maxHitSpeed_mps).epsilon(1e-5));
+      // Same distance from the avatar at that frame (a rigid move), same height.
+      const std::size_t i = m.actionFrameBegin[a] + h.offset - 1;
+      const double rx = h.x - m.frameRoot[3 * i], rz = h.z - m.frameRoot[3 * i + 1];
+      CHECK(std::hypot(rx, rz) == Approx(std::hypot(it->tipAvatar.x(), it->tipAvatar.z())).margin(1e-4));
+      CHECK(h.y == Approx(it->tipAvatar.y()).margin(1e-5));
+      heaviest = std::max(heaviest, h.weight);
+    }
+  CHECK(heaviest <= 1.0f);
+  // The centroid sits in front of the boxer at chest height.
+  CHECK(m.centroid[2] > 0.2);
+  CHECK(m.centroid[1] > 0.8);
+  CHECK(m.centroid[1] < 1.8);
+}
+
+TEST_CASE("the fast distance kernel agrees with the exact geodesic distance", "[graph][data]") {
+  const Boxing& b = boxing();
+  const FrameFeatures features = computeFrameFeatures(b.db, b.scenario.graph);
+  const auto transitions = findTransitions(b.db, features, b.scenario.graph);
+  REQUIRE(transitions.size() > 100);
+  for (std::size_t t = 0; t < transitions.size(); t += 7) {
+    const auto& c = transitions[t];
+    CAPTURE(c.from, c.to);
+    CHECK(c.distance == Approx(std::sqrt(frameDistance2(features, c.from, c.to - 1))).margin(2e-3));
+    CHECK(c.distance < b.scenario.graph.threshold);
+  }
+}
+
+TEST_CASE("without contact events, transitions are local minima of the distance matrix", "[graph][data]") {
+  const Boxing& b = boxing();
+  GraphParams params = b.scenario.graph;
+  params.contactEvent = ContactEvent::None;
+  params.threshold = 0.2;
+  const FrameFeatures features = computeFrameFeatures(b.db, params);
+  TransitionSearchStats stats;
+  const auto transitions = findTransitions(b.db, features, params, &stats);
+  REQUIRE(transitions.size() > 100);
+  CHECK(stats.pairs >= std::size_t{1900} * 1900);
+  for (std::size_t t = 0; t < transitions.size(); t += 13) {
+    const std::uint32_t i = transitions[t].from, j = transitions[t].to - 1;
+    const double d = frameDistance2(features, i, j);
+    for (int di = -1; di <= 1; ++di)
+      for (int dj = -1; dj <= 1; ++dj) {
+        const std::uint32_t a = i + di, c = j + dj;
+        if ((di == 0 && dj == 0) || a >= b.db.frameCount() || c + 1 >= b.db.frameCount()) continue;
+        if (b.db.clipOf(a) != b.db.clipOf(i) || b.db.clipOf(c) != b.db.clipOf(j)) continue;
+        CAPTURE(i, j, di, dj);
+        CHECK(d <= frameDistance2(features, a, c) + 2e-3);
+      }
+  }
+}
+
+TEST_CASE("the same input gives a byte-identical graph with any thread count", "[graph][data]") {
+  const Boxing& b = boxing();
+  GraphParams one = b.scenario.graph, two = b.scenario.graph;
+  one.threads = 1;
+  two.threads = 2;
+  const StateActionModel m1 = buildStateActionModel(b.db, one);
+  const StateActionModel m2 = buildStateActionModel(b.db, two);
+  const auto dir = std::filesystem::temp_directory_path() / "mgrl_graph_identical";
+  std::filesystem::remove_all(dir);
+  saveGraphBundle(dir / "a", m1, {{"key", "k"}});
+  saveGraphBundle(dir / "b", m2, {{"key", "k"}});
+  std::size_t files = 0;
+  for (const auto& entry : std::filesystem::directory_iterator(dir / "a")) {
+    CAPTURE(entry.path().filename().string());
+    CHECK(readFile(entry.path()) == readFile(dir / "b" / entry.path().filename()));
+    ++files;
+  }
+  CHECK(files > 10);
+  std::filesystem::remove_all(dir);
+}
+
+TEST_CASE("blended playback never jumps further than the capture and keeps feet planted", "[graph][data]") {
+  const Boxing& b = boxing();
+  const PlaybackCheck check = checkPlayback(b.db, b.model, b.scenario.graph.blendFrames, 300, 7);
+  REQUIRE(check.transitions > 50);
+  CHECK(check.maxJointStep_m <= check.sourceMaxJointStep_m + 1e-9);
+  // Foot sliding no worse than the capture's own at the same frames (5 % noise allowed).
+  CHECK(check.slide.meanSpeed_mps <= 1.05 * check.sourceSlideSameFrames_mps);
+  // Without blending, transitions jump: the playback's worst step relative to the data grows.
+  const PlaybackCheck raw = checkPlayback(b.db, b.model, 0, 300, 7);
+  CHECK(raw.worstJointStepRatio > check.worstJointStepRatio);
+}
+
+TEST_CASE("playback refuses an action that does not leave the current state", "[graph][data]") {
+  const Boxing& b = boxing();
+  ActionPlayback playback(b.db, b.model, 4);
+  playback.reset(0);
+  std::vector<Pose> poses;
+  const std::uint32_t foreign = b.model.stateActionBegin[1];
+  REQUIRE_THROWS_WITH(playback.play(foreign, poses), Catch::Contains("expected an action leaving state 0"));
+  playback.play(b.model.stateActionBegin[0], poses);
+  CHECK(poses.size() == b.model.actionLength(b.model.stateActionBegin[0]));
+  CHECK(playback.state() == b.model.actionTo[b.model.stateActionBegin[0]]);
+}
+
+TEST_CASE("the sparring scenario builds a graph over all SNU sparring tracks", "[graph][data]") {
+  const Scenario s = loadScenario(scenarioFile("sparring"), test::mocap());
+  REQUIRE(s.motion.files.size() == 20);
+  const MotionDatabase db = loadMotionDatabase(s.motion);
+  CHECK(db.frameCount() > 12000);
+  const StateActionModel m = buildStateActionModel(db, s.graph);
+  CHECK(m.stateCount() >= 100);
+  CHECK(m.actionCount() >= 1000);
+  CHECK(m.componentFrames.size() >= db.frameCount() / 2);
+  REQUIRE_NOTHROW(checkModel(m, "sparring"));
+}
+
+TEST_CASE("a component too small to learn on is an error naming the parameter to relax", "[graph][data]") {
+  const Boxing& b = boxing();
+  GraphParams params = b.scenario.graph;
+  params.threshold = 0.05;
+  REQUIRE_THROWS_WITH(buildStateActionModel(b.db, params),
+                      Catch::Contains("expected at least graph.min_states = 10") &&
+                          Catch::Contains("raise graph.threshold (now 0.05)"));
+}
+
+TEST_CASE("files with different skeletons cannot share a graph", "[graph][data]") {
+  MotionSpec spec;
+  spec.files = {test::mocap() / "cmu/bvh/13_17_boxing.bvh", test::mocap() / "snu_martial_arts/motion/s_001_3_1.bvh"};
+  REQUIRE_THROWS_WITH(loadMotionDatabase(spec), Catch::Contains("13_17_boxing.bvh and s_001_3_1.bvh have different "
+                                                                "skeletons: expected 31 joints, found 22"));
+  spec.files.clear();
+  REQUIRE_THROWS_WITH(loadMotionDatabase(spec), Catch::Contains("expected at least one motion file, found none"));
+}
+
+TEST_CASE("graph.joint_weights must name joints of the skeleton", "[graph][data]") {
+  const Boxing& b = boxing();
+  GraphParams params = b.scenario.graph;
+  params.jointWeights["LeftElbow"] = 1;
+  REQUIRE_THROWS_WITH(computeFrameFeatures(b.db, params),
+                      Catch::Contains("graph.joint_weights: expected a joint of the skeleton") &&
+                          Catch::Contains("found 'LeftElbow'"));
+}
