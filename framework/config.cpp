@@ -50,7 +50,7 @@ std::string describe(const YAML::Node& node) {
   if (!node || node.IsNull()) return "nothing";
   if (node.IsMap()) return "a map";
   if (node.IsSequence()) return "a list";
-  return fmt::format("'{}'", quoteToken(node.Scalar()));
+  return quoteToken(node.Scalar());
 }
 
 }  // namespace

@@ -242,7 +242,8 @@ std::vector<T> loadArray(const fs::path& dir, const ManifestReader& reader, cons
   const std::string source = filePath.string();
   std::error_code ec;
   const std::uintmax_t size = fs::file_size(filePath, ec);
-  if (ec) throw Error(fmt::format("{}: expected the file listed in manifest.json, found none ({})", source, ec.message()));
+  if (ec)
+    throw Error(fmt::format("{}: expected the file listed in manifest.json, found none ({})", source, ec.message()));
   // Before reading, so a huge stray file is refused without loading it.
   if (size != bytes)
     throw Error(fmt::format("{}: expected {} bytes as in manifest.json, found {}", source, bytes, size));
@@ -367,7 +368,8 @@ void checkModel(const StateActionModel& m, std::string_view source) {
         fail(source, fmt::format("hits[{}].offset", h),
              fmt::format("an offset in [1, {}] (the length of action {})", m.actionLength(a), a),
              fmt::format("{}", hit.offset));
-      if (hit.hand > 1) fail(source, fmt::format("hits[{}].hand", h), "0 (left) or 1 (right)", fmt::format("{}", hit.hand));
+      if (hit.hand > 1)
+        fail(source, fmt::format("hits[{}].hand", h), "0 (left) or 1 (right)", fmt::format("{}", hit.hand));
       if (h > m.actionHitBegin[a]) {
         const ActionHit& previous = m.hits[h - 1];
         if (hit.offset < previous.offset || (hit.offset == previous.offset && hit.hand < previous.hand))
@@ -566,8 +568,8 @@ GraphBundleLoad loadGraphBundle(const std::filesystem::path& dirArgument, std::s
 
     const std::size_t hitCount = hitsIndex.size() / kHitIndexColumns;
     if (hitsValue.size() != hitCount * kHitValueColumns)
-      throw Error(fmt::format("{}: expected {} rows, as hits_index.npy has, found {}", (dir / "hits_value.npy").string(),
-                              hitCount, hitsValue.size() / kHitValueColumns));
+      throw Error(fmt::format("{}: expected {} rows, as hits_index.npy has, found {}",
+                              (dir / "hits_value.npy").string(), hitCount, hitsValue.size() / kHitValueColumns));
     m.hits.resize(hitCount);
     for (std::size_t h = 0; h < hitCount; ++h) {
       const std::uint32_t* index = &hitsIndex[kHitIndexColumns * h];

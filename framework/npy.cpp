@@ -286,7 +286,8 @@ std::vector<T> npyDecode(std::string_view bytes, std::string_view source, std::v
 
   const std::optional<std::size_t> count = elementCount(*header.shape);
   if (!count || *count > std::numeric_limits<std::size_t>::max() / sizeof(T))
-    throw ParseError(source, 0, fmt::format("a shape whose data fits in 2^{} bytes", std::numeric_limits<std::size_t>::digits),
+    throw ParseError(source, 0,
+                     fmt::format("a shape whose data fits in 2^{} bytes", std::numeric_limits<std::size_t>::digits),
                      shapeText(*header.shape));
   const std::string_view payload = bytes.substr(prefix + headerLength);
   if (*count * sizeof(T) != payload.size())

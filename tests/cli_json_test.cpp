@@ -1,4 +1,5 @@
 #include <cstdio>
+#include <filesystem>
 #include <string>
 
 #include <catch2/catch.hpp>
@@ -66,4 +67,24 @@ TEST_CASE("a failing mgrl inspect prints nothing on stdout", "[cli][data]") {
   const Run run = runMgrl("inspect --json '" + bvh + "' no_such_file.bvh");
   CHECK(run.status != 0);
   CHECK(run.out.empty());
+}
+
+TEST_CASE("mgrl graph --json reports the contract keys and reuses its cache", "[cli][data][graph]") {
+  const auto cache = std::filesystem::temp_directory_path() / "mgrl_cli_graph_cache";
+  std::filesystem::remove_all(cache);
+  const std::string args = std::string("graph '") + MGRL_SOURCE_DIR + "/scenarios/boxing.yaml' --json --cache '" +
+                           cache.string() + "'";
+  for (bool cached : {false, true}) {
+    const Run run = runMgrl(args);
+    REQUIRE(run.status == 0);
+    const auto json = nlohmann::json::parse(run.out);
+    for (const char* key : {"frames_total", "frames_in_scc", "states", "actions", "mean_action_frames",
+                            "min_action_frames", "max_action_frames", "build_seconds"})
+      CHECK(json.contains(key));
+    CHECK(json["frames_total"] == 1960);
+    CHECK(json["states"].get<int>() >= 30);
+    CHECK(json["actions"].get<int>() >= 1000);
+    CHECK(json["cached"] == cached);
+  }
+  std::filesystem::remove_all(cache);
 }

@@ -88,7 +88,7 @@ mgrl_cli_test(amc_without_asf ARGS inspect nope_01.amc EXIT 1
 mgrl_cli_test(units_furlong ARGS inspect tiny.bvh --units furlong EXIT 1
   MESSAGE "--units: expected one of auto, m, cm, inch, cmu, found 'furlong'")
 mgrl_cli_test(unknown_command ARGS frobnicate EXIT 2
-  REGEX "expected a command \\(inspect\\), found 'frobnicate'")
+  REGEX "expected a command \\(inspect, graph\\), found 'frobnicate'")
 
 # --- Usage errors, exit 2 -----------------------------------------------------------------
 
@@ -103,3 +103,9 @@ mgrl_cli_test(role_without_joint ARGS inspect tiny.bvh --role left_fist EXIT 1
   MESSAGE "--role: expected ROLE=JOINT, found 'left_fist'")
 mgrl_cli_test(role_unknown_joint ARGS inspect tiny.bvh --role left_fist=Nope EXIT 1
   REGEX "tiny\\.bvh: role left_fist: expected a joint of the skeleton, found 'Nope'")
+
+# --- mgrl graph ------------------------------------------------------------------------
+mgrl_cli_test(graph_unknown_key ARGS graph bad_scenario.yaml
+              MESSAGE "bad_scenario.yaml:5:13: graph.treshold: unknown key (expected one of: threshold, velocity_weight, root_height_weight, contact_event, local_minimum, blend_frames, min_states, joint_weights, threads)")
+mgrl_cli_test(graph_missing_scenario ARGS graph no_such.yaml MESSAGE "no_such.yaml: cannot open: No such file or directory")
+mgrl_cli_test(graph_no_scenario ARGS graph EXIT 2 REGEX "SCENARIO is required")

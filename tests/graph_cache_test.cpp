@@ -66,7 +66,8 @@ StateActionModel tinyModel() {
   m.actionFrom = {0, 0, 1, 2};
   m.actionTo = {1, 2, 2, 0};
   m.actionFrameBegin = {0, 6, 10, 14, 18};
-  for (int a = 0; a < 4; ++a) m.actionDisplacement.insert(m.actionDisplacement.end(), {0.1 * (a + 1), -0.2 * (a + 1), 0.3 / (a + 1)});
+  for (int a = 0; a < 4; ++a)
+    m.actionDisplacement.insert(m.actionDisplacement.end(), {0.1 * (a + 1), -0.2 * (a + 1), 0.3 / (a + 1)});
   m.stateActionBegin = {0, 2, 3, 4};
   m.actionFrames = {3, 4, 5, 6, 7, 8, 3, 4, 13, 14, 9, 12, 13, 14, 15, 16, 1, 2};
   for (std::size_t i = 0; i < 3 * m.actionFrames.size(); ++i) {
@@ -132,7 +133,8 @@ void writeBytes(const fs::path& path, const std::string& bytes) {
 
 std::map<std::string, std::string> filesIn(const fs::path& dir) {
   std::map<std::string, std::string> files;
-  for (const auto& entry : fs::directory_iterator(dir)) files[entry.path().filename().string()] = mgrl::readFile(entry.path());
+  for (const auto& entry : fs::directory_iterator(dir))
+    files[entry.path().filename().string()] = mgrl::readFile(entry.path());
   return files;
 }
 

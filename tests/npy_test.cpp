@@ -232,7 +232,8 @@ TEST_CASE("npyDecode refuses a payload shorter or longer than the shape", "[npy]
   const std::string file = npyEncode<double>(std::vector<double>{1, 2, 3}, {3});
   REQUIRE_PARSE_ERROR(npyDecode<double>(file.substr(0, file.size() - 1), "short.npy"),
                       "short.npy: expected 24 data bytes for shape (3,) of '<f8', found 23 bytes");
-  REQUIRE_PARSE_ERROR(npyDecode<double>(file + "x", "long.npy"), "expected 24 data bytes for shape (3,) of '<f8', found 25 bytes");
+  REQUIRE_PARSE_ERROR(npyDecode<double>(file + "x", "long.npy"),
+                      "expected 24 data bytes for shape (3,) of '<f8', found 25 bytes");
 }
 
 TEST_CASE("npyDecode refuses a header that is not the expected dict", "[npy]") {
@@ -241,8 +242,10 @@ TEST_CASE("npyDecode refuses a header that is not the expected dict", "[npy]") {
   };
   REQUIRE_PARSE_ERROR(decode("hello"), "h.npy: expected '{' opening the header dict, found 'hello'");
   REQUIRE_PARSE_ERROR(decode(""), "expected '{' opening the header dict, found the end of the header");
-  REQUIRE_PARSE_ERROR(decode("{'descr': '<f8', 'fortran_order': False"), "expected ',' or '}' in the header dict, found the end");
-  REQUIRE_PARSE_ERROR(decode("{'descr': '<f8' 'fortran_order': False}"), "expected ',' or '}' in the header dict, found ''fortran_order'");
+  REQUIRE_PARSE_ERROR(decode("{'descr': '<f8', 'fortran_order': False"),
+                      "expected ',' or '}' in the header dict, found the end");
+  REQUIRE_PARSE_ERROR(decode("{'descr': '<f8' 'fortran_order': False}"),
+                      "expected ',' or '}' in the header dict, found ''fortran_order'");
   REQUIRE_PARSE_ERROR(decode("{'descr': '<f8', 'fortran_order': False, 'shape': (3,)} x", threeDoubles()),
                       "expected the end of the header after '}', found 'x'");
   REQUIRE_PARSE_ERROR(decode("{descr: '<f8'}"), "expected a quoted key or '}' in the header dict, found 'descr");
@@ -255,9 +258,11 @@ TEST_CASE("npyDecode refuses a header that is not the expected dict", "[npy]") {
   REQUIRE_PARSE_ERROR(decode("{'shape': (3 4)}"), "expected ',' or ')' in 'shape', found '4)}'");
   REQUIRE_PARSE_ERROR(decode("{'shape': (03,)}"), "expected a decimal dimension without leading zeros");
   REQUIRE_PARSE_ERROR(decode("{'shape': (3.0,)}"), "expected ',' or ')' in 'shape', found '.0,)}'");
-  REQUIRE_PARSE_ERROR(decode("{'dtype': '<f8'}"), "expected one of the keys 'descr', 'fortran_order', 'shape', found ''dtype'");
+  REQUIRE_PARSE_ERROR(decode("{'dtype': '<f8'}"),
+                      "expected one of the keys 'descr', 'fortran_order', 'shape', found ''dtype'");
   REQUIRE_PARSE_ERROR(decode("{'descr': '<f8', 'descr': '<f8'}"), "expected each header key once, found 'descr' twice");
-  REQUIRE_PARSE_ERROR(decode("{'descr': '<f8', 'fortran_order': False}"), "expected the header key 'shape', found none");
+  REQUIRE_PARSE_ERROR(decode("{'descr': '<f8', 'fortran_order': False}"),
+                      "expected the header key 'shape', found none");
   REQUIRE_PARSE_ERROR(decode("{'shape': (3,), 'fortran_order': False}"), "expected the header key 'descr', found none");
   REQUIRE_PARSE_ERROR(decode("{'descr': '<f8', 'shape': (3,)}"), "expected the header key 'fortran_order', found none");
   // Control bytes from a damaged file are shown escaped.

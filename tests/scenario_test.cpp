@@ -1,0 +1,146 @@
+// Scenario YAML: strict keys, types, ranges, paths; and the graph cache in use.
+#include <filesystem>
+#include <fstream>
+
+#include <catch2/catch.hpp>
+
+#include "graph_command.hpp"
+#include "mgrl/graph_cache.hpp"
+#include "mgrl/scenario.hpp"
+#include "test_support.hpp"
+
+using namespace mgrl;
+using Catch::Contains;
+
+namespace {
+
+const std::filesystem::path kSource = std::filesystem::path(MGRL_SOURCE_DIR) / "scenarios" / "test.yaml";
+
+Scenario parse(const std::string& text) { return parseScenario(text, kSource, test::mocap()); }
+
+const char* kGood = R"(name: mini
+motion:
+  files: [cmu/bvh/13_17_boxing.bvh]
+  fps: 30
+graph:
+  threshold: 0.4
+)";
+
+}  // namespace
+
+TEST_CASE("both shipped scenarios load", "[scenario][data]") {
+  for (const char* name : {"boxing", "sparring"}) {
+    CAPTURE(name);
+    const Scenario s =
+        loadScenario(std::filesystem::path(MGRL_SOURCE_DIR) / "scenarios" / (std::string(name) + ".yaml"), test::mocap());
+    CHECK(s.name == name);
+    CHECK(s.motion.fps == 30);
+    CHECK(!s.motion.files.empty());
+  }
+}
+
+TEST_CASE("a scenario resolves files in the data folder and expands patterns in order", "[scenario][data]") {
+  const Scenario s = parse("motion:\n  files: [snu_martial_arts/motion/s_005_*.bvh, cmu/bvh/13_18_boxing.bvh]\ngraph: {}\n");
+  REQUIRE(s.motion.files.size() == 5);
+  CHECK(s.motion.files[0].filename() == "s_005_1_1.bvh");
+  CHECK(s.motion.files[3].filename() == "s_005_3_2.bvh");
+  CHECK(s.motion.files[4].filename() == "13_18_boxing.bvh");
+  CHECK(s.name == "test");
+  CHECK(s.graph.threshold == GraphParams{}.threshold);
+}
+
+TEST_CASE("scenario mistakes name the file, line, column and key", "[scenario]") {
+  REQUIRE_NOTHROW(parse(kGood));
+  SECTION("unknown key") {
+    REQUIRE_THROWS_WITH(parse(std::string(kGood) + "  treshold: 0.2\n"),
+                        Contains("test.yaml:7:13: graph.treshold: unknown key (expected one of: threshold,"));
+  }
+  SECTION("unknown top-level key") {
+    REQUIRE_THROWS_WITH(parse(std::string(kGood) + "grpah: {}\n"), Contains("test.yaml:7:8: grpah: unknown key"));
+  }
+  SECTION("wrong type") {
+    REQUIRE_THROWS_WITH(parse("motion:\n  files: [cmu/bvh/13_17_boxing.bvh]\ngraph:\n  threshold: high\n"),
+                        Contains("test.yaml:4:14: graph.threshold: expected a number in [1e-06, 10], found 'high'"));
+  }
+  SECTION("out of range") {
+    REQUIRE_THROWS_WITH(parse("motion:\n  files: [cmu/bvh/13_17_boxing.bvh]\n  fps: 0\ngraph: {}\n"),
+                        Contains("test.yaml:3:8: motion.fps: expected a number in [1, 1000], found 0"));
+    REQUIRE_THROWS_WITH(parse("motion:\n  files: [cmu/bvh/13_17_boxing.bvh]\ngraph:\n  blend_frames: 2.5\n"),
+                        Contains("graph.blend_frames: expected a whole number in [0, 120], found '2.5'"));
+  }
+  SECTION("missing section") {
+    REQUIRE_THROWS_WITH(parse("motion:\n  files: [cmu/bvh/13_17_boxing.bvh]\n"),
+                        Contains("test.yaml:1:1: expected a 'graph' section, found none"));
+    REQUIRE_THROWS_WITH(parse("graph: {}\n"), Contains("expected a 'motion' section, found none"));
+  }
+  SECTION("no motion files") {
+    REQUIRE_THROWS_WITH(parse("motion:\n  files: []\ngraph: {}\n"),
+                        Contains("motion.files: expected at least one motion file, found an empty list"));
+    REQUIRE_THROWS_WITH(parse("motion:\n  fps: 30\ngraph: {}\n"), Contains("motion: expected a 'files' list, found none"));
+  }
+  SECTION("a file or pattern that matches nothing") {
+    REQUIRE_THROWS_WITH(parse("motion:\n  files: [cmu/bvh/nothing_*.bvh]\ngraph: {}\n"),
+                        Contains("test.yaml:2:11: motion.files[0]: expected a motion file or pattern matching files, "
+                                 "found none for 'cmu/bvh/nothing_*.bvh'"));
+  }
+  SECTION("bad enumerations") {
+    REQUIRE_THROWS_WITH(parse(std::string(kGood) + "  contact_event: right_foot\n"),
+                        Contains("graph.contact_event: expected one of left_foot_liftoff, any_contact_change, none, "
+                                 "found 'right_foot'"));
+    REQUIRE_THROWS_WITH(parse("motion:\n  files: [cmu/bvh/13_17_boxing.bvh]\n  units: feet\ngraph: {}\n"),
+                        Contains("motion.units:"));
+    REQUIRE_THROWS_WITH(parse("motion:\n  files: [cmu/bvh/13_17_boxing.bvh]\n  roles: {left_paw: X}\ngraph: {}\n"),
+                        Contains("motion.roles.left_paw: unknown role"));
+  }
+  SECTION("malformed YAML") {
+    REQUIRE_THROWS_WITH(parse("motion: [\n"), Contains("test.yaml:2:1: expected valid YAML, found a syntax error"));
+    REQUIRE_THROWS_WITH(parse("- just\n- a list\n"), Contains("expected a scenario"));
+  }
+}
+
+TEST_CASE("the graph cache is reused, refreshed when inputs change and rebuilt when damaged", "[scenario][graph_cache][data]") {
+  const auto cache = std::filesystem::temp_directory_path() / "mgrl_cache_test";
+  std::filesystem::remove_all(cache);
+  Scenario s = parse(kGood);
+  std::vector<std::string> log;
+  app::GraphOptions options;
+  options.cacheDir = cache;
+  options.log = [&](const std::string& m) { log.push_back(m); };
+
+  const app::GraphResult first = app::obtainGraph(s, options);
+  CHECK_FALSE(first.fromCache);
+  REQUIRE(std::filesystem::exists(first.bundle / "manifest.json"));
+  const app::GraphResult second = app::obtainGraph(s, options);
+  CHECK(second.fromCache);
+  CHECK(second.model.actionFrames == first.model.actionFrames);
+  CHECK(second.model.frameRoot == first.model.frameRoot);
+
+  SECTION("--no-cache rebuilds") {
+    options.noCache = true;
+    CHECK_FALSE(app::obtainGraph(s, options).fromCache);
+  }
+  SECTION("a changed parameter makes the bundle stale") {
+    s.graph.threshold = 0.35;
+    const app::GraphResult third = app::obtainGraph(s, options);
+    CHECK_FALSE(third.fromCache);
+    CHECK(log.back().find("saved") != std::string::npos);
+    CHECK(std::any_of(log.begin(), log.end(), [](const std::string& m) { return m.find("stale") != std::string::npos; }));
+    CHECK(app::obtainGraph(s, options).fromCache);
+  }
+  SECTION("a damaged array is detected and rebuilt") {
+    const auto file = first.bundle / "action_frames.npy";
+    std::string bytes = readFile(file);
+    bytes[bytes.size() - 3] ^= 0x5a;
+    writeFileAtomically(file, bytes);
+    const app::GraphResult third = app::obtainGraph(s, options);
+    CHECK_FALSE(third.fromCache);
+    CHECK(std::any_of(log.begin(), log.end(), [](const std::string& m) { return m.find("damaged") != std::string::npos; }));
+    CHECK(third.model.actionFrames == first.model.actionFrames);
+    CHECK(app::obtainGraph(s, options).fromCache);
+  }
+  SECTION("a garbage manifest is detected and rebuilt") {
+    writeFileAtomically(first.bundle / "manifest.json", "{ not json");
+    CHECK_FALSE(app::obtainGraph(s, options).fromCache);
+  }
+  std::filesystem::remove_all(cache);
+}
