@@ -1,8 +1,10 @@
 #!/usr/bin/env bash
-# The main job: set up, build, and show what mgrl finds in the CMU shadow-boxing capture.
+# The main job: set up, build, inspect the CMU shadow-boxing capture, and build the
+# boxing scenario's motion graph and state-action model (cached after the first run).
 set -euo pipefail
 root="$(cd "$(dirname "$0")/.." && pwd)"
 "$root/scripts/setup.sh"
 "$root/scripts/build.sh"
 data="${MGRL_DATA:-$root/../shared/mocap}"
-"$root/build/app/mgrl" inspect "$data/cmu/bvh/13_17_boxing.bvh" "$data/cmu/bvh/13_18_boxing.bvh" "$@"
+"$root/build/app/mgrl" inspect "$data/cmu/bvh/13_17_boxing.bvh" "$data/cmu/bvh/13_18_boxing.bvh"
+"$root/build/app/mgrl" graph "$root/scenarios/boxing.yaml" --data "$data" "$@"
