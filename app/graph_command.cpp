@@ -53,7 +53,10 @@ GraphResult obtainGraph(const Scenario& scenario, const GraphOptions& options) {
     if (options.log) options.log(message);
   };
   GraphResult result;
-  result.db = loadMotionDatabase(scenario.motion, options.log);
+  // Loader warnings are warnings; the log also carries plain progress.
+  WarningSink warn;
+  if (options.log) warn = [&](const std::string& message) { log(fmt::format("warning: {}", message)); };
+  result.db = loadMotionDatabase(scenario.motion, warn);
   result.key = graphCacheKey(scenario);
   const std::filesystem::path cacheDir = options.cacheDir.empty() ? defaultCacheDirectory() : options.cacheDir;
   // One bundle per scenario file: a changed scenario replaces its bundle instead of piling up.
@@ -68,7 +71,6 @@ GraphResult obtainGraph(const Scenario& scenario, const GraphOptions& options) {
       result.model = std::move(cached.model);
       result.fromCache = true;
       result.buildSeconds = cached.manifest["provenance"].value("build_seconds", 0.0);
-      result.report.effectiveHits = result.model.hits.size();
       result.seconds = since(start);
       log(fmt::format("graph: reused {}", result.bundle.string()));
       return result;
@@ -107,18 +109,21 @@ GraphResult obtainGraph(const Scenario& scenario, const GraphOptions& options) {
 void measurePlayback(GraphResult& graph, int blendFrames) {
   graph.blendFrames = blendFrames;
   graph.playback = checkPlayback(graph.db, graph.model, blendFrames, kPlaybackCheckActions, kPlaybackCheckSeed);
-  graph.sourceSlide = sourceFootSlide(graph.db);
 }
 
 namespace {
 
-struct LengthStats {
-  std::size_t min = 0, max = 0;
+// What both reports show beyond the model's own sizes.
+struct Summary {
+  std::size_t min = 0, max = 0;  // action frames
   double mean = 0;
+  std::size_t hitFrames = 0;     // effective hitting points in the data
 };
 
-LengthStats actionLengths(const StateActionModel& m) {
-  LengthStats s;
+Summary summarise(const GraphResult& g) {
+  const StateActionModel& m = g.model;
+  Summary s;
+  for (const Clip& c : g.db.clips) s.hitFrames += c.annotation.hits.size();
   if (m.actionCount() == 0) return s;
   s.min = SIZE_MAX;
   double sum = 0;
@@ -138,9 +143,7 @@ double round3(double v) { return std::round(v * 1000) / 1000; }
 
 nlohmann::json graphJson(const GraphResult& g) {
   const StateActionModel& m = g.model;
-  const LengthStats l = actionLengths(m);
-  std::size_t hitFrames = 0;
-  for (const Clip& c : g.db.clips) hitFrames += c.annotation.hits.size();
+  const Summary l = summarise(g);
   return {{"frames_total", m.framesTotal},
           {"frames_in_scc", m.componentFrames.size()},
           {"scc_fraction", round3(m.framesTotal ? static_cast<double>(m.componentFrames.size()) / m.framesTotal : 0)},
@@ -150,7 +153,7 @@ nlohmann::json graphJson(const GraphResult& g) {
           {"mean_action_frames", round3(l.mean)},
           {"min_action_frames", l.min},
           {"max_action_frames", l.max},
-          {"effective_hits", hitFrames},
+          {"effective_hits", l.hitFrames},
           {"action_hits", m.hits.size()},
           {"fps", round3(1.0 / m.frameTime)},
           {"build_seconds", round3(g.buildSeconds)},
@@ -159,7 +162,7 @@ nlohmann::json graphJson(const GraphResult& g) {
             {"transitions", g.playback.transitions},
             {"foot_slide_mps", round3(g.playback.slide.meanSpeed_mps)},
             {"source_foot_slide_mps", round3(g.playback.sourceSlideSameFrames_mps)},
-            {"capture_foot_slide_mps", round3(g.sourceSlide.meanSpeed_mps)},
+            {"capture_foot_slide_mps", round3(g.playback.captureSlide.meanSpeed_mps)},
             {"max_joint_step_m", round3(g.playback.maxJointStep_m)},
             {"source_max_joint_step_m", round3(g.playback.sourceMaxJointStep_m)},
             {"worst_joint_step_ratio", round3(g.playback.worstJointStepRatio)}}},
@@ -170,9 +173,7 @@ nlohmann::json graphJson(const GraphResult& g) {
 
 std::string graphText(const GraphResult& g) {
   const StateActionModel& m = g.model;
-  const LengthStats l = actionLengths(m);
-  std::size_t hitFrames = 0;
-  for (const Clip& c : g.db.clips) hitFrames += c.annotation.hits.size();
+  const Summary l = summarise(g);
   std::string out;
   out += fmt::format("frames          {} in {} files at {:g} fps ({:.1f} s)\n", m.framesTotal, g.db.clips.size(),
                      1.0 / m.frameTime, m.framesTotal * m.frameTime);
@@ -184,7 +185,7 @@ std::string graphText(const GraphResult& g) {
                      m.stateCount() ? static_cast<double>(m.actionCount()) / m.stateCount() : 0.0);
   out += fmt::format("action frames   min {}, mean {:.1f}, max {} ({:.2f} s mean)\n", l.min, l.mean, l.max,
                      l.mean * m.frameTime);
-  out += fmt::format("effective hits  {} in the data, {} inside actions\n", hitFrames, m.hits.size());
+  out += fmt::format("effective hits  {} in the data, {} inside actions\n", l.hitFrames, m.hits.size());
   out += fmt::format("playback check  {} frames, {} transitions blended over {} frames: foot sliding {:.3f} m/s "
                      "(same frames in the capture: {:.3f}), largest joint step {:.3f} m (capture: {:.3f})\n",
                      g.playback.frames, g.playback.transitions, g.blendFrames, g.playback.slide.meanSpeed_mps,

@@ -26,7 +26,7 @@ struct GraphOptions {
 struct GraphResult {
   MotionDatabase db;
   StateActionModel model;
-  GraphBuildReport report;     ///< zeros when loaded from the cache, except effectiveHits
+  GraphBuildReport report;     ///< zeros when loaded from the cache
   bool fromCache = false;
   double buildSeconds = 0;     ///< of the build that made the model (the cached one's if reused)
   double seconds = 0;          ///< this call, loading included
@@ -34,7 +34,6 @@ struct GraphResult {
   std::string key;
   /// Filled by measurePlayback().
   PlaybackCheck playback;
-  FootSlide sourceSlide;
   int blendFrames = 0;
 };
 

@@ -96,20 +96,7 @@ int main(int argc, char** argv) {
         throw mgrl::Error(fmt::format("--fps: expected a frame rate in (0, 10000], found {}", inspect.load.fps));
       try {
         inspect.load.units = mgrl::parseLengthUnit(units);
-        if (graphCommand->parsed()) {
-      const mgrl::Scenario scenario = mgrl::loadScenario(scenarioPath, mgrl::dataDirectory(dataDir));
-      mgrl::app::GraphOptions options;
-      options.cacheDir = cacheDir;
-      options.noCache = noCache;
-      options.log = [](const std::string& message) { std::cerr << "mgrl: " << message << '\n'; };
-      mgrl::app::GraphResult graph = mgrl::app::obtainGraph(scenario, options);
-      mgrl::app::measurePlayback(graph, scenario.graph.blendFrames);
-      if (json)
-        std::cout << mgrl::app::graphJson(graph).dump(2) << '\n';
-      else
-        std::cout << mgrl::app::graphText(graph);
-    }
-  } catch (const mgrl::Error& e) {
+      } catch (const mgrl::Error& e) {
         throw mgrl::Error(fmt::format("--units: {}", e.what()));
       }
       inspect.load.asf = asf;

@@ -12,16 +12,12 @@
 
 #include <sys/resource.h>
 
+#include "bench_support.hpp"
 #include "mgrl/data_paths.hpp"
 #include "mgrl/motion_graph.hpp"
 #include "mgrl/scenario.hpp"
 
 namespace {
-
-double median(std::vector<double> v) {
-  std::sort(v.begin(), v.end());
-  return v[v.size() / 2];
-}
 
 double peakMegabytes() {
   rusage usage{};
@@ -70,7 +66,7 @@ int main(int argc, char** argv) {
         t.push_back(std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());
         if (out) *out = std::move(m);
       }
-      return median(t);
+      return mgrl::bench::median(t);
     };
     mgrl::StateActionModel model;
     const double build = time(db, scenario.graph, &model);

@@ -10,6 +10,7 @@
 #include <string>
 #include <vector>
 
+#include "bench_support.hpp"
 #include "mgrl/annotation.hpp"
 #include "mgrl/asf_amc.hpp"
 #include "mgrl/bvh.hpp"
@@ -23,11 +24,6 @@ using Clock = std::chrono::steady_clock;
 namespace {
 
 double seconds(Clock::time_point a, Clock::time_point b) { return std::chrono::duration<double>(b - a).count(); }
-
-double median(std::vector<double> v) {
-  std::sort(v.begin(), v.end());
-  return v[v.size() / 2];
-}
 
 }  // namespace
 
@@ -106,7 +102,8 @@ int main(int argc, char** argv) {
     annotateTimes.push_back(seconds(a0, Clock::now()));
   }
 
-  const double load = median(loadTimes), parse = median(parseTimes), fk = median(fkTimes), ann = median(annotateTimes);
+  const double load = bench::median(loadTimes), parse = bench::median(parseTimes);
+  const double fk = bench::median(fkTimes), ann = bench::median(annotateTimes);
   std::printf("files                 %zu (%.1f MB, %zu frames)\n", files.size(), bytes / 1e6, frames);
   std::printf("load all (disk)       %.3f s median of %d  (%.0f MB/s)\n", load, runs, bytes / 1e6 / load);
   std::printf("parse only (memory)   %.3f s median  (%.0f MB/s)\n", parse, bytes / 1e6 / parse);

@@ -9,6 +9,7 @@
 
 #include "mgrl/kinematics.hpp"
 #include "mgrl/parallel.hpp"
+#include "mgrl/rotation.hpp"
 
 namespace mgrl {
 
@@ -35,9 +36,6 @@ void addGeodesic2(float* __restrict row, const float* __restrict qx, const float
     row[c] += w4 * (1.0f - x) * p * p;
   }
 }
-
-// Rotation about +Y by `yaw` (the avatar frame's orientation, DESIGN.md sec. 3).
-Eigen::Quaterniond yawRotation(double yaw) { return Eigen::Quaterniond(Eigen::AngleAxisd(yaw, Eigen::Vector3d::UnitY())); }
 
 // Angular velocity (rad/s, in the rotation's own frame) between two orientations dt apart.
 Eigen::Vector3d angularVelocity(const Eigen::Quaterniond& a, const Eigen::Quaterniond& b, double dt) {
@@ -92,7 +90,7 @@ FrameFeatures computeFrameFeatures(const MotionDatabase& db, const GraphParams& 
       for (std::size_t s = 0; s < slots; ++s) {
         Eigen::Quaterniond q = clip.motion.rotation(k, static_cast<std::size_t>(f.joints[s]));
         // The root's facing yaw is factored out: what remains is its tilt (pitch and roll).
-        if (s == 0) q = yawRotation(-clip.annotation.frames[k].yaw) * q;
+        if (s == 0) q = axisRotation(Axis::Y, -clip.annotation.frames[k].yaw) * q;
         q.normalize();
         frameRot[g * slots + s] = q;
         f.quat[(s * 4 + 0) * n + g] = static_cast<float>(q.x());

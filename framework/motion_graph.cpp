@@ -18,10 +18,15 @@ GroundMotion relativeMotion(const AvatarFrame& from, const AvatarFrame& to) {
   return {d.x(), d.z(), std::remainder(to.yaw - from.yaw, 2 * M_PI)};
 }
 
-GroundMotion compose(const GroundMotion& a, const GroundMotion& b) {
+Eigen::Vector3d transformPoint(const GroundMotion& motion, const Eigen::Vector3d& point) {
   // Avatar-frame axes: +Z facing, +X left; turning by yaw maps +Z to (sin yaw, cos yaw).
-  const double c = std::cos(a.dyaw), s = std::sin(a.dyaw);
-  return {a.dx + c * b.dx + s * b.dz, a.dz - s * b.dx + c * b.dz, std::remainder(a.dyaw + b.dyaw, 2 * M_PI)};
+  const double c = std::cos(motion.dyaw), s = std::sin(motion.dyaw);
+  return {motion.dx + c * point.x() + s * point.z(), point.y(), motion.dz - s * point.x() + c * point.z()};
+}
+
+GroundMotion compose(const GroundMotion& a, const GroundMotion& b) {
+  const Eigen::Vector3d end = transformPoint(a, {b.dx, 0, b.dz});
+  return {end.x(), end.z(), std::remainder(a.dyaw + b.dyaw, 2 * M_PI)};
 }
 
 namespace {
@@ -203,17 +208,13 @@ StateActionModel buildStateActionModel(const MotionDatabase& db, const GraphPara
         root = compose(root, relativeMotion(avatarFrameAt(db, v - 1), avatarFrameAt(db, v)));
         m.actionFrames.push_back(v);
         m.frameRoot.insert(m.frameRoot.end(), {root.dx, root.dz, root.dyaw});
-        const double c = std::cos(root.dyaw), sn = std::sin(root.dyaw);
-        auto toDecision = [&](const Eigen::Vector3d& p) {
-          return Eigen::Vector3d(root.dx + c * p.x() + sn * p.z(), p.y(), root.dz - sn * p.x() + c * p.z());
-        };
-        const Eigen::Vector3d pc = toDecision(centroid);
+        const Eigen::Vector3d pc = transformPoint(root, centroid);
         m.frameCentroid.insert(m.frameCentroid.end(),
                                {static_cast<float>(pc.x()), static_cast<float>(pc.y()), static_cast<float>(pc.z())});
         m.frameEntersTransition.push_back(v != previous + 1 ? 1 : 0);
         for (std::uint32_t h = hitBegin[v]; h < hitBegin[v + 1]; ++h) {
           const EffectiveHit& hit = *hitList[h];
-          const Eigen::Vector3d p = toDecision(hit.tipAvatar);
+          const Eigen::Vector3d p = transformPoint(root, hit.tipAvatar);
           m.hits.push_back({a, offset, static_cast<std::uint8_t>(hit.hand), static_cast<float>(p.x()),
                             static_cast<float>(p.y()), static_cast<float>(p.z()),
                             static_cast<float>(hit.speed_mps / m.maxHitSpeed_mps)});
@@ -231,14 +232,8 @@ StateActionModel buildStateActionModel(const MotionDatabase& db, const GraphPara
     }
     m.stateActionBegin.push_back(static_cast<std::uint32_t>(m.actionFrom.size()));
   }
-  local.effectiveHits = m.hits.size();
   if (report) *report = local;
   return m;
-}
-
-std::size_t StateActionModel::clipOf(std::uint32_t frame) const {
-  const auto it = std::upper_bound(clipOffset.begin(), clipOffset.end(), frame);
-  return static_cast<std::size_t>(it - clipOffset.begin()) - 1;
 }
 
 }  // namespace mgrl

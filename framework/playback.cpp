@@ -7,18 +7,11 @@
 
 #include "mgrl/kinematics.hpp"
 #include "mgrl/motion_graph.hpp"
+#include "mgrl/rotation.hpp"
 
 namespace mgrl {
 
 namespace {
-
-Eigen::Quaterniond yawRotation(double yaw) { return Eigen::Quaterniond(Eigen::AngleAxisd(yaw, Eigen::Vector3d::UnitY())); }
-
-// Avatar frame (x, z, yaw) to world.
-Eigen::Vector3d toWorld(const GroundMotion& frame, const Eigen::Vector3d& local) {
-  const double c = std::cos(frame.dyaw), s = std::sin(frame.dyaw);
-  return {frame.dx + c * local.x() + s * local.z(), local.y(), frame.dz - s * local.x() + c * local.z()};
-}
 
 // Blend weight of the offset `b` frames into a transition: 1 on the first frame (the pose
 // continues where it was), easing to 0 after `frames` frames.
@@ -47,7 +40,7 @@ void ActionPlayback::sourceLocal(std::uint32_t frame, Local& out) const {
   const AvatarFrame& avatar = clip.annotation.frames[k];
   const auto rotations = clip.motion.rotations(k);
   std::copy(rotations.begin(), rotations.end(), out.rotations.begin());
-  out.rotations[0] = yawRotation(-avatar.yaw) * out.rotations[0];
+  out.rotations[0] = axisRotation(Axis::Y, -avatar.yaw) * out.rotations[0];
   const Eigen::Vector3d root = clip.motion.localTranslation(k, 0);
   const Eigen::Vector3d local = avatar.toAvatar(root);
   out.height = root.y() - clip.annotation.groundY;
@@ -101,12 +94,12 @@ void ActionPlayback::play(std::uint32_t action, std::vector<Pose>& out) {
     const GroundMotion at = compose(world_, {model_.frameRoot[3 * i], model_.frameRoot[3 * i + 1], model_.frameRoot[3 * i + 2]});
     Pose pose;
     pose.rotations = current_.rotations;
-    pose.rotations[0] = yawRotation(at.dyaw) * current_.rotations[0];
+    pose.rotations[0] = axisRotation(Axis::Y, at.dyaw) * current_.rotations[0];
     pose.translations.resize(joints);
     const std::size_t c = db_.clipOf(v);
     const std::size_t k = v - db_.offsets[c];
     for (std::size_t j = 1; j < joints; ++j) pose.translations[j] = db_.clips[c].motion.localTranslation(k, j);
-    pose.translations[0] = toWorld(at, {current_.rootOffset.x(), current_.height, current_.rootOffset.y()});
+    pose.translations[0] = transformPoint(at, {current_.rootOffset.x(), current_.height, current_.rootOffset.y()});
     pose.translations[0].x() += correction_.x();
     pose.translations[0].z() += correction_.y();
 
@@ -172,47 +165,35 @@ std::array<bool, 2> footDown(const MotionDatabase& db, std::uint32_t frame) {
 
 }  // namespace
 
-FootSlide sourceFootSlide(const MotionDatabase& db) {
-  double sum = 0;
-  std::size_t pairs = 0;
-  for (std::size_t c = 0; c < db.clips.size(); ++c) {
-    const std::vector<Eigen::Vector3d> positions = jointPositions(db.clips[c].motion);
-    const std::size_t joints = db.skeleton->jointCount();
-    for (std::uint32_t k = 1; k < db.clips[c].motion.frameCount(); ++k) {
-      const std::uint32_t g = db.offsets[c] + k;
-      addSlide(db.roles, {positions.data() + (k - 1) * joints, joints}, {positions.data() + k * joints, joints},
-               footDown(db, g - 1), footDown(db, g), db.frameTime, sum, pairs);
-    }
-  }
-  return {pairs ? sum / static_cast<double>(pairs) : 0, pairs};
-}
-
 PlaybackCheck checkPlayback(const MotionDatabase& db, const StateActionModel& model, int blendFrames,
                             std::size_t actions, std::uint64_t seed) {
   PlaybackCheck check;
   const Skeleton& skeleton = *db.skeleton;
   const std::size_t joints = skeleton.jointCount();
-  // Per-joint largest step in the source.
+  // One pass over the capture: each joint's largest step, each frame's ankle speed from
+  // its predecessor (0 for a clip's first frame: the baseline for the same frames played),
+  // and the capture's own foot sliding.
   std::vector<double> sourceStep(joints, 0);
-  for (const Clip& clip : db.clips) {
-    const std::vector<Eigen::Vector3d> p = jointPositions(clip.motion);
-    for (std::size_t k = 1; k < clip.motion.frameCount(); ++k)
-      for (std::size_t j = 0; j < joints; ++j)
-        sourceStep[j] = std::max(sourceStep[j], (p[k * joints + j] - p[(k - 1) * joints + j]).norm());
-  }
-  check.sourceMaxJointStep_m = *std::max_element(sourceStep.begin(), sourceStep.end());
-  // Ankle speed of every source frame from its predecessor (0 for a clip's first frame):
-  // the baseline for the same frames played.
   std::vector<std::array<double, 2>> sourceAnkleSpeed(db.frameCount(), {0.0, 0.0});
+  double captureSum = 0;
   for (std::size_t c = 0; c < db.clips.size(); ++c) {
     const std::vector<Eigen::Vector3d> p = jointPositions(db.clips[c].motion);
-    for (std::size_t k = 1; k < db.clips[c].motion.frameCount(); ++k)
+    for (std::size_t k = 1; k < db.clips[c].motion.frameCount(); ++k) {
+      for (std::size_t j = 0; j < joints; ++j)
+        sourceStep[j] = std::max(sourceStep[j], (p[k * joints + j] - p[(k - 1) * joints + j]).norm());
+      const auto g = static_cast<std::uint32_t>(db.offsets[c] + k);
       for (int side = 0; side < 2; ++side) {
         const std::size_t ankle = static_cast<std::size_t>(db.roles.ankle[side]);
         const Eigen::Vector3d d = p[k * joints + ankle] - p[(k - 1) * joints + ankle];
-        sourceAnkleSpeed[db.offsets[c] + k][side] = std::hypot(d.x(), d.z()) / db.frameTime;
+        sourceAnkleSpeed[g][side] = std::hypot(d.x(), d.z()) / db.frameTime;
       }
+      addSlide(db.roles, {p.data() + (k - 1) * joints, joints}, {p.data() + k * joints, joints}, footDown(db, g - 1),
+               footDown(db, g), db.frameTime, captureSum, check.captureSlide.framePairs);
+    }
   }
+  check.captureSlide.meanSpeed_mps =
+      captureSum / static_cast<double>(std::max<std::size_t>(check.captureSlide.framePairs, 1));
+  check.sourceMaxJointStep_m = *std::max_element(sourceStep.begin(), sourceStep.end());
   double sourceSum = 0;
 
   std::mt19937_64 rng(seed);

@@ -84,13 +84,7 @@ MotionSpec readMotion(const ConfigNode& motion, const std::filesystem::path& sce
   spec.fps = motion.number("fps", 30, 1, 1000);
   if (motion.has("units")) {
     const ConfigNode units = motion.child("units");
-    try {
-      spec.units = parseLengthUnit(units.asString());
-    } catch (const ConfigError&) {
-      throw;
-    } catch (const Error& e) {
-      units.fail(e.what());
-    }
+    spec.units = units.withLocation([&] { return parseLengthUnit(units.asString()); });
   }
   if (motion.has("asf")) {
     const ConfigNode asf = motion.child("asf");
@@ -119,11 +113,7 @@ MotionSpec readMotion(const ConfigNode& motion, const std::filesystem::path& sce
     p.punchMinSpeed_mps = a.number("punch_min_speed_mps", p.punchMinSpeed_mps, 0, 100);
     p.punchMinAlignment = a.number("punch_min_alignment", p.punchMinAlignment, -1, 1);
     p.punchMaxSpeed_mps = a.number("punch_max_speed_mps", p.punchMaxSpeed_mps, 0, 1000);
-    try {
-      p.validate();
-    } catch (const Error& e) {
-      a.fail(e.what());
-    }
+    a.withLocation([&] { p.validate(); });
   }
   return spec;
 }
@@ -137,13 +127,7 @@ GraphParams readGraph(const ConfigNode& graph) {
   p.rootHeightWeight = graph.number("root_height_weight", p.rootHeightWeight, 0, 100);
   if (graph.has("contact_event")) {
     const ConfigNode event = graph.child("contact_event");
-    try {
-      p.contactEvent = parseContactEvent(event.asString());
-    } catch (const ConfigError&) {
-      throw;
-    } catch (const Error& e) {
-      event.fail(e.what());
-    }
+    p.contactEvent = event.withLocation([&] { return parseContactEvent(event.asString()); });
   }
   p.localMinimum = graph.boolean("local_minimum", p.localMinimum);
   p.blendFrames = static_cast<int>(graph.integer("blend_frames", p.blendFrames, 0, 120));

@@ -12,16 +12,11 @@
 #include "mgrl/bvh.hpp"
 #include "mgrl/error.hpp"
 #include "mgrl/rotation.hpp"
+#include "test_support.hpp"
 
 using Catch::Contains;
 using mgrl::ParseError;
 
-// Both halves of the contract: the type, and the message with its line number.
-#define REQUIRE_PARSE_ERROR(expr, message)             \
-  do {                                                 \
-    REQUIRE_THROWS_AS(expr, ParseError);               \
-    REQUIRE_THROWS_WITH(expr, Contains(message));      \
-  } while (false)
 
 namespace {
 

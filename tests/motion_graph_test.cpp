@@ -5,6 +5,7 @@
 #include <queue>
 
 #include <catch2/catch.hpp>
+#include <fmt/format.h>
 
 #include "mgrl/data_paths.hpp"
 #include "mgrl/graph_cache.hpp"
@@ -264,6 +265,29 @@ TEST_CASE("playback refuses an action that does not leave the current state", "[
   CHECK(playback.state() == b.model.actionTo[b.model.stateActionBegin[0]]);
 }
 
+TEST_CASE("playback refuses a state that does not exist", "[graph][data]") {
+  const Boxing& b = boxing();
+  ActionPlayback playback(b.db, b.model, 4);
+  const auto states = static_cast<std::uint32_t>(b.model.stateCount());
+  REQUIRE_THROWS_WITH(playback.reset(states),
+                      Catch::Contains(fmt::format("playback: expected a state below {}, found {}", states, states)));
+}
+
+TEST_CASE("graph parameters out of range name their YAML key", "[graph]") {
+  GraphParams params;
+  REQUIRE_NOTHROW(params.validate());
+  params.threshold = 0;
+  REQUIRE_THROWS_WITH(params.validate(), Catch::Contains("graph.threshold: expected a distance in (0, 10], found 0"));
+  params = {};
+  params.blendFrames = -1;
+  REQUIRE_THROWS_WITH(params.validate(),
+                      Catch::Contains("graph.blend_frames: expected a frame count in [0, 120], found -1"));
+  params = {};
+  params.jointWeights["Spine"] = -1;
+  REQUIRE_THROWS_WITH(params.validate(),
+                      Catch::Contains("graph.joint_weights.Spine: expected a weight in [0, 100], found -1"));
+}
+
 TEST_CASE("the sparring scenario builds a graph over all SNU sparring tracks", "[graph][data]") {
   const Scenario s = loadScenario(scenarioFile("sparring"), test::mocap());
   REQUIRE(s.motion.files.size() == 20);
@@ -292,6 +316,34 @@ TEST_CASE("files with different skeletons cannot share a graph", "[graph][data]"
                                                                 "skeletons: expected 31 joints, found 22"));
   spec.files.clear();
   REQUIRE_THROWS_WITH(loadMotionDatabase(spec), Catch::Contains("expected at least one motion file, found none"));
+}
+
+TEST_CASE("clips of one graph need one frame rate and one body", "[graph][data]") {
+  const Motion at30 = test::loadMocap("cmu/bvh/13_18_boxing.bvh", [] {
+                        LoadOptions o;
+                        o.fps = 30;
+                        return o;
+                      }()).motion;
+  const Motion at60 = resample(at30, 60);
+  REQUIRE_THROWS_WITH(makeMotionDatabase({{"a.bvh", at30}, {"b.bvh", at60}}),
+                      Catch::Contains("b.bvh: expected 30 fps like a.bvh, found 60 fps"));
+  REQUIRE_THROWS_WITH(makeMotionDatabase({{"a.bvh", at30}, {"big.bvh", at30.scaled(1.2)}}),
+                      Catch::Contains("a.bvh and big.bvh have different skeletons: bone") &&
+                          Catch::Contains("(more than 5 % apart)"));
+  // Same joint count, one joint renamed.
+  std::vector<std::string> names = test::humanoidNames();
+  auto still = [](std::vector<std::string> jointNames) {
+    auto skeleton = std::make_shared<const Skeleton>(test::humanoid(jointNames));
+    const std::size_t n = skeleton->jointCount();
+    return Motion(skeleton, 1.0 / 30, std::vector<Eigen::Quaterniond>(2 * n, Eigen::Quaterniond::Identity()),
+                  std::vector<Eigen::Vector3d>(2 * skeleton->translatedJoints().size(), Eigen::Vector3d(0, 1, 0)));
+  };
+  const std::string renamed = names[1];
+  names[1] = "Torso";
+  REQUIRE_THROWS_WITH(makeMotionDatabase({{"a.bvh", still(test::humanoidNames())}, {"b.bvh", still(names)}}),
+                      Catch::Contains(fmt::format("a.bvh and b.bvh have different skeletons: joint 1 is '{}' (parent 0) "
+                                                  "in the first, 'Torso' (parent 0) in the second",
+                                                  renamed)));
 }
 
 TEST_CASE("graph.joint_weights must name joints of the skeleton", "[graph][data]") {

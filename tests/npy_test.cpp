@@ -13,18 +13,13 @@
 
 #include "mgrl/error.hpp"
 #include "mgrl/npy.hpp"
+#include "test_support.hpp"
 
 using Catch::Contains;
 using mgrl::npyDecode;
 using mgrl::npyEncode;
 using mgrl::ParseError;
 
-// Both halves of the contract: the type, and the message.
-#define REQUIRE_PARSE_ERROR(expr, message)        \
-  do {                                            \
-    REQUIRE_THROWS_AS(expr, ParseError);          \
-    REQUIRE_THROWS_WITH(expr, Contains(message)); \
-  } while (false)
 
 namespace {
 

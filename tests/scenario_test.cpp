@@ -92,6 +92,30 @@ TEST_CASE("scenario mistakes name the file, line, column and key", "[scenario]")
     REQUIRE_THROWS_WITH(parse("motion:\n  files: [cmu/bvh/13_17_boxing.bvh]\n  roles: {left_paw: X}\ngraph: {}\n"),
                         Contains("motion.roles.left_paw: unknown role"));
   }
+  SECTION("wrong shapes") {
+    REQUIRE_THROWS_WITH(parse("motion:\n  files: cmu/bvh/13_17_boxing.bvh\ngraph: {}\n"),
+                        Contains("test.yaml:2:10: motion.files: expected a list, found 'cmu/bvh/13_17_boxing.bvh'"));
+    REQUIRE_THROWS_WITH(parse("motion:\n  files: [cmu/bvh/13_17_boxing.bvh]\ngraph: 3\n"),
+                        Contains("test.yaml:3:8: graph: expected a map, found '3'"));
+    REQUIRE_THROWS_WITH(parse(std::string(kGood) + "  local_minimum: maybe\n"),
+                        Contains("graph.local_minimum: expected true or false, found 'maybe'"));
+    REQUIRE_THROWS_WITH(parse(std::string(kGood) + "  joint_weights: {LeftHand: heavy}\n"),
+                        Contains("graph.joint_weights.LeftHand: expected a number in [0, 100], found 'heavy'"));
+    REQUIRE_THROWS_WITH(parse(std::string(kGood) + "  joint_weights: {[a, b]: 1}\n"),
+                        Contains("graph.joint_weights: expected a plain key, found a map or list as key"));
+  }
+  SECTION("bad file entries") {
+    REQUIRE_THROWS_WITH(parse("motion:\n  files: [cmu/*/13_17_boxing.bvh]\ngraph: {}\n"),
+                        Contains("motion.files[0]: expected wildcards only in the file name, found "
+                                 "'cmu/*/13_17_boxing.bvh'"));
+    REQUIRE_THROWS_WITH(parse("motion:\n  files: ['']\ngraph: {}\n"),
+                        Contains("motion.files[0]: expected a file path, found an empty string"));
+  }
+  SECTION("annotation thresholds that contradict each other") {
+    REQUIRE_THROWS_WITH(
+        parse("motion:\n  files: [cmu/bvh/13_17_boxing.bvh]\n  annotation:\n    contact_height_enter_m: 0.2\ngraph: {}\n"),
+        Contains("test.yaml:4:5: motion.annotation: annotation: expected exit thresholds at least the enter thresholds"));
+  }
   SECTION("malformed YAML") {
     REQUIRE_THROWS_WITH(parse("motion: [\n"), Contains("test.yaml:2:1: expected valid YAML, found a syntax error"));
     REQUIRE_THROWS_WITH(parse("- just\n- a list\n"), Contains("expected a scenario"));

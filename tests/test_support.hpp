@@ -7,6 +7,14 @@
 
 #include "mgrl/motion_io.hpp"
 
+// Both halves of a parser's error contract: the type (mgrl::ParseError) and the message
+// (`source:line: expected ..., found ...`). Needs <catch2/catch.hpp> included first.
+#define REQUIRE_PARSE_ERROR(expr, message)                     \
+  do {                                                         \
+    REQUIRE_THROWS_AS(expr, ::mgrl::ParseError);               \
+    REQUIRE_THROWS_WITH(expr, ::Catch::Contains(message));     \
+  } while (false)
+
 namespace mgrl::test {
 
 /// ../shared/mocap (or MGRL_DATA). Fails the test if it is missing: the integration tests

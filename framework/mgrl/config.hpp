@@ -63,6 +63,19 @@ class ConfigNode {
   bool boolean(std::string_view key, bool fallback) const;
   std::string string(std::string_view key, std::string fallback) const;
 
+  /// Returns `check()`; an mgrl::Error it throws without a place (e.g. from a parser of
+  /// enumeration names or a validate()) is rethrown as a ConfigError at this node.
+  template <class F>
+  decltype(auto) withLocation(F&& check) const {
+    try {
+      return check();
+    } catch (const ConfigError&) {
+      throw;
+    } catch (const Error& e) {
+      fail(e.what());
+    }
+  }
+
   /// Throws ConfigError `source:line:col: path: problem` at this node.
   [[noreturn]] void fail(std::string_view problem) const;
   /// "source:line:col" of this node.

@@ -36,17 +36,6 @@ namespace mgrl {
 inline constexpr std::string_view kGraphFormatName = "mgrl.graph";
 inline constexpr int kGraphFormatVersion = 1;
 
-/// Checks every structural invariant of `m` that code indexing its arrays relies on:
-/// array sizes agree with each other; offset arrays (clipOffset, actionFrameBegin,
-/// stateActionBegin, actionHitBegin) start at 0, do not decrease and end at the size of
-/// what they index; every action has a frame; frame and state indices are in range;
-/// actions are grouped by the state they leave and end on their end state's frame;
-/// componentFrames and stateFrame strictly ascend; transitions are sorted pairs; hits
-/// belong to their action, sorted by (offset, hand), 1 <= offset <= action length, hand 0
-/// or 1, weight in (0, 1]; frameTime > 0; every floating-point value finite.
-/// Throws mgrl::Error with a message starting with `source` and naming the field and index,
-/// e.g. `graph: actionFrames[7]: expected a frame below framesTotal 40, found 40`.
-void checkModel(const StateActionModel& m, std::string_view source);
 
 /// Writes `m` as a bundle at `dir` (see the file comment), replacing a bundle already there.
 /// `provenance` must be a JSON object with a string "key", the cache key loadGraphBundle()

@@ -17,7 +17,6 @@ struct GraphBuildReport {
   TransitionSearchStats search;
   std::size_t transitionsFound = 0;  ///< candidates passing threshold, contact and local-minimum tests
   std::size_t components = 0;        ///< strongly connected components of the frame graph
-  std::size_t effectiveHits = 0;     ///< effective hitting points inside the component's actions
 };
 
 /// Builds the model. Throws mgrl::Error when the largest component has fewer than
@@ -32,5 +31,8 @@ const AvatarFrame& avatarFrameAt(const MotionDatabase& db, std::uint32_t frame);
 GroundMotion relativeMotion(const AvatarFrame& from, const AvatarFrame& to);
 /// a then b (b expressed in a's end frame).
 GroundMotion compose(const GroundMotion& a, const GroundMotion& b);
+/// A point given in the avatar frame that `motion` leads to, in the frame `motion` starts
+/// from (height unchanged). With `motion` a world placement: avatar frame to world.
+Eigen::Vector3d transformPoint(const GroundMotion& motion, const Eigen::Vector3d& point);
 
 }  // namespace mgrl

@@ -75,9 +75,6 @@ struct FootSlide {
   std::size_t framePairs = 0;
 };
 
-/// Foot sliding in the capture itself, over every clip.
-FootSlide sourceFootSlide(const MotionDatabase& db);
-
 /// Statistics of a seeded random walk through the graph, played with blending.
 struct PlaybackCheck {
   std::size_t frames = 0, actions = 0, transitions = 0;
@@ -85,6 +82,8 @@ struct PlaybackCheck {
   /// The capture's own ankle speed at the same played frames (each from its source
   /// predecessor): the fair baseline for `slide`.
   double sourceSlideSameFrames_mps = 0;
+  /// Foot sliding of the whole capture, every clip.
+  FootSlide captureSlide;
   /// Largest frame-to-frame move of any joint (m), in playback and in the source clips.
   double maxJointStep_m = 0, sourceMaxJointStep_m = 0;
   /// Largest step ratio playback / source over joints (<= 1: no jump beyond the data's).

@@ -8,6 +8,7 @@
 #include <cstdint>
 #include <span>
 #include <string>
+#include <string_view>
 #include <vector>
 
 namespace mgrl {
@@ -87,8 +88,18 @@ struct StateActionModel {
   GroundMotion displacement(std::size_t a) const {
     return {actionDisplacement[3 * a], actionDisplacement[3 * a + 1], actionDisplacement[3 * a + 2]};
   }
-  /// Index of the clip holding global frame `frame`.
-  std::size_t clipOf(std::uint32_t frame) const;
 };
+
+/// Checks every structural invariant of `m` that code indexing its arrays relies on:
+/// array sizes agree with each other; offset arrays (clipOffset, actionFrameBegin,
+/// stateActionBegin, actionHitBegin) start at 0, do not decrease and end at the size of
+/// what they index; every action has a frame; frame and state indices are in range;
+/// actions are grouped by the state they leave and end on their end state's frame;
+/// componentFrames and stateFrame strictly ascend; transitions are sorted pairs; hits
+/// belong to their action, sorted by (offset, hand), 1 <= offset <= action length, hand 0
+/// or 1, weight in (0, 1]; frameTime > 0; every floating-point value finite.
+/// Throws mgrl::Error with a message starting with `source` and naming the field and index,
+/// e.g. `graph: actionFrames[7]: expected a frame below framesTotal 40, found 40`.
+void checkModel(const StateActionModel& m, std::string_view source);
 
 }  // namespace mgrl
