@@ -5,12 +5,16 @@
 #include <cstdio>
 #include <iostream>
 
+#include <unistd.h>
+
 #include <CLI/CLI.hpp>
 #include <fmt/format.h>
 #include <fmt/ranges.h>
 
 #include "graph_command.hpp"
 #include "inspect.hpp"
+#include "learn_commands.hpp"
+#include "plugins.hpp"
 #include "mgrl/data_paths.hpp"
 #include "mgrl/error.hpp"
 #include "mgrl/version.hpp"
@@ -70,6 +74,43 @@ int main(int argc, char** argv) {
   graphCommand->add_option("--cache", cacheDir, "Cache folder (default: MGRL_CACHE, else ~/.cache/mgrl)");
   graphCommand->add_flag("--no-cache", noCache, "Rebuild even if a matching cached graph exists");
 
+  mgrl::app::TrainOptions train;
+  CLI::App* trainCommand = app.add_subcommand(
+      "train", "Train the scenario's behaviours (paper sec. 4) on its motion graph and save a policy bundle.");
+  trainCommand->add_option("SCENARIO", scenarioPath, "Scenario YAML file with a behaviors: section")->required();
+  trainCommand->add_option("--behavior", train.behavior, "Train only this behaviour (others in the bundle are kept)");
+  trainCommand->add_option("--set", train.sets, "Override a scenario key, e.g. --set behaviors.hit.learner.budget=1e6 "
+                                                "(repeatable)");
+  trainCommand->add_option("--out", train.out, "Policy bundle folder (default: <cache>/policies/<scenario>-<hash>)");
+  trainCommand->add_flag("--resume", train.resume, "Continue from the checkpoints of an interrupted run");
+  trainCommand->add_flag("--json", json, "Print one JSON object on stdout");
+  trainCommand->add_option("--data", dataDir, "Motion capture folder (default: MGRL_DATA, else ../shared/mocap)");
+  trainCommand->add_option("--cache", cacheDir, "Cache folder (default: MGRL_CACHE, else ~/.cache/mgrl)");
+
+  mgrl::app::EvalOptions eval;
+  std::size_t trials = eval.trials;
+  CLI::App* evalCommand = app.add_subcommand(
+      "eval", "Evaluate a trained policy: random starts, a static target in the approach region, up to --seconds of "
+              "motion each; success = an effective hit on the target.");
+  evalCommand->add_option("SCENARIO", scenarioPath, "Scenario YAML file")->required();
+  evalCommand->add_option("--policy", eval.policy, "Policy bundle folder (default: the one mgrl train writes)");
+  evalCommand->add_option("--controller", eval.controller, "policy (the trained one) or random")
+      ->default_str("policy");
+  evalCommand->add_option("--trials", trials, "Number of trials")->default_val(trials);
+  evalCommand->add_option("--seed", eval.seed, "Random seed (the same seed, the same numbers)")->default_val(1);
+  evalCommand->add_option("--seconds", eval.seconds, "Seconds of motion per trial")->default_val(10);
+  evalCommand->add_option("--target-height", eval.targetHeight,
+                          "Height of the target (m; default: that of the effective hitting points' centroid)");
+  evalCommand->add_option("--set", eval.sets, "Override a scenario key (repeatable)");
+  evalCommand->add_flag("--json", json, "Print one JSON object on stdout");
+  evalCommand->add_option("--data", dataDir, "Motion capture folder (default: MGRL_DATA, else ../shared/mocap)");
+  evalCommand->add_option("--cache", cacheDir, "Cache folder (default: MGRL_CACHE, else ~/.cache/mgrl)");
+
+  CLI::App* listCommand =
+      app.add_subcommand("list", "List every registered discretizer, reward, environment model and learner with its "
+                                 "parameters, defaults and units.");
+  listCommand->add_flag("--json", json, "Print one JSON object on stdout");
+
   // CLI11 would call an unknown command a missing one; name it instead.
   if (argc > 1 && argv[1][0] != '-') {
     std::vector<std::string> known;
@@ -123,6 +164,37 @@ int main(int argc, char** argv) {
         std::cout << mgrl::app::graphJson(graph).dump(2) << '\n';
       else
         std::cout << mgrl::app::graphText(graph);
+    }
+    auto log = [](const std::string& message) { std::cerr << "mgrl: " << message << '\n'; };
+    if (trainCommand->parsed()) {
+      train.scenario = scenarioPath;
+      train.dataDir = dataDir;
+      train.cacheDir = cacheDir;
+      train.log = log;
+      train.progressBar = ::isatty(2) != 0;
+      const nlohmann::json report = mgrl::app::runTrain(train);
+      if (json)
+        std::cout << report.dump(2) << '\n';
+      else
+        std::cout << mgrl::app::trainText(report);
+    }
+    if (evalCommand->parsed()) {
+      eval.scenario = scenarioPath;
+      eval.dataDir = dataDir;
+      eval.cacheDir = cacheDir;
+      eval.log = log;
+      eval.trials = trials;
+      const nlohmann::json report = mgrl::app::runEval(eval);
+      if (json)
+        std::cout << report.dump(2) << '\n';
+      else
+        std::cout << mgrl::app::evalText(report);
+    }
+    if (listCommand->parsed()) {
+      if (json)
+        std::cout << mgrl::app::listJson(mgrl::app::plugins()).dump(2) << '\n';
+      else
+        std::cout << mgrl::app::listText(mgrl::app::plugins());
     }
   } catch (const mgrl::Error& e) {
     std::cerr << "mgrl: " << e.what() << '\n';

@@ -4,6 +4,7 @@
 #include <system_error>
 
 #include <fmt/format.h>
+#include <fmt/ranges.h>
 
 #include "mgrl/hash.hpp"
 #include "mgrl/motion_io.hpp"
@@ -140,21 +141,105 @@ GraphParams readGraph(const ConfigNode& graph) {
   return p;
 }
 
+std::vector<BehaviorSpec> readBehaviors(const ConfigNode& root) {
+  std::vector<BehaviorSpec> result;
+  if (!root.has("behaviors")) return result;
+  const ConfigNode behaviors = root.section("behaviors");
+  for (const std::string& name : behaviors.keys()) {
+    const ConfigNode b = behaviors.child(name);
+    if (name.empty() || name.find_first_not_of("abcdefghijklmnopqrstuvwxyzABCDEFGHIJKLMNOPQRSTUVWXYZ0123456789_-") !=
+                            std::string::npos)
+      b.fail("expected a behaviour name of letters, digits, '_' and '-' (it names files of the policy bundle)");
+    if (!b.isMap()) b.fail("expected a map with discretizer, reward and learner sections");
+    b.allowOnly({"description", "weight", "activation", "discretizer", "reward", "environment", "learner"});
+    BehaviorSpec spec{name,
+                      b.string("description", ""),
+                      b.number("weight", 1.0, -1e6, 1e6),
+                      Activation::Always,
+                      b,
+                      b.section("discretizer"),
+                      b.section("reward"),
+                      b.child("environment"),
+                      b.section("learner")};
+    if (b.has("activation")) {
+      const ConfigNode activation = b.child("activation");
+      const std::string text = activation.asString();
+      spec.activation = activation.withLocation([&] { return parseActivation(text); });
+    }
+    if (!spec.environment.isNull() && !spec.environment.isMap())
+      spec.environment.fail("expected a map with 'type: static_target' or another environment model");
+    result.push_back(std::move(spec));
+  }
+  return result;
+}
+
+// `--set a.b.c=value`: walks (creating) maps down the dotted path and sets a scalar.
+void applyOverride(YAML::Node root, const std::string& text, const std::string& source) {
+  const auto eq = text.find('=');
+  if (eq == std::string::npos || eq == 0)
+    throw ConfigError(fmt::format("{}: --set {}: expected KEY=VALUE with a dotted KEY such as "
+                                  "behaviors.hit.learner.budget",
+                                  source, quoteToken(text)));
+  const std::string key = text.substr(0, eq), value = text.substr(eq + 1);
+  std::vector<std::string> parts;
+  for (std::size_t begin = 0;;) {
+    const std::size_t dot = key.find('.', begin);
+    parts.push_back(key.substr(begin, dot == std::string::npos ? std::string::npos : dot - begin));
+    if (dot == std::string::npos) break;
+    begin = dot + 1;
+  }
+  std::vector<YAML::Node> chain{root};
+  for (std::size_t i = 0; i < parts.size(); ++i) {
+    if (parts[i].empty())
+      throw ConfigError(fmt::format("{}: --set {}: expected a dotted key without empty parts", source, key));
+    YAML::Node& here = chain.back();
+    if (!here.IsMap() && !here.IsNull())
+      throw ConfigError(fmt::format("{}: --set {}: expected '{}' to be a map, found a value", source, key,
+                                    fmt::join(parts.begin(), parts.begin() + static_cast<long>(i), ".")));
+    if (i + 1 == parts.size()) {
+      // A plugin block switched to another type starts afresh: the file's other keys
+      // were that type's parameters.
+      if (parts[i] == "type" && here.IsMap() && here["type"].IsScalar() && here["type"].Scalar() != value)
+        here = YAML::Node(YAML::NodeType::Map);
+      here[parts[i]] = value;
+    } else {
+      chain.push_back(here[parts[i]]);
+    }
+  }
+}
+
 }  // namespace
 
+Activation parseActivation(std::string_view name) {
+  if (name == "always") return Activation::Always;
+  if (name == "target_inside") return Activation::TargetInside;
+  throw Error(fmt::format("expected an activation rule (always, target_inside), found {}", quoteToken(name)));
+}
+
+std::string_view activationName(Activation activation) {
+  return activation == Activation::Always ? "always" : "target_inside";
+}
+
 Scenario parseScenario(std::string_view text, const std::filesystem::path& source,
-                       const std::filesystem::path& dataDir) {
+                       const std::filesystem::path& dataDir, const std::vector<std::string>& overrides) {
   ConfigNode root = ConfigNode::parse(text, source.string());
   if (!root.isMap()) root.fail("expected a scenario (a map with 'motion' and 'graph' sections), found something else");
-  root.allowOnly({"name", "description", "motion", "graph"});
+  for (const std::string& o : overrides) applyOverride(root.yaml(), o, source.string());
+  root.allowOnly({"name", "description", "motion", "graph", "behaviors"});
   const std::filesystem::path dir = source.parent_path().empty() ? std::filesystem::path(".") : source.parent_path();
-  Scenario s{source, root.string("name", source.stem().string()), root.string("description", ""),
-             readMotion(root.section("motion"), dir, dataDir), readGraph(root.section("graph")), root};
+  Scenario s{source,
+             root.string("name", source.stem().string()),
+             root.string("description", ""),
+             readMotion(root.section("motion"), dir, dataDir),
+             readGraph(root.section("graph")),
+             readBehaviors(root),
+             root};
   return s;
 }
 
-Scenario loadScenario(const std::filesystem::path& path, const std::filesystem::path& dataDir) {
-  return parseScenario(readFile(path), path, dataDir);
+Scenario loadScenario(const std::filesystem::path& path, const std::filesystem::path& dataDir,
+                      const std::vector<std::string>& overrides) {
+  return parseScenario(readFile(path), path, dataDir, overrides);
 }
 
 std::string graphCacheKey(const Scenario& s) {

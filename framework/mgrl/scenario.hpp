@@ -5,6 +5,7 @@
 /// scenario's folder, then the data folder (DESIGN.md sec. 6).
 #include <filesystem>
 #include <string>
+#include <vector>
 
 #include "mgrl/config.hpp"
 #include "mgrl/graph_params.hpp"
@@ -12,12 +13,30 @@
 
 namespace mgrl {
 
+/// When a behaviour takes part in the combined controller (paper sec. 5): always, or only
+/// while the target is inside its grid (the paper's hit behaviour).
+enum class Activation { Always, TargetInside };
+Activation parseActivation(std::string_view name);
+std::string_view activationName(Activation activation);
+
+/// One entry of `behaviors:` (scenarios/README.md): plugin blocks are kept as YAML and
+/// built by the registries of the application (mgrl/behavior.hpp).
+struct BehaviorSpec {
+  std::string name;
+  std::string description;
+  double weight = 1;
+  Activation activation = Activation::Always;
+  ConfigNode node;  ///< the behaviour's block
+  ConfigNode discretizer, reward, environment, learner;  ///< environment may be absent (static_target)
+};
+
 struct Scenario {
   std::filesystem::path path;  ///< the YAML file
   std::string name;            ///< `name:`, or the file's stem
   std::string description;
   MotionSpec motion;           ///< files resolved and expanded (globs), in order
   GraphParams graph;
+  std::vector<BehaviorSpec> behaviors;  ///< `behaviors:` in document order (may be empty)
   ConfigNode root;             ///< the whole document, for sections read elsewhere
 };
 
@@ -25,10 +44,17 @@ struct Scenario {
 /// beside the scenario. Throws ConfigError (`file:line:col: key.path: problem`) for any
 /// unknown key, wrong type or out-of-range value, a missing section, or a motion path or
 /// pattern that matches no file.
-Scenario loadScenario(const std::filesystem::path& path, const std::filesystem::path& dataDir);
+///
+/// `overrides` are `KEY=VALUE` texts (`--set`, DESIGN.md sec. 5) applied to the document
+/// before it is checked: KEY is a dotted path (`behaviors.hit.learner.budget`), created if
+/// missing; VALUE is a scalar (a number, a word, true/false). Setting a `type` to another
+/// plugin drops the block's other keys from the file (they were the old plugin's
+/// parameters). A malformed override is a ConfigError naming it.
+Scenario loadScenario(const std::filesystem::path& path, const std::filesystem::path& dataDir,
+                      const std::vector<std::string>& overrides = {});
 /// The same from YAML text; `source` names it in messages and its folder anchors relative paths.
 Scenario parseScenario(std::string_view text, const std::filesystem::path& source,
-                       const std::filesystem::path& dataDir);
+                       const std::filesystem::path& dataDir, const std::vector<std::string>& overrides = {});
 
 /// Hex key of everything a graph depends on: the bytes of every motion (and ASF) file, the
 /// motion and graph parameters (not the thread count) and the graph format version. Equal

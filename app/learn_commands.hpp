@@ -1,0 +1,54 @@
+#pragma once
+/// \file
+/// `mgrl train` and `mgrl eval` (DESIGN.md sec. 5).
+#include <cstdint>
+#include <filesystem>
+#include <limits>
+#include <string>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+#include "mgrl/error.hpp"
+
+namespace mgrl::app {
+
+struct LearnOptions {
+  std::filesystem::path scenario, dataDir, cacheDir;
+  std::vector<std::string> sets;  ///< --set KEY=VALUE
+  WarningSink log;                ///< progress lines and messages (stderr)
+  bool progressBar = false;       ///< draw a progress bar on stderr (a terminal)
+};
+
+struct TrainOptions : LearnOptions {
+  std::string behavior;        ///< only this one ("" every behaviour)
+  std::filesystem::path out;   ///< policy bundle ("" the default in the cache)
+  bool resume = false;         ///< continue from checkpoints left by a killed run
+};
+
+/// Trains, saves the policy bundle atomically and returns the --json report:
+/// {"scenario", "policy", "graph_key", "behaviors": {NAME: {"learner", "updates", "seconds",
+/// "updates_per_second", "final_residual", "table_bytes", ...}}}.
+nlohmann::json runTrain(const TrainOptions& options);
+std::string trainText(const nlohmann::json& report);
+
+struct EvalOptions : LearnOptions {
+  std::filesystem::path policy;   ///< "" the default bundle of the scenario
+  std::string controller = "policy";  ///< policy | random
+  std::size_t trials = 100;
+  std::uint64_t seed = 1;
+  double seconds = 10;            ///< motion per trial
+  double targetHeight = std::numeric_limits<double>::quiet_NaN();  ///< NaN: the hitting points' centroid height
+};
+
+/// Runs the trials and returns {"success_rate", "mean_time_to_hit_s", "median_time_to_hit_s",
+/// "mean_return", "decisions_per_second", ...}.
+nlohmann::json runEval(const EvalOptions& options);
+std::string evalText(const nlohmann::json& report);
+
+/// Where `mgrl train` puts a scenario's policy bundle by default:
+/// <cache>/policies/<name>-<hash of the scenario's path>.
+std::filesystem::path defaultPolicyDirectory(const std::filesystem::path& cacheDir, const std::string& scenarioName,
+                                             const std::filesystem::path& scenarioPath);
+
+}  // namespace mgrl::app

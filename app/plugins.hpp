@@ -1,0 +1,19 @@
+#pragma once
+/// \file
+/// The composition root's plugin list: every discretizer, reward, environment model and
+/// learner the application offers, registered explicitly (DESIGN.md sec. 4).
+#include <string>
+
+#include "mgrl/behavior.hpp"
+
+namespace mgrl::app {
+
+/// The registries with every built-in plugin (built once).
+const Plugins& plugins();
+
+/// `mgrl list`: every registered name with its summary and parameters (default, range and
+/// unit, help), seam by seam.
+std::string listText(const Plugins& plugins);
+nlohmann::json listJson(const Plugins& plugins);
+
+}  // namespace mgrl::app

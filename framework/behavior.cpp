@@ -1,0 +1,73 @@
+#include "mgrl/behavior.hpp"
+
+#include <fmt/format.h>
+#include <fmt/ranges.h>
+
+#include "mgrl/hash.hpp"
+
+namespace mgrl {
+
+namespace {
+
+// The parameters of a plugin block, defaults filled in, as the registry reads them.
+template <class Registry>
+nlohmann::json blockJson(const Registry& registry, const ConfigNode& block, const std::string& fallbackType) {
+  const std::string type = block.isNull() ? fallbackType : block.child("type").asString();
+  const auto* entry = registry.find(type);
+  nlohmann::json json = nlohmann::json::object();
+  json["type"] = type;
+  if (!entry) return json;
+  const Params params = block.isNull() ? Params::defaults(entry->params) : Params::read(block, entry->params, {"type"});
+  const nlohmann::json values = params.toJson();
+  for (const auto& item : values.items()) json[item.key()] = item.value();
+  return json;
+}
+
+}  // namespace
+
+Behavior buildBehavior(const BehaviorSpec& spec, const Plugins& plugins, const StateActionModel& model,
+                       const std::string& graphKey) {
+  Behavior b;
+  b.name = spec.name;
+  b.weight = spec.weight;
+  b.activation = spec.activation;
+  b.discretizer = plugins.discretizers.create(spec.discretizer, model);
+  b.reward = plugins.rewards.create(spec.reward);
+  if (spec.environment.isNull()) {
+    const auto* entry = plugins.environments.find("static_target");
+    if (!entry) throw Error("no environment model 'static_target' registered");
+    b.environment = entry->make(Params::defaults(entry->params));
+  } else {
+    b.environment = plugins.environments.create(spec.environment);
+  }
+  b.learner = plugins.learners.create(spec.learner);
+  b.config = {{"discretizer", blockJson(plugins.discretizers, spec.discretizer, "")},
+              {"reward", blockJson(plugins.rewards, spec.reward, "")},
+              {"environment", blockJson(plugins.environments, spec.environment, "static_target")},
+              {"learner", blockJson(plugins.learners, spec.learner, "")}};
+  nlohmann::json keyed = b.config;
+  for (const char* irrelevant : {"threads", "curve_points", "checkpoint_every"}) keyed["learner"].erase(irrelevant);
+  Hasher h;
+  h.update(std::string_view("mgrl.behavior.v1"));
+  h.update(std::string_view(graphKey));
+  h.update(std::string_view(keyed.dump()));
+  b.key = h.hex();
+  return b;
+}
+
+std::vector<Behavior> buildBehaviors(const Scenario& scenario, const Plugins& plugins, const StateActionModel& model,
+                                     const std::string& graphKey, const std::string& only) {
+  if (scenario.behaviors.empty())
+    scenario.root.fail("expected a 'behaviors' section naming at least one behaviour to train, found none");
+  std::vector<std::string> names;
+  for (const BehaviorSpec& spec : scenario.behaviors) names.push_back(spec.name);
+  if (!only.empty() && std::find(names.begin(), names.end(), only) == names.end())
+    throw Error(fmt::format("--behavior: expected one of the scenario's behaviours ({}), found {}",
+                            fmt::join(names, ", "), quoteToken(only)));
+  std::vector<Behavior> result;
+  for (const BehaviorSpec& spec : scenario.behaviors)
+    if (only.empty() || spec.name == only) result.push_back(buildBehavior(spec, plugins, model, graphKey));
+  return result;
+}
+
+}  // namespace mgrl

@@ -1,0 +1,55 @@
+#pragma once
+/// \file
+/// Behaviours (DESIGN.md sec. 2, "learn"): a scenario's `behaviors:` entry turned into
+/// plugin instances through the registries, and the key that says which trained table
+/// belongs to it.
+#include <memory>
+#include <string>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+#include "mgrl/discretizer.hpp"
+#include "mgrl/learner.hpp"
+#include "mgrl/reward.hpp"
+#include "mgrl/scenario.hpp"
+
+namespace mgrl {
+
+/// One registry per seam; the application fills them (app/plugins.cpp).
+struct Plugins {
+  DiscretizerRegistry discretizers{"discretizer"};
+  RewardRegistry rewards{"reward"};
+  EnvironmentRegistry environments{"environment model"};
+  LearnerRegistry learners{"learner"};
+};
+
+struct Behavior {
+  std::string name;
+  double weight = 1;
+  Activation activation = Activation::Always;
+  std::unique_ptr<Discretizer> discretizer;
+  std::unique_ptr<Reward> reward;
+  std::unique_ptr<EnvironmentModel> environment;
+  std::unique_ptr<Learner> learner;
+  /// {"discretizer": {"type", params...}, "reward": ..., "environment": ..., "learner": ...}
+  /// with every parameter, defaults included.
+  nlohmann::json config;
+  /// Hash of the graph key and everything in `config` that changes the trained table (not
+  /// weight or activation, not threads, curve_points or checkpoint_every).
+  std::string key;
+
+  Problem problem(const StateActionModel& model) const { return {model, *discretizer, *reward, *environment}; }
+};
+
+/// Builds a behaviour's plugins; ConfigError (`file:line:col: behaviors.NAME.reward.type:
+/// unknown reward 'x' (known: approach, hit)`) for unknown types and bad parameters.
+Behavior buildBehavior(const BehaviorSpec& spec, const Plugins& plugins, const StateActionModel& model,
+                       const std::string& graphKey);
+
+/// Builds every behaviour of the scenario, or only `only` (an unknown name is an error
+/// listing the scenario's behaviours). A scenario without behaviours is an error.
+std::vector<Behavior> buildBehaviors(const Scenario& scenario, const Plugins& plugins, const StateActionModel& model,
+                                     const std::string& graphKey, const std::string& only = "");
+
+}  // namespace mgrl

@@ -1,0 +1,43 @@
+#pragma once
+/// \file
+/// The runtime choice (paper sec. 5): at a state, score each out-action by the weighted sum
+/// of the active behaviours' Q values interpolated at the target, and take the best. A
+/// behaviour with activation `always` is evaluated at the target clamped into its grid (so
+/// a far target still pulls the avatar its way); a `target_inside` one only while the
+/// target is inside its grid (the paper's hit behaviour).
+#include <cstddef>
+#include <cstdint>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "mgrl/discretizer.hpp"
+#include "mgrl/q_table.hpp"
+#include "mgrl/scenario.hpp"
+
+namespace mgrl {
+
+struct PolicyPart {
+  const Discretizer* grid = nullptr;
+  const QTable* table = nullptr;
+  double weight = 1;
+  Activation activation = Activation::Always;
+};
+
+class PolicyController {
+ public:
+  PolicyController(const StateActionModel& model, std::vector<PolicyPart> parts);
+
+  /// The greedy action at state s with the target at e (avatar frame); ties go to the
+  /// lowest action index. If no behaviour is active, the state's first action.
+  std::size_t choose(std::uint32_t s, const Eigen::Vector3d& e);
+  /// The combined scores of s's out-actions from the last choose() (for views and tests).
+  const std::vector<float>& scores() const { return scores_; }
+
+ private:
+  const StateActionModel& model_;
+  std::vector<PolicyPart> parts_;
+  std::vector<float> scores_;
+};
+
+}  // namespace mgrl

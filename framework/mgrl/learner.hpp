@@ -1,0 +1,77 @@
+#pragma once
+/// \file
+/// The Learner seam (DESIGN.md sec. 4): a learner turns a tabulated problem into a QTable.
+/// Learners never see YAML, BVH or files: parameters arrive through the registry, progress
+/// leaves through a TrainObserver, and long runs save their whole state through a
+/// Checkpointer so that a resumed run ends with the same table as an uninterrupted one.
+#include <cstdint>
+#include <memory>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+#include "mgrl/problem.hpp"
+#include "mgrl/q_table.hpp"
+#include "mgrl/registry.hpp"
+
+namespace mgrl {
+
+/// One point of a training curve.
+struct CurvePoint {
+  std::uint64_t updates = 0;  ///< actions taken (Q-learning) or (vertex, action) backups (value iteration)
+  double seconds = 0;         ///< training time so far
+  double residual = 0;        ///< max Bellman residual of the table at this point
+  double meanResidual = 0;
+};
+
+struct TrainProgress {
+  std::uint64_t updates = 0, total = 0;  ///< total 0 when unknown (value iteration)
+  double seconds = 0;
+  double residual = -1;  ///< the latest measured residual, -1 before the first
+};
+
+class TrainObserver {
+ public:
+  virtual ~TrainObserver() = default;
+  /// Called often (at most every few milliseconds of work); cheap.
+  virtual void progress(const TrainProgress&) {}
+};
+
+/// Where a learner keeps a resumable state. A checkpoint is the learner's own JSON plus a
+/// table; `load` returns the last one saved for the same problem, if any.
+class Checkpointer {
+ public:
+  virtual ~Checkpointer() = default;
+  virtual void save(const nlohmann::json& state, const QTable& table) = 0;
+  virtual std::optional<nlohmann::json> load(QTable& table) = 0;
+};
+
+struct TrainResult {
+  QTable table;
+  std::uint64_t updates = 0;
+  double seconds = 0;  ///< training time of this table, resumed runs included
+  double finalResidual = 0;
+  std::vector<CurvePoint> curve;
+  nlohmann::json stats = nlohmann::json::object();  ///< learner-specific figures
+};
+
+struct TrainContext {
+  const Problem& problem;
+  const GridModel& grid;
+  TrainObserver* observer = nullptr;
+  Checkpointer* checkpointer = nullptr;  ///< may be null: no checkpoints
+  unsigned threads = 1;
+};
+
+class Learner {
+ public:
+  virtual ~Learner() = default;
+  virtual std::string type() const = 0;
+  virtual TrainResult train(const TrainContext& context) const = 0;
+};
+
+using LearnerRegistry = Registry<Learner>;
+
+}  // namespace mgrl

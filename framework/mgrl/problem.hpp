@@ -1,0 +1,72 @@
+#pragma once
+/// \file
+/// A learning problem (DESIGN.md sec. 2, "learn"): the state-action model, a grid over the
+/// target's position, a reward and an environment model. Because both learners back values
+/// up at grid vertices only (paper sec. 4.2: "the update is applied at every grid point
+/// next to e, moving e' along"), everything a backup needs besides Q is a function of
+/// (action, vertex) alone; GridModel tabulates it once: the reward r(v, a) and where the
+/// vertex lands after the action (its cell and fractions, or outside).
+#include <cstddef>
+#include <cstdint>
+#include <vector>
+
+#include "mgrl/discretizer.hpp"
+#include "mgrl/q_table.hpp"
+#include "mgrl/reward.hpp"
+#include "mgrl/state_action_model.hpp"
+
+namespace mgrl {
+
+struct Problem {
+  const StateActionModel& model;
+  const Discretizer& grid;
+  const Reward& reward;
+  const EnvironmentModel& environment;
+};
+
+/// The problem tabulated on the grid: for action a and vertex v at index a * V + v.
+struct GridModel {
+  std::size_t vertexCount = 0, actionCount = 0;
+  int dimension = 0;
+  std::vector<std::uint32_t> corners;     ///< the grid's cell corner table
+  std::vector<float> reward;              ///< r(v, a)
+  std::vector<std::int32_t> nextCell;     ///< cell of e'(v, a), -1 outside the grid
+  std::vector<float> nextFrac;            ///< 3 per (a, v): fractions in that cell
+  std::vector<float> discount;            ///< per action: gamma^(frames of a)
+  std::vector<std::uint32_t> actionTo;    ///< per action: its end state
+  /// Actions grouped by the state they end at: incoming[incomingBegin[s], incomingBegin[s+1]).
+  std::vector<std::uint32_t> incomingBegin, incoming;
+
+  std::size_t bytes() const;
+
+  /// Tabulates `problem` on `threads` threads. The same inputs give the same bytes.
+  static GridModel build(const Problem& problem, unsigned threads);
+};
+
+/// max over s's out-actions a' of the Q(., a') interpolated at the point with cell
+/// `cell` and fractions `frac` (the paper's "max_a' Q(e', a')").
+float maxInterpolated(const QTable& q, const GridModel& g, std::uint32_t s, std::uint32_t cell, const float* frac);
+
+/// The backup of (action a, vertex v): r(v, a) + gamma^t_a max_a' Q(e'(v, a), a'), with
+/// future value 0 when e' leaves the grid.
+inline float backup(const QTable& q, const GridModel& g, std::size_t a, std::size_t v) {
+  const std::size_t i = a * g.vertexCount + v;
+  const std::int32_t cell = g.nextCell[i];
+  if (cell < 0) return g.reward[i];
+  return g.reward[i] + g.discount[a] * maxInterpolated(q, g, g.actionTo[a], static_cast<std::uint32_t>(cell),
+                                                       &g.nextFrac[3 * i]);
+}
+
+/// One Jacobi sweep: out(v, a) = backup of `in` for every pair, in parallel over end
+/// states (each reads one block of `in`, which stays in cache). Returns max |out - in|.
+/// Deterministic whatever the thread count; a sweep over a subset of states is a function
+/// of `in` alone (DESIGN.md sec. 8).
+double sweep(const QTable& in, QTable& out, const GridModel& g, unsigned threads);
+
+/// The Bellman residual max over (v, a) of |backup(Q) - Q|, and its mean.
+struct Residual {
+  double max = 0, mean = 0;
+};
+Residual bellmanResidual(const QTable& q, const GridModel& g, unsigned threads);
+
+}  // namespace mgrl

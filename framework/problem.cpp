@@ -1,0 +1,177 @@
+#include "mgrl/problem.hpp"
+
+#include <cmath>
+#include <limits>
+
+#include "mgrl/parallel.hpp"
+
+namespace mgrl {
+
+std::size_t GridModel::bytes() const {
+  return corners.size() * 4 + reward.size() * 4 + nextCell.size() * 4 + nextFrac.size() * 4 + discount.size() * 4 +
+         actionTo.size() * 4 + incomingBegin.size() * 4 + incoming.size() * 4;
+}
+
+GridModel GridModel::build(const Problem& problem, unsigned threads) {
+  const StateActionModel& m = problem.model;
+  const Discretizer& grid = problem.grid;
+  GridModel g;
+  g.vertexCount = grid.vertexCount();
+  g.actionCount = m.actionCount();
+  g.dimension = grid.dimension();
+  g.corners = grid.cellCorners();
+  g.actionTo = m.actionTo;
+  const std::size_t pairs = g.vertexCount * g.actionCount;
+  g.reward.assign(pairs, 0);
+  g.nextCell.assign(pairs, -1);
+  g.nextFrac.assign(3 * pairs, 0);
+  g.discount.resize(g.actionCount);
+  const double gamma = problem.reward.gamma();
+  for (std::size_t a = 0; a < g.actionCount; ++a)
+    g.discount[a] = static_cast<float>(std::pow(gamma, static_cast<double>(m.actionLength(a))));
+
+  std::vector<Eigen::Vector3d> vertex(g.vertexCount);
+  for (std::size_t v = 0; v < g.vertexCount; ++v) vertex[v] = grid.vertexPosition(v);
+  constexpr std::size_t kChunk = 64;
+  parallelFor((g.actionCount + kChunk - 1) / kChunk, threads, [&](std::size_t chunk, unsigned) {
+    const std::size_t end = std::min(g.actionCount, (chunk + 1) * kChunk);
+    for (std::size_t a = chunk * kChunk; a < end; ++a)
+      for (std::size_t v = 0; v < g.vertexCount; ++v) {
+        const std::size_t i = a * g.vertexCount + v;
+        g.reward[i] = static_cast<float>(problem.reward.evaluate(m, a, vertex[v]));
+        GridCell cell;
+        if (grid.locate(problem.environment.next(m, a, vertex[v]), cell)) {
+          g.nextCell[i] = static_cast<std::int32_t>(cell.cell);
+          for (int k = 0; k < 3; ++k) g.nextFrac[3 * i + k] = cell.frac[k];
+        }
+      }
+  });
+
+  const std::size_t states = m.stateCount();
+  g.incomingBegin.assign(states + 1, 0);
+  for (std::uint32_t to : m.actionTo) ++g.incomingBegin[to + 1];
+  for (std::size_t s = 0; s < states; ++s) g.incomingBegin[s + 1] += g.incomingBegin[s];
+  g.incoming.resize(g.actionCount);
+  std::vector<std::uint32_t> fill(g.incomingBegin.begin(), g.incomingBegin.end() - 1);
+  for (std::size_t a = 0; a < g.actionCount; ++a) g.incoming[fill[m.actionTo[a]]++] = static_cast<std::uint32_t>(a);
+  return g;
+}
+
+namespace {
+
+typedef float Float8 __attribute__((vector_size(32)));
+typedef int Int8 __attribute__((vector_size(32)));
+
+inline Float8 load8(const float* p) {
+  Float8 v;
+  __builtin_memcpy(&v, p, sizeof v);
+  return v;
+}
+
+// max_j sum_k w[k] rows[k][j] over j < n. Rows may be read up to 7 floats past n (the
+// table is padded); those lanes are masked out. The sum for each j is formed in the same
+// order whatever the lane, so the result does not depend on n's remainder or the clone.
+template <int K>
+inline __attribute__((always_inline)) float maxWeightedRows(const float* const* rows, const float* w, std::uint32_t n) {
+  const Float8 minusInf = Float8{} - std::numeric_limits<float>::infinity();
+  Float8 best = minusInf;
+  Float8 weight[K];
+  for (int k = 0; k < K; ++k) weight[k] = Float8{} + w[k];
+  std::uint32_t j = 0;
+  for (; j + 8 <= n; j += 8) {
+    Float8 acc = weight[0] * load8(rows[0] + j);
+    for (int k = 1; k < K; ++k) acc += weight[k] * load8(rows[k] + j);
+    best = acc > best ? acc : best;
+  }
+  if (j < n) {
+    Float8 acc = weight[0] * load8(rows[0] + j);
+    for (int k = 1; k < K; ++k) acc += weight[k] * load8(rows[k] + j);
+    const Int8 lane = Int8{0, 1, 2, 3, 4, 5, 6, 7} + static_cast<int>(j);
+    acc = lane < static_cast<int>(n) ? acc : minusInf;
+    best = acc > best ? acc : best;
+  }
+  float result = best[0];
+  for (int i = 1; i < 8; ++i) result = best[i] > result ? best[i] : result;
+  return result;
+}
+
+__attribute__((target_clones("arch=x86-64-v4", "arch=x86-64-v3", "default")))
+float maxRows4(const float* const* rows, const float* w, std::uint32_t n) {
+  return maxWeightedRows<4>(rows, w, n);
+}
+
+__attribute__((target_clones("arch=x86-64-v4", "arch=x86-64-v3", "default")))
+float maxRows8(const float* const* rows, const float* w, std::uint32_t n) {
+  return maxWeightedRows<8>(rows, w, n);
+}
+
+}  // namespace
+
+float maxInterpolated(const QTable& q, const GridModel& g, std::uint32_t s, std::uint32_t cell, const float* frac) {
+  const int d = g.dimension;
+  const std::uint32_t n = static_cast<std::uint32_t>(q.actionsOf(s));
+  const std::uint32_t* corner = &g.corners[static_cast<std::size_t>(cell) << d];
+  const float* rows[8];
+  float w[8];
+  std::array<float, 3> f{frac[0], frac[1], frac[2]};
+  cornerWeights(d, f, w);
+  if (d == 3) {
+    for (int k = 0; k < 8; ++k) rows[k] = q.row(s, corner[k]);
+    return maxRows8(rows, w, n);
+  }
+  if (d == 2) {
+    for (int k = 0; k < 4; ++k) rows[k] = q.row(s, corner[k]);
+    return maxRows4(rows, w, n);
+  }
+  // 1-D grids: two corners, padded with zero weights.
+  for (int k = 0; k < 4; ++k) {
+    rows[k] = q.row(s, corner[k & 1]);
+    if (k >= 2) w[k] = 0;
+  }
+  return maxRows4(rows, w, n);
+}
+
+double sweep(const QTable& in, QTable& out, const GridModel& g, unsigned threads) {
+  const std::size_t states = g.incomingBegin.size() - 1;
+  std::vector<double> change(states, 0.0);
+  parallelFor(states, threads, [&](std::size_t s, unsigned) {
+    double largest = 0;
+    for (std::uint32_t i = g.incomingBegin[s]; i < g.incomingBegin[s + 1]; ++i) {
+      const std::size_t a = g.incoming[i];
+      for (std::size_t v = 0; v < g.vertexCount; ++v) {
+        const float value = backup(in, g, a, v);
+        largest = std::max(largest, static_cast<double>(std::fabs(value - in.at(a, v))));
+        out.at(a, v) = value;
+      }
+    }
+    change[s] = largest;
+  });
+  double largest = 0;
+  for (double c : change) largest = std::max(largest, c);
+  return largest;
+}
+
+Residual bellmanResidual(const QTable& q, const GridModel& g, unsigned threads) {
+  const std::size_t states = g.incomingBegin.size() - 1;
+  std::vector<double> largest(states, 0.0), sum(states, 0.0);
+  parallelFor(states, threads, [&](std::size_t s, unsigned) {
+    for (std::uint32_t i = g.incomingBegin[s]; i < g.incomingBegin[s + 1]; ++i) {
+      const std::size_t a = g.incoming[i];
+      for (std::size_t v = 0; v < g.vertexCount; ++v) {
+        const double r = std::fabs(static_cast<double>(backup(q, g, a, v)) - q.at(a, v));
+        largest[s] = std::max(largest[s], r);
+        sum[s] += r;
+      }
+    }
+  });
+  Residual result;
+  for (std::size_t s = 0; s < states; ++s) {
+    result.max = std::max(result.max, largest[s]);
+    result.mean += sum[s];
+  }
+  const std::size_t pairs = g.vertexCount * g.actionCount;
+  if (pairs > 0) result.mean /= static_cast<double>(pairs);
+  return result;
+}
+
+}  // namespace mgrl

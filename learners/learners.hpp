@@ -1,0 +1,12 @@
+#pragma once
+/// \file
+/// The learner plugins: `q_learning` (the paper's algorithm, sec. 4.2) and
+/// `value_iteration` (the same backup swept to convergence: the exact answer on the grid).
+#include "mgrl/learner.hpp"
+
+namespace mgrl::learners {
+
+/// Adds q_learning and value_iteration.
+void registerAll(LearnerRegistry& registry);
+
+}  // namespace mgrl::learners

@@ -1,0 +1,245 @@
+// q_learning: Lee & Lee 2004, sec. 4.2, as the paper states it. From a random pose (state)
+// and a random target inside the grid, take uniformly random actions. After each action a
+// with the target at e, update every grid vertex v of e's cell:
+//     Q(v, a) += alpha (r(v, a) + gamma^t_a max_a' Q(e'_v, a') - Q(v, a)),
+// where e'_v is v moved along by the action (the environment model) and Q(e'_v, .) is
+// interpolated from e'_v's cell (0 when e'_v leaves the grid). Restart when the target
+// itself leaves the grid. alpha falls linearly from 1 over the budget of actions.
+#include <chrono>
+
+#include <fmt/format.h>
+
+#include "learners.hpp"
+#include "mgrl/error.hpp"
+#include "mgrl/random.hpp"
+
+namespace mgrl::learners {
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+class QLearning final : public Learner {
+ public:
+  explicit QLearning(const Params& p)
+      : budget_(static_cast<std::uint64_t>(p.integer("budget"))),
+        seed_(static_cast<std::uint64_t>(p.integer("seed"))),
+        alphaFinal_(p.number("alpha_final")),
+        curvePoints_(static_cast<std::uint64_t>(p.integer("curve_points"))),
+        checkpointEvery_(static_cast<std::uint64_t>(p.integer("checkpoint_every"))),
+        threads_(static_cast<unsigned>(p.integer("threads"))) {}
+
+  std::string type() const override { return "q_learning"; }
+
+  TrainResult train(const TrainContext& context) const override;
+
+ private:
+  std::uint64_t budget_, seed_;
+  double alphaFinal_;
+  std::uint64_t curvePoints_, checkpointEvery_;
+  unsigned threads_;
+};
+
+// Everything that determines the rest of a run, so a checkpoint resumes it exactly.
+struct Walk {
+  Rng rng;
+  std::uint64_t updates = 0, restarts = 0;
+  std::uint32_t state = 0;
+  Eigen::Vector3d target{0, 0, 0};
+};
+
+nlohmann::json toJson(const Walk& w) {
+  nlohmann::json rng = nlohmann::json::array();
+  for (std::uint64_t word : w.rng.state()) rng.push_back(word);
+  return {{"updates", w.updates}, {"restarts", w.restarts}, {"state", w.state},
+          {"target", {w.target.x(), w.target.y(), w.target.z()}}, {"rng", rng}};
+}
+
+Walk walkFromJson(const nlohmann::json& j, std::size_t states) {
+  Walk w;
+  std::array<std::uint64_t, 4> s{};
+  for (int i = 0; i < 4; ++i) s[i] = j.at("rng").at(i).get<std::uint64_t>();
+  w.rng.setState(s);
+  w.updates = j.at("updates").get<std::uint64_t>();
+  w.restarts = j.at("restarts").get<std::uint64_t>();
+  w.state = j.at("state").get<std::uint32_t>();
+  if (w.state >= states) throw Error(fmt::format("expected a state below {}, found {}", states, w.state));
+  w.target = {j.at("target").at(0).get<double>(), j.at("target").at(1).get<double>(), j.at("target").at(2).get<double>()};
+  return w;
+}
+
+TrainResult QLearning::train(const TrainContext& context) const {
+  const StateActionModel& m = context.problem.model;
+  const Discretizer& grid = context.problem.grid;
+  const EnvironmentModel& environment = context.problem.environment;
+  const GridModel& g = context.grid;
+  const unsigned threads = threads_ > 0 ? threads_ : context.threads;
+  const std::uint64_t total = budget_;
+
+  TrainResult result;
+  result.table = QTable(m, g.vertexCount);
+  QTable& q = result.table;
+  Walk walk{Rng(seed_)};
+  double secondsBefore = 0;
+
+  auto restart = [&] {
+    walk.state = static_cast<std::uint32_t>(walk.rng.below(m.stateCount()));
+    do walk.target = grid.sample({walk.rng.uniform(), walk.rng.uniform(), walk.rng.uniform()});
+    while (!grid.inside(walk.target));
+    ++walk.restarts;
+  };
+
+  bool resumed = false;
+  if (context.checkpointer) {
+    if (std::optional<nlohmann::json> saved = context.checkpointer->load(q)) {
+      walk = walkFromJson(saved->at("walk"), m.stateCount());
+      secondsBefore = saved->at("seconds").get<double>();
+      for (const auto& point : saved->at("curve"))
+        result.curve.push_back({point.at(0).get<std::uint64_t>(), point.at(1).get<double>(),
+                                point.at(2).get<double>(), point.at(3).get<double>()});
+      resumed = true;
+    }
+  }
+  if (!resumed) restart();
+
+  const auto start = Clock::now();
+  auto elapsed = [&] { return secondsBefore + std::chrono::duration<double>(Clock::now() - start).count(); };
+  auto curveAt = [&](std::uint64_t i) { return total * i / curvePoints_; };
+  std::uint64_t nextCurveIndex = 1;
+  while (nextCurveIndex <= curvePoints_ && curveAt(nextCurveIndex) <= walk.updates) ++nextCurveIndex;
+  double lastResidual = result.curve.empty() ? -1 : result.curve.back().residual;
+
+  const int d = g.dimension;
+  const int corners = 1 << d;
+  const std::uint32_t* stateBegin = m.stateActionBegin.data();
+  const double alphaSlope = (1 - alphaFinal_) / static_cast<double>(total);
+  constexpr std::uint64_t kProgressEvery = 1 << 16;
+
+  while (walk.updates < total) {
+    std::uint64_t stop = std::min(total, walk.updates + kProgressEvery);
+    if (nextCurveIndex <= curvePoints_) stop = std::min(stop, curveAt(nextCurveIndex));
+    if (checkpointEvery_ > 0) stop = std::min(stop, (walk.updates / checkpointEvery_ + 1) * checkpointEvery_);
+
+    // The hot loop: one random action and 2^d vertex updates per iteration.
+    for (std::uint64_t k = walk.updates; k < stop; ++k) {
+      const std::uint32_t s = walk.state;
+      const std::uint32_t n = stateBegin[s + 1] - stateBegin[s];
+      const std::size_t a = stateBegin[s] + static_cast<std::uint32_t>(walk.rng.below(n));
+      const float alpha = static_cast<float>(1 - alphaSlope * static_cast<double>(k));
+      GridCell cell;
+      grid.locate(walk.target, cell);  // inside: checked after every move
+      const std::uint32_t* corner = &g.corners[static_cast<std::size_t>(cell.cell) << d];
+      for (int i = 0; i < corners; ++i) {
+        const std::size_t v = corner[i];
+        const float target = backup(q, g, a, v);
+        float& value = q.at(a, v);
+        value += alpha * (target - value);
+      }
+      walk.target = environment.next(m, a, walk.target);
+      walk.state = m.actionTo[a];
+      if (!grid.inside(walk.target)) restart();
+    }
+    walk.updates = stop;
+
+    if (nextCurveIndex <= curvePoints_ && walk.updates == curveAt(nextCurveIndex)) {
+      const Residual r = bellmanResidual(q, g, threads);
+      result.curve.push_back({walk.updates, elapsed(), r.max, r.mean});
+      lastResidual = r.max;
+      ++nextCurveIndex;
+    }
+    if (context.checkpointer && checkpointEvery_ > 0 && walk.updates % checkpointEvery_ == 0 &&
+        walk.updates < total) {
+      nlohmann::json curve = nlohmann::json::array();
+      for (const CurvePoint& p : result.curve) curve.push_back({p.updates, p.seconds, p.residual, p.meanResidual});
+      context.checkpointer->save({{"walk", toJson(walk)}, {"seconds", elapsed()}, {"curve", curve}}, q);
+    }
+    if (context.observer) context.observer->progress({walk.updates, total, elapsed(), lastResidual});
+  }
+
+  result.updates = walk.updates;
+  result.seconds = elapsed();
+  result.finalResidual = result.curve.empty() ? bellmanResidual(q, g, threads).max : result.curve.back().residual;
+  result.stats = {{"restarts", walk.restarts},
+                  {"mean_episode_actions", walk.restarts > 0 ? static_cast<double>(walk.updates) / walk.restarts : 0.0},
+                  {"resumed", resumed}};
+  return result;
+}
+
+class ValueIteration final : public Learner {
+ public:
+  explicit ValueIteration(const Params& p)
+      : tolerance_(p.number("tolerance")),
+        maxSweeps_(static_cast<std::uint64_t>(p.integer("max_sweeps"))),
+        threads_(static_cast<unsigned>(p.integer("threads"))) {}
+
+  std::string type() const override { return "value_iteration"; }
+
+  // Jacobi sweeps of the same backup as q_learning over every (vertex, action) pair, from
+  // Q = 0, until the largest change falls below the tolerance (DESIGN.md sec. 4: the
+  // ground truth on the grid). Each sweep reads only the previous table (sec. 8).
+  TrainResult train(const TrainContext& context) const override {
+    const GridModel& g = context.grid;
+    const unsigned threads = threads_ > 0 ? threads_ : context.threads;
+    const auto start = Clock::now();
+    auto elapsed = [&] { return std::chrono::duration<double>(Clock::now() - start).count(); };
+    TrainResult result;
+    QTable current(context.problem.model, g.vertexCount), next = current;
+    const std::uint64_t pairs = static_cast<std::uint64_t>(g.vertexCount) * g.actionCount;
+    std::uint64_t sweeps = 0;
+    double change = 0;
+    bool converged = false;
+    while (sweeps < maxSweeps_) {
+      change = sweep(current, next, g, threads);
+      std::swap(current, next);
+      ++sweeps;
+      result.curve.push_back({sweeps * pairs, elapsed(), change, 0});
+      if (context.observer) context.observer->progress({sweeps * pairs, 0, elapsed(), change});
+      if (change < tolerance_) {
+        converged = true;
+        break;
+      }
+    }
+    result.table = std::move(current);
+    result.updates = sweeps * pairs;
+    result.finalResidual = bellmanResidual(result.table, g, threads).max;
+    result.seconds = elapsed();
+    result.stats = {{"sweeps", sweeps}, {"converged", converged}, {"last_change", change}};
+    return result;
+  }
+
+ private:
+  double tolerance_;
+  std::uint64_t maxSweeps_;
+  unsigned threads_;
+};
+
+ParamSpec threadsSpec() {
+  return ParamSpec::integer("threads", 0, 0, 1024, "threads", "threads for sweeps (0: every core)");
+}
+
+}  // namespace
+
+void registerAll(LearnerRegistry& registry) {
+  registry.add(
+      {"q_learning",
+       "the paper's Q-learning (sec. 4.2): random poses, targets and actions; every vertex next to the target "
+       "updated with Q(e', .) interpolated; alpha falls linearly from 1",
+       {ParamSpec::integer("budget", 10'000'000, 1, 1'000'000'000'000LL, "actions", "random actions to take"),
+        ParamSpec::integer("seed", 1, 0, 9'007'199'254'740'991LL, "", "random seed: the same seed, the same table"),
+        ParamSpec::number("alpha_final", 0.0, 0, 1, "", "learning rate at the end of the budget (1 at the start)"),
+        ParamSpec::integer("curve_points", 20, 1, 100000, "points",
+                           "training-curve points, each measuring the Bellman residual with a full sweep"),
+        ParamSpec::integer("checkpoint_every", 50'000'000, 0, 1'000'000'000'000LL, "actions",
+                           "save a resumable checkpoint this often (0: never)"),
+        threadsSpec()},
+       [](const Params& p) { return std::make_unique<QLearning>(p); }});
+  registry.add({"value_iteration",
+                "the same backup swept over every (vertex, action) pair until the largest change is below the "
+                "tolerance: the exact answer on the grid",
+                {ParamSpec::number("tolerance", 1e-4, 1e-9, 1, "", "stop when no value changes more than this"),
+                 ParamSpec::integer("max_sweeps", 1000, 1, 1'000'000, "sweeps", "give up after this many sweeps"),
+                 threadsSpec()},
+                [](const Params& p) { return std::make_unique<ValueIteration>(p); }});
+}
+
+}  // namespace mgrl::learners

@@ -1,0 +1,353 @@
+// The learning framework on problems whose answers are known by hand: interpolation,
+// rewards, the static-target environment, value iteration and Q-learning (paper sec. 4).
+#include <catch2/catch.hpp>
+
+#include <cmath>
+
+#include "app/plugins.hpp"
+#include "mgrl/behavior.hpp"
+#include "mgrl/controller.hpp"
+#include "mgrl/motion_graph.hpp"
+#include "mgrl/problem.hpp"
+#include "mgrl/random.hpp"
+
+namespace mgrl {
+namespace {
+
+// An action for hand-made models: frames, a straight root path to (dx, dz, dyaw), hits.
+struct HandAction {
+  std::uint32_t from, to, frames;
+  double dx, dz, dyaw;
+  std::vector<ActionHit> hits;  // action index filled in
+};
+
+// A model with only what learners, rewards and controllers read. The centroid (0, 1, 0.5)
+// rides along with the avatar, as in the graph builder.
+StateActionModel handModel(std::size_t states, std::vector<HandAction> actions, double frameTime = 1.0 / 30) {
+  std::stable_sort(actions.begin(), actions.end(), [](const HandAction& a, const HandAction& b) { return a.from < b.from; });
+  StateActionModel m;
+  m.frameTime = frameTime;
+  m.stateFrame.resize(states);
+  m.stateActionBegin.assign(states + 1, 0);
+  m.actionFrameBegin.push_back(0);
+  m.actionHitBegin.push_back(0);
+  m.centroid[0] = 0;
+  m.centroid[1] = 1;
+  m.centroid[2] = 0.5;
+  for (std::size_t a = 0; a < actions.size(); ++a) {
+    const HandAction& h = actions[a];
+    m.actionFrom.push_back(h.from);
+    m.actionTo.push_back(h.to);
+    ++m.stateActionBegin[h.from + 1];
+    m.actionDisplacement.insert(m.actionDisplacement.end(), {h.dx, h.dz, h.dyaw});
+    for (std::uint32_t t = 1; t <= h.frames; ++t) {
+      const double f = static_cast<double>(t) / h.frames;
+      const GroundMotion root{f * h.dx, f * h.dz, f * h.dyaw};
+      m.actionFrames.push_back(0);
+      m.frameRoot.insert(m.frameRoot.end(), {root.dx, root.dz, root.dyaw});
+      const Eigen::Vector3d c = transformPoint(root, {m.centroid[0], m.centroid[1], m.centroid[2]});
+      m.frameCentroid.insert(m.frameCentroid.end(), {float(c.x()), float(c.y()), float(c.z())});
+      m.frameEntersTransition.push_back(0);
+    }
+    m.actionFrameBegin.push_back(static_cast<std::uint32_t>(m.actionFrames.size()));
+    for (ActionHit hit : h.hits) {
+      hit.action = static_cast<std::uint32_t>(a);
+      m.hits.push_back(hit);
+    }
+    m.actionHitBegin.push_back(static_cast<std::uint32_t>(m.hits.size()));
+  }
+  for (std::size_t s = 0; s < states; ++s) m.stateActionBegin[s + 1] += m.stateActionBegin[s];
+  m.framesTotal = static_cast<std::uint32_t>(m.actionFrames.size());
+  return m;
+}
+
+// A vertex's grid coordinates from the axes (its position loses the angle at distance 0).
+std::array<double, 3> vertexCoordinates(const Discretizer& grid, std::size_t v) {
+  std::array<double, 3> c{0, 0, 0};
+  for (int i = 0; i < grid.dimension(); ++i) {
+    const std::vector<double>& axis = grid.axes()[i].vertices;
+    c[i] = axis[v % axis.size()];
+    v /= axis.size();
+  }
+  return c;
+}
+
+ConfigNode yaml(const std::string& text) { return ConfigNode::parse(text, "test.yaml"); }
+
+std::unique_ptr<Discretizer> makeGrid(const std::string& text, const StateActionModel& m) {
+  return app::plugins().discretizers.create(yaml(text), m);
+}
+
+// The corridor: one state, three 5-frame self-loops. forward walks 0.5 m, back walks
+// -0.5 m, punch stays and lands an effective hit 0.5 m ahead at height 1 on frame 3. The
+// grid's centre line (angle 0, height 1) has vertices every 0.5 m from 0.5 to 3 m, and
+// both walks move a target on it exactly onto the next vertex: interpolation is exact
+// there and the values are known in closed form.
+StateActionModel corridor() {
+  const ActionHit punch{0, 3, 1, 0.0f, 1.0f, 0.5f, 1.0f};
+  return handModel(1, {{0, 0, 5, 0, 0.5, 0, {}}, {0, 0, 5, 0, -0.5, 0, {}}, {0, 0, 5, 0, 0, 0, {punch}}});
+}
+
+constexpr const char* kCorridorGrid =
+    "{type: cylindrical3d, bounds: given, angles: 3, distances: 6, heights: 3, angle_min: -10, angle_max: 10, "
+    "distance_min: 0.5, distance_max: 3.0, height_min: 0.5, height_max: 1.5}";
+
+struct Built {
+  std::unique_ptr<Discretizer> grid;
+  std::unique_ptr<Reward> reward;
+  StaticTarget environment;
+};
+
+Built corridorParts(const StateActionModel& m) {
+  return {makeGrid(kCorridorGrid, m), app::plugins().rewards.create(yaml("{type: hit, contact_radius: 0.1}")), {}};
+}
+
+// The vertex on the centre line at distance 0.5 (k + 1).
+std::size_t centre(const Discretizer&, int k) { return 1 + 3 * static_cast<std::size_t>(k) + 3 * 6 * 1; }
+
+TrainResult trainWith(const std::string& learnerYaml, const Problem& problem, const GridModel& g,
+                      Checkpointer* checkpointer = nullptr) {
+  const auto learner = app::plugins().learners.create(yaml(learnerYaml));
+  return learner->train({problem, g, nullptr, checkpointer, 2});
+}
+
+}  // namespace
+
+TEST_CASE("interpolation weights sum to 1 and reproduce functions linear in the grid coordinates", "[learning]") {
+  const StateActionModel m = corridor();
+  const auto polar = makeGrid("{type: polar2d, radius: 2, rings: 5, sectors: 13}", m);
+  const auto cyl = makeGrid(kCorridorGrid, m);
+  Rng rng(7);
+  for (const Discretizer* grid : {polar.get(), cyl.get()}) {
+    // f = 0.3 + 0.7 angle - 1.1 distance + 0.4 height, evaluated at the vertices and interpolated.
+    auto f = [&](const std::array<double, 3>& c) { return 0.3 + 0.7 * c[0] - 1.1 * c[1] + 0.4 * c[2]; };
+    for (int trial = 0; trial < 500; ++trial) {
+      std::array<double, 3> u{rng.uniform(), rng.uniform(), rng.uniform()};
+      if (grid == polar.get()) u[0] = 0.02 + 0.9 * u[0];  // stay off the seam, where angle jumps by 2 pi
+      const Eigen::Vector3d e = grid->sample(u);
+      GridCell cell;
+      REQUIRE(grid->locate(e, cell));
+      const Stencil s = grid->stencil(cell);
+      double sum = 0, value = 0;
+      for (int k = 0; k < s.size; ++k) {
+        REQUIRE(s.weight[k] >= 0);
+        sum += s.weight[k];
+        value += s.weight[k] * f(vertexCoordinates(*grid, s.vertex[k]));
+      }
+      REQUIRE(sum == Approx(1).margin(1e-6));
+      REQUIRE(value == Approx(f(grid->coordinates(e))).margin(1e-5));
+    }
+  }
+}
+
+TEST_CASE("polar2d wraps the angle around the full circle", "[learning]") {
+  const StateActionModel m = corridor();
+  const auto polar = makeGrid("{type: polar2d, radius: 2, rings: 5, sectors: 13}", m);
+  REQUIRE(polar->vertexCount() == 65);
+  REQUIRE(polar->cellCount() == 13 * 4);  // 13 sectors wrap: 13 angular cells
+  // Straight behind, slightly to the right and to the left: the same cell, between the last
+  // angle vertex and the first one (-180 deg).
+  const double step = 2 * M_PI / 13;
+  const double last = -M_PI + 12 * step;
+  const Eigen::Vector3d behind(std::sin(last + 0.25 * step), 0, std::cos(last + 0.25 * step));
+  GridCell cell;
+  REQUIRE(polar->locate(behind, cell));
+  const Stencil s = polar->stencil(cell);
+  std::set<std::size_t> angles;
+  for (int k = 0; k < s.size; ++k) angles.insert(s.vertex[k] % 13);
+  REQUIRE(angles == std::set<std::size_t>{0, 12});
+  REQUIRE(cell.frac[0] == Approx(0.25).margin(1e-5));
+  // A point beyond the radius is outside; clamped, it sits on the outer ring.
+  REQUIRE_FALSE(polar->inside({0, 0, 2.5}));
+  const GridCell clamped = polar->locateClamped({0, 0, 2.5});
+  REQUIRE(clamped.frac[1] == Approx(1));
+}
+
+TEST_CASE("cylindrical3d takes its bounds from the effective hitting points", "[learning]") {
+  const ActionHit a{0, 1, 0, 0.3f, 1.2f, 0.6f, 1.0f}, b{0, 2, 1, -0.2f, 1.5f, 0.4f, 0.5f};
+  const StateActionModel m = handModel(1, {{0, 0, 5, 0, 0, 0, {a, b}}, {0, 0, 5, 0, 0.1, 0, {}}});
+  const auto grid = makeGrid("{type: cylindrical3d}", m);
+  REQUIRE(grid->vertexCount() == 400);
+  const auto& axes = grid->axes();
+  REQUIRE(axes[0].vertices.front() == Approx(std::atan2(-0.2, 0.4)));
+  REQUIRE(axes[0].vertices.back() == Approx(std::atan2(0.3, 0.6)));
+  REQUIRE(axes[1].vertices.front() == Approx(std::hypot(-0.2, 0.4)));
+  REQUIRE(axes[1].vertices.back() == Approx(std::hypot(0.3, 0.6)));
+  REQUIRE(axes[2].vertices.front() == Approx(1.2));
+  REQUIRE(axes[2].vertices.back() == Approx(1.5));
+  REQUIRE_FALSE(axes[0].wraps);
+  // Both hitting points are inside their own grid.
+  REQUIRE(grid->inside(Eigen::Vector3f(0.3f, 1.2f, 0.6f).cast<double>()));
+  REQUIRE(grid->inside(Eigen::Vector3f(-0.2f, 1.5f, 0.4f).cast<double>()));
+  REQUIRE_FALSE(grid->inside({0.3, 1.6, 0.6}));
+  // Without hits there is nothing to take bounds from.
+  const StateActionModel none = handModel(1, {{0, 0, 5, 0, 0, 0, {}}, {0, 0, 5, 0, 0.1, 0, {}}});
+  REQUIRE_THROWS_WITH(makeGrid("{type: cylindrical3d}", none),
+                      Catch::Contains("test.yaml:1:1: bounds: expected at least 2 effective hitting points"));
+}
+
+TEST_CASE("rewards match hand-computed values on a tiny action", "[learning]") {
+  // One 4-frame action walking 0.4 m ahead: the centroid (0, 1, 0.5) moves to z = 0.6, 0.7,
+  // 0.8, 0.9; an effective hit at frame 2, 0.6 m ahead at height 1.3, weight 0.5.
+  const ActionHit hit{0, 2, 1, 0.0f, 1.3f, 0.6f, 0.5f};
+  const StateActionModel m = handModel(1, {{0, 0, 4, 0, 0.4, 0, {hit}}, {0, 0, 4, 0, 0, 0, {}}});
+  const auto approach = app::plugins().rewards.create(yaml("{type: approach, sigma: 0.1, gamma: 0.9}"));
+  // Target 0.8 m ahead: frame 3 reaches it, 0.9^3 exp(0) beats 0.9^2 exp(-1) and 0.9^4 exp(-1).
+  REQUIRE(approach->evaluate(m, 0, {0, 0, 0.8}) == Approx(0.729));
+  // Target 0.2 m to the side of frame 1's centroid (0, 0.6): 0.9 exp(-2) vs 0.9^2 exp(-sqrt(0.05)/0.1).
+  const double expected = std::max(0.9 * std::exp(-2.0), 0.81 * std::exp(-std::sqrt(0.05) / 0.1));
+  REQUIRE(approach->evaluate(m, 0, {0.2, 0, 0.6}) == Approx(expected));
+  const auto hitReward = app::plugins().rewards.create(yaml("{type: hit, contact_radius: 0.1, gamma: 0.9}"));
+  REQUIRE(hitReward->evaluate(m, 0, {0, 1.3, 0.6}) == Approx(0.81 * 0.5));
+  REQUIRE(hitReward->evaluate(m, 0, {0.05, 1.3, 0.65}) == Approx(0.81 * 0.5));  // 7 cm away
+  REQUIRE(hitReward->evaluate(m, 0, {0, 1.3, 0.75}) == 0);                        // 15 cm away
+  REQUIRE(hitReward->evaluate(m, 1, {0, 1.3, 0.6}) == 0);                         // no hit in action 1
+  const auto flat = app::plugins().rewards.create(yaml("{type: hit, contact_radius: 0.1, gamma: 0.9, use_speed: false}"));
+  REQUIRE(flat->evaluate(m, 0, {0, 1.3, 0.6}) == Approx(0.81));
+}
+
+TEST_CASE("static_target sees a fixed world point from the action's end", "[learning]") {
+  const StateActionModel m = handModel(1, {{0, 0, 5, 0.3, 0.4, 0.7, {}}, {0, 0, 5, 0, 0, 0, {}}});
+  const StaticTarget environment;
+  const Eigen::Vector3d e(0.5, 1.2, 1.5);
+  const Eigen::Vector3d next = environment.next(m, 0, e);
+  // Back into the decision's frame, it is where it was.
+  const Eigen::Vector3d back = transformPoint(m.displacement(0), next);
+  REQUIRE((back - e).norm() < 1e-12);
+  REQUIRE(next.y() == 1.2);
+}
+
+TEST_CASE("value iteration gives the corridor's closed-form values", "[learning]") {
+  const StateActionModel m = corridor();
+  Built parts = corridorParts(m);
+  const Problem problem{m, *parts.grid, *parts.reward, parts.environment};
+  const GridModel g = GridModel::build(problem, 2);
+  const TrainResult vi = trainWith("{type: value_iteration, tolerance: 1e-7}", problem, g);
+  REQUIRE(vi.stats["converged"] == true);
+  const double gamma = 0.97, v0 = std::pow(gamma, 3) / (1 - std::pow(gamma, 5));
+  // At 0.5 m punching forever is best; further out, walk forward then punch.
+  REQUIRE(vi.table.at(2, centre(*parts.grid, 0)) == Approx(v0).epsilon(1e-5));
+  REQUIRE(vi.table.at(0, centre(*parts.grid, 0)) == Approx(0).margin(1e-6));  // walks out of the grid
+  for (int k = 1; k < 6; ++k) {
+    const double vk = std::pow(gamma, 5 * k) * v0;
+    REQUIRE(vi.table.at(0, centre(*parts.grid, k)) == Approx(vk).epsilon(1e-5));
+    REQUIRE(vi.table.at(2, centre(*parts.grid, k)) == Approx(std::pow(gamma, 5) * vk).epsilon(1e-5));
+  }
+  REQUIRE(vi.finalResidual < 1e-6);
+}
+
+TEST_CASE("Q-learning's greedy policy converges to value iteration's on the corridor", "[learning]") {
+  const StateActionModel m = corridor();
+  Built parts = corridorParts(m);
+  const Problem problem{m, *parts.grid, *parts.reward, parts.environment};
+  const GridModel g = GridModel::build(problem, 2);
+  const TrainResult vi = trainWith("{type: value_iteration, tolerance: 1e-7}", problem, g);
+  const TrainResult q = trainWith("{type: q_learning, budget: 400000, seed: 3, curve_points: 4}", problem, g);
+  REQUIRE(q.updates == 400000);
+  REQUIRE(q.curve.size() == 4);
+  // The corridor is deterministic, so Q-learning at alpha near 1 backs values up exactly:
+  // the residual reaches float round-off.
+  REQUIRE(q.curve.back().residual <= q.curve.front().residual);
+  REQUIRE(q.finalResidual < 1e-5);
+  std::size_t compared = 0, agree = 0;
+  for (std::size_t v = 0; v < g.vertexCount; ++v) {
+    std::array<float, 3> best{vi.table.at(0, v), vi.table.at(1, v), vi.table.at(2, v)};
+    std::array<float, 3> learned{q.table.at(0, v), q.table.at(1, v), q.table.at(2, v)};
+    const auto viBest = std::max_element(best.begin(), best.end()) - best.begin();
+    std::array<float, 3> sorted = best;
+    std::sort(sorted.begin(), sorted.end());
+    if (sorted[2] - sorted[1] < 1e-3) continue;  // no clear best action
+    ++compared;
+    agree += (std::max_element(learned.begin(), learned.end()) - learned.begin()) == viBest;
+  }
+  CAPTURE(compared, agree);
+  REQUIRE(compared >= 12);
+  REQUIRE(agree == compared);
+  // On the centre line the values themselves are close.
+  for (int k = 0; k < 6; ++k)
+    REQUIRE(q.table.at(k == 0 ? 2 : 0, centre(*parts.grid, k)) ==
+            Approx(vi.table.at(k == 0 ? 2 : 0, centre(*parts.grid, k))).epsilon(0.05));
+}
+
+namespace {
+
+// Checkpoints kept in memory; optionally "crashes" (throws) after a number of saves.
+class MemoryCheckpointer final : public Checkpointer {
+ public:
+  explicit MemoryCheckpointer(int crashAfter) : crashAfter_(crashAfter) {}
+  void save(const nlohmann::json& state, const QTable& table) override {
+    state_ = state;
+    table_ = table;
+    ++saves;
+    if (crashAfter_ > 0 && saves == crashAfter_) throw std::runtime_error("simulated crash");
+  }
+  std::optional<nlohmann::json> load(QTable& table) override {
+    if (state_.is_null()) return std::nullopt;
+    table = table_;
+    return state_;
+  }
+  int saves = 0;
+
+ private:
+  int crashAfter_;
+  nlohmann::json state_;
+  QTable table_;
+};
+
+}  // namespace
+
+// Three states with turning walks and an approach reward on a polar grid: interpolation
+// is inexact here, so a short run is still far from converged and every update matters.
+StateActionModel ring() {
+  return handModel(3, {{0, 1, 7, 0.1, 0.3, 0.4, {}},
+                       {0, 2, 9, -0.2, 0.1, -0.9, {}},
+                       {1, 2, 5, 0.0, 0.4, 0.2, {}},
+                       {1, 0, 11, 0.3, -0.1, 1.3, {}},
+                       {2, 0, 6, -0.1, 0.5, -0.3, {}},
+                       {2, 1, 8, 0.05, 0.2, 2.1, {}}});
+}
+
+TEST_CASE("Q-learning is deterministic and a resumed run ends with the uninterrupted table", "[learning]") {
+  const StateActionModel m = ring();
+  const auto grid = makeGrid("{type: polar2d, radius: 2, rings: 5, sectors: 13}", m);
+  const auto reward = app::plugins().rewards.create(yaml("{type: approach}"));
+  const StaticTarget environment;
+  const Problem problem{m, *grid, *reward, environment};
+  const GridModel g = GridModel::build(problem, 1);
+  const std::string learner = "{type: q_learning, budget: 2000, seed: 9, checkpoint_every: 600, curve_points: 4}";
+  const TrainResult whole = trainWith(learner, problem, g);
+  REQUIRE(whole.finalResidual > 1e-3);  // still learning: the comparisons below mean something
+  REQUIRE(trainWith(learner, problem, g).table == whole.table);
+  REQUIRE_FALSE(trainWith("{type: q_learning, budget: 2000, seed: 10}", problem, g).table == whole.table);
+
+  MemoryCheckpointer store(2);
+  REQUIRE_THROWS_WITH(trainWith(learner, problem, g, &store), "simulated crash");
+  REQUIRE(store.saves == 2);
+  MemoryCheckpointer resumed = store;  // continue from the second checkpoint (1200 actions)
+  const TrainResult finished = trainWith(learner, problem, g, &resumed);
+  REQUIRE(finished.stats["resumed"] == true);
+  REQUIRE(resumed.saves == 3);  // one more, at 1800
+  REQUIRE(finished.updates == 2000);
+  REQUIRE(finished.table == whole.table);
+  REQUIRE(finished.curve.size() == whole.curve.size());
+  REQUIRE(finished.curve.back().residual == whole.curve.back().residual);
+}
+
+TEST_CASE("the combined controller takes the best weighted sum of active behaviours", "[learning]") {
+  const StateActionModel m = corridor();
+  Built parts = corridorParts(m);
+  const Problem problem{m, *parts.grid, *parts.reward, parts.environment};
+  const GridModel g = GridModel::build(problem, 1);
+  const TrainResult vi = trainWith("{type: value_iteration, tolerance: 1e-7}", problem, g);
+  PolicyController controller(m, {{parts.grid.get(), &vi.table, 1.0, Activation::TargetInside}});
+  REQUIRE(controller.choose(0, {0, 1, 0.5}) == 2);  // punch at 0.5 m
+  REQUIRE(controller.choose(0, {0, 1, 2.0}) == 0);  // walk forward from 2 m
+  // Outside the grid the target_inside behaviour is silent: all scores 0, first action.
+  REQUIRE(controller.choose(0, {0, 1, 5.0}) == 0);
+  REQUIRE(controller.scores() == std::vector<float>{0, 0, 0});
+  // A negative weight turns the preference around.
+  PolicyController contrary(m, {{parts.grid.get(), &vi.table, -1.0, Activation::Always}});
+  REQUIRE(contrary.choose(0, {0, 1, 2.0}) == 1);
+}
+
+}  // namespace mgrl
