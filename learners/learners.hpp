@@ -8,5 +8,10 @@ namespace mgrl::learners {
 
 /// Adds q_learning and value_iteration.
 void registerAll(LearnerRegistry& registry);
+void registerQLearning(LearnerRegistry& registry);
+void registerValueIteration(LearnerRegistry& registry);
+
+/// The `threads` parameter both learners share.
+ParamSpec threadsSpec();
 
 }  // namespace mgrl::learners

@@ -165,61 +165,9 @@ TrainResult QLearning::train(const TrainContext& context) const {
   return result;
 }
 
-class ValueIteration final : public Learner {
- public:
-  explicit ValueIteration(const Params& p)
-      : tolerance_(p.number("tolerance")),
-        maxSweeps_(static_cast<std::uint64_t>(p.integer("max_sweeps"))),
-        threads_(static_cast<unsigned>(p.integer("threads"))) {}
-
-  std::string type() const override { return "value_iteration"; }
-
-  // Jacobi sweeps of the same backup as q_learning over every (vertex, action) pair, from
-  // Q = 0, until the largest change falls below the tolerance (DESIGN.md sec. 4: the
-  // ground truth on the grid). Each sweep reads only the previous table (sec. 8).
-  TrainResult train(const TrainContext& context) const override {
-    const GridModel& g = context.grid;
-    const unsigned threads = threads_ > 0 ? threads_ : context.threads;
-    const auto start = Clock::now();
-    auto elapsed = [&] { return std::chrono::duration<double>(Clock::now() - start).count(); };
-    TrainResult result;
-    QTable current(context.problem.model, g.vertexCount), next = current;
-    const std::uint64_t pairs = static_cast<std::uint64_t>(g.vertexCount) * g.actionCount;
-    std::uint64_t sweeps = 0;
-    double change = 0;
-    bool converged = false;
-    while (sweeps < maxSweeps_) {
-      change = sweep(current, next, g, threads);
-      std::swap(current, next);
-      ++sweeps;
-      result.curve.push_back({sweeps * pairs, elapsed(), change, 0});
-      if (context.observer) context.observer->progress({sweeps * pairs, 0, elapsed(), change});
-      if (change < tolerance_) {
-        converged = true;
-        break;
-      }
-    }
-    result.table = std::move(current);
-    result.updates = sweeps * pairs;
-    result.finalResidual = bellmanResidual(result.table, g, threads).max;
-    result.seconds = elapsed();
-    result.stats = {{"sweeps", sweeps}, {"converged", converged}, {"last_change", change}};
-    return result;
-  }
-
- private:
-  double tolerance_;
-  std::uint64_t maxSweeps_;
-  unsigned threads_;
-};
-
-ParamSpec threadsSpec() {
-  return ParamSpec::integer("threads", 0, 0, 1024, "threads", "threads for sweeps (0: every core)");
-}
-
 }  // namespace
 
-void registerAll(LearnerRegistry& registry) {
+void registerQLearning(LearnerRegistry& registry) {
   registry.add(
       {"q_learning",
        "the paper's Q-learning (sec. 4.2): random poses, targets and actions; every vertex next to the target "
@@ -233,13 +181,6 @@ void registerAll(LearnerRegistry& registry) {
                            "save a resumable checkpoint this often (0: never)"),
         threadsSpec()},
        [](const Params& p) { return std::make_unique<QLearning>(p); }});
-  registry.add({"value_iteration",
-                "the same backup swept over every (vertex, action) pair until the largest change is below the "
-                "tolerance: the exact answer on the grid",
-                {ParamSpec::number("tolerance", 1e-4, 1e-9, 1, "", "stop when no value changes more than this"),
-                 ParamSpec::integer("max_sweeps", 1000, 1, 1'000'000, "sweeps", "give up after this many sweeps"),
-                 threadsSpec()},
-                [](const Params& p) { return std::make_unique<ValueIteration>(p); }});
 }
 
 }  // namespace mgrl::learners

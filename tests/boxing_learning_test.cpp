@@ -1,0 +1,105 @@
+// The paper's two behaviours on the real boxing capture (sec. 6.4): trained policies hit
+// far more often than a random controller, and Q-learning agrees with value iteration.
+#include <catch2/catch.hpp>
+
+#include <filesystem>
+
+#include "app/graph_command.hpp"
+#include "app/learn_commands.hpp"
+#include "app/plugins.hpp"
+#include "mgrl/behavior.hpp"
+#include "mgrl/data_paths.hpp"
+#include "test_support.hpp"
+
+namespace mgrl {
+namespace {
+
+namespace fs = std::filesystem;
+
+const fs::path kBoxing = fs::path(MGRL_SOURCE_DIR) / "scenarios" / "boxing.yaml";
+
+struct TempDir {
+  fs::path path;
+  TempDir() : path(fs::temp_directory_path() / fmt::format("mgrl-boxing-learning-{}", ::getpid())) {
+    fs::remove_all(path);
+  }
+  ~TempDir() { fs::remove_all(path); }
+};
+
+// For every (state, vertex): does `learned`'s greedy action reach within `tolerance` of the
+// best value of `reference` there? Returns the fraction of pairs where it does.
+double nearOptimalFraction(const QTable& learned, const QTable& reference, double tolerance) {
+  std::size_t good = 0, total = 0;
+  for (std::size_t s = 0; s < reference.stateCount(); ++s)
+    for (std::size_t v = 0; v < reference.vertexCount(); ++v) {
+      const float* l = learned.row(s, v);
+      const float* r = reference.row(s, v);
+      std::size_t greedy = 0, best = 0;
+      for (std::size_t j = 1; j < reference.actionsOf(s); ++j) {
+        if (l[j] > l[greedy]) greedy = j;
+        if (r[j] > r[best]) best = j;
+      }
+      good += r[greedy] >= r[best] - tolerance;
+      ++total;
+    }
+  return static_cast<double>(good) / static_cast<double>(total);
+}
+
+}  // namespace
+
+TEST_CASE("on boxing, the trained combined policy hits far more often than a random controller", "[boxing][learning]") {
+  TempDir temp;
+  app::TrainOptions train;
+  train.scenario = kBoxing;
+  train.dataDir = test::mocap();
+  train.cacheDir = temp.path;
+  train.out = temp.path / "policy";
+  train.sets = {"behaviors.approach.learner.type=value_iteration", "behaviors.hit.learner.type=value_iteration"};
+  const nlohmann::json trained = app::runTrain(train);
+  REQUIRE(trained["behaviors"]["hit"]["stats"]["converged"] == true);
+
+  app::EvalOptions eval;
+  static_cast<app::LearnOptions&>(eval) = train;
+  eval.policy = train.out;
+  eval.trials = 150;
+  eval.seed = 11;
+  const nlohmann::json report = app::runEval(eval);
+  const double policy = report["success_rate"], random = report["random_baseline"]["success_rate"];
+  CAPTURE(policy, random);
+  WARN(fmt::format("boxing: success rate of the trained policy {:.1f} %, of a random controller {:.1f} %",
+                   100 * policy, 100 * random));
+  REQUIRE(policy >= 0.6);
+  REQUIRE(policy >= 5 * random);
+  REQUIRE(report["mean_time_to_hit_s"].get<double>() < report["seconds_per_trial"].get<double>());
+
+  // The same seed, the same numbers.
+  const nlohmann::json again = app::runEval(eval);
+  for (const char* key : {"success_rate", "mean_time_to_hit_s", "median_time_to_hit_s", "mean_return"})
+    REQUIRE(again[key] == report[key]);
+}
+
+TEST_CASE("on boxing, Q-learning with a generous budget agrees with value iteration", "[boxing][learning]") {
+  const Scenario scenario = loadScenario(kBoxing, test::mocap());
+  const MotionDatabase db = loadMotionDatabase(scenario.motion, {});
+  const StateActionModel model = buildStateActionModel(db, scenario.graph);
+  std::vector<Behavior> behaviors = buildBehaviors(scenario, app::plugins(), model, "test", "approach");
+  const Behavior& approach = behaviors.front();
+  const Problem problem = approach.problem(model);
+  const GridModel grid = GridModel::build(problem, 2);
+
+  const auto vi = app::plugins().learners.create(ConfigNode::parse("{type: value_iteration, tolerance: 1e-6}", "t"));
+  const TrainResult exact = vi->train({problem, grid, nullptr, nullptr, 2});
+  const auto q = app::plugins().learners.create(
+      ConfigNode::parse("{type: q_learning, budget: 4000000, seed: 5, curve_points: 2}", "t"));
+  const TrainResult learned = q->train({problem, grid, nullptr, nullptr, 2});
+
+  const double agree = nearOptimalFraction(learned.table, exact.table, 0.01);
+  const double chance = nearOptimalFraction(QTable(model, grid.vertexCount), exact.table, 0.01);
+  WARN(fmt::format("boxing approach: Q-learning's greedy action is within 0.01 of value iteration's best at {:.1f} % "
+                   "of (state, vertex) pairs (the first action: {:.1f} %); residual {:.3g} vs {:.3g}",
+                   100 * agree, 100 * chance, learned.finalResidual, exact.finalResidual));
+  REQUIRE(agree >= 0.9);
+  REQUIRE(agree > chance + 0.3);
+}
+
+}  // namespace mgrl
