@@ -11,13 +11,15 @@
 /// twice. Only statistics were taken, never frames: the synthetic model has no poses, so it
 /// feeds learners, rewards, discretizers and controllers, not playback or BVH export.
 #include <array>
+#include <cstddef>
 #include <cstdint>
 
 #include "mgrl/state_action_model.hpp"
 
 namespace mgrl {
 
-/// A normal distribution cut to [min, max] (values outside are drawn again).
+/// A normal distribution cut to [min, max]: values outside are drawn again (after 64 misses,
+/// which only bounds holding almost none of the mass cause, the mean is clamped into them).
 struct BoundedNormal {
   double mean = 0, sd = 0, min = 0, max = 0;
 };

@@ -1,0 +1,191 @@
+// Learning benchmark (issue 4, DESIGN.md sec. 7): the paper's problem sizes on a
+// seed-sized synthetic state-action model (437 states, 27,072 actions of 5-40 frames at
+// 15 fps, motion statistics measured from the boxing capture), with the paper's grids
+// (approach: polar2d 5 x 13 within 2 m; hit: cylindrical3d 10 x 10 x 4 over the effective
+// hitting points). Reports, as medians where repeated:
+//   - Q-learning throughput (random actions per second, the paper's exact update) and the
+//     time for the paper's budgets (approach 50 M actions, hit 400 M);
+//   - one value-iteration sweep of the hit problem;
+//   - one runtime decision of the combined controller;
+//   - the Q tables' size;
+//   - how training time grows with grid size and with the number of actions.
+//   build/bench/mgrl_bench_learn [--approach-actions N] [--hit-actions N] [--runs N] [--quick]
+// --quick measures 10 M approach and 20 M hit actions and extrapolates to the paper's budgets.
+#include <chrono>
+#include <cstdio>
+#include <cstdlib>
+#include <cstring>
+#include <string>
+
+#include <sys/resource.h>
+
+#include "app/plugins.hpp"
+#include "bench_support.hpp"
+#include "mgrl/controller.hpp"
+#include "mgrl/parallel.hpp"
+#include "mgrl/problem.hpp"
+#include "mgrl/random.hpp"
+#include "mgrl/synthetic_model.hpp"
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+double since(Clock::time_point t) { return std::chrono::duration<double>(Clock::now() - t).count(); }
+
+double peakMegabytes() {
+  rusage usage{};
+  getrusage(RUSAGE_SELF, &usage);
+  return static_cast<double>(usage.ru_maxrss) / 1024.0;
+}
+
+mgrl::ConfigNode yaml(const std::string& text) { return mgrl::ConfigNode::parse(text, "bench"); }
+
+struct Setup {
+  std::unique_ptr<mgrl::Discretizer> grid;
+  std::unique_ptr<mgrl::Reward> reward;
+  mgrl::StaticTarget environment;
+  mgrl::GridModel tabulated;
+  double tabulateSeconds = 0;
+};
+
+std::unique_ptr<Setup> setup(const mgrl::StateActionModel& m, const std::string& grid, const std::string& reward) {
+  auto s = std::make_unique<Setup>();
+  s->grid = mgrl::app::plugins().discretizers.create(yaml(grid), m);
+  s->reward = mgrl::app::plugins().rewards.create(yaml(reward));
+  const auto start = Clock::now();
+  s->tabulated = mgrl::GridModel::build({m, *s->grid, *s->reward, s->environment}, mgrl::defaultThreadCount());
+  s->tabulateSeconds = since(start);
+  return s;
+}
+
+mgrl::TrainResult qLearning(const mgrl::StateActionModel& m, const Setup& s, std::uint64_t actions) {
+  const auto learner = mgrl::app::plugins().learners.create(
+      yaml("{type: q_learning, curve_points: 1, checkpoint_every: 0, budget: " + std::to_string(actions) + "}"));
+  return learner->train({{m, *s.grid, *s.reward, s.environment}, s.tabulated, nullptr, nullptr,
+                         mgrl::defaultThreadCount()});
+}
+
+double sweepSeconds(const mgrl::StateActionModel& m, const Setup& s, int runs) {
+  mgrl::QTable a(m, s.tabulated.vertexCount), b = a;
+  mgrl::sweep(a, b, s.tabulated, mgrl::defaultThreadCount());  // values that are not all 0
+  std::vector<double> samples;
+  for (int r = 0; r < runs; ++r) {
+    const auto start = Clock::now();
+    mgrl::sweep(b, a, s.tabulated, mgrl::defaultThreadCount());
+    samples.push_back(since(start));
+    std::swap(a, b);
+  }
+  return mgrl::bench::median(samples);
+}
+
+const char* kApproachGrid = "{type: polar2d, radius: 2, rings: 5, sectors: 13}";
+const char* kApproachReward = "{type: approach, sigma: 0.1, gamma: 0.97}";
+const char* kHitReward = "{type: hit, contact_radius: 0.15, gamma: 0.97}";
+std::string hitGrid(int angles, int distances, int heights) {
+  return "{type: cylindrical3d, bounds: hits, angles: " + std::to_string(angles) +
+         ", distances: " + std::to_string(distances) + ", heights: " + std::to_string(heights) + "}";
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  std::uint64_t approachActions = 50'000'000, hitActions = 400'000'000;
+  int runs = 5;
+  for (int i = 1; i < argc; ++i) {
+    const bool hasValue = i + 1 < argc;
+    if (!std::strcmp(argv[i], "--approach-actions") && hasValue) approachActions = std::strtoull(argv[++i], nullptr, 10);
+    else if (!std::strcmp(argv[i], "--hit-actions") && hasValue) hitActions = std::strtoull(argv[++i], nullptr, 10);
+    else if (!std::strcmp(argv[i], "--runs") && hasValue) runs = std::max(1, std::atoi(argv[++i]));
+    else if (!std::strcmp(argv[i], "--quick")) {
+      approachActions = 10'000'000;
+      hitActions = 20'000'000;
+    } else {
+      std::fprintf(stderr,
+                   "usage: mgrl_bench_learn [--approach-actions N] [--hit-actions N] [--runs N] [--quick]\n");
+      return 2;
+    }
+  }
+
+  auto start = Clock::now();
+  const mgrl::StateActionModel m = mgrl::makeSyntheticModel({});
+  std::printf("seed-sized synthetic model: %zu states, %zu actions, %u action frames, %zu effective hits (%.2f s)\n",
+              m.stateCount(), m.actionCount(), m.framesTotal, m.hits.size(), since(start));
+
+  const auto approach = setup(m, kApproachGrid, kApproachReward);
+  const auto hit = setup(m, hitGrid(10, 10, 4), kHitReward);
+  const double tableMB = static_cast<double>((approach->grid->vertexCount() + hit->grid->vertexCount()) *
+                                             m.actionCount() * sizeof(float)) / 1e6;
+  std::printf("grids: approach %zu vertices, hit %zu vertices; tabulated in %.2f s and %.2f s (%.0f MB and %.0f MB)\n",
+              approach->grid->vertexCount(), hit->grid->vertexCount(), approach->tabulateSeconds,
+              hit->tabulateSeconds, approach->tabulated.bytes() / 1e6, hit->tabulated.bytes() / 1e6);
+  std::printf("Q tables (float32): approach %.1f MB + hit %.1f MB = %.1f MB   (target <= 55 MB; paper 50 MB)\n",
+              approach->grid->vertexCount() * m.actionCount() * 4 / 1e6,
+              hit->grid->vertexCount() * m.actionCount() * 4 / 1e6, tableMB);
+
+  // Q-learning, the paper's exact update, one thread (the algorithm is sequential).
+  for (const auto& [name, s, actions, paper, target, budget] :
+       {std::tuple{"approach", approach.get(), approachActions, "2 h", 10.0, 50e6},
+        std::tuple{"hit", hit.get(), hitActions, "15 h", 120.0, 400e6}}) {
+    const mgrl::TrainResult r = qLearning(m, *s, actions);
+    const double rate = static_cast<double>(r.updates) / r.seconds;
+    std::printf("q_learning %-8s %llu actions in %.2f s: %.2f M actions/s -> the paper's %.0f M in %.1f s "
+                "(target <= %.0f s; paper %s); %.1f actions per episode\n",
+                name, static_cast<unsigned long long>(r.updates), r.seconds, rate / 1e6, budget / 1e6, budget / rate,
+                target, paper, r.stats["mean_episode_actions"].get<double>());
+  }
+
+  std::printf("value iteration sweep, hit problem (%zu vertex-action pairs): %.3f s median of %d (target <= 0.15 s)\n",
+              hit->tabulated.vertexCount * m.actionCount(), sweepSeconds(m, *hit, runs), runs);
+
+  // A runtime decision: both behaviours, random states and targets in the approach region.
+  {
+    mgrl::QTable qa(m, approach->grid->vertexCount()), qh(m, hit->grid->vertexCount()), scratch = qa;
+    mgrl::sweep(mgrl::QTable(qa), qa, approach->tabulated, 2);
+    mgrl::sweep(mgrl::QTable(qh), qh, hit->tabulated, 2);
+    mgrl::PolicyController controller(m, {{approach->grid.get(), &qa, 1.0, mgrl::Activation::Always},
+                                          {hit->grid.get(), &qh, 1.0, mgrl::Activation::TargetInside}});
+    mgrl::Rng rng(3);
+    std::vector<std::pair<std::uint32_t, Eigen::Vector3d>> queries(100000);
+    std::size_t inside = 0;
+    for (auto& [s, e] : queries) {
+      s = static_cast<std::uint32_t>(rng.below(m.stateCount()));
+      e = (rng.uniform() < 0.5 ? approach : hit)->grid->sample({rng.uniform(), rng.uniform(), rng.uniform()});
+      e.y() = m.centroid[1];
+      inside += hit->grid->inside(e);
+    }
+    std::vector<double> samples;
+    std::size_t sink = 0;
+    for (int r = 0; r < runs; ++r) {
+      const auto t = Clock::now();
+      for (const auto& [s, e] : queries) sink += controller.choose(s, e);
+      samples.push_back(since(t) / static_cast<double>(queries.size()));
+    }
+    std::printf("runtime decision (approach + hit, %.0f %% of targets inside the hit grid, %.1f actions per state): "
+                "%.3f us median (target <= 0.5 us) [%zu]\n",
+                100.0 * inside / queries.size(), static_cast<double>(m.actionCount()) / m.stateCount(),
+                mgrl::bench::median(samples) * 1e6, sink % 10);
+  }
+
+  // Growth with grid size (hit problem) and with the number of actions.
+  std::printf("growth with the hit grid (27,072 actions): vertices, Q-learning M actions/s, sweep s\n");
+  for (const auto& [a, d, h] : {std::tuple{5, 5, 2}, std::tuple{10, 10, 4}, std::tuple{20, 20, 8}}) {
+    const auto s = setup(m, hitGrid(a, d, h), kHitReward);
+    const mgrl::TrainResult r = qLearning(m, *s, 5'000'000);
+    std::printf("  %2dx%2dx%d %6zu vertices  %6.2f M actions/s  sweep %.3f s  table %.0f MB\n", a, d, h,
+                s->grid->vertexCount(), r.updates / r.seconds / 1e6, sweepSeconds(m, *s, std::min(runs, 3)),
+                s->grid->vertexCount() * m.actionCount() * 4 / 1e6);
+  }
+  std::printf("growth with the number of actions (437 states, 10x10x4 hit grid): actions, Q-learning M actions/s, "
+              "sweep s\n");
+  for (const std::size_t actions : {6768u, 13536u, 27072u, 54144u}) {
+    mgrl::SyntheticModelSpec spec;
+    spec.actions = actions;
+    const mgrl::StateActionModel model = mgrl::makeSyntheticModel(spec);
+    const auto s = setup(model, hitGrid(10, 10, 4), kHitReward);
+    const mgrl::TrainResult r = qLearning(model, *s, 5'000'000);
+    std::printf("  %6zu actions  %6.2f M actions/s  sweep %.3f s\n", actions, r.updates / r.seconds / 1e6,
+                sweepSeconds(model, *s, std::min(runs, 3)));
+  }
+  std::printf("peak memory %.0f MB\n", peakMegabytes());
+  return 0;
+}
