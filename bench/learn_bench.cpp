@@ -9,7 +9,7 @@
 //   - one runtime decision of the combined controller;
 //   - the Q tables' size;
 //   - how training time grows with grid size and with the number of actions.
-//   build/bench/mgrl_bench_learn [--approach-actions N] [--hit-actions N] [--runs N] [--quick]
+//   build/bench/mgrl_bench_learn [--approach-actions N] [--hit-actions N] [--runs N] [--quick] [--no-growth]
 // --quick measures 10 M approach and 20 M hit actions and extrapolates to the paper's budgets.
 #include <chrono>
 #include <cstdio>
@@ -91,17 +91,19 @@ std::string hitGrid(int angles, int distances, int heights) {
 int main(int argc, char** argv) {
   std::uint64_t approachActions = 50'000'000, hitActions = 400'000'000;
   int runs = 5;
+  bool growth = true;
   for (int i = 1; i < argc; ++i) {
     const bool hasValue = i + 1 < argc;
     if (!std::strcmp(argv[i], "--approach-actions") && hasValue) approachActions = std::strtoull(argv[++i], nullptr, 10);
     else if (!std::strcmp(argv[i], "--hit-actions") && hasValue) hitActions = std::strtoull(argv[++i], nullptr, 10);
     else if (!std::strcmp(argv[i], "--runs") && hasValue) runs = std::max(1, std::atoi(argv[++i]));
+    else if (!std::strcmp(argv[i], "--no-growth")) growth = false;
     else if (!std::strcmp(argv[i], "--quick")) {
       approachActions = 10'000'000;
       hitActions = 20'000'000;
     } else {
       std::fprintf(stderr,
-                   "usage: mgrl_bench_learn [--approach-actions N] [--hit-actions N] [--runs N] [--quick]\n");
+                   "usage: mgrl_bench_learn [--approach-actions N] [--hit-actions N] [--runs N] [--quick] [--no-growth]\n");
       return 2;
     }
   }
@@ -167,6 +169,10 @@ int main(int argc, char** argv) {
   }
 
   // Growth with grid size (hit problem) and with the number of actions.
+  if (!growth) {
+    std::printf("peak memory %.0f MB\n", peakMegabytes());
+    return 0;
+  }
   std::printf("growth with the hit grid (27,072 actions): vertices, Q-learning M actions/s, sweep s\n");
   for (const auto& [a, d, h] : {std::tuple{5, 5, 2}, std::tuple{10, 10, 4}, std::tuple{20, 20, 8}}) {
     const auto s = setup(m, hitGrid(a, d, h), kHitReward);

@@ -15,22 +15,36 @@ constexpr double kTwoPi = 2 * M_PI;
 
 // Interval of coordinate c on an axis: index of its lower vertex and the fraction towards
 // the next one (the first vertex + 2 pi for the last interval of a wrapping axis).
-bool locateOnAxis(const GridAxis& axis, double c, std::uint32_t& index, float& frac) {
+// `inverseStep` > 0 marks evenly spaced vertices, found by arithmetic (the hot path of
+// every learner); otherwise by binary search.
+inline bool locateOnAxis(const GridAxis& axis, double inverseStep, double c, std::uint32_t& index, float& frac) {
   const std::vector<double>& v = axis.vertices;
   const std::size_t n = v.size();
   if (axis.wraps) {
-    c = v[0] + std::fmod(std::fmod(c - v[0], kTwoPi) + kTwoPi, kTwoPi);  // into [v0, v0 + 2 pi)
-    if (c >= v[0] + kTwoPi) c = v[0];
+    if (!std::isfinite(c)) return false;
+    if (c < v[0] || c >= v[0] + kTwoPi) {
+      c = v[0] + std::fmod(std::fmod(c - v[0], kTwoPi) + kTwoPi, kTwoPi);  // into [v0, v0 + 2 pi)
+      if (c >= v[0] + kTwoPi) c = v[0];
+    }
     if (c >= v[n - 1]) {
       index = static_cast<std::uint32_t>(n - 1);
-      frac = static_cast<float>((c - v[n - 1]) / (v[0] + kTwoPi - v[n - 1]));
+      frac = static_cast<float>(std::clamp((c - v[n - 1]) / (v[0] + kTwoPi - v[n - 1]), 0.0, 1.0));
       return true;
     }
   } else if (!(c >= v[0] && c <= v[n - 1])) {
     return false;  // also for NaN
   }
-  const std::size_t upper = static_cast<std::size_t>(std::upper_bound(v.begin(), v.end(), c) - v.begin());
-  const std::size_t i = std::min(upper == 0 ? 0 : upper - 1, n - 2);
+  std::size_t i;
+  if (inverseStep > 0) {
+    i = static_cast<std::size_t>((c - v[0]) * inverseStep);
+    i = std::min(i, n - 2);
+    // Round-off at a vertex may land one interval off; the exact comparison settles it.
+    if (c < v[i] && i > 0) --i;
+    else if (c > v[i + 1] && i + 2 < n) ++i;
+  } else {
+    const std::size_t upper = static_cast<std::size_t>(std::upper_bound(v.begin(), v.end(), c) - v.begin());
+    i = std::min(upper == 0 ? 0 : upper - 1, n - 2);
+  }
   index = static_cast<std::uint32_t>(i);
   frac = static_cast<float>(std::clamp((c - v[i]) / (v[i + 1] - v[i]), 0.0, 1.0));
   return true;
@@ -58,6 +72,12 @@ void Discretizer::setAxes(std::vector<GridAxis> axes) {
     if (axis.wraps && !(axis.vertices.back() - axis.vertices.front() < kTwoPi))
       throw Error(fmt::format("{}: {}: a wrapping axis must span less than 360 degrees", type(), axis.name));
     cellsPerAxis_[i] = axis.wraps ? axis.vertices.size() : axis.vertices.size() - 1;
+    const std::size_t n = axis.vertices.size();
+    const double step = (axis.vertices.back() - axis.vertices.front()) / static_cast<double>(n - 1);
+    bool even = true;
+    for (std::size_t k = 0; k < n; ++k)
+      even = even && std::fabs(axis.vertices[k] - (axis.vertices.front() + step * static_cast<double>(k))) <= 1e-9 * (1 + std::fabs(step));
+    inverseStep_[i] = even ? 1 / step : 0;
     vertexCount_ *= axis.vertices.size();
     cellCount_ *= cellsPerAxis_[i];
   }
@@ -90,7 +110,7 @@ bool Discretizer::locate(const Eigen::Vector3d& e, GridCell& out) const {
   std::size_t cell = 0, stride = 1;
   for (int i = 0; i < dimension(); ++i) {
     std::uint32_t index = 0;
-    if (!locateOnAxis(axes_[i], c[i], index, out.frac[i])) return false;
+    if (!locateOnAxis(axes_[i], inverseStep_[i], c[i], index, out.frac[i])) return false;
     cell += index * stride;
     stride *= cellsPerAxis_[i];
   }
@@ -110,7 +130,7 @@ GridCell Discretizer::locateClamped(const Eigen::Vector3d& e) const {
   std::size_t cell = 0, stride = 1;
   for (int i = 0; i < dimension(); ++i) {
     std::uint32_t index = 0;
-    locateOnAxis(axes_[i], c[i], index, out.frac[i]);
+    locateOnAxis(axes_[i], inverseStep_[i], c[i], index, out.frac[i]);
     cell += index * stride;
     stride *= cellsPerAxis_[i];
   }

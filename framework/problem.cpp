@@ -8,7 +8,7 @@
 namespace mgrl {
 
 std::size_t GridModel::bytes() const {
-  return corners.size() * 4 + reward.size() * 4 + nextCell.size() * 4 + nextFrac.size() * 4 + discount.size() * 4 +
+  return corners.size() * 4 + transition.size() * sizeof(GridTransition) + discount.size() * 4 + rigid.size() * 8 +
          actionTo.size() * 4 + incomingBegin.size() * 4 + incoming.size() * 4;
 }
 
@@ -22,13 +22,22 @@ GridModel GridModel::build(const Problem& problem, unsigned threads) {
   g.corners = grid.cellCorners();
   g.actionTo = m.actionTo;
   const std::size_t pairs = g.vertexCount * g.actionCount;
-  g.reward.assign(pairs, 0);
-  g.nextCell.assign(pairs, -1);
-  g.nextFrac.assign(3 * pairs, 0);
+  g.transition.assign(pairs, GridTransition{});
   g.discount.resize(g.actionCount);
   const double gamma = problem.reward.gamma();
   for (std::size_t a = 0; a < g.actionCount; ++a)
     g.discount[a] = static_cast<float>(std::pow(gamma, static_cast<double>(m.actionLength(a))));
+
+  if (problem.environment.rigid()) {
+    g.rigid.resize(4 * g.actionCount);
+    for (std::size_t a = 0; a < g.actionCount; ++a) {
+      const GroundMotion d = m.displacement(a);
+      g.rigid[4 * a] = std::cos(d.dyaw);
+      g.rigid[4 * a + 1] = std::sin(d.dyaw);
+      g.rigid[4 * a + 2] = d.dx;
+      g.rigid[4 * a + 3] = d.dz;
+    }
+  }
 
   std::vector<Eigen::Vector3d> vertex(g.vertexCount);
   for (std::size_t v = 0; v < g.vertexCount; ++v) vertex[v] = grid.vertexPosition(v);
@@ -37,12 +46,12 @@ GridModel GridModel::build(const Problem& problem, unsigned threads) {
     const std::size_t end = std::min(g.actionCount, (chunk + 1) * kChunk);
     for (std::size_t a = chunk * kChunk; a < end; ++a)
       for (std::size_t v = 0; v < g.vertexCount; ++v) {
-        const std::size_t i = a * g.vertexCount + v;
-        g.reward[i] = static_cast<float>(problem.reward.evaluate(m, a, vertex[v]));
+        GridTransition& t = g.transition[a * g.vertexCount + v];
+        t.reward = static_cast<float>(problem.reward.evaluate(m, a, vertex[v]));
         GridCell cell;
         if (grid.locate(problem.environment.next(m, a, vertex[v]), cell)) {
-          g.nextCell[i] = static_cast<std::int32_t>(cell.cell);
-          for (int k = 0; k < 3; ++k) g.nextFrac[3 * i + k] = cell.frac[k];
+          t.cell = static_cast<std::int32_t>(cell.cell);
+          for (int k = 0; k < 3; ++k) t.frac[k] = cell.frac[k];
         }
       }
   });

@@ -109,35 +109,87 @@ TrainResult QLearning::train(const TrainContext& context) const {
   while (nextCurveIndex <= curvePoints_ && curveAt(nextCurveIndex) <= walk.updates) ++nextCurveIndex;
   double lastResidual = result.curve.empty() ? -1 : result.curve.back().residual;
 
+  constexpr std::uint64_t kProgressEvery = 1 << 16;
   const int d = g.dimension;
   const int corners = 1 << d;
+  const bool rigid = !g.rigid.empty();
+  struct Step {
+    std::uint32_t action, cell;
+  };
+  std::vector<Step> steps;
+  steps.reserve(kProgressEvery);
   const std::uint32_t* stateBegin = m.stateActionBegin.data();
   const double alphaSlope = (1 - alphaFinal_) / static_cast<double>(total);
-  constexpr std::uint64_t kProgressEvery = 1 << 16;
 
   while (walk.updates < total) {
     std::uint64_t stop = std::min(total, walk.updates + kProgressEvery);
     if (nextCurveIndex <= curvePoints_) stop = std::min(stop, curveAt(nextCurveIndex));
     if (checkpointEvery_ > 0) stop = std::min(stop, (walk.updates / checkpointEvery_ + 1) * checkpointEvery_);
 
-    // The hot loop: one random action and 2^d vertex updates per iteration.
+    // The walk (states, targets, restarts, random actions) does not depend on Q, so each
+    // chunk first walks and records (action, cell) per step, consuming the random numbers
+    // in the same order as interleaving would, then applies the updates. Knowing the
+    // steps ahead lets the update loop prefetch: the tables are far bigger than the
+    // caches and random actions defeat the hardware's own prefetching.
+    steps.clear();
+    GridCell cell;
+    if (!grid.locate(walk.target, cell)) {  // only on the boundary's round-off
+      restart();
+      grid.locate(walk.target, cell);
+    }
     for (std::uint64_t k = walk.updates; k < stop; ++k) {
       const std::uint32_t s = walk.state;
-      const std::uint32_t n = stateBegin[s + 1] - stateBegin[s];
-      const std::size_t a = stateBegin[s] + static_cast<std::uint32_t>(walk.rng.below(n));
-      const float alpha = static_cast<float>(1 - alphaSlope * static_cast<double>(k));
-      GridCell cell;
-      grid.locate(walk.target, cell);  // inside: checked after every move
-      const std::uint32_t* corner = &g.corners[static_cast<std::size_t>(cell.cell) << d];
-      for (int i = 0; i < corners; ++i) {
-        const std::size_t v = corner[i];
+      const std::size_t a = stateBegin[s] + static_cast<std::uint32_t>(walk.rng.below(stateBegin[s + 1] - stateBegin[s]));
+      steps.push_back({static_cast<std::uint32_t>(a), cell.cell});
+      if (rigid) {
+        const double* r = &g.rigid[4 * a];
+        const double qx = walk.target.x() - r[2], qz = walk.target.z() - r[3];
+        walk.target = {r[0] * qx - r[1] * qz, walk.target.y(), r[1] * qx + r[0] * qz};
+      } else {
+        walk.target = environment.next(m, a, walk.target);
+      }
+      walk.state = m.actionTo[a];
+      if (!grid.locate(walk.target, cell)) {
+        restart();
+        grid.locate(walk.target, cell);
+      }
+    }
+    constexpr std::size_t kTransitionAhead = 6, kRowsAhead = 3;
+    for (std::size_t i = 0; i < steps.size(); ++i) {
+      if (i + kTransitionAhead < steps.size()) {
+        const Step& ahead = steps[i + kTransitionAhead];
+        const std::uint32_t* c = &g.corners[static_cast<std::size_t>(ahead.cell) << d];
+        for (int j = 0; j < corners; ++j) {
+          __builtin_prefetch(&g.transition[ahead.action * g.vertexCount + c[j]]);
+          __builtin_prefetch(&q.at(ahead.action, c[j]), 1);
+        }
+      }
+      if (i + kRowsAhead < steps.size()) {
+        // The rows the backups of that step will interpolate: its transitions should be
+        // in cache by now.
+        const Step& ahead = steps[i + kRowsAhead];
+        const std::uint32_t* c = &g.corners[static_cast<std::size_t>(ahead.cell) << d];
+        const std::uint32_t to = g.actionTo[ahead.action];
+        const std::size_t n = q.actionsOf(to);
+        for (int j = 0; j < corners; ++j) {
+          const GridTransition& t = g.transition[ahead.action * g.vertexCount + c[j]];
+          if (t.cell < 0) continue;
+          const std::uint32_t* u = &g.corners[static_cast<std::size_t>(t.cell) << d];
+          for (int l = 0; l < corners; ++l) {
+            const float* row = q.row(to, u[l]);
+            for (std::size_t o = 0; o < n; o += 16) __builtin_prefetch(row + o);
+          }
+        }
+      }
+      const std::size_t a = steps[i].action;
+      const float alpha = static_cast<float>(1 - alphaSlope * static_cast<double>(walk.updates + i));
+      const std::uint32_t* corner = &g.corners[static_cast<std::size_t>(steps[i].cell) << d];
+      for (int j = 0; j < corners; ++j) {
+        const std::size_t v = corner[j];
         const float target = backup(q, g, a, v);
         float& value = q.at(a, v);
         value += alpha * (target - value);
       }
-      walk.target = environment.next(m, a, walk.target);
-      walk.state = m.actionTo[a];
-      if (!grid.inside(walk.target)) restart();
     }
     walk.updates = stop;
 

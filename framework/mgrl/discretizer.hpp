@@ -91,6 +91,8 @@ class Discretizer {
   std::size_t vertexCount_ = 0, cellCount_ = 0;
   std::vector<std::uint32_t> corners_;
   std::array<std::size_t, 3> cellsPerAxis_{1, 1, 1};
+  /// Evenly spaced axes are located by arithmetic instead of a search: 1 / spacing, or 0.
+  std::array<double, 3> inverseStep_{0, 0, 0};
 };
 
 /// Multilinear weights of the 2^dimension corners for fractions `frac`.

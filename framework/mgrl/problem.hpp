@@ -24,15 +24,24 @@ struct Problem {
   const EnvironmentModel& environment;
 };
 
+/// What a backup of (action a, vertex v) needs besides Q, in one 20-byte record so that
+/// a backup reads one cache line of it.
+struct GridTransition {
+  float reward = 0;       ///< r(v, a)
+  std::int32_t cell = -1;  ///< cell of e'(v, a), -1 outside the grid
+  float frac[3] = {0, 0, 0};  ///< fractions of e'(v, a) in that cell
+};
+
 /// The problem tabulated on the grid: for action a and vertex v at index a * V + v.
 struct GridModel {
   std::size_t vertexCount = 0, actionCount = 0;
   int dimension = 0;
   std::vector<std::uint32_t> corners;     ///< the grid's cell corner table
-  std::vector<float> reward;              ///< r(v, a)
-  std::vector<std::int32_t> nextCell;     ///< cell of e'(v, a), -1 outside the grid
-  std::vector<float> nextFrac;            ///< 3 per (a, v): fractions in that cell
+  std::vector<GridTransition> transition;  ///< per (a, v)
   std::vector<float> discount;            ///< per action: gamma^(frames of a)
+  /// Per action, if the environment model moves the target rigidly (EnvironmentModel::
+  /// rigidMotion): (cos, sin, dx, dz) of the motion e' = R^T (e - d); else empty.
+  std::vector<double> rigid;
   std::vector<std::uint32_t> actionTo;    ///< per action: its end state
   /// Actions grouped by the state they end at: incoming[incomingBegin[s], incomingBegin[s+1]).
   std::vector<std::uint32_t> incomingBegin, incoming;
@@ -50,11 +59,9 @@ float maxInterpolated(const QTable& q, const GridModel& g, std::uint32_t s, std:
 /// The backup of (action a, vertex v): r(v, a) + gamma^t_a max_a' Q(e'(v, a), a'), with
 /// future value 0 when e' leaves the grid.
 inline float backup(const QTable& q, const GridModel& g, std::size_t a, std::size_t v) {
-  const std::size_t i = a * g.vertexCount + v;
-  const std::int32_t cell = g.nextCell[i];
-  if (cell < 0) return g.reward[i];
-  return g.reward[i] + g.discount[a] * maxInterpolated(q, g, g.actionTo[a], static_cast<std::uint32_t>(cell),
-                                                       &g.nextFrac[3 * i]);
+  const GridTransition& t = g.transition[a * g.vertexCount + v];
+  if (t.cell < 0) return t.reward;
+  return t.reward + g.discount[a] * maxInterpolated(q, g, g.actionTo[a], static_cast<std::uint32_t>(t.cell), t.frac);
 }
 
 /// One Jacobi sweep: out(v, a) = backup of `in` for every pair, in parallel over end

@@ -34,6 +34,9 @@ class EnvironmentModel {
   virtual ~EnvironmentModel() = default;
   virtual std::string type() const = 0;
   virtual Eigen::Vector3d next(const StateActionModel& model, std::size_t action, const Eigen::Vector3d& e) const = 0;
+  /// True if next() is exactly inverseTransformPoint(model.displacement(action), e), so
+  /// learners may apply it from precomputed sines and cosines.
+  virtual bool rigid() const { return false; }
 };
 
 using EnvironmentRegistry = Registry<EnvironmentModel>;
@@ -45,6 +48,7 @@ class StaticTarget final : public EnvironmentModel {
  public:
   std::string type() const override { return "static_target"; }
   Eigen::Vector3d next(const StateActionModel& model, std::size_t action, const Eigen::Vector3d& e) const override;
+  bool rigid() const override { return true; }
 };
 
 /// The inverse of transformPoint(): a point of the frame `motion` starts from, seen from
