@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
-# The main job: set up, build, inspect the CMU shadow-boxing capture, and build the
-# boxing scenario's motion graph and state-action model (cached after the first run).
+# The main job: set up, build, inspect the CMU shadow-boxing capture, build the boxing
+# scenario's motion graph (cached after the first run), train its approach and hit
+# behaviours with the paper's Q-learning, and evaluate the combined policy.
 set -euo pipefail
 root="$(cd "$(dirname "$0")/.." && pwd)"
 "$root/scripts/setup.sh"
@@ -8,3 +9,5 @@ root="$(cd "$(dirname "$0")/.." && pwd)"
 data="${MGRL_DATA:-$root/../shared/mocap}"
 "$root/build/app/mgrl" inspect "$data/cmu/bvh/13_17_boxing.bvh" "$data/cmu/bvh/13_18_boxing.bvh"
 "$root/build/app/mgrl" graph "$root/scenarios/boxing.yaml" --data "$data" "$@"
+"$root/build/app/mgrl" train "$root/scenarios/boxing.yaml" --data "$data"
+"$root/build/app/mgrl" eval "$root/scenarios/boxing.yaml" --data "$data" --trials 200
