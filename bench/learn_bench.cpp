@@ -67,11 +67,12 @@ mgrl::TrainResult qLearning(const mgrl::StateActionModel& m, const Setup& s, std
 
 double sweepSeconds(const mgrl::StateActionModel& m, const Setup& s, int runs) {
   mgrl::QTable a(m, s.tabulated.vertexCount), b = a;
-  mgrl::sweep(a, b, s.tabulated, mgrl::defaultThreadCount());  // values that are not all 0
+  std::vector<float> stage;
+  mgrl::sweep(a, b, s.tabulated, mgrl::defaultThreadCount(), stage);  // values that are not all 0
   std::vector<double> samples;
   for (int r = 0; r < runs; ++r) {
     const auto start = Clock::now();
-    mgrl::sweep(b, a, s.tabulated, mgrl::defaultThreadCount());
+    mgrl::sweep(b, a, s.tabulated, mgrl::defaultThreadCount(), stage);
     samples.push_back(since(start));
     std::swap(a, b);
   }

@@ -21,6 +21,7 @@ GridModel GridModel::build(const Problem& problem, unsigned threads) {
   g.dimension = grid.dimension();
   g.corners = grid.cellCorners();
   g.actionTo = m.actionTo;
+  g.stateActionBegin = m.stateActionBegin;
   const std::size_t pairs = g.vertexCount * g.actionCount;
   g.transition.assign(pairs, GridTransition{});
   g.discount.resize(g.actionCount);
@@ -68,39 +69,43 @@ GridModel GridModel::build(const Problem& problem, unsigned threads) {
 
 namespace {
 
-typedef float Float8 __attribute__((vector_size(32)));
-typedef int Int8 __attribute__((vector_size(32)));
+// 16 lanes: one AVX-512 register, two AVX2 ones, four SSE ones, depending on the clone.
+constexpr int kLanes = 16;
+typedef float FloatV __attribute__((vector_size(4 * kLanes)));
+typedef int IntV __attribute__((vector_size(4 * kLanes)));
 
-inline Float8 load8(const float* p) {
-  Float8 v;
+inline FloatV loadV(const float* p) {
+  FloatV v;
   __builtin_memcpy(&v, p, sizeof v);
   return v;
 }
 
-// max_j sum_k w[k] rows[k][j] over j < n. Rows may be read up to 7 floats past n (the
-// table is padded); those lanes are masked out. The sum for each j is formed in the same
-// order whatever the lane, so the result does not depend on n's remainder or the clone.
+// max_j sum_k w[k] rows[k][j] over j < n. Rows may be read up to kLanes - 1 floats past n
+// (the table is padded); those lanes are masked out. The sum for each j is formed in the
+// same order whatever the lane, so the result does not depend on n's remainder or the clone.
 template <int K>
 inline __attribute__((always_inline)) float maxWeightedRows(const float* const* rows, const float* w, std::uint32_t n) {
-  const Float8 minusInf = Float8{} - std::numeric_limits<float>::infinity();
-  Float8 best = minusInf;
-  Float8 weight[K];
-  for (int k = 0; k < K; ++k) weight[k] = Float8{} + w[k];
+  const FloatV minusInf = FloatV{} - std::numeric_limits<float>::infinity();
+  FloatV best = minusInf;
+  FloatV weight[K];
+  for (int k = 0; k < K; ++k) weight[k] = FloatV{} + w[k];
   std::uint32_t j = 0;
-  for (; j + 8 <= n; j += 8) {
-    Float8 acc = weight[0] * load8(rows[0] + j);
-    for (int k = 1; k < K; ++k) acc += weight[k] * load8(rows[k] + j);
+  for (; j + kLanes <= n; j += kLanes) {
+    FloatV acc = weight[0] * loadV(rows[0] + j);
+    for (int k = 1; k < K; ++k) acc += weight[k] * loadV(rows[k] + j);
     best = acc > best ? acc : best;
   }
   if (j < n) {
-    Float8 acc = weight[0] * load8(rows[0] + j);
-    for (int k = 1; k < K; ++k) acc += weight[k] * load8(rows[k] + j);
-    const Int8 lane = Int8{0, 1, 2, 3, 4, 5, 6, 7} + static_cast<int>(j);
+    FloatV acc = weight[0] * loadV(rows[0] + j);
+    for (int k = 1; k < K; ++k) acc += weight[k] * loadV(rows[k] + j);
+    IntV lane;
+    for (int i = 0; i < kLanes; ++i) lane[i] = i;
+    lane += static_cast<int>(j);
     acc = lane < static_cast<int>(n) ? acc : minusInf;
     best = acc > best ? acc : best;
   }
   float result = best[0];
-  for (int i = 1; i < 8; ++i) result = best[i] > result ? best[i] : result;
+  for (int i = 1; i < kLanes; ++i) result = best[i] > result ? best[i] : result;
   return result;
 }
 
@@ -141,16 +146,37 @@ float maxInterpolated(const QTable& q, const GridModel& g, std::uint32_t s, std:
 }
 
 double sweep(const QTable& in, QTable& out, const GridModel& g, unsigned threads) {
+  std::vector<float> stage;
+  return sweep(in, out, g, threads, stage);
+}
+
+double sweep(const QTable& in, QTable& out, const GridModel& g, unsigned threads, std::vector<float>& stage) {
   const std::size_t states = g.incomingBegin.size() - 1;
-  std::vector<double> change(states, 0.0);
+  const std::size_t V = g.vertexCount;
+  stage.resize(g.actionCount * V);
+  // Backups grouped by end state: each group reads one block of `in` (its rows), which
+  // stays in cache, and writes its actions' values contiguously into `stage` (a, v).
   parallelFor(states, threads, [&](std::size_t s, unsigned) {
-    double largest = 0;
     for (std::uint32_t i = g.incomingBegin[s]; i < g.incomingBegin[s + 1]; ++i) {
       const std::size_t a = g.incoming[i];
-      for (std::size_t v = 0; v < g.vertexCount; ++v) {
-        const float value = backup(in, g, a, v);
-        largest = std::max(largest, static_cast<double>(std::fabs(value - in.at(a, v))));
-        out.at(a, v) = value;
+      float* values = &stage[a * V];
+      for (std::size_t v = 0; v < V; ++v) values[v] = backup(in, g, a, v);
+    }
+  });
+  // Then into the state-major layout, block by block, measuring the change.
+  const std::size_t sources = in.stateCount();
+  std::vector<double> change(sources, 0.0);
+  parallelFor(sources, threads, [&](std::size_t s, unsigned) {
+    const std::size_t n = in.actionsOf(s);
+    double largest = 0;
+    const std::size_t begin = g.stateActionBegin[s];
+    for (std::size_t v = 0; v < V; ++v) {
+      const float* old = in.row(s, v);
+      float* row = out.row(s, v);
+      for (std::size_t j = 0; j < n; ++j) {
+        const float value = stage[(begin + j) * V + v];
+        largest = std::max(largest, static_cast<double>(std::fabs(value - old[j])));
+        row[j] = value;
       }
     }
     change[s] = largest;

@@ -32,10 +32,11 @@ class ValueIteration final : public Learner {
     QTable current(context.problem.model, g.vertexCount), next = current;
     const std::uint64_t pairs = static_cast<std::uint64_t>(g.vertexCount) * g.actionCount;
     std::uint64_t sweeps = 0;
+    std::vector<float> stage;
     double change = 0;
     bool converged = false;
     while (sweeps < maxSweeps_) {
-      change = sweep(current, next, g, threads);
+      change = sweep(current, next, g, threads, stage);
       std::swap(current, next);
       ++sweeps;
       result.curve.push_back({sweeps * pairs, elapsed(), change, 0});

@@ -43,6 +43,7 @@ struct GridModel {
   /// rigidMotion): (cos, sin, dx, dz) of the motion e' = R^T (e - d); else empty.
   std::vector<double> rigid;
   std::vector<std::uint32_t> actionTo;    ///< per action: its end state
+  std::vector<std::uint32_t> stateActionBegin;  ///< the model's: actions by the state they leave
   /// Actions grouped by the state they end at: incoming[incomingBegin[s], incomingBegin[s+1]).
   std::vector<std::uint32_t> incomingBegin, incoming;
 
@@ -69,6 +70,8 @@ inline float backup(const QTable& q, const GridModel& g, std::size_t a, std::siz
 /// Deterministic whatever the thread count; a sweep over a subset of states is a function
 /// of `in` alone (DESIGN.md sec. 8).
 double sweep(const QTable& in, QTable& out, const GridModel& g, unsigned threads);
+/// The same with a scratch buffer kept between sweeps (actions x vertices floats).
+double sweep(const QTable& in, QTable& out, const GridModel& g, unsigned threads, std::vector<float>& stage);
 
 /// The Bellman residual max over (v, a) of |backup(Q) - Q|, and its mean.
 struct Residual {
