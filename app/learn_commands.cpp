@@ -9,12 +9,14 @@
 #include <iostream>
 
 #include <fmt/format.h>
+#include <fmt/ranges.h>
 
 #include "graph_command.hpp"
 #include "mgrl/checkpoint_store.hpp"
 #include "mgrl/controller.hpp"
 #include "mgrl/data_paths.hpp"
 #include "mgrl/hash.hpp"
+#include "mgrl/motion_io.hpp"
 #include "mgrl/parallel.hpp"
 #include "mgrl/policy_bundle.hpp"
 #include "mgrl/random.hpp"
@@ -111,11 +113,18 @@ struct Loaded {
   fs::path cacheDir;
 };
 
-Loaded load(const LearnOptions& options) {
+// The scenario with its behaviours checked: every mistake that needs no graph is found
+// before the graph is built or loaded.
+Scenario checkedScenario(const LearnOptions& options) {
   Scenario scenario = loadScenario(options.scenario, dataDirectory(options.dataDir), options.sets);
   if (scenario.behaviors.empty())
     scenario.root.fail("expected a 'behaviors' section naming at least one behaviour (see scenarios/README.md), "
                        "found none");
+  checkBehaviors(scenario, plugins());
+  return scenario;
+}
+
+Loaded load(const LearnOptions& options, Scenario scenario) {
   GraphOptions graphOptions;
   graphOptions.cacheDir = options.cacheDir;
   graphOptions.log = options.log;
@@ -134,6 +143,12 @@ std::vector<double> vertexPositions(const Discretizer& grid) {
   return out;
 }
 
+std::string setFlags(const std::vector<std::string>& sets) {
+  std::string text;
+  for (const std::string& s : sets) text += fmt::format(" --set {}", s);
+  return text;
+}
+
 fs::path checkpointDirectory(const fs::path& out, const std::string& behavior) {
   return out.parent_path() / (out.filename().string() + ".checkpoints") / behavior;
 }
@@ -150,12 +165,16 @@ json runTrain(const TrainOptions& options) {
   const auto log = [&](const std::string& m) {
     if (options.log) options.log(m);
   };
-  Loaded loaded = load(options);
-  const StateActionModel& model = loaded.graph.model;
-  std::vector<Behavior> all = buildBehaviors(loaded.scenario, plugins(), model, loaded.graph.key);
-  if (!options.behavior.empty()) buildBehaviors(loaded.scenario, plugins(), model, loaded.graph.key, options.behavior);
-  fs::path out = options.out.empty() ? defaultPolicyDirectory(loaded.cacheDir, loaded.scenario.name, loaded.scenario.path)
-                                     : options.out;
+  Scenario scenario = checkedScenario(options);
+  if (!options.behavior.empty()) {
+    std::vector<std::string> names;
+    for (const BehaviorSpec& spec : scenario.behaviors) names.push_back(spec.name);
+    if (std::find(names.begin(), names.end(), options.behavior) == names.end())
+      throw Error(fmt::format("--behavior: expected one of the scenario's behaviours ({}), found {}",
+                              fmt::join(names, ", "), quoteToken(options.behavior)));
+  }
+  const fs::path cacheDir = options.cacheDir.empty() ? defaultCacheDirectory() : options.cacheDir;
+  fs::path out = options.out.empty() ? defaultPolicyDirectory(cacheDir, scenario.name, scenario.path) : options.out;
   if (!out.has_filename()) out = out.parent_path();
   {
     // Fail before hours of training, not after: the bundle's folder must be creatable.
@@ -165,6 +184,9 @@ json runTrain(const TrainOptions& options) {
     if (fs::exists(out, ec) && !fs::is_directory(out, ec))
       throw Error(fmt::format("--out {}: expected a policy bundle directory or nothing, found a file", out.string()));
   }
+  Loaded loaded = load(options, std::move(scenario));
+  const StateActionModel& model = loaded.graph.model;
+  std::vector<Behavior> all = buildBehaviors(loaded.scenario, plugins(), model, loaded.graph.key);
 
   PolicyBundle bundle;
   bundle.graphKey = loaded.graph.key;
@@ -178,8 +200,12 @@ json runTrain(const TrainOptions& options) {
       PolicyBundle previous = loadPolicyBundle(out, model, loaded.graph.key);
       for (auto& [name, entry] : previous.behaviors) {
         const auto match = std::find_if(all.begin(), all.end(), [&](const Behavior& b) { return b.name == name; });
-        if (name != options.behavior && match != all.end() && match->key == entry.key)
+        if (name == options.behavior) continue;
+        if (match != all.end() && match->key == entry.key)
           bundle.behaviors.emplace(name, std::move(entry));
+        else
+          log(fmt::format("warning: dropping {}'s table from {}: the scenario {}", name, out.string(),
+                          match == all.end() ? "no longer has this behaviour" : "now asks for other settings"));
       }
     } catch (const Error& e) {
       log(fmt::format("warning: not keeping the other behaviours of {}: {}", out.string(), e.what()));
@@ -265,6 +291,44 @@ struct TrialStats {
   double returns = 0;
 };
 
+// The refusals eval can make from the manifest alone, made before the graph is loaded so
+// that they are the only line on stderr. loadPolicyBundle() checks everything afterwards.
+void precheckPolicy(const fs::path& dir, const Scenario& scenario, const EvalOptions& options) {
+  std::error_code ec;
+  if (!fs::is_directory(dir, ec))
+    throw Error(fmt::format("{}: no policy bundle here: run `mgrl train {}{}` first (or pass --policy DIR)",
+                            dir.string(), options.scenario.string(), setFlags(options.sets)));
+  json manifest;
+  try {
+    manifest = json::parse(readFile(dir / "manifest.json"));
+  } catch (const std::exception&) {
+    return;  // the full load says what is wrong
+  }
+  if (!manifest.is_object() || !manifest.contains("graph_key") || !manifest["graph_key"].is_string() ||
+      !manifest.contains("behaviors") || !manifest["behaviors"].is_object())
+    return;
+  const std::string graphKey = graphCacheKey(scenario);
+  const std::string found = manifest["graph_key"].get<std::string>();
+  if (found != graphKey)
+    throw Error(fmt::format("{}: expected graph key '{}', found '{}': the policy was made for another graph; "
+                            "retrain with mgrl train {}{}",
+                            (dir / "manifest.json").string(), graphKey.substr(0, 16), found.substr(0, 16),
+                            options.scenario.string(), setFlags(options.sets)));
+  for (const BehaviorSpec& spec : scenario.behaviors) {
+    const json& entry = manifest["behaviors"].contains(spec.name) ? manifest["behaviors"][spec.name] : json();
+    if (entry.is_null())
+      throw Error(fmt::format("{}: expected a trained table for behaviour '{}' that the scenario asks for, found "
+                              "none; run mgrl train {} --behavior {}{}",
+                              dir.string(), spec.name, options.scenario.string(), spec.name, setFlags(options.sets)));
+    const std::string key = behaviorConfigAndKey(spec, plugins(), graphKey).second;
+    if (entry.is_object() && entry.contains("key") && entry["key"].is_string() && entry["key"] != key)
+      throw Error(fmt::format("{}: behaviour '{}' was trained with other settings than the scenario's now (key {} "
+                              "vs {}); retrain with mgrl train {} --behavior {}{}",
+                              dir.string(), spec.name, entry["key"].get<std::string>().substr(0, 16),
+                              key.substr(0, 16), options.scenario.string(), spec.name, setFlags(options.sets)));
+  }
+}
+
 }  // namespace
 
 json runEval(const EvalOptions& options) {
@@ -274,13 +338,15 @@ json runEval(const EvalOptions& options) {
     throw Error(fmt::format("--trials: expected a number of trials in [1, 10000000], found {}", options.trials));
   if (!(options.seconds > 0 && options.seconds <= 3600))
     throw Error(fmt::format("--seconds: expected seconds of motion per trial in (0, 3600], found {}", options.seconds));
-  Loaded loaded = load(options);
+  Scenario scenario = checkedScenario(options);
+  const fs::path cacheDir = options.cacheDir.empty() ? defaultCacheDirectory() : options.cacheDir;
+  const fs::path dir =
+      options.policy.empty() ? defaultPolicyDirectory(cacheDir, scenario.name, scenario.path) : options.policy;
+  if (options.controller == "policy") precheckPolicy(dir, scenario, options);
+  Loaded loaded = load(options, std::move(scenario));
   const StateActionModel& model = loaded.graph.model;
   std::vector<Behavior> behaviors = buildBehaviors(loaded.scenario, plugins(), model, loaded.graph.key);
 
-  const fs::path dir = options.policy.empty()
-                           ? defaultPolicyDirectory(loaded.cacheDir, loaded.scenario.name, loaded.scenario.path)
-                           : options.policy;
   PolicyBundle bundle;
   std::vector<PolicyPart> parts;
   if (options.controller == "policy") {
@@ -289,13 +355,13 @@ json runEval(const EvalOptions& options) {
       const auto found = bundle.behaviors.find(b.name);
       if (found == bundle.behaviors.end())
         throw Error(fmt::format("{}: expected a trained table for behaviour '{}' that the scenario asks for, found "
-                                "none; run mgrl train {} --behavior {}",
-                                dir.string(), b.name, options.scenario.string(), b.name));
+                                "none; run mgrl train {} --behavior {}{}",
+                                dir.string(), b.name, options.scenario.string(), b.name, setFlags(options.sets)));
       if (found->second.key != b.key)
         throw Error(fmt::format("{}: behaviour '{}' was trained with other settings than the scenario's now (key {} "
-                                "vs {}); retrain with mgrl train {} --behavior {}",
+                                "vs {}); retrain with mgrl train {} --behavior {}{}",
                                 dir.string(), b.name, found->second.key.substr(0, 16), b.key.substr(0, 16),
-                                options.scenario.string(), b.name));
+                                options.scenario.string(), b.name, setFlags(options.sets)));
       parts.push_back({b.discretizer.get(), &found->second.table, b.weight, b.activation});
     }
   }
@@ -314,8 +380,13 @@ json runEval(const EvalOptions& options) {
   // target at punching height, as the user's target in the paper's demo).
   const double targetHeight = std::isnan(options.targetHeight) ? model.centroid[1] : options.targetHeight;
   double contactRadius = 0.15;
+  // A hit lands within the first hit reward's contact radius; returns are discounted with
+  // the first behaviour's gamma.
   for (const Behavior& b : behaviors)
-    if (b.reward->type() == "hit") contactRadius = b.config["reward"].value("contact_radius", contactRadius);
+    if (b.reward->type() == "hit") {
+      contactRadius = b.config["reward"].value("contact_radius", contactRadius);
+      break;
+    }
   const double gamma = behaviors.front().reward->gamma();
   const StaticTarget environment;
   PolicyController controller(model, parts);

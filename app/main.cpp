@@ -88,7 +88,8 @@ int main(int argc, char** argv) {
   trainCommand->add_option("--cache", cacheDir, "Cache folder (default: MGRL_CACHE, else ~/.cache/mgrl)");
 
   mgrl::app::EvalOptions eval;
-  std::size_t trials = eval.trials;
+  long long trials = static_cast<long long>(eval.trials);
+  long long seed = static_cast<long long>(eval.seed);
   CLI::App* evalCommand = app.add_subcommand(
       "eval", "Evaluate a trained policy: random starts, a static target in the approach region, up to --seconds of "
               "motion each; success = an effective hit on the target.");
@@ -97,7 +98,7 @@ int main(int argc, char** argv) {
   evalCommand->add_option("--controller", eval.controller, "policy (the trained one) or random")
       ->default_str("policy");
   evalCommand->add_option("--trials", trials, "Number of trials")->default_val(trials);
-  evalCommand->add_option("--seed", eval.seed, "Random seed (the same seed, the same numbers)")->default_val(1);
+  evalCommand->add_option("--seed", seed, "Random seed (the same seed, the same numbers)")->default_val(1);
   evalCommand->add_option("--seconds", eval.seconds, "Seconds of motion per trial")->default_val(10);
   evalCommand->add_option("--target-height", eval.targetHeight,
                           "Height of the target (m; default: that of the effective hitting points' centroid)");
@@ -183,7 +184,11 @@ int main(int argc, char** argv) {
       eval.dataDir = dataDir;
       eval.cacheDir = cacheDir;
       eval.log = log;
-      eval.trials = trials;
+      if (trials < 1 || trials > 10'000'000)
+        throw mgrl::Error(fmt::format("--trials: expected a number of trials in [1, 10000000], found {}", trials));
+      if (seed < 0) throw mgrl::Error(fmt::format("--seed: expected a whole number >= 0, found {}", seed));
+      eval.trials = static_cast<std::size_t>(trials);
+      eval.seed = static_cast<std::uint64_t>(seed);
       const nlohmann::json report = mgrl::app::runEval(eval);
       if (json)
         std::cout << report.dump(2) << '\n';

@@ -3,6 +3,8 @@
 #include <fmt/format.h>
 #include <fmt/ranges.h>
 
+#include <tuple>
+
 #include "mgrl/hash.hpp"
 
 namespace mgrl {
@@ -25,6 +27,21 @@ nlohmann::json blockJson(const Registry& registry, const ConfigNode& block, cons
 
 }  // namespace
 
+std::pair<nlohmann::json, std::string> behaviorConfigAndKey(const BehaviorSpec& spec, const Plugins& plugins,
+                                                             const std::string& graphKey) {
+  nlohmann::json config = {{"discretizer", blockJson(plugins.discretizers, spec.discretizer, "")},
+                           {"reward", blockJson(plugins.rewards, spec.reward, "")},
+                           {"environment", blockJson(plugins.environments, spec.environment, "static_target")},
+                           {"learner", blockJson(plugins.learners, spec.learner, "")}};
+  nlohmann::json keyed = config;
+  for (const char* irrelevant : {"threads", "curve_points", "checkpoint_every"}) keyed["learner"].erase(irrelevant);
+  Hasher h;
+  h.update(std::string_view("mgrl.behavior.v1"));
+  h.update(std::string_view(graphKey));
+  h.update(std::string_view(keyed.dump()));
+  return {std::move(config), h.hex()};
+}
+
 Behavior buildBehavior(const BehaviorSpec& spec, const Plugins& plugins, const StateActionModel& model,
                        const std::string& graphKey) {
   Behavior b;
@@ -41,18 +58,17 @@ Behavior buildBehavior(const BehaviorSpec& spec, const Plugins& plugins, const S
     b.environment = plugins.environments.create(spec.environment);
   }
   b.learner = plugins.learners.create(spec.learner);
-  b.config = {{"discretizer", blockJson(plugins.discretizers, spec.discretizer, "")},
-              {"reward", blockJson(plugins.rewards, spec.reward, "")},
-              {"environment", blockJson(plugins.environments, spec.environment, "static_target")},
-              {"learner", blockJson(plugins.learners, spec.learner, "")}};
-  nlohmann::json keyed = b.config;
-  for (const char* irrelevant : {"threads", "curve_points", "checkpoint_every"}) keyed["learner"].erase(irrelevant);
-  Hasher h;
-  h.update(std::string_view("mgrl.behavior.v1"));
-  h.update(std::string_view(graphKey));
-  h.update(std::string_view(keyed.dump()));
-  b.key = h.hex();
+  std::tie(b.config, b.key) = behaviorConfigAndKey(spec, plugins, graphKey);
   return b;
+}
+
+void checkBehaviors(const Scenario& scenario, const Plugins& plugins) {
+  for (const BehaviorSpec& spec : scenario.behaviors) {
+    plugins.discretizers.check(spec.discretizer);
+    plugins.rewards.check(spec.reward);
+    if (!spec.environment.isNull()) plugins.environments.check(spec.environment);
+    plugins.learners.check(spec.learner);
+  }
 }
 
 std::vector<Behavior> buildBehaviors(const Scenario& scenario, const Plugins& plugins, const StateActionModel& model,

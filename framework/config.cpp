@@ -1,5 +1,6 @@
 #include "mgrl/config.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 
@@ -82,6 +83,9 @@ std::vector<std::string> ConfigNode::keys() const {
   for (const auto& item : node_) {
     if (!item.first.IsScalar())
       ConfigNode(item.first, source_, path_, mark_).fail("expected a plain key, found a map or list as key");
+    if (std::find(result.begin(), result.end(), item.first.Scalar()) != result.end())
+      ConfigNode(item.second, source_, childPath(item.first.Scalar()), item.first.Mark())
+          .fail("expected each key once, found it again (a second copy would be ignored)");
     result.push_back(item.first.Scalar());
   }
   return result;
@@ -98,6 +102,7 @@ std::vector<ConfigNode> ConfigNode::elements() const {
 void ConfigNode::allowOnly(std::initializer_list<std::string_view> allowed) const {
   if (isNull()) return;
   if (!node_.IsMap()) fail(fmt::format("expected a map, found {}", describe(node_)));
+  keys();  // rejects a key given twice
   for (const auto& item : node_) {
     const std::string key = item.first.IsScalar() ? item.first.Scalar() : std::string("?");
     bool known = false;
@@ -118,8 +123,14 @@ double ConfigNode::asNumber(double min, double max) const {
 
 long long ConfigNode::asInteger(long long min, long long max) const {
   long long value = 0;
-  if (!node_.IsScalar() || !YAML::convert<long long>::decode(node_, value))
-    fail(fmt::format("expected a whole number in [{}, {}], found {}", min, max, describe(node_)));
+  if (!node_.IsScalar() || !YAML::convert<long long>::decode(node_, value)) {
+    // Budgets read better as 5e7: accept a number written with an exponent if it is whole.
+    double number = 0;
+    if (!node_.IsScalar() || !YAML::convert<double>::decode(node_, number) || !std::isfinite(number) ||
+        number != std::floor(number) || std::fabs(number) > 9.007199254740992e15)
+      fail(fmt::format("expected a whole number in [{}, {}], found {}", min, max, describe(node_)));
+    value = static_cast<long long>(number);
+  }
   if (value < min || value > max) fail(fmt::format("expected a whole number in [{}, {}], found {}", min, max, value));
   return value;
 }

@@ -193,7 +193,7 @@ void applyOverride(YAML::Node root, const std::string& text, const std::string& 
     if (parts[i].empty())
       throw ConfigError(fmt::format("{}: --set {}: expected a dotted key without empty parts", source, key));
     YAML::Node& here = chain.back();
-    if (!here.IsMap() && !here.IsNull())
+    if (here.IsDefined() && !here.IsMap() && !here.IsNull())
       throw ConfigError(fmt::format("{}: --set {}: expected '{}' to be a map, found a value", source, key,
                                     fmt::join(parts.begin(), parts.begin() + static_cast<long>(i), ".")));
     if (i + 1 == parts.size()) {
@@ -224,7 +224,15 @@ Scenario parseScenario(std::string_view text, const std::filesystem::path& sourc
                        const std::filesystem::path& dataDir, const std::vector<std::string>& overrides) {
   ConfigNode root = ConfigNode::parse(text, source.string());
   if (!root.isMap()) root.fail("expected a scenario (a map with 'motion' and 'graph' sections), found something else");
-  for (const std::string& o : overrides) applyOverride(root.yaml(), o, source.string());
+  // Type switches first: they reset their block, which must not swallow other overrides.
+  auto switchesType = [](const std::string& o) {
+    const std::string key = o.substr(0, o.find('='));
+    return key == "type" || (key.size() > 5 && key.compare(key.size() - 5, 5, ".type") == 0);
+  };
+  for (const std::string& o : overrides)
+    if (switchesType(o)) applyOverride(root.yaml(), o, source.string());
+  for (const std::string& o : overrides)
+    if (!switchesType(o)) applyOverride(root.yaml(), o, source.string());
   root.allowOnly({"name", "description", "motion", "graph", "behaviors"});
   const std::filesystem::path dir = source.parent_path().empty() ? std::filesystem::path(".") : source.parent_path();
   Scenario s{source,

@@ -118,6 +118,8 @@ TrainResult QLearning::train(const TrainContext& context) const {
   };
   std::vector<Step> steps;
   steps.reserve(kProgressEvery);
+  std::vector<std::uint64_t> seen(g.vertexCount, 0);  // rows prefetched for the step at `stamp`
+  std::uint64_t stamp = 0;
   const std::uint32_t* stateBegin = m.stateActionBegin.data();
   const double alphaSlope = (1 - alphaFinal_) / static_cast<double>(total);
 
@@ -171,11 +173,15 @@ TrainResult QLearning::train(const TrainContext& context) const {
         const std::uint32_t* c = &g.corners[static_cast<std::size_t>(ahead.cell) << d];
         const std::uint32_t to = g.actionTo[ahead.action];
         const std::size_t n = q.actionsOf(to);
+        ++stamp;
         for (int j = 0; j < corners; ++j) {
           const GridTransition& t = g.transition[ahead.action * g.vertexCount + c[j]];
           if (t.cell < 0) continue;
           const std::uint32_t* u = &g.corners[static_cast<std::size_t>(t.cell) << d];
           for (int l = 0; l < corners; ++l) {
+            // The moved corners' cells overlap: each row once.
+            if (seen[u[l]] == stamp) continue;
+            seen[u[l]] = stamp;
             const float* row = q.row(to, u[l]);
             for (std::size_t o = 0; o < n; o += 16) __builtin_prefetch(row + o);
           }

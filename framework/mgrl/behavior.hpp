@@ -42,10 +42,19 @@ struct Behavior {
   Problem problem(const StateActionModel& model) const { return {model, *discretizer, *reward, *environment}; }
 };
 
+/// A behaviour's `config` and `key` (see Behavior) without building its plugins: enough to
+/// tell whether a trained table belongs to it. Throws ConfigError like buildBehavior().
+std::pair<nlohmann::json, std::string> behaviorConfigAndKey(const BehaviorSpec& spec, const Plugins& plugins,
+                                                             const std::string& graphKey);
+
 /// Builds a behaviour's plugins; ConfigError (`file:line:col: behaviors.NAME.reward.type:
 /// unknown reward 'x' (known: approach, hit)`) for unknown types and bad parameters.
 Behavior buildBehavior(const BehaviorSpec& spec, const Plugins& plugins, const StateActionModel& model,
                        const std::string& graphKey);
+
+/// Checks every behaviour's plugin types and parameters (all that can be checked without
+/// the graph), so that a typo is reported before a graph is built or loaded.
+void checkBehaviors(const Scenario& scenario, const Plugins& plugins);
 
 /// Builds every behaviour of the scenario, or only `only` (an unknown name is an error
 /// listing the scenario's behaviours). A scenario without behaviours is an error.

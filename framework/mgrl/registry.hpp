@@ -48,15 +48,25 @@ class Registry {
   /// Builds the plugin a YAML block names: `{type: NAME, ...parameters}`. A missing or
   /// unknown type is a ConfigError listing the known names; parameters are read strictly.
   std::unique_ptr<Product> create(const ConfigNode& block, Context... context) const {
+    const Params params = check(block);
+    const Entry& entry = entryFor(block);
+    return block.withLocation([&] { return entry.make(params, context...); });
+  }
+
+  /// The plugin a block names; ConfigError for a missing or unknown type.
+  const Entry& entryFor(const ConfigNode& block) const {
     if (!block.isMap()) block.fail(fmt::format("expected a map with 'type: <{}>', found {}", seam_, describeKnown()));
     if (!block.has("type")) block.fail(fmt::format("expected a 'type' key naming the {} ({})", seam_, describeKnown()));
     const ConfigNode typeNode = block.child("type");
     const std::string type = typeNode.asString();
     const Entry* entry = find(type);
     if (!entry) typeNode.fail(fmt::format("unknown {} {} (known: {})", seam_, quoteToken(type), describeKnown()));
-    const Params params = Params::read(block, entry->params, {"type"});
-    return block.withLocation([&] { return entry->make(params, context...); });
+    return *entry;
   }
+
+  /// Checks a block's type and parameters without building the plugin (checks that need
+  /// the plugin's context, e.g. the graph, happen in create()).
+  Params check(const ConfigNode& block) const { return Params::read(block, entryFor(block).params, {"type"}); }
 
   const std::vector<Entry>& entries() const { return entries_; }
 

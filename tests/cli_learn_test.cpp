@@ -1,0 +1,434 @@
+// `mgrl list`, `mgrl train` and `mgrl eval` through the real binary (DESIGN.md sec. 5-6):
+// the --json reports, the policy bundle on disk, determinism, retraining one behaviour,
+// resuming from a checkpoint, and refusals (non-zero exit, nothing on stdout, the reason on
+// stderr). Each test trains the boxing scenario with small budgets (about a second) in a
+// cache folder of its own.
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include <catch2/catch.hpp>
+#include <nlohmann/json.hpp>
+
+#include "test_support.hpp"
+
+namespace fs = std::filesystem;
+using Catch::Contains;
+using Catch::StartsWith;
+using nlohmann::json;
+
+namespace {
+
+const std::string kBoxing = std::string(MGRL_SOURCE_DIR) + "/scenarios/boxing.yaml";
+// Budgets that train boxing in about a second (the file asks for 5 M and 20 M updates).
+const std::string kFast = "--set behaviors.approach.learner.budget=200000 --set behaviors.hit.learner.budget=400000";
+// kFast with checkpoints: the approach behaviour saves one every 100 k of its 300 k updates.
+const std::string kCheckpointed =
+    "--set behaviors.approach.learner.budget=300000 "
+    "--set behaviors.approach.learner.checkpoint_every=100000 "
+    "--set behaviors.hit.learner.budget=400000";
+
+// A path as one shell word (the paths here hold no quote).
+std::string shellWord(const fs::path& p) {
+  std::string word(1, '\'');
+  word += p.string();
+  word += '\'';
+  return word;
+}
+
+std::string readText(const fs::path& path) {
+  std::ifstream in(path, std::ios::binary);
+  std::ostringstream s;
+  s << in.rdbuf();
+  return s.str();
+}
+
+std::vector<std::string> lines(const std::string& text) {
+  std::vector<std::string> result;
+  std::istringstream in(text);
+  for (std::string l; std::getline(in, l);) result.push_back(l);
+  return result;
+}
+
+struct Run {
+  int status = -1;
+  std::string out, err;
+
+  std::string lastErrorLine() const {
+    const std::vector<std::string> all = lines(err);
+    return all.empty() ? std::string() : all.back();
+  }
+  json report() const {
+    INFO("stderr: " << err);
+    REQUIRE(status == 0);
+    json parsed;
+    REQUIRE_NOTHROW(parsed = json::parse(out));  // the whole of stdout, nothing before or after
+    REQUIRE(parsed.is_object());
+    return parsed;
+  }
+};
+
+// A fresh folder per test (cache, bundles, captured streams), removed at the end even when
+// the test fails.
+class Sandbox {
+ public:
+  explicit Sandbox(const std::string& tag)
+      : dir_(fs::temp_directory_path() / ("mgrl_cli_learn_" + tag + "_" + std::to_string(::getpid()))) {
+    fs::remove_all(dir_);
+    fs::create_directories(dir_);
+  }
+  ~Sandbox() {
+    std::error_code ec;
+    fs::remove_all(dir_, ec);
+  }
+  Sandbox(const Sandbox&) = delete;
+  Sandbox& operator=(const Sandbox&) = delete;
+
+  const fs::path& dir() const { return dir_; }
+  fs::path cache() const { return dir_ / "cache"; }
+  fs::path path(const std::string& name) const { return dir_ / name; }
+
+  // " --cache <sandbox>/cache --data <mocap>", for train and eval.
+  std::string where() const { return " --cache " + shellWord(cache()) + " --data " + shellWord(mgrl::test::mocap()); }
+
+  // Runs mgrl with `arguments` (shell words), `environment` ("NAME=value ...") added to a
+  // copy of ours without MGRL_EXIT_AFTER_CHECKPOINTS.
+  Run run(const std::string& arguments, const std::string& environment = "") {
+    const fs::path out = dir_ / "stdout.txt", err = dir_ / "stderr.txt";
+    const std::string command = "env -u MGRL_EXIT_AFTER_CHECKPOINTS " + environment + " " + shellWord(MGRL_BINARY) +
+                                " " + arguments + " >" + shellWord(out) + " 2>" + shellWord(err) + " </dev/null";
+    const int raw = std::system(command.c_str());
+    Run r;
+    r.status = raw != -1 && WIFEXITED(raw) ? WEXITSTATUS(raw) : -1;
+    r.out = readText(out);
+    r.err = readText(err);
+    return r;
+  }
+
+  Run train(const std::string& arguments, const std::string& environment = "") {
+    return run("train " + shellWord(kBoxing) + " --json" + where() + " " + arguments, environment);
+  }
+  Run eval(const std::string& arguments) {
+    return run("eval " + shellWord(kBoxing) + " --json" + where() + " " + arguments);
+  }
+
+ private:
+  fs::path dir_;
+};
+
+// The refusal contract: exit 1, nothing on stdout, and the reason as the last line of
+// stderr, "mgrl: ..." (the test at the end checks that it is the only line when the
+// refusal needs no graph).
+void requireRefusal(const Run& r, const std::string& reason) {
+  INFO("stderr: " << r.err);
+  CHECK(r.status == 1);
+  CHECK(r.out.empty());
+  CHECK_THAT(r.lastErrorLine(), StartsWith("mgrl: ") && Contains(reason));
+}
+
+// The same, for refusals that come before any work: the reason is all there is on stderr.
+void requireOneLineRefusal(const Run& r, const std::string& reason) {
+  requireRefusal(r, reason);
+  CHECK(lines(r.err).size() == 1);
+}
+
+void requireFile(const fs::path& p) {
+  INFO(p);
+  CHECK(fs::is_regular_file(p));
+}
+
+}  // namespace
+
+TEST_CASE("mgrl list names every plugin, as text and as JSON", "[cli]") {
+  Sandbox box("list");
+  const Run text = box.run("list");
+  INFO(text.err);
+  REQUIRE(text.status == 0);
+  CHECK(text.err.empty());
+  for (const char* name :
+       {"polar2d", "cylindrical3d", "approach", "hit", "static_target", "q_learning", "value_iteration"})
+    CHECK_THAT(text.out, Contains(std::string("  ") + name + ": "));
+  CHECK_THAT(text.out, Contains("budget") && Contains("default 10000000") && Contains("contact_radius"));
+
+  const Run run = box.run("list --json");
+  const json list = run.report();
+  CHECK(run.err.empty());
+  const std::vector<std::pair<const char*, std::vector<std::string>>> seams = {
+      {"discretizers", {"polar2d", "cylindrical3d"}},
+      {"rewards", {"approach", "hit"}},
+      {"environments", {"static_target"}},
+      {"learners", {"q_learning", "value_iteration"}}};
+  CHECK(list.size() == seams.size());
+  for (const auto& [seam, names] : seams) {
+    CAPTURE(seam);
+    REQUIRE(list[seam].is_array());
+    std::vector<std::string> found;
+    for (const json& entry : list[seam]) {
+      found.push_back(entry["name"].get<std::string>());
+      CHECK(entry["summary"].is_string());
+      REQUIRE(entry["parameters"].is_array());
+      for (const json& p : entry["parameters"])
+        for (const char* key : {"name", "default", "range", "unit", "help"}) CHECK(p.contains(key));
+    }
+    for (const std::string& name : names) CHECK(std::find(found.begin(), found.end(), name) != found.end());
+  }
+}
+
+TEST_CASE("mgrl train --json reports each behaviour and writes the same bundle every time", "[cli][data]") {
+  Sandbox box("train");
+  const fs::path out = box.path("bundle");
+  const Run first = box.train(kFast + " --out " + shellWord(out));
+  const json report = first.report();
+  CHECK(report["policy"] == out.string());
+  CHECK(report["graph_key"].is_string());
+  REQUIRE(report["behaviors"].size() == 2);
+  for (const auto& [name, updates] : {std::pair{"approach", 200000}, std::pair{"hit", 400000}}) {
+    CAPTURE(name);
+    const json& b = report["behaviors"][name];
+    for (const char* key : {"learner", "updates", "seconds", "updates_per_second", "final_residual", "table_bytes"})
+      CHECK(b.contains(key));
+    CHECK(b["learner"] == "q_learning");
+    CHECK(b["updates"] == updates);
+    CHECK(b["seconds"].get<double>() > 0);
+    CHECK(b["updates_per_second"].get<double>() > 0);
+    CHECK(b["final_residual"].get<double>() >= 0);
+    // One float32 per (action, vertex).
+    CHECK(b["table_bytes"].get<std::uint64_t>() ==
+          4 * b["actions"].get<std::uint64_t>() * b["vertices"].get<std::uint64_t>());
+  }
+  CHECK(report["behaviors"]["approach"]["vertices"] == 5 * 13);
+  CHECK(report["behaviors"]["hit"]["vertices"] == 10 * 10 * 4);
+
+  for (const char* file : {"manifest.json", "approach.q.npy", "hit.q.npy"}) requireFile(out / file);
+  const std::string approach = readText(out / "approach.q.npy"), hit = readText(out / "hit.q.npy");
+  CHECK(approach.rfind("\x93NUMPY", 0) == 0);
+  const json manifest = json::parse(readText(out / "manifest.json"));
+  CHECK(manifest.is_object());
+  // Nothing left behind: no checkpoints, no temporary folder beside the bundle.
+  CHECK_FALSE(fs::exists(box.path("bundle.checkpoints")));
+  for (const auto& item : fs::directory_iterator(box.dir()))
+    CHECK_THAT(item.path().filename().string(), !Contains("bundle."));
+
+  // The same command, the same tables, to the byte.
+  const Run second = box.train(kFast + " --out " + shellWord(out));
+  REQUIRE(second.status == 0);
+  CHECK(readText(out / "approach.q.npy") == approach);
+  CHECK(readText(out / "hit.q.npy") == hit);
+}
+
+TEST_CASE("mgrl train --behavior retrains one behaviour and keeps the other's table", "[cli][data]") {
+  Sandbox box("behavior");
+  const fs::path out = box.path("bundle");
+  REQUIRE(box.train(kFast + " --out " + shellWord(out)).status == 0);
+  const std::string approach = readText(out / "approach.q.npy"), hit = readText(out / "hit.q.npy");
+
+  const std::string reseeded = kFast + " --set behaviors.hit.learner.seed=2";
+  const json report = box.train(reseeded + " --behavior hit --out " + shellWord(out)).report();
+  REQUIRE(report["behaviors"].size() == 1);
+  CHECK(report["behaviors"].contains("hit"));
+  CHECK(readText(out / "approach.q.npy") == approach);
+  CHECK(readText(out / "hit.q.npy") != hit);
+  // The bundle now holds both behaviours as the reseeded scenario asks for them.
+  const Run eval = box.eval(reseeded + " --trials 5 --policy " + shellWord(out));
+  INFO(eval.err);
+  CHECK(eval.status == 0);
+
+  const std::string retrained = readText(out / "hit.q.npy");
+  requireRefusal(box.train(kFast + " --behavior nope --out " + shellWord(out)),
+                 "--behavior: expected one of the scenario's behaviours (approach, hit), found 'nope'");
+  CHECK(readText(out / "hit.q.npy") == retrained);  // the refused run left the bundle alone
+  CHECK(readText(out / "approach.q.npy") == approach);
+}
+
+TEST_CASE("an interrupted mgrl train resumes to the table of an uninterrupted run", "[cli][data]") {
+  Sandbox box("resume");
+  const fs::path out = box.path("resumed"), checkpoint = box.path("resumed.checkpoints") / "approach";
+
+  const Run killed = box.train(kCheckpointed + " --out " + shellWord(out), "MGRL_EXIT_AFTER_CHECKPOINTS=1");
+  INFO(killed.err);
+  CHECK(killed.status == 75);
+  CHECK(killed.out.empty());
+  CHECK_THAT(killed.err, Contains("exiting after checkpoint 1"));
+  requireFile(checkpoint / "state.json");
+  requireFile(checkpoint / "table.npy");
+  CHECK_FALSE(fs::exists(out));  // never half a bundle
+
+  const Run resume = box.train(kCheckpointed + " --resume --out " + shellWord(out));
+  const json resumed = resume.report();
+  CHECK_THAT(resume.err, !Contains("ignoring the checkpoint"));
+  CHECK(resumed["behaviors"]["approach"]["stats"]["resumed"] == true);
+  CHECK(resumed["behaviors"]["approach"]["updates"] == 300000);
+  CHECK(resumed["behaviors"]["hit"]["stats"]["resumed"] == false);
+  CHECK_FALSE(fs::exists(box.path("resumed.checkpoints")));  // done with
+
+  const fs::path straight = box.path("straight");
+  const json uninterrupted = box.train(kCheckpointed + " --out " + shellWord(straight)).report();
+  CHECK(uninterrupted["behaviors"]["approach"]["stats"]["resumed"] == false);
+  CHECK(readText(out / "approach.q.npy") == readText(straight / "approach.q.npy"));
+  CHECK(readText(out / "hit.q.npy") == readText(straight / "hit.q.npy"));
+  CHECK(resumed["behaviors"]["approach"]["stats"]["restarts"] ==
+        uninterrupted["behaviors"]["approach"]["stats"]["restarts"]);
+}
+
+TEST_CASE("mgrl train starts over without --resume or from a checkpoint of other settings", "[cli][data]") {
+  Sandbox box("discard");
+  const fs::path out = box.path("bundle"), checkpoints = box.path("bundle.checkpoints");
+  const std::string train = kCheckpointed + " --out " + shellWord(out);
+
+  SECTION("without --resume the checkpoint is discarded") {
+    REQUIRE(box.train(train, "MGRL_EXIT_AFTER_CHECKPOINTS=1").status == 75);
+    REQUIRE(fs::exists(checkpoints / "approach" / "state.json"));
+    const Run again = box.train(train);
+    INFO(again.err);
+    CHECK(again.report()["behaviors"]["approach"]["stats"]["resumed"] == false);
+    // Nothing is said about checkpoints unless one is refused (mgrl/checkpoint_store.hpp).
+    CHECK_THAT(again.err, !Contains("resum") && !Contains("ignoring the checkpoint"));
+    CHECK_FALSE(fs::exists(checkpoints));
+  }
+  SECTION("--resume ignores, and says so, a checkpoint of other settings") {
+    REQUIRE(box.train(train, "MGRL_EXIT_AFTER_CHECKPOINTS=1").status == 75);
+    const Run other = box.train(train + " --resume --set behaviors.approach.learner.seed=2");
+    INFO(other.err);
+    CHECK(other.report()["behaviors"]["approach"]["stats"]["resumed"] == false);
+    CHECK_THAT(other.err, Contains("a checkpoint of other inputs or settings") && Contains("ignoring the checkpoint"));
+    CHECK_FALSE(fs::exists(checkpoints));
+  }
+  SECTION("--resume without a checkpoint trains from the start") {
+    const Run fresh = box.train(train + " --resume");
+    INFO(fresh.err);
+    CHECK(fresh.report()["behaviors"]["approach"]["stats"]["resumed"] == false);
+  }
+}
+
+TEST_CASE("settings left out of the behaviour key do not change the trained table", "[cli][data]") {
+  // checkpoint_every, curve_points and threads are not hashed into the key (mgrl/behavior.hpp),
+  // so a bundle trained with other values is taken as current: its table must be the same.
+  Sandbox box("unkeyed");
+  const fs::path a = box.path("a"), b = box.path("b");
+  REQUIRE(box.train(kFast + " --behavior approach --out " + shellWord(a)).status == 0);
+  const Run other = box.train(kFast +
+                              " --set behaviors.approach.learner.checkpoint_every=70000"
+                              " --set behaviors.approach.learner.curve_points=3"
+                              " --set behaviors.approach.learner.threads=1 --behavior approach --out " +
+                              shellWord(b));
+  REQUIRE(other.status == 0);
+  CHECK(readText(a / "approach.q.npy") == readText(b / "approach.q.npy"));
+}
+
+TEST_CASE("mgrl eval --json reports the contract keys and repeats itself for a seed", "[cli][data]") {
+  Sandbox box("eval");
+  // The default bundle location, in the cache, on both sides.
+  REQUIRE(box.train(kFast).status == 0);
+  const std::string args = kFast + " --trials 40 --seed 5";
+  json first = box.eval(args).report();
+  json second = box.eval(args).report();
+  for (const char* key : {"success_rate", "mean_time_to_hit_s", "median_time_to_hit_s", "mean_return",
+                          "decisions_per_second", "random_baseline"})
+    CHECK(first.contains(key));
+  CHECK_THAT(first["policy"].get<std::string>(), StartsWith(box.cache().string()));
+  CHECK(first["trials"] == 40);
+  CHECK(first["seed"] == 5);
+  const double rate = first["success_rate"].get<double>();
+  CHECK(rate >= 0);
+  CHECK(rate <= 1);
+  CHECK(first["decisions_per_second"].get<double>() > 0);
+  const json& baseline = first["random_baseline"];
+  for (const char* key : {"success_rate", "mean_time_to_hit_s", "median_time_to_hit_s", "mean_return"})
+    CHECK(baseline.contains(key));
+  // Trained for a second, the policy already lands more punches than random actions.
+  CHECK(rate > baseline["success_rate"].get<double>());
+  if (!first["mean_time_to_hit_s"].is_null()) {
+    CHECK(first["mean_time_to_hit_s"].get<double>() > 0);
+    CHECK(first["mean_time_to_hit_s"].get<double>() <= first["seconds_per_trial"].get<double>());
+  }
+
+  first.erase("decisions_per_second");
+  second.erase("decisions_per_second");
+  CHECK(first == second);
+}
+
+TEST_CASE("mgrl eval --controller random needs no trained bundle", "[cli][data]") {
+  Sandbox box("random");
+  const json report = box.eval(kFast + " --controller random --trials 10 --seed 3").report();
+  CHECK(report["controller"] == "random");
+  CHECK(report["trials"] == 10);
+  for (const char* key :
+       {"success_rate", "mean_time_to_hit_s", "median_time_to_hit_s", "mean_return", "decisions_per_second"})
+    CHECK(report.contains(key));
+  CHECK_FALSE(report.contains("random_baseline"));
+  CHECK_FALSE(fs::exists(box.cache() / "policies"));
+}
+
+TEST_CASE("mgrl train and eval refuse what they cannot use, with the reason on stderr", "[cli][data]") {
+  Sandbox box("refuse");
+  const fs::path out = box.path("bundle");
+
+  // Checked before any work: the reason is the only line.
+  requireOneLineRefusal(box.eval(kFast + " --trials 0"),
+                        "--trials: expected a number of trials in [1, 10000000], found 0");
+  requireOneLineRefusal(box.eval(kFast + " --controller bogus"),
+                        "--controller: expected one of: policy, random, found 'bogus'");
+  for (const char* command : {"train", "eval"}) {
+    CAPTURE(command);
+    requireOneLineRefusal(
+        box.run(std::string(command) + " " + shellWord(kBoxing) + " --json" + box.where() + " --set nokey"),
+        "mgrl: " + kBoxing +
+            ": --set 'nokey': expected KEY=VALUE with a dotted KEY such as "
+            "behaviors.hit.learner.budget");
+    // Plugin parameters are checked before the graph is built or loaded.
+    requireRefusal(box.run(std::string(command) + " " + shellWord(kBoxing) + " --json" + box.where() +
+                           " --set behaviors.hit.learner.budget=lots"),
+                   "behaviors.hit.learner.budget: expected a whole number in [1, 1000000000000], found 'lots'");
+  }
+
+  // Nothing trained yet.
+  requireRefusal(box.eval(kFast), "no policy bundle here: run `mgrl train");
+  requireRefusal(box.eval(kFast + " --policy " + shellWord(out)), out.string() + ": no policy bundle here");
+
+  // --out must be a folder or nothing.
+  const fs::path file = box.path("file.txt");
+  std::ofstream(file) << "not a bundle\n";
+  requireRefusal(box.train(kFast + " --out " + shellWord(file)),
+                 "--out " + file.string() + ": expected a policy bundle directory or nothing, found a file");
+  CHECK(readText(file) == "not a bundle\n");
+
+  REQUIRE(box.train(kFast + " --out " + shellWord(out)).status == 0);
+  REQUIRE(box.eval(kFast + " --trials 3 --policy " + shellWord(out)).status == 0);
+  // Another reward parameter: the table belongs to other settings.
+  requireRefusal(box.eval(kFast + " --set behaviors.approach.reward.sigma=0.2 --policy " + shellWord(out)),
+                 "behaviour 'approach' was trained with other settings than the scenario's now");
+  // Another learner budget too (the key follows the learner's parameters).
+  requireRefusal(box.eval("--set behaviors.hit.learner.budget=400000 --policy " + shellWord(out)),
+                 "behaviour 'approach' was trained with other settings");
+  // Another graph.
+  requireRefusal(box.eval(kFast + " --set graph.threshold=0.5 --policy " + shellWord(out)),
+                 "the policy was made for another graph");
+  // A bundle without one of the scenario's behaviours.
+  const fs::path partial = box.path("partial");
+  REQUIRE(box.train(kFast + " --behavior hit --out " + shellWord(partial)).status == 0);
+  requireRefusal(box.eval(kFast + " --policy " + shellWord(partial)),
+                 "expected a trained table for behaviour 'approach' that the scenario asks for, found none; run mgrl "
+                 "train");
+}
+
+// DESIGN.md sec. 5 and tests/run_cli.cmake: on an error, one line on stderr. A missing
+// bundle and a bad plugin parameter are found before the graph is built or loaded, so no
+// graph-cache log line ("mgrl: graph: ...") comes before the reason.
+TEST_CASE("refusals that need no graph print only the reason on stderr", "[cli][data]") {
+  Sandbox box("oneline");
+  const Run missing = box.eval(kFast);
+  INFO(missing.err);
+  CHECK(missing.status == 1);
+  CHECK(lines(missing.err).size() == 1);
+  const Run badParameter = box.train("--set behaviors.hit.learner.budget=lots");
+  INFO(badParameter.err);
+  CHECK(badParameter.status == 1);
+  CHECK(lines(badParameter.err).size() == 1);
+}
