@@ -95,8 +95,9 @@ Params Params::read(const ConfigNode& node, const ParamSpecs& specs, const std::
   for (const ParamSpec& spec : specs) allowed.push_back(spec.name);
   for (const std::string& key : node.keys()) {
     if (std::find(allowed.begin(), allowed.end(), key) == allowed.end())
-      node.child(key).fail(allowed.empty() ? std::string("unknown key (this plugin takes no parameters)")
-                                           : fmt::format("unknown key (expected one of: {})", fmt::join(allowed, ", ")));
+      node.child(key).fail(specs.empty() ? fmt::format("unknown key (this plugin takes no parameters; expected only: {})",
+                                                       fmt::join(allowed, ", "))
+                                         : fmt::format("unknown key (expected one of: {})", fmt::join(allowed, ", ")));
   }
   for (Entry& e : params.entries_) {
     if (!node.has(e.spec.name)) continue;

@@ -6,6 +6,7 @@
 // interpolated from e'_v's cell (0 when e'_v leaves the grid). Restart when the target
 // itself leaves the grid. alpha falls linearly from 1 over the budget of actions.
 #include <chrono>
+#include <thread>
 
 #include <fmt/format.h>
 
@@ -82,11 +83,11 @@ TrainResult QLearning::train(const TrainContext& context) const {
   Walk walk{Rng(seed_)};
   double secondsBefore = 0;
 
-  auto restart = [&] {
-    walk.state = static_cast<std::uint32_t>(walk.rng.below(m.stateCount()));
-    do walk.target = grid.sample({walk.rng.uniform(), walk.rng.uniform(), walk.rng.uniform()});
-    while (!grid.inside(walk.target));
-    ++walk.restarts;
+  auto restart = [&](Walk& w) {
+    w.state = static_cast<std::uint32_t>(w.rng.below(m.stateCount()));
+    do w.target = grid.sample({w.rng.uniform(), w.rng.uniform(), w.rng.uniform()});
+    while (!grid.inside(w.target));
+    ++w.restarts;
   };
 
   bool resumed = false;
@@ -100,7 +101,7 @@ TrainResult QLearning::train(const TrainContext& context) const {
       resumed = true;
     }
   }
-  if (!resumed) restart();
+  if (!resumed) restart(walk);
 
   const auto start = Clock::now();
   auto elapsed = [&] { return secondsBefore + std::chrono::duration<double>(Clock::now() - start).count(); };
@@ -116,46 +117,45 @@ TrainResult QLearning::train(const TrainContext& context) const {
   struct Step {
     std::uint32_t action, cell;
   };
-  std::vector<Step> steps;
-  steps.reserve(kProgressEvery);
   std::vector<std::uint64_t> seen(g.vertexCount, 0);  // rows prefetched for the step at `stamp`
   std::uint64_t stamp = 0;
   const std::uint32_t* stateBegin = m.stateActionBegin.data();
   const double alphaSlope = (1 - alphaFinal_) / static_cast<double>(total);
 
-  while (walk.updates < total) {
-    std::uint64_t stop = std::min(total, walk.updates + kProgressEvery);
-    if (nextCurveIndex <= curvePoints_) stop = std::min(stop, curveAt(nextCurveIndex));
-    if (checkpointEvery_ > 0) stop = std::min(stop, (walk.updates / checkpointEvery_ + 1) * checkpointEvery_);
-
-    // The walk (states, targets, restarts, random actions) does not depend on Q, so each
-    // chunk first walks and records (action, cell) per step, consuming the random numbers
-    // in the same order as interleaving would, then applies the updates. Knowing the
-    // steps ahead lets the update loop prefetch: the tables are far bigger than the
-    // caches and random actions defeat the hardware's own prefetching.
+  // The walk (states, targets, restarts, random actions) does not depend on Q, so it is
+  // walked a chunk at a time, recording (action, cell) per step and consuming the random
+  // numbers in the same order as interleaving would; the updates then follow the record.
+  // Knowing the steps ahead lets the update loop prefetch (the tables are far bigger than
+  // the caches and random actions defeat the hardware's own prefetching), and with two
+  // threads the next chunk is walked while this one is updated. Chunks end at progress,
+  // curve and checkpoint points, so the same seed gives the same table either way.
+  auto walkChunk = [&](Walk& w, std::uint64_t stop, std::vector<Step>& steps) {
     steps.clear();
     GridCell cell;
-    if (!grid.locate(walk.target, cell)) {  // only on the boundary's round-off
-      restart();
-      grid.locate(walk.target, cell);
+    if (!grid.locate(w.target, cell)) {  // only on the boundary's round-off
+      restart(w);
+      grid.locate(w.target, cell);
     }
-    for (std::uint64_t k = walk.updates; k < stop; ++k) {
-      const std::uint32_t s = walk.state;
-      const std::size_t a = stateBegin[s] + static_cast<std::uint32_t>(walk.rng.below(stateBegin[s + 1] - stateBegin[s]));
+    for (std::uint64_t k = w.updates; k < stop; ++k) {
+      const std::uint32_t s = w.state;
+      const std::size_t a = stateBegin[s] + static_cast<std::uint32_t>(w.rng.below(stateBegin[s + 1] - stateBegin[s]));
       steps.push_back({static_cast<std::uint32_t>(a), cell.cell});
       if (rigid) {
         const double* r = &g.rigid[4 * a];
-        const double qx = walk.target.x() - r[2], qz = walk.target.z() - r[3];
-        walk.target = {r[0] * qx - r[1] * qz, walk.target.y(), r[1] * qx + r[0] * qz};
+        const double qx = w.target.x() - r[2], qz = w.target.z() - r[3];
+        w.target = {r[0] * qx - r[1] * qz, w.target.y(), r[1] * qx + r[0] * qz};
       } else {
-        walk.target = environment.next(m, a, walk.target);
+        w.target = environment.next(m, a, w.target);
       }
-      walk.state = m.actionTo[a];
-      if (!grid.locate(walk.target, cell)) {
-        restart();
-        grid.locate(walk.target, cell);
+      w.state = m.actionTo[a];
+      if (!grid.locate(w.target, cell)) {
+        restart(w);
+        grid.locate(w.target, cell);
       }
     }
+    w.updates = stop;
+  };
+  auto update = [&](const std::vector<Step>& steps, std::uint64_t from) {
     constexpr std::size_t kTransitionAhead = 6, kRowsAhead = 3;
     for (std::size_t i = 0; i < steps.size(); ++i) {
       if (i + kTransitionAhead < steps.size()) {
@@ -188,7 +188,7 @@ TrainResult QLearning::train(const TrainContext& context) const {
         }
       }
       const std::size_t a = steps[i].action;
-      const float alpha = static_cast<float>(1 - alphaSlope * static_cast<double>(walk.updates + i));
+      const float alpha = static_cast<float>(1 - alphaSlope * static_cast<double>(from + i));
       const std::uint32_t* corner = &g.corners[static_cast<std::size_t>(steps[i].cell) << d];
       for (int j = 0; j < corners; ++j) {
         const std::size_t v = corner[j];
@@ -197,8 +197,47 @@ TrainResult QLearning::train(const TrainContext& context) const {
         value += alpha * (target - value);
       }
     }
-    walk.updates = stop;
+  };
+  auto chunkEnd = [&](std::uint64_t from) {
+    std::uint64_t stop = std::min(total, from + kProgressEvery);
+    // The first curve point after `from`: curveAt rounds down, so look just past from's share.
+    for (std::uint64_t i = std::max<std::uint64_t>(1, from * curvePoints_ / total); i <= curvePoints_; ++i)
+      if (curveAt(i) > from) {
+        stop = std::min(stop, curveAt(i));
+        break;
+      }
+    if (checkpointEvery_ > 0) stop = std::min(stop, (from / checkpointEvery_ + 1) * checkpointEvery_);
+    return stop;
+  };
 
+  Walk ahead = walk;
+  std::vector<Step> current, next;
+  current.reserve(kProgressEvery);
+  next.reserve(kProgressEvery);
+  if (walk.updates < total) walkChunk(ahead, chunkEnd(walk.updates), current);
+  while (walk.updates < total) {
+    const std::uint64_t from = walk.updates;
+    const Walk atStop = ahead;  // the walk as it stands when this chunk's updates are done
+    const std::uint64_t stop = atStop.updates;
+    std::thread walker;
+    if (stop < total) {
+      const std::uint64_t nextStop = chunkEnd(stop);
+      if (threads > 1)
+        walker = std::thread([&, nextStop] { walkChunk(ahead, nextStop, next); });
+      else
+        walkChunk(ahead, nextStop, next);
+    }
+    try {
+      update(current, from);
+    } catch (...) {
+      if (walker.joinable()) walker.join();
+      throw;
+    }
+    if (walker.joinable()) walker.join();
+    std::swap(current, next);
+    walk = atStop;
+
+    while (nextCurveIndex <= curvePoints_ && curveAt(nextCurveIndex) < walk.updates) ++nextCurveIndex;
     if (nextCurveIndex <= curvePoints_ && walk.updates == curveAt(nextCurveIndex)) {
       const Residual r = bellmanResidual(q, g, threads);
       result.curve.push_back({walk.updates, elapsed(), r.max, r.mean});

@@ -233,7 +233,9 @@ TEST_CASE("behaviour mistakes name the file, line, column and key", "[behaviors]
                             "behaviors.approach.learner.sead: unknown key (expected one of: type, budget, "
                             "seed, alpha_final, curve_points, checkpoint_every, threads)"));
     REQUIRE_CONFIG_ERROR(build(approachInserting(19, "    environment: {type: static_target, speed: 1}")),
-                         at(19, 47, "behaviors.approach.environment.speed: unknown key (expected one of: type)"));
+                         at(19, 47,
+                            "behaviors.approach.environment.speed: unknown key (this plugin takes no parameters; "
+                            "expected only: type)"));
   }
   SECTION("a parameter of the wrong type") {
     REQUIRE_CONFIG_ERROR(build(approachWith(21, "      budget: lots")),

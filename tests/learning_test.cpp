@@ -319,6 +319,10 @@ TEST_CASE("Q-learning is deterministic and a resumed run ends with the uninterru
   REQUIRE(whole.finalResidual > 1e-3);  // still learning: the comparisons below mean something
   REQUIRE(trainWith(learner, problem, g).table == whole.table);
   REQUIRE_FALSE(trainWith("{type: q_learning, budget: 2000, seed: 10}", problem, g).table == whole.table);
+  // One thread walks and updates in turn; two walk the next chunk while updating this one.
+  const std::string oneThread =
+      "{type: q_learning, budget: 2000, seed: 9, checkpoint_every: 600, curve_points: 4, threads: 1}";
+  REQUIRE(trainWith(oneThread, problem, g).table == whole.table);
 
   MemoryCheckpointer store(2);
   REQUIRE_THROWS_WITH(trainWith(learner, problem, g, &store), "simulated crash");
