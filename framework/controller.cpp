@@ -1,5 +1,7 @@
 #include "mgrl/controller.hpp"
 
+#include "mgrl/problem.hpp"
+
 namespace mgrl {
 
 PolicyController::PolicyController(const StateActionModel& model, std::vector<PolicyPart> parts)
@@ -8,7 +10,8 @@ PolicyController::PolicyController(const StateActionModel& model, std::vector<Po
 std::size_t PolicyController::choose(std::uint32_t s, const Eigen::Vector3d& e) {
   const std::uint32_t begin = model_.stateActionBegin[s];
   const std::uint32_t n = model_.stateActionBegin[s + 1] - begin;
-  scores_.assign(n, 0.0f);
+  buffer_.assign(n + 16, 0.0f);  // vector code writes whole 16-float registers
+  count_ = n;
   for (const PolicyPart& part : parts_) {
     GridCell cell;
     if (part.activation == Activation::TargetInside) {
@@ -16,16 +19,11 @@ std::size_t PolicyController::choose(std::uint32_t s, const Eigen::Vector3d& e) 
     } else {
       cell = part.grid->locateClamped(e);
     }
-    const Stencil stencil = part.grid->stencil(cell);
-    for (int k = 0; k < stencil.size; ++k) {
-      const float w = static_cast<float>(part.weight) * stencil.weight[k];
-      const float* row = part.table->row(s, stencil.vertex[k]);
-      for (std::uint32_t j = 0; j < n; ++j) scores_[j] += w * row[j];
-    }
+    addInterpolated(buffer_.data(), *part.table, s, part.grid->stencil(cell), static_cast<float>(part.weight));
   }
   std::uint32_t best = 0;
   for (std::uint32_t j = 1; j < n; ++j)
-    if (scores_[j] > scores_[best]) best = j;
+    if (buffer_[j] > buffer_[best]) best = j;
   return begin + best;
 }
 

@@ -119,7 +119,44 @@ float maxRows8(const float* const* rows, const float* w, std::uint32_t n) {
   return maxWeightedRows<8>(rows, w, n);
 }
 
+template <int K>
+inline __attribute__((always_inline)) void addWeightedRows(float* sum, const float* const* rows, const float* w,
+                                                           std::uint32_t n) {
+  FloatV weight[K];
+  for (int k = 0; k < K; ++k) weight[k] = FloatV{} + w[k];
+  for (std::uint32_t j = 0; j < n; j += kLanes) {
+    FloatV acc = loadV(sum + j);
+    for (int k = 0; k < K; ++k) acc += weight[k] * loadV(rows[k] + j);
+    __builtin_memcpy(sum + j, &acc, sizeof acc);
+  }
+}
+
+__attribute__((target_clones("arch=x86-64-v4", "arch=x86-64-v3", "default")))
+void addRows4(float* sum, const float* const* rows, const float* w, std::uint32_t n) {
+  addWeightedRows<4>(sum, rows, w, n);
+}
+
+__attribute__((target_clones("arch=x86-64-v4", "arch=x86-64-v3", "default")))
+void addRows8(float* sum, const float* const* rows, const float* w, std::uint32_t n) {
+  addWeightedRows<8>(sum, rows, w, n);
+}
+
 }  // namespace
+
+void addInterpolated(float* sum, const QTable& q, std::uint32_t s, const Stencil& stencil, float scale) {
+  const std::uint32_t n = static_cast<std::uint32_t>(q.actionsOf(s));
+  const float* rows[8];
+  float w[8];
+  for (int k = 0; k < 8; ++k) {
+    const int from = k < stencil.size ? k : 0;
+    rows[k] = q.row(s, stencil.vertex[from]);
+    w[k] = k < stencil.size ? scale * stencil.weight[k] : 0.0f;
+  }
+  if (stencil.size <= 4)
+    addRows4(sum, rows, w, n);
+  else
+    addRows8(sum, rows, w, n);
+}
 
 float maxInterpolated(const QTable& q, const GridModel& g, std::uint32_t s, std::uint32_t cell, const float* frac) {
   const int d = g.dimension;

@@ -348,7 +348,7 @@ TEST_CASE("the combined controller takes the best weighted sum of active behavio
   REQUIRE(controller.choose(0, {0, 1, 2.0}) == 0);  // walk forward from 2 m
   // Outside the grid the target_inside behaviour is silent: all scores 0, first action.
   REQUIRE(controller.choose(0, {0, 1, 5.0}) == 0);
-  REQUIRE(controller.scores() == std::vector<float>{0, 0, 0});
+  REQUIRE(std::vector<float>(controller.scores().begin(), controller.scores().end()) == std::vector<float>{0, 0, 0});
   // A negative weight turns the preference around.
   PolicyController contrary(m, {{parts.grid.get(), &vi.table, -1.0, Activation::Always}});
   REQUIRE(contrary.choose(0, {0, 1, 2.0}) == 1);

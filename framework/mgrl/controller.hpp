@@ -7,6 +7,7 @@
 /// target is inside its grid (the paper's hit behaviour).
 #include <cstddef>
 #include <cstdint>
+#include <span>
 #include <vector>
 
 #include <Eigen/Core>
@@ -32,12 +33,13 @@ class PolicyController {
   /// lowest action index. If no behaviour is active, the state's first action.
   std::size_t choose(std::uint32_t s, const Eigen::Vector3d& e);
   /// The combined scores of s's out-actions from the last choose() (for views and tests).
-  const std::vector<float>& scores() const { return scores_; }
+  std::span<const float> scores() const { return {buffer_.data(), count_}; }
 
  private:
   const StateActionModel& model_;
   std::vector<PolicyPart> parts_;
-  std::vector<float> scores_;
+  std::vector<float> buffer_;  ///< scores, padded for vector code
+  std::size_t count_ = 0;      ///< out-actions of the last state
 };
 
 }  // namespace mgrl

@@ -57,6 +57,11 @@ struct GridModel {
 /// `cell` and fractions `frac` (the paper's "max_a' Q(e', a')").
 float maxInterpolated(const QTable& q, const GridModel& g, std::uint32_t s, std::uint32_t cell, const float* frac);
 
+/// sum[j] += scale * sum_k stencil.weight[k] Q(stencil.vertex[k], a_j) for s's out-actions
+/// a_j. `sum` must have room for actionsOf(s) rounded up to 16 floats (vector code writes
+/// whole registers; the extra entries receive garbage).
+void addInterpolated(float* sum, const QTable& q, std::uint32_t s, const Stencil& stencil, float scale);
+
 /// The backup of (action a, vertex v): r(v, a) + gamma^t_a max_a' Q(e'(v, a), a'), with
 /// future value 0 when e' leaves the grid.
 inline float backup(const QTable& q, const GridModel& g, std::size_t a, std::size_t v) {
