@@ -80,6 +80,17 @@ inline FloatV loadV(const float* p) {
   return v;
 }
 
+// sum_k weight[k] rows[k][j .. j + kLanes), added as a balanced tree: a short dependency
+// chain, and the same order in every lane and every clone.
+template <int K>
+inline __attribute__((always_inline)) FloatV weightedSum(const float* const* rows, const FloatV* weight, std::uint32_t j) {
+  FloatV term[K];
+  for (int k = 0; k < K; ++k) term[k] = weight[k] * loadV(rows[k] + j);
+  for (int width = K / 2; width >= 1; width /= 2)
+    for (int k = 0; k < width; ++k) term[k] = term[2 * k] + term[2 * k + 1];
+  return term[0];
+}
+
 // max_j sum_k w[k] rows[k][j] over j < n. Rows may be read up to kLanes - 1 floats past n
 // (the table is padded); those lanes are masked out. The sum for each j is formed in the
 // same order whatever the lane, so the result does not depend on n's remainder or the clone.
@@ -91,13 +102,11 @@ inline __attribute__((always_inline)) float maxWeightedRows(const float* const* 
   for (int k = 0; k < K; ++k) weight[k] = FloatV{} + w[k];
   std::uint32_t j = 0;
   for (; j + kLanes <= n; j += kLanes) {
-    FloatV acc = weight[0] * loadV(rows[0] + j);
-    for (int k = 1; k < K; ++k) acc += weight[k] * loadV(rows[k] + j);
+    const FloatV acc = weightedSum<K>(rows, weight, j);
     best = acc > best ? acc : best;
   }
   if (j < n) {
-    FloatV acc = weight[0] * loadV(rows[0] + j);
-    for (int k = 1; k < K; ++k) acc += weight[k] * loadV(rows[k] + j);
+    FloatV acc = weightedSum<K>(rows, weight, j);
     IntV lane;
     for (int i = 0; i < kLanes; ++i) lane[i] = i;
     lane += static_cast<int>(j);
