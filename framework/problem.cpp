@@ -169,23 +169,28 @@ void addInterpolated(float* sum, const QTable& q, std::uint32_t s, const Stencil
 
 float maxInterpolated(const QTable& q, const GridModel& g, std::uint32_t s, std::uint32_t cell, const float* frac) {
   const int d = g.dimension;
-  const std::uint32_t n = static_cast<std::uint32_t>(q.actionsOf(s));
+  const auto n = static_cast<std::uint32_t>(q.actionsOf(s));
+  const float* block = q.row(s, 0);  // vertex v's row starts at block + v * n
   const std::uint32_t* corner = &g.corners[static_cast<std::size_t>(cell) << d];
   const float* rows[8];
+  if (d == 3) {
+    // The products in cornerWeights' order, written out.
+    const float f0 = frac[0], f1 = frac[1], f2 = frac[2], g0 = 1 - f0, g1 = 1 - f1, g2 = 1 - f2;
+    const float w[8] = {g0 * g1 * g2, f0 * g1 * g2, g0 * f1 * g2, f0 * f1 * g2,
+                        g0 * g1 * f2, f0 * g1 * f2, g0 * f1 * f2, f0 * f1 * f2};
+    for (int k = 0; k < 8; ++k) rows[k] = block + static_cast<std::size_t>(corner[k]) * n;
+    return maxRows8(rows, w, n);
+  }
   float w[8];
   std::array<float, 3> f{frac[0], frac[1], frac[2]};
   cornerWeights(d, f, w);
-  if (d == 3) {
-    for (int k = 0; k < 8; ++k) rows[k] = q.row(s, corner[k]);
-    return maxRows8(rows, w, n);
-  }
   if (d == 2) {
-    for (int k = 0; k < 4; ++k) rows[k] = q.row(s, corner[k]);
+    for (int k = 0; k < 4; ++k) rows[k] = block + static_cast<std::size_t>(corner[k]) * n;
     return maxRows4(rows, w, n);
   }
   // 1-D grids: two corners, padded with zero weights.
   for (int k = 0; k < 4; ++k) {
-    rows[k] = q.row(s, corner[k & 1]);
+    rows[k] = block + static_cast<std::size_t>(corner[k & 1]) * n;
     if (k >= 2) w[k] = 0;
   }
   return maxRows4(rows, w, n);
