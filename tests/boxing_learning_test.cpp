@@ -18,14 +18,6 @@ namespace fs = std::filesystem;
 
 const fs::path kBoxing = fs::path(MGRL_SOURCE_DIR) / "scenarios" / "boxing.yaml";
 
-struct TempDir {
-  fs::path path;
-  TempDir() : path(fs::temp_directory_path() / fmt::format("mgrl-boxing-learning-{}", ::getpid())) {
-    fs::remove_all(path);
-  }
-  ~TempDir() { fs::remove_all(path); }
-};
-
 // For every (state, vertex): does `learned`'s greedy action reach within `tolerance` of the
 // best value of `reference` there? Returns the fraction of pairs where it does.
 double nearOptimalFraction(const QTable& learned, const QTable& reference, double tolerance) {
@@ -48,7 +40,7 @@ double nearOptimalFraction(const QTable& learned, const QTable& reference, doubl
 }  // namespace
 
 TEST_CASE("on boxing, the trained combined policy hits far more often than a random controller", "[boxing][learning]") {
-  TempDir temp;
+  test::TempDir temp("boxing-learning");
   app::TrainOptions train;
   train.scenario = kBoxing;
   train.dataDir = test::mocap();

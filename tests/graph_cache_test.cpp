@@ -22,6 +22,7 @@
 #include "mgrl/hash.hpp"
 #include "mgrl/motion_io.hpp"
 #include "mgrl/npy.hpp"
+#include "test_support.hpp"
 
 namespace fs = std::filesystem;
 using Catch::Contains;
@@ -30,23 +31,6 @@ using mgrl::StateActionModel;
 using nlohmann::json;
 
 namespace {
-
-// A fresh directory per test, removed afterwards; the pid keeps parallel ctest runs apart.
-struct TempDir {
-  fs::path path;
-  TempDir() {
-    static int counter = 0;
-    path = fs::temp_directory_path() / fmt::format("mgrl-graph-cache-test-{}-{}", ::getpid(), counter++);
-    fs::remove_all(path);
-    fs::create_directories(path);
-  }
-  ~TempDir() {
-    std::error_code ignored;
-    fs::remove_all(path, ignored);
-  }
-  TempDir(const TempDir&) = delete;
-  TempDir& operator=(const TempDir&) = delete;
-};
 
 // Two clips of 10 frames; states at frames 2, 8 and 14; four actions, three of which go
 // through a transition edge; four hits.
@@ -311,7 +295,7 @@ TEST_CASE("checkModel names the array and index that break an invariant", "[grap
 // --- saving and loading -----------------------------------------------------------------
 
 TEST_CASE("a graph bundle round-trips every field of the model", "[graph_cache]") {
-  TempDir tmp;
+  mgrl::test::TempDir tmp("graph-cache-test");
   const fs::path bundle = tmp.path / "graph";
   const StateActionModel model = tinyModel();
   mgrl::saveGraphBundle(bundle, model, provenance("k1"));
@@ -347,7 +331,7 @@ TEST_CASE("a graph bundle without hits or transitions round-trips", "[graph_cach
   StateActionModel model = tinyModel();
   model.hits.clear();
   model.actionHitBegin.assign(model.actionCount() + 1, 0);
-  TempDir tmp;
+  mgrl::test::TempDir tmp("graph-cache-test");
   mgrl::saveGraphBundle(tmp.path / "graph", model, provenance("k1"));
   const GraphBundleLoad load = mgrl::loadGraphBundle(tmp.path / "graph/", "k1");
   CAPTURE(load.reason);
@@ -356,7 +340,7 @@ TEST_CASE("a graph bundle without hits or transitions round-trips", "[graph_cach
 }
 
 TEST_CASE("saving the same model twice writes byte-identical files", "[graph_cache]") {
-  TempDir tmp;
+  mgrl::test::TempDir tmp("graph-cache-test");
   mgrl::saveGraphBundle(tmp.path / "a", tinyModel(), provenance("k1"));
   const auto first = filesIn(tmp.path / "a");
   mgrl::saveGraphBundle(tmp.path / "a", tinyModel(), provenance("k1"));
@@ -367,7 +351,7 @@ TEST_CASE("saving the same model twice writes byte-identical files", "[graph_cac
 }
 
 TEST_CASE("saving over a bundle replaces it and leaves no temporary directory", "[graph_cache]") {
-  TempDir tmp;
+  mgrl::test::TempDir tmp("graph-cache-test");
   const fs::path bundle = tmp.path / "graph";
   mgrl::saveGraphBundle(bundle, tinyModel(), provenance("k1"));
   StateActionModel other = tinyModel();
@@ -383,7 +367,7 @@ TEST_CASE("saving over a bundle replaces it and leaves no temporary directory", 
 }
 
 TEST_CASE("saveGraphBundle replaces an empty directory but refuses to delete anything else", "[graph_cache]") {
-  TempDir tmp;
+  mgrl::test::TempDir tmp("graph-cache-test");
   fs::create_directories(tmp.path / "empty");
   mgrl::saveGraphBundle(tmp.path / "empty", tinyModel(), provenance("k1"));
   REQUIRE(mgrl::loadGraphBundle(tmp.path / "empty", "k1").status == GraphBundleLoad::Ok);
@@ -401,7 +385,7 @@ TEST_CASE("saveGraphBundle replaces an empty directory but refuses to delete any
 }
 
 TEST_CASE("saveGraphBundle refuses an invalid model or provenance and writes nothing", "[graph_cache]") {
-  TempDir tmp;
+  mgrl::test::TempDir tmp("graph-cache-test");
   StateActionModel broken = tinyModel();
   broken.actionFrames[0] = 99;
   REQUIRE_THROWS_WITH(mgrl::saveGraphBundle(tmp.path / "graph", broken, provenance("k1")),
@@ -412,13 +396,13 @@ TEST_CASE("saveGraphBundle refuses an invalid model or provenance and writes not
 }
 
 TEST_CASE("loadGraphBundle reports a missing bundle", "[graph_cache]") {
-  TempDir tmp;
+  mgrl::test::TempDir tmp("graph-cache-test");
   const GraphBundleLoad load = mgrl::loadGraphBundle(tmp.path / "nothing", "k1");
   REQUIRE(load.status == GraphBundleLoad::Missing);
 }
 
 TEST_CASE("a bundle made for another key is stale", "[graph_cache]") {
-  TempDir tmp;
+  mgrl::test::TempDir tmp("graph-cache-test");
   mgrl::saveGraphBundle(tmp.path / "graph", tinyModel(), provenance("k1"));
   const GraphBundleLoad load = mgrl::loadGraphBundle(tmp.path / "graph", "k2");
   REQUIRE(load.status == GraphBundleLoad::Stale);
@@ -427,7 +411,7 @@ TEST_CASE("a bundle made for another key is stale", "[graph_cache]") {
 }
 
 TEST_CASE("a bundle of another format version is stale", "[graph_cache]") {
-  TempDir tmp;
+  mgrl::test::TempDir tmp("graph-cache-test");
   const fs::path bundle = tmp.path / "graph";
   mgrl::saveGraphBundle(bundle, tinyModel(), provenance("k1"));
   json manifest = json::parse(mgrl::readFile(bundle / "manifest.json"));
@@ -439,7 +423,7 @@ TEST_CASE("a bundle of another format version is stale", "[graph_cache]") {
 }
 
 TEST_CASE("a bundle with a flipped byte is damaged", "[graph_cache]") {
-  TempDir tmp;
+  mgrl::test::TempDir tmp("graph-cache-test");
   const fs::path bundle = tmp.path / "graph";
   mgrl::saveGraphBundle(bundle, tinyModel(), provenance("k1"));
   std::string bytes = mgrl::readFile(bundle / "action_frames.npy");
@@ -450,7 +434,7 @@ TEST_CASE("a bundle with a flipped byte is damaged", "[graph_cache]") {
 }
 
 TEST_CASE("a bundle with a truncated file is damaged", "[graph_cache]") {
-  TempDir tmp;
+  mgrl::test::TempDir tmp("graph-cache-test");
   const fs::path bundle = tmp.path / "graph";
   mgrl::saveGraphBundle(bundle, tinyModel(), provenance("k1"));
   const std::string bytes = mgrl::readFile(bundle / "frame_root.npy");
@@ -460,7 +444,7 @@ TEST_CASE("a bundle with a truncated file is damaged", "[graph_cache]") {
 }
 
 TEST_CASE("a bundle with a deleted file is damaged", "[graph_cache]") {
-  TempDir tmp;
+  mgrl::test::TempDir tmp("graph-cache-test");
   const fs::path bundle = tmp.path / "graph";
   mgrl::saveGraphBundle(bundle, tinyModel(), provenance("k1"));
   fs::remove(bundle / "hits_value.npy");
@@ -468,7 +452,7 @@ TEST_CASE("a bundle with a deleted file is damaged", "[graph_cache]") {
 }
 
 TEST_CASE("a bundle with a garbage manifest is damaged", "[graph_cache]") {
-  TempDir tmp;
+  mgrl::test::TempDir tmp("graph-cache-test");
   const fs::path bundle = tmp.path / "graph";
   mgrl::saveGraphBundle(bundle, tinyModel(), provenance("k1"));
   writeBytes(bundle / "manifest.json", "{\"format\": \"mgrl.gr");
@@ -482,7 +466,7 @@ TEST_CASE("a bundle with a garbage manifest is damaged", "[graph_cache]") {
 }
 
 TEST_CASE("a bundle whose manifest lacks or mistypes a member is damaged", "[graph_cache]") {
-  TempDir tmp;
+  mgrl::test::TempDir tmp("graph-cache-test");
   const fs::path bundle = tmp.path / "graph";
   mgrl::saveGraphBundle(bundle, tinyModel(), provenance("k1"));
   const json good = json::parse(mgrl::readFile(bundle / "manifest.json"));
@@ -525,7 +509,7 @@ TEST_CASE("a bundle whose manifest lacks or mistypes a member is damaged", "[gra
 }
 
 TEST_CASE("a bundle whose arrays break the model is damaged even with correct hashes", "[graph_cache]") {
-  TempDir tmp;
+  mgrl::test::TempDir tmp("graph-cache-test");
   const fs::path bundle = tmp.path / "graph";
   StateActionModel model = tinyModel();
   mgrl::saveGraphBundle(bundle, model, provenance("k1"));

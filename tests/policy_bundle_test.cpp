@@ -26,6 +26,7 @@
 #include "mgrl/motion_io.hpp"
 #include "mgrl/npy.hpp"
 #include "mgrl/policy_bundle.hpp"
+#include "test_support.hpp"
 
 namespace fs = std::filesystem;
 using Catch::Contains;
@@ -36,23 +37,6 @@ using mgrl::StateActionModel;
 using nlohmann::json;
 
 namespace {
-
-// A fresh directory per test, removed afterwards; the pid keeps parallel ctest runs apart.
-struct TempDir {
-  fs::path path;
-  TempDir() {
-    static int counter = 0;
-    path = fs::temp_directory_path() / fmt::format("mgrl-policy-bundle-test-{}-{}", ::getpid(), counter++);
-    fs::remove_all(path);
-    fs::create_directories(path);
-  }
-  ~TempDir() {
-    std::error_code ignored;
-    fs::remove_all(path, ignored);
-  }
-  TempDir(const TempDir&) = delete;
-  TempDir& operator=(const TempDir&) = delete;
-};
 
 // Only what a Q table's layout depends on: state 0 has actions 0 and 1, state 1 action 2
 // (and, with `fourActions`, state 2 action 3).
@@ -145,7 +129,7 @@ struct Log {
 // --- policy bundles ----------------------------------------------------------------------
 
 TEST_CASE("a policy bundle round-trips tables, vertices, records and provenance", "[policy_bundle]") {
-  TempDir tmp;
+  mgrl::test::TempDir tmp("policy-bundle-test");
   const StateActionModel model = tableModel();
   const PolicyBundle saved = sampleBundle(model);
   mgrl::savePolicyBundle(tmp.path / "policy", saved);
@@ -178,7 +162,7 @@ TEST_CASE("a policy bundle round-trips tables, vertices, records and provenance"
 }
 
 TEST_CASE("a policy bundle's Q table is a NumPy float32 array of shape (actions, vertices)", "[policy_bundle]") {
-  TempDir tmp;
+  mgrl::test::TempDir tmp("policy-bundle-test");
   const StateActionModel model = tableModel();
   const PolicyBundle saved = sampleBundle(model);
   mgrl::savePolicyBundle(tmp.path / "policy", saved);
@@ -198,7 +182,7 @@ TEST_CASE("a policy bundle's Q table is a NumPy float32 array of shape (actions,
 }
 
 TEST_CASE("saving the same policy twice writes byte-identical files and replaces the old bundle", "[policy_bundle]") {
-  TempDir tmp;
+  mgrl::test::TempDir tmp("policy-bundle-test");
   const StateActionModel model = tableModel();
   mgrl::savePolicyBundle(tmp.path / "a", sampleBundle(model));
   const auto first = filesIn(tmp.path / "a");
@@ -216,7 +200,7 @@ TEST_CASE("saving the same policy twice writes byte-identical files and replaces
 }
 
 TEST_CASE("a failed policy save leaves no temporary directory and deletes nothing", "[policy_bundle]") {
-  TempDir tmp;
+  mgrl::test::TempDir tmp("policy-bundle-test");
   const StateActionModel model = tableModel();
   writeBytes(tmp.path / "file", "x");
   REQUIRE_THROWS_WITH(mgrl::savePolicyBundle(tmp.path / "file", sampleBundle(model)),
@@ -235,7 +219,7 @@ TEST_CASE("a failed policy save leaves no temporary directory and deletes nothin
 }
 
 TEST_CASE("savePolicyBundle refuses what it could not load back, writing nothing", "[policy_bundle]") {
-  TempDir tmp;
+  mgrl::test::TempDir tmp("policy-bundle-test");
   const StateActionModel model = tableModel();
   PolicyBundle bundle = sampleBundle(model);
   std::string message;
@@ -275,7 +259,7 @@ TEST_CASE("savePolicyBundle refuses what it could not load back, writing nothing
 }
 
 TEST_CASE("loadPolicyBundle refuses a missing, foreign or stale bundle with one line", "[policy_bundle]") {
-  TempDir tmp;
+  mgrl::test::TempDir tmp("policy-bundle-test");
   const StateActionModel model = tableModel();
   const fs::path bundle = tmp.path / "policy";
   mgrl::savePolicyBundle(bundle, sampleBundle(model));
@@ -332,7 +316,7 @@ TEST_CASE("loadPolicyBundle refuses a missing, foreign or stale bundle with one 
 }
 
 TEST_CASE("loadPolicyBundle refuses a bundle made for another graph, naming both keys", "[policy_bundle]") {
-  TempDir tmp;
+  mgrl::test::TempDir tmp("policy-bundle-test");
   const StateActionModel model = tableModel();
   mgrl::savePolicyBundle(tmp.path / "policy", sampleBundle(model));
   try {
@@ -351,7 +335,7 @@ TEST_CASE("loadPolicyBundle refuses a bundle made for another graph, naming both
 }
 
 TEST_CASE("loadPolicyBundle refuses behaviour names that are not file stems", "[policy_bundle]") {
-  TempDir tmp;
+  mgrl::test::TempDir tmp("policy-bundle-test");
   const StateActionModel model = tableModel();
   const fs::path bundle = tmp.path / "policy";
   mgrl::savePolicyBundle(bundle, sampleBundle(model));
@@ -370,7 +354,7 @@ TEST_CASE("loadPolicyBundle refuses behaviour names that are not file stems", "[
 }
 
 TEST_CASE("loadPolicyBundle refuses altered, truncated or missing files", "[policy_bundle]") {
-  TempDir tmp;
+  mgrl::test::TempDir tmp("policy-bundle-test");
   const StateActionModel model = tableModel();
   const fs::path bundle = tmp.path / "policy";
   mgrl::savePolicyBundle(bundle, sampleBundle(model));
@@ -403,7 +387,7 @@ TEST_CASE("loadPolicyBundle refuses altered, truncated or missing files", "[poli
 
 TEST_CASE("loadPolicyBundle refuses tables and vertices of the wrong shape or with non-finite values",
           "[policy_bundle]") {
-  TempDir tmp;
+  mgrl::test::TempDir tmp("policy-bundle-test");
   const StateActionModel model = tableModel();
   const fs::path bundle = tmp.path / "policy";
   const PolicyBundle saved = sampleBundle(model);
@@ -453,7 +437,7 @@ TEST_CASE("loadPolicyBundle refuses tables and vertices of the wrong shape or wi
 // --- checkpoints -------------------------------------------------------------------------
 
 TEST_CASE("a directory checkpoint round-trips the learner's state and table", "[policy_bundle][checkpoint]") {
-  TempDir tmp;
+  mgrl::test::TempDir tmp("policy-bundle-test");
   const StateActionModel model = tableModel();
   Log log;
   mgrl::DirectoryCheckpointer checkpointer(tmp.path / "run" / "checkpoint", "run-key", model, 6, log.sink());
@@ -484,7 +468,7 @@ TEST_CASE("a directory checkpoint round-trips the learner's state and table", "[
 }
 
 TEST_CASE("a damaged or foreign checkpoint is reported and ignored", "[policy_bundle][checkpoint]") {
-  TempDir tmp;
+  mgrl::test::TempDir tmp("policy-bundle-test");
   const StateActionModel model = tableModel();
   const fs::path dir = tmp.path / "checkpoint";
   Log log;
@@ -552,7 +536,7 @@ TEST_CASE("a damaged or foreign checkpoint is reported and ignored", "[policy_bu
 }
 
 TEST_CASE("a checkpointer leaves a directory that is not a checkpoint alone", "[policy_bundle][checkpoint]") {
-  TempDir tmp;
+  mgrl::test::TempDir tmp("policy-bundle-test");
   const StateActionModel model = tableModel();
   fs::create_directories(tmp.path / "home");
   writeBytes(tmp.path / "home" / "notes.txt", "keep me");

@@ -1,5 +1,9 @@
 #include "test_support.hpp"
 
+#include <unistd.h>
+
+#include <fmt/format.h>
+
 #include <catch2/catch.hpp>
 
 #include "mgrl/data_paths.hpp"
@@ -14,6 +18,18 @@ std::filesystem::path mocap() {
 }
 
 std::filesystem::path testData() { return MGRL_TEST_DATA_DIR; }
+
+TempDir::TempDir(std::string_view tag) {
+  static int counter = 0;
+  path = std::filesystem::temp_directory_path() / fmt::format("mgrl-{}-{}-{}", tag, ::getpid(), counter++);
+  std::filesystem::remove_all(path);
+  std::filesystem::create_directories(path);
+}
+
+TempDir::~TempDir() {
+  std::error_code ignored;
+  std::filesystem::remove_all(path, ignored);
+}
 
 LoadedMotion loadMocap(const std::string& relative, const LoadOptions& options) {
   return loadMotion(mocap() / relative, options);

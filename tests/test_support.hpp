@@ -3,6 +3,7 @@
 
 #include <filesystem>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include "mgrl/motion_io.hpp"
@@ -31,5 +32,15 @@ LoadedMotion loadMocap(const std::string& relative, const LoadOptions& options =
 Skeleton humanoid(const std::vector<std::string>& names);
 /// Names for humanoid() in CMU-like spelling.
 std::vector<std::string> humanoidNames();
+
+/// A fresh, empty directory under the system's temporary folder, removed with everything
+/// in it when the object goes; `tag` and the process id keep parallel ctest runs apart.
+struct TempDir {
+  explicit TempDir(std::string_view tag);
+  ~TempDir();
+  TempDir(const TempDir&) = delete;
+  TempDir& operator=(const TempDir&) = delete;
+  std::filesystem::path path;
+};
 
 }  // namespace mgrl::test
