@@ -1,0 +1,35 @@
+#pragma once
+// Shared by `mgrl train` and `mgrl eval` (app/train_command.cpp, app/eval_command.cpp).
+#include <chrono>
+#include <string>
+#include <vector>
+
+#include "graph_command.hpp"
+#include "learn_commands.hpp"
+#include "mgrl/scenario.hpp"
+
+namespace mgrl::app {
+
+using Clock = std::chrono::steady_clock;
+
+inline double since(Clock::time_point start) { return std::chrono::duration<double>(Clock::now() - start).count(); }
+
+/// "4.17 M", "850.0 k": counts and rates for people (with a trailing space for units).
+std::string humanCount(double n);
+
+/// " --set A --set B": the overrides in use, for hints that must reproduce them.
+std::string setFlags(const std::vector<std::string>& sets);
+
+/// The scenario with its behaviours checked: every mistake that needs no graph is found
+/// before the graph is built or loaded.
+Scenario checkedScenario(const LearnOptions& options);
+
+struct Loaded {
+  Scenario scenario;
+  GraphResult graph;
+};
+
+/// The scenario's graph, from the cache or built (options.log hears about it).
+Loaded load(const LearnOptions& options, Scenario scenario);
+
+}  // namespace mgrl::app
