@@ -68,8 +68,11 @@ void precheckPolicy(const fs::path& dir, const Scenario& scenario, const EvalOpt
 }  // namespace
 
 json runEval(const EvalOptions& options) {
-  if (options.controller != "policy" && options.controller != "random")
-    throw Error(fmt::format("--controller: expected one of: policy, random, found {}", quoteToken(options.controller)));
+  if (options.controller != "policy" && options.controller != "random" && options.controller != "online_search")
+    throw Error(fmt::format("--controller: expected one of: policy, online_search, random, found {}",
+                            quoteToken(options.controller)));
+  if (options.horizon < 1 || options.horizon > 8)
+    throw Error(fmt::format("--horizon: expected a search depth in actions in [1, 8], found {}", options.horizon));
   if (options.trials < 1 || options.trials > 10'000'000)
     throw Error(fmt::format("--trials: expected a number of trials in [1, 10000000], found {}", options.trials));
   if (!(options.seconds > 0 && options.seconds <= 3600))
@@ -126,6 +129,17 @@ json runEval(const EvalOptions& options) {
   const double gamma = behaviors.front().reward->gamma();
   const StaticTarget environment;
   PolicyController controller(model, parts);
+  std::vector<SearchPart> searchParts;
+  for (const Behavior& b : behaviors)
+    searchParts.push_back({b.discretizer.get(), b.reward.get(), b.weight, b.activation});
+  OnlineSearchController search(model, environment, searchParts, options.horizon, gamma);
+  std::size_t expanded = 0;
+  auto choose = [&](const std::string& kind, std::uint32_t s, const Eigen::Vector3d& e) -> std::size_t {
+    if (kind == "policy") return controller.choose(s, e);
+    const std::size_t a = search.choose(s, e);
+    expanded += search.expanded();
+    return a;
+  };
 
   auto run = [&](const std::string& kind, std::vector<std::pair<std::uint32_t, Eigen::Vector3d>>* decisions) {
     Rng starts(options.seed), choices(options.seed ^ 0x5eed5eed5eedULL);
@@ -141,9 +155,9 @@ json runEval(const EvalOptions& options) {
       bool hit = false;
       while (elapsed < limit && !hit) {
         std::size_t a;
-        if (kind == "policy") {
+        if (kind != "random") {
           if (decisions) decisions->emplace_back(s, e);
-          a = controller.choose(s, e);
+          a = choose(kind, s, e);
         } else {
           a = model.stateActionBegin[s] + choices.below(model.stateActionBegin[s + 1] - model.stateActionBegin[s]);
         }
@@ -193,15 +207,20 @@ json runEval(const EvalOptions& options) {
   };
 
   std::vector<std::pair<std::uint32_t, Eigen::Vector3d>> decisions;
-  TrialStats stats = run(options.controller, options.controller == "policy" ? &decisions : nullptr);
+  TrialStats stats = run(options.controller, options.controller != "random" ? &decisions : nullptr);
   json report = summarize(stats);
-  // Decision cost, measured apart from the simulation: replay the trials' decisions.
+  if (options.controller == "online_search") {
+    report["horizon"] = options.horizon;
+    report["mean_expanded_actions"] = static_cast<double>(expanded) / static_cast<double>(std::max<std::size_t>(1, stats.decisions));
+  }
+  // Decision cost, measured apart from the simulation: replay the trials' decisions (at
+  // least once, for at least 0.2 s).
   double perSecond = 0;
-  if (options.controller == "policy" && !decisions.empty()) {
+  if (options.controller != "random" && !decisions.empty()) {
     std::size_t sink = 0, calls = 0;
     const auto start = Clock::now();
     do {
-      for (const auto& [s, e] : decisions) sink += controller.choose(s, e);
+      for (const auto& [s, e] : decisions) sink += choose(options.controller, s, e);
       calls += decisions.size();
     } while (since(start) < 0.2);
     perSecond = static_cast<double>(calls) / since(start);
@@ -227,8 +246,8 @@ json runEval(const EvalOptions& options) {
   report["seconds_per_trial"] = options.seconds;
   report["contact_radius_m"] = contactRadius;
   report["target_height_m"] = targetHeight;
-  if (options.controller == "policy") {
-    report["policy"] = dir.string();
+  if (options.controller == "policy") report["policy"] = dir.string();
+  if (options.controller != "random") {
     TrialStats baseline = run("random", nullptr);
     report["random_baseline"] = summarize(baseline);
   }

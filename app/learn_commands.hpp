@@ -34,7 +34,8 @@ std::string trainText(const nlohmann::json& report);
 
 struct EvalOptions : LearnOptions {
   std::filesystem::path policy;   ///< "" the default bundle of the scenario
-  std::string controller = "policy";  ///< policy | random
+  std::string controller = "policy";  ///< policy | online_search | random
+  int horizon = 3;                ///< online_search: depth in actions
   std::size_t trials = 100;
   std::uint64_t seed = 1;
   double seconds = 10;            ///< motion per trial

@@ -95,8 +95,11 @@ int main(int argc, char** argv) {
               "motion each; success = an effective hit on the target.");
   evalCommand->add_option("SCENARIO", scenarioPath, "Scenario YAML file")->required();
   evalCommand->add_option("--policy", eval.policy, "Policy bundle folder (default: the one mgrl train writes)");
-  evalCommand->add_option("--controller", eval.controller, "policy (the trained one) or random")
+  evalCommand->add_option("--controller", eval.controller,
+                          "policy (the trained one), online_search (depth-limited search of the graph for the best "
+                          "discounted reward, the baseline of Lee et al. 2002) or random")
       ->default_str("policy");
+  evalCommand->add_option("--horizon", eval.horizon, "online_search: search depth in actions")->default_val(3);
   evalCommand->add_option("--trials", trials, "Number of trials")->default_val(trials);
   evalCommand->add_option("--seed", seed, "Random seed (the same seed, the same numbers)")->default_val(1);
   evalCommand->add_option("--seconds", eval.seconds, "Seconds of motion per trial")->default_val(10);

@@ -366,6 +366,24 @@ TEST_CASE("mgrl eval --controller random needs no trained bundle", "[cli][data]"
   CHECK_FALSE(fs::exists(box.cache() / "policies"));
 }
 
+TEST_CASE("mgrl eval --controller online_search searches the graph without a trained bundle", "[cli][data]") {
+  Sandbox box("search");
+  const json report = box.eval(kFast + " --controller online_search --horizon 2 --trials 8 --seed 3").report();
+  CHECK(report["controller"] == "online_search");
+  CHECK(report["horizon"] == 2);
+  for (const char* key : {"success_rate", "mean_time_to_hit_s", "median_time_to_hit_s", "mean_return",
+                          "decisions_per_second", "random_baseline"})
+    CHECK(report.contains(key));
+  // A depth-2 search expands the first state's actions and theirs: more than one level.
+  CHECK(report["mean_expanded_actions"].get<double>() > 20);
+  CHECK(report["mean_return"].get<double>() > report["random_baseline"]["mean_return"].get<double>());
+  CHECK_FALSE(fs::exists(box.cache() / "policies"));
+  // The same seed, the same numbers.
+  const json again = box.eval(kFast + " --controller online_search --horizon 2 --trials 8 --seed 3").report();
+  for (const char* key : {"success_rate", "mean_time_to_hit_s", "mean_return", "mean_expanded_actions"})
+    CHECK(again[key] == report[key]);
+}
+
 TEST_CASE("mgrl train and eval refuse what they cannot use, with the reason on stderr", "[cli][data]") {
   Sandbox box("refuse");
   const fs::path out = box.path("bundle");
@@ -374,7 +392,9 @@ TEST_CASE("mgrl train and eval refuse what they cannot use, with the reason on s
   requireOneLineRefusal(box.eval(kFast + " --trials 0"),
                         "--trials: expected a number of trials in [1, 10000000], found 0");
   requireOneLineRefusal(box.eval(kFast + " --controller bogus"),
-                        "--controller: expected one of: policy, random, found 'bogus'");
+                        "--controller: expected one of: policy, online_search, random, found 'bogus'");
+  requireOneLineRefusal(box.eval(kFast + " --controller online_search --horizon 0"),
+                        "--horizon: expected a search depth in actions in [1, 8], found 0");
   for (const char* command : {"train", "eval"}) {
     CAPTURE(command);
     requireOneLineRefusal(

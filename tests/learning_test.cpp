@@ -354,4 +354,29 @@ TEST_CASE("the combined controller takes the best weighted sum of active behavio
   REQUIRE(contrary.choose(0, {0, 1, 2.0}) == 1);
 }
 
+TEST_CASE("the online search baseline finds the corridor's best first action within its horizon", "[learning]") {
+  // The corridor with its actions in another order, so that the tie rule (lowest index)
+  // cannot pass for a good choice: 0 walks back, 1 walks forward, 2 punches.
+  const ActionHit punch{0, 3, 1, 0.0f, 1.0f, 0.5f, 1.0f};
+  const StateActionModel m =
+      handModel(1, {{0, 0, 5, 0, -0.5, 0, {}}, {0, 0, 5, 0, 0.5, 0, {}}, {0, 0, 5, 0, 0, 0, {punch}}});
+  Built parts = corridorParts(m);
+  const std::vector<SearchPart> search{{parts.grid.get(), parts.reward.get(), 1.0, Activation::Always}};
+  // 2 m away the punch position is 3 walks ahead: a horizon of 4 sees the punch, and only
+  // walking forward first leads there.
+  OnlineSearchController deep(m, parts.environment, search, 4, 0.97);
+  REQUIRE(deep.choose(0, {0, 1, 2.0}) == 1);
+  REQUIRE(deep.expanded() == 3 + 9 + 27 + 81);
+  // A horizon of 2 sees nothing rewarding from 2 m: every sequence is worth 0 and the tie
+  // goes to the first action, walking away; from 1 m it sees walk-then-punch.
+  OnlineSearchController shallow(m, parts.environment, search, 2, 0.97);
+  REQUIRE(shallow.choose(0, {0, 1, 2.0}) == 0);
+  REQUIRE(shallow.choose(0, {0, 1, 1.0}) == 1);
+  // At 0.5 m the punch wins at any depth.
+  for (int horizon = 1; horizon <= 4; ++horizon) {
+    OnlineSearchController any(m, parts.environment, search, horizon, 0.97);
+    REQUIRE(any.choose(0, {0, 1, 0.5}) == 2);
+  }
+}
+
 }  // namespace mgrl
