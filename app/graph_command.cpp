@@ -16,10 +16,6 @@ namespace mgrl::app {
 
 namespace {
 
-double since(std::chrono::steady_clock::time_point start) {
-  return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-}
-
 nlohmann::json paramsJson(const Scenario& s) {
   const GraphParams& g = s.graph;
   nlohmann::json weights = nlohmann::json::object();

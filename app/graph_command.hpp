@@ -2,6 +2,7 @@
 /// \file
 /// `mgrl graph SCENARIO`: builds (or reuses from the cache) a scenario's motion graph and
 /// state-action model, and reports its size.
+#include <chrono>
 #include <filesystem>
 #include <string>
 
@@ -15,6 +16,11 @@
 #include "mgrl/state_action_model.hpp"
 
 namespace mgrl::app {
+
+/// Seconds since `start` on the steady clock.
+inline double since(std::chrono::steady_clock::time_point start) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+}
 
 struct GraphOptions {
   std::filesystem::path cacheDir;  ///< empty: defaultCacheDirectory()

@@ -12,8 +12,6 @@ namespace mgrl::app {
 
 using Clock = std::chrono::steady_clock;
 
-inline double since(Clock::time_point start) { return std::chrono::duration<double>(Clock::now() - start).count(); }
-
 /// "4.17 M", "850.0 k": counts and rates for people (with a trailing space for units).
 std::string humanCount(double n);
 

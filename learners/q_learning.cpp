@@ -140,13 +140,7 @@ TrainResult QLearning::train(const TrainContext& context) const {
       const std::uint32_t s = w.state;
       const std::size_t a = stateBegin[s] + static_cast<std::uint32_t>(w.rng.below(stateBegin[s + 1] - stateBegin[s]));
       steps.push_back({static_cast<std::uint32_t>(a), cell.cell});
-      if (rigid) {
-        const double* r = &g.rigid[4 * a];
-        const double qx = w.target.x() - r[2], qz = w.target.z() - r[3];
-        w.target = {r[0] * qx - r[1] * qz, w.target.y(), r[1] * qx + r[0] * qz};
-      } else {
-        w.target = environment.next(m, a, w.target);
-      }
+      w.target = rigid ? g.rigidNext(a, w.target) : environment.next(m, a, w.target);
       w.state = m.actionTo[a];
       if (!grid.locate(w.target, cell)) {
         restart(w);

@@ -98,6 +98,24 @@ struct Built {
   StaticTarget environment;
 };
 
+// The corridor's parts, its problem and the problem on the grid, built once per test.
+struct CorridorSetup {
+  explicit CorridorSetup(unsigned threads)
+      : model(corridor()),
+        grid(makeGrid(kCorridorGrid, model)),
+        reward(app::plugins().rewards.create(yaml("{type: hit, contact_radius: 0.1}"))),
+        problem{model, *grid, *reward, environment},
+        tabulated(GridModel::build(problem, threads)) {}
+  StateActionModel model;
+  std::unique_ptr<Discretizer> grid;
+  std::unique_ptr<Reward> reward;
+  StaticTarget environment;
+  Problem problem;
+  GridModel tabulated;
+  CorridorSetup(const CorridorSetup&) = delete;  // problem refers to the members
+  CorridorSetup& operator=(const CorridorSetup&) = delete;
+};
+
 Built corridorParts(const StateActionModel& m) {
   return {makeGrid(kCorridorGrid, m), app::plugins().rewards.create(yaml("{type: hit, contact_radius: 0.1}")), {}};
 }
@@ -218,10 +236,9 @@ TEST_CASE("static_target sees a fixed world point from the action's end", "[lear
 }
 
 TEST_CASE("value iteration gives the corridor's closed-form values", "[learning]") {
-  const StateActionModel m = corridor();
-  Built parts = corridorParts(m);
-  const Problem problem{m, *parts.grid, *parts.reward, parts.environment};
-  const GridModel g = GridModel::build(problem, 2);
+  const CorridorSetup parts(2);
+  const Problem& problem = parts.problem;
+  const GridModel& g = parts.tabulated;
   const TrainResult vi = trainWith("{type: value_iteration, tolerance: 1e-7}", problem, g);
   REQUIRE(vi.stats["converged"] == true);
   const double gamma = 0.97, v0 = std::pow(gamma, 3) / (1 - std::pow(gamma, 5));
@@ -237,10 +254,9 @@ TEST_CASE("value iteration gives the corridor's closed-form values", "[learning]
 }
 
 TEST_CASE("Q-learning's greedy policy converges to value iteration's on the corridor", "[learning]") {
-  const StateActionModel m = corridor();
-  Built parts = corridorParts(m);
-  const Problem problem{m, *parts.grid, *parts.reward, parts.environment};
-  const GridModel g = GridModel::build(problem, 2);
+  const CorridorSetup parts(2);
+  const Problem& problem = parts.problem;
+  const GridModel& g = parts.tabulated;
   const TrainResult vi = trainWith("{type: value_iteration, tolerance: 1e-7}", problem, g);
   const TrainResult q = trainWith("{type: q_learning, budget: 400000, seed: 3, curve_points: 4}", problem, g);
   REQUIRE(q.updates == 400000);
@@ -338,10 +354,10 @@ TEST_CASE("Q-learning is deterministic and a resumed run ends with the uninterru
 }
 
 TEST_CASE("the combined controller takes the best weighted sum of active behaviours", "[learning]") {
-  const StateActionModel m = corridor();
-  Built parts = corridorParts(m);
-  const Problem problem{m, *parts.grid, *parts.reward, parts.environment};
-  const GridModel g = GridModel::build(problem, 1);
+  const CorridorSetup parts(1);
+  const StateActionModel& m = parts.model;
+  const Problem& problem = parts.problem;
+  const GridModel& g = parts.tabulated;
   const TrainResult vi = trainWith("{type: value_iteration, tolerance: 1e-7}", problem, g);
   PolicyController controller(m, {{parts.grid.get(), &vi.table, 1.0, Activation::TargetInside}});
   REQUIRE(controller.choose(0, {0, 1, 0.5}) == 2);  // punch at 0.5 m

@@ -49,6 +49,14 @@ struct GridModel {
 
   std::size_t bytes() const;
 
+  /// The target after action a under a rigid environment model (`rigid` not empty): the
+  /// same arithmetic as inverseTransformPoint(), from the precomputed sine and cosine.
+  Eigen::Vector3d rigidNext(std::size_t a, const Eigen::Vector3d& e) const {
+    const double* r = &rigid[4 * a];
+    const double qx = e.x() - r[2], qz = e.z() - r[3];
+    return {r[0] * qx - r[1] * qz, e.y(), r[1] * qx + r[0] * qz};
+  }
+
   /// Tabulates `problem` on `threads` threads. The same inputs give the same bytes.
   static GridModel build(const Problem& problem, unsigned threads);
 };
