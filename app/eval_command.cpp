@@ -31,44 +31,6 @@ struct TrialStats {
   double returns = 0;
 };
 
-// The refusals eval can make from the manifest alone, made before the graph is loaded so
-// that they are the only line on stderr. loadPolicyBundle() checks everything afterwards.
-void precheckPolicy(const fs::path& dir, const Scenario& scenario, const EvalOptions& options) {
-  std::error_code ec;
-  if (!fs::is_directory(dir, ec))
-    throw Error(fmt::format("{}: no policy bundle here: run `mgrl train {}{}` first (or pass --policy DIR)",
-                            dir.string(), options.scenario.string(), setFlags(options.sets)));
-  json manifest;
-  try {
-    manifest = json::parse(readFile(dir / "manifest.json"));
-  } catch (const std::exception&) {
-    return;  // the full load says what is wrong
-  }
-  if (!manifest.is_object() || !manifest.contains("graph_key") || !manifest["graph_key"].is_string() ||
-      !manifest.contains("behaviors") || !manifest["behaviors"].is_object())
-    return;
-  const std::string graphKey = graphCacheKey(scenario);
-  const std::string found = manifest["graph_key"].get<std::string>();
-  if (found != graphKey)
-    throw Error(fmt::format("{}: expected graph key '{}', found '{}': the policy was made for another graph; "
-                            "retrain with mgrl train {}{}",
-                            (dir / "manifest.json").string(), graphKey.substr(0, 16), found.substr(0, 16),
-                            options.scenario.string(), setFlags(options.sets)));
-  for (const BehaviorSpec& spec : scenario.behaviors) {
-    const json& entry = manifest["behaviors"].contains(spec.name) ? manifest["behaviors"][spec.name] : json();
-    if (entry.is_null())
-      throw Error(fmt::format("{}: expected a trained table for behaviour '{}' that the scenario asks for, found "
-                              "none; run mgrl train {} --behavior {}{}",
-                              dir.string(), spec.name, options.scenario.string(), spec.name, setFlags(options.sets)));
-    const std::string key = behaviorConfigAndKey(spec, plugins(), graphKey).second;
-    if (entry.is_object() && entry.contains("key") && entry["key"].is_string() && entry["key"] != key)
-      throw Error(fmt::format("{}: behaviour '{}' was trained with other settings than the scenario's now (key {} "
-                              "vs {}); retrain with mgrl train {} --behavior {}{}",
-                              dir.string(), spec.name, entry["key"].get<std::string>().substr(0, 16),
-                              key.substr(0, 16), options.scenario.string(), spec.name, setFlags(options.sets)));
-  }
-}
-
 }  // namespace
 
 json runEval(const EvalOptions& options) {
@@ -77,6 +39,9 @@ json runEval(const EvalOptions& options) {
                             quoteToken(options.controller)));
   if (options.horizon < 1 || options.horizon > 8)
     throw Error(fmt::format("--horizon: expected a search depth in actions in [1, 8], found {}", options.horizon));
+  if (!(options.horizonSeconds >= 0 && options.horizonSeconds <= 5))
+    throw Error(fmt::format("--horizon-seconds: expected seconds of motion to search in [0, 5], found {}",
+                            options.horizonSeconds));
   if (options.trials < 1 || options.trials > 10'000'000)
     throw Error(fmt::format("--trials: expected a number of trials in [1, 10000000], found {}", options.trials));
   if (!(options.seconds > 0 && options.seconds <= 3600))
@@ -92,22 +57,7 @@ json runEval(const EvalOptions& options) {
 
   PolicyBundle bundle;
   std::vector<PolicyPart> parts;
-  if (options.controller == "policy") {
-    bundle = loadPolicyBundle(dir, model, loaded.graph.key);
-    for (const Behavior& b : behaviors) {
-      const auto found = bundle.behaviors.find(b.name);
-      if (found == bundle.behaviors.end())
-        throw Error(fmt::format("{}: expected a trained table for behaviour '{}' that the scenario asks for, found "
-                                "none; run mgrl train {} --behavior {}{}",
-                                dir.string(), b.name, options.scenario.string(), b.name, setFlags(options.sets)));
-      if (found->second.key != b.key)
-        throw Error(fmt::format("{}: behaviour '{}' was trained with other settings than the scenario's now (key {} "
-                                "vs {}); retrain with mgrl train {} --behavior {}{}",
-                                dir.string(), b.name, found->second.key.substr(0, 16), b.key.substr(0, 16),
-                                options.scenario.string(), b.name, setFlags(options.sets)));
-      parts.push_back({b.discretizer.get(), &found->second.table, b.weight, b.activation});
-    }
-  }
+  if (options.controller == "policy") parts = policyParts(dir, behaviors, loaded.graph, options, bundle);
 
   // The approach region: the first always-active behaviour's grid, sampled uniformly by area.
   const auto region = std::find_if(behaviors.begin(), behaviors.end(),
@@ -136,7 +86,8 @@ json runEval(const EvalOptions& options) {
   std::vector<SearchPart> searchParts;
   for (const Behavior& b : behaviors)
     searchParts.push_back({b.discretizer.get(), b.reward.get(), b.weight, b.activation});
-  OnlineSearchController search(model, environment, searchParts, options.horizon, gamma);
+  OnlineSearchController search(model, environment, searchParts, SearchHorizon{options.horizon, options.horizonSeconds},
+                                gamma);
   std::size_t expanded = 0;
   auto choose = [&](const std::string& kind, std::uint32_t s, const Eigen::Vector3d& e) -> std::size_t {
     if (kind == "policy") return controller.choose(s, e);
@@ -215,6 +166,7 @@ json runEval(const EvalOptions& options) {
   json report = summarize(stats);
   if (options.controller == "online_search") {
     report["horizon"] = options.horizon;
+    report["horizon_seconds"] = options.horizonSeconds;
     report["mean_expanded_actions"] = static_cast<double>(expanded) / static_cast<double>(std::max<std::size_t>(1, stats.decisions));
   }
   // Decision cost, measured apart from the simulation: replay the trials' decisions (at

@@ -36,6 +36,7 @@ struct EvalOptions : LearnOptions {
   std::filesystem::path policy;   ///< "" the default bundle of the scenario
   std::string controller = "policy";  ///< policy | online_search | random
   int horizon = 3;                ///< online_search: depth in actions
+  double horizonSeconds = 0;      ///< online_search: > 0 searches this much motion instead
   std::size_t trials = 100;
   std::uint64_t seed = 1;
   double seconds = 10;            ///< motion per trial
@@ -46,6 +47,25 @@ struct EvalOptions : LearnOptions {
 /// "mean_return", "decisions_per_second", ...}.
 nlohmann::json runEval(const EvalOptions& options);
 std::string evalText(const nlohmann::json& report);
+
+struct SimulateOptions : LearnOptions {
+  std::filesystem::path policy;       ///< "" the default bundle of the scenario
+  std::string controller = "policy";  ///< policy | online_search | random
+  int horizon = 3;                    ///< online_search: depth in actions
+  double horizonSeconds = 0;          ///< online_search: > 0 searches this much motion instead
+  long long avatars = 2;
+  double seconds = 10;                ///< simulated time
+  std::uint64_t seed = 1;
+  long long topK = 0;                 ///< > 0 overrides world.top_k
+  std::filesystem::path bvhOut;       ///< one BVH per avatar here ("" none)
+  std::filesystem::path eventsOut;    ///< hits as JSON lines ("" none)
+  bool poses = false;                 ///< forward kinematics of every joint each frame
+  unsigned threads = 0;               ///< 0: the hardware's
+};
+/// Runs the world headless and returns {"avatars", "frames", "avatar_frames_per_second",
+/// "hits", "hits_per_avatar_minute", ...}; writes the BVH files and events atomically.
+nlohmann::json runSimulate(const SimulateOptions& options);
+std::string simulateText(const nlohmann::json& report);
 
 /// Where `mgrl train` puts a scenario's policy bundle by default:
 /// <cache>/policies/<name>-<hash of the scenario's path>.

@@ -6,6 +6,9 @@
 
 #include "graph_command.hpp"
 #include "learn_commands.hpp"
+#include "mgrl/behavior.hpp"
+#include "mgrl/controller.hpp"
+#include "mgrl/policy_bundle.hpp"
 #include "mgrl/scenario.hpp"
 
 namespace mgrl::app {
@@ -29,5 +32,15 @@ struct Loaded {
 
 /// The scenario's graph, from the cache or built (options.log hears about it).
 Loaded load(const LearnOptions& options, Scenario scenario);
+
+/// The refusals a policy bundle gets from its manifest alone (missing, another graph, a
+/// behaviour missing or trained with other settings), made before the graph is loaded so
+/// that the message is the only line on stderr. Throws mgrl::Error naming what to retrain.
+void precheckPolicy(const std::filesystem::path& dir, const Scenario& scenario, const LearnOptions& options);
+
+/// Loads the bundle into `bundle` and returns one part per behaviour (pointing into
+/// `bundle` and `behaviors`). Throws mgrl::Error for a missing or stale behaviour.
+std::vector<PolicyPart> policyParts(const std::filesystem::path& dir, const std::vector<Behavior>& behaviors,
+                                    const GraphResult& graph, const LearnOptions& options, PolicyBundle& bundle);
 
 }  // namespace mgrl::app

@@ -100,6 +100,9 @@ int main(int argc, char** argv) {
                           "discounted reward, the baseline of Lee et al. 2002) or random")
       ->default_str("policy");
   evalCommand->add_option("--horizon", eval.horizon, "online_search: search depth in actions")->default_val(3);
+  evalCommand->add_option("--horizon-seconds", eval.horizonSeconds,
+                          "online_search: search every sequence until it covers this much motion (s; at most "
+                          "--horizon actions deep)");
   evalCommand->add_option("--trials", trials, "Number of trials")->default_val(trials);
   evalCommand->add_option("--seed", seed, "Random seed (the same seed, the same numbers)")->default_val(1);
   evalCommand->add_option("--seconds", eval.seconds, "Seconds of motion per trial")->default_val(10);
@@ -109,6 +112,36 @@ int main(int argc, char** argv) {
   evalCommand->add_flag("--json", json, "Print one JSON object on stdout");
   evalCommand->add_option("--data", dataDir, "Motion capture folder (default: MGRL_DATA, else ../shared/mocap)");
   evalCommand->add_option("--cache", cacheDir, "Cache folder (default: MGRL_CACHE, else ~/.cache/mgrl)");
+
+  mgrl::app::SimulateOptions simulate;
+  long long simulateSeed = 1;
+  CLI::App* simulateCommand = app.add_subcommand(
+      "simulate", "Run the world headless (paper sec. 5, 6.6): avatars in sparring pairs (or with targets) "
+                  "controlled by the trained policy, collisions at effective punches, reactions; report speed and "
+                  "hits, optionally write BVH and hit events.");
+  simulateCommand->add_option("SCENARIO", scenarioPath, "Scenario YAML file")->required();
+  simulateCommand->add_option("--avatars", simulate.avatars, "Number of avatars (pairs spar; an odd one punches a "
+                                                             "target)")->default_val(2);
+  simulateCommand->add_option("--seconds", simulate.seconds, "Simulated seconds")->default_val(10);
+  simulateCommand->add_option("--seed", simulateSeed, "Random seed (the same seed, the same events and BVH bytes)")
+      ->default_val(1);
+  simulateCommand->add_option("--bvh-out", simulate.bvhOut, "Write one BVH per avatar into this folder");
+  simulateCommand->add_option("--events-out", simulate.eventsOut, "Write the hits as JSON lines to this file");
+  simulateCommand->add_option("--policy", simulate.policy, "Policy bundle folder (default: the one mgrl train writes)");
+  simulateCommand->add_option("--controller", simulate.controller, "policy, online_search or random")
+      ->default_str("policy");
+  simulateCommand->add_option("--horizon", simulate.horizon, "online_search: search depth in actions")->default_val(3);
+  simulateCommand->add_option("--horizon-seconds", simulate.horizonSeconds,
+                              "online_search: search this much motion instead (s)");
+  simulateCommand->add_option("--top-k", simulate.topK, "Variety: draw among the k best actions (default: world.top_k)");
+  simulateCommand->add_flag("--poses", simulate.poses,
+                            "Compute every joint's pose each frame (blending, forward kinematics, reactions); "
+                            "implied by --bvh-out");
+  simulateCommand->add_option("--threads", simulate.threads, "Worker threads (default: all cores)");
+  simulateCommand->add_option("--set", simulate.sets, "Override a scenario key (repeatable)");
+  simulateCommand->add_flag("--json", json, "Print one JSON object on stdout");
+  simulateCommand->add_option("--data", dataDir, "Motion capture folder (default: MGRL_DATA, else ../shared/mocap)");
+  simulateCommand->add_option("--cache", cacheDir, "Cache folder (default: MGRL_CACHE, else ~/.cache/mgrl)");
 
   CLI::App* listCommand =
       app.add_subcommand("list", "List every registered discretizer, reward, environment model and learner with its "
@@ -197,6 +230,20 @@ int main(int argc, char** argv) {
         std::cout << report.dump(2) << '\n';
       else
         std::cout << mgrl::app::evalText(report);
+    }
+    if (simulateCommand->parsed()) {
+      simulate.scenario = scenarioPath;
+      simulate.dataDir = dataDir;
+      simulate.cacheDir = cacheDir;
+      simulate.log = log;
+      if (simulateSeed < 0)
+        throw mgrl::Error(fmt::format("--seed: expected a whole number >= 0, found {}", simulateSeed));
+      simulate.seed = static_cast<std::uint64_t>(simulateSeed);
+      const nlohmann::json report = mgrl::app::runSimulate(simulate);
+      if (json)
+        std::cout << report.dump(2) << '\n';
+      else
+        std::cout << mgrl::app::simulateText(report);
     }
     if (listCommand->parsed()) {
       if (json)

@@ -22,8 +22,8 @@ double fade(int b, int frames) {
 
 }  // namespace
 
-ActionPlayback::ActionPlayback(const MotionDatabase& db, const StateActionModel& model, int blendFrames)
-    : db_(db), model_(model), blendFrames_(std::max(0, blendFrames)) {
+ActionPlayback::ActionPlayback(const MotionDatabase& db, const StateActionModel& model, int blendFrames, bool lockFeet)
+    : db_(db), model_(model), blendFrames_(std::max(0, blendFrames)), lockFeet_(lockFeet) {
   const std::size_t joints = db.skeleton->jointCount();
   current_.rotations.resize(joints);
   source_.rotations.resize(joints);
@@ -62,13 +62,25 @@ void ActionPlayback::reset(std::uint32_t state, const GroundMotion& world) {
 }
 
 void ActionPlayback::play(std::uint32_t action, std::vector<Pose>& out) {
+  begin(action);
+  Pose pose;
+  while (next(pose)) out.push_back(pose);
+}
+
+void ActionPlayback::begin(std::uint32_t action) {
   if (action >= model_.actionCount() || model_.actionFrom[action] != state_)
     throw Error(fmt::format("playback: expected an action leaving state {}, found action {}", state_, action));
+  action_ = action;
+  cursor_ = model_.actionFrameBegin[action];
+  end_ = model_.actionFrameBegin[action + 1];
+}
+
+bool ActionPlayback::next(Pose& pose) {
+  if (cursor_ >= end_) return false;
   const Skeleton& skeleton = *db_.skeleton;
   const std::size_t joints = skeleton.jointCount();
-  const std::size_t begin = model_.actionFrameBegin[action];
-  const std::size_t end = model_.actionFrameBegin[action + 1];
-  for (std::size_t i = begin; i < end; ++i) {
+  {
+    const std::size_t i = cursor_++;
     const std::uint32_t v = model_.actionFrames[i];
     if (model_.frameEntersTransition[i]) {
       // The new clip expected frame v - 1 before v; the avatar shows `current_` instead.
@@ -92,8 +104,7 @@ void ActionPlayback::play(std::uint32_t action, std::vector<Pose>& out) {
     current_.rootOffset = source_.rootOffset;
 
     const GroundMotion at = compose(world_, {model_.frameRoot[3 * i], model_.frameRoot[3 * i + 1], model_.frameRoot[3 * i + 2]});
-    Pose pose;
-    pose.rotations = current_.rotations;
+    pose.rotations.assign(current_.rotations.begin(), current_.rotations.end());
     pose.rotations[0] = axisRotation(Axis::Y, at.dyaw) * current_.rotations[0];
     pose.translations.resize(joints);
     const std::size_t c = db_.clipOf(v);
@@ -109,7 +120,7 @@ void ActionPlayback::play(std::uint32_t action, std::vector<Pose>& out) {
     forwardKinematics(skeleton, pose.rotations, pose.translations, fkRotations_, fkPositions_);
     const std::array<bool, 2> down = {db_.clips[c].annotation.contact[0][k] != 0,
                                       db_.clips[c].annotation.contact[1][k] != 0};
-    if (sinceTransition_ <= blendFrames_ && havePrevious_) {
+    if (lockFeet_ && sinceTransition_ <= blendFrames_ && havePrevious_) {
       Eigen::Vector2d drift = Eigen::Vector2d::Zero();
       int planted = 0;
       for (int side = 0; side < 2; ++side) {
@@ -132,14 +143,16 @@ void ActionPlayback::play(std::uint32_t action, std::vector<Pose>& out) {
     for (int side = 0; side < 2; ++side) previousAnkle_[side] = fkPositions_[static_cast<std::size_t>(db_.roles.ankle[side])];
     previousDown_ = down;
     havePrevious_ = true;
-    out.push_back(std::move(pose));
     frame_ = v;
   }
-  world_ = compose(world_, model_.displacement(action));
-  world_.dx += correction_.x();
-  world_.dz += correction_.y();
-  correction_.setZero();
-  state_ = model_.actionTo[action];
+  if (cursor_ == end_) {  // the action's last frame: the avatar stands at its end state
+    world_ = compose(world_, model_.displacement(action_));
+    world_.dx += correction_.x();
+    world_.dz += correction_.y();
+    correction_.setZero();
+    state_ = model_.actionTo[action_];
+  }
+  return true;
 }
 
 namespace {

@@ -8,6 +8,7 @@
 
 #include "mgrl/hash.hpp"
 #include "mgrl/motion_io.hpp"
+#include "mgrl/world.hpp"
 
 namespace mgrl {
 
@@ -233,7 +234,10 @@ Scenario parseScenario(std::string_view text, const std::filesystem::path& sourc
     if (switchesType(o)) applyOverride(root.yaml(), o, source.string());
   for (const std::string& o : overrides)
     if (!switchesType(o)) applyOverride(root.yaml(), o, source.string());
-  root.allowOnly({"name", "description", "motion", "graph", "behaviors"});
+  root.allowOnly({"name", "description", "motion", "graph", "behaviors", "world"});
+  // The world section is read where a world is made (readWorldParams(worldNode(s))); it
+  // is checked here so that a mistake in it fails every command at once.
+  if (root.has("world")) readWorldParams(root.child("world"));
   const std::filesystem::path dir = source.parent_path().empty() ? std::filesystem::path(".") : source.parent_path();
   Scenario s{source,
              root.string("name", source.stem().string()),

@@ -9,6 +9,7 @@
 #include <array>
 #include <cstdint>
 #include <random>
+#include <span>
 #include <vector>
 
 #include <Eigen/Geometry>
@@ -28,7 +29,10 @@ struct Pose {
 class ActionPlayback {
  public:
   /// `db` and `model` must outlive the playback; blendFrames >= 0 (0: no blending).
-  ActionPlayback(const MotionDatabase& db, const StateActionModel& model, int blendFrames);
+  /// lockFeet: while a transition blends, shift the root so planted feet stay put (the
+  /// shift stays with the avatar). Off, the root follows the model's ground motion
+  /// exactly, as the world simulation and the learners assume.
+  ActionPlayback(const MotionDatabase& db, const StateActionModel& model, int blendFrames, bool lockFeet = true);
 
   /// Stands the avatar at state `state`, its avatar frame at world (dx, dz, dyaw).
   void reset(std::uint32_t state, const GroundMotion& world = {});
@@ -36,6 +40,16 @@ class ActionPlayback {
   /// not), appending one pose per frame to `out`; afterwards the avatar is at the action's
   /// end state.
   void play(std::uint32_t action, std::vector<Pose>& out);
+
+  /// The same one frame at a time, into a caller-owned pose (no allocation once `pose`
+  /// has its size): begin() checks and starts the action, next() writes its next frame and
+  /// returns false (writing nothing) once the action is over; the avatar is then at the
+  /// action's end state.
+  void begin(std::uint32_t action);
+  bool next(Pose& pose);
+  /// World joint positions and rotations of the last pose next() wrote.
+  std::span<const Eigen::Vector3d> positions() const { return fkPositions_; }
+  std::span<const Eigen::Quaterniond> globalRotations() const { return fkRotations_; }
 
   std::uint32_t state() const { return state_; }
   /// The avatar frame at the current state, in world coordinates.
@@ -54,7 +68,10 @@ class ActionPlayback {
   const MotionDatabase& db_;
   const StateActionModel& model_;
   int blendFrames_;
+  bool lockFeet_;
   std::uint32_t state_ = 0, frame_ = 0;
+  std::uint32_t action_ = 0;
+  std::size_t cursor_ = 0, end_ = 0;  ///< action frames still to play: [cursor_, end_)
   GroundMotion world_;
   Local current_, source_, previous_;
   std::vector<Eigen::Quaterniond> offset_;

@@ -1,0 +1,297 @@
+// `mgrl simulate` (DESIGN.md sec. 5): the world run headless (paper sec. 5, 6.6, 6.7):
+// avatars in sparring pairs or with targets, controlled by the trained policy (or the
+// online search, or at random), collisions at effective punches, reactions. Reports speed
+// and hits; writes one BVH per avatar and the hits as JSON lines, atomically.
+#include <algorithm>
+#include <cmath>
+#include <fstream>
+#include <sstream>
+
+#include <unistd.h>
+
+#include <fmt/format.h>
+
+#include "learn_common.hpp"
+#include "mgrl/behavior.hpp"
+#include "mgrl/bvh.hpp"
+#include "mgrl/controller.hpp"
+#include "mgrl/motion_io.hpp"
+#include "mgrl/parallel.hpp"
+#include "mgrl/policy_bundle.hpp"
+#include "mgrl/world.hpp"
+#include "plugins.hpp"
+
+namespace mgrl::app {
+
+namespace fs = std::filesystem;
+using json = nlohmann::json;
+
+namespace {
+
+constexpr long long kMaxAvatars = 1'000'000;
+constexpr long long kMaxAvatarsWithPoses = 200'000;
+constexpr double kMaxRecordingBytes = 4e9;
+
+// A folder made for output that is removed again unless commit() is called: what a
+// failed run leaves behind is nothing.
+class ScratchDirectory {
+ public:
+  explicit ScratchDirectory(fs::path path) : path_(std::move(path)) {}
+  ~ScratchDirectory() {
+    std::error_code ec;
+    if (!path_.empty()) fs::remove_all(path_, ec);
+  }
+  ScratchDirectory(const ScratchDirectory&) = delete;
+  ScratchDirectory& operator=(const ScratchDirectory&) = delete;
+  const fs::path& path() const { return path_; }
+
+ private:
+  fs::path path_;
+};
+
+std::string scratchName() { return fmt::format(".mgrl-simulate-{}", ::getpid()); }
+
+// Creates `dir` if needed and a scratch folder inside it; throws if either fails.
+std::unique_ptr<ScratchDirectory> prepareFolder(const fs::path& dir, std::string_view flag) {
+  std::error_code ec;
+  fs::create_directories(dir, ec);
+  if (ec || !fs::is_directory(dir))
+    throw Error(fmt::format("{} {}: expected a folder that can be created, found: {}", flag, dir.string(),
+                            ec ? ec.message() : std::string("not a folder")));
+  const fs::path scratch = dir / scratchName();
+  fs::remove_all(scratch, ec);
+  if (!fs::create_directory(scratch, ec) || ec)
+    throw Error(fmt::format("{} {}: expected a writable folder, found: {}", flag, dir.string(),
+                            ec ? ec.message() : std::string("cannot create files there")));
+  auto guard = std::make_unique<ScratchDirectory>(scratch);
+  std::ofstream probe(scratch / "probe");
+  if (!(probe << "x") || !probe.flush())
+    throw Error(fmt::format("{} {}: expected a writable folder, found one where files cannot be written", flag,
+                            dir.string()));
+  probe.close();
+  fs::remove(scratch / "probe", ec);
+  return guard;
+}
+
+Motion recordedMotion(const MotionDatabase& db, const std::vector<Pose>& poses, double frameTime) {
+  const Skeleton& skeleton = *db.skeleton;
+  const std::size_t joints = skeleton.jointCount();
+  const auto translated = skeleton.translatedJoints();
+  std::vector<Eigen::Quaterniond> rotations;
+  std::vector<Eigen::Vector3d> translations;
+  rotations.reserve(poses.size() * joints);
+  translations.reserve(poses.size() * translated.size());
+  for (const Pose& pose : poses) {
+    rotations.insert(rotations.end(), pose.rotations.begin(), pose.rotations.end());
+    for (int j : translated) translations.push_back(pose.translations[static_cast<std::size_t>(j)]);
+  }
+  return Motion(db.skeleton, frameTime, std::move(rotations), std::move(translations));
+}
+
+std::string eventLine(const HitEvent& e) {
+  const json line = {{"time", e.time},
+                     {"attacker", e.attacker},
+                     {"target", e.target},
+                     {"part", e.target < 0 ? "target" : bodyPartName(e.part)},
+                     {"hand", e.hand == 0 ? "left" : "right"},
+                     {"speed", e.speed},
+                     {"point", {e.point.x(), e.point.y(), e.point.z()}}};
+  return line.dump();
+}
+
+}  // namespace
+
+json runSimulate(const SimulateOptions& options) {
+  // Every mistake in the command line is reported before anything is loaded.
+  if (options.controller != "policy" && options.controller != "random" && options.controller != "online_search")
+    throw Error(fmt::format("--controller: expected one of: policy, online_search, random, found {}",
+                            quoteToken(options.controller)));
+  if (options.avatars < 1 || options.avatars > kMaxAvatars)
+    throw Error(fmt::format("--avatars: expected a number of avatars in [1, {}], found {}", kMaxAvatars,
+                            options.avatars));
+  const bool poses = options.poses || !options.bvhOut.empty();
+  if (poses && options.avatars > kMaxAvatarsWithPoses)
+    throw Error(fmt::format("--avatars: expected at most {} avatars with poses (--poses or --bvh-out), found {}",
+                            kMaxAvatarsWithPoses, options.avatars));
+  if (!(options.seconds > 0 && options.seconds <= 86400))
+    throw Error(fmt::format("--seconds: expected simulated seconds in (0, 86400], found {}", options.seconds));
+  if (options.horizon < 1 || options.horizon > 8)
+    throw Error(fmt::format("--horizon: expected a search depth in actions in [1, 8], found {}", options.horizon));
+  if (!(options.horizonSeconds >= 0 && options.horizonSeconds <= 5))
+    throw Error(fmt::format("--horizon-seconds: expected seconds of motion to search in [0, 5], found {}",
+                            options.horizonSeconds));
+  if (options.topK < 0 || options.topK > 64)
+    throw Error(fmt::format("--top-k: expected a number of candidates in [1, 64], found {}", options.topK));
+  if (options.threads > 256)
+    throw Error(fmt::format("--threads: expected at most 256 threads, found {}", options.threads));
+
+  Scenario scenario = checkedScenario(options);
+  WorldParams params =
+      readWorldParams(scenario.root.has("world") ? scenario.root.child("world") : ConfigNode::parse("", "world"));
+  if (options.topK > 0) params.variety.topK = static_cast<int>(options.topK);
+  const fs::path cacheDir = options.cacheDir.empty() ? defaultCacheDirectory() : options.cacheDir;
+  const fs::path policyDir =
+      options.policy.empty() ? defaultPolicyDirectory(cacheDir, scenario.name, scenario.path) : options.policy;
+  if (options.controller == "policy") precheckPolicy(policyDir, scenario, options);
+
+  // Output places are checked (and scratch folders made) before any simulation.
+  std::unique_ptr<ScratchDirectory> bvhScratch, eventsScratch;
+  if (!options.bvhOut.empty()) bvhScratch = prepareFolder(options.bvhOut, "--bvh-out");
+  if (!options.eventsOut.empty()) {
+    if (fs::is_directory(options.eventsOut))
+      throw Error(fmt::format("--events-out {}: expected a file name, found a folder", options.eventsOut.string()));
+    const fs::path parent = options.eventsOut.parent_path().empty() ? fs::path(".") : options.eventsOut.parent_path();
+    if (!fs::is_directory(parent))
+      throw Error(fmt::format("--events-out {}: expected an existing folder {}, found none",
+                              options.eventsOut.string(), parent.string()));
+    eventsScratch = prepareFolder(parent, "--events-out");
+  }
+
+  Loaded loaded = load(options, std::move(scenario));
+  const StateActionModel& model = loaded.graph.model;
+  const auto frames = static_cast<std::size_t>(std::max(1.0, std::round(options.seconds / model.frameTime)));
+  const auto avatars = static_cast<std::size_t>(options.avatars);
+  const std::size_t joints = loaded.graph.db.skeleton->jointCount();
+  if (!options.bvhOut.empty()) {
+    const double bytes = static_cast<double>(avatars) * static_cast<double>(frames) *
+                         (static_cast<double>(joints) * (sizeof(Eigen::Quaterniond) + sizeof(Eigen::Vector3d)) + 64);
+    if (bytes > kMaxRecordingBytes)
+      throw Error(fmt::format("--bvh-out: recording {} avatars for {} frames needs about {:.1f} GB of memory; expected "
+                              "at most {:.0f} GB: use fewer --avatars or --seconds",
+                              avatars, frames, bytes / 1e9, kMaxRecordingBytes / 1e9));
+  }
+  std::vector<Behavior> behaviors = buildBehaviors(loaded.scenario, plugins(), model, loaded.graph.key);
+  PolicyBundle bundle;
+  std::vector<PolicyPart> parts;
+  if (options.controller == "policy") parts = policyParts(policyDir, behaviors, loaded.graph, options, bundle);
+  std::vector<SearchPart> searchParts;
+  for (const Behavior& b : behaviors) searchParts.push_back({b.discretizer.get(), b.reward.get(), b.weight, b.activation});
+  const StaticTarget environment;
+  const double gamma = behaviors.front().reward->gamma();
+
+  const BodyTable body = makeBodyTable(loaded.graph.db);
+  WorldSetup setup;
+  setup.model = &model;
+  setup.body = &body;
+  setup.db = &loaded.graph.db;
+  setup.blendFrames = loaded.scenario.graph.blendFrames;
+  setup.params = params;
+  setup.avatars = avatars;
+  setup.seed = options.seed;
+  setup.threads = options.threads > 0 ? options.threads : defaultThreadCount();
+  setup.poses = poses;
+  setup.record = !options.bvhOut.empty();
+  const std::string kind = options.controller;
+  setup.makeController = [&, kind]() -> std::unique_ptr<Controller> {
+    if (kind == "policy") return std::make_unique<PolicyController>(model, parts, params.variety);
+    if (kind == "online_search")
+      return std::make_unique<OnlineSearchController>(model, environment, searchParts,
+                                                      SearchHorizon{options.horizon, options.horizonSeconds}, gamma);
+    return std::make_unique<RandomController>(model);
+  };
+  World world(setup);
+
+  // Run in slices so that long runs report progress (stderr, every 5 s).
+  const auto start = Clock::now();
+  auto lastReport = start;
+  const std::size_t slice = std::max<std::size_t>(1, static_cast<std::size_t>(std::round(1.0 / model.frameTime)));
+  for (std::size_t done = 0; done < frames;) {
+    const std::size_t now = std::min(slice, frames - done);
+    world.run(now);
+    done += now;
+    if (options.log && since(lastReport) >= 5 && done < frames) {
+      lastReport = Clock::now();
+      options.log(fmt::format("simulate: {:.0f} % ({:.1f} of {:.1f} s simulated), {}avatar-frames/s", 100.0 * done / frames,
+                              done * model.frameTime, frames * model.frameTime,
+                              humanCount(static_cast<double>(done * avatars) / since(start))));
+    }
+  }
+  const double wall = since(start);
+
+  // Outputs: written into the scratch folders, then renamed into place.
+  std::vector<std::string> bvhFiles;
+  if (bvhScratch) {
+    const int width = static_cast<int>(std::to_string(avatars - 1).size());
+    BvhWriteOptions bvhOptions;
+    bvhOptions.lengthScale = 100;  // centimetres, as most tools expect
+    bvhOptions.continuousAngles = true;
+    std::vector<std::pair<fs::path, fs::path>> moves;
+    for (std::size_t i = 0; i < avatars; ++i) {
+      const std::string name = fmt::format("avatar_{:0{}}.bvh", i, std::max(width, 3));
+      std::ofstream out(bvhScratch->path() / name, std::ios::binary);
+      writeBvh(out, recordedMotion(loaded.graph.db, world.recorded(i), model.frameTime), bvhOptions);
+      out.flush();
+      if (!out) throw Error(fmt::format("--bvh-out {}: could not write {}", options.bvhOut.string(), name));
+      moves.emplace_back(bvhScratch->path() / name, options.bvhOut / name);
+      bvhFiles.push_back((options.bvhOut / name).string());
+    }
+    for (const auto& [from, to] : moves) {
+      std::error_code ec;
+      fs::rename(from, to, ec);
+      if (ec) throw Error(fmt::format("--bvh-out {}: could not move {} into place: {}", options.bvhOut.string(),
+                                      to.filename().string(), ec.message()));
+    }
+  }
+  if (eventsScratch) {
+    const fs::path temporary = eventsScratch->path() / "events.jsonl";
+    {
+      std::ofstream out(temporary, std::ios::binary);
+      for (const HitEvent& e : world.events()) out << eventLine(e) << '\n';
+      out.flush();
+      if (!out) throw Error(fmt::format("--events-out {}: could not write the events", options.eventsOut.string()));
+    }
+    std::error_code ec;
+    fs::rename(temporary, options.eventsOut, ec);
+    if (ec) throw Error(fmt::format("--events-out {}: could not move the events into place: {}",
+                                    options.eventsOut.string(), ec.message()));
+  }
+
+  std::vector<std::size_t> byAvatar(avatars, 0);
+  json byPart = {{"head", 0}, {"chest", 0}, {"spine", 0}, {"target", 0}};
+  for (const HitEvent& e : world.events()) {
+    ++byAvatar[e.attacker];
+    byPart[e.target < 0 ? "target" : bodyPartName(e.part)] = byPart[e.target < 0 ? "target" : bodyPartName(e.part)].get<int>() + 1;
+  }
+  const double simulated = static_cast<double>(frames) * model.frameTime;
+  json report = {{"scenario", loaded.scenario.path.string()},
+                 {"controller", options.controller},
+                 {"mode", params.mode},
+                 {"avatars", avatars},
+                 {"frames", frames},
+                 {"seconds", simulated},
+                 {"fps", 1.0 / model.frameTime},
+                 {"wall_seconds", wall},
+                 {"avatar_frames_per_second", static_cast<double>(frames * avatars) / std::max(wall, 1e-9)},
+                 {"poses", poses},
+                 {"hits", world.events().size()},
+                 {"hits_per_avatar_minute",
+                  static_cast<double>(world.events().size()) / static_cast<double>(avatars) / (simulated / 60)},
+                 {"hits_by_part", byPart},
+                 {"decisions", world.decisions()},
+                 {"bytes_per_avatar", world.bytesPerAvatar()},
+                 {"seed", options.seed},
+                 {"world", worldParamsJson(params)}};
+  if (avatars <= 1000) report["hits_by_avatar"] = byAvatar;
+  if (options.controller == "policy") report["policy"] = policyDir.string();
+  if (!bvhFiles.empty()) report["bvh_files"] = bvhFiles;
+  if (!options.eventsOut.empty()) report["events_file"] = options.eventsOut.string();
+  return report;
+}
+
+std::string simulateText(const json& r) {
+  std::string text = fmt::format(
+      "simulate ({} controller, {}): {} avatars x {} frames ({:.1f} s) in {:.2f} s: {}avatar-frames/s\n"
+      "hits: {} ({:.1f} per avatar-minute; head {}, chest {}, spine {}, targets {})\n",
+      r["controller"].get<std::string>(), r["mode"].get<std::string>(), r["avatars"].get<std::size_t>(),
+      r["frames"].get<std::size_t>(), r["seconds"].get<double>(), r["wall_seconds"].get<double>(),
+      humanCount(r["avatar_frames_per_second"].get<double>()), r["hits"].get<std::size_t>(),
+      r["hits_per_avatar_minute"].get<double>(), r["hits_by_part"]["head"].get<int>(),
+      r["hits_by_part"]["chest"].get<int>(), r["hits_by_part"]["spine"].get<int>(),
+      r["hits_by_part"]["target"].get<int>());
+  if (r.contains("bvh_files"))
+    text += fmt::format("wrote {} BVH files\n", r["bvh_files"].size());
+  if (r.contains("events_file")) text += fmt::format("wrote the hits to {}\n", r["events_file"].get<std::string>());
+  return text;
+}
+
+}  // namespace mgrl::app
