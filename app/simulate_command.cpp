@@ -73,21 +73,6 @@ std::unique_ptr<ScratchDirectory> prepareFolder(const fs::path& dir, std::string
   return guard;
 }
 
-Motion recordedMotion(const MotionDatabase& db, const std::vector<Pose>& poses, double frameTime) {
-  const Skeleton& skeleton = *db.skeleton;
-  const std::size_t joints = skeleton.jointCount();
-  const auto translated = skeleton.translatedJoints();
-  std::vector<Eigen::Quaterniond> rotations;
-  std::vector<Eigen::Vector3d> translations;
-  rotations.reserve(poses.size() * joints);
-  translations.reserve(poses.size() * translated.size());
-  for (const Pose& pose : poses) {
-    rotations.insert(rotations.end(), pose.rotations.begin(), pose.rotations.end());
-    for (int j : translated) translations.push_back(pose.translations[static_cast<std::size_t>(j)]);
-  }
-  return Motion(db.skeleton, frameTime, std::move(rotations), std::move(translations));
-}
-
 std::string eventLine(const HitEvent& e) {
   const json line = {{"time", e.time},
                      {"attacker", e.attacker},
@@ -219,7 +204,7 @@ json runSimulate(const SimulateOptions& options) {
     for (std::size_t i = 0; i < avatars; ++i) {
       const std::string name = fmt::format("avatar_{:0{}}.bvh", i, std::max(width, 3));
       std::ofstream out(bvhScratch->path() / name, std::ios::binary);
-      writeBvh(out, recordedMotion(loaded.graph.db, world.recorded(i), model.frameTime), bvhOptions);
+      writeBvh(out, motionFromPoses(loaded.graph.db.skeleton, world.recorded(i), model.frameTime), bvhOptions);
       out.flush();
       if (!out) throw Error(fmt::format("--bvh-out {}: could not write {}", options.bvhOut.string(), name));
       moves.emplace_back(bvhScratch->path() / name, options.bvhOut / name);

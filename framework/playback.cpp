@@ -155,6 +155,22 @@ bool ActionPlayback::next(Pose& pose) {
   return true;
 }
 
+Motion motionFromPoses(std::shared_ptr<const Skeleton> skeleton, const std::vector<Pose>& poses, double frameTime) {
+  const std::size_t joints = skeleton->jointCount();
+  const auto translated = skeleton->translatedJoints();
+  std::vector<Eigen::Quaterniond> rotations;
+  std::vector<Eigen::Vector3d> translations;
+  rotations.reserve(poses.size() * joints);
+  translations.reserve(poses.size() * translated.size());
+  for (const Pose& pose : poses) {
+    if (pose.rotations.size() != joints || pose.translations.size() != joints)
+      throw Error(fmt::format("poses: expected {} joints per pose, found {}", joints, pose.rotations.size()));
+    rotations.insert(rotations.end(), pose.rotations.begin(), pose.rotations.end());
+    for (int j : translated) translations.push_back(pose.translations[static_cast<std::size_t>(j)]);
+  }
+  return Motion(std::move(skeleton), frameTime, std::move(rotations), std::move(translations));
+}
+
 namespace {
 
 // Adds the horizontal ankle motion between two frames to `slide` if both have the foot down.

@@ -85,6 +85,10 @@ class ActionPlayback {
   bool havePrevious_ = false;
 };
 
+/// Poses as a motion clip on `skeleton` (for export): every joint's rotation, and the
+/// translation of each joint with position channels. Throws mgrl::Error for no pose.
+Motion motionFromPoses(std::shared_ptr<const Skeleton> skeleton, const std::vector<Pose>& poses, double frameTime);
+
 /// Foot sliding: mean horizontal speed (m/s) of a foot's ankle over pairs of consecutive
 /// frames in which the annotation has that foot planted in both.
 struct FootSlide {
