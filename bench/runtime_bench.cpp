@@ -1,0 +1,204 @@
+// Runtime benchmark (issue 5, DESIGN.md sec. 7): the world on the real boxing capture with
+// policies trained by value iteration.
+//   - the paper's run (sec. 6.7): 30 sparring avatars for 1,000 frames (paper: 9 s);
+//   - avatar-frames per second for control + collision, and with forward kinematics of
+//     every joint each frame, from 2 to 10,000 avatars; memory per avatar;
+//   - decision cost of the policy against the online search at several horizons.
+// Medians of several runs (the machine is shared and noisy).
+//
+// Usage: mgrl_bench_runtime [--quick] [--runs N] [--threads T]
+#include <unistd.h>
+
+#include <chrono>
+#include <cstdio>
+#include <cstring>
+#include <fstream>
+#include <string>
+
+#include <fmt/format.h>
+
+#include "app/learn_commands.hpp"
+#include "app/learn_common.hpp"
+#include "app/plugins.hpp"
+#include "bench_support.hpp"
+#include "mgrl/behavior.hpp"
+#include "mgrl/data_paths.hpp"
+#include "mgrl/parallel.hpp"
+#include "mgrl/world.hpp"
+
+namespace {
+
+namespace fs = std::filesystem;
+using Clock = std::chrono::steady_clock;
+
+double since(Clock::time_point start) { return std::chrono::duration<double>(Clock::now() - start).count(); }
+
+volatile std::size_t observed = 0;
+
+// Resident memory of this process (bytes).
+double residentBytes() {
+  std::ifstream statm("/proc/self/statm");
+  double pages = 0, resident = 0;
+  statm >> pages >> resident;
+  return resident * static_cast<double>(::sysconf(_SC_PAGESIZE));
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  int runs = 5;
+  bool quick = false;
+  unsigned threads = mgrl::defaultThreadCount();
+  for (int i = 1; i < argc; ++i) {
+    if (!std::strcmp(argv[i], "--quick")) {
+      quick = true;
+      runs = 3;
+    } else if (!std::strcmp(argv[i], "--runs") && i + 1 < argc) {
+      runs = std::max(1, std::atoi(argv[++i]));
+    } else if (!std::strcmp(argv[i], "--threads") && i + 1 < argc) {
+      threads = static_cast<unsigned>(std::max(1, std::atoi(argv[++i])));
+    } else {
+      std::fprintf(stderr, "usage: mgrl_bench_runtime [--quick] [--runs N] [--threads T]\n");
+      return 2;
+    }
+  }
+  try {
+    // Boxing, both behaviours trained by value iteration into a scratch folder.
+    const fs::path scratch = fs::temp_directory_path() / fmt::format("mgrl-bench-runtime-{}", ::getpid());
+    mgrl::app::TrainOptions train;
+    train.scenario = fs::path(MGRL_SOURCE_DIR) / "scenarios" / "boxing.yaml";
+    train.dataDir = mgrl::dataDirectory("");
+    train.cacheDir = scratch;
+    train.out = scratch / "policy";
+    train.sets = {"behaviors.approach.learner.type=value_iteration", "behaviors.hit.learner.type=value_iteration"};
+    mgrl::app::runTrain(train);
+    mgrl::app::Loaded loaded = mgrl::app::load(train, mgrl::app::checkedScenario(train));
+    const mgrl::StateActionModel& model = loaded.graph.model;
+    std::vector<mgrl::Behavior> behaviors =
+        mgrl::buildBehaviors(loaded.scenario, mgrl::app::plugins(), model, loaded.graph.key);
+    mgrl::PolicyBundle bundle;
+    const std::vector<mgrl::PolicyPart> parts = mgrl::app::policyParts(train.out, behaviors, loaded.graph, train, bundle);
+    fs::remove_all(scratch);
+    const mgrl::BodyTable body = mgrl::makeBodyTable(loaded.graph.db);
+    const mgrl::WorldParams params = mgrl::readWorldParams(loaded.scenario.root.child("world"));
+    std::printf("boxing: %zu states, %zu actions, %zu joints, %.0f fps; %u threads; medians of %d runs\n",
+                model.stateCount(), model.actionCount(), loaded.graph.db.skeleton->jointCount(), 1 / model.frameTime,
+                threads, runs);
+
+    auto setup = [&](std::size_t avatars, bool poses) {
+      mgrl::WorldSetup s;
+      s.model = &model;
+      s.body = &body;
+      s.db = &loaded.graph.db;
+      s.blendFrames = loaded.scenario.graph.blendFrames;
+      s.params = params;
+      s.avatars = avatars;
+      s.seed = 1;
+      s.threads = threads;
+      s.poses = poses;
+      s.makeController = [&]() -> std::unique_ptr<mgrl::Controller> {
+        return std::make_unique<mgrl::PolicyController>(model, parts, params.variety);
+      };
+      return s;
+    };
+    // Avatar-frames per second of `frames` frames (the world made outside the timing).
+    auto rate = [&](std::size_t avatars, std::size_t frames, bool poses, std::size_t* hits = nullptr) {
+      std::vector<double> samples;
+      for (int r = 0; r < runs; ++r) {
+        mgrl::World world(setup(avatars, poses));
+        const auto start = Clock::now();
+        world.run(frames);
+        samples.push_back(static_cast<double>(avatars * frames) / since(start));
+        if (hits) *hits = world.events().size();
+      }
+      return mgrl::bench::median(samples);
+    };
+
+    // The paper's run.
+    {
+      std::size_t hits = 0;
+      const double control = rate(30, 1000, false, &hits);
+      const double withPoses = rate(30, 1000, true);
+      std::printf("\npaper's run, 30 sparring avatars x 1000 frames (paper: 9 s, 3,300 avatar-frames/s):\n");
+      std::printf("  control + collision: %8.4f s  %12.0f avatar-frames/s  (%zu hits)\n", 30000 / control, control, hits);
+      std::printf("  with poses (FK):     %8.4f s  %12.0f avatar-frames/s\n", 30000 / withPoses, withPoses);
+    }
+
+    // Growth with the number of avatars.
+    std::printf("\ngrowth (avatar-frames/s; targets: >= 1,000,000 control + collision, >= 300,000 with FK)\n");
+    std::printf("  %8s %16s %16s %14s %14s\n", "avatars", "control", "with FK", "B/avatar", "B/avatar FK");
+    const std::vector<std::size_t> counts = quick ? std::vector<std::size_t>{2, 100, 10000}
+                                                  : std::vector<std::size_t>{2, 10, 100, 1000, 10000};
+    for (const std::size_t n : counts) {
+      const std::size_t controlFrames = std::max<std::size_t>(300, (quick ? 2'000'000 : 6'000'000) / n);
+      const std::size_t fkFrames = std::max<std::size_t>(60, (quick ? 200'000 : 600'000) / n);
+      const double control = rate(n, controlFrames, false);
+      const double fk = rate(n, fkFrames, true);
+      mgrl::World plain(setup(n, false)), posed(setup(n, true));
+      std::printf("  %8zu %16.0f %16.0f %14zu %14zu\n", n, control, fk, plain.bytesPerAvatar(), posed.bytesPerAvatar());
+    }
+    // Measured memory: resident growth for 10,000 avatars with poses.
+    {
+      const double before = residentBytes();
+      mgrl::World world(setup(10000, true));
+      world.run(1);
+      const double after = residentBytes();
+      std::printf("  resident memory for 10,000 avatars with poses: %.1f MB (%.0f B per avatar)\n",
+                  (after - before) / 1e6, (after - before) / 10000);
+    }
+
+    // Decision cost: the same queries (state, target) from a sparring run for every controller.
+    {
+      std::vector<std::pair<std::uint32_t, Eigen::Vector3d>> queries;
+      mgrl::Rng rng(3);
+      for (int q = 0; q < 2000; ++q) {
+        const auto s = static_cast<std::uint32_t>(rng.below(model.stateCount()));
+        queries.emplace_back(s, Eigen::Vector3d((2 * rng.uniform() - 1) * 1.5, model.centroid[1],
+                                                (2 * rng.uniform() - 1) * 1.5));
+      }
+      auto timeController = [&](mgrl::Controller& c, std::size_t count) {
+        std::vector<double> samples;
+        mgrl::Rng draws(1);
+        for (int r = 0; r < runs; ++r) {
+          std::size_t sink = 0, calls = 0;
+          const auto start = Clock::now();
+          do {
+            for (std::size_t q = 0; q < count; ++q) sink += c.choose(queries[q].first, queries[q].second, draws);
+            calls += count;
+          } while (since(start) < 0.2);
+          samples.push_back(since(start) / static_cast<double>(calls));
+          observed = sink;
+        }
+        return mgrl::bench::median(samples);
+      };
+      std::printf("\ndecision cost (same %zu random (state, target) queries)\n", queries.size());
+      mgrl::PolicyController greedy(model, parts);
+      mgrl::PolicyController varied(model, parts, params.variety);
+      const double policy = timeController(greedy, queries.size());
+      std::printf("  %-28s %12.3f us\n", "policy (greedy)", policy * 1e6);
+      std::printf("  %-28s %12.3f us\n", "policy (top 3, margin 0.1)", timeController(varied, queries.size()) * 1e6);
+      std::vector<mgrl::SearchPart> searchParts;
+      for (const mgrl::Behavior& b : behaviors) searchParts.push_back({b.discretizer.get(), b.reward.get(), b.weight, b.activation});
+      const mgrl::StaticTarget environment;
+      const double gamma = behaviors.front().reward->gamma();
+      struct Horizon {
+        int actions;
+        double seconds;
+      };
+      const std::vector<Horizon> horizons = quick ? std::vector<Horizon>{{1, 0}, {2, 0}, {3, 0}}
+                                                  : std::vector<Horizon>{{1, 0}, {2, 0}, {3, 0}, {8, 0.5}, {4, 0}};
+      for (const Horizon& h : horizons) {
+        mgrl::OnlineSearchController search(model, environment, searchParts, mgrl::SearchHorizon{h.actions, h.seconds}, gamma);
+        const std::size_t count = h.actions >= 4 || h.seconds > 0 ? 20 : h.actions == 3 ? 200 : queries.size();
+        const double cost = timeController(search, count);
+        const std::string name = h.seconds > 0 ? fmt::format("online_search {:.1f} s", h.seconds)
+                                               : fmt::format("online_search {} action{}", h.actions, h.actions > 1 ? "s" : "");
+        std::printf("  %-28s %12.3f us  (%8.0fx the policy)\n", name.c_str(), cost * 1e6, cost / policy);
+      }
+    }
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "mgrl_bench_runtime: %s\n", e.what());
+    return 1;
+  }
+  return 0;
+}
