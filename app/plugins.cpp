@@ -4,6 +4,7 @@
 
 #include "discretizers/discretizers.hpp"
 #include "learners/learners.hpp"
+#include "mgrl/world.hpp"
 #include "rewards/rewards.hpp"
 
 namespace mgrl::app {
@@ -32,15 +33,19 @@ void describe(std::string& text, const Registry& registry, std::string_view head
   text += "\n";
 }
 
+nlohmann::json paramsJson(const ParamSpecs& specs) {
+  nlohmann::json params = nlohmann::json::array();
+  for (const ParamSpec& spec : specs)
+    params.push_back({{"name", spec.name}, {"default", spec.defaultText()}, {"range", spec.rangeText()},
+                      {"unit", spec.unit}, {"help", spec.help}});
+  return params;
+}
+
 template <class Registry>
 nlohmann::json toJson(const Registry& registry) {
   nlohmann::json list = nlohmann::json::array();
   for (const auto& entry : registry.entries()) {
-    nlohmann::json params = nlohmann::json::array();
-    for (const ParamSpec& spec : entry.params)
-      params.push_back({{"name", spec.name}, {"default", spec.defaultText()}, {"range", spec.rangeText()},
-                        {"unit", spec.unit}, {"help", spec.help}});
-    list.push_back({{"name", entry.name}, {"summary", entry.summary}, {"parameters", params}});
+    list.push_back({{"name", entry.name}, {"summary", entry.summary}, {"parameters", paramsJson(entry.params)}});
   }
   return list;
 }
@@ -54,7 +59,13 @@ std::string listText(const Plugins& p) {
   describe(text, p.environments, "environment models (behaviors.NAME.environment.type, default static_target)");
   describe(text, p.learners, "learners (behaviors.NAME.learner.type)");
   text += "Behaviour keys: description, weight (default 1), activation (always | target_inside), discretizer, "
-          "reward, environment, learner. See scenarios/README.md.\n";
+          "reward, environment, learner. See scenarios/README.md.\n\n";
+  text += "controllers (mgrl eval / simulate --controller):\n"
+          "  policy: the trained behaviours' weighted Q values, with the world's variety in simulate\n"
+          "  online_search: depth-limited graph search for the best discounted reward (--horizon, --horizon-seconds)\n"
+          "  random: a uniformly random out-action\n\n";
+  text += "world (mgrl simulate; scenario section world:):\n";
+  text += describeParams(worldParamSpecs(), "      ");
   return text;
 }
 
@@ -62,7 +73,9 @@ nlohmann::json listJson(const Plugins& p) {
   return {{"discretizers", toJson(p.discretizers)},
           {"rewards", toJson(p.rewards)},
           {"environments", toJson(p.environments)},
-          {"learners", toJson(p.learners)}};
+          {"learners", toJson(p.learners)},
+          {"controllers", {"policy", "online_search", "random"}},
+          {"world", paramsJson(worldParamSpecs())}};
 }
 
 }  // namespace mgrl::app
