@@ -507,6 +507,13 @@ std::size_t World::decisions() const {
   return total;
 }
 
+void World::moveTarget(std::size_t i, const Eigen::Vector3d& base) {
+  if (i >= avatars_.size() || avatars_[i].partner >= 0)
+    throw Error(fmt::format("world: expected an avatar with a target of its own, found avatar {}", i));
+  targets_[i].base = base;
+  targets_[i].nextMove = std::numeric_limits<double>::infinity();
+}
+
 std::size_t World::avatarCount() const { return avatars_.size(); }
 GroundMotion World::avatarFrame(std::size_t i) const { return avatars_[i].now; }
 int World::partner(std::size_t i) const { return avatars_[i].partner; }

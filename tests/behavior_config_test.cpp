@@ -435,7 +435,7 @@ TEST_CASE("scenario overrides (--set) replace, create and reset keys", "[behavio
     REQUIRE_CONFIG_ERROR(build(both, {"grpah=0.3"}),
                          kSource.string() +
                              ": grpah: unknown key (expected one of: name, description, motion, graph, "
-                             "behaviors)");
+                             "behaviors, world)");
     REQUIRE_THROWS_WITH(build(both, {"behaviors.hit=3"}),
                         Contains("behaviors.hit: expected a map with discretizer, reward and learner sections"));
   }

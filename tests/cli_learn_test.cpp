@@ -165,7 +165,12 @@ TEST_CASE("mgrl list names every plugin, as text and as JSON", "[cli]") {
       {"rewards", {"approach", "hit"}},
       {"environments", {"static_target"}},
       {"learners", {"q_learning", "value_iteration"}}};
-  CHECK(list.size() == seams.size());
+  CHECK(list.size() == seams.size() + 2);  // plus the controllers and the world section
+  CHECK(list["controllers"] == json::array({"policy", "online_search", "random"}));
+  REQUIRE(list["world"].is_array());
+  CHECK(list["world"].size() == 19);
+  for (const json& p : list["world"])
+    for (const char* key : {"name", "default", "range", "unit", "help"}) CHECK(p.contains(key));
   for (const auto& [seam, names] : seams) {
     CAPTURE(seam);
     REQUIRE(list[seam].is_array());

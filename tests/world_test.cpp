@@ -333,6 +333,34 @@ TEST_CASE("a hit target bends away from the punch and springs back", "[world][da
   REQUIRE(checkedRecovery >= 1);
 }
 
+TEST_CASE("a boxer follows a target the user drags and punches it", "[world][data]") {
+  const Boxing& b = boxing();
+  WorldSetup s = b.setup(1);
+  s.params.mode = "targets";
+  World world(s);
+  const double dt = b.model().frameTime;
+  // Drag the target 3 m away, behind the boxer, then wait: it turns, walks up and hits.
+  const GroundMotion start = world.avatarFrame(0);
+  const Eigen::Vector3d far = transformPoint(start, {0, b.model().centroid[1], -3});
+  world.moveTarget(0, far);
+  auto distance = [&] {
+    const GroundMotion at = world.avatarFrame(0);
+    return std::hypot(far.x() - at.dx, far.z() - at.dz);
+  };
+  const double before = distance();
+  std::size_t frames = 0;
+  while (world.events().empty() && frames < static_cast<std::size_t>(30 / dt)) {
+    world.run(1);
+    ++frames;
+  }
+  CAPTURE(before, distance(), frames * dt);
+  REQUIRE_FALSE(world.events().empty());
+  REQUIRE(distance() < 1.2);
+  REQUIRE((world.events().front().point - world.target(0).centre()).norm() < 0.5);
+  REQUIRE(world.target(0).base == far);  // it stayed where the user put it
+  REQUIRE_THROWS_AS(World(b.setup(2)).moveTarget(0, far), Error);
+}
+
 TEST_CASE("variety draws among the top k actions, seeded; k = 1 is greedy", "[world][data]") {
   const Boxing& b = boxing();
   const StateActionModel& m = b.model();

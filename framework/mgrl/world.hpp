@@ -146,6 +146,9 @@ class World {
   /// Avatar i's partner, or -1 if it has a target of its own.
   int partner(std::size_t i) const;
   const Target& target(std::size_t i) const;
+  /// The user drags avatar i's target (one without a partner) to `base` (world); automatic
+  /// moves stop for it. Throws mgrl::Error for an avatar with a partner.
+  void moveTarget(std::size_t i, const Eigen::Vector3d& base);
   /// Avatar i's current pose (world), when poses are on.
   const Pose& pose(std::size_t i) const;
   /// World joint positions of avatar i's current pose, when poses are on.
