@@ -32,38 +32,51 @@ constexpr long long kMaxAvatars = 1'000'000;
 constexpr long long kMaxAvatarsWithPoses = 200'000;
 constexpr double kMaxRecordingBytes = 4e9;
 
-// A folder made for output that is removed again unless commit() is called: what a
-// failed run leaves behind is nothing.
+// A scratch folder for output, removed again with everything in it. If the output folder
+// around it was made for this run, that goes too unless the run keeps its results
+// (keep()): what a failed run leaves behind is nothing.
 class ScratchDirectory {
  public:
-  explicit ScratchDirectory(fs::path path) : path_(std::move(path)) {}
+  ScratchDirectory(fs::path path, fs::path created) : path_(std::move(path)), created_(std::move(created)) {}
   ~ScratchDirectory() {
     std::error_code ec;
-    if (!path_.empty()) fs::remove_all(path_, ec);
+    fs::remove_all(path_, ec);
+    if (!created_.empty()) fs::remove_all(created_, ec);
   }
   ScratchDirectory(const ScratchDirectory&) = delete;
   ScratchDirectory& operator=(const ScratchDirectory&) = delete;
   const fs::path& path() const { return path_; }
+  void keep() { created_.clear(); }
 
  private:
   fs::path path_;
+  fs::path created_;  ///< the outermost folder this run created ("" none)
 };
 
 std::string scratchName() { return fmt::format(".mgrl-simulate-{}", ::getpid()); }
 
-// Creates `dir` if needed and a scratch folder inside it; throws if either fails.
+// Creates `dir` if needed and a scratch folder inside it; throws if either fails (and
+// then leaves nothing created).
 std::unique_ptr<ScratchDirectory> prepareFolder(const fs::path& dir, std::string_view flag) {
   std::error_code ec;
+  // The outermost missing folder on the way to `dir`, to remove if the run fails.
+  fs::path created;
+  for (fs::path p = fs::absolute(dir, ec); !p.empty() && !fs::exists(p, ec); p = p.parent_path()) {
+    created = p;
+    if (p == p.parent_path()) break;
+  }
   fs::create_directories(dir, ec);
-  if (ec || !fs::is_directory(dir))
+  if (ec || !fs::is_directory(dir)) {
+    if (!created.empty()) fs::remove_all(created, ec);
     throw Error(fmt::format("{} {}: expected a folder that can be created, found: {}", flag, dir.string(),
                             ec ? ec.message() : std::string("not a folder")));
+  }
   const fs::path scratch = dir / scratchName();
   fs::remove_all(scratch, ec);
+  auto guard = std::make_unique<ScratchDirectory>(scratch, created);
   if (!fs::create_directory(scratch, ec) || ec)
     throw Error(fmt::format("{} {}: expected a writable folder, found: {}", flag, dir.string(),
                             ec ? ec.message() : std::string("cannot create files there")));
-  auto guard = std::make_unique<ScratchDirectory>(scratch);
   std::ofstream probe(scratch / "probe");
   if (!(probe << "x") || !probe.flush())
     throw Error(fmt::format("{} {}: expected a writable folder, found one where files cannot be written", flag,
@@ -71,6 +84,11 @@ std::unique_ptr<ScratchDirectory> prepareFolder(const fs::path& dir, std::string
   probe.close();
   fs::remove(scratch / "probe", ec);
   return guard;
+}
+
+// Memory to record `avatarFrames` poses of `joints` joints for BVH export (bytes).
+double recordingBytes(double avatarFrames, double joints) {
+  return avatarFrames * (joints * (sizeof(Eigen::Quaterniond) + sizeof(Eigen::Vector3d)) + 64);
 }
 
 std::string eventLine(const HitEvent& e) {
@@ -106,7 +124,8 @@ json runSimulate(const SimulateOptions& options) {
     throw Error(fmt::format("--horizon-seconds: expected seconds of motion to search in [0, 5], found {}",
                             options.horizonSeconds));
   if (options.topK < 0 || options.topK > 64)
-    throw Error(fmt::format("--top-k: expected a number of candidates in [1, 64], found {}", options.topK));
+    throw Error(fmt::format("--top-k: expected a number of candidates in [1, 64] (0: world.top_k), found {}",
+                            options.topK));
   if (options.threads > 256)
     throw Error(fmt::format("--threads: expected at most 256 threads, found {}", options.threads));
 
@@ -119,9 +138,8 @@ json runSimulate(const SimulateOptions& options) {
       options.policy.empty() ? defaultPolicyDirectory(cacheDir, scenario.name, scenario.path) : options.policy;
   if (options.controller == "policy") precheckPolicy(policyDir, scenario, options);
 
-  // Output places are checked (and scratch folders made) before any simulation.
-  std::unique_ptr<ScratchDirectory> bvhScratch, eventsScratch;
-  if (!options.bvhOut.empty()) bvhScratch = prepareFolder(options.bvhOut, "--bvh-out");
+  // Output places are checked (and scratch folders made) before any simulation: first
+  // what can be checked without creating anything.
   if (!options.eventsOut.empty()) {
     if (fs::is_directory(options.eventsOut))
       throw Error(fmt::format("--events-out {}: expected a file name, found a folder", options.eventsOut.string()));
@@ -129,8 +147,22 @@ json runSimulate(const SimulateOptions& options) {
     if (!fs::is_directory(parent))
       throw Error(fmt::format("--events-out {}: expected an existing folder {}, found none",
                               options.eventsOut.string(), parent.string()));
+  }
+  if (!options.bvhOut.empty()) {
+    // A first estimate with a small skeleton (20 joints), exact once the skeleton is known.
+    const double avatarFrames = static_cast<double>(options.avatars) * std::round(options.seconds * scenario.motion.fps);
+    if (recordingBytes(avatarFrames, 20) > kMaxRecordingBytes)
+      throw Error(fmt::format("--bvh-out: recording {} avatars for {} s needs more than {:.1f} GB of memory; expected "
+                              "at most {:.0f} GB: use fewer --avatars or --seconds",
+                              options.avatars, options.seconds, recordingBytes(avatarFrames, 20) / 1e9,
+                              kMaxRecordingBytes / 1e9));
+  }
+  std::unique_ptr<ScratchDirectory> bvhScratch, eventsScratch;
+  if (!options.eventsOut.empty()) {
+    const fs::path parent = options.eventsOut.parent_path().empty() ? fs::path(".") : options.eventsOut.parent_path();
     eventsScratch = prepareFolder(parent, "--events-out");
   }
+  if (!options.bvhOut.empty()) bvhScratch = prepareFolder(options.bvhOut, "--bvh-out");
 
   Loaded loaded = load(options, std::move(scenario));
   const StateActionModel& model = loaded.graph.model;
@@ -138,8 +170,8 @@ json runSimulate(const SimulateOptions& options) {
   const auto avatars = static_cast<std::size_t>(options.avatars);
   const std::size_t joints = loaded.graph.db.skeleton->jointCount();
   if (!options.bvhOut.empty()) {
-    const double bytes = static_cast<double>(avatars) * static_cast<double>(frames) *
-                         (static_cast<double>(joints) * (sizeof(Eigen::Quaterniond) + sizeof(Eigen::Vector3d)) + 64);
+    const double bytes =
+        recordingBytes(static_cast<double>(avatars) * static_cast<double>(frames), static_cast<double>(joints));
     if (bytes > kMaxRecordingBytes)
       throw Error(fmt::format("--bvh-out: recording {} avatars for {} frames needs about {:.1f} GB of memory; expected "
                               "at most {:.0f} GB: use fewer --avatars or --seconds",
@@ -216,6 +248,7 @@ json runSimulate(const SimulateOptions& options) {
       if (ec) throw Error(fmt::format("--bvh-out {}: could not move {} into place: {}", options.bvhOut.string(),
                                       to.filename().string(), ec.message()));
     }
+    bvhScratch->keep();
   }
   if (eventsScratch) {
     const fs::path temporary = eventsScratch->path() / "events.jsonl";
@@ -229,6 +262,7 @@ json runSimulate(const SimulateOptions& options) {
     fs::rename(temporary, options.eventsOut, ec);
     if (ec) throw Error(fmt::format("--events-out {}: could not move the events into place: {}",
                                     options.eventsOut.string(), ec.message()));
+    eventsScratch->keep();
   }
 
   std::vector<std::size_t> byAvatar(avatars, 0);

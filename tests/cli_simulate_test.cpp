@@ -13,7 +13,6 @@
 #include <filesystem>
 #include <fstream>
 #include <map>
-#include <set>
 #include <sstream>
 #include <string>
 #include <vector>
@@ -468,10 +467,8 @@ TEST_CASE("the trained policy lands far more hits than random actions", "[cli][d
   CHECK(trained > 4 * baseline);
 }
 
-// Found while writing the tests above: a refusal that comes after --bvh-out's folder was
-// made leaves that (empty) folder behind, against "what a failed run leaves behind is
-// nothing" (app/simulate_command.cpp). Tagged [!mayfail] until it is fixed.
-TEST_CASE("a refused mgrl simulate leaves no --bvh-out folder behind", "[cli][data][simulate-cli][!mayfail]") {
+// A refusal after --bvh-out's folder would be made must not leave that folder behind.
+TEST_CASE("a refused mgrl simulate leaves no --bvh-out folder behind", "[cli][data][simulate-cli]") {
   Sandbox box("leftover");
   SECTION("--events-out refused after --bvh-out was prepared") {
     const fs::path bvh = box.path("bvh"), folder = box.path("a_folder");
@@ -488,6 +485,7 @@ TEST_CASE("a refused mgrl simulate leaves no --bvh-out folder behind", "[cli][da
     INFO("stderr: " << r.err);
     CHECK(r.status == 1);
     CHECK(r.out.empty());
+    REQUIRE(lines(r.err).size() == 1);  // refused before the graph is loaded
     CHECK_THAT(lines(r.err).back(), StartsWith("mgrl: --bvh-out: recording 200000 avatars"));
     requireAbsent(bvh);
   }
