@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cmath>
 #include <fstream>
+#include <map>
 #include <sstream>
 
 #include <unistd.h>
@@ -91,11 +92,14 @@ double recordingBytes(double avatarFrames, double joints) {
   return avatarFrames * (joints * (sizeof(Eigen::Quaterniond) + sizeof(Eigen::Vector3d)) + 64);
 }
 
+// What a hit struck: the partner's body part, or the attacker's own target.
+const char* struckName(const HitEvent& e) { return e.target < 0 ? "target" : bodyPartName(e.part); }
+
 std::string eventLine(const HitEvent& e) {
   const json line = {{"time", e.time},
                      {"attacker", e.attacker},
                      {"target", e.target},
-                     {"part", e.target < 0 ? "target" : bodyPartName(e.part)},
+                     {"part", struckName(e)},
                      {"hand", e.hand == 0 ? "left" : "right"},
                      {"speed", e.speed},
                      {"point", {e.point.x(), e.point.y(), e.point.z()}}};
@@ -266,10 +270,10 @@ json runSimulate(const SimulateOptions& options) {
   }
 
   std::vector<std::size_t> byAvatar(avatars, 0);
-  json byPart = {{"head", 0}, {"chest", 0}, {"spine", 0}, {"target", 0}};
+  std::map<std::string, std::size_t> byPart = {{"head", 0}, {"chest", 0}, {"spine", 0}, {"target", 0}};
   for (const HitEvent& e : world.events()) {
     ++byAvatar[e.attacker];
-    byPart[e.target < 0 ? "target" : bodyPartName(e.part)] = byPart[e.target < 0 ? "target" : bodyPartName(e.part)].get<int>() + 1;
+    ++byPart[struckName(e)];
   }
   const double simulated = static_cast<double>(frames) * model.frameTime;
   json report = {{"scenario", loaded.scenario.path.string()},
@@ -304,9 +308,9 @@ std::string simulateText(const json& r) {
       r["controller"].get<std::string>(), r["mode"].get<std::string>(), r["avatars"].get<std::size_t>(),
       r["frames"].get<std::size_t>(), r["seconds"].get<double>(), r["wall_seconds"].get<double>(),
       humanCount(r["avatar_frames_per_second"].get<double>()), r["hits"].get<std::size_t>(),
-      r["hits_per_avatar_minute"].get<double>(), r["hits_by_part"]["head"].get<int>(),
-      r["hits_by_part"]["chest"].get<int>(), r["hits_by_part"]["spine"].get<int>(),
-      r["hits_by_part"]["target"].get<int>());
+      r["hits_per_avatar_minute"].get<double>(), r["hits_by_part"]["head"].get<std::size_t>(),
+      r["hits_by_part"]["chest"].get<std::size_t>(), r["hits_by_part"]["spine"].get<std::size_t>(),
+      r["hits_by_part"]["target"].get<std::size_t>());
   if (r.contains("bvh_files"))
     text += fmt::format("wrote {} BVH files\n", r["bvh_files"].size());
   if (r.contains("events_file")) text += fmt::format("wrote the hits to {}\n", r["events_file"].get<std::string>());

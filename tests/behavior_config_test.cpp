@@ -471,7 +471,7 @@ TEST_CASE("an override (--set) creates missing sections along its path", "[behav
   CHECK(all.size() == 3);
   REQUIRE_THROWS_WITH(build(both, {"grpah.threshold=0.3"}),
                       Equals(kSource.string() + ": grpah: unknown key (expected one of: name, description, motion, "
-                                                "graph, behaviors)"));
+                                                "graph, behaviors, world)"));
 }
 
 // The help of `mgrl train --set` shows `--set behaviors.hit.learner.budget=1e6`; budget is a

@@ -17,6 +17,7 @@
 #include <catch2/catch.hpp>
 #include <nlohmann/json.hpp>
 
+#include "cli_support.hpp"
 #include "test_support.hpp"
 
 namespace fs = std::filesystem;
@@ -35,45 +36,10 @@ const std::string kCheckpointed =
     "--set behaviors.approach.learner.checkpoint_every=100000 "
     "--set behaviors.hit.learner.budget=400000";
 
-// A path as one shell word (the paths here hold no quote).
-std::string shellWord(const fs::path& p) {
-  std::string word(1, '\'');
-  word += p.string();
-  word += '\'';
-  return word;
-}
-
-std::string readText(const fs::path& path) {
-  std::ifstream in(path, std::ios::binary);
-  std::ostringstream s;
-  s << in.rdbuf();
-  return s.str();
-}
-
-std::vector<std::string> lines(const std::string& text) {
-  std::vector<std::string> result;
-  std::istringstream in(text);
-  for (std::string l; std::getline(in, l);) result.push_back(l);
-  return result;
-}
-
-struct Run {
-  int status = -1;
-  std::string out, err;
-
-  std::string lastErrorLine() const {
-    const std::vector<std::string> all = lines(err);
-    return all.empty() ? std::string() : all.back();
-  }
-  json report() const {
-    INFO("stderr: " << err);
-    REQUIRE(status == 0);
-    json parsed;
-    REQUIRE_NOTHROW(parsed = json::parse(out));  // the whole of stdout, nothing before or after
-    REQUIRE(parsed.is_object());
-    return parsed;
-  }
-};
+using mgrl::test::lines;
+using mgrl::test::readText;
+using mgrl::test::Run;
+using mgrl::test::shellWord;
 
 // A fresh folder per test (cache, bundles, captured streams), removed at the end even when
 // the test fails.
@@ -101,15 +67,7 @@ class Sandbox {
   // Runs mgrl with `arguments` (shell words), `environment` ("NAME=value ...") added to a
   // copy of ours without MGRL_EXIT_AFTER_CHECKPOINTS.
   Run run(const std::string& arguments, const std::string& environment = "") {
-    const fs::path out = dir_ / "stdout.txt", err = dir_ / "stderr.txt";
-    const std::string command = "env -u MGRL_EXIT_AFTER_CHECKPOINTS " + environment + " " + shellWord(MGRL_BINARY) +
-                                " " + arguments + " >" + shellWord(out) + " 2>" + shellWord(err) + " </dev/null";
-    const int raw = std::system(command.c_str());
-    Run r;
-    r.status = raw != -1 && WIFEXITED(raw) ? WEXITSTATUS(raw) : -1;
-    r.out = readText(out);
-    r.err = readText(err);
-    return r;
+    return mgrl::test::runMgrl(arguments, dir_, "env -u MGRL_EXIT_AFTER_CHECKPOINTS " + environment);
   }
 
   Run train(const std::string& arguments, const std::string& environment = "") {
@@ -209,7 +167,7 @@ TEST_CASE("mgrl train --json reports each behaviour and writes the same bundle e
           4 * b["actions"].get<std::uint64_t>() * b["vertices"].get<std::uint64_t>());
   }
   CHECK(report["behaviors"]["approach"]["vertices"] == 5 * 13);
-  CHECK(report["behaviors"]["hit"]["vertices"] == 10 * 10 * 4);
+  CHECK(report["behaviors"]["hit"]["vertices"] == 20 * 16 * 6);
 
   for (const char* file : {"manifest.json", "approach.q.npy", "hit.q.npy"}) requireFile(out / file);
   const std::string approach = readText(out / "approach.q.npy"), hit = readText(out / "hit.q.npy");

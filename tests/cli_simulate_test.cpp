@@ -20,6 +20,7 @@
 #include <catch2/catch.hpp>
 #include <nlohmann/json.hpp>
 
+#include "cli_support.hpp"
 #include "test_support.hpp"
 
 namespace fs = std::filesystem;
@@ -36,41 +37,10 @@ const std::string kFast = "--set behaviors.approach.learner.budget=200000 --set 
 // What simulate calls the scratch folders it makes beside its outputs.
 const std::string kScratchPrefix = ".mgrl-simulate";
 
-// A path as one shell word (the paths here hold no quote).
-std::string shellWord(const fs::path& p) {
-  std::string word(1, '\'');
-  word += p.string();
-  word += '\'';
-  return word;
-}
-
-std::string readText(const fs::path& path) {
-  std::ifstream in(path, std::ios::binary);
-  std::ostringstream s;
-  s << in.rdbuf();
-  return s.str();
-}
-
-std::vector<std::string> lines(const std::string& text) {
-  std::vector<std::string> result;
-  std::istringstream in(text);
-  for (std::string l; std::getline(in, l);) result.push_back(l);
-  return result;
-}
-
-struct Run {
-  int status = -1;
-  std::string out, err;
-
-  json report() const {
-    INFO("stderr: " << err);
-    REQUIRE(status == 0);
-    json parsed;
-    REQUIRE_NOTHROW(parsed = json::parse(out));  // the whole of stdout, nothing before or after
-    REQUIRE(parsed.is_object());
-    return parsed;
-  }
-};
+using mgrl::test::lines;
+using mgrl::test::readText;
+using mgrl::test::Run;
+using mgrl::test::shellWord;
 
 // A fresh folder per test (cache, bundles, outputs, captured streams), removed at the end
 // even when the test fails.
@@ -97,17 +67,7 @@ class Sandbox {
 
   // Runs mgrl with `arguments` (shell words); the captured streams live outside dir() so
   // that listing dir() shows only what mgrl made.
-  Run run(const std::string& arguments) {
-    const fs::path out = streams_ / "stdout.txt", err = streams_ / "stderr.txt";
-    const std::string command = shellWord(MGRL_BINARY) + " " + arguments + " >" + shellWord(out) + " 2>" +
-                                shellWord(err) + " </dev/null";
-    const int raw = std::system(command.c_str());
-    Run r;
-    r.status = raw != -1 && WIFEXITED(raw) ? WEXITSTATUS(raw) : -1;
-    r.out = readText(out);
-    r.err = readText(err);
-    return r;
-  }
+  Run run(const std::string& arguments) { return mgrl::test::runMgrl(arguments, streams_); }
 
   Run train(const std::string& arguments = "") {
     return run("train " + shellWord(kBoxing) + " --json" + where() + " " + kFast + " " + arguments);
