@@ -43,31 +43,14 @@ using mgrl::test::shellWord;
 
 // A fresh folder per test (cache, bundles, captured streams), removed at the end even when
 // the test fails.
-class Sandbox {
+class Sandbox : public mgrl::test::CliSandbox {
  public:
-  explicit Sandbox(const std::string& tag)
-      : dir_(fs::temp_directory_path() / ("mgrl_cli_learn_" + tag + "_" + std::to_string(::getpid()))) {
-    fs::remove_all(dir_);
-    fs::create_directories(dir_);
-  }
-  ~Sandbox() {
-    std::error_code ec;
-    fs::remove_all(dir_, ec);
-  }
-  Sandbox(const Sandbox&) = delete;
-  Sandbox& operator=(const Sandbox&) = delete;
-
-  const fs::path& dir() const { return dir_; }
-  fs::path cache() const { return dir_ / "cache"; }
-  fs::path path(const std::string& name) const { return dir_ / name; }
-
-  // " --cache <sandbox>/cache --data <mocap>", for train and eval.
-  std::string where() const { return " --cache " + shellWord(cache()) + " --data " + shellWord(mgrl::test::mocap()); }
+  explicit Sandbox(const std::string& tag) : CliSandbox("mgrl_cli_learn_" + tag) {}
 
   // Runs mgrl with `arguments` (shell words), `environment` ("NAME=value ...") added to a
   // copy of ours without MGRL_EXIT_AFTER_CHECKPOINTS.
   Run run(const std::string& arguments, const std::string& environment = "") {
-    return mgrl::test::runMgrl(arguments, dir_, "env -u MGRL_EXIT_AFTER_CHECKPOINTS " + environment);
+    return mgrl::test::runMgrl(arguments, dir(), "env -u MGRL_EXIT_AFTER_CHECKPOINTS " + environment);
   }
 
   Run train(const std::string& arguments, const std::string& environment = "") {
@@ -76,9 +59,6 @@ class Sandbox {
   Run eval(const std::string& arguments) {
     return run("eval " + shellWord(kBoxing) + " --json" + where() + " " + arguments);
   }
-
- private:
-  fs::path dir_;
 };
 
 // The refusal contract: exit 1, nothing on stdout, and the reason as the last line of

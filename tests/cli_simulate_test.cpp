@@ -44,26 +44,9 @@ using mgrl::test::shellWord;
 
 // A fresh folder per test (cache, bundles, outputs, captured streams), removed at the end
 // even when the test fails.
-class Sandbox {
+class Sandbox : public mgrl::test::CliSandbox {
  public:
-  explicit Sandbox(const std::string& tag)
-      : dir_(fs::temp_directory_path() / ("mgrl_cli_simulate_" + tag + "_" + std::to_string(::getpid()))) {
-    fs::remove_all(dir_);
-    fs::create_directories(dir_);
-  }
-  ~Sandbox() {
-    std::error_code ec;
-    fs::remove_all(dir_, ec);
-  }
-  Sandbox(const Sandbox&) = delete;
-  Sandbox& operator=(const Sandbox&) = delete;
-
-  const fs::path& dir() const { return dir_; }
-  fs::path cache() const { return dir_ / "cache"; }
-  fs::path path(const std::string& name) const { return dir_ / name; }
-
-  // " --cache <sandbox>/cache --data <mocap>".
-  std::string where() const { return " --cache " + shellWord(cache()) + " --data " + shellWord(mgrl::test::mocap()); }
+  explicit Sandbox(const std::string& tag) : CliSandbox("mgrl_cli_simulate_" + tag) {}
 
   // Runs mgrl with `arguments` (shell words); the captured streams live outside dir() so
   // that listing dir() shows only what mgrl made.
@@ -83,7 +66,6 @@ class Sandbox {
   }
 
  private:
-  fs::path dir_;
   mgrl::test::TempDir streamsDir_{"cli_simulate_streams"};
   fs::path streams_ = streamsDir_.path;
 };

@@ -7,6 +7,8 @@
 
 #include <nlohmann/json.hpp>
 
+#include "test_support.hpp"
+
 namespace mgrl::test {
 
 /// A path as one shell word (the paths in tests hold no quote).
@@ -30,5 +32,20 @@ struct Run {
 /// Runs MGRL_BINARY with `arguments` (shell words) after `prefix` (e.g. "env -u NAME"),
 /// stdin from /dev/null, capturing stdout and stderr through files in `streams`.
 Run runMgrl(const std::string& arguments, const std::filesystem::path& streams, const std::string& prefix = "");
+
+/// A fresh folder per CLI test (cache, bundles, outputs), removed at the end even when the
+/// test fails; the command-specific sandboxes add their runs on top.
+class CliSandbox {
+ public:
+  explicit CliSandbox(std::string_view tag) : temp_(tag) {}
+  const std::filesystem::path& dir() const { return temp_.path; }
+  std::filesystem::path cache() const { return dir() / "cache"; }
+  std::filesystem::path path(const std::string& name) const { return dir() / name; }
+  /// " --cache <sandbox>/cache --data <mocap>".
+  std::string where() const { return " --cache " + shellWord(cache()) + " --data " + shellWord(mocap()); }
+
+ private:
+  TempDir temp_;
+};
 
 }  // namespace mgrl::test
