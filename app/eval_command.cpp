@@ -47,10 +47,7 @@ json runEval(const EvalOptions& options) {
   if (!(options.seconds > 0 && options.seconds <= 3600))
     throw Error(fmt::format("--seconds: expected seconds of motion per trial in (0, 3600], found {}", options.seconds));
   Scenario scenario = checkedScenario(options);
-  const fs::path cacheDir = options.cacheDir.empty() ? defaultCacheDirectory() : options.cacheDir;
-  const fs::path dir =
-      options.policy.empty() ? defaultPolicyDirectory(cacheDir, scenario.name, scenario.path) : options.policy;
-  if (options.controller == "policy") precheckPolicy(dir, scenario, options);
+  const fs::path dir = options.controller == "policy" ? resolvePolicy(options.policy, scenario, options) : fs::path();
   Loaded loaded = load(options, std::move(scenario));
   const StateActionModel& model = loaded.graph.model;
   std::vector<Behavior> behaviors = buildBehaviors(loaded.scenario, plugins(), model, loaded.graph.key);

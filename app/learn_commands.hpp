@@ -10,6 +10,7 @@
 #include <nlohmann/json.hpp>
 
 #include "mgrl/error.hpp"
+#include "mgrl/scenario.hpp"
 
 namespace mgrl::app {
 
@@ -68,8 +69,14 @@ nlohmann::json runSimulate(const SimulateOptions& options);
 std::string simulateText(const nlohmann::json& report);
 
 /// Where `mgrl train` puts a scenario's policy bundle by default:
-/// <cache>/policies/<name>-<hash of the scenario's path>.
-std::filesystem::path defaultPolicyDirectory(const std::filesystem::path& cacheDir, const std::string& scenarioName,
-                                             const std::filesystem::path& scenarioPath);
+/// <cache>/policies/<name>-<hash of the scenario's path, graph and behaviour settings>.
+std::filesystem::path defaultPolicyDirectory(const std::filesystem::path& cacheDir, const Scenario& scenario);
+
+/// A run stopped by Ctrl-C or SIGTERM after saving what it could; the message says how to
+/// continue. The command line exits with 130 for it.
+class Interrupted : public Error {
+ public:
+  using Error::Error;
+};
 
 }  // namespace mgrl::app

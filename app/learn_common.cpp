@@ -1,6 +1,10 @@
 #include "learn_common.hpp"
 
+#include <exception>
+#include <optional>
+
 #include <fmt/format.h>
+#include <fmt/ranges.h>
 
 #include "mgrl/behavior.hpp"
 #include "mgrl/motion_io.hpp"
@@ -17,6 +21,16 @@ std::string humanCount(double n) {
   if (n >= 1e6) return fmt::format("{:.2f} M", n / 1e6);
   if (n >= 1e3) return fmt::format("{:.1f} k", n / 1e3);
   return fmt::format("{:.0f} ", n);
+}
+
+std::string countOf(std::size_t n, std::string_view noun) {
+  return fmt::format("{} {}{}", n, noun, n == 1 ? "" : "s");
+}
+
+std::string humanSeconds(double seconds) {
+  if (seconds >= 0.1) return fmt::format("{:.2f} s", seconds);
+  if (seconds >= 0.001) return fmt::format("{:.1f} ms", seconds * 1e3);
+  return fmt::format("{:.2f} ms", seconds * 1e3);
 }
 
 std::string setFlags(const std::vector<std::string>& sets) {
@@ -70,6 +84,14 @@ void precheckPolicy(const fs::path& dir, const Scenario& scenario, const LearnOp
                             options.scenario.string(), setFlags(options.sets)));
   for (const BehaviorSpec& spec : scenario.behaviors) {
     const json& entry = manifest["behaviors"].contains(spec.name) ? manifest["behaviors"][spec.name] : json();
+    const json unfinished = manifest.contains("provenance") && manifest["provenance"].is_object()
+                                ? manifest["provenance"].value("unfinished", json::array())
+                                : json::array();
+    if (entry.is_null() && unfinished.is_array() &&
+        std::find(unfinished.begin(), unfinished.end(), json(spec.name)) != unfinished.end())
+      throw Error(fmt::format("{}: expected a trained table for behaviour '{}', found none: its training was "
+                              "interrupted; run mgrl train {}{} --resume",
+                              dir.string(), spec.name, options.scenario.string(), setFlags(options.sets)));
     if (entry.is_null())
       throw Error(fmt::format("{}: expected a trained table for behaviour '{}' that the scenario asks for, found "
                               "none; run mgrl train {} --behavior {}{}",
@@ -83,6 +105,94 @@ void precheckPolicy(const fs::path& dir, const Scenario& scenario, const LearnOp
   }
 }
 
+
+namespace {
+
+// A parameter value as `--set` takes it; empty for what --set cannot express.
+std::string setValue(const json& value) {
+  if (value.is_string()) return value.get<std::string>();
+  if (value.is_boolean()) return value.get<bool>() ? "true" : "false";
+  if (value.is_number()) return value.dump();
+  return {};
+}
+
+// The --set flags that give the scenario's behaviours the settings they were trained with
+// in the bundle at `dir` (only for behaviours whose key differs), with a short description
+// of the differences; nothing if the bundle cannot say or was made for another graph.
+std::pair<std::vector<std::string>, std::vector<std::string>> bundleSettings(const fs::path& dir,
+                                                                             const Scenario& scenario) {
+  std::vector<std::string> sets, differences;
+  json manifest;
+  try {
+    manifest = json::parse(readFile(dir / "manifest.json"));
+  } catch (const std::exception&) {
+    return {};
+  }
+  if (!manifest.is_object() || manifest.value("graph_key", json()) != json(graphCacheKey(scenario)) ||
+      !manifest.contains("behaviors") || !manifest["behaviors"].is_object())
+    return {};
+  const std::string graphKey = graphCacheKey(scenario);
+  for (const BehaviorSpec& spec : scenario.behaviors) {
+    const json& entry = manifest["behaviors"].contains(spec.name) ? manifest["behaviors"][spec.name] : json();
+    if (!entry.is_object() || !entry.contains("config") || !entry["config"].is_object()) continue;
+    const auto [config, key] = behaviorConfigAndKey(spec, plugins(), graphKey);
+    if (entry.value("key", json()) == json(key)) continue;
+    for (const char* block : {"discretizer", "reward", "environment", "learner"}) {
+      const json& trained = entry["config"].value(block, json());
+      if (!trained.is_object() || !trained.contains("type")) return {};
+      const json& now = config.value(block, json::object());
+      const bool newType = trained["type"] != now.value("type", json());
+      for (const auto& [name, value] : trained.items()) {
+        if (name != "type" && !newType && now.value(name, json()) == value) continue;
+        const std::string text = setValue(value);
+        if (text.empty()) return {};
+        const std::string flag = fmt::format("behaviors.{}.{}.{}={}", spec.name, block, name, text);
+        // The type first: setting it resets the block.
+        if (name == "type")
+          sets.insert(sets.begin(), flag);
+        else
+          sets.push_back(flag);
+        if (name == "type" || !newType) differences.push_back(fmt::format("{}.{}.{}={}", spec.name, block, name, text));
+      }
+    }
+  }
+  return {sets, differences};
+}
+
+}  // namespace
+
+fs::path resolvePolicy(const fs::path& policy, Scenario& scenario, const LearnOptions& options) {
+  const fs::path cacheDir = options.cacheDir.empty() ? defaultCacheDirectory() : options.cacheDir;
+  if (policy.empty()) {
+    const fs::path dir = defaultPolicyDirectory(cacheDir, scenario);
+    precheckPolicy(dir, scenario, options);
+    return dir;
+  }
+  try {
+    precheckPolicy(policy, scenario, options);
+    return policy;
+  } catch (const Error&) {
+    const std::exception_ptr refusal = std::current_exception();
+    const auto [adopted, differences] = bundleSettings(policy, scenario);
+    if (adopted.empty()) throw;
+    LearnOptions again = options;
+    again.sets.insert(again.sets.end(), adopted.begin(), adopted.end());
+    std::optional<Scenario> adjusted;
+    try {
+      adjusted.emplace(loadScenario(options.scenario, dataDirectory(options.dataDir), again.sets));
+      checkBehaviors(*adjusted, plugins());
+      precheckPolicy(policy, *adjusted, again);
+    } catch (const Error&) {
+      std::rethrow_exception(refusal);  // the bundle's settings do not fit either: the first refusal says why
+    }
+    if (options.log)
+      options.log(fmt::format("--policy {}: using the settings the bundle was trained with ({}) instead of the "
+                              "scenario's",
+                              policy.string(), fmt::join(differences, ", ")));
+    scenario = std::move(*adjusted);
+    return policy;
+  }
+}
 
 std::vector<PolicyPart> policyParts(const fs::path& dir, const std::vector<Behavior>& behaviors,
                                     const GraphResult& graph, const LearnOptions& options, PolicyBundle& bundle) {

@@ -2,6 +2,7 @@
 // Shared by `mgrl train` and `mgrl eval` (app/train_command.cpp, app/eval_command.cpp).
 #include <chrono>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include "graph_command.hpp"
@@ -17,6 +18,12 @@ using Clock = std::chrono::steady_clock;
 
 /// "4.17 M", "850.0 k": counts and rates for people (with a trailing space for units).
 std::string humanCount(double n);
+
+/// "1 frame", "30 frames".
+std::string countOf(std::size_t n, std::string_view noun);
+
+/// A duration for people: "12.31 s", "4.2 ms", "0.3 ms" (never "0.00 s").
+std::string humanSeconds(double seconds);
 
 /// " --set A --set B": the overrides in use, for hints that must reproduce them.
 std::string setFlags(const std::vector<std::string>& sets);
@@ -37,6 +44,13 @@ Loaded load(const LearnOptions& options, Scenario scenario);
 /// behaviour missing or trained with other settings), made before the graph is loaded so
 /// that the message is the only line on stderr. Throws mgrl::Error naming what to retrain.
 void precheckPolicy(const std::filesystem::path& dir, const Scenario& scenario, const LearnOptions& options);
+
+/// The policy bundle of eval and simulate, checked with precheckPolicy(): `policy`, else
+/// the scenario's default bundle. An explicit `policy` made for the same graph whose
+/// behaviours were trained with other settings (another learner, grid or budget) is used
+/// with those settings: `scenario` is reloaded with them and the log says which.
+std::filesystem::path resolvePolicy(const std::filesystem::path& policy, Scenario& scenario,
+                                    const LearnOptions& options);
 
 /// Loads the bundle into `bundle` and returns one part per behaviour (pointing into
 /// `bundle` and `behaviors`). Throws mgrl::Error for a missing or stale behaviour.

@@ -2,6 +2,8 @@
 // --json: one JSON object on stdout and nothing else there.
 
 #include <algorithm>
+#include <string>
+#include <vector>
 #include <cstdio>
 #include <iostream>
 
@@ -15,6 +17,7 @@
 #include "inspect.hpp"
 #include "learn_commands.hpp"
 #include "plugins.hpp"
+#include "mgrl/behavior.hpp"
 #include "mgrl/data_paths.hpp"
 #include "mgrl/error.hpp"
 #include "mgrl/version.hpp"
@@ -23,6 +26,7 @@ namespace {
 
 constexpr int kExitError = 1;
 constexpr int kExitUsage = 2;
+constexpr int kExitInterrupted = 130;  // as a shell reports a Ctrl-C
 
 mgrl::RoleOverrides parseRoles(const std::vector<std::string>& pairs) {
   mgrl::RoleOverrides roles;
@@ -33,6 +37,50 @@ mgrl::RoleOverrides parseRoles(const std::vector<std::string>& pairs) {
     roles[pair.substr(0, eq)] = pair.substr(eq + 1);
   }
   return roles;
+}
+
+// Levenshtein distance, for "did you mean".
+std::size_t editDistance(const std::string& a, const std::string& b) {
+  std::vector<std::size_t> row(b.size() + 1);
+  for (std::size_t j = 0; j <= b.size(); ++j) row[j] = j;
+  for (std::size_t i = 1; i <= a.size(); ++i) {
+    std::size_t diagonal = row[0];
+    row[0] = i;
+    for (std::size_t j = 1; j <= b.size(); ++j) {
+      const std::size_t up = row[j];
+      row[j] = std::min({row[j] + 1, row[j - 1] + 1, diagonal + (a[i - 1] == b[j - 1] ? 0 : 1)});
+      diagonal = up;
+    }
+  }
+  return row[b.size()];
+}
+
+// The first argument of `args` that looks like an option `command` does not know, with the
+// nearest known one: "--contoller" -> "--controller". Empty if there is none.
+std::string unknownOption(const CLI::App& command, const std::vector<std::string>& args) {
+  std::vector<std::string> known;
+  for (const CLI::Option* option : command.get_options()) {
+    for (const std::string& name : option->get_lnames()) known.push_back("--" + name);
+    for (const std::string& name : option->get_snames()) known.push_back("-" + name);
+  }
+  for (const std::string& arg : args) {
+    if (arg.size() < 2 || arg[0] != '-') continue;
+    const std::string name = arg.substr(0, arg.find('='));
+    if (std::find(known.begin(), known.end(), name) != known.end()) continue;
+    std::string best;
+    std::size_t bestDistance = std::string::npos;
+    for (const std::string& k : known) {
+      const std::size_t d = editDistance(name, k);
+      if (d < bestDistance) {
+        bestDistance = d;
+        best = k;
+      }
+    }
+    if (!best.empty() && bestDistance <= std::max<std::size_t>(2, name.size() / 3))
+      return fmt::format("{}: unknown option {} (did you mean {}?)", command.get_name(), name, best);
+    return fmt::format("{}: unknown option {} (see mgrl {} --help)", command.get_name(), name, command.get_name());
+  }
+  return {};
 }
 
 }  // namespace
@@ -73,12 +121,14 @@ int main(int argc, char** argv) {
   graphCommand->add_option("--data", dataDir, "Motion capture folder (default: MGRL_DATA, else ../shared/mocap)");
   graphCommand->add_option("--cache", cacheDir, "Cache folder (default: MGRL_CACHE, else ~/.cache/mgrl)");
   graphCommand->add_flag("--no-cache", noCache, "Rebuild even if a matching cached graph exists");
+  std::vector<std::string> graphSets;
+  graphCommand->add_option("--set", graphSets, "Override a scenario key, e.g. --set graph.threshold=0.5 (repeatable)");
 
   mgrl::app::TrainOptions train;
   CLI::App* trainCommand = app.add_subcommand(
       "train", "Train the scenario's behaviours (paper sec. 4) on its motion graph and save a policy bundle.");
   trainCommand->add_option("SCENARIO", scenarioPath, "Scenario YAML file with a behaviors: section")->required();
-  trainCommand->add_option("--behavior", train.behavior, "Train only this behaviour (others in the bundle are kept)");
+  trainCommand->add_option("--behavior,--behaviour", train.behavior, "Train only this behaviour (others in the bundle are kept)");
   trainCommand->add_option("--set", train.sets, "Override a scenario key, e.g. --set behaviors.hit.learner.budget=1e6 "
                                                 "(repeatable)");
   trainCommand->add_option("--out", train.out, "Policy bundle folder (default: <cache>/policies/<scenario>-<hash>)");
@@ -164,6 +214,18 @@ int main(int argc, char** argv) {
   } catch (const CLI::Success& e) {
     return app.exit(e);
   } catch (const CLI::ParseError& e) {
+    // CLI11 says only "arguments were not expected": name the option and the nearest one.
+    if (argc > 1) {
+      const std::vector<std::string> args(argv + 2, argv + argc);
+      for (const CLI::App* command : app.get_subcommands({}))
+        if (command->get_name() == argv[1]) {
+          const std::string unknown = unknownOption(*command, args);
+          if (!unknown.empty()) {
+            std::cerr << "mgrl: " << unknown << '\n';
+            return kExitUsage;
+          }
+        }
+    }
     std::cerr << "mgrl: " << e.what() << " (see mgrl --help)\n";
     return kExitUsage;
   }
@@ -190,7 +252,9 @@ int main(int argc, char** argv) {
         std::cout << mgrl::app::toText(reports);
     }
     if (graphCommand->parsed()) {
-      const mgrl::Scenario scenario = mgrl::loadScenario(scenarioPath, mgrl::dataDirectory(dataDir));
+      const mgrl::Scenario scenario = mgrl::loadScenario(scenarioPath, mgrl::dataDirectory(dataDir), graphSets);
+      // The whole scenario, behaviours included, so that `graph` does not pass a file `train` refuses.
+      mgrl::checkBehaviors(scenario, mgrl::app::plugins());
       mgrl::app::GraphOptions options;
       options.cacheDir = cacheDir;
       options.noCache = noCache;
@@ -251,6 +315,9 @@ int main(int argc, char** argv) {
       else
         std::cout << mgrl::app::listText(mgrl::app::plugins());
     }
+  } catch (const mgrl::app::Interrupted& e) {
+    std::cerr << "mgrl: " << e.what() << '\n';
+    return kExitInterrupted;
   } catch (const mgrl::Error& e) {
     std::cerr << "mgrl: " << e.what() << '\n';
     return kExitError;

@@ -137,20 +137,15 @@ json runSimulate(const SimulateOptions& options) {
   WorldParams params =
       readWorldParams(scenario.root.has("world") ? scenario.root.child("world") : ConfigNode::parse("", "world"));
   if (options.topK > 0) params.variety.topK = static_cast<int>(options.topK);
-  const fs::path cacheDir = options.cacheDir.empty() ? defaultCacheDirectory() : options.cacheDir;
   const fs::path policyDir =
-      options.policy.empty() ? defaultPolicyDirectory(cacheDir, scenario.name, scenario.path) : options.policy;
-  if (options.controller == "policy") precheckPolicy(policyDir, scenario, options);
+      options.controller == "policy" ? resolvePolicy(options.policy, scenario, options) : fs::path();
 
   // Output places are checked (and scratch folders made) before any simulation: first
   // what can be checked without creating anything.
   if (!options.eventsOut.empty()) {
     if (fs::is_directory(options.eventsOut))
       throw Error(fmt::format("--events-out {}: expected a file name, found a folder", options.eventsOut.string()));
-    const fs::path parent = options.eventsOut.parent_path().empty() ? fs::path(".") : options.eventsOut.parent_path();
-    if (!fs::is_directory(parent))
-      throw Error(fmt::format("--events-out {}: expected an existing folder {}, found none",
-                              options.eventsOut.string(), parent.string()));
+    // A missing folder is made, as for --bvh-out (prepareFolder below).
   }
   if (!options.bvhOut.empty()) {
     // A first estimate with a small skeleton (20 joints), exact once the skeleton is known.
@@ -296,23 +291,28 @@ json runSimulate(const SimulateOptions& options) {
                  {"world", worldParamsJson(params)}};
   if (avatars <= 1000) report["hits_by_avatar"] = byAvatar;
   if (options.controller == "policy") report["policy"] = policyDir.string();
-  if (!bvhFiles.empty()) report["bvh_files"] = bvhFiles;
+  if (!bvhFiles.empty()) {
+    report["bvh_files"] = bvhFiles;
+    report["bvh_folder"] = options.bvhOut.string();
+  }
   if (!options.eventsOut.empty()) report["events_file"] = options.eventsOut.string();
   return report;
 }
 
 std::string simulateText(const json& r) {
   std::string text = fmt::format(
-      "simulate ({} controller, {}): {} avatars x {} frames ({:.1f} s) in {:.2f} s: {}avatar-frames/s\n"
+      "simulate ({} controller, {}): {} x {} ({:.1f} s) in {}: {}avatar-frames/s\n"
       "hits: {} ({:.1f} per avatar-minute; head {}, chest {}, spine {}, targets {})\n",
-      r["controller"].get<std::string>(), r["mode"].get<std::string>(), r["avatars"].get<std::size_t>(),
-      r["frames"].get<std::size_t>(), r["seconds"].get<double>(), r["wall_seconds"].get<double>(),
+      r["controller"].get<std::string>(), r["mode"].get<std::string>(),
+      countOf(r["avatars"].get<std::size_t>(), "avatar"), countOf(r["frames"].get<std::size_t>(), "frame"),
+      r["seconds"].get<double>(), humanSeconds(r["wall_seconds"].get<double>()),
       humanCount(r["avatar_frames_per_second"].get<double>()), r["hits"].get<std::size_t>(),
       r["hits_per_avatar_minute"].get<double>(), r["hits_by_part"]["head"].get<std::size_t>(),
       r["hits_by_part"]["chest"].get<std::size_t>(), r["hits_by_part"]["spine"].get<std::size_t>(),
       r["hits_by_part"]["target"].get<std::size_t>());
   if (r.contains("bvh_files"))
-    text += fmt::format("wrote {} BVH files\n", r["bvh_files"].size());
+    text += fmt::format("wrote {} BVH file{} to {}\n", r["bvh_files"].size(), r["bvh_files"].size() == 1 ? "" : "s",
+                        r["bvh_folder"].get<std::string>());
   if (r.contains("events_file")) text += fmt::format("wrote the hits to {}\n", r["events_file"].get<std::string>());
   return text;
 }

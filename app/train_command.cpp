@@ -1,11 +1,16 @@
 // `mgrl train` (DESIGN.md sec. 5): trains a scenario's behaviours and saves a policy bundle.
+#include <atomic>
+#include <csignal>
 #include <cstdlib>
 #include <iostream>
 
 #include <fmt/format.h>
 #include <fmt/ranges.h>
 
+#include <set>
+
 #include "learn_common.hpp"
+
 #include "mgrl/behavior.hpp"
 #include "mgrl/checkpoint_store.hpp"
 #include "mgrl/hash.hpp"
@@ -67,25 +72,74 @@ class ProgressReporter final : public TrainObserver {
   bool drawn_ = false;
 };
 
+// Ctrl-C and SIGTERM while training raise this flag: the learner stops at its next safe
+// point and saves a checkpoint; what had finished is kept. A second Ctrl-C kills at once.
+std::atomic<bool> stopRequested{false};
+static_assert(std::atomic<bool>::is_always_lock_free, "the signal handler needs a lock-free flag");
+
+extern "C" void onStopSignal(int) { stopRequested.store(true); }
+
+class StopSignals {
+ public:
+  StopSignals() {
+    stopRequested.store(false);
+    struct sigaction action {};
+    action.sa_handler = onStopSignal;
+    action.sa_flags = SA_RESETHAND;
+    sigemptyset(&action.sa_mask);
+    sigaction(SIGINT, &action, &oldInt_);
+    sigaction(SIGTERM, &action, &oldTerm_);
+  }
+  ~StopSignals() {
+    sigaction(SIGINT, &oldInt_, nullptr);
+    sigaction(SIGTERM, &oldTerm_, nullptr);
+  }
+  StopSignals(const StopSignals&) = delete;
+  StopSignals& operator=(const StopSignals&) = delete;
+
+ private:
+  struct sigaction oldInt_ {}, oldTerm_ {};
+};
+
 // Checkpoints in a directory; MGRL_EXIT_AFTER_CHECKPOINTS=N makes the process exit at once
 // after the N-th, as a kill would, so crash recovery can be tested without timing races.
+// MGRL_STOP_AFTER_CHECKPOINTS=N raises the stop flag after the N-th, as a Ctrl-C would.
+// A resumed run says where it resumed from.
 class CrashTestCheckpointer final : public Checkpointer {
  public:
-  explicit CrashTestCheckpointer(DirectoryCheckpointer& inner) : inner_(inner) {
+  CrashTestCheckpointer(DirectoryCheckpointer& inner, std::string behavior, WarningSink log)
+      : inner_(inner), behavior_(std::move(behavior)), log_(std::move(log)) {
     if (const char* n = std::getenv("MGRL_EXIT_AFTER_CHECKPOINTS")) exitAfter_ = std::atoi(n);
+    if (const char* n = std::getenv("MGRL_STOP_AFTER_CHECKPOINTS")) stopAfter_ = std::atoi(n);
   }
   void save(const json& state, const QTable& table) override {
     inner_.save(state, table);
-    if (exitAfter_ > 0 && ++saved_ >= exitAfter_) {
+    ++saved_;
+    if (exitAfter_ > 0 && saved_ >= exitAfter_) {
       std::cerr << "mgrl: MGRL_EXIT_AFTER_CHECKPOINTS: exiting after checkpoint " << saved_ << '\n';
       std::_Exit(75);
     }
+    if (stopAfter_ > 0 && saved_ == stopAfter_) stopRequested.store(true);
   }
-  std::optional<json> load(QTable& table) override { return inner_.load(table); }
+  std::optional<json> load(QTable& table) override {
+    std::optional<json> state = inner_.load(table);
+    if (state && log_) {
+      const json updates = state->is_object() && state->contains("updates") ? (*state)["updates"] : json();
+      log_(fmt::format("resume: {}: continuing from the checkpoint{} in {}", behavior_,
+                       updates.is_number_unsigned() ? fmt::format(" at {} actions", updates.get<std::uint64_t>()) : "",
+                       inner_.directory().string()));
+    }
+    resumed_ = state.has_value();
+    return state;
+  }
+  bool resumed() const { return resumed_; }
 
  private:
   DirectoryCheckpointer& inner_;
-  int exitAfter_ = 0, saved_ = 0;
+  std::string behavior_;
+  WarningSink log_;
+  int exitAfter_ = 0, stopAfter_ = 0, saved_ = 0;
+  bool resumed_ = false;
 };
 
 std::vector<double> vertexPositions(const Discretizer& grid) {
@@ -104,11 +158,56 @@ fs::path checkpointDirectory(const fs::path& out, const std::string& behavior) {
 
 }  // namespace
 
-fs::path defaultPolicyDirectory(const fs::path& cacheDir, const std::string& scenarioName, const fs::path& scenarioPath) {
+fs::path defaultPolicyDirectory(const fs::path& cacheDir, const Scenario& scenario) {
+  // Everything that trains the tables names the folder: the scenario file, its graph and
+  // every behaviour's settings (after --set), so another learner gets another bundle.
   std::error_code ec;
-  const fs::path canonical = fs::weakly_canonical(scenarioPath, ec);
-  return cacheDir / "policies" / fmt::format("{}-{}", scenarioName, hexDigest(hashBytes(canonical.string())).substr(0, 8));
+  Hasher h;
+  h.update(std::string_view("mgrl.policy-path.v2"));
+  h.update(std::string_view(fs::weakly_canonical(scenario.path, ec).string()));
+  const std::string graphKey = graphCacheKey(scenario);
+  h.update(std::string_view(graphKey));
+  for (const BehaviorSpec& spec : scenario.behaviors) {
+    h.update(std::string_view(spec.name));
+    h.update(std::string_view(behaviorConfigAndKey(spec, plugins(), graphKey).second));
+  }
+  return cacheDir / "policies" / fmt::format("{}-{}", scenario.name, h.hex().substr(0, 8));
 }
+
+namespace {
+
+// A stopped run keeps what had finished: the bundle is saved with the finished tables and
+// the unfinished behaviours named in its provenance (so eval and simulate refuse it,
+// saying to resume, instead of taking it for a whole one), then the run ends with
+// Interrupted saying how to continue.
+[[noreturn]] void interrupted(const TrainOptions& options, const fs::path& out, PolicyBundle& bundle,
+                              const std::vector<std::string>& wanted, const std::string& current,
+                              const TrainInterrupted& stop, const fs::path& checkpoint) {
+  // A table of the current behaviour from an earlier run is still right (same key).
+  std::vector<std::string> unfinished;
+  for (const std::string& name : wanted)
+    if (bundle.behaviors.count(name) == 0) unfinished.push_back(name);
+  std::vector<std::string> kept;
+  for (const auto& entry : bundle.behaviors) kept.push_back(entry.first);
+  std::string keptText = "nothing had finished";
+  if (!kept.empty()) {
+    bundle.provenance["unfinished"] = unfinished;
+    savePolicyBundle(out, bundle);
+    keptText = fmt::format("kept {} in {}", fmt::join(kept, ", "), out.string());
+  }
+  const std::string where =
+      stop.checkpointed()
+          ? fmt::format("checkpoint at {} of {} actions in {}", stop.updates(), stop.total(), checkpoint.string())
+          : std::string("no checkpoint: it starts over");
+  std::string command = fmt::format("mgrl train {}", options.scenario.string());
+  if (!options.behavior.empty()) command += fmt::format(" --behavior {}", options.behavior);
+  command += setFlags(options.sets);
+  if (!options.out.empty()) command += fmt::format(" --out {}", options.out.string());
+  throw Interrupted(fmt::format("interrupted while training {} ({}); {}; run `{} --resume` to continue", current,
+                                where, keptText, command));
+}
+
+}  // namespace
 
 json runTrain(const TrainOptions& options) {
   const auto log = [&](const std::string& m) {
@@ -123,7 +222,7 @@ json runTrain(const TrainOptions& options) {
                               fmt::join(names, ", "), quoteToken(options.behavior)));
   }
   const fs::path cacheDir = options.cacheDir.empty() ? defaultCacheDirectory() : options.cacheDir;
-  fs::path out = options.out.empty() ? defaultPolicyDirectory(cacheDir, scenario.name, scenario.path) : options.out;
+  fs::path out = options.out.empty() ? defaultPolicyDirectory(cacheDir, scenario) : options.out;
   if (!out.has_filename()) out = out.parent_path();
   {
     // Fail before hours of training, not after: the bundle's folder must be creatable.
@@ -143,21 +242,27 @@ json runTrain(const TrainOptions& options) {
                        {"scenario_name", loaded.scenario.name},
                        {"tool", fmt::format("mgrl {}", kVersion)},
                        {"sets", options.sets}};
-  if (!options.behavior.empty() && fs::exists(out / "manifest.json")) {
-    // Training one behaviour keeps the others' tables if they are still current.
+  // Tables already in the bundle that are still current (same key: the same settings on
+  // the same graph, so the same table) are kept: those of other behaviours when training
+  // one, those a stopped run finished when resuming, and all of them until replaced.
+  std::set<std::string> finished;
+  if (fs::exists(out / "manifest.json")) {
     try {
       PolicyBundle previous = loadPolicyBundle(out, model, loaded.graph.key);
+      const json unfinished = previous.provenance.value("unfinished", json::array());
       for (auto& [name, entry] : previous.behaviors) {
         const auto match = std::find_if(all.begin(), all.end(), [&](const Behavior& b) { return b.name == name; });
-        if (name == options.behavior) continue;
-        if (match != all.end() && match->key == entry.key)
+        if (match != all.end() && match->key == entry.key) {
           bundle.behaviors.emplace(name, std::move(entry));
-        else
+          const bool wasUnfinished = std::find(unfinished.begin(), unfinished.end(), json(name)) != unfinished.end();
+          if (options.resume && !wasUnfinished) finished.insert(name);
+        } else {
           log(fmt::format("warning: dropping {}'s table from {}: the scenario {}", name, out.string(),
                           match == all.end() ? "no longer has this behaviour" : "now asks for other settings"));
+        }
       }
     } catch (const Error& e) {
-      log(fmt::format("warning: not keeping the other behaviours of {}: {}", out.string(), e.what()));
+      log(fmt::format("warning: not keeping the behaviours already in {}: {}", out.string(), e.what()));
     }
   }
 
@@ -166,9 +271,17 @@ json runTrain(const TrainOptions& options) {
                  {"policy", out.string()},
                  {"graph_key", loaded.graph.key},
                  {"behaviors", json::object()}};
+  std::vector<std::string> wanted;
+  for (const Behavior& behavior : all)
+    if (options.behavior.empty() || behavior.name == options.behavior) wanted.push_back(behavior.name);
   std::vector<fs::path> checkpoints;
+  const StopSignals signals;
   for (Behavior& behavior : all) {
-    if (!options.behavior.empty() && behavior.name != options.behavior) continue;
+    if (std::find(wanted.begin(), wanted.end(), behavior.name) == wanted.end()) continue;
+    if (finished.count(behavior.name) != 0) {
+      log(fmt::format("resume: {}: already trained in {}, kept", behavior.name, out.string()));
+      continue;
+    }
     const Problem problem = behavior.problem(model);
     const auto tabulateStart = Clock::now();
     const GridModel grid = GridModel::build(problem, threads);
@@ -181,10 +294,20 @@ json runTrain(const TrainOptions& options) {
     DirectoryCheckpointer directory(checkpointDirectory(out, behavior.name), behavior.key, model,
                                     behavior.discretizer->vertexCount(), options.log);
     if (!options.resume) directory.remove();
-    CrashTestCheckpointer checkpointer(directory);
+    CrashTestCheckpointer checkpointer(directory, behavior.name, options.log);
     checkpoints.push_back(directory.directory());
-    ProgressReporter progress(behavior.name, options.progressBar, options.log);
-    TrainResult result = behavior.learner->train({problem, grid, &progress, &checkpointer, threads});
+    std::optional<TrainResult> trained;
+    {
+      ProgressReporter progress(behavior.name, options.progressBar, options.log);
+      try {
+        trained = behavior.learner->train({problem, grid, &progress, &checkpointer, threads, &stopRequested});
+      } catch (const TrainInterrupted& stop) {
+        interrupted(options, out, bundle, wanted, behavior.name, stop, directory.directory());
+      }
+    }
+    if (options.resume && !checkpointer.resumed())
+      log(fmt::format("resume: {}: no checkpoint to continue from, trained from the start", behavior.name));
+    TrainResult& result = *trained;
 
     json curve = json::array();
     for (const CurvePoint& p : result.curve) curve.push_back({p.updates, p.seconds, p.residual, p.meanResidual});
@@ -212,6 +335,7 @@ json runTrain(const TrainOptions& options) {
     log(fmt::format("train {}: {} updates in {:.2f} s ({}updates/s), Bellman residual {:.3g}", behavior.name,
                     result.updates, result.seconds, humanCount(rate), result.finalResidual));
   }
+  if (bundle.provenance.contains("unfinished")) bundle.provenance.erase("unfinished");
   savePolicyBundle(out, bundle);
   for (const fs::path& dir : checkpoints) {
     std::error_code ec;

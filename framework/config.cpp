@@ -11,20 +11,19 @@
 
 namespace mgrl {
 
-ConfigNode::ConfigNode(YAML::Node node, std::shared_ptr<const std::string> source, std::string path,
-                       YAML::Mark parentMark)
-    : node_(std::move(node)), source_(std::move(source)), path_(std::move(path)), mark_(parentMark) {
+ConfigNode::ConfigNode(YAML::Node node, std::shared_ptr<Origin> origin, std::string path, YAML::Mark parentMark)
+    : node_(std::move(node)), origin_(std::move(origin)), path_(std::move(path)), mark_(parentMark) {
   // A node without a position of its own (e.g. an absent child) reports its parent's.
   if (node_ && node_.Mark().line >= 0) mark_ = node_.Mark();
 }
 
 ConfigNode ConfigNode::parse(std::string_view text, std::string source) {
-  auto name = std::make_shared<const std::string>(std::move(source));
+  auto origin = std::make_shared<Origin>(Origin{std::move(source), {}});
   try {
     YAML::Node root = YAML::Load(std::string(text));
-    return ConfigNode(root, name, "", YAML::Mark());
+    return ConfigNode(root, origin, "", YAML::Mark());
   } catch (const YAML::Exception& e) {
-    throw ConfigError(fmt::format("{}:{}:{}: expected valid YAML, found a syntax error: {}", *name, e.mark.line + 1,
+    throw ConfigError(fmt::format("{}:{}:{}: expected valid YAML, found a syntax error: {}", origin->source, e.mark.line + 1,
                                   e.mark.column + 1, e.msg));
   }
 }
@@ -32,8 +31,19 @@ ConfigNode ConfigNode::parse(std::string_view text, std::string source) {
 ConfigNode ConfigNode::parseFile(const std::filesystem::path& path) { return parse(readFile(path), path.string()); }
 
 std::string ConfigNode::where() const {
-  if (mark_.line < 0) return *source_;
-  return fmt::format("{}:{}:{}", *source_, mark_.line + 1, mark_.column + 1);
+  // A value set on the command line is not at the file's line (which may hold another).
+  for (auto it = origin_->overrides.rbegin(); it != origin_->overrides.rend(); ++it) {
+    const std::string& path = it->first;
+    if (path_ == path || (path_.size() > path.size() && path_.compare(0, path.size(), path) == 0 &&
+                          (path_[path.size()] == '.' || path_[path.size()] == '[')))
+      return it->second;
+  }
+  if (mark_.line < 0) return origin_->source;
+  return fmt::format("{}:{}:{}", origin_->source, mark_.line + 1, mark_.column + 1);
+}
+
+void ConfigNode::noteOverride(const std::string& path, std::string flag) const {
+  origin_->overrides.emplace_back(path, std::move(flag));
 }
 
 void ConfigNode::fail(std::string_view problem) const {
@@ -66,8 +76,8 @@ bool ConfigNode::has(std::string_view key) const {
 ConfigNode ConfigNode::child(std::string_view key) const {
   if (!node_.IsMap()) fail(fmt::format("expected a map with key '{}', found {}", key, describe(node_)));
   for (const auto& item : node_)
-    if (item.first.IsScalar() && item.first.Scalar() == key) return ConfigNode(item.second, source_, childPath(key), item.first.Mark());
-  return ConfigNode(YAML::Node(), source_, childPath(key), mark_);
+    if (item.first.IsScalar() && item.first.Scalar() == key) return ConfigNode(item.second, origin_, childPath(key), item.first.Mark());
+  return ConfigNode(YAML::Node(), origin_, childPath(key), mark_);
 }
 
 ConfigNode ConfigNode::section(std::string_view key) const {
@@ -82,9 +92,9 @@ std::vector<std::string> ConfigNode::keys() const {
   std::vector<std::string> result;
   for (const auto& item : node_) {
     if (!item.first.IsScalar())
-      ConfigNode(item.first, source_, path_, mark_).fail("expected a plain key, found a map or list as key");
+      ConfigNode(item.first, origin_, path_, mark_).fail("expected a plain key, found a map or list as key");
     if (std::find(result.begin(), result.end(), item.first.Scalar()) != result.end())
-      ConfigNode(item.second, source_, childPath(item.first.Scalar()), item.first.Mark())
+      ConfigNode(item.second, origin_, childPath(item.first.Scalar()), item.first.Mark())
           .fail("expected each key once, found it again (a second copy would be ignored)");
     result.push_back(item.first.Scalar());
   }
@@ -95,7 +105,7 @@ std::vector<ConfigNode> ConfigNode::elements() const {
   if (!node_.IsSequence()) fail(fmt::format("expected a list, found {}", describe(node_)));
   std::vector<ConfigNode> result;
   std::size_t i = 0;
-  for (const auto& item : node_) result.push_back(ConfigNode(item, source_, fmt::format("{}[{}]", path_, i++), mark_));
+  for (const auto& item : node_) result.push_back(ConfigNode(item, origin_, fmt::format("{}[{}]", path_, i++), mark_));
   return result;
 }
 
@@ -108,7 +118,7 @@ void ConfigNode::allowOnly(std::initializer_list<std::string_view> allowed) cons
     bool known = false;
     for (std::string_view a : allowed) known = known || a == key;
     if (!known)
-      ConfigNode(item.second, source_, childPath(key), item.first.Mark())
+      ConfigNode(item.second, origin_, childPath(key), item.first.Mark())
           .fail(fmt::format("unknown key (expected one of: {})", fmt::join(allowed, ", ")));
   }
 }

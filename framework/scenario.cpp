@@ -234,6 +234,7 @@ Scenario parseScenario(std::string_view text, const std::filesystem::path& sourc
     if (switchesType(o)) applyOverride(root.yaml(), o, source.string());
   for (const std::string& o : overrides)
     if (!switchesType(o)) applyOverride(root.yaml(), o, source.string());
+  for (const std::string& o : overrides) root.noteOverride(o.substr(0, o.find('=')), "--set " + o);
   root.allowOnly({"name", "description", "motion", "graph", "behaviors", "world"});
   // The world section is read where a world is made (readWorldParams(worldNode(s))); it
   // is checked here so that a mistake in it fails every command at once.

@@ -238,13 +238,18 @@ TrainResult QLearning::train(const TrainContext& context) const {
       lastResidual = r.max;
       ++nextCurveIndex;
     }
-    if (context.checkpointer && checkpointEvery_ > 0 && walk.updates % checkpointEvery_ == 0 &&
-        walk.updates < total) {
+    const bool stopping = context.stop && context.stop->load(std::memory_order_relaxed) && walk.updates < total;
+    // A chunk ends where an uninterrupted run's chunk ends too, so a checkpoint saved on
+    // a stop resumes to the same table as one saved on schedule.
+    if (context.checkpointer && walk.updates < total &&
+        (stopping || (checkpointEvery_ > 0 && walk.updates % checkpointEvery_ == 0))) {
       nlohmann::json curve = nlohmann::json::array();
       for (const CurvePoint& p : result.curve) curve.push_back({p.updates, p.seconds, p.residual, p.meanResidual});
-      context.checkpointer->save({{"walk", toJson(walk)}, {"seconds", elapsed()}, {"curve", curve}}, q);
+      context.checkpointer->save(
+          {{"updates", walk.updates}, {"walk", toJson(walk)}, {"seconds", elapsed()}, {"curve", curve}}, q);
     }
     if (context.observer) context.observer->progress({walk.updates, total, elapsed(), lastResidual});
+    if (stopping) throw TrainInterrupted(walk.updates, total, context.checkpointer != nullptr);
   }
 
   result.updates = walk.updates;
@@ -268,7 +273,7 @@ void registerQLearning(LearnerRegistry& registry) {
         ParamSpec::number("alpha_final", 0.0, 0, 1, "", "learning rate at the end of the budget (1 at the start)"),
         ParamSpec::integer("curve_points", 20, 1, 100000, "points",
                            "training-curve points, each measuring the Bellman residual with a full sweep"),
-        ParamSpec::integer("checkpoint_every", 50'000'000, 0, 1'000'000'000'000LL, "actions",
+        ParamSpec::integer("checkpoint_every", 10'000'000, 0, 1'000'000'000'000LL, "actions",
                            "save a resumable checkpoint this often (0: never)"),
         threadsSpec()},
        [](const Params& p) { return std::make_unique<QLearning>(p); }});

@@ -41,6 +41,9 @@ class ValueIteration final : public Learner {
       ++sweeps;
       result.curve.push_back({sweeps * pairs, elapsed(), change, 0});
       if (context.observer) context.observer->progress({sweeps * pairs, 0, elapsed(), change});
+      // Sweeps are short and need no checkpoint: a stopped run starts over.
+      if (context.stop && context.stop->load(std::memory_order_relaxed) && change >= tolerance_)
+        throw TrainInterrupted(sweeps * pairs, 0, false);
       if (change < tolerance_) {
         converged = true;
         break;

@@ -1,17 +1,77 @@
 #!/usr/bin/env bash
-# The main job: set up, build, inspect the CMU shadow-boxing capture, build the boxing
-# scenario's motion graph (cached after the first run), train its approach and hit
-# behaviours with the paper's Q-learning, evaluate the combined policy, then run a
-# two-boxer bout (BVH files and hits in build/demo/) and the paper's 30-boxer crowd.
+# The main job: set up, build the `mgrl` program, inspect the CMU shadow-boxing capture,
+# build the boxing scenario's motion graph (cached after the first run), train its
+# approach and hit behaviours with the paper's Q-learning, evaluate the combined policy,
+# then run a two-boxer bout (BVH files and hits in build/demo/) and the paper's 30-boxer
+# crowd.
+#
+# Usage: scripts/demo.sh [--quick] [extra `mgrl graph` arguments]
+#   --quick   small training budgets and short runs (about 1 minute after the build): the
+#             same steps, used by scripts/test.sh from a fresh clone so a broken main job
+#             cannot land.
+# Environment: MGRL_DATA (motion capture, default ../shared/mocap), MGRL_CACHE (graphs and
+# policies, default ~/.cache/mgrl), MGRL_BUILD_DIR (default build/).
 set -euo pipefail
 root="$(cd "$(dirname "$0")/.." && pwd)"
-"$root/scripts/setup.sh"
-"$root/scripts/build.sh"
+quick=0
+if [ "${1:-}" = "--quick" ]; then
+  quick=1
+  shift
+fi
+build="${MGRL_BUILD_DIR:-$root/build}"
+out="$build/demo"
 data="${MGRL_DATA:-$root/../shared/mocap}"
-"$root/build/app/mgrl" inspect "$data/cmu/bvh/13_17_boxing.bvh" "$data/cmu/bvh/13_18_boxing.bvh"
-"$root/build/app/mgrl" graph "$root/scenarios/boxing.yaml" --data "$data" "$@"
-"$root/build/app/mgrl" train "$root/scenarios/boxing.yaml" --data "$data"
-"$root/build/app/mgrl" eval "$root/scenarios/boxing.yaml" --data "$data" --trials 200
-"$root/build/app/mgrl" simulate "$root/scenarios/boxing.yaml" --data "$data" --avatars 2 --seconds 60 \
-  --bvh-out "$root/build/demo" --events-out "$root/build/demo/hits.jsonl"
-"$root/build/app/mgrl" simulate "$root/scenarios/boxing.yaml" --data "$data" --avatars 30 --seconds 33.3
+mgrl="$build/app/mgrl"
+start=$SECONDS
+
+say() { echo "demo: $*" >&2; }
+step() { say "[$((SECONDS - start)) s] $*"; }
+
+if [ ! -d "$data/cmu/bvh" ]; then
+  say "expected the motion capture in $data (with cmu/bvh/ inside), found none: set MGRL_DATA"
+  exit 1
+fi
+if [ -x "$mgrl" ]; then
+  say "about 1 minute with the program already built (training takes about 15 s of it)"
+else
+  say "about 10 minutes on a 2-core machine: the build takes most of it, training about 15 s"
+fi
+
+step "set-up (installs missing Debian packages)"
+"$root/scripts/setup.sh"
+
+step "building mgrl into $build (log: $build/demo-build.log)"
+mkdir -p "$build"
+if ! "$root/scripts/build.sh" "$build" --target mgrl >"$build/demo-build.log" 2>&1; then
+  tail -n 30 "$build/demo-build.log" >&2
+  say "the build failed; the whole log is $build/demo-build.log"
+  exit 1
+fi
+
+# Quick mode: the same commands with budgets small enough for CI.
+train_sets=()
+trials=200
+bout=60
+crowd=33.3
+if ((quick)); then
+  train_sets=(--set behaviors.approach.learner.budget=200000 --set behaviors.hit.learner.budget=400000)
+  trials=20
+  bout=5
+  crowd=3
+fi
+
+mkdir -p "$out"
+step "inspect: the CMU shadow-boxing capture"
+"$mgrl" inspect "$data/cmu/bvh/13_17_boxing.bvh" "$data/cmu/bvh/13_18_boxing.bvh"
+step "graph: the boxing scenario's motion graph"
+"$mgrl" graph "$root/scenarios/boxing.yaml" --data "$data" "$@"
+step "train: approach and hit (Q-learning, paper sec. 4)"
+"$mgrl" train "$root/scenarios/boxing.yaml" --data "$data" "${train_sets[@]}"
+step "eval: the combined policy against a random controller"
+"$mgrl" eval "$root/scenarios/boxing.yaml" --data "$data" --trials "$trials" "${train_sets[@]}"
+step "simulate: a two-boxer bout of $bout s (BVH and hits in $out)"
+"$mgrl" simulate "$root/scenarios/boxing.yaml" --data "$data" --avatars 2 --seconds "$bout" \
+  --bvh-out "$out" --events-out "$out/hits.jsonl" "${train_sets[@]}"
+step "simulate: the paper's crowd of 30 sparring boxers"
+"$mgrl" simulate "$root/scenarios/boxing.yaml" --data "$data" --avatars 30 --seconds "$crowd" "${train_sets[@]}"
+step "done: BVH files and hits in $out"

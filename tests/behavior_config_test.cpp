@@ -190,7 +190,7 @@ TEST_CASE("a well-formed behaviors section builds every plugin with defaults fil
   // The config records every parameter, the defaults too, and the implicit environment.
   CHECK(approach.config["learner"]["budget"] == 1000);
   CHECK(approach.config["learner"]["alpha_final"] == 0.0);
-  CHECK(approach.config["learner"]["checkpoint_every"] == 50'000'000);
+  CHECK(approach.config["learner"]["checkpoint_every"] == 10'000'000);
   CHECK(approach.config["discretizer"]["min_radius"] == 0.0);
   CHECK(approach.config["environment"]["type"] == "static_target");
   CHECK(hit.config["reward"]["use_speed"] == true);

@@ -364,12 +364,14 @@ TEST_CASE("mgrl train and eval refuse what they cannot use, with the reason on s
 
   REQUIRE(box.train(kFast + " --out " + shellWord(out)).status == 0);
   REQUIRE(box.eval(kFast + " --trials 3 --policy " + shellWord(out)).status == 0);
-  // Another reward parameter: the table belongs to other settings.
-  requireRefusal(box.eval(kFast + " --set behaviors.approach.reward.sigma=0.2 --policy " + shellWord(out)),
-                 "behaviour 'approach' was trained with other settings than the scenario's now");
-  // Another learner budget too (the key follows the learner's parameters).
-  requireRefusal(box.eval("--set behaviors.hit.learner.budget=400000 --policy " + shellWord(out)),
-                 "behaviour 'approach' was trained with other settings");
+  // Another reward parameter: without --policy, the scenario's own bundle (for these
+  // settings) does not exist; with --policy, the bundle's settings are used, saying so.
+  requireRefusal(box.eval(kFast + " --set behaviors.approach.reward.sigma=0.2"), "no policy bundle here");
+  const Run adopted = box.eval(kFast + " --trials 3 --set behaviors.approach.reward.sigma=0.2 --policy " + shellWord(out));
+  INFO(adopted.err);
+  CHECK(adopted.status == 0);
+  CHECK_THAT(adopted.err, Contains("--policy " + out.string() + ": using the settings the bundle was trained with "
+                                   "(approach.reward.sigma=0.1) instead of the scenario's"));
   // Another graph.
   requireRefusal(box.eval(kFast + " --set graph.threshold=0.5 --policy " + shellWord(out)),
                  "the policy was made for another graph");
@@ -394,4 +396,88 @@ TEST_CASE("refusals that need no graph print only the reason on stderr", "[cli][
   INFO(badParameter.err);
   CHECK(badParameter.status == 1);
   CHECK(lines(badParameter.err).size() == 1);
+}
+
+// Issue 12: Ctrl-C (here raised by MGRL_STOP_AFTER_CHECKPOINTS, as the signal handler
+// does) keeps the finished behaviours, saves a checkpoint, says how to resume; the bundle
+// is not taken for a whole one; --resume says what it resumed and ends with the table of
+// an uninterrupted run.
+TEST_CASE("a stopped mgrl train keeps what finished and resumes the rest", "[cli][data]") {
+  Sandbox box("stop");
+  const fs::path out = box.path("bundle");
+  const std::string settings = kFast + " --set behaviors.hit.learner.checkpoint_every=100000";
+  const Run stopped = box.train(settings + " --out " + shellWord(out), "MGRL_STOP_AFTER_CHECKPOINTS=1");
+  INFO("stderr: " << stopped.err);
+  CHECK(stopped.status == 130);
+  CHECK(stopped.out.empty());
+  CHECK_THAT(stopped.lastErrorLine(), StartsWith("mgrl: interrupted while training hit (checkpoint at ") &&
+                                          Contains("kept approach in " + out.string()) && Contains("--resume`"));
+  requireFile(out / "approach.q.npy");
+  CHECK_FALSE(fs::exists(out / "hit.q.npy"));
+  requireFile(box.path("bundle.checkpoints") / "hit" / "state.json");
+  requireRefusal(box.eval(settings + " --trials 3 --policy " + shellWord(out)),
+                 "expected a trained table for behaviour 'hit', found none: its training was interrupted; run mgrl "
+                 "train");
+
+  const Run resumed = box.train(settings + " --resume --out " + shellWord(out));
+  const json report = resumed.report();
+  CHECK_THAT(resumed.err, Contains("resume: approach: already trained in " + out.string() + ", kept"));
+  CHECK_THAT(resumed.err, Contains("resume: hit: continuing from the checkpoint at "));
+  CHECK(report["behaviors"]["hit"]["stats"]["resumed"] == true);
+  CHECK_FALSE(report["behaviors"].contains("approach"));
+  CHECK(box.eval(settings + " --trials 3 --policy " + shellWord(out)).status == 0);
+
+  const fs::path straight = box.path("straight");
+  REQUIRE(box.train(settings + " --out " + shellWord(straight)).status == 0);
+  CHECK(readText(out / "approach.q.npy") == readText(straight / "approach.q.npy"));
+  CHECK(readText(out / "hit.q.npy") == readText(straight / "hit.q.npy"));
+  CHECK_FALSE(fs::exists(box.path("bundle.checkpoints")));
+}
+
+// The real signal: Ctrl-C once training has started.
+TEST_CASE("SIGINT during mgrl train exits 130 with a checkpoint and the resume command", "[cli][data]") {
+  Sandbox box("sigint");
+  const fs::path out = box.path("bundle"), err = box.path("err.txt");
+  const std::string command =
+      mgrl::test::shellWord(MGRL_BINARY) + " train " + shellWord(kBoxing) + box.where() +
+      " --set behaviors.approach.learner.budget=200000 --set behaviors.hit.learner.budget=1000000000 --out " +
+      shellWord(out);
+  // Start, wait until hit is training, press Ctrl-C, report the exit code.
+  const std::string script = command + " 2>" + shellWord(err) + " >/dev/null & pid=$!; for i in $(seq 600); do grep -q 'train hit:' " +
+                             shellWord(err) + " && break; sleep 0.1; done; sleep 0.3; kill -INT $pid; wait $pid; echo $? > " +
+                             shellWord(box.path("status"));
+  const fs::path file = box.path("sigint.sh");
+  std::ofstream(file) << script << "\n";
+  REQUIRE(std::system(("bash " + shellWord(file)).c_str()) == 0);
+  const std::string status = readText(box.path("status"));
+  const std::string stderrText = readText(err);
+  INFO("stderr: " << stderrText);
+  CHECK(status == "130\n");
+  CHECK_THAT(stderrText, Contains("mgrl: interrupted while training hit (checkpoint at ") &&
+                             Contains("kept approach in " + out.string()));
+  requireFile(out / "approach.q.npy");
+  requireFile(box.path("bundle.checkpoints") / "hit" / "state.json");
+}
+
+// Issue 12: the default bundle depends on everything that trained it, so training another
+// learner does not overwrite the first; eval with the same --set finds each.
+TEST_CASE("another learner trains into another default bundle", "[cli][data]") {
+  Sandbox box("paths");
+  const std::string vi = kFast + " --set behaviors.approach.learner.type=value_iteration";
+  const json q = box.train(kFast + " --behavior approach").report();
+  const json v = box.train(vi + " --behavior approach").report();
+  CHECK(q["policy"] != v["policy"]);
+  CHECK(fs::path(q["policy"].get<std::string>()).parent_path() == box.cache() / "policies");
+  CHECK(json::parse(readText(fs::path(v["policy"].get<std::string>()) / "manifest.json"))["behaviors"]["approach"]
+            ["learner"] == "value_iteration");
+  CHECK(json::parse(readText(fs::path(q["policy"].get<std::string>()) / "manifest.json"))["behaviors"]["approach"]
+            ["learner"] == "q_learning");
+
+  // A bundle trained with another learner, given with --policy, is used with its settings.
+  const fs::path out = box.path("vi");
+  REQUIRE(box.train(vi + " --out " + shellWord(out)).status == 0);
+  const Run eval = box.eval(kFast + " --trials 3 --policy " + shellWord(out));
+  INFO("stderr: " << eval.err);
+  CHECK(eval.status == 0);
+  CHECK_THAT(eval.err, Contains("using the settings the bundle was trained with (approach.learner.type=value_iteration)"));
 }

@@ -375,10 +375,10 @@ TEST_CASE("mgrl simulate refuses bad input before simulating and leaves nothing 
                  "expected a folder");
   CHECK(readText(file) == "a file\n");
 
-  const fs::path noFolder = box.path("missing") / "events.jsonl";
-  requireRefusal(box.simulate("--json --controller random --events-out " + shellWord(noFolder)),
-                 "--events-out " + noFolder.string(), "expected an existing folder");
-  requireAbsent(box.path("missing"));
+  const fs::path underAFile = file / "events.jsonl";
+  requireRefusal(box.simulate("--json --controller random --events-out " + shellWord(underAFile)),
+                 "--events-out " + file.string(), "expected a folder that can be created");
+  CHECK(readText(file) == "a file\n");
 
   const fs::path folder = box.path("a_folder");
   fs::create_directory(folder);
@@ -431,4 +431,25 @@ TEST_CASE("a refused mgrl simulate leaves no --bvh-out folder behind", "[cli][da
     CHECK_THAT(lines(r.err).back(), StartsWith("mgrl: --bvh-out: recording 200000 avatars"));
     requireAbsent(bvh);
   }
+}
+
+// Output folders are handled one way (issue 12): --events-out makes missing folders as
+// --bvh-out does, and the text summary says where each output went.
+TEST_CASE("mgrl simulate makes missing output folders and says where it wrote", "[cli][data][simulate-cli]") {
+  Sandbox box("outputs");
+  const fs::path bvh = box.path("new") / "bvh", events = box.path("other") / "deeper" / "hits.jsonl";
+  const Run r = box.simulate("--controller random --avatars 1 --seconds 1 --bvh-out " + shellWord(bvh) +
+                             " --events-out " + shellWord(events));
+  INFO("stderr: " << r.err);
+  REQUIRE(r.status == 0);
+  CHECK(fs::is_regular_file(bvh / "avatar_000.bvh"));
+  CHECK(fs::is_regular_file(events));
+  const std::vector<std::string> summary = lines(r.out);
+  REQUIRE(summary.size() == 4);
+  // One avatar: singular words, and a wall time that never reads "0.00 s".
+  CHECK_THAT(summary[0], StartsWith("simulate (random controller, sparring): 1 avatar x 30 frames (1.0 s) in "));
+  CHECK_THAT(summary[0], !Contains("in 0.00 s"));
+  CHECK(summary[2] == "wrote 1 BVH file to " + bvh.string());
+  CHECK(summary[3] == "wrote the hits to " + events.string());
+  CHECK(scratchLeft(box.dir()).empty());
 }

@@ -109,3 +109,23 @@ mgrl_cli_test(graph_unknown_key ARGS graph bad_scenario.yaml
               MESSAGE "bad_scenario.yaml:5:13: graph.treshold: unknown key (expected one of: threshold, velocity_weight, root_height_weight, contact_event, local_minimum, blend_frames, min_states, joint_weights, threads)")
 mgrl_cli_test(graph_missing_scenario ARGS graph no_such.yaml MESSAGE "no_such.yaml: cannot open: No such file or directory")
 mgrl_cli_test(graph_no_scenario ARGS graph EXIT 2 REGEX "SCENARIO is required")
+
+# --- Issue 12: what a new user types -----------------------------------------------------
+
+# An unknown option gets the nearest known one; --behaviour is --behavior.
+mgrl_cli_test(unknown_option_nearest ARGS eval tiny.bvh --contoller random EXIT 2
+              MESSAGE "eval: unknown option --contoller (did you mean --controller?)")
+mgrl_cli_test(unknown_option_far ARGS simulate tiny.bvh --frobnicate EXIT 2
+              MESSAGE "simulate: unknown option --frobnicate (see mgrl simulate --help)")
+mgrl_cli_test(behaviour_spelling ARGS train "${MGRL_SOURCE_DIR}/scenarios/boxing.yaml" --behaviour nope
+              MESSAGE "--behavior: expected one of the scenario's behaviours (approach, hit), found 'nope'")
+# A value set with --set is reported at the flag, not at the file's line (which holds another).
+mgrl_cli_test(set_names_flag ARGS train "${MGRL_SOURCE_DIR}/scenarios/boxing.yaml" --set world.mode=target
+              MESSAGE "--set world.mode=target: world.mode: expected one of: sparring, targets, found 'target'")
+mgrl_cli_test(set_names_flag_number ARGS eval "${MGRL_SOURCE_DIR}/scenarios/boxing.yaml"
+              --set behaviors.hit.learner.budget=abc
+              MESSAGE "--set behaviors.hit.learner.budget=abc: behaviors.hit.learner.budget: expected a whole number in [1, 1000000000000], found 'abc'")
+# `mgrl graph` checks the behaviours too, as train would.
+mgrl_cli_test(graph_checks_behaviours ARGS graph "${MGRL_SOURCE_DIR}/scenarios/boxing.yaml"
+              --set behaviors.hit.learner.type=nope
+              REGEX "--set behaviors\\.hit\\.learner\\.type=nope: behaviors\\.hit\\.learner\\.type: unknown learner 'nope'")

@@ -32,7 +32,7 @@ class ConfigNode {
 
   /// Dotted key path of this node ("" for the document root).
   const std::string& path() const { return path_; }
-  const std::string& source() const { return *source_; }
+  const std::string& source() const { return origin_->source; }
   const YAML::Node& yaml() const { return node_; }
   bool isMap() const { return node_.IsMap(); }
   bool isNull() const { return !node_ || node_.IsNull(); }
@@ -76,17 +76,27 @@ class ConfigNode {
     }
   }
 
+  /// Records that the value at dotted `path` came from the command line flag `flag`
+  /// (e.g. `--set world.mode=target`): a mistake there, or below it, is then reported as
+  /// `--set world.mode=target: world.mode: problem`, not at the file's line. Applies to
+  /// every node of this document.
+  void noteOverride(const std::string& path, std::string flag) const;
+
   /// Throws ConfigError `source:line:col: path: problem` at this node.
   [[noreturn]] void fail(std::string_view problem) const;
   /// "source:line:col" of this node.
   std::string where() const;
 
  private:
-  ConfigNode(YAML::Node node, std::shared_ptr<const std::string> source, std::string path, YAML::Mark parentMark);
+  struct Origin {
+    std::string source;
+    std::vector<std::pair<std::string, std::string>> overrides;  ///< (dotted path, flag)
+  };
+  ConfigNode(YAML::Node node, std::shared_ptr<Origin> origin, std::string path, YAML::Mark parentMark);
   std::string childPath(std::string_view key) const;
 
   YAML::Node node_;
-  std::shared_ptr<const std::string> source_;
+  std::shared_ptr<Origin> origin_;
   std::string path_;
   YAML::Mark mark_;
 };

@@ -4,6 +4,7 @@
 /// Learners never see YAML, BVH or files: parameters arrive through the registry, progress
 /// leaves through a TrainObserver, and long runs save their whole state through a
 /// Checkpointer so that a resumed run ends with the same table as an uninterrupted one.
+#include <atomic>
 #include <cstdint>
 #include <memory>
 #include <optional>
@@ -12,6 +13,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "mgrl/error.hpp"
 #include "mgrl/problem.hpp"
 #include "mgrl/q_table.hpp"
 #include "mgrl/registry.hpp"
@@ -63,6 +65,23 @@ struct TrainContext {
   TrainObserver* observer = nullptr;
   Checkpointer* checkpointer = nullptr;  ///< may be null: no checkpoints
   unsigned threads = 1;
+  /// When set and true (e.g. by a Ctrl-C handler), the learner stops at its next safe
+  /// point, saves a checkpoint if it can, and throws TrainInterrupted.
+  const std::atomic<bool>* stop = nullptr;
+};
+
+/// Thrown by Learner::train when TrainContext::stop was raised.
+class TrainInterrupted : public Error {
+ public:
+  TrainInterrupted(std::uint64_t updates, std::uint64_t total, bool checkpointed)
+      : Error("training interrupted"), updates_(updates), total_(total), checkpointed_(checkpointed) {}
+  std::uint64_t updates() const { return updates_; }  ///< work done when stopped
+  std::uint64_t total() const { return total_; }      ///< 0 when unknown (value iteration)
+  bool checkpointed() const { return checkpointed_; }  ///< a checkpoint of this point was saved
+
+ private:
+  std::uint64_t updates_, total_;
+  bool checkpointed_;
 };
 
 class Learner {

@@ -1,0 +1,25 @@
+#!/usr/bin/env bash
+# Checks what scripts/demo.sh printed and wrote: every step ran and said what it made.
+# Usage: scripts/check_demo.sh STDOUT_FILE STDERR_FILE DEMO_OUTPUT_DIR
+set -euo pipefail
+stdout="$1" stderr="$2" dir="$3"
+fail() {
+  echo "check_demo: $*" >&2
+  exit 1
+}
+expect() {  # FILE REGEX WHAT
+  grep -Eq "$2" "$1" || fail "expected $3 in $(basename "$1"), found none (regex: $2)"
+}
+expect "$stdout" '^13_17_boxing\.bvh' "the inspect report of 13_17_boxing.bvh"
+expect "$stdout" '^states +[0-9]+' "the graph's state count"
+expect "$stdout" '^policy bundle: ' "the trained policy bundle's path"
+expect "$stdout" 'success rate [0-9.]+ %' "the evaluation's success rate"
+expect "$stdout" '2 avatars x [0-9]+ frames' "the two-boxer bout"
+expect "$stdout" '30 avatars x [0-9]+ frames' "the 30-boxer crowd"
+expect "$stderr" 'demo: \[[0-9]+ s\] done' "the demo's last step"
+for f in avatar_000.bvh avatar_001.bvh hits.jsonl; do
+  [ -f "$dir/$f" ] || fail "expected $dir/$f, found none"
+done
+head -c 9 "$dir/avatar_000.bvh" | grep -q '^HIERARCHY' || fail "expected $dir/avatar_000.bvh to start with HIERARCHY"
+grep -q '^MOTION' "$dir/avatar_001.bvh" || fail "expected a MOTION section in $dir/avatar_001.bvh, found none"
+echo "check_demo: every step of the main job ran and wrote its files" >&2
