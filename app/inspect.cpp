@@ -4,6 +4,8 @@
 
 #include <fmt/format.h>
 
+#include "plural.hpp"
+
 namespace mgrl::app {
 namespace {
 
@@ -19,8 +21,10 @@ double rounded(double value, int decimals) {
 FileReport inspectFile(const std::filesystem::path& path, const InspectOptions& options) {
   const LoadedMotion loaded = loadMotion(path, options.load);
   const Motion& motion = loaded.motion;
-  const SkeletonRoles roles = findRoles(motion.skeleton(), options.roles, path.string());
+  const SkeletonRoles roles = findRoles(motion.skeleton(), options.roles, path.string(), options.load.warn);
   const Annotation annotation = annotate(motion, roles, options.annotation);
+  if (const std::string unusual = unusualHeightWarning(annotation, path.string()); !unusual.empty() && options.load.warn)
+    options.load.warn(unusual);
 
   FileReport report;
   report.path = path.string();
@@ -29,7 +33,10 @@ FileReport inspectFile(const std::filesystem::path& path, const InspectOptions& 
   report.fps = motion.fps();
   report.fileFps = loaded.fileFps;
   report.duration_s = motion.duration();
-  report.height_m = roles.restHeight;
+  report.height_m = annotation.standingHeight;
+  report.restHeight_m = roles.restHeight;
+  report.knockdownFrames = annotation.knockdownFrames;
+  report.knockdownRatio = options.annotation.knockdownHeadRatio;
   report.groundY_m = annotation.groundY;
   report.units = std::string(lengthUnitName(loaded.units));
   report.glitchFrames = annotation.glitchFrames;
@@ -63,6 +70,7 @@ nlohmann::json toJson(const std::vector<FileReport>& reports) {
         {"file_fps", rounded(r.fileFps, 6)},
         {"duration_s", rounded(r.duration_s, 6)},
         {"height_m", rounded(r.height_m, 4)},
+        {"rest_height_m", rounded(r.restHeight_m, 4)},
         {"units", r.units},
         {"ground_y_m", rounded(r.groundY_m, 4)},
         {"contact_frames", {{"left", r.contactFrames[0]}, {"right", r.contactFrames[1]}}},
@@ -70,6 +78,7 @@ nlohmann::json toJson(const std::vector<FileReport>& reports) {
         {"punches", {{"left", r.punches[0]}, {"right", r.punches[1]}, {"total", r.punches[0] + r.punches[1]}}},
         {"peak_hit_speed_mps", rounded(r.peakHitSpeed_mps, 3)},
         {"glitch_frames", r.glitchFrames},
+        {"knockdown_frames", r.knockdownFrames},
         {"hit_bounds_m", r.hits[0] + r.hits[1] == 0 ? nlohmann::json(nullptr)
                                                      : nlohmann::json{{"min", vec(r.hitMin)}, {"max", vec(r.hitMax)}}},
     });
@@ -89,8 +98,9 @@ std::string toText(const std::vector<FileReport>& reports) {
     out += fmt::format("  foot contact frames: left {} ({:.0f}%), right {} ({:.0f}%)\n", r.contactFrames[0],
                        100.0 * static_cast<double>(r.contactFrames[0]) / n, r.contactFrames[1],
                        100.0 * static_cast<double>(r.contactFrames[1]) / n);
-    out += fmt::format("  effective hits: left {} in {} punches, right {} in {} punches, total {}\n", r.hits[0],
-                       r.punches[0], r.hits[1], r.punches[1], r.hits[0] + r.hits[1]);
+    out += fmt::format("  effective hits: left {} in {}, right {} in {}, total {}\n", r.hits[0],
+                       counted(static_cast<std::size_t>(r.punches[0]), "punch", "punches"), r.hits[1], counted(static_cast<std::size_t>(r.punches[1]), "punch", "punches"),
+                       r.hits[0] + r.hits[1]);
     if (r.hits[0] + r.hits[1] > 0) {
       out += fmt::format("  peak hit speed {:.2f} m/s\n", r.peakHitSpeed_mps);
       out += fmt::format("  hitting points, avatar frame (m): x [{:.2f}, {:.2f}] (left +), y [{:.2f}, {:.2f}], "
@@ -98,7 +108,11 @@ std::string toText(const std::vector<FileReport>& reports) {
                          r.hitMin.x(), r.hitMax.x(), r.hitMin.y(), r.hitMax.y(), r.hitMin.z(), r.hitMax.z());
     }
     if (r.glitchFrames > 0)
-      out += fmt::format("  {} fist-speed glitch frames ignored (faster than the glitch threshold)\n", r.glitchFrames);
+      out += fmt::format("  {} ignored (faster than the glitch threshold)\n",
+                         counted(static_cast<std::size_t>(r.glitchFrames), "fist-speed glitch frame"));
+    if (r.knockdownFrames > 0)
+      out += fmt::format("  {} knocked down (head top below {:.0f} % of the standing height): no punches counted there\n",
+                         counted(r.knockdownFrames, "frame"), 100 * r.knockdownRatio);
   }
   return out;
 }

@@ -26,16 +26,21 @@ struct InspectOptions {
 struct FileReport {
   std::string path;
   std::size_t joints = 0, frames = 0;
-  double fps = 0, fileFps = 0, duration_s = 0, height_m = 0, groundY_m = 0;
+  double fps = 0, fileFps = 0, duration_s = 0, groundY_m = 0;
+  double height_m = 0;      ///< standing height from the motion (Annotation::standingHeight)
+  double restHeight_m = 0;  ///< from the rest pose (SkeletonRoles::restHeight)
   std::string units;
   std::array<std::size_t, 2> contactFrames{}, hits{};
   std::array<int, 2> punches{};
   int glitchFrames = 0;
+  std::size_t knockdownFrames = 0;  ///< frames with no punch counted: the boxer is down
+  double knockdownRatio = 0;        ///< AnnotationParams::knockdownHeadRatio used
   double peakHitSpeed_mps = 0;
   Eigen::Vector3d hitMin = Eigen::Vector3d::Zero(), hitMax = Eigen::Vector3d::Zero();
 };
 
-/// Loads, annotates and summarises one file. Throws mgrl::Error on bad input.
+/// Loads, annotates and summarises one file. Warnings (a fist standing in for a missing
+/// one, an unusual standing height) go to options.load.warn. Throws mgrl::Error on bad input.
 FileReport inspectFile(const std::filesystem::path& path, const InspectOptions& options);
 
 nlohmann::json toJson(const std::vector<FileReport>& reports);

@@ -34,6 +34,9 @@ void AnnotationParams::validate() const {
     throw Error("annotation: expected exit thresholds at least the enter thresholds (hysteresis), found smaller");
   if (!(punchMinAlignment >= 0 && punchMinAlignment <= 1))
     throw Error(fmt::format("annotation: punch_min_alignment: expected a value in [0, 1], found {}", punchMinAlignment));
+  if (!(knockdownHeadRatio >= 0 && knockdownHeadRatio < 1))
+    throw Error(fmt::format("annotation: knockdown_head_ratio: expected a value in [0, 1) (0: off), found {}",
+                            knockdownHeadRatio));
   if (punchMaxSpeed_mps <= punchMinSpeed_mps)
     throw Error(fmt::format("annotation: punch_max_speed_mps: expected a value above punch_min_speed_mps ({}), found {}",
                             punchMinSpeed_mps, punchMaxSpeed_mps));
@@ -62,8 +65,8 @@ Annotation annotate(const Motion& motion, const SkeletonRoles& roles, const Anno
   const std::size_t n = skeleton.jointCount();
 
   // Tracked points per frame: ankle L/R, toe L/R, fist tip L/R, wrist L/R, forearm L/R,
-  // toe tip L/R.
-  constexpr std::size_t kPoints = 12;
+  // toe tip L/R, head top.
+  constexpr std::size_t kPoints = 13;
   std::vector<Eigen::Vector3d> points(frames * kPoints);
   std::vector<Eigen::Vector3d> rootPosition(frames), facing(frames);
   std::vector<Eigen::Quaterniond> rotations(n);
@@ -79,6 +82,7 @@ Annotation annotate(const Motion& motion, const SkeletonRoles& roles, const Anno
       p[8 + s] = positions[roles.forearm[s]];
       p[10 + s] = pointOnJoint(rotations, positions, roles.toe[s], roles.toeTipOffset[s]);
     }
+    p[12] = pointOnJoint(rotations, positions, roles.head, roles.headTopOffset);
     rootPosition[f] = positions[0];
     facing[f] = rotations[0] * roles.forward;
   }
@@ -130,6 +134,20 @@ Annotation annotate(const Motion& motion, const SkeletonRoles& roles, const Anno
     }
   }
 
+  // Standing height from the motion: the head top above the lower foot while both feet
+  // are down. A high percentile, because boxers stand in a crouch most of the time.
+  std::vector<double> headAbove(frames), standing;
+  for (std::size_t f = 0; f < frames; ++f) headAbove[f] = points[f * kPoints + 12].y() - lowest[f];
+  for (int needed : {2, 1, 0}) {
+    standing.clear();
+    for (std::size_t f = 0; f < frames; ++f)
+      if (result.contact[0][f] + result.contact[1][f] >= needed) standing.push_back(headAbove[f]);
+    if (!standing.empty()) break;
+  }
+  result.standingFrames = standing.size();
+  result.standingHeight = percentile(standing, 0.99);
+  const double knockdownBelow = params.knockdownHeadRatio * result.standingHeight;
+
   result.frames.resize(frames);
   for (std::size_t f = 0; f < frames; ++f) {
     result.frames[f].origin = {rootPosition[f].x(), result.groundY, rootPosition[f].z()};
@@ -137,9 +155,11 @@ Annotation annotate(const Motion& motion, const SkeletonRoles& roles, const Anno
   }
 
   // Effective punches (sec. 6.2): fist velocity projected on the forearm axis above a
-  // threshold, and not opposed to it.
+  // threshold, and not opposed to it, by a boxer on his feet.
   std::array<bool, 2> previous{false, false};
   for (std::size_t f = 0; f < frames; ++f) {
+    const bool down = headAbove[f] < knockdownBelow;
+    result.knockdownFrames += down ? 1 : 0;
     for (int s = 0; s < 2; ++s) {
       const std::size_t base = f * kPoints;
       Eigen::Vector3d axis = points[base + 6 + s] - points[base + 8 + s];
@@ -152,7 +172,7 @@ Annotation annotate(const Motion& motion, const SkeletonRoles& roles, const Anno
       const double after = f + 1 < frames ? (points[base + kPoints + 4 + s] - points[base + 4 + s]).norm() / motion.frameTime() : 0;
       if (std::max({speed, before, after}) > params.punchMaxSpeed_mps) {
         ++result.glitchFrames;
-      } else if (axis.norm() > 1e-9) {
+      } else if (!down && axis.norm() > 1e-9) {
         axis.normalize();
         const double along = v.dot(axis);
         if (along >= params.punchMinSpeed_mps && along >= params.punchMinAlignment * speed) {
@@ -172,6 +192,15 @@ Annotation annotate(const Motion& motion, const SkeletonRoles& roles, const Anno
     }
   }
   return result;
+}
+
+std::string unusualHeightWarning(const Annotation& annotation, std::string_view source) {
+  const double h = annotation.standingHeight;
+  if (h >= kUsualHeightMin_m && h <= kUsualHeightMax_m) return {};
+  return fmt::format("{}: standing height {:.2f} m (head top above the lower foot over {} standing frames), expected "
+                     "{} to {} m for an adult; check the units (--units), the head role (--role head=JOINT) and "
+                     "that the capture has frames standing upright",
+                     source, h, annotation.standingFrames, kUsualHeightMin_m, kUsualHeightMax_m);
 }
 
 }  // namespace mgrl

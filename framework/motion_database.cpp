@@ -41,13 +41,13 @@ std::size_t MotionDatabase::clipOf(std::uint32_t frame) const {
 }
 
 MotionDatabase makeMotionDatabase(std::vector<std::pair<std::string, Motion>> motions, const RoleOverrides& roles,
-                                  const AnnotationParams& annotation) {
+                                  const AnnotationParams& annotation, const WarningSink& warn) {
   if (motions.empty()) throw Error("motion: expected at least one motion file, found none");
   annotation.validate();
   MotionDatabase db;
   db.skeleton = motions.front().second.sharedSkeleton();
   db.frameTime = motions.front().second.frameTime();
-  db.roles = findRoles(*db.skeleton, roles, motions.front().first);
+  db.roles = findRoles(*db.skeleton, roles, motions.front().first, warn);
   db.offsets.push_back(0);
   for (auto& [name, motion] : motions) {
     requireSameSkeleton(*db.skeleton, motions.front().first, motion.skeleton(), name);
@@ -58,6 +58,7 @@ MotionDatabase makeMotionDatabase(std::vector<std::pair<std::string, Motion>> mo
     if (total > std::uint64_t{1} << 30)
       throw Error(fmt::format("motion: expected at most 2^30 frames in one graph, found {}", total));
     Annotation ann = annotate(motion, db.roles, annotation);
+    if (const std::string unusual = unusualHeightWarning(ann, name); !unusual.empty() && warn) warn(unusual);
     db.clips.push_back(Clip{name, {}, std::move(motion), std::move(ann)});
     db.offsets.push_back(static_cast<std::uint32_t>(total));
   }
@@ -77,7 +78,7 @@ MotionDatabase loadMotionDatabase(const MotionSpec& spec, const WarningSink& war
     LoadedMotion loaded = loadMotion(file, options);
     motions.emplace_back(file.filename().string(), std::move(loaded.motion));
   }
-  MotionDatabase db = makeMotionDatabase(std::move(motions), spec.roles, spec.annotation);
+  MotionDatabase db = makeMotionDatabase(std::move(motions), spec.roles, spec.annotation, warn);
   for (std::size_t c = 0; c < db.clips.size(); ++c) db.clips[c].path = spec.files[c];
   return db;
 }

@@ -65,9 +65,10 @@ std::string roleKey(const RoleSpec& spec, std::optional<Side> side) {
   return side ? fmt::format("{}_{}", sideName(*side), spec.name) : std::string(spec.name);
 }
 
-// `normalised[j]` is normalise() of joint j's name, computed once per skeleton.
-int findJoint(const Skeleton& skeleton, const std::vector<std::string>& normalised, const RoleSpec& spec,
-              std::optional<Side> side, const RoleOverrides& overrides, std::string_view source) {
+// `normalised[j]` is normalise() of joint j's name, computed once per skeleton. -1 if no
+// joint has one of the role's names (an override must name a joint).
+int matchJoint(const Skeleton& skeleton, const std::vector<std::string>& normalised, const RoleSpec& spec,
+               std::optional<Side> side, const RoleOverrides& overrides, std::string_view source) {
   const std::string key = roleKey(spec, side);
   if (auto it = overrides.find(key); it != overrides.end()) {
     const int index = skeleton.find(it->second);
@@ -76,15 +77,28 @@ int findJoint(const Skeleton& skeleton, const std::vector<std::string>& normalis
                               it->second, skeleton.jointList()));
     return index;
   }
-  const auto names = candidates(spec, side);
-  for (const std::string& name : names)
+  for (const std::string& name : candidates(spec, side))
     for (std::size_t j = 0; j < normalised.size(); ++j)
       if (normalised[j] == name) return static_cast<int>(j);
   if (spec.name == std::string_view("pelvis")) return 0;  // the root is the pelvis by convention
+  return -1;
+}
+
+[[noreturn]] void throwMissingRole(const Skeleton& skeleton, const RoleSpec& spec, std::optional<Side> side,
+                                   std::string_view source) {
+  const std::string key = roleKey(spec, side);
+  const auto names = candidates(spec, side);
   throw Error(fmt::format("{}: expected a joint for role {} (a name like {}), found none; joints: {}; "
                           "set it with --role {}=JOINT",
                           source, key, fmt::join(names.begin(), names.begin() + std::min<std::size_t>(4, names.size()), ", "),
                           skeleton.jointList(), key));
+}
+
+int findJoint(const Skeleton& skeleton, const std::vector<std::string>& normalised, const RoleSpec& spec,
+              std::optional<Side> side, const RoleOverrides& overrides, std::string_view source) {
+  const int index = matchJoint(skeleton, normalised, spec, side, overrides, source);
+  if (index < 0) throwMissingRole(skeleton, spec, side, source);
+  return index;
 }
 
 std::vector<std::vector<int>> childLists(const Skeleton& skeleton) {
@@ -124,7 +138,8 @@ std::vector<std::string> roleNames() {
   return names;
 }
 
-SkeletonRoles findRoles(const Skeleton& skeleton, const RoleOverrides& overrides, std::string_view source) {
+SkeletonRoles findRoles(const Skeleton& skeleton, const RoleOverrides& overrides, std::string_view source,
+                        const WarningSink& warn) {
   const auto known = roleNames();
   for (const auto& [role, joint] : overrides)
     if (std::find(known.begin(), known.end(), role) == known.end())
@@ -138,8 +153,18 @@ SkeletonRoles findRoles(const Skeleton& skeleton, const RoleOverrides& overrides
     out[0] = findJoint(skeleton, normalised, specs[spec], Side::Left, overrides, source);
     out[1] = findJoint(skeleton, normalised, specs[spec], Side::Right, overrides, source);
   };
-  sided(0, roles.fist);
   sided(1, roles.wrist);
+  // A capture without finger joints (a 21-joint Hips/Ab/Chest/.../LeftWrist skeleton) has
+  // no fist joint: the wrist stands in, its end site (if any) becoming the fist tip below.
+  std::array<bool, 2> fistFromWrist{false, false};
+  for (int s = 0; s < 2; ++s) {
+    const Side side = static_cast<Side>(s);
+    roles.fist[s] = matchJoint(skeleton, normalised, specs[0], side, overrides, source);
+    if (roles.fist[s] < 0) {
+      roles.fist[s] = roles.wrist[s];
+      fistFromWrist[s] = true;
+    }
+  }
   sided(2, roles.forearm);
   sided(3, roles.shoulder);
   sided(4, roles.ankle);
@@ -178,6 +203,19 @@ SkeletonRoles findRoles(const Skeleton& skeleton, const RoleOverrides& overrides
     }
   }
 
+  if (fistFromWrist[0] || fistFromWrist[1]) {
+    std::vector<std::string> used;
+    for (int s = 0; s < 2; ++s) {
+      if (!fistFromWrist[s]) continue;
+      const std::string& tip = skeleton.joint(static_cast<std::size_t>(roles.fistTipJoint[s])).name;
+      const bool endSite = roles.fistTipOffset[s].squaredNorm() > 0;
+      used.push_back(fmt::format("{}{} for {}", tip, endSite ? "'s end site" : "", roleKey(specs[0], static_cast<Side>(s))));
+    }
+    if (warn)
+      warn(fmt::format("{}: no fist joint (a name like {}), using {}; set it with --role left_fist=JOINT", source,
+                       candidates(specs[0], Side::Left).front(), fmt::join(used, " and ")));
+  }
+
   // Rest rotations are identity, so rest positions are in the root's frame. Rest poses
   // vary (SNU's lies along +X with one leg up), so use only what holds in any of them: the
   // spine points from pelvis to head, and the hips (ankle -> knee -> hip) sit rigidly left
@@ -204,9 +242,15 @@ SkeletonRoles findRoles(const Skeleton& skeleton, const RoleOverrides& overrides
     const auto& end = skeleton.joint(static_cast<std::size_t>(roles.toe[s])).endSite;
     roles.toeTipOffset[s] = end ? *end : Eigen::Vector3d::Zero();
   }
+  // The head top. SNU's head end site has zero length and others have none: without a
+  // stand-in the person would measure about a head short. The neck-to-head bone once more
+  // is the stand-in (CMU's head end site is about that long).
+  const Joint& head = skeleton.joint(static_cast<std::size_t>(roles.head));
+  const double neckLength = roles.head > 0 ? head.offset.norm() : 0;
+  roles.headTopOffset = head.endSite && head.endSite->norm() >= 0.25 * neckLength ? *head.endSite : head.offset;
+  if (roles.head == 0) roles.headTopOffset.setZero();
   // Standing height: head top down to the lowest foot point, along the spine axis.
-  const auto& headEnd = skeleton.joint(static_cast<std::size_t>(roles.head)).endSite;
-  const double top = (rest[roles.head] + (headEnd ? *headEnd : Eigen::Vector3d::Zero())).dot(up);
+  const double top = (rest[roles.head] + roles.headTopOffset).dot(up);
   double bottom = top;
   for (int s = 0; s < 2; ++s)
     for (const Eigen::Vector3d& p : {rest[roles.ankle[s]], rest[roles.toe[s]], Eigen::Vector3d(rest[roles.toe[s]] + roles.toeTipOffset[s])})

@@ -1,4 +1,5 @@
 #include <algorithm>
+#include <cmath>
 
 #include <catch2/catch.hpp>
 
@@ -151,4 +152,79 @@ TEST_CASE("annotation thresholds are validated", "[annotation]") {
   p = {};
   p.punchMinAlignment = 2;
   CHECK_THROWS_AS(p.validate(), Error);
+  for (double ratio : {-0.1, 1.0, std::nan("")}) {
+    CAPTURE(ratio);
+    p = {};
+    p.knockdownHeadRatio = ratio;
+    CHECK_THROWS_WITH(p.validate(), Catch::Contains("knockdown_head_ratio: expected a value in [0, 1)"));
+  }
+  p = {};
+  p.knockdownHeadRatio = 0;
+  CHECK_NOTHROW(p.validate());
+}
+
+TEST_CASE("the standing height comes from the motion's standing frames, not the rest pose", "[annotation]") {
+  // boxer21.bvh stands with flat feet (ankles turned 60 degrees) though its rest pose
+  // points the toes down: standing, the head top is 161.7 cm above the toe tips; the rest
+  // pose says 174 cm.
+  const Motion m = loadMotion(test::testData() / "boxer21.bvh").motion;
+  const SkeletonRoles roles = findRoles(m.skeleton());
+  const Annotation a = annotate(m, roles);
+  CHECK(roles.restHeight == Approx(1.74));
+  CHECK(a.standingHeight == Approx(1.617).margin(0.002));
+  CHECK(a.standingFrames > 0);
+  CHECK(unusualHeightWarning(a, "boxer21.bvh").empty());
+
+  // Half the size is no adult: a warning naming the file and the height.
+  const Motion half = m.scaled(0.5);
+  const Annotation small = annotate(half, findRoles(half.skeleton()));
+  CHECK(small.standingHeight == Approx(0.81).margin(0.01));
+  CHECK_THAT(unusualHeightWarning(small, "boxer21.bvh"),
+             Catch::Contains("boxer21.bvh: standing height 0.81 m") && Catch::Contains("expected 1.2 to 2.2 m"));
+}
+
+TEST_CASE("standing heights of the real capture are the people's", "[annotation][data]") {
+  // DATA.md: subject 13 is about 1.63 m; the rest pose gives 1.631.
+  for (const char* file : {"cmu/bvh/13_17_boxing.bvh", "cmu/bvh/13_18_boxing.bvh"}) {
+    CAPTURE(file);
+    CHECK(annotateFile(file).standingHeight == Approx(1.63).margin(0.02));
+  }
+  // SNU's fighters: the rest pose (zero-length head end site continued by the neck) says 1.75.
+  CHECK(annotateFile("snu_martial_arts/motion/s_001_3_1.bvh").standingHeight == Approx(1.75).margin(0.03));
+  // No standing frame with both feet down in a run: one foot down will do.
+  const Annotation run = annotateFile("cmu/bvh/09_06_run.bvh");
+  CHECK(run.standingFrames > 0);
+  CHECK(run.standingHeight == Approx(1.6).margin(0.08));
+}
+
+TEST_CASE("punches while knocked down are not effective", "[annotation]") {
+  // boxer21.bvh throws the same left punch twice: standing (frames 15-27), then lying on
+  // its back on the floor (frames 60-72), head top 12 cm above the floor.
+  const Motion m = loadMotion(test::testData() / "boxer21.bvh").motion;
+  const SkeletonRoles roles = findRoles(m.skeleton());
+  const Annotation a = annotate(m, roles);
+  CHECK(a.punches[0] == 1);
+  CHECK(a.punches[1] == 0);
+  CHECK(a.knockdownFrames == 45);
+  REQUIRE(!a.hits.empty());
+  CHECK(std::all_of(a.hits.begin(), a.hits.end(), [](const EffectiveHit& h) { return h.frame >= 15 && h.frame < 28; }));
+
+  // With the rule off, the punch on the floor counts too: the arm motion is the same.
+  AnnotationParams off;
+  off.knockdownHeadRatio = 0;
+  const Annotation b = annotate(m, roles, off);
+  CHECK(b.punches[0] == 2);
+  CHECK(b.knockdownFrames == 0);
+  CHECK(std::any_of(b.hits.begin(), b.hits.end(), [](const EffectiveHit& h) { return h.frame >= 60; }));
+}
+
+TEST_CASE("no boxing punch is lost to the knockdown rule; SNU's take-downs are", "[annotation][data]") {
+  for (const char* file : {"cmu/bvh/13_17_boxing.bvh", "cmu/bvh/135_06_martial_arts.bvh"}) {
+    CAPTURE(file);
+    CHECK(annotateFile(file).knockdownFrames == 0);
+  }
+  // s_001_3_1: one fighter is thrown about frame 332 and gets up about frame 470.
+  const Annotation a = annotateFile("snu_martial_arts/motion/s_001_3_1.bvh");
+  CHECK(a.knockdownFrames >= 100);
+  CHECK(std::none_of(a.hits.begin(), a.hits.end(), [](const EffectiveHit& h) { return h.frame >= 340 && h.frame <= 460; }));
 }

@@ -45,8 +45,10 @@ TEST_CASE("roles are found by name in CMU BVH, CMU ASF and SNU skeletons", "[rol
   const SkeletonRoles s = findRoles(snu);
   CHECK(nameOf(snu, s.fist[0]) == "LeftHand");
   CHECK(nameOf(snu, s.toe[1]) == "RightToe");
-  // SNU's rest pose lies along +X with one leg up: height must still be a person's.
-  CHECK(s.restHeight == Approx(1.68).margin(0.1));
+  // SNU's rest pose lies along +X with one leg up: height must still be a person's. Its
+  // head end site has zero length: the head top continues the neck bone (9.3 cm).
+  CHECK(s.restHeight == Approx(1.75).margin(0.05));
+  CHECK(s.headTopOffset.norm() == Approx(0.093).margin(0.002));
 }
 
 TEST_CASE("roles are found for Mixamo-like and _L/_R namings", "[roles]") {
@@ -86,4 +88,51 @@ TEST_CASE("a role can be overridden, and a missing role lists the skeleton's joi
                     Catch::Contains("role head: expected a joint of the skeleton, found 'Nope'"));
   CHECK_THROWS_WITH(findRoles(odd, {{"left_tail", "Skull"}}, "odd.bvh"),
                     Catch::Contains("expected a role name") && Catch::Contains("left_fist"));
+}
+
+TEST_CASE("a skeleton without finger joints uses the wrist's end site as the fist, and says so once",
+          "[roles]") {
+  // tests/data/boxer21.bvh: Hips/Ab/Chest/Neck/Head, LeftCollar/LeftShoulder/LeftElbow/
+  // LeftWrist with an 8 cm end site, legs Hip/Knee/Ankle/Toe; no finger joints.
+  const LoadedMotion loaded = loadMotion(test::testData() / "boxer21.bvh");
+  const Skeleton& skeleton = loaded.motion.skeleton();
+  std::vector<std::string> warnings;
+  const SkeletonRoles r = findRoles(skeleton, {}, "boxer21.bvh", [&](const std::string& w) { warnings.push_back(w); });
+  for (int s = 0; s < 2; ++s) {
+    CAPTURE(s);
+    CHECK(r.fist[s] == r.wrist[s]);
+    CHECK(r.fistTipJoint[s] == r.wrist[s]);
+    CHECK(r.fistTipOffset[s].norm() == Approx(0.08));
+  }
+  CHECK(nameOf(skeleton, r.wrist[0]) == "LeftWrist");
+  CHECK(nameOf(skeleton, r.forearm[1]) == "RightElbow");
+  CHECK(nameOf(skeleton, r.ankle[0]) == "LeftAnkle");
+  REQUIRE(warnings.size() == 1);
+  CHECK_THAT(warnings[0], Catch::Contains("boxer21.bvh: no fist joint") &&
+                              Catch::Contains("using LeftWrist's end site for left_fist and RightWrist's end site for "
+                                              "right_fist"));
+
+  // A skeleton with fist joints says nothing, and a wrist without an end site is its own tip.
+  warnings.clear();
+  const Skeleton plain = test::humanoid(test::humanoidNames());
+  (void)findRoles(plain, {}, "plain", [&](const std::string& w) { warnings.push_back(w); });
+  CHECK(warnings.empty());
+  std::vector<Joint> joints(skeleton.joints().begin(), skeleton.joints().end());
+  for (Joint& j : joints)
+    if (j.name == "LeftWrist") j.endSite.reset();
+  const SkeletonRoles bare = findRoles(Skeleton(joints), {}, "bare.bvh", [&](const std::string& w) { warnings.push_back(w); });
+  CHECK(bare.fistTipJoint[0] == bare.wrist[0]);
+  CHECK(bare.fistTipOffset[0].norm() == 0);
+  REQUIRE(warnings.size() == 1);
+  CHECK_THAT(warnings[0], Catch::Contains("using LeftWrist for left_fist and RightWrist's end site for right_fist"));
+}
+
+TEST_CASE("a zero-length head end site is continued by the neck bone for the head top", "[roles]") {
+  // boxer21.bvh: Head 10 cm above Neck with a zero-length end site; toes point down in the
+  // rest pose (toe tip 16 cm below the ankle). Rest height: head top 70 cm above the
+  // hips, toe tip 104 cm below.
+  const LoadedMotion loaded = loadMotion(test::testData() / "boxer21.bvh");
+  const SkeletonRoles r = findRoles(loaded.motion.skeleton());
+  CHECK(r.headTopOffset.y() == Approx(0.10));
+  CHECK(r.restHeight == Approx(1.74));
 }

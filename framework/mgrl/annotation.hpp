@@ -5,6 +5,8 @@
 
 #include <array>
 #include <cstdint>
+#include <string>
+#include <string_view>
 #include <vector>
 
 #include <Eigen/Core>
@@ -33,6 +35,13 @@ struct AnnotationParams {
   /// Fist speeds above this are capture glitches (e.g. a 23 m/s spike in SNU 16_28_1),
   /// never effective hits.
   double punchMaxSpeed_mps = 15.0;
+  /// No punch counts while the boxer is down (paper sec. 6.2 annotates punches of a
+  /// standing boxer): while the head top is below this fraction of the standing height
+  /// above the lower foot, arm swings are not effective. In [0, 1); 0 turns the rule off.
+  /// 0.6 keeps crouches, weaving and deep stances (CMU's boxing and karate punches all
+  /// stay above 0.68) and drops kneeling, sitting, lying and falling (SNU's sparring has
+  /// take-downs: arms flail on the way down and on the floor).
+  double knockdownHeadRatio = 0.6;
 
   /// Throws mgrl::Error naming the first out-of-range value.
   void validate() const;
@@ -68,6 +77,16 @@ struct Annotation {
   std::array<int, 2> punches{0, 0};
   /// Frames where a fist moved faster than punchMaxSpeed_mps (ignored as glitches).
   int glitchFrames = 0;
+  /// Standing height (m): head top (SkeletonRoles::headTopOffset) above the lower foot's
+  /// lowest point, 99th percentile over the frames with both feet on the ground (over
+  /// frames with one foot down if there are none, else over all frames). From the motion,
+  /// not the rest pose, whose feet or head may not stand as the person does.
+  double standingHeight = 0;
+  /// Frames the standingHeight came from.
+  std::size_t standingFrames = 0;
+  /// Frames where the head top was below knockdownHeadRatio * standingHeight (no
+  /// effective punches there).
+  std::size_t knockdownFrames = 0;
   /// Avatar frame at every frame.
   std::vector<AvatarFrame> frames;
 
@@ -77,5 +96,13 @@ struct Annotation {
 
 /// Annotates `motion` (metres). `roles` must come from the motion's skeleton.
 Annotation annotate(const Motion& motion, const SkeletonRoles& roles, const AnnotationParams& params = {});
+
+/// Standing heights outside this range (m) are unusual for an adult: likely a wrong unit,
+/// a mislabelled head or a capture without standing frames.
+inline constexpr double kUsualHeightMin_m = 1.2, kUsualHeightMax_m = 2.2;
+
+/// A warning text when `annotation.standingHeight` is outside the usual range, e.g.
+/// `x.bvh: standing height 0.95 m, expected 1.2 to 2.2 m for an adult: ...`; empty otherwise.
+std::string unusualHeightWarning(const Annotation& annotation, std::string_view source);
 
 }  // namespace mgrl

@@ -55,7 +55,8 @@ struct MotionDatabase {
 MotionDatabase loadMotionDatabase(const MotionSpec& spec, const WarningSink& warn = {});
 
 /// The same from motions already in memory (metres, one frame rate), for tests and tools.
+/// Warnings (a fist standing in for a missing one, an unusual standing height) go to `warn`.
 MotionDatabase makeMotionDatabase(std::vector<std::pair<std::string, Motion>> motions, const RoleOverrides& roles = {},
-                                  const AnnotationParams& annotation = {});
+                                  const AnnotationParams& annotation = {}, const WarningSink& warn = {});
 
 }  // namespace mgrl
