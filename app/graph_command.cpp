@@ -9,8 +9,11 @@
 
 #include "mgrl/graph_cache.hpp"
 #include "mgrl/hash.hpp"
+#include "mgrl/motion_graph.hpp"
 #include "mgrl/playback.hpp"
 #include "mgrl/version.hpp"
+#include "plugins.hpp"
+#include "plural.hpp"
 
 namespace mgrl::app {
 
@@ -35,6 +38,81 @@ nlohmann::json paramsJson(const Scenario& s) {
 }
 
 }  // namespace
+
+CaptureTravel measureTravel(const Scenario& scenario, const MotionDatabase& db, const StateActionModel& model) {
+  CaptureTravel t;
+  for (const Clip& clip : db.clips) {
+    const auto& frames = clip.annotation.frames;
+    if (frames.empty()) continue;
+    const Eigen::Vector3d start = frames.front().origin;
+    Eigen::Vector2d lo(start.x(), start.z()), hi = lo;
+    for (const AvatarFrame& f : frames) {
+      const Eigen::Vector2d p(f.origin.x(), f.origin.z());
+      lo = lo.cwiseMin(p);
+      hi = hi.cwiseMax(p);
+      const double d = std::hypot(f.origin.x() - start.x(), f.origin.z() - start.z());
+      if (d > t.clipTravel_m) {
+        t.clipTravel_m = d;
+        t.clip = clip.name;
+      }
+    }
+    t.rootExtent_m = std::max(t.rootExtent_m, (hi - lo).norm());
+  }
+  for (std::size_t a = 0; a < model.actionCount(); ++a)
+    t.actionTravel_m = std::max(t.actionTravel_m, std::hypot(model.actionDisplacement[3 * a], model.actionDisplacement[3 * a + 1]));
+  // Chained actions carry the avatar farther than one clip: from every state, walk the
+  // graph greedily away from the start for kTravelWalkSeconds. A lower bound on what a
+  // policy can do, but one that shows whether the capture goes anywhere at all.
+  const double walkFrames = kTravelWalkSeconds / model.frameTime;
+  for (std::size_t start = 0; start < model.stateCount(); ++start) {
+    GroundMotion total;
+    double frames = 0;
+    std::size_t state = start;
+    while (frames < walkFrames) {
+      const std::uint32_t begin = model.stateActionBegin[state], end = model.stateActionBegin[state + 1];
+      if (begin == end) break;
+      std::uint32_t best = begin;
+      GroundMotion bestTotal;
+      double bestDistance = -1;
+      for (std::uint32_t a = begin; a < end; ++a) {
+        const GroundMotion next = compose(total, {model.actionDisplacement[3 * a], model.actionDisplacement[3 * a + 1],
+                                                  model.actionDisplacement[3 * a + 2]});
+        const double d = std::hypot(next.dx, next.dz);
+        if (d > bestDistance) {
+          bestDistance = d;
+          best = a;
+          bestTotal = next;
+        }
+      }
+      total = bestTotal;
+      frames += static_cast<double>(model.actionLength(best));
+      state = model.actionTo[best];
+      t.walkTravel_m = std::max(t.walkTravel_m, bestDistance);
+    }
+  }
+  const double travel = std::max(t.clipTravel_m, t.walkTravel_m);
+  for (const BehaviorSpec& spec : scenario.behaviors) {
+    std::unique_ptr<Discretizer> grid;
+    try {
+      grid = plugins().discretizers.create(spec.discretizer, model);
+    } catch (const Error&) {
+      continue;  // a bad block is train's to report, with its line
+    }
+    double reach = 0;
+    for (std::size_t v = 0; v < grid->vertexCount(); ++v) {
+      const Eigen::Vector3d p = grid->vertexPosition(v);
+      reach = std::max(reach, std::hypot(p.x(), p.z()));
+    }
+    t.reaches.push_back({spec.name, reach});
+    if (reach > kTravelReachFactor * travel)
+      t.warnings.push_back(fmt::format(
+          "behaviors.{}: its grid reaches {:.2f} m from the avatar, but the capture carries the root at most {:.2f} m "
+          "from a clip's start and a {:g} s walk through the graph {:.2f} m (largest action: {:.2f} m): targets that "
+          "far may be out of reach whatever is learned; add capture that travels, or shrink the grid",
+          spec.name, reach, t.clipTravel_m, kTravelWalkSeconds, t.walkTravel_m, t.actionTravel_m));
+  }
+  return t;
+}
 
 std::filesystem::path defaultCacheDirectory() {
   if (const char* env = std::getenv("MGRL_CACHE"); env && *env) return env;
@@ -69,13 +147,15 @@ GraphResult obtainGraph(const Scenario& scenario, const GraphOptions& options) {
       result.buildSeconds = cached.manifest["provenance"].value("build_seconds", 0.0);
       result.seconds = since(start);
       log(fmt::format("graph: reused {}", result.bundle.string()));
+      result.travel = measureTravel(scenario, result.db, result.model);
+      for (const std::string& w : result.travel.warnings) log(fmt::format("graph: warning: {}", w));
       return result;
     }
     if (cached.status == GraphBundleLoad::Stale) log(fmt::format("graph: cache is stale, rebuilding ({})", cached.reason));
     if (cached.status == GraphBundleLoad::Damaged)
       log(fmt::format("graph: cache is damaged, rebuilding ({})", cached.reason));
   }
-  log(fmt::format("graph: building from {} frames in {} files", result.db.frameCount(), result.db.clips.size()));
+  log(fmt::format("graph: building from {} frames in {}", result.db.frameCount(), counted(result.db.clips.size(), "file")));
   const auto buildStart = std::chrono::steady_clock::now();
   result.model = buildStateActionModel(result.db, scenario.graph, &result.report);
   result.buildSeconds = since(buildStart);
@@ -98,6 +178,8 @@ GraphResult obtainGraph(const Scenario& scenario, const GraphOptions& options) {
     // The graph is good; only reuse is lost. Say so and go on.
     log(fmt::format("graph: warning: could not write the cache ({})", e.what()));
   }
+  result.travel = measureTravel(scenario, result.db, result.model);
+  for (const std::string& w : result.travel.warnings) log(fmt::format("graph: warning: {}", w));
   result.seconds = since(start);
   return result;
 }
@@ -135,6 +217,19 @@ Summary summarise(const GraphResult& g) {
 
 double round3(double v) { return std::round(v * 1000) / 1000; }
 
+nlohmann::json travelJson(const CaptureTravel& t) {
+  nlohmann::json reaches = nlohmann::json::object();
+  for (const auto& r : t.reaches) reaches[r.behavior] = round3(r.reach_m);
+  return {{"clip_travel_m", round3(t.clipTravel_m)},
+          {"clip", t.clip},
+          {"root_extent_m", round3(t.rootExtent_m)},
+          {"action_travel_m", round3(t.actionTravel_m)},
+          {"walk_travel_m", round3(t.walkTravel_m)},
+          {"walk_seconds", kTravelWalkSeconds},
+          {"grid_reach_m", reaches},
+          {"warnings", t.warnings}};
+}
+
 }  // namespace
 
 nlohmann::json graphJson(const GraphResult& g) {
@@ -162,6 +257,7 @@ nlohmann::json graphJson(const GraphResult& g) {
             {"max_joint_step_m", round3(g.playback.maxJointStep_m)},
             {"source_max_joint_step_m", round3(g.playback.sourceMaxJointStep_m)},
             {"worst_joint_step_ratio", round3(g.playback.worstJointStepRatio)}}},
+          {"travel", travelJson(g.travel)},
           {"seconds", round3(g.seconds)},
           {"cached", g.fromCache},
           {"cache", g.bundle.string()}};
@@ -171,7 +267,7 @@ std::string graphText(const GraphResult& g) {
   const StateActionModel& m = g.model;
   const Summary l = summarise(g);
   std::string out;
-  out += fmt::format("frames          {} in {} files at {:g} fps ({:.1f} s)\n", m.framesTotal, g.db.clips.size(),
+  out += fmt::format("frames          {} in {} at {:g} fps ({:.1f} s)\n", m.framesTotal, counted(g.db.clips.size(), "file"),
                      1.0 / m.frameTime, m.framesTotal * m.frameTime);
   out += fmt::format("component       {} frames ({:.1f} % of the data)\n", m.componentFrames.size(),
                      m.framesTotal ? 100.0 * static_cast<double>(m.componentFrames.size()) / m.framesTotal : 0.0);
@@ -182,6 +278,13 @@ std::string graphText(const GraphResult& g) {
   out += fmt::format("action frames   min {}, mean {:.1f}, max {} ({:.2f} s mean)\n", l.min, l.mean, l.max,
                      l.mean * m.frameTime);
   out += fmt::format("effective hits  {} in the data, {} inside actions\n", l.hitFrames, m.hits.size());
+  const CaptureTravel& t = g.travel;
+  std::string reaches;
+  for (const auto& r : t.reaches) reaches += fmt::format("{}{} {:.2f} m", reaches.empty() ? "; grids reach " : ", ", r.behavior, r.reach_m);
+  out += fmt::format("travel          root up to {:.2f} m from a clip's start ({}), clip extent up to {:.2f} m, "
+                     "largest action {:.2f} m, {:g} s graph walk {:.2f} m{}\n",
+                     t.clipTravel_m, t.clip.empty() ? "-" : t.clip, t.rootExtent_m, t.actionTravel_m,
+                     kTravelWalkSeconds, t.walkTravel_m, reaches);
   out += fmt::format("playback check  {} frames, {} transitions blended over {} frames: foot sliding {:.3f} m/s "
                      "(same frames in the capture: {:.3f}), largest joint step {:.3f} m (capture: {:.3f})\n",
                      g.playback.frames, g.playback.transitions, g.blendFrames, g.playback.slide.meanSpeed_mps,

@@ -28,6 +28,32 @@ struct GraphOptions {
   WarningSink log;                 ///< progress and cache messages (stderr)
 };
 
+/// How far the capture carries the avatar, against how far the behaviours' grids reach
+/// (issue 12: two standing clips cannot approach a target 2 m away, whatever is learned).
+struct CaptureTravel {
+  double clipTravel_m = 0;    ///< largest ground distance of the root from its clip's first frame
+  std::string clip;           ///< the clip where it is reached
+  double rootExtent_m = 0;    ///< largest diagonal of a clip's root positions' ground bounding box
+  double actionTravel_m = 0;  ///< largest root ground displacement of one action
+  /// Farthest a greedy walk through the graph (each decision the action ending farthest
+  /// from the start) gets in kTravelWalkSeconds, over every starting state.
+  double walkTravel_m = 0;
+  struct Reach {
+    std::string behavior;
+    double reach_m = 0;       ///< largest ground distance of its grid's vertices from the avatar
+  };
+  std::vector<Reach> reaches;  ///< per behaviour whose discretizer could be built
+  /// Behaviours whose grid reaches more than kTravelReachFactor times the larger of
+  /// clipTravel_m and walkTravel_m.
+  std::vector<std::string> warnings;
+};
+
+/// A grid reaching this many times farther than the capture ever travels is warned about:
+/// chaining actions carries the avatar farther than one clip, but not without limit.
+inline constexpr double kTravelReachFactor = 2.0;
+/// Seconds of motion the travel walk plays (eval's trials play 10).
+inline constexpr double kTravelWalkSeconds = 10.0;
+
 /// A built or cached graph with the capture it indexes.
 struct GraphResult {
   MotionDatabase db;
@@ -38,6 +64,8 @@ struct GraphResult {
   double seconds = 0;          ///< this call, loading included
   std::filesystem::path bundle;
   std::string key;
+  /// Filled by obtainGraph(); its warnings also go to options.log.
+  CaptureTravel travel;
   /// Filled by measurePlayback().
   PlaybackCheck playback;
   int blendFrames = 0;
@@ -54,9 +82,15 @@ void measurePlayback(GraphResult& graph, int blendFrames);
 /// `--cache`, else MGRL_CACHE, else $XDG_CACHE_HOME/mgrl, else ~/.cache/mgrl, else ./.mgrl-cache.
 std::filesystem::path defaultCacheDirectory();
 
+/// How far the capture travels and how far each behaviour's grid reaches (behaviours whose
+/// discretizer cannot be built are left out: training reports those).
+CaptureTravel measureTravel(const Scenario& scenario, const MotionDatabase& db, const StateActionModel& model);
+
 /// Loads the scenario's capture and returns its graph: from the cache bundle when its key
 /// matches, else built and saved there atomically. A stale or damaged bundle is reported
-/// through options.log and rebuilt, never trusted. Throws mgrl::Error on bad input.
+/// through options.log and rebuilt, never trusted. Also measures the capture's travel and
+/// logs a warning for each behaviour whose grid reaches beyond it. Throws mgrl::Error on
+/// bad input.
 GraphResult obtainGraph(const Scenario& scenario, const GraphOptions& options);
 
 nlohmann::json graphJson(const GraphResult& graph);

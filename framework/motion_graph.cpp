@@ -156,14 +156,20 @@ StateActionModel buildStateActionModel(const MotionDatabase& db, const GraphPara
       m.stateFrame.push_back(f);
     }
   }
-  if (m.stateFrame.size() < static_cast<std::size_t>(params.minStates))
+  if (m.stateFrame.size() < static_cast<std::size_t>(params.minStates)) {
+    // Advise only the looser contact events than the one in use.
+    const char* looser = params.contactEvent == ContactEvent::LeftFootLiftoff ? "any_contact_change or none"
+                         : params.contactEvent == ContactEvent::AnyContactChange ? "none"
+                                                                                  : nullptr;
     throw Error(fmt::format(
         "graph: the largest strongly connected component keeps {} of {} frames ({:.0f} %) with {} states, expected at "
         "least graph.min_states = {}; {} transitions passed the tests ({} frames at a '{}' contact event): raise "
-        "graph.threshold (now {}), use graph.contact_event: any_contact_change or none, or add motion files",
+        "graph.threshold (now {}), {}add motion files",
         m.componentFrames.size(), n, 100.0 * static_cast<double>(m.componentFrames.size()) / std::max(n, 1u),
         m.stateFrame.size(), params.minStates, transitions.size(), local.search.eventFrames,
-        contactEventName(params.contactEvent), params.threshold));
+        contactEventName(params.contactEvent), params.threshold,
+        looser ? fmt::format("use graph.contact_event: {}, or ", looser) : std::string("or ")));
+  }
 
   // Effective hitting points of the data: their centroid (the paper's p(t) follows it) and
   // the fastest one (the hit reward's w(t) is normalised by it).

@@ -21,6 +21,16 @@ std::string lowerExtension(const std::filesystem::path& path) {
   return ext;
 }
 
+// The CMU subject number a file name carries: "13" for the motion "13_17" (motion) or the
+// skeleton "13"; empty for names that do not follow CMU's numbering.
+std::string cmuSubject(const std::string& stem, bool motion) {
+  const std::string number = motion ? stem.substr(0, stem.find('_')) : stem;
+  if (number.empty() || (motion && number.size() == stem.size())) return {};
+  for (char c : number)
+    if (!std::isdigit(static_cast<unsigned char>(c))) return {};
+  return number;
+}
+
 }  // namespace
 
 std::string readFile(const std::filesystem::path& path) {
@@ -92,6 +102,16 @@ LoadedMotion loadMotion(const std::filesystem::path& path, const LoadOptions& op
     if (!std::filesystem::exists(asfPath, ec))
       throw Error(fmt::format("{}: expected its skeleton {}, found no such file; pass --asf FILE", source,
                               asfPath.string()));
+    if (!options.asf.empty() && options.warn) {
+      // Every CMU subject's ASF has the same bones and channels, so another subject's loads
+      // without an error, with the wrong person's bone lengths. The names tell.
+      const std::string subject = cmuSubject(path.stem().string(), true), asfSubject = cmuSubject(asfPath.stem().string(), false);
+      if (!subject.empty() && !asfSubject.empty() && subject != asfSubject)
+        options.warn(fmt::format("{}: expected the skeleton of subject {} ({}), found {} (subject {}): its bones and "
+                                 "channels match, its bone lengths are another person's",
+                                 source, subject, defaultAsfFor(path).filename().string(),
+                                 asfPath.filename().string(), asfSubject));
+    }
     const AsfSkeleton asf = parseAsf(readFile(asfPath), asfPath.string());
     raw.emplace(parseAmc(readFile(path), source, asf, 1.0 / options.amcFps));
     if (units == LengthUnit::Auto) {

@@ -309,6 +309,23 @@ TEST_CASE("a component too small to learn on is an error naming the parameter to
                           Catch::Contains("raise graph.threshold (now 0.05)"));
 }
 
+TEST_CASE("a too-small component advises only contact events looser than the one in use", "[graph][data]") {
+  const Boxing& b = boxing();
+  GraphParams params = b.scenario.graph;
+  params.threshold = 0.05;
+  params.contactEvent = ContactEvent::LeftFootLiftoff;
+  REQUIRE_THROWS_WITH(buildStateActionModel(b.db, params),
+                      Catch::Contains("use graph.contact_event: any_contact_change or none, or add motion files"));
+  params.contactEvent = ContactEvent::AnyContactChange;
+  REQUIRE_THROWS_WITH(buildStateActionModel(b.db, params),
+                      Catch::Contains("use graph.contact_event: none, or add motion files") &&
+                          !Catch::Contains("any_contact_change or"));
+  params.contactEvent = ContactEvent::None;
+  REQUIRE_THROWS_WITH(buildStateActionModel(b.db, params),
+                      Catch::Contains("raise graph.threshold (now 0.05), or add motion files") &&
+                          !Catch::Contains("use graph.contact_event"));
+}
+
 TEST_CASE("files with different skeletons cannot share a graph", "[graph][data]") {
   MotionSpec spec;
   spec.files = {test::mocap() / "cmu/bvh/13_17_boxing.bvh", test::mocap() / "snu_martial_arts/motion/s_001_3_1.bvh"};
