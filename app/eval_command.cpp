@@ -208,18 +208,22 @@ json runEval(const EvalOptions& options) {
 }
 
 std::string evalText(const json& r) {
-  auto optional = [](const json& v) { return v.is_null() ? std::string("-") : fmt::format("{:.2f} s", v.get<double>()); };
+  // "time to hit mean 3.40 s median 3.38 s", or "no hit" when no trial succeeded.
+  auto timeToHit = [](const json& mean, const json& median) {
+    if (mean.is_null()) return std::string("no hit");
+    std::string text = fmt::format("time to hit mean {:.2f} s", mean.get<double>());
+    if (!median.is_null()) text += fmt::format(" median {:.2f} s", median.get<double>());
+    return text;
+  };
   std::string text = fmt::format(
-      "controller {}: {} trials, success rate {:.1f} %, time to hit mean {} median {}, mean return {:.3f}, {} "
-      "decisions/s\n",
-      r["controller"].get<std::string>(), r["trials"].get<std::size_t>(), 100 * r["success_rate"].get<double>(),
-      optional(r["mean_time_to_hit_s"]), optional(r["median_time_to_hit_s"]), r["mean_return"].get<double>(),
-      humanCount(r["decisions_per_second"].get<double>()));
+      "controller {}: {}, success rate {:.1f} %, {}, mean return {:.3f}, {}decisions/s\n",
+      r["controller"].get<std::string>(), countOf(r["trials"].get<std::size_t>(), "trial"),
+      100 * r["success_rate"].get<double>(), timeToHit(r["mean_time_to_hit_s"], r["median_time_to_hit_s"]),
+      r["mean_return"].get<double>(), humanCount(r["decisions_per_second"].get<double>()));
   if (r.contains("random_baseline")) {
     const json& b = r["random_baseline"];
-    text += fmt::format("random baseline on the same starts: success rate {:.1f} %, time to hit mean {}, mean return "
-                        "{:.3f}\n",
-                        100 * b["success_rate"].get<double>(), optional(b["mean_time_to_hit_s"]),
+    text += fmt::format("random baseline on the same starts: success rate {:.1f} %, {}, mean return {:.3f}\n",
+                        100 * b["success_rate"].get<double>(), timeToHit(b["mean_time_to_hit_s"], json()),
                         b["mean_return"].get<double>());
   }
   return text;

@@ -119,9 +119,14 @@ std::string setValue(const json& value) {
 // The --set flags that give the scenario's behaviours the settings they were trained with
 // in the bundle at `dir` (only for behaviours whose key differs), with a short description
 // of the differences; nothing if the bundle cannot say or was made for another graph.
-std::pair<std::vector<std::string>, std::vector<std::string>> bundleSettings(const fs::path& dir,
-                                                                             const Scenario& scenario) {
-  std::vector<std::string> sets, differences;
+struct BundleSettings {
+  std::vector<std::string> sets;         ///< --set texts, types first
+  std::vector<std::string> differences;  ///< "hit.learner.type=value_iteration", for the message
+  std::vector<std::string> replaced;     ///< "behaviors.hit.learner." blocks of another type
+};
+
+BundleSettings bundleSettings(const fs::path& dir, const Scenario& scenario) {
+  std::vector<std::string> sets, differences, replaced;
   json manifest;
   try {
     manifest = json::parse(readFile(dir / "manifest.json"));
@@ -134,16 +139,19 @@ std::pair<std::vector<std::string>, std::vector<std::string>> bundleSettings(con
   const std::string graphKey = graphCacheKey(scenario);
   for (const BehaviorSpec& spec : scenario.behaviors) {
     const json& entry = manifest["behaviors"].contains(spec.name) ? manifest["behaviors"][spec.name] : json();
-    if (!entry.is_object() || !entry.contains("config") || !entry["config"].is_object()) continue;
+    if (!entry.is_object() || !entry.contains("record") || !entry["record"].is_object()) continue;
+    const json trainedConfig = entry["record"].value("config", json());
+    if (!trainedConfig.is_object()) continue;
     const auto [config, key] = behaviorConfigAndKey(spec, plugins(), graphKey);
     if (entry.value("key", json()) == json(key)) continue;
     for (const char* block : {"discretizer", "reward", "environment", "learner"}) {
-      const json& trained = entry["config"].value(block, json());
+      const json trained = trainedConfig.value(block, json());
       if (!trained.is_object() || !trained.contains("type")) return {};
       const json& now = config.value(block, json::object());
       const bool newType = trained["type"] != now.value("type", json());
+      if (newType) replaced.push_back(fmt::format("behaviors.{}.{}.", spec.name, block));
       for (const auto& [name, value] : trained.items()) {
-        if (name != "type" && !newType && now.value(name, json()) == value) continue;
+        if (!newType && now.value(name, json()) == value) continue;
         const std::string text = setValue(value);
         if (text.empty()) return {};
         const std::string flag = fmt::format("behaviors.{}.{}.{}={}", spec.name, block, name, text);
@@ -156,7 +164,7 @@ std::pair<std::vector<std::string>, std::vector<std::string>> bundleSettings(con
       }
     }
   }
-  return {sets, differences};
+  return {sets, differences, replaced};
 }
 
 }  // namespace
@@ -173,10 +181,16 @@ fs::path resolvePolicy(const fs::path& policy, Scenario& scenario, const LearnOp
     return policy;
   } catch (const Error&) {
     const std::exception_ptr refusal = std::current_exception();
-    const auto [adopted, differences] = bundleSettings(policy, scenario);
-    if (adopted.empty()) throw;
+    const BundleSettings adopted = bundleSettings(policy, scenario);
+    if (adopted.sets.empty()) throw;
+    // The user's own --set flags into a block of another type belong to the scenario's
+    // plugin, not the bundle's: they go.
     LearnOptions again = options;
-    again.sets.insert(again.sets.end(), adopted.begin(), adopted.end());
+    std::erase_if(again.sets, [&](const std::string& set) {
+      return std::any_of(adopted.replaced.begin(), adopted.replaced.end(),
+                         [&](const std::string& prefix) { return set.rfind(prefix, 0) == 0; });
+    });
+    again.sets.insert(again.sets.end(), adopted.sets.begin(), adopted.sets.end());
     std::optional<Scenario> adjusted;
     try {
       adjusted.emplace(loadScenario(options.scenario, dataDirectory(options.dataDir), again.sets));
@@ -188,7 +202,7 @@ fs::path resolvePolicy(const fs::path& policy, Scenario& scenario, const LearnOp
     if (options.log)
       options.log(fmt::format("--policy {}: using the settings the bundle was trained with ({}) instead of the "
                               "scenario's",
-                              policy.string(), fmt::join(differences, ", ")));
+                              policy.string(), fmt::join(adopted.differences, ", ")));
     scenario = std::move(*adjusted);
     return policy;
   }

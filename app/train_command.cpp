@@ -42,18 +42,19 @@ class ProgressReporter final : public TrainObserver {
     if (!done && now - last_ < (bar_ ? 0.2 : 10.0)) return;
     last_ = now;
     const double rate = p.seconds > 0 ? static_cast<double>(p.updates) / p.seconds : 0;
-    const std::string residual = p.residual < 0 ? std::string("-") : fmt::format("{:.3g}", p.residual);
+    // Before the first measurement there is no residual to show: say nothing of it.
+    const std::string residual = p.residual < 0 ? std::string() : fmt::format("  residual {:.3g}", p.residual);
     std::string line;
     if (p.total > 0) {
       const double fraction = static_cast<double>(p.updates) / static_cast<double>(p.total);
       const double eta = rate > 0 ? static_cast<double>(p.total - p.updates) / rate : 0;
       constexpr int kWidth = 24;
       const int filled = static_cast<int>(fraction * kWidth);
-      line = fmt::format("{} [{}{}] {:3.0f}%  {}updates/s  residual {}  ETA {:.0f} s", name_, std::string(filled, '#'),
+      line = fmt::format("{} [{}{}] {:3.0f}%  {}updates/s{}  ETA {:.0f} s", name_, std::string(filled, '#'),
                          std::string(kWidth - filled, '.'), 100 * fraction, humanCount(rate), residual, eta);
     } else {
-      line = fmt::format("{}: {}updates  {}updates/s  largest change {}", name_, humanCount(p.updates),
-                         humanCount(rate), residual);
+      line = fmt::format("{}: {}updates  {}updates/s{}", name_, humanCount(p.updates), humanCount(rate),
+                         p.residual < 0 ? std::string() : fmt::format("  largest change {:.3g}", p.residual));
     }
     if (bar_) {
       std::cerr << '\r' << line << "\x1b[K" << std::flush;
@@ -280,6 +281,7 @@ json runTrain(const TrainOptions& options) {
     if (std::find(wanted.begin(), wanted.end(), behavior.name) == wanted.end()) continue;
     if (finished.count(behavior.name) != 0) {
       log(fmt::format("resume: {}: already trained in {}, kept", behavior.name, out.string()));
+      report["kept"].push_back(behavior.name);
       continue;
     }
     const Problem problem = behavior.problem(model);
@@ -353,6 +355,9 @@ std::string trainText(const json& report) {
                         name, b["learner"].get<std::string>(), b["updates"].get<std::uint64_t>(),
                         b["seconds"].get<double>(), humanCount(b["updates_per_second"].get<double>()),
                         b["final_residual"].get<double>(), b["table_bytes"].get<double>() / 1e6);
+  if (report.contains("kept"))
+    for (const json& name : report["kept"])
+      text += fmt::format("  {:<10} kept: trained before the run was stopped\n", name.get<std::string>());
   return text;
 }
 

@@ -15,7 +15,8 @@ namespace mgrl {
 namespace {
 
 // Bump when the graph construction changes what it computes, so old caches go stale.
-constexpr int kGraphAlgorithmVersion = 1;
+// 2: no effective punch while knocked down; the fist falls back to the wrist's end site.
+constexpr int kGraphAlgorithmVersion = 2;
 
 bool wildcardMatch(std::string_view pattern, std::string_view text) {
   // Iterative '*' / '?' matching with backtracking to the last star.
@@ -106,7 +107,8 @@ MotionSpec readMotion(const ConfigNode& motion, const std::filesystem::path& sce
   if (motion.has("annotation")) {
     const ConfigNode a = motion.child("annotation");
     a.allowOnly({"contact_height_enter_m", "contact_height_exit_m", "contact_speed_enter_mps",
-                 "contact_speed_exit_mps", "punch_min_speed_mps", "punch_min_alignment", "punch_max_speed_mps"});
+                 "contact_speed_exit_mps", "punch_min_speed_mps", "punch_min_alignment", "punch_max_speed_mps",
+                 "knockdown_head_ratio"});
     AnnotationParams& p = spec.annotation;
     p.contactHeightEnter_m = a.number("contact_height_enter_m", p.contactHeightEnter_m, 0, 1);
     p.contactHeightExit_m = a.number("contact_height_exit_m", p.contactHeightExit_m, 0, 1);
@@ -115,6 +117,7 @@ MotionSpec readMotion(const ConfigNode& motion, const std::filesystem::path& sce
     p.punchMinSpeed_mps = a.number("punch_min_speed_mps", p.punchMinSpeed_mps, 0, 100);
     p.punchMinAlignment = a.number("punch_min_alignment", p.punchMinAlignment, -1, 1);
     p.punchMaxSpeed_mps = a.number("punch_max_speed_mps", p.punchMaxSpeed_mps, 0, 1000);
+    p.knockdownHeadRatio = a.number("knockdown_head_ratio", p.knockdownHeadRatio, 0, 0.99);
     a.withLocation([&] { p.validate(); });
   }
   return spec;
@@ -280,7 +283,7 @@ std::string graphCacheKey(const Scenario& s) {
   }
   const AnnotationParams& a = m.annotation;
   for (double v : {a.contactHeightEnter_m, a.contactHeightExit_m, a.contactSpeedEnter_mps, a.contactSpeedExit_mps,
-                   a.punchMinSpeed_mps, a.punchMinAlignment, a.punchMaxSpeed_mps})
+                   a.punchMinSpeed_mps, a.punchMinAlignment, a.punchMaxSpeed_mps, a.knockdownHeadRatio})
     h.update(v);
   const GraphParams& g = s.graph;
   for (double v : {g.threshold, g.velocityWeight, g.rootHeightWeight}) h.update(v);

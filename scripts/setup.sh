@@ -2,7 +2,7 @@
 # Installs what mgrl needs to build and test, from Debian 12 packages, if missing.
 set -euo pipefail
 
-packages=(g++ cmake ninja-build pkg-config libeigen3-dev libfmt-dev libcli11-dev nlohmann-json3-dev libyaml-cpp-dev catch2)
+packages=(g++ cmake ninja-build pkg-config git python3 libeigen3-dev libfmt-dev libcli11-dev nlohmann-json3-dev libyaml-cpp-dev catch2)
 
 missing=()
 for p in "${packages[@]}"; do

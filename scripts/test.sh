@@ -13,6 +13,9 @@ say "Release build and full test suite"
 "$root/scripts/build.sh" "$root/build"
 (cd "$root/build" && ctest --output-on-failure -j "$jobs")
 
+say "README sample outputs against the program's (scripts/readme_outputs.py)"
+python3 "$root/scripts/readme_outputs.py" --check --mgrl "$root/build/app/mgrl"
+
 # The README's first command, from what is committed (a file left out of a commit fails
 # here), on an empty cache, as a new user runs it; quick budgets keep it to minutes.
 say "main job from a fresh clone: scripts/demo.sh --quick"

@@ -424,16 +424,17 @@ TEST_CASE("scenario overrides (--set) replace, create and reset keys", "[behavio
     REQUIRE_THROWS_WITH(build(both, {"behaviors.approach.learner.budget=lots"}),
                         Contains("behaviors.approach.learner.budget: expected a whole number in [1, 1000000000000], "
                                  "found 'lots'"));
+    // Named at the flag that set it, not at the file's line.
     REQUIRE_CONFIG_ERROR(build(both, {"behaviors.approach.learner.bugdet=5"}),
-                         kSource.string() +
+                         std::string("--set behaviors.approach.learner.bugdet=5") +
                              ": behaviors.approach.learner.bugdet: unknown key (expected one of: type, "
                              "budget, seed, alpha_final, curve_points, checkpoint_every, threads)");
     REQUIRE_CONFIG_ERROR(build(both, {"behaviors.approach.learner.type=sarsa"}),
-                         kSource.string() +
+                         std::string("--set behaviors.approach.learner.type=sarsa") +
                              ": behaviors.approach.learner.type: unknown learner 'sarsa' (known: "
                              "q_learning, value_iteration)");
     REQUIRE_CONFIG_ERROR(build(both, {"grpah=0.3"}),
-                         kSource.string() +
+                         std::string("--set grpah=0.3") +
                              ": grpah: unknown key (expected one of: name, description, motion, graph, "
                              "behaviors, world)");
     REQUIRE_THROWS_WITH(build(both, {"behaviors.hit=3"}),

@@ -463,15 +463,16 @@ TEST_CASE("SIGINT during mgrl train exits 130 with a checkpoint and the resume c
 // learner does not overwrite the first; eval with the same --set finds each.
 TEST_CASE("another learner trains into another default bundle", "[cli][data]") {
   Sandbox box("paths");
-  const std::string vi = kFast + " --set behaviors.approach.learner.type=value_iteration";
+  const std::string vi =
+      "--set behaviors.hit.learner.budget=400000 --set behaviors.approach.learner.type=value_iteration";
   const json q = box.train(kFast + " --behavior approach").report();
   const json v = box.train(vi + " --behavior approach").report();
   CHECK(q["policy"] != v["policy"]);
   CHECK(fs::path(q["policy"].get<std::string>()).parent_path() == box.cache() / "policies");
   CHECK(json::parse(readText(fs::path(v["policy"].get<std::string>()) / "manifest.json"))["behaviors"]["approach"]
-            ["learner"] == "value_iteration");
+            ["record"]["learner"] == "value_iteration");
   CHECK(json::parse(readText(fs::path(q["policy"].get<std::string>()) / "manifest.json"))["behaviors"]["approach"]
-            ["learner"] == "q_learning");
+            ["record"]["learner"] == "q_learning");
 
   // A bundle trained with another learner, given with --policy, is used with its settings.
   const fs::path out = box.path("vi");
