@@ -7,11 +7,12 @@
 #include <fmt/format.h>
 
 #include "learn_common.hpp"
-#include "mgrl/behavior.hpp"
-#include "mgrl/controller.hpp"
-#include "mgrl/motion_io.hpp"
-#include "mgrl/policy_bundle.hpp"
-#include "mgrl/random.hpp"
+#include "mgrl/learning/behavior.hpp"
+#include "mgrl/scenario/behaviors.hpp"
+#include "mgrl/runtime/controller.hpp"
+#include "mgrl/motion/motion_io.hpp"
+#include "mgrl/learning/policy_bundle.hpp"
+#include "mgrl/core/random.hpp"
 #include "plugins.hpp"
 
 namespace mgrl::app {

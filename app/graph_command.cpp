@@ -7,11 +7,11 @@
 
 #include <fmt/format.h>
 
-#include "mgrl/graph_cache.hpp"
-#include "mgrl/hash.hpp"
-#include "mgrl/motion_graph.hpp"
-#include "mgrl/playback.hpp"
-#include "mgrl/version.hpp"
+#include "mgrl/graph/graph_cache.hpp"
+#include "mgrl/core/hash.hpp"
+#include "mgrl/graph/motion_graph.hpp"
+#include "mgrl/graph/playback.hpp"
+#include "mgrl/core/version.hpp"
 #include "plugins.hpp"
 #include "plural.hpp"
 

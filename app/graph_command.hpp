@@ -8,12 +8,12 @@
 
 #include <nlohmann/json.hpp>
 
-#include "mgrl/error.hpp"
-#include "mgrl/motion_database.hpp"
-#include "mgrl/motion_graph.hpp"
-#include "mgrl/playback.hpp"
-#include "mgrl/scenario.hpp"
-#include "mgrl/state_action_model.hpp"
+#include "mgrl/core/error.hpp"
+#include "mgrl/motion/motion_database.hpp"
+#include "mgrl/graph/motion_graph.hpp"
+#include "mgrl/graph/playback.hpp"
+#include "mgrl/scenario/scenario.hpp"
+#include "mgrl/graph/state_action_model.hpp"
 
 namespace mgrl::app {
 

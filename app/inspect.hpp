@@ -9,9 +9,9 @@
 
 #include <nlohmann/json.hpp>
 
-#include "mgrl/annotation.hpp"
-#include "mgrl/motion_io.hpp"
-#include "mgrl/roles.hpp"
+#include "mgrl/motion/annotation.hpp"
+#include "mgrl/motion/motion_io.hpp"
+#include "mgrl/motion/roles.hpp"
 
 namespace mgrl::app {
 

@@ -9,8 +9,8 @@
 
 #include <nlohmann/json.hpp>
 
-#include "mgrl/error.hpp"
-#include "mgrl/scenario.hpp"
+#include "mgrl/core/error.hpp"
+#include "mgrl/scenario/scenario.hpp"
 
 namespace mgrl::app {
 

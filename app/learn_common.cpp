@@ -6,9 +6,10 @@
 #include <fmt/format.h>
 #include <fmt/ranges.h>
 
-#include "mgrl/behavior.hpp"
-#include "mgrl/motion_io.hpp"
-#include "mgrl/data_paths.hpp"
+#include "mgrl/learning/behavior.hpp"
+#include "mgrl/scenario/behaviors.hpp"
+#include "mgrl/motion/motion_io.hpp"
+#include "mgrl/core/data_paths.hpp"
 #include "plugins.hpp"
 
 namespace mgrl::app {

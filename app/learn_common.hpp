@@ -7,10 +7,10 @@
 
 #include "graph_command.hpp"
 #include "learn_commands.hpp"
-#include "mgrl/behavior.hpp"
-#include "mgrl/controller.hpp"
-#include "mgrl/policy_bundle.hpp"
-#include "mgrl/scenario.hpp"
+#include "mgrl/learning/behavior.hpp"
+#include "mgrl/runtime/controller.hpp"
+#include "mgrl/learning/policy_bundle.hpp"
+#include "mgrl/scenario/scenario.hpp"
 
 namespace mgrl::app {
 

@@ -17,10 +17,11 @@
 #include "inspect.hpp"
 #include "learn_commands.hpp"
 #include "plugins.hpp"
-#include "mgrl/behavior.hpp"
-#include "mgrl/data_paths.hpp"
-#include "mgrl/error.hpp"
-#include "mgrl/version.hpp"
+#include "mgrl/learning/behavior.hpp"
+#include "mgrl/scenario/behaviors.hpp"
+#include "mgrl/core/data_paths.hpp"
+#include "mgrl/core/error.hpp"
+#include "mgrl/core/version.hpp"
 
 namespace {
 

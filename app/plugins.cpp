@@ -3,8 +3,9 @@
 #include <fmt/format.h>
 
 #include "discretizers/discretizers.hpp"
+#include "environments/environments.hpp"
 #include "learners/learners.hpp"
-#include "mgrl/world.hpp"
+#include "mgrl/runtime/world.hpp"
 #include "rewards/rewards.hpp"
 
 namespace mgrl::app {
@@ -14,7 +15,7 @@ const Plugins& plugins() {
     Plugins p;
     discretizers::registerAll(p.discretizers);
     rewards::registerAll(p.rewards);
-    rewards::registerEnvironments(p.environments);
+    environments::registerAll(p.environments);
     learners::registerAll(p.learners);
     return p;
   }();

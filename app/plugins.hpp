@@ -4,7 +4,7 @@
 /// learner the application offers, registered explicitly (DESIGN.md sec. 4).
 #include <string>
 
-#include "mgrl/behavior.hpp"
+#include "mgrl/learning/behavior.hpp"
 
 namespace mgrl::app {
 

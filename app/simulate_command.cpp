@@ -13,13 +13,14 @@
 #include <fmt/format.h>
 
 #include "learn_common.hpp"
-#include "mgrl/behavior.hpp"
-#include "mgrl/bvh.hpp"
-#include "mgrl/controller.hpp"
-#include "mgrl/motion_io.hpp"
-#include "mgrl/parallel.hpp"
-#include "mgrl/policy_bundle.hpp"
-#include "mgrl/world.hpp"
+#include "mgrl/learning/behavior.hpp"
+#include "mgrl/scenario/behaviors.hpp"
+#include "mgrl/motion/bvh.hpp"
+#include "mgrl/runtime/controller.hpp"
+#include "mgrl/motion/motion_io.hpp"
+#include "mgrl/core/parallel.hpp"
+#include "mgrl/learning/policy_bundle.hpp"
+#include "mgrl/runtime/world.hpp"
 #include "plugins.hpp"
 
 namespace mgrl::app {

@@ -11,12 +11,13 @@
 
 #include "learn_common.hpp"
 
-#include "mgrl/behavior.hpp"
-#include "mgrl/checkpoint_store.hpp"
-#include "mgrl/hash.hpp"
-#include "mgrl/parallel.hpp"
-#include "mgrl/policy_bundle.hpp"
-#include "mgrl/version.hpp"
+#include "mgrl/learning/behavior.hpp"
+#include "mgrl/scenario/behaviors.hpp"
+#include "mgrl/learning/checkpoint_store.hpp"
+#include "mgrl/core/hash.hpp"
+#include "mgrl/core/parallel.hpp"
+#include "mgrl/learning/policy_bundle.hpp"
+#include "mgrl/core/version.hpp"
 #include "plugins.hpp"
 
 namespace mgrl::app {

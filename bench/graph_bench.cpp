@@ -13,9 +13,9 @@
 #include <sys/resource.h>
 
 #include "bench_support.hpp"
-#include "mgrl/data_paths.hpp"
-#include "mgrl/motion_graph.hpp"
-#include "mgrl/scenario.hpp"
+#include "mgrl/core/data_paths.hpp"
+#include "mgrl/graph/motion_graph.hpp"
+#include "mgrl/scenario/scenario.hpp"
 
 namespace {
 

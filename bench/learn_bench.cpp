@@ -21,11 +21,11 @@
 
 #include "app/plugins.hpp"
 #include "bench_support.hpp"
-#include "mgrl/controller.hpp"
-#include "mgrl/parallel.hpp"
-#include "mgrl/problem.hpp"
-#include "mgrl/random.hpp"
-#include "mgrl/synthetic_model.hpp"
+#include "mgrl/runtime/controller.hpp"
+#include "mgrl/core/parallel.hpp"
+#include "mgrl/learning/problem.hpp"
+#include "mgrl/core/random.hpp"
+#include "synthetic_model.hpp"
 
 namespace {
 

@@ -11,12 +11,12 @@
 #include <vector>
 
 #include "bench_support.hpp"
-#include "mgrl/annotation.hpp"
-#include "mgrl/asf_amc.hpp"
-#include "mgrl/bvh.hpp"
-#include "mgrl/data_paths.hpp"
-#include "mgrl/kinematics.hpp"
-#include "mgrl/motion_io.hpp"
+#include "mgrl/motion/annotation.hpp"
+#include "mgrl/motion/asf_amc.hpp"
+#include "mgrl/motion/bvh.hpp"
+#include "mgrl/core/data_paths.hpp"
+#include "mgrl/motion/kinematics.hpp"
+#include "mgrl/motion/motion_io.hpp"
 
 using namespace mgrl;
 using Clock = std::chrono::steady_clock;

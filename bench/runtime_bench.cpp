@@ -21,10 +21,11 @@
 #include "app/learn_common.hpp"
 #include "app/plugins.hpp"
 #include "bench_support.hpp"
-#include "mgrl/behavior.hpp"
-#include "mgrl/data_paths.hpp"
-#include "mgrl/parallel.hpp"
-#include "mgrl/world.hpp"
+#include "mgrl/learning/behavior.hpp"
+#include "mgrl/scenario/behaviors.hpp"
+#include "mgrl/core/data_paths.hpp"
+#include "mgrl/core/parallel.hpp"
+#include "mgrl/runtime/world.hpp"
 
 namespace {
 

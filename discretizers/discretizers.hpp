@@ -3,7 +3,7 @@
 /// The discretizer plugins (paper sec. 4.2, 6.4): `polar2d` for approaching (the target's
 /// ground position around the avatar) and `cylindrical3d` for hitting (angle, distance and
 /// height over the volume the avatar's effective punches reach).
-#include "mgrl/discretizer.hpp"
+#include "mgrl/learning/discretizer.hpp"
 
 namespace mgrl::discretizers {
 

@@ -2,7 +2,7 @@
 /// \file
 /// The learner plugins: `q_learning` (the paper's algorithm, sec. 4.2) and
 /// `value_iteration` (the same backup swept to convergence: the exact answer on the grid).
-#include "mgrl/learner.hpp"
+#include "mgrl/learning/learner.hpp"
 
 namespace mgrl::learners {
 

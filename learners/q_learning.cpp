@@ -11,8 +11,8 @@
 #include <fmt/format.h>
 
 #include "learners.hpp"
-#include "mgrl/error.hpp"
-#include "mgrl/random.hpp"
+#include "mgrl/core/error.hpp"
+#include "mgrl/core/random.hpp"
 
 namespace mgrl::learners {
 

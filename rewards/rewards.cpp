@@ -75,11 +75,4 @@ void registerAll(RewardRegistry& registry) {
                 [](const Params& p) { return std::make_unique<Hit>(p); }});
 }
 
-void registerEnvironments(EnvironmentRegistry& registry) {
-  registry.add({"static_target",
-                "the target stays put in the world; after an action it is seen from the action's end (exact)",
-                {},
-                [](const Params&) { return std::make_unique<StaticTarget>(); }});
-}
-
 }  // namespace mgrl::rewards

@@ -2,9 +2,9 @@
 
 #include <catch2/catch.hpp>
 
-#include "mgrl/annotation.hpp"
-#include "mgrl/bvh.hpp"
-#include "mgrl/kinematics.hpp"
+#include "mgrl/motion/annotation.hpp"
+#include "mgrl/motion/bvh.hpp"
+#include "mgrl/motion/kinematics.hpp"
 #include "test_support.hpp"
 
 using namespace mgrl;

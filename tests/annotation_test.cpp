@@ -3,8 +3,8 @@
 
 #include <catch2/catch.hpp>
 
-#include "mgrl/annotation.hpp"
-#include "mgrl/error.hpp"
+#include "mgrl/motion/annotation.hpp"
+#include "mgrl/core/error.hpp"
 #include "test_support.hpp"
 
 using namespace mgrl;

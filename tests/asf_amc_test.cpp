@@ -2,8 +2,8 @@
 
 #include <catch2/catch.hpp>
 
-#include "mgrl/asf_amc.hpp"
-#include "mgrl/kinematics.hpp"
+#include "mgrl/motion/asf_amc.hpp"
+#include "mgrl/motion/kinematics.hpp"
 #include "test_support.hpp"
 
 using namespace mgrl;

@@ -10,9 +10,10 @@
 #include <catch2/catch.hpp>
 
 #include "app/plugins.hpp"
-#include "mgrl/behavior.hpp"
-#include "mgrl/scenario.hpp"
-#include "mgrl/state_action_model.hpp"
+#include "mgrl/learning/behavior.hpp"
+#include "mgrl/scenario/behaviors.hpp"
+#include "mgrl/scenario/scenario.hpp"
+#include "mgrl/graph/state_action_model.hpp"
 #include "test_support.hpp"
 
 using namespace mgrl;

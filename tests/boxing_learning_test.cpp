@@ -7,8 +7,9 @@
 #include "app/graph_command.hpp"
 #include "app/learn_commands.hpp"
 #include "app/plugins.hpp"
-#include "mgrl/behavior.hpp"
-#include "mgrl/data_paths.hpp"
+#include "mgrl/learning/behavior.hpp"
+#include "mgrl/scenario/behaviors.hpp"
+#include "mgrl/core/data_paths.hpp"
 #include "test_support.hpp"
 
 namespace mgrl {

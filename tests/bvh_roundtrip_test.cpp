@@ -2,9 +2,9 @@
 
 #include <catch2/catch.hpp>
 
-#include "mgrl/bvh.hpp"
-#include "mgrl/kinematics.hpp"
-#include "mgrl/text_scanner.hpp"
+#include "mgrl/motion/bvh.hpp"
+#include "mgrl/motion/kinematics.hpp"
+#include "mgrl/core/text_scanner.hpp"
 #include "test_support.hpp"
 
 using namespace mgrl;

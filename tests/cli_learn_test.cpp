@@ -231,7 +231,7 @@ TEST_CASE("mgrl train starts over without --resume or from a checkpoint of other
     const Run again = box.train(train);
     INFO(again.err);
     CHECK(again.report()["behaviors"]["approach"]["stats"]["resumed"] == false);
-    // Nothing is said about checkpoints unless one is refused (mgrl/checkpoint_store.hpp).
+    // Nothing is said about checkpoints unless one is refused (mgrl/learning/checkpoint_store.hpp).
     CHECK_THAT(again.err, !Contains("resum") && !Contains("ignoring the checkpoint"));
     CHECK_FALSE(fs::exists(checkpoints));
   }
@@ -251,7 +251,7 @@ TEST_CASE("mgrl train starts over without --resume or from a checkpoint of other
 }
 
 TEST_CASE("settings left out of the behaviour key do not change the trained table", "[cli][data]") {
-  // checkpoint_every, curve_points and threads are not hashed into the key (mgrl/behavior.hpp),
+  // checkpoint_every, curve_points and threads are not hashed into the key (mgrl/learning/behavior.hpp),
   // so a bundle trained with other values is taken as current: its table must be the same.
   Sandbox box("unkeyed");
   const fs::path a = box.path("a"), b = box.path("b");

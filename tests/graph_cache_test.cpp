@@ -17,11 +17,11 @@
 #include <catch2/catch.hpp>
 #include <fmt/format.h>
 
-#include "mgrl/error.hpp"
-#include "mgrl/graph_cache.hpp"
-#include "mgrl/hash.hpp"
-#include "mgrl/motion_io.hpp"
-#include "mgrl/npy.hpp"
+#include "mgrl/core/error.hpp"
+#include "mgrl/graph/graph_cache.hpp"
+#include "mgrl/core/hash.hpp"
+#include "mgrl/motion/motion_io.hpp"
+#include "mgrl/core/npy.hpp"
 #include "test_support.hpp"
 
 namespace fs = std::filesystem;

@@ -1,6 +1,6 @@
 #include <catch2/catch.hpp>
 
-#include "mgrl/kinematics.hpp"
+#include "mgrl/motion/kinematics.hpp"
 #include "test_support.hpp"
 
 using namespace mgrl;

@@ -5,11 +5,11 @@
 #include <cmath>
 
 #include "app/plugins.hpp"
-#include "mgrl/behavior.hpp"
-#include "mgrl/controller.hpp"
-#include "mgrl/motion_graph.hpp"
-#include "mgrl/problem.hpp"
-#include "mgrl/random.hpp"
+#include "mgrl/learning/behavior.hpp"
+#include "mgrl/runtime/controller.hpp"
+#include "mgrl/graph/motion_graph.hpp"
+#include "mgrl/learning/problem.hpp"
+#include "mgrl/core/random.hpp"
 
 namespace mgrl {
 namespace {

@@ -8,10 +8,10 @@
 
 #include <catch2/catch.hpp>
 
-#include "mgrl/asf_amc.hpp"
-#include "mgrl/bvh.hpp"
-#include "mgrl/error.hpp"
-#include "mgrl/rotation.hpp"
+#include "mgrl/motion/asf_amc.hpp"
+#include "mgrl/motion/bvh.hpp"
+#include "mgrl/core/error.hpp"
+#include "mgrl/core/rotation.hpp"
 #include "test_support.hpp"
 
 using Catch::Contains;

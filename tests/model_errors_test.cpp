@@ -5,10 +5,10 @@
 
 #include <catch2/catch.hpp>
 
-#include "mgrl/annotation.hpp"
-#include "mgrl/error.hpp"
-#include "mgrl/motion_io.hpp"
-#include "mgrl/roles.hpp"
+#include "mgrl/motion/annotation.hpp"
+#include "mgrl/core/error.hpp"
+#include "mgrl/motion/motion_io.hpp"
+#include "mgrl/motion/roles.hpp"
 #include "test_support.hpp"
 
 using namespace mgrl;

@@ -7,12 +7,12 @@
 #include <catch2/catch.hpp>
 #include <fmt/format.h>
 
-#include "mgrl/data_paths.hpp"
-#include "mgrl/graph_cache.hpp"
-#include "mgrl/kinematics.hpp"
-#include "mgrl/motion_graph.hpp"
-#include "mgrl/playback.hpp"
-#include "mgrl/scenario.hpp"
+#include "mgrl/core/data_paths.hpp"
+#include "mgrl/graph/graph_cache.hpp"
+#include "mgrl/motion/kinematics.hpp"
+#include "mgrl/graph/motion_graph.hpp"
+#include "mgrl/graph/playback.hpp"
+#include "mgrl/scenario/scenario.hpp"
 #include "test_support.hpp"
 
 using namespace mgrl;

@@ -2,8 +2,8 @@
 
 #include <catch2/catch.hpp>
 
-#include "mgrl/kinematics.hpp"
-#include "mgrl/error.hpp"
+#include "mgrl/motion/kinematics.hpp"
+#include "mgrl/core/error.hpp"
 #include "test_support.hpp"
 
 using namespace mgrl;

@@ -11,8 +11,8 @@
 #include <catch2/catch.hpp>
 #include <fmt/format.h>
 
-#include "mgrl/error.hpp"
-#include "mgrl/npy.hpp"
+#include "mgrl/core/error.hpp"
+#include "mgrl/core/npy.hpp"
 #include "test_support.hpp"
 
 using Catch::Contains;

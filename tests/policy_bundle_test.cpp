@@ -20,12 +20,12 @@
 #include <catch2/catch.hpp>
 #include <fmt/format.h>
 
-#include "mgrl/checkpoint_store.hpp"
-#include "mgrl/error.hpp"
-#include "mgrl/hash.hpp"
-#include "mgrl/motion_io.hpp"
-#include "mgrl/npy.hpp"
-#include "mgrl/policy_bundle.hpp"
+#include "mgrl/learning/checkpoint_store.hpp"
+#include "mgrl/core/error.hpp"
+#include "mgrl/core/hash.hpp"
+#include "mgrl/motion/motion_io.hpp"
+#include "mgrl/core/npy.hpp"
+#include "mgrl/learning/policy_bundle.hpp"
 #include "test_support.hpp"
 
 namespace fs = std::filesystem;

@@ -9,10 +9,10 @@
 
 #include <catch2/catch.hpp>
 
-#include "mgrl/asf_amc.hpp"
-#include "mgrl/bvh.hpp"
-#include "mgrl/error.hpp"
-#include "mgrl/motion_io.hpp"
+#include "mgrl/motion/asf_amc.hpp"
+#include "mgrl/motion/bvh.hpp"
+#include "mgrl/core/error.hpp"
+#include "mgrl/motion/motion_io.hpp"
 #include "test_support.hpp"
 
 namespace {

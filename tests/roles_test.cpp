@@ -1,7 +1,7 @@
 #include <catch2/catch.hpp>
 
-#include "mgrl/error.hpp"
-#include "mgrl/roles.hpp"
+#include "mgrl/core/error.hpp"
+#include "mgrl/motion/roles.hpp"
 #include "test_support.hpp"
 
 using namespace mgrl;

@@ -4,7 +4,7 @@
 
 #include <catch2/catch.hpp>
 
-#include "mgrl/rotation.hpp"
+#include "mgrl/core/rotation.hpp"
 
 using namespace mgrl;
 

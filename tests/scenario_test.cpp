@@ -5,8 +5,8 @@
 #include <catch2/catch.hpp>
 
 #include "graph_command.hpp"
-#include "mgrl/graph_cache.hpp"
-#include "mgrl/scenario.hpp"
+#include "mgrl/graph/graph_cache.hpp"
+#include "mgrl/scenario/scenario.hpp"
 #include "test_support.hpp"
 
 using namespace mgrl;

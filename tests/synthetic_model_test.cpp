@@ -13,9 +13,9 @@
 
 #include <catch2/catch.hpp>
 
-#include "mgrl/error.hpp"
-#include "mgrl/motion_graph.hpp"
-#include "mgrl/synthetic_model.hpp"
+#include "mgrl/core/error.hpp"
+#include "mgrl/graph/motion_graph.hpp"
+#include "synthetic_model.hpp"
 
 using namespace mgrl;
 using Catch::Contains;

@@ -6,7 +6,7 @@
 
 #include <catch2/catch.hpp>
 
-#include "mgrl/data_paths.hpp"
+#include "mgrl/core/data_paths.hpp"
 
 namespace mgrl::test {
 

@@ -6,7 +6,7 @@
 #include <string_view>
 #include <vector>
 
-#include "mgrl/motion_io.hpp"
+#include "mgrl/motion/motion_io.hpp"
 
 // Both halves of a parser's error contract: the type (mgrl::ParseError) and the message
 // (`source:line: expected ..., found ...`). Needs <catch2/catch.hpp> included first.

@@ -1,7 +1,7 @@
 #include <catch2/catch.hpp>
 
-#include "mgrl/error.hpp"
-#include "mgrl/units.hpp"
+#include "mgrl/core/error.hpp"
+#include "mgrl/motion/units.hpp"
 #include "test_support.hpp"
 
 using namespace mgrl;

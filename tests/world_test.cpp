@@ -12,10 +12,11 @@
 #include "app/learn_commands.hpp"
 #include "app/learn_common.hpp"
 #include "app/plugins.hpp"
-#include "mgrl/behavior.hpp"
-#include "mgrl/bvh.hpp"
-#include "mgrl/kinematics.hpp"
-#include "mgrl/world.hpp"
+#include "mgrl/learning/behavior.hpp"
+#include "mgrl/scenario/behaviors.hpp"
+#include "mgrl/motion/bvh.hpp"
+#include "mgrl/motion/kinematics.hpp"
+#include "mgrl/runtime/world.hpp"
 #include "test_support.hpp"
 
 namespace mgrl {

@@ -1,0 +1,266 @@
+#include "mgrl/core/bundle.hpp"
+
+#include <unistd.h>
+
+#include <atomic>
+#include <cerrno>
+#include <cstring>
+#include <fstream>
+#include <limits>
+#include <system_error>
+
+#include <fmt/format.h>
+#include <fmt/ranges.h>
+
+#include "mgrl/core/error.hpp"
+#include "mgrl/core/hash.hpp"
+#include "mgrl/core/files.hpp"
+
+namespace mgrl {
+namespace {
+
+namespace fs = std::filesystem;
+using nlohmann::json;
+
+void renameOrThrow(const fs::path& from, const fs::path& to, std::string_view source) {
+  std::error_code ec;
+  fs::rename(from, to, ec);
+  if (ec) throw Error(fmt::format("{}: cannot rename {} to {}: {}", source, from.string(), to.string(), ec.message()));
+}
+
+std::string dumpForMessage(const json& value) {
+  return value.dump(-1, ' ', false, json::error_handler_t::replace);
+}
+
+}  // namespace
+
+// ---------------------------------------------------------------------------------------
+// Writing
+
+void writeWholeFile(const fs::path& path, std::string_view bytes) {
+  std::ofstream out(path, std::ios::binary | std::ios::trunc);
+  if (out) out.write(bytes.data(), static_cast<std::streamsize>(bytes.size()));
+  if (out) out.flush();
+  if (!out) throw Error(fmt::format("{}: cannot write: {}", path.string(), std::strerror(errno)));
+}
+
+fs::path freshSibling(const fs::path& dir, std::string_view tag, bool create) {
+  static std::atomic<unsigned> counter{0};
+  for (int attempt = 0; attempt < 1000; ++attempt) {
+    const fs::path candidate =
+        dir.parent_path() / fmt::format("{}.{}-{}-{}", dir.filename().string(), tag, ::getpid(), counter++);
+    std::error_code ec;
+    if (create) {
+      if (fs::create_directory(candidate, ec)) return candidate;
+      if (ec) throw Error(fmt::format("{}: cannot create {}: {}", dir.string(), candidate.string(), ec.message()));
+    } else if (!fs::exists(fs::symlink_status(candidate, ec))) {
+      return candidate;
+    }
+  }
+  throw Error(fmt::format("{}: expected a free name for a {} directory beside it, found none", dir.string(), tag));
+}
+
+bool isPlainFileName(std::string_view name) {
+  return !name.empty() && name != "." && name != ".." && name.find_first_of(std::string_view("/\\\0", 3)) == name.npos;
+}
+
+void writeBundleDirectory(const fs::path& dirArgument, const std::vector<BundleFile>& files,
+                          std::string_view manifestText, std::string_view kind, std::string_view manifestName) {
+  // "cache/graph/" names the same bundle as "cache/graph".
+  const fs::path dir = dirArgument.has_filename() ? dirArgument : dirArgument.parent_path();
+  const std::string source = dir.string();
+  for (const BundleFile& file : files)
+    if (!isPlainFileName(file.name) || file.name == manifestName)
+      throw Error(fmt::format("{}: expected plain file names in a {} other than {}, found {}", source, kind,
+                              manifestName, quoteToken(file.name)));
+
+  // Never delete something that is not ours to replace.
+  std::error_code ec;
+  const fs::file_status existing = fs::symlink_status(dir, ec);
+  const bool replacing = fs::exists(existing);
+  if (replacing) {
+    if (!fs::is_directory(existing))
+      throw Error(fmt::format("{}: expected a {} directory or nothing, found another kind of file", source, kind));
+    if (!fs::exists(dir / manifestName, ec) && !fs::is_empty(dir, ec))
+      throw Error(fmt::format("{}: expected a {} (with {}) or an empty directory to replace, "
+                              "found a directory with other files; not deleting it",
+                              source, kind, manifestName));
+  }
+  if (dir.has_parent_path()) {
+    fs::create_directories(dir.parent_path(), ec);
+    if (ec) throw Error(fmt::format("{}: cannot create {}: {}", source, dir.parent_path().string(), ec.message()));
+  }
+
+  const fs::path temporary = freshSibling(dir, "tmp", true);
+  try {
+    for (const BundleFile& file : files) writeWholeFile(temporary / file.name, file.bytes);
+    // Last, so a directory with a manifest has all its files.
+    writeWholeFile(temporary / manifestName, manifestText);
+    if (!replacing) {
+      renameOrThrow(temporary, dir, source);
+      return;
+    }
+    const fs::path old = freshSibling(dir, "old", false);
+    renameOrThrow(dir, old, source);
+    try {
+      renameOrThrow(temporary, dir, source);
+    } catch (const Error&) {
+      std::error_code ignored;
+      fs::rename(old, dir, ignored);  // put the previous bundle back
+      throw;
+    }
+    // The new bundle is in place; an old copy that cannot be removed only wastes space.
+    std::error_code ignored;
+    fs::remove_all(old, ignored);
+  } catch (...) {
+    std::error_code ignored;
+    fs::remove_all(temporary, ignored);
+    throw;
+  }
+}
+
+std::string quoteKey(std::string_view key) { return quoteToken(key.substr(0, 16)); }
+
+std::string formatShape(const std::vector<std::size_t>& shape) {
+  if (shape.size() == 1) return fmt::format("({},)", shape[0]);
+  return fmt::format("({})", fmt::join(shape, ", "));
+}
+
+json bundleArrayEntry(const BundleFile& file, std::string_view dtype, const std::vector<std::size_t>& shape) {
+  return {{"file", file.name},
+          {"dtype", std::string(dtype)},
+          {"shape", shape},
+          {"bytes", file.bytes.size()},
+          {"hash", hexDigest(hashBytes(file.bytes))}};
+}
+
+// ---------------------------------------------------------------------------------------
+// Reading
+
+void ManifestReader::fail(std::string_view path, std::string_view expected, const json& found) const {
+  throw Error(fmt::format("{}: {}: expected {}, found {}", source_, path, expected, quoteToken(dumpForMessage(found))));
+}
+
+const json& ManifestReader::member(const json& parent, std::string_view path, std::string_view key) const {
+  const auto it = parent.find(key);
+  if (it == parent.end())
+    throw Error(
+        fmt::format("{}: {}: expected the key '{}', found none", source_, path.empty() ? "manifest" : path, key));
+  return *it;
+}
+
+const json& ManifestReader::object(const json& parent, std::string_view path, std::string_view key,
+                                   std::initializer_list<std::string_view> allowed) const {
+  const json& value = member(parent, path, key);
+  const std::string here = join(path, key);
+  if (!value.is_object()) fail(here, "an object", value);
+  if (allowed.size() == 0) return value;
+  for (const auto& item : value.items()) {
+    bool known = false;
+    for (std::string_view name : allowed) known = known || item.key() == name;
+    if (!known)
+      throw Error(fmt::format("{}: {}: expected only the keys {}, found '{}'", source_, here, fmt::join(allowed, ", "),
+                              item.key()));
+  }
+  return value;
+}
+
+std::string ManifestReader::string(const json& parent, std::string_view path, std::string_view key) const {
+  const json& value = member(parent, path, key);
+  if (!value.is_string()) fail(join(path, key), "a string", value);
+  return value.get<std::string>();
+}
+
+double ManifestReader::number(const json& parent, std::string_view path, std::string_view key) const {
+  const json& value = member(parent, path, key);
+  if (!value.is_number()) fail(join(path, key), "a number", value);
+  return value.get<double>();
+}
+
+std::uint64_t ManifestReader::unsignedInteger(const json& parent, std::string_view path, std::string_view key,
+                                              std::uint64_t max) const {
+  const json& value = member(parent, path, key);
+  if (!value.is_number_unsigned() || value.get<std::uint64_t>() > max)
+    fail(join(path, key), fmt::format("an integer in [0, {}]", max), value);
+  return value.get<std::uint64_t>();
+}
+
+std::string ManifestReader::join(std::string_view path, std::string_view key) {
+  return path.empty() ? std::string(key) : fmt::format("{}.{}", path, key);
+}
+
+json readManifestObject(const fs::path& path) {
+  const ManifestReader reader(path.string());
+  json manifest;
+  try {
+    manifest = json::parse(readFile(path));
+  } catch (const json::parse_error& e) {
+    throw Error(fmt::format("{}: expected JSON, found a syntax error ({})", reader.source(), e.what()));
+  }
+  if (!manifest.is_object()) reader.fail("manifest", "a JSON object", manifest);
+  return manifest;
+}
+
+template <NpyElement T>
+std::vector<T> loadBundleArray(const fs::path& dir, const ManifestReader& reader, const json& parent,
+                               std::string_view parentPath, std::string_view key, std::string_view expectedFile,
+                               std::vector<std::size_t>* shapeOut) {
+  const json& entry = reader.object(parent, parentPath, key, {"file", "dtype", "shape", "bytes", "hash"});
+  const std::string path = ManifestReader::join(parentPath, key);
+  const std::string file = reader.string(entry, path, "file");
+  if (!expectedFile.empty() && file != expectedFile)
+    reader.fail(ManifestReader::join(path, "file"), fmt::format("'{}'", expectedFile), entry["file"]);
+  // Whatever the manifest says, never read outside the bundle.
+  if (!isPlainFileName(file))
+    reader.fail(ManifestReader::join(path, "file"), "a file name inside the bundle (no '/', '\\' or '..')",
+                entry["file"]);
+  if (reader.string(entry, path, "dtype") != npyDescr<T>())
+    reader.fail(ManifestReader::join(path, "dtype"), fmt::format("'{}'", npyDescr<T>()), entry["dtype"]);
+  const json& shapeJson = reader.member(entry, path, "shape");
+  std::vector<std::size_t> shape;
+  if (!shapeJson.is_array()) reader.fail(ManifestReader::join(path, "shape"), "an array of dimensions", shapeJson);
+  for (const json& d : shapeJson) {
+    if (!d.is_number_unsigned()) reader.fail(ManifestReader::join(path, "shape"), "non-negative integers", shapeJson);
+    shape.push_back(d.get<std::size_t>());
+  }
+  const std::uint64_t bytes = reader.unsignedInteger(entry, path, "bytes", std::numeric_limits<std::uint64_t>::max());
+  const std::string hash = reader.string(entry, path, "hash");
+
+  const std::string manifestName = fs::path(reader.source()).filename().string();
+  const fs::path filePath = dir / file;
+  const std::string source = filePath.string();
+  std::error_code ec;
+  const std::uintmax_t size = fs::file_size(filePath, ec);
+  if (ec)
+    throw Error(fmt::format("{}: expected the file listed in {}, found none ({})", source, manifestName, ec.message()));
+  // Before reading, so a huge stray file is refused without loading it.
+  if (size != bytes)
+    throw Error(fmt::format("{}: expected {} bytes as in {}, found {}", source, bytes, manifestName, size));
+  const std::string text = readFile(filePath);
+  if (text.size() != bytes)
+    throw Error(fmt::format("{}: expected {} bytes as in {}, found {}", source, bytes, manifestName, text.size()));
+  const std::string actualHash = hexDigest(hashBytes(text));
+  if (actualHash != hash)
+    throw Error(fmt::format("{}: expected hash {} as in {}, found {} (the file was altered)", source,
+                            quoteToken(hash), manifestName, quoteToken(actualHash)));
+  std::vector<std::size_t> fileShape;
+  std::vector<T> data = npyDecode<T>(text, source, &fileShape);
+  if (fileShape != shape)
+    throw Error(fmt::format("{}: expected shape {} as in {}, found {}", source, formatShape(shape), manifestName,
+                            formatShape(fileShape)));
+  if (shapeOut) *shapeOut = std::move(fileShape);
+  return data;
+}
+
+#define MGRL_BUNDLE_INSTANTIATE(T)                                                                             \
+  template std::vector<T> loadBundleArray<T>(const fs::path&, const ManifestReader&, const json&,               \
+                                             std::string_view, std::string_view, std::string_view,              \
+                                             std::vector<std::size_t>*);
+MGRL_BUNDLE_INSTANTIATE(std::uint8_t)
+MGRL_BUNDLE_INSTANTIATE(std::uint32_t)
+MGRL_BUNDLE_INSTANTIATE(std::int32_t)
+MGRL_BUNDLE_INSTANTIATE(float)
+MGRL_BUNDLE_INSTANTIATE(double)
+#undef MGRL_BUNDLE_INSTANTIATE
+
+}  // namespace mgrl

@@ -1,0 +1,144 @@
+#pragma once
+/// \file
+/// Bundles (DESIGN.md sec. 6): a directory holding a JSON manifest and NumPy .npy files,
+/// written all at once so a crash never leaves half of one. The graph cache, policy bundles
+/// and training checkpoints are bundles; this header is what they share:
+/// - writing: writeBundleDirectory() puts the files in a temporary sibling directory, the
+///   manifest last, and renames it onto the destination;
+/// - the manifest entry of an array, `{"file": "q.npy", "dtype": "<f4", "shape": [A, V],
+///   "bytes": size, "hash": "<xxh64 hex>"}` (bundleArrayEntry(), encodeBundleArray());
+/// - reading: ManifestReader checks the type of every manifest member it reads, and
+///   loadBundleArray() checks one array file against its entry before decoding it.
+
+#include <cstddef>
+#include <cstdint>
+#include <filesystem>
+#include <initializer_list>
+#include <span>
+#include <string>
+#include <string_view>
+#include <utility>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+#include "mgrl/core/npy.hpp"
+
+namespace mgrl {
+
+/// One file of a bundle: its name inside the directory and its whole contents.
+struct BundleFile {
+  std::string name;
+  std::string bytes;
+};
+
+/// Writes `files` and then `manifestText` (as `manifestName`) into a fresh temporary
+/// directory beside `dir` and renames it onto `dir`, so a crash leaves either a whole
+/// bundle at `dir` or none. An old bundle at `dir` is first renamed aside, then removed
+/// (and put back if the rename of the new one fails). A trailing '/' in `dir` is ignored;
+/// `dir`'s parent is created if needed. `kind` names the bundle in messages ("graph
+/// bundle", "policy bundle"). Not safe against another process writing the same `dir` at
+/// the same time.
+/// Throws mgrl::Error, leaving no temporary directory, if a file name is not a plain name
+/// (isPlainFileName()), if `dir` is something other than a directory holding
+/// `manifestName` or an empty directory (it is never deleted then), or on any I/O failure.
+void writeBundleDirectory(const std::filesystem::path& dir, const std::vector<BundleFile>& files,
+                          std::string_view manifestText, std::string_view kind,
+                          std::string_view manifestName = "manifest.json");
+
+/// A name beside `dir` that nothing has: `<dir>.<tag>-<pid>-<counter>`. With `create`, the
+/// directory is made by the same call that proves the name free, so two writers never
+/// share it. Throws mgrl::Error if it cannot be created or no free name is found.
+std::filesystem::path freshSibling(const std::filesystem::path& dir, std::string_view tag, bool create);
+
+/// Writes `bytes` to `path`, truncating it. Throws mgrl::Error naming the path on failure.
+void writeWholeFile(const std::filesystem::path& path, std::string_view bytes);
+
+/// True if `name` names a file directly inside a directory: not empty, not "." or "..",
+/// without '/', '\\' or NUL.
+bool isPlainFileName(std::string_view name);
+
+/// `key` quoted for a message and cut to its first 16 characters: cache and run keys are
+/// long hex digests, and 16 digits tell two apart.
+std::string quoteKey(std::string_view key);
+
+/// Python's repr of a shape tuple, as NumPy prints it: "(3,)", "(2, 3)", "()".
+std::string formatShape(const std::vector<std::size_t>& shape);
+
+/// The manifest entry of `file`, an encoded .npy of NumPy type `dtype` (npyDescr<T>()) and
+/// dimensions `shape`: {"file", "dtype", "shape", "bytes", "hash"}, the hash being
+/// hexDigest(hashBytes(file.bytes)) (mgrl/core/hash.hpp).
+nlohmann::json bundleArrayEntry(const BundleFile& file, std::string_view dtype,
+                                const std::vector<std::size_t>& shape);
+
+/// An array ready to go into a bundle: its .npy file and its manifest entry.
+struct EncodedArray {
+  BundleFile file;
+  nlohmann::json entry;
+};
+
+/// npyEncode<T>(values, shape) as the file `fileName`, with its bundleArrayEntry().
+/// Throws mgrl::Error if the shape does not match the number of values.
+template <NpyElement T>
+EncodedArray encodeBundleArray(std::string fileName, std::span<const T> values, const std::vector<std::size_t>& shape) {
+  BundleFile file{std::move(fileName), npyEncode<T>(values, shape)};
+  nlohmann::json entry = bundleArrayEntry(file, npyDescr<T>(), shape);
+  return {std::move(file), std::move(entry)};
+}
+
+/// Reads members of a parsed manifest, checking each one's type, so that a hand-edited or
+/// damaged manifest produces a message naming the member (`graph/manifest.json:
+/// scalars.frames_total: expected an integer in [0, 4294967295], found '"20"'`) instead of
+/// a json exception. `path` arguments are the dotted path of the parent ("" for the root);
+/// every method throws mgrl::Error starting with source().
+class ManifestReader {
+ public:
+  /// `source` is the manifest's path as shown in messages.
+  explicit ManifestReader(std::string source) : source_(std::move(source)) {}
+
+  /// Throws `<source>: <path>: expected <expected>, found <found, quoted>`.
+  [[noreturn]] void fail(std::string_view path, std::string_view expected, const nlohmann::json& found) const;
+
+  /// parent[key], which must exist.
+  const nlohmann::json& member(const nlohmann::json& parent, std::string_view path, std::string_view key) const;
+  /// parent[key], which must be an object with no keys besides `allowed` (any keys if
+  /// `allowed` is empty).
+  const nlohmann::json& object(const nlohmann::json& parent, std::string_view path, std::string_view key,
+                               std::initializer_list<std::string_view> allowed) const;
+  /// parent[key], which must be a string.
+  std::string string(const nlohmann::json& parent, std::string_view path, std::string_view key) const;
+  /// parent[key], which must be a number.
+  double number(const nlohmann::json& parent, std::string_view path, std::string_view key) const;
+  /// parent[key], which must be an integer in [0, max].
+  std::uint64_t unsignedInteger(const nlohmann::json& parent, std::string_view path, std::string_view key,
+                                std::uint64_t max) const;
+
+  /// `path.key`, or `key` if path is empty.
+  static std::string join(std::string_view path, std::string_view key);
+
+  const std::string& source() const { return source_; }
+
+ private:
+  std::string source_;
+};
+
+/// Reads and parses the manifest at `path`, which must hold a JSON object.
+/// Throws mgrl::Error `<path>: expected JSON, found a syntax error (...)`,
+/// `<path>: manifest: expected a JSON object, found ...`, or readFile()'s error.
+nlohmann::json readManifestObject(const std::filesystem::path& path);
+
+/// Loads the array whose entry is `parent[key]` (at `path` in the manifest) from the bundle
+/// at `dir`. Checks, in this order: the entry is an object with exactly the keys of
+/// bundleArrayEntry(); its file is `expectedFile` (or, if that is empty, any plain file
+/// name, see isPlainFileName()); its dtype is npyDescr<T>(); the file exists and has the
+/// entry's byte size (checked before reading it) and hash; it decodes strictly
+/// (npyDecode()) to the entry's shape. If `shape` is given it receives the dimensions.
+/// Throws mgrl::Error (or mgrl::ParseError from npyDecode()) whose message starts with the
+/// manifest's or the array file's path, e.g. `policy/hit.q.npy: expected 4168 bytes as in
+/// manifest.json, found 4000`.
+template <NpyElement T>
+std::vector<T> loadBundleArray(const std::filesystem::path& dir, const ManifestReader& manifest,
+                               const nlohmann::json& parent, std::string_view path, std::string_view key,
+                               std::string_view expectedFile, std::vector<std::size_t>* shape = nullptr);
+
+}  // namespace mgrl

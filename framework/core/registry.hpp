@@ -1,0 +1,84 @@
+#pragma once
+/// \file
+/// One registry per seam (DESIGN.md sec. 4): a snake_case name maps to a factory and the
+/// parameters it reads. The application registers every plugin explicitly (app/plugins.cpp);
+/// nothing registers itself behind the reader's back.
+#include <functional>
+#include <memory>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include <fmt/format.h>
+#include <fmt/ranges.h>
+
+#include "mgrl/core/config.hpp"
+#include "mgrl/core/params.hpp"
+
+namespace mgrl {
+
+template <class Product, class... Context>
+class Registry {
+ public:
+  using Factory = std::function<std::unique_ptr<Product>(const Params&, Context...)>;
+  struct Entry {
+    std::string name;
+    std::string summary;  ///< one line for `mgrl list`
+    ParamSpecs params;
+    Factory make;
+  };
+
+  /// `seam` names the kind of plugin in messages: "discretizer", "reward", ...
+  explicit Registry(std::string seam) : seam_(std::move(seam)) {}
+
+  const std::string& seam() const { return seam_; }
+
+  /// Adds a plugin; a second plugin of the same name is a programming error.
+  void add(Entry entry) {
+    if (find(entry.name)) throw std::logic_error(fmt::format("{} '{}' registered twice", seam_, entry.name));
+    entries_.push_back(std::move(entry));
+  }
+
+  const Entry* find(std::string_view name) const {
+    for (const Entry& e : entries_)
+      if (e.name == name) return &e;
+    return nullptr;
+  }
+
+  /// Builds the plugin a YAML block names: `{type: NAME, ...parameters}`. A missing or
+  /// unknown type is a ConfigError listing the known names; parameters are read strictly.
+  std::unique_ptr<Product> create(const ConfigNode& block, Context... context) const {
+    const Params params = check(block);
+    const Entry& entry = entryFor(block);
+    return block.withLocation([&] { return entry.make(params, context...); });
+  }
+
+  /// The plugin a block names; ConfigError for a missing or unknown type.
+  const Entry& entryFor(const ConfigNode& block) const {
+    if (!block.isMap()) block.fail(fmt::format("expected a map with 'type: <{}>', found {}", seam_, describeKnown()));
+    if (!block.has("type")) block.fail(fmt::format("expected a 'type' key naming the {} ({})", seam_, describeKnown()));
+    const ConfigNode typeNode = block.child("type");
+    const std::string type = typeNode.asString();
+    const Entry* entry = find(type);
+    if (!entry) typeNode.fail(fmt::format("unknown {} {} (known: {})", seam_, quoteToken(type), describeKnown()));
+    return *entry;
+  }
+
+  /// Checks a block's type and parameters without building the plugin (checks that need
+  /// the plugin's context, e.g. the graph, happen in create()).
+  Params check(const ConfigNode& block) const { return Params::read(block, entryFor(block).params, {"type"}); }
+
+  const std::vector<Entry>& entries() const { return entries_; }
+
+  std::string describeKnown() const {
+    std::vector<std::string> names;
+    for (const Entry& e : entries_) names.push_back(e.name);
+    return names.empty() ? std::string("none registered") : fmt::format("{}", fmt::join(names, ", "));
+  }
+
+ private:
+  std::string seam_;
+  std::vector<Entry> entries_;
+};
+
+}  // namespace mgrl

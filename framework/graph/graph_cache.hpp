@@ -1,0 +1,77 @@
+#pragma once
+/// \file
+/// The graph cache bundle (DESIGN.md sec. 6): a directory holding `manifest.json` and one
+/// NumPy .npy file per array of a StateActionModel, so building the motion graph is done
+/// once per scenario and data, and a student can open the arrays with `numpy.load`.
+///
+/// manifest.json:
+///
+///     {"format": "mgrl.graph", "version": 1,
+///      "provenance": {"key": "<cache key>", ...whatever the caller records},
+///      "scalars": {"frame_time": s, "frames_total": n, "centroid": [x, y, z],
+///                  "max_hit_speed_mps": v},
+///      "arrays": {"action_frames": {"file": "action_frames.npy", "dtype": "<u4",
+///                                   "shape": [F], "bytes": size, "hash": "<xxh64 hex>"},
+///                 ...}}
+///
+/// Arrays, named after the fields in snake_case: clip_offset, component_frames,
+/// transitions (T, 2), transition_distance, state_frame, action_from, action_to,
+/// action_frame_begin, action_displacement (A, 3), state_action_begin, action_frames,
+/// frame_root (F, 3), frame_centroid (F, 3), frame_enters_transition, action_hit_begin, and
+/// the hits split by type: hits_index (H, 3) uint32 (action, offset, hand) and hits_value
+/// (H, 4) float32 (x, y, z, weight). The hash is hexDigest(hashBytes(file bytes))
+/// (mgrl/core/hash.hpp: XXH64).
+
+#include <filesystem>
+#include <string>
+#include <string_view>
+
+#include <nlohmann/json.hpp>
+
+#include "mgrl/graph/state_action_model.hpp"
+
+namespace mgrl {
+
+/// The manifest's "format" and "version"; a bundle with others is Stale.
+inline constexpr std::string_view kGraphFormatName = "mgrl.graph";
+inline constexpr int kGraphFormatVersion = 1;
+
+
+/// Writes `m` as a bundle at `dir` (see the file comment), replacing a bundle already there.
+/// `provenance` must be a JSON object with a string "key", the cache key loadGraphBundle()
+/// compares; the rest is recorded as is. The files go to a sibling temporary directory
+/// that is then renamed onto `dir` (an old bundle is first renamed aside, then removed),
+/// so a crash leaves either a whole bundle at `dir` or none; a power loss may still leave
+/// files with lost contents, which loadGraphBundle() reports as Damaged by their hashes.
+/// Writes the same bytes for the same model and provenance. Creates `dir`'s parent if
+/// needed. Not safe against another process saving to the same `dir` at the same time.
+/// Throws mgrl::Error (leaving no temporary directory) if checkModel() fails, if
+/// provenance has no string "key", if `dir` is something other than a bundle or an empty
+/// directory (it is never deleted then), or on any I/O failure.
+void saveGraphBundle(const std::filesystem::path& dir, const StateActionModel& m,
+                     const nlohmann::json& provenance);
+
+/// What loadGraphBundle() found.
+struct GraphBundleLoad {
+  enum Status {
+    Missing,  ///< no directory at the path
+    Stale,    ///< a readable manifest for another cache key, format or version
+    Damaged,  ///< anything else wrong: unreadable, incomplete, altered or invalid
+    Ok,       ///< `model` holds the bundle, checked by checkModel()
+  };
+  Status status = Missing;
+  /// Why the bundle is not Ok, starting with the path of the file concerned, e.g.
+  /// `graph/action_to.npy: expected 48 bytes as in manifest.json, found 44`; empty if Ok.
+  std::string reason;
+  StateActionModel model;   ///< filled only if Ok
+  nlohmann::json manifest;  ///< the parsed manifest if Stale or Ok, else null
+};
+
+/// Loads the bundle at `dir` if it is whole, unaltered and made for `expectedKey`
+/// (provenance.key). Checks the format and version, every array's file name, dtype, shape,
+/// byte size and hash against the manifest, decodes the arrays strictly (mgrl/core/npy.hpp) and
+/// runs checkModel() on the result. Never throws for a bad bundle: the status and reason
+/// say what is wrong, and the caller rebuilds.
+GraphBundleLoad loadGraphBundle(const std::filesystem::path& dir, std::string_view expectedKey);
+
+}  // namespace mgrl

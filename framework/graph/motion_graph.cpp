@@ -1,0 +1,245 @@
+#include "mgrl/graph/motion_graph.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <numeric>
+
+#include <fmt/format.h>
+
+namespace mgrl {
+
+const AvatarFrame& avatarFrameAt(const MotionDatabase& db, std::uint32_t frame) {
+  const std::size_t c = db.clipOf(frame);
+  return db.clips[c].annotation.frames[frame - db.offsets[c]];
+}
+
+GroundMotion relativeMotion(const AvatarFrame& from, const AvatarFrame& to) {
+  const Eigen::Vector3d d = from.toAvatar(to.origin);
+  return {d.x(), d.z(), std::remainder(to.yaw - from.yaw, 2 * M_PI)};
+}
+
+Eigen::Vector3d transformPoint(const GroundMotion& motion, const Eigen::Vector3d& point) {
+  // Avatar-frame axes: +Z facing, +X left; turning by yaw maps +Z to (sin yaw, cos yaw).
+  const double c = std::cos(motion.dyaw), s = std::sin(motion.dyaw);
+  return {motion.dx + c * point.x() + s * point.z(), point.y(), motion.dz - s * point.x() + c * point.z()};
+}
+
+GroundMotion compose(const GroundMotion& a, const GroundMotion& b) {
+  const Eigen::Vector3d end = transformPoint(a, {b.dx, 0, b.dz});
+  return {end.x(), end.z(), std::remainder(a.dyaw + b.dyaw, 2 * M_PI)};
+}
+
+namespace {
+
+// Frame graph in compressed rows: out-edges of frame f are target[begin[f], begin[f + 1]).
+struct FrameGraph {
+  std::vector<std::uint32_t> begin;
+  std::vector<std::uint32_t> target;
+};
+
+FrameGraph frameGraph(const MotionDatabase& db, const std::vector<TransitionCandidate>& transitions) {
+  const std::uint32_t n = db.frameCount();
+  FrameGraph g;
+  g.begin.assign(n + 1, 0);
+  std::vector<std::uint8_t> natural(n, 0);
+  for (std::size_t c = 0; c < db.clips.size(); ++c)
+    for (std::uint32_t f = db.offsets[c]; f + 1 < db.offsets[c + 1]; ++f) natural[f] = 1;
+  for (std::uint32_t f = 0; f < n; ++f) g.begin[f + 1] = natural[f];
+  for (const auto& t : transitions) ++g.begin[t.from + 1];
+  for (std::uint32_t f = 0; f < n; ++f) g.begin[f + 1] += g.begin[f];
+  g.target.resize(g.begin[n]);
+  std::vector<std::uint32_t> fill(g.begin.begin(), g.begin.end() - 1);
+  for (std::uint32_t f = 0; f < n; ++f)
+    if (natural[f]) g.target[fill[f]++] = f + 1;
+  for (const auto& t : transitions) g.target[fill[t.from]++] = t.to;
+  for (std::uint32_t f = 0; f < n; ++f) std::sort(g.target.begin() + g.begin[f], g.target.begin() + g.begin[f + 1]);
+  return g;
+}
+
+// Tarjan's strongly connected components without recursion (graphs of 10^5 frames would
+// overflow the stack). Returns the component of every vertex.
+std::vector<std::uint32_t> stronglyConnected(const FrameGraph& g, std::size_t* count) {
+  const std::uint32_t n = static_cast<std::uint32_t>(g.begin.size() - 1);
+  constexpr std::uint32_t kUnset = UINT32_MAX;
+  std::vector<std::uint32_t> index(n, kUnset), low(n, 0), component(n, kUnset), stack;
+  std::vector<std::uint8_t> onStack(n, 0);
+  std::vector<std::pair<std::uint32_t, std::uint32_t>> call;  // (vertex, next edge)
+  std::uint32_t counter = 0, components = 0;
+  for (std::uint32_t root = 0; root < n; ++root) {
+    if (index[root] != kUnset) continue;
+    call.push_back({root, g.begin[root]});
+    index[root] = low[root] = counter++;
+    stack.push_back(root);
+    onStack[root] = 1;
+    while (!call.empty()) {
+      auto& [v, edge] = call.back();
+      if (edge < g.begin[v + 1]) {
+        const std::uint32_t w = g.target[edge++];
+        if (index[w] == kUnset) {
+          index[w] = low[w] = counter++;
+          stack.push_back(w);
+          onStack[w] = 1;
+          call.push_back({w, g.begin[w]});
+        } else if (onStack[w]) {
+          low[v] = std::min(low[v], index[w]);
+        }
+        continue;
+      }
+      const std::uint32_t done = v;
+      call.pop_back();
+      if (!call.empty()) low[call.back().first] = std::min(low[call.back().first], low[done]);
+      if (low[done] == index[done]) {
+        std::uint32_t w;
+        do {
+          w = stack.back();
+          stack.pop_back();
+          onStack[w] = 0;
+          component[w] = components;
+        } while (w != done);
+        ++components;
+      }
+    }
+  }
+  *count = components;
+  return component;
+}
+
+}  // namespace
+
+StateActionModel buildStateActionModel(const MotionDatabase& db, const GraphParams& params, GraphBuildReport* report) {
+  params.validate();
+  GraphBuildReport local;
+  const FrameFeatures features = computeFrameFeatures(db, params);
+  std::vector<TransitionCandidate> transitions = findTransitions(db, features, params, &local.search);
+  local.transitionsFound = transitions.size();
+
+  const std::uint32_t n = db.frameCount();
+  const FrameGraph graph = frameGraph(db, transitions);
+  const std::vector<std::uint32_t> component = stronglyConnected(graph, &local.components);
+  std::vector<std::uint32_t> size(local.components, 0);
+  for (std::uint32_t c : component) ++size[c];
+  // Largest component; on a tie the one holding the earliest frame, so the choice is stable.
+  std::uint32_t best = component[0];
+  for (std::uint32_t f = 0; f < n; ++f)
+    if (size[component[f]] > size[best]) best = component[f];
+
+  StateActionModel m;
+  m.frameTime = db.frameTime;
+  m.framesTotal = n;
+  m.clipOffset = db.offsets;
+  std::vector<std::uint8_t> inside(n, 0);
+  for (std::uint32_t f = 0; f < n; ++f)
+    if (component[f] == best) {
+      inside[f] = 1;
+      m.componentFrames.push_back(f);
+    }
+  for (std::size_t t = 0; t < transitions.size(); ++t) {
+    const auto& c = transitions[t];
+    if (inside[c.from] && inside[c.to]) {
+      m.transitions.push_back(c.from);
+      m.transitions.push_back(c.to);
+      m.transitionDistance.push_back(c.distance);
+    }
+  }
+  // Out-edges inside the component decide which frames are states.
+  auto outInside = [&](std::uint32_t f, std::vector<std::uint32_t>& out) {
+    out.clear();
+    for (std::uint32_t e = graph.begin[f]; e < graph.begin[f + 1]; ++e)
+      if (inside[graph.target[e]]) out.push_back(graph.target[e]);
+  };
+  std::vector<std::uint32_t> out;
+  std::vector<std::uint32_t> stateOf(n, UINT32_MAX);
+  for (std::uint32_t f : m.componentFrames) {
+    outInside(f, out);
+    if (out.size() >= 2) {
+      stateOf[f] = static_cast<std::uint32_t>(m.stateFrame.size());
+      m.stateFrame.push_back(f);
+    }
+  }
+  if (m.stateFrame.size() < static_cast<std::size_t>(params.minStates)) {
+    // Advise only the looser contact events than the one in use.
+    const char* looser = params.contactEvent == ContactEvent::LeftFootLiftoff ? "any_contact_change or none"
+                         : params.contactEvent == ContactEvent::AnyContactChange ? "none"
+                                                                                  : nullptr;
+    throw Error(fmt::format(
+        "graph: the largest strongly connected component keeps {} of {} frames ({:.0f} %) with {} states, expected at "
+        "least graph.min_states = {}; {} transitions passed the tests ({} frames at a '{}' contact event): raise "
+        "graph.threshold (now {}), {}add motion files",
+        m.componentFrames.size(), n, 100.0 * static_cast<double>(m.componentFrames.size()) / std::max(n, 1u),
+        m.stateFrame.size(), params.minStates, transitions.size(), local.search.eventFrames,
+        contactEventName(params.contactEvent), params.threshold,
+        looser ? fmt::format("use graph.contact_event: {}, or ", looser) : std::string("or ")));
+  }
+
+  // Effective hitting points of the data: their centroid (the paper's p(t) follows it) and
+  // the fastest one (the hit reward's w(t) is normalised by it).
+  std::vector<std::uint32_t> hitBegin(n + 1, 0);
+  std::vector<const EffectiveHit*> hitList;
+  {
+    Eigen::Vector3d sum = Eigen::Vector3d::Zero();
+    std::size_t count = 0;
+    for (std::size_t c = 0; c < db.clips.size(); ++c)
+      for (const EffectiveHit& h : db.clips[c].annotation.hits) {
+        ++hitBegin[db.offsets[c] + h.frame + 1];
+        sum += h.tipAvatar;
+        ++count;
+        m.maxHitSpeed_mps = std::max(m.maxHitSpeed_mps, h.speed_mps);
+      }
+    if (count) sum /= static_cast<double>(count);
+    for (int i = 0; i < 3; ++i) m.centroid[i] = sum[i];
+    for (std::uint32_t f = 0; f < n; ++f) hitBegin[f + 1] += hitBegin[f];
+    hitList.resize(hitBegin[n]);
+    std::vector<std::uint32_t> fill(hitBegin.begin(), hitBegin.end() - 1);
+    for (std::size_t c = 0; c < db.clips.size(); ++c)
+      for (const EffectiveHit& h : db.clips[c].annotation.hits) hitList[fill[db.offsets[c] + h.frame]++] = &h;
+  }
+
+  // Collapse: every out-edge of a state starts an action that runs until the next state.
+  m.stateActionBegin.push_back(0);
+  m.actionFrameBegin.push_back(0);
+  m.actionHitBegin.push_back(0);
+  const Eigen::Vector3d centroid(m.centroid[0], m.centroid[1], m.centroid[2]);
+  for (std::uint32_t s = 0; s < m.stateFrame.size(); ++s) {
+    const std::uint32_t from = m.stateFrame[s];
+    std::vector<std::uint32_t> starts;
+    outInside(from, starts);
+    for (std::uint32_t first : starts) {
+      const auto a = static_cast<std::uint32_t>(m.actionFrom.size());
+      GroundMotion root;  // avatar frame of the current frame, in the decision's
+      std::uint32_t previous = from, v = first, offset = 0;
+      for (;;) {
+        ++offset;
+        // Edge previous -> v: v continues its own clip from v - 1, which resembles
+        // `previous` (the same frame unless the edge is a transition).
+        root = compose(root, relativeMotion(avatarFrameAt(db, v - 1), avatarFrameAt(db, v)));
+        m.actionFrames.push_back(v);
+        m.frameRoot.insert(m.frameRoot.end(), {root.dx, root.dz, root.dyaw});
+        const Eigen::Vector3d pc = transformPoint(root, centroid);
+        m.frameCentroid.insert(m.frameCentroid.end(),
+                               {static_cast<float>(pc.x()), static_cast<float>(pc.y()), static_cast<float>(pc.z())});
+        m.frameEntersTransition.push_back(v != previous + 1 ? 1 : 0);
+        for (std::uint32_t h = hitBegin[v]; h < hitBegin[v + 1]; ++h) {
+          const EffectiveHit& hit = *hitList[h];
+          const Eigen::Vector3d p = transformPoint(root, hit.tipAvatar);
+          m.hits.push_back({a, offset, static_cast<std::uint8_t>(hit.hand), static_cast<float>(p.x()),
+                            static_cast<float>(p.y()), static_cast<float>(p.z()),
+                            static_cast<float>(hit.speed_mps / m.maxHitSpeed_mps)});
+        }
+        if (stateOf[v] != UINT32_MAX) break;
+        outInside(v, out);  // exactly one edge: v is not a state
+        previous = v;
+        v = out.front();
+      }
+      m.actionFrom.push_back(s);
+      m.actionTo.push_back(stateOf[v]);
+      m.actionFrameBegin.push_back(static_cast<std::uint32_t>(m.actionFrames.size()));
+      m.actionDisplacement.insert(m.actionDisplacement.end(), {root.dx, root.dz, root.dyaw});
+      m.actionHitBegin.push_back(static_cast<std::uint32_t>(m.hits.size()));
+    }
+    m.stateActionBegin.push_back(static_cast<std::uint32_t>(m.actionFrom.size()));
+  }
+  if (report) *report = local;
+  return m;
+}
+
+}  // namespace mgrl

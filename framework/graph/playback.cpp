@@ -1,0 +1,275 @@
+#include "mgrl/graph/playback.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+#include <fmt/format.h>
+
+#include "mgrl/motion/kinematics.hpp"
+#include "mgrl/graph/motion_graph.hpp"
+#include "mgrl/core/rotation.hpp"
+
+namespace mgrl {
+
+namespace {
+
+// Blend weight of the offset `b` frames into a transition: 1 on the first frame (the pose
+// continues where it was), easing to 0 after `frames` frames.
+double fade(int b, int frames) {
+  if (b < 1 || b > frames) return 0;
+  return 0.5 * (1 + std::cos(M_PI * (b - 1) / frames));
+}
+
+}  // namespace
+
+ActionPlayback::ActionPlayback(const MotionDatabase& db, const StateActionModel& model, int blendFrames, bool lockFeet)
+    : db_(db), model_(model), blendFrames_(std::max(0, blendFrames)), lockFeet_(lockFeet) {
+  const std::size_t joints = db.skeleton->jointCount();
+  current_.rotations.resize(joints);
+  source_.rotations.resize(joints);
+  previous_.rotations.resize(joints);
+  offset_.assign(joints, Eigen::Quaterniond::Identity());
+  fkRotations_.resize(joints);
+  fkPositions_.resize(joints);
+}
+
+void ActionPlayback::sourceLocal(std::uint32_t frame, Local& out) const {
+  const std::size_t c = db_.clipOf(frame);
+  const Clip& clip = db_.clips[c];
+  const std::size_t k = frame - db_.offsets[c];
+  const AvatarFrame& avatar = clip.annotation.frames[k];
+  const auto rotations = clip.motion.rotations(k);
+  std::copy(rotations.begin(), rotations.end(), out.rotations.begin());
+  out.rotations[0] = axisRotation(Axis::Y, -avatar.yaw) * out.rotations[0];
+  const Eigen::Vector3d root = clip.motion.localTranslation(k, 0);
+  const Eigen::Vector3d local = avatar.toAvatar(root);
+  out.height = root.y() - clip.annotation.groundY;
+  out.rootOffset = {local.x(), local.z()};
+}
+
+void ActionPlayback::reset(std::uint32_t state, const GroundMotion& world) {
+  if (state >= model_.stateCount())
+    throw Error(fmt::format("playback: expected a state below {}, found {}", model_.stateCount(), state));
+  state_ = state;
+  world_ = world;
+  frame_ = model_.stateFrame[state];
+  sourceLocal(frame_, current_);
+  std::fill(offset_.begin(), offset_.end(), Eigen::Quaterniond::Identity());
+  heightOffset_ = 0;
+  sinceTransition_ = 1 << 30;
+  correction_.setZero();
+  havePrevious_ = false;
+}
+
+void ActionPlayback::play(std::uint32_t action, std::vector<Pose>& out) {
+  begin(action);
+  Pose pose;
+  while (next(pose)) out.push_back(pose);
+}
+
+void ActionPlayback::begin(std::uint32_t action) {
+  if (action >= model_.actionCount() || model_.actionFrom[action] != state_)
+    throw Error(fmt::format("playback: expected an action leaving state {}, found action {}", state_, action));
+  action_ = action;
+  cursor_ = model_.actionFrameBegin[action];
+  end_ = model_.actionFrameBegin[action + 1];
+}
+
+bool ActionPlayback::next(Pose& pose) {
+  if (cursor_ >= end_) return false;
+  const Skeleton& skeleton = *db_.skeleton;
+  const std::size_t joints = skeleton.jointCount();
+  {
+    const std::size_t i = cursor_++;
+    const std::uint32_t v = model_.actionFrames[i];
+    if (model_.frameEntersTransition[i]) {
+      // The new clip expected frame v - 1 before v; the avatar shows `current_` instead.
+      // Carry the difference as an offset that fades out (blending without a jump).
+      sourceLocal(v - 1, previous_);
+      for (std::size_t j = 0; j < joints; ++j) {
+        offset_[j] = current_.rotations[j] * previous_.rotations[j].conjugate();
+        if (offset_[j].w() < 0) offset_[j].coeffs() = -offset_[j].coeffs();
+      }
+      heightOffset_ = current_.height - previous_.height;
+      sinceTransition_ = 0;
+    }
+    ++sinceTransition_;
+    sourceLocal(v, source_);
+    const double alpha = fade(sinceTransition_, blendFrames_);
+    for (std::size_t j = 0; j < joints; ++j)
+      current_.rotations[j] =
+          alpha > 0 ? Eigen::Quaterniond::Identity().slerp(alpha, offset_[j]) * source_.rotations[j]
+                    : source_.rotations[j];
+    current_.height = source_.height + alpha * heightOffset_;
+    current_.rootOffset = source_.rootOffset;
+
+    const GroundMotion at = compose(world_, {model_.frameRoot[3 * i], model_.frameRoot[3 * i + 1], model_.frameRoot[3 * i + 2]});
+    pose.rotations.assign(current_.rotations.begin(), current_.rotations.end());
+    pose.rotations[0] = axisRotation(Axis::Y, at.dyaw) * current_.rotations[0];
+    pose.translations.resize(joints);
+    const std::size_t c = db_.clipOf(v);
+    const std::size_t k = v - db_.offsets[c];
+    for (std::size_t j = 1; j < joints; ++j) pose.translations[j] = db_.clips[c].motion.localTranslation(k, j);
+    pose.translations[0] = transformPoint(at, {current_.rootOffset.x(), current_.height, current_.rootOffset.y()});
+    pose.translations[0].x() += correction_.x();
+    pose.translations[0].z() += correction_.y();
+
+    // While the offsets fade, the legs move against the root and a planted foot would
+    // slide: shift the root so that feet planted in both this frame and the last stay put
+    // (their mean drift is removed). The shift stays with the avatar.
+    forwardKinematics(skeleton, pose.rotations, pose.translations, fkRotations_, fkPositions_);
+    const std::array<bool, 2> down = {db_.clips[c].annotation.contact[0][k] != 0,
+                                      db_.clips[c].annotation.contact[1][k] != 0};
+    if (lockFeet_ && sinceTransition_ <= blendFrames_ && havePrevious_) {
+      Eigen::Vector2d drift = Eigen::Vector2d::Zero();
+      int planted = 0;
+      for (int side = 0; side < 2; ++side) {
+        if (!down[side] || !previousDown_[side]) continue;
+        const Eigen::Vector3d d = fkPositions_[static_cast<std::size_t>(db_.roles.ankle[side])] - previousAnkle_[side];
+        drift += Eigen::Vector2d(d.x(), d.z());
+        ++planted;
+      }
+      if (planted) {
+        drift /= planted;
+        correction_ -= drift;
+        pose.translations[0].x() -= drift.x();
+        pose.translations[0].z() -= drift.y();
+        for (auto& p : fkPositions_) {
+          p.x() -= drift.x();
+          p.z() -= drift.y();
+        }
+      }
+    }
+    for (int side = 0; side < 2; ++side) previousAnkle_[side] = fkPositions_[static_cast<std::size_t>(db_.roles.ankle[side])];
+    previousDown_ = down;
+    havePrevious_ = true;
+    frame_ = v;
+  }
+  if (cursor_ == end_) {  // the action's last frame: the avatar stands at its end state
+    world_ = compose(world_, model_.displacement(action_));
+    world_.dx += correction_.x();
+    world_.dz += correction_.y();
+    correction_.setZero();
+    state_ = model_.actionTo[action_];
+  }
+  return true;
+}
+
+Motion motionFromPoses(std::shared_ptr<const Skeleton> skeleton, const std::vector<Pose>& poses, double frameTime) {
+  const std::size_t joints = skeleton->jointCount();
+  const auto translated = skeleton->translatedJoints();
+  std::vector<Eigen::Quaterniond> rotations;
+  std::vector<Eigen::Vector3d> translations;
+  rotations.reserve(poses.size() * joints);
+  translations.reserve(poses.size() * translated.size());
+  for (const Pose& pose : poses) {
+    if (pose.rotations.size() != joints || pose.translations.size() != joints)
+      throw Error(fmt::format("poses: expected {} joints per pose, found {}", joints, pose.rotations.size()));
+    rotations.insert(rotations.end(), pose.rotations.begin(), pose.rotations.end());
+    for (int j : translated) translations.push_back(pose.translations[static_cast<std::size_t>(j)]);
+  }
+  return Motion(std::move(skeleton), frameTime, std::move(rotations), std::move(translations));
+}
+
+namespace {
+
+// Adds the horizontal ankle motion between two frames to `slide` if both have the foot down.
+void addSlide(const SkeletonRoles& roles, std::span<const Eigen::Vector3d> a, std::span<const Eigen::Vector3d> b,
+              const std::array<bool, 2>& downA, const std::array<bool, 2>& downB, double dt, double& sum,
+              std::size_t& pairs) {
+  for (int s = 0; s < 2; ++s) {
+    if (!downA[s] || !downB[s]) continue;
+    const std::size_t ankle = static_cast<std::size_t>(roles.ankle[s]);
+    const Eigen::Vector3d d = b[ankle] - a[ankle];
+    sum += std::hypot(d.x(), d.z()) / dt;
+    ++pairs;
+  }
+}
+
+std::array<bool, 2> footDown(const MotionDatabase& db, std::uint32_t frame) {
+  const std::size_t c = db.clipOf(frame);
+  const std::size_t k = frame - db.offsets[c];
+  return {db.clips[c].annotation.contact[0][k] != 0, db.clips[c].annotation.contact[1][k] != 0};
+}
+
+}  // namespace
+
+PlaybackCheck checkPlayback(const MotionDatabase& db, const StateActionModel& model, int blendFrames,
+                            std::size_t actions, std::uint64_t seed) {
+  PlaybackCheck check;
+  const Skeleton& skeleton = *db.skeleton;
+  const std::size_t joints = skeleton.jointCount();
+  // One pass over the capture: each joint's largest step, each frame's ankle speed from
+  // its predecessor (0 for a clip's first frame: the baseline for the same frames played),
+  // and the capture's own foot sliding.
+  std::vector<double> sourceStep(joints, 0);
+  std::vector<std::array<double, 2>> sourceAnkleSpeed(db.frameCount(), {0.0, 0.0});
+  double captureSum = 0;
+  for (std::size_t c = 0; c < db.clips.size(); ++c) {
+    const std::vector<Eigen::Vector3d> p = jointPositions(db.clips[c].motion);
+    for (std::size_t k = 1; k < db.clips[c].motion.frameCount(); ++k) {
+      for (std::size_t j = 0; j < joints; ++j)
+        sourceStep[j] = std::max(sourceStep[j], (p[k * joints + j] - p[(k - 1) * joints + j]).norm());
+      const auto g = static_cast<std::uint32_t>(db.offsets[c] + k);
+      for (int side = 0; side < 2; ++side) {
+        const std::size_t ankle = static_cast<std::size_t>(db.roles.ankle[side]);
+        const Eigen::Vector3d d = p[k * joints + ankle] - p[(k - 1) * joints + ankle];
+        sourceAnkleSpeed[g][side] = std::hypot(d.x(), d.z()) / db.frameTime;
+      }
+      addSlide(db.roles, {p.data() + (k - 1) * joints, joints}, {p.data() + k * joints, joints}, footDown(db, g - 1),
+               footDown(db, g), db.frameTime, captureSum, check.captureSlide.framePairs);
+    }
+  }
+  check.captureSlide.meanSpeed_mps =
+      captureSum / static_cast<double>(std::max<std::size_t>(check.captureSlide.framePairs, 1));
+  check.sourceMaxJointStep_m = *std::max_element(sourceStep.begin(), sourceStep.end());
+  double sourceSum = 0;
+
+  std::mt19937_64 rng(seed);
+  ActionPlayback playback(db, model, blendFrames);
+  playback.reset(static_cast<std::uint32_t>(rng() % model.stateCount()));
+  std::vector<Pose> poses;
+  std::vector<Eigen::Quaterniond> rot(joints);
+  std::vector<Eigen::Vector3d> pos(joints), last(joints);
+  bool haveLast = false;
+  std::uint32_t lastFrame = 0;
+  double slideSum = 0;
+  for (std::size_t n = 0; n < actions; ++n) {
+    const std::uint32_t s = playback.state();
+    const std::uint32_t count = model.stateActionBegin[s + 1] - model.stateActionBegin[s];
+    const std::uint32_t a = model.stateActionBegin[s] + static_cast<std::uint32_t>(rng() % count);
+    const std::size_t begin = model.actionFrameBegin[a];
+    poses.clear();
+    playback.play(a, poses);
+    ++check.actions;
+    check.transitions += model.frameEntersTransition[begin];
+    for (std::size_t i = 0; i < poses.size(); ++i) {
+      forwardKinematics(skeleton, poses[i].rotations, poses[i].translations, rot, pos);
+      const std::uint32_t v = model.actionFrames[begin + i];
+      if (haveLast) {
+        for (std::size_t j = 0; j < joints; ++j) {
+          const double step = (pos[j] - last[j]).norm();
+          check.maxJointStep_m = std::max(check.maxJointStep_m, step);
+          if (sourceStep[j] > 0 && step / sourceStep[j] > check.worstJointStepRatio) {
+            check.worstJointStepRatio = step / sourceStep[j];
+            check.worstJoint = static_cast<int>(j);
+          }
+        }
+        const std::array<bool, 2> before = footDown(db, lastFrame), now = footDown(db, v);
+        addSlide(db.roles, last, pos, before, now, db.frameTime, slideSum, check.slide.framePairs);
+        for (int side = 0; side < 2; ++side)
+          if (before[side] && now[side]) sourceSum += sourceAnkleSpeed[v][side];
+      }
+      last = pos;
+      lastFrame = v;
+      haveLast = true;
+      ++check.frames;
+    }
+  }
+  const double pairs = static_cast<double>(std::max<std::size_t>(check.slide.framePairs, 1));
+  check.slide.meanSpeed_mps = slideSum / pairs;
+  check.sourceSlideSameFrames_mps = sourceSum / pairs;
+  return check;
+}
+
+}  // namespace mgrl

@@ -1,0 +1,120 @@
+#pragma once
+/// \file
+/// Playing actions of a state-action model back as poses, with transition blending
+/// (Lee et al. 2002, sec. 4.3 style): when an action enters through a transition, the pose
+/// difference between the frame left and the frame the new clip expected is carried as a
+/// per-joint offset that fades out over a few frames, so playback never jumps. The root is
+/// placed by composing the actions' ground motions; while offsets fade, the root is shifted
+/// so that planted feet do not slide, and the shift stays with the avatar.
+#include <array>
+#include <cstdint>
+#include <random>
+#include <span>
+#include <vector>
+
+#include <Eigen/Geometry>
+
+#include "mgrl/motion/motion_database.hpp"
+#include "mgrl/graph/state_action_model.hpp"
+
+namespace mgrl {
+
+/// A full pose: local rotation and local translation of every joint (the root's
+/// translation in world coordinates, metres, ground at y = 0).
+struct Pose {
+  std::vector<Eigen::Quaterniond> rotations;
+  std::vector<Eigen::Vector3d> translations;
+};
+
+class ActionPlayback {
+ public:
+  /// `db` and `model` must outlive the playback; blendFrames >= 0 (0: no blending).
+  /// lockFeet: while a transition blends, shift the root so planted feet stay put (the
+  /// shift stays with the avatar). Off, the root follows the model's ground motion
+  /// exactly, as the world simulation and the learners assume.
+  ActionPlayback(const MotionDatabase& db, const StateActionModel& model, int blendFrames, bool lockFeet = true);
+
+  /// Stands the avatar at state `state`, its avatar frame at world (dx, dz, dyaw).
+  void reset(std::uint32_t state, const GroundMotion& world = {});
+  /// Plays action `action`, which must leave the current state (throws mgrl::Error if
+  /// not), appending one pose per frame to `out`; afterwards the avatar is at the action's
+  /// end state.
+  void play(std::uint32_t action, std::vector<Pose>& out);
+
+  /// The same one frame at a time, into a caller-owned pose (no allocation once `pose`
+  /// has its size): begin() checks and starts the action, next() writes its next frame and
+  /// returns false (writing nothing) once the action is over; the avatar is then at the
+  /// action's end state.
+  void begin(std::uint32_t action);
+  bool next(Pose& pose);
+  /// World joint positions and rotations of the last pose next() wrote.
+  std::span<const Eigen::Vector3d> positions() const { return fkPositions_; }
+  std::span<const Eigen::Quaterniond> globalRotations() const { return fkRotations_; }
+
+  std::uint32_t state() const { return state_; }
+  /// The avatar frame at the current state, in world coordinates.
+  const GroundMotion& world() const { return world_; }
+  /// The source frame shown by the last pose.
+  std::uint32_t frame() const { return frame_; }
+
+ private:
+  struct Local {  // a pose with the root's yaw and ground position factored out
+    std::vector<Eigen::Quaterniond> rotations;  // root: tilt (yaw removed)
+    double height = 0;
+    Eigen::Vector2d rootOffset = Eigen::Vector2d::Zero();  // root from the avatar origin (x, z)
+  };
+  void sourceLocal(std::uint32_t frame, Local& out) const;
+
+  const MotionDatabase& db_;
+  const StateActionModel& model_;
+  int blendFrames_;
+  bool lockFeet_;
+  std::uint32_t state_ = 0, frame_ = 0;
+  std::uint32_t action_ = 0;
+  std::size_t cursor_ = 0, end_ = 0;  ///< action frames still to play: [cursor_, end_)
+  GroundMotion world_;
+  Local current_, source_, previous_;
+  std::vector<Eigen::Quaterniond> offset_;
+  double heightOffset_ = 0;
+  int sinceTransition_ = 1 << 30;
+  Eigen::Vector2d correction_ = Eigen::Vector2d::Zero();  // world (x, z) shift from foot locking
+  std::vector<Eigen::Quaterniond> fkRotations_;
+  std::vector<Eigen::Vector3d> fkPositions_;
+  std::array<Eigen::Vector3d, 2> previousAnkle_;
+  std::array<bool, 2> previousDown_{false, false};
+  bool havePrevious_ = false;
+};
+
+/// Poses as a motion clip on `skeleton` (for export): every joint's rotation, and the
+/// translation of each joint with position channels. Throws mgrl::Error for no pose.
+Motion motionFromPoses(std::shared_ptr<const Skeleton> skeleton, const std::vector<Pose>& poses, double frameTime);
+
+/// Foot sliding: mean horizontal speed (m/s) of a foot's ankle over pairs of consecutive
+/// frames in which the annotation has that foot planted in both.
+struct FootSlide {
+  double meanSpeed_mps = 0;
+  std::size_t framePairs = 0;
+};
+
+/// Statistics of a seeded random walk through the graph, played with blending.
+struct PlaybackCheck {
+  std::size_t frames = 0, actions = 0, transitions = 0;
+  FootSlide slide;
+  /// The capture's own ankle speed at the same played frames (each from its source
+  /// predecessor): the fair baseline for `slide`.
+  double sourceSlideSameFrames_mps = 0;
+  /// Foot sliding of the whole capture, every clip.
+  FootSlide captureSlide;
+  /// Largest frame-to-frame move of any joint (m), in playback and in the source clips.
+  double maxJointStep_m = 0, sourceMaxJointStep_m = 0;
+  /// Largest step ratio playback / source over joints (<= 1: no jump beyond the data's).
+  double worstJointStepRatio = 0;
+  int worstJoint = -1;  ///< the joint with that ratio
+};
+
+/// Plays `actions` random actions from a random state with `seed` and measures sliding
+/// and joint steps against the source.
+PlaybackCheck checkPlayback(const MotionDatabase& db, const StateActionModel& model, int blendFrames,
+                            std::size_t actions, std::uint64_t seed);
+
+}  // namespace mgrl

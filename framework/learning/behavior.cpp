@@ -1,0 +1,65 @@
+#include "mgrl/learning/behavior.hpp"
+
+#include <fmt/format.h>
+#include <fmt/ranges.h>
+
+#include <tuple>
+
+#include "mgrl/core/hash.hpp"
+
+namespace mgrl {
+
+namespace {
+
+// The parameters of a plugin block, defaults filled in, as the registry reads them.
+template <class Registry>
+nlohmann::json blockJson(const Registry& registry, const ConfigNode& block, const std::string& fallbackType) {
+  const std::string type = block.isNull() ? fallbackType : block.child("type").asString();
+  const auto* entry = registry.find(type);
+  nlohmann::json json = nlohmann::json::object();
+  json["type"] = type;
+  if (!entry) return json;
+  const Params params = block.isNull() ? Params::defaults(entry->params) : Params::read(block, entry->params, {"type"});
+  const nlohmann::json values = params.toJson();
+  for (const auto& item : values.items()) json[item.key()] = item.value();
+  return json;
+}
+
+}  // namespace
+
+std::pair<nlohmann::json, std::string> behaviorConfigAndKey(const BehaviorSpec& spec, const Plugins& plugins,
+                                                             const std::string& graphKey) {
+  nlohmann::json config = {{"discretizer", blockJson(plugins.discretizers, spec.discretizer, "")},
+                           {"reward", blockJson(plugins.rewards, spec.reward, "")},
+                           {"environment", blockJson(plugins.environments, spec.environment, "static_target")},
+                           {"learner", blockJson(plugins.learners, spec.learner, "")}};
+  nlohmann::json keyed = config;
+  for (const char* irrelevant : {"threads", "curve_points", "checkpoint_every"}) keyed["learner"].erase(irrelevant);
+  Hasher h;
+  h.update(std::string_view("mgrl.behavior.v1"));
+  h.update(std::string_view(graphKey));
+  h.update(std::string_view(keyed.dump()));
+  return {std::move(config), h.hex()};
+}
+
+Behavior buildBehavior(const BehaviorSpec& spec, const Plugins& plugins, const StateActionModel& model,
+                       const std::string& graphKey) {
+  Behavior b;
+  b.name = spec.name;
+  b.weight = spec.weight;
+  b.activation = spec.activation;
+  b.discretizer = plugins.discretizers.create(spec.discretizer, model);
+  b.reward = plugins.rewards.create(spec.reward);
+  if (spec.environment.isNull()) {
+    const auto* entry = plugins.environments.find("static_target");
+    if (!entry) throw Error("no environment model 'static_target' registered");
+    b.environment = entry->make(Params::defaults(entry->params));
+  } else {
+    b.environment = plugins.environments.create(spec.environment);
+  }
+  b.learner = plugins.learners.create(spec.learner);
+  std::tie(b.config, b.key) = behaviorConfigAndKey(spec, plugins, graphKey);
+  return b;
+}
+
+}  // namespace mgrl

@@ -1,0 +1,55 @@
+#pragma once
+/// \file
+/// Behaviours (DESIGN.md sec. 2, "learn"): a scenario's `behaviors:` entry turned into
+/// plugin instances through the registries, and the key that says which trained table
+/// belongs to it.
+#include <memory>
+#include <string>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+#include "mgrl/learning/discretizer.hpp"
+#include "mgrl/learning/learner.hpp"
+#include "mgrl/learning/reward.hpp"
+#include "mgrl/learning/behavior_spec.hpp"
+
+namespace mgrl {
+
+/// One registry per seam; the application fills them (app/plugins.cpp).
+struct Plugins {
+  DiscretizerRegistry discretizers{"discretizer"};
+  RewardRegistry rewards{"reward"};
+  EnvironmentRegistry environments{"environment model"};
+  LearnerRegistry learners{"learner"};
+};
+
+struct Behavior {
+  std::string name;
+  double weight = 1;
+  Activation activation = Activation::Always;
+  std::unique_ptr<Discretizer> discretizer;
+  std::unique_ptr<Reward> reward;
+  std::unique_ptr<EnvironmentModel> environment;
+  std::unique_ptr<Learner> learner;
+  /// {"discretizer": {"type", params...}, "reward": ..., "environment": ..., "learner": ...}
+  /// with every parameter, defaults included.
+  nlohmann::json config;
+  /// Hash of the graph key and everything in `config` that changes the trained table (not
+  /// weight or activation, not threads, curve_points or checkpoint_every).
+  std::string key;
+
+  Problem problem(const StateActionModel& model) const { return {model, *discretizer, *reward, *environment}; }
+};
+
+/// A behaviour's `config` and `key` (see Behavior) without building its plugins: enough to
+/// tell whether a trained table belongs to it. Throws ConfigError like buildBehavior().
+std::pair<nlohmann::json, std::string> behaviorConfigAndKey(const BehaviorSpec& spec, const Plugins& plugins,
+                                                             const std::string& graphKey);
+
+/// Builds a behaviour's plugins; ConfigError (`file:line:col: behaviors.NAME.reward.type:
+/// unknown reward 'x' (known: approach, hit)`) for unknown types and bad parameters.
+Behavior buildBehavior(const BehaviorSpec& spec, const Plugins& plugins, const StateActionModel& model,
+                       const std::string& graphKey);
+
+}  // namespace mgrl

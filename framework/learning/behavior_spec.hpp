@@ -1,0 +1,30 @@
+#pragma once
+/// \file
+/// A behaviour as a scenario names it (scenarios/README.md, `behaviors:`): its weight and
+/// activation for the combined controller and its plugin blocks, still YAML, for the
+/// registries to build (mgrl/learning/behavior.hpp).
+#include <string>
+#include <string_view>
+
+#include "mgrl/core/config.hpp"
+
+namespace mgrl {
+
+/// When a behaviour takes part in the combined controller (paper sec. 5): always, or only
+/// while the target is inside its grid (the paper's hit behaviour).
+enum class Activation { Always, TargetInside };
+Activation parseActivation(std::string_view name);
+std::string_view activationName(Activation activation);
+
+/// One entry of `behaviors:` (scenarios/README.md): plugin blocks are kept as YAML and
+/// built by the registries of the application (mgrl/learning/behavior.hpp).
+struct BehaviorSpec {
+  std::string name;
+  std::string description;
+  double weight = 1;
+  Activation activation = Activation::Always;
+  ConfigNode node;  ///< the behaviour's block
+  ConfigNode discretizer, reward, environment, learner;  ///< environment may be absent (static_target)
+};
+
+}  // namespace mgrl

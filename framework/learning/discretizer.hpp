@@ -1,0 +1,111 @@
+#pragma once
+/// \file
+/// The Discretizer seam (DESIGN.md sec. 4; paper sec. 4.2): an avatar-centric grid over the
+/// target's position e (avatar frame: +Z facing, +X left, Y up; metres). Q values live on
+/// the grid's vertices and are interpolated multilinearly inside a cell. Grids here are
+/// products of 2 or 3 axes, each a list of vertex coordinates; an axis may wrap (an angle
+/// covering the full circle), so its last vertex neighbours its first.
+#include <array>
+#include <cstddef>
+#include <cstdint>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include <Eigen/Core>
+#include <nlohmann/json.hpp>
+
+#include "mgrl/core/params.hpp"
+#include "mgrl/core/registry.hpp"
+#include "mgrl/graph/state_action_model.hpp"
+
+namespace mgrl {
+
+/// Where a point falls: its cell and the fractional position inside it along each axis,
+/// in [0, 1]. Corner k of a cell is at the upper end of axis i where bit i of k is set.
+struct GridCell {
+  std::uint32_t cell = 0;
+  std::array<float, 3> frac{0, 0, 0};
+};
+
+/// Up to 8 grid vertices and their interpolation weights (non-negative, summing to 1).
+struct Stencil {
+  std::array<std::uint32_t, 8> vertex{};
+  std::array<float, 8> weight{};
+  int size = 0;
+};
+
+/// One axis of a product grid.
+struct GridAxis {
+  std::string name;          ///< "angle", "distance", "height"
+  std::string unit;          ///< "rad", "m"
+  std::vector<double> vertices;  ///< ascending coordinates
+  bool wraps = false;        ///< the axis is periodic with period 2 pi (angles only)
+};
+
+class Discretizer {
+ public:
+  virtual ~Discretizer() = default;
+
+  /// The registered name, e.g. "polar2d".
+  virtual std::string type() const = 0;
+  /// The axes, first varying fastest in the vertex numbering:
+  /// vertex = i0 + n0 * (i1 + n1 * i2).
+  const std::vector<GridAxis>& axes() const { return axes_; }
+  int dimension() const { return static_cast<int>(axes_.size()); }
+  std::size_t vertexCount() const { return vertexCount_; }
+  std::size_t cellCount() const { return cellCount_; }
+  /// cellCount() x 2^dimension() vertex indices: corner k of cell c at [c << dimension() | k].
+  const std::vector<std::uint32_t>& cellCorners() const { return corners_; }
+
+  /// The grid coordinates of a target position (one per axis, e.g. angle, distance, height).
+  virtual std::array<double, 3> coordinates(const Eigen::Vector3d& e) const = 0;
+  /// A target position with these grid coordinates (height 0 for 2-D grids).
+  virtual Eigen::Vector3d position(const std::array<double, 3>& coordinates) const = 0;
+
+  /// Locates e: false if it lies outside the grid (future value 0 there, paper sec. 4.2).
+  bool locate(const Eigen::Vector3d& e, GridCell& out) const;
+  /// The cell of the nearest grid point to e (e itself if inside).
+  GridCell locateClamped(const Eigen::Vector3d& e) const;
+  bool inside(const Eigen::Vector3d& e) const {
+    GridCell ignored;
+    return locate(e, ignored);
+  }
+  /// Vertices and multilinear weights of a located point.
+  Stencil stencil(const GridCell& cell) const;
+  /// The position of vertex v.
+  Eigen::Vector3d vertexPosition(std::size_t v) const;
+  /// A point uniform in grid coordinates, from u uniform in [0, 1)^3.
+  Eigen::Vector3d sample(const std::array<double, 3>& u) const;
+
+  /// {"type", "axes": [{"name", "unit", "vertices": [...], "wraps"}], "vertex_count", "cell_count"}.
+  nlohmann::json describe() const;
+
+ protected:
+  /// Called by a derived constructor once its axes are known: checks them (at least 2
+  /// vertices each, ascending, wrapping axes span less than 2 pi) and builds the cell table.
+  void setAxes(std::vector<GridAxis> axes);
+
+ private:
+  std::vector<GridAxis> axes_;
+  std::size_t vertexCount_ = 0, cellCount_ = 0;
+  std::vector<std::uint32_t> corners_;
+  std::array<std::size_t, 3> cellsPerAxis_{1, 1, 1};
+  /// Evenly spaced axes are located by arithmetic instead of a search: 1 / spacing, or 0.
+  std::array<double, 3> inverseStep_{0, 0, 0};
+};
+
+/// Multilinear weights of the 2^dimension corners for fractions `frac`.
+inline void cornerWeights(int dimension, const std::array<float, 3>& frac, float* weight) {
+  const int corners = 1 << dimension;
+  for (int k = 0; k < corners; ++k) {
+    float w = 1;
+    for (int i = 0; i < dimension; ++i) w *= (k >> i & 1) ? frac[i] : 1 - frac[i];
+    weight[k] = w;
+  }
+}
+
+/// Factories get the model so that bounds can come from its effective hitting points.
+using DiscretizerRegistry = Registry<Discretizer, const StateActionModel&>;
+
+}  // namespace mgrl

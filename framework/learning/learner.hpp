@@ -1,0 +1,96 @@
+#pragma once
+/// \file
+/// The Learner seam (DESIGN.md sec. 4): a learner turns a tabulated problem into a QTable.
+/// Learners never see YAML, BVH or files: parameters arrive through the registry, progress
+/// leaves through a TrainObserver, and long runs save their whole state through a
+/// Checkpointer so that a resumed run ends with the same table as an uninterrupted one.
+#include <atomic>
+#include <cstdint>
+#include <memory>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+#include "mgrl/core/error.hpp"
+#include "mgrl/learning/problem.hpp"
+#include "mgrl/learning/q_table.hpp"
+#include "mgrl/core/registry.hpp"
+
+namespace mgrl {
+
+/// One point of a training curve.
+struct CurvePoint {
+  std::uint64_t updates = 0;  ///< actions taken (Q-learning) or (vertex, action) backups (value iteration)
+  double seconds = 0;         ///< training time so far
+  double residual = 0;        ///< max Bellman residual of the table at this point
+  double meanResidual = 0;
+};
+
+struct TrainProgress {
+  std::uint64_t updates = 0, total = 0;  ///< total 0 when unknown (value iteration)
+  double seconds = 0;
+  double residual = -1;  ///< the latest measured residual, -1 before the first
+};
+
+class TrainObserver {
+ public:
+  virtual ~TrainObserver() = default;
+  /// Called often (at most every few milliseconds of work); cheap.
+  virtual void progress(const TrainProgress&) {}
+};
+
+/// Where a learner keeps a resumable state. A checkpoint is the learner's own JSON plus a
+/// table; `load` returns the last one saved for the same problem, if any.
+class Checkpointer {
+ public:
+  virtual ~Checkpointer() = default;
+  virtual void save(const nlohmann::json& state, const QTable& table) = 0;
+  virtual std::optional<nlohmann::json> load(QTable& table) = 0;
+};
+
+struct TrainResult {
+  QTable table;
+  std::uint64_t updates = 0;
+  double seconds = 0;  ///< training time of this table, resumed runs included
+  double finalResidual = 0;
+  std::vector<CurvePoint> curve;
+  nlohmann::json stats = nlohmann::json::object();  ///< learner-specific figures
+};
+
+struct TrainContext {
+  const Problem& problem;
+  const GridModel& grid;
+  TrainObserver* observer = nullptr;
+  Checkpointer* checkpointer = nullptr;  ///< may be null: no checkpoints
+  unsigned threads = 1;
+  /// When set and true (e.g. by a Ctrl-C handler), the learner stops at its next safe
+  /// point, saves a checkpoint if it can, and throws TrainInterrupted.
+  const std::atomic<bool>* stop = nullptr;
+};
+
+/// Thrown by Learner::train when TrainContext::stop was raised.
+class TrainInterrupted : public Error {
+ public:
+  TrainInterrupted(std::uint64_t updates, std::uint64_t total, bool checkpointed)
+      : Error("training interrupted"), updates_(updates), total_(total), checkpointed_(checkpointed) {}
+  std::uint64_t updates() const { return updates_; }  ///< work done when stopped
+  std::uint64_t total() const { return total_; }      ///< 0 when unknown (value iteration)
+  bool checkpointed() const { return checkpointed_; }  ///< a checkpoint of this point was saved
+
+ private:
+  std::uint64_t updates_, total_;
+  bool checkpointed_;
+};
+
+class Learner {
+ public:
+  virtual ~Learner() = default;
+  virtual std::string type() const = 0;
+  virtual TrainResult train(const TrainContext& context) const = 0;
+};
+
+using LearnerRegistry = Registry<Learner>;
+
+}  // namespace mgrl

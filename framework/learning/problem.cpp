@@ -1,0 +1,263 @@
+#include "mgrl/learning/problem.hpp"
+
+#include <cmath>
+#include <limits>
+
+#include "mgrl/core/parallel.hpp"
+
+namespace mgrl {
+
+std::size_t GridModel::bytes() const {
+  return corners.size() * 4 + transition.size() * sizeof(GridTransition) + discount.size() * 4 + rigid.size() * 8 +
+         actionTo.size() * 4 + incomingBegin.size() * 4 + incoming.size() * 4;
+}
+
+GridModel GridModel::build(const Problem& problem, unsigned threads) {
+  const StateActionModel& m = problem.model;
+  const Discretizer& grid = problem.grid;
+  GridModel g;
+  g.vertexCount = grid.vertexCount();
+  g.actionCount = m.actionCount();
+  g.dimension = grid.dimension();
+  g.corners = grid.cellCorners();
+  g.actionTo = m.actionTo;
+  g.stateActionBegin = m.stateActionBegin;
+  const std::size_t pairs = g.vertexCount * g.actionCount;
+  g.transition.assign(pairs, GridTransition{});
+  g.discount.resize(g.actionCount);
+  const double gamma = problem.reward.gamma();
+  for (std::size_t a = 0; a < g.actionCount; ++a)
+    g.discount[a] = static_cast<float>(std::pow(gamma, static_cast<double>(m.actionLength(a))));
+
+  if (problem.environment.rigid()) {
+    g.rigid.resize(4 * g.actionCount);
+    for (std::size_t a = 0; a < g.actionCount; ++a) {
+      const GroundMotion d = m.displacement(a);
+      g.rigid[4 * a] = std::cos(d.dyaw);
+      g.rigid[4 * a + 1] = std::sin(d.dyaw);
+      g.rigid[4 * a + 2] = d.dx;
+      g.rigid[4 * a + 3] = d.dz;
+    }
+  }
+
+  std::vector<Eigen::Vector3d> vertex(g.vertexCount);
+  for (std::size_t v = 0; v < g.vertexCount; ++v) vertex[v] = grid.vertexPosition(v);
+  constexpr std::size_t kChunk = 64;
+  parallelFor((g.actionCount + kChunk - 1) / kChunk, threads, [&](std::size_t chunk, unsigned) {
+    const std::size_t end = std::min(g.actionCount, (chunk + 1) * kChunk);
+    for (std::size_t a = chunk * kChunk; a < end; ++a)
+      for (std::size_t v = 0; v < g.vertexCount; ++v) {
+        GridTransition& t = g.transition[a * g.vertexCount + v];
+        t.reward = static_cast<float>(problem.reward.evaluate(m, a, vertex[v]));
+        GridCell cell;
+        if (grid.locate(problem.environment.next(m, a, vertex[v]), cell)) {
+          t.cell = static_cast<std::int32_t>(cell.cell);
+          for (int k = 0; k < 3; ++k) t.frac[k] = cell.frac[k];
+        }
+      }
+  });
+
+  const std::size_t states = m.stateCount();
+  g.incomingBegin.assign(states + 1, 0);
+  for (std::uint32_t to : m.actionTo) ++g.incomingBegin[to + 1];
+  for (std::size_t s = 0; s < states; ++s) g.incomingBegin[s + 1] += g.incomingBegin[s];
+  g.incoming.resize(g.actionCount);
+  std::vector<std::uint32_t> fill(g.incomingBegin.begin(), g.incomingBegin.end() - 1);
+  for (std::size_t a = 0; a < g.actionCount; ++a) g.incoming[fill[m.actionTo[a]]++] = static_cast<std::uint32_t>(a);
+  return g;
+}
+
+namespace {
+
+// 16 lanes: one AVX-512 register, two AVX2 ones, four SSE ones, depending on the clone.
+constexpr int kLanes = 16;
+typedef float FloatV __attribute__((vector_size(4 * kLanes)));
+typedef int IntV __attribute__((vector_size(4 * kLanes)));
+
+inline FloatV loadV(const float* p) {
+  FloatV v;
+  __builtin_memcpy(&v, p, sizeof v);
+  return v;
+}
+
+// sum_k weight[k] rows[k][j .. j + kLanes), added as a balanced tree: a short dependency
+// chain, and the same order in every lane and every clone.
+template <int K>
+inline __attribute__((always_inline)) FloatV weightedSum(const float* const* rows, const FloatV* weight, std::uint32_t j) {
+  FloatV term[K];
+  for (int k = 0; k < K; ++k) term[k] = weight[k] * loadV(rows[k] + j);
+  for (int width = K / 2; width >= 1; width /= 2)
+    for (int k = 0; k < width; ++k) term[k] = term[2 * k] + term[2 * k + 1];
+  return term[0];
+}
+
+// max_j sum_k w[k] rows[k][j] over j < n. Rows may be read up to kLanes - 1 floats past n
+// (the table is padded); those lanes are masked out. The sum for each j is formed in the
+// same order whatever the lane, so the result does not depend on n's remainder or the clone.
+template <int K>
+inline __attribute__((always_inline)) float maxWeightedRows(const float* const* rows, const float* w, std::uint32_t n) {
+  const FloatV minusInf = FloatV{} - std::numeric_limits<float>::infinity();
+  FloatV best = minusInf;
+  FloatV weight[K];
+  for (int k = 0; k < K; ++k) weight[k] = FloatV{} + w[k];
+  std::uint32_t j = 0;
+  for (; j + kLanes <= n; j += kLanes) {
+    const FloatV acc = weightedSum<K>(rows, weight, j);
+    best = acc > best ? acc : best;
+  }
+  if (j < n) {
+    FloatV acc = weightedSum<K>(rows, weight, j);
+    IntV lane;
+    for (int i = 0; i < kLanes; ++i) lane[i] = i;
+    lane += static_cast<int>(j);
+    acc = lane < static_cast<int>(n) ? acc : minusInf;
+    best = acc > best ? acc : best;
+  }
+  float result = best[0];
+  for (int i = 1; i < kLanes; ++i) result = best[i] > result ? best[i] : result;
+  return result;
+}
+
+__attribute__((target_clones("arch=x86-64-v4", "arch=x86-64-v3", "default")))
+float maxRows4(const float* const* rows, const float* w, std::uint32_t n) {
+  return maxWeightedRows<4>(rows, w, n);
+}
+
+__attribute__((target_clones("arch=x86-64-v4", "arch=x86-64-v3", "default")))
+float maxRows8(const float* const* rows, const float* w, std::uint32_t n) {
+  return maxWeightedRows<8>(rows, w, n);
+}
+
+template <int K>
+inline __attribute__((always_inline)) void addWeightedRows(float* sum, const float* const* rows, const float* w,
+                                                           std::uint32_t n) {
+  FloatV weight[K];
+  for (int k = 0; k < K; ++k) weight[k] = FloatV{} + w[k];
+  for (std::uint32_t j = 0; j < n; j += kLanes) {
+    FloatV acc = loadV(sum + j);
+    for (int k = 0; k < K; ++k) acc += weight[k] * loadV(rows[k] + j);
+    __builtin_memcpy(sum + j, &acc, sizeof acc);
+  }
+}
+
+__attribute__((target_clones("arch=x86-64-v4", "arch=x86-64-v3", "default")))
+void addRows4(float* sum, const float* const* rows, const float* w, std::uint32_t n) {
+  addWeightedRows<4>(sum, rows, w, n);
+}
+
+__attribute__((target_clones("arch=x86-64-v4", "arch=x86-64-v3", "default")))
+void addRows8(float* sum, const float* const* rows, const float* w, std::uint32_t n) {
+  addWeightedRows<8>(sum, rows, w, n);
+}
+
+}  // namespace
+
+void addInterpolated(float* sum, const QTable& q, std::uint32_t s, const Stencil& stencil, float scale) {
+  const std::uint32_t n = static_cast<std::uint32_t>(q.actionsOf(s));
+  const float* rows[8];
+  float w[8];
+  for (int k = 0; k < 8; ++k) {
+    const int from = k < stencil.size ? k : 0;
+    rows[k] = q.row(s, stencil.vertex[from]);
+    w[k] = k < stencil.size ? scale * stencil.weight[k] : 0.0f;
+  }
+  if (stencil.size <= 4)
+    addRows4(sum, rows, w, n);
+  else
+    addRows8(sum, rows, w, n);
+}
+
+float maxInterpolated(const QTable& q, const GridModel& g, std::uint32_t s, std::uint32_t cell, const float* frac) {
+  const int d = g.dimension;
+  const auto n = static_cast<std::uint32_t>(q.actionsOf(s));
+  const float* block = q.row(s, 0);  // vertex v's row starts at block + v * n
+  const std::uint32_t* corner = &g.corners[static_cast<std::size_t>(cell) << d];
+  const float* rows[8];
+  if (d == 3) {
+    // The products in cornerWeights' order, written out.
+    const float f0 = frac[0], f1 = frac[1], f2 = frac[2], g0 = 1 - f0, g1 = 1 - f1, g2 = 1 - f2;
+    const float w[8] = {g0 * g1 * g2, f0 * g1 * g2, g0 * f1 * g2, f0 * f1 * g2,
+                        g0 * g1 * f2, f0 * g1 * f2, g0 * f1 * f2, f0 * f1 * f2};
+    for (int k = 0; k < 8; ++k) rows[k] = block + static_cast<std::size_t>(corner[k]) * n;
+    return maxRows8(rows, w, n);
+  }
+  float w[8];
+  std::array<float, 3> f{frac[0], frac[1], frac[2]};
+  cornerWeights(d, f, w);
+  if (d == 2) {
+    for (int k = 0; k < 4; ++k) rows[k] = block + static_cast<std::size_t>(corner[k]) * n;
+    return maxRows4(rows, w, n);
+  }
+  // 1-D grids: two corners, padded with zero weights.
+  for (int k = 0; k < 4; ++k) {
+    rows[k] = block + static_cast<std::size_t>(corner[k & 1]) * n;
+    if (k >= 2) w[k] = 0;
+  }
+  return maxRows4(rows, w, n);
+}
+
+double sweep(const QTable& in, QTable& out, const GridModel& g, unsigned threads) {
+  std::vector<float> stage;
+  return sweep(in, out, g, threads, stage);
+}
+
+double sweep(const QTable& in, QTable& out, const GridModel& g, unsigned threads, std::vector<float>& stage) {
+  const std::size_t states = g.incomingBegin.size() - 1;
+  const std::size_t V = g.vertexCount;
+  stage.resize(g.actionCount * V);
+  // Backups grouped by end state: each group reads one block of `in` (its rows), which
+  // stays in cache, and writes its actions' values contiguously into `stage` (a, v).
+  parallelFor(states, threads, [&](std::size_t s, unsigned) {
+    for (std::uint32_t i = g.incomingBegin[s]; i < g.incomingBegin[s + 1]; ++i) {
+      const std::size_t a = g.incoming[i];
+      float* values = &stage[a * V];
+      for (std::size_t v = 0; v < V; ++v) values[v] = backup(in, g, a, v);
+    }
+  });
+  // Then into the state-major layout, block by block, measuring the change.
+  const std::size_t sources = in.stateCount();
+  std::vector<double> change(sources, 0.0);
+  parallelFor(sources, threads, [&](std::size_t s, unsigned) {
+    const std::size_t n = in.actionsOf(s);
+    double largest = 0;
+    const std::size_t begin = g.stateActionBegin[s];
+    for (std::size_t v = 0; v < V; ++v) {
+      const float* old = in.row(s, v);
+      float* row = out.row(s, v);
+      for (std::size_t j = 0; j < n; ++j) {
+        const float value = stage[(begin + j) * V + v];
+        largest = std::max(largest, static_cast<double>(std::fabs(value - old[j])));
+        row[j] = value;
+      }
+    }
+    change[s] = largest;
+  });
+  double largest = 0;
+  for (double c : change) largest = std::max(largest, c);
+  return largest;
+}
+
+Residual bellmanResidual(const QTable& q, const GridModel& g, unsigned threads) {
+  const std::size_t states = g.incomingBegin.size() - 1;
+  std::vector<double> largest(states, 0.0), sum(states, 0.0);
+  parallelFor(states, threads, [&](std::size_t s, unsigned) {
+    for (std::uint32_t i = g.incomingBegin[s]; i < g.incomingBegin[s + 1]; ++i) {
+      const std::size_t a = g.incoming[i];
+      for (std::size_t v = 0; v < g.vertexCount; ++v) {
+        const double r = std::fabs(static_cast<double>(backup(q, g, a, v)) - q.at(a, v));
+        largest[s] = std::max(largest[s], r);
+        sum[s] += r;
+      }
+    }
+  });
+  Residual result;
+  for (std::size_t s = 0; s < states; ++s) {
+    result.max = std::max(result.max, largest[s]);
+    result.mean += sum[s];
+  }
+  const std::size_t pairs = g.vertexCount * g.actionCount;
+  if (pairs > 0) result.mean /= static_cast<double>(pairs);
+  return result;
+}
+
+}  // namespace mgrl

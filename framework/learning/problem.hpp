@@ -1,0 +1,95 @@
+#pragma once
+/// \file
+/// A learning problem (DESIGN.md sec. 2, "learn"): the state-action model, a grid over the
+/// target's position, a reward and an environment model. Because both learners back values
+/// up at grid vertices only (paper sec. 4.2: "the update is applied at every grid point
+/// next to e, moving e' along"), everything a backup needs besides Q is a function of
+/// (action, vertex) alone; GridModel tabulates it once: the reward r(v, a) and where the
+/// vertex lands after the action (its cell and fractions, or outside).
+#include <cstddef>
+#include <cstdint>
+#include <vector>
+
+#include "mgrl/learning/discretizer.hpp"
+#include "mgrl/learning/q_table.hpp"
+#include "mgrl/learning/reward.hpp"
+#include "mgrl/graph/state_action_model.hpp"
+
+namespace mgrl {
+
+struct Problem {
+  const StateActionModel& model;
+  const Discretizer& grid;
+  const Reward& reward;
+  const EnvironmentModel& environment;
+};
+
+/// What a backup of (action a, vertex v) needs besides Q, in one 20-byte record so that
+/// a backup reads one cache line of it.
+struct GridTransition {
+  float reward = 0;       ///< r(v, a)
+  std::int32_t cell = -1;  ///< cell of e'(v, a), -1 outside the grid
+  float frac[3] = {0, 0, 0};  ///< fractions of e'(v, a) in that cell
+};
+
+/// The problem tabulated on the grid: for action a and vertex v at index a * V + v.
+struct GridModel {
+  std::size_t vertexCount = 0, actionCount = 0;
+  int dimension = 0;
+  std::vector<std::uint32_t> corners;     ///< the grid's cell corner table
+  std::vector<GridTransition> transition;  ///< per (a, v)
+  std::vector<float> discount;            ///< per action: gamma^(frames of a)
+  /// Per action, if the environment model moves the target rigidly (EnvironmentModel::
+  /// rigidMotion): (cos, sin, dx, dz) of the motion e' = R^T (e - d); else empty.
+  std::vector<double> rigid;
+  std::vector<std::uint32_t> actionTo;    ///< per action: its end state
+  std::vector<std::uint32_t> stateActionBegin;  ///< the model's: actions by the state they leave
+  /// Actions grouped by the state they end at: incoming[incomingBegin[s], incomingBegin[s+1]).
+  std::vector<std::uint32_t> incomingBegin, incoming;
+
+  std::size_t bytes() const;
+
+  /// The target after action a under a rigid environment model (`rigid` not empty): the
+  /// same arithmetic as inverseTransformPoint(), from the precomputed sine and cosine.
+  Eigen::Vector3d rigidNext(std::size_t a, const Eigen::Vector3d& e) const {
+    const double* r = &rigid[4 * a];
+    const double qx = e.x() - r[2], qz = e.z() - r[3];
+    return {r[0] * qx - r[1] * qz, e.y(), r[1] * qx + r[0] * qz};
+  }
+
+  /// Tabulates `problem` on `threads` threads. The same inputs give the same bytes.
+  static GridModel build(const Problem& problem, unsigned threads);
+};
+
+/// max over s's out-actions a' of the Q(., a') interpolated at the point with cell
+/// `cell` and fractions `frac` (the paper's "max_a' Q(e', a')").
+float maxInterpolated(const QTable& q, const GridModel& g, std::uint32_t s, std::uint32_t cell, const float* frac);
+
+/// sum[j] += scale * sum_k stencil.weight[k] Q(stencil.vertex[k], a_j) for s's out-actions
+/// a_j. `sum` must have room for actionsOf(s) rounded up to 16 floats (vector code writes
+/// whole registers; the extra entries receive garbage).
+void addInterpolated(float* sum, const QTable& q, std::uint32_t s, const Stencil& stencil, float scale);
+
+/// The backup of (action a, vertex v): r(v, a) + gamma^t_a max_a' Q(e'(v, a), a'), with
+/// future value 0 when e' leaves the grid.
+inline float backup(const QTable& q, const GridModel& g, std::size_t a, std::size_t v) {
+  const GridTransition& t = g.transition[a * g.vertexCount + v];
+  if (t.cell < 0) return t.reward;
+  return t.reward + g.discount[a] * maxInterpolated(q, g, g.actionTo[a], static_cast<std::uint32_t>(t.cell), t.frac);
+}
+
+/// One Jacobi sweep: out(v, a) = backup of `in` for every pair, in parallel over end
+/// states (each reads one block of `in`, which stays in cache). Returns max |out - in|.
+/// Deterministic whatever the thread count; a sweep over a subset of states is a function
+/// of `in` alone (DESIGN.md sec. 8).
+double sweep(const QTable& in, QTable& out, const GridModel& g, unsigned threads);
+/// The same with a scratch buffer kept between sweeps (actions x vertices floats).
+double sweep(const QTable& in, QTable& out, const GridModel& g, unsigned threads, std::vector<float>& stage);
+
+/// The Bellman residual max over (v, a) of |backup(Q) - Q|, and its mean.
+struct Residual {
+  double max = 0, mean = 0;
+};
+Residual bellmanResidual(const QTable& q, const GridModel& g, unsigned threads);
+
+}  // namespace mgrl

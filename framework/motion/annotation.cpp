@@ -1,0 +1,206 @@
+#include "mgrl/motion/annotation.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+#include <fmt/format.h>
+
+#include "mgrl/core/error.hpp"
+#include "mgrl/motion/kinematics.hpp"
+
+namespace mgrl {
+namespace {
+
+double percentile(std::vector<double> values, double q) {
+  if (values.empty()) return 0;
+  const auto k = static_cast<std::size_t>(q * static_cast<double>(values.size() - 1));
+  std::nth_element(values.begin(), values.begin() + static_cast<std::ptrdiff_t>(k), values.end());
+  return values[k];
+}
+
+}  // namespace
+
+void AnnotationParams::validate() const {
+  auto positive = [](double v, const char* name) {
+    if (!(v > 0) || !std::isfinite(v)) throw Error(fmt::format("annotation: {}: expected a positive value, found {}", name, v));
+  };
+  positive(contactHeightEnter_m, "contact_height_enter_m");
+  positive(contactHeightExit_m, "contact_height_exit_m");
+  positive(contactSpeedEnter_mps, "contact_speed_enter_mps");
+  positive(contactSpeedExit_mps, "contact_speed_exit_mps");
+  positive(punchMinSpeed_mps, "punch_min_speed_mps");
+  positive(punchMaxSpeed_mps, "punch_max_speed_mps");
+  if (contactHeightExit_m < contactHeightEnter_m || contactSpeedExit_mps < contactSpeedEnter_mps)
+    throw Error("annotation: expected exit thresholds at least the enter thresholds (hysteresis), found smaller");
+  if (!(punchMinAlignment >= 0 && punchMinAlignment <= 1))
+    throw Error(fmt::format("annotation: punch_min_alignment: expected a value in [0, 1], found {}", punchMinAlignment));
+  if (!(knockdownHeadRatio >= 0 && knockdownHeadRatio < 1))
+    throw Error(fmt::format("annotation: knockdown_head_ratio: expected a value in [0, 1) (0: off), found {}",
+                            knockdownHeadRatio));
+  if (punchMaxSpeed_mps <= punchMinSpeed_mps)
+    throw Error(fmt::format("annotation: punch_max_speed_mps: expected a value above punch_min_speed_mps ({}), found {}",
+                            punchMinSpeed_mps, punchMaxSpeed_mps));
+}
+
+Eigen::Vector3d AvatarFrame::toAvatar(const Eigen::Vector3d& world) const {
+  const Eigen::Vector3d d = world - origin;
+  const double c = std::cos(yaw), s = std::sin(yaw);
+  // Rotation by -yaw about +Y.
+  return {c * d.x() - s * d.z(), d.y(), s * d.x() + c * d.z()};
+}
+
+std::size_t Annotation::contactFrames(Side side) const {
+  const auto& c = contact[static_cast<int>(side)];
+  return static_cast<std::size_t>(std::count(c.begin(), c.end(), 1));
+}
+
+std::size_t Annotation::hitCount(Side side) const {
+  return static_cast<std::size_t>(std::count_if(hits.begin(), hits.end(), [side](const EffectiveHit& h) { return h.hand == side; }));
+}
+
+Annotation annotate(const Motion& motion, const SkeletonRoles& roles, const AnnotationParams& params) {
+  params.validate();
+  const Skeleton& skeleton = motion.skeleton();
+  const std::size_t frames = motion.frameCount();
+  const std::size_t n = skeleton.jointCount();
+
+  // Tracked points per frame: ankle L/R, toe L/R, fist tip L/R, wrist L/R, forearm L/R,
+  // toe tip L/R, head top.
+  constexpr std::size_t kPoints = 13;
+  std::vector<Eigen::Vector3d> points(frames * kPoints);
+  std::vector<Eigen::Vector3d> rootPosition(frames), facing(frames);
+  std::vector<Eigen::Quaterniond> rotations(n);
+  std::vector<Eigen::Vector3d> positions(n);
+  for (std::size_t f = 0; f < frames; ++f) {
+    forwardKinematics(motion, f, rotations, positions);
+    Eigen::Vector3d* p = &points[f * kPoints];
+    for (int s = 0; s < 2; ++s) {
+      p[0 + s] = positions[roles.ankle[s]];
+      p[2 + s] = positions[roles.toe[s]];
+      p[4 + s] = pointOnJoint(rotations, positions, roles.fistTipJoint[s], roles.fistTipOffset[s]);
+      p[6 + s] = positions[roles.wrist[s]];
+      p[8 + s] = positions[roles.forearm[s]];
+      p[10 + s] = pointOnJoint(rotations, positions, roles.toe[s], roles.toeTipOffset[s]);
+    }
+    p[12] = pointOnJoint(rotations, positions, roles.head, roles.headTopOffset);
+    rootPosition[f] = positions[0];
+    facing[f] = rotations[0] * roles.forward;
+  }
+  const auto velocity = velocities(points, kPoints, motion.frameTime());
+
+  Annotation result;
+  // Planted level of each foot joint at each frame: the height it rests at when down
+  // nearby in time (10th percentile within +-1 s). Local, because capture floors tilt and
+  // drift (CMU 07_05 rises 5 cm over its 4 m walk); a percentile, because some frames dip
+  // through the floor (SNU s_019_2_1).
+  const std::size_t window = std::max<std::size_t>(1, static_cast<std::size_t>(std::lround(1.0 / motion.frameTime())));
+  std::array<std::vector<double>, 4> planted;
+  std::vector<double> heights(frames), lowest(frames), span;
+  for (std::size_t k = 0; k < 4; ++k) {
+    for (std::size_t f = 0; f < frames; ++f) heights[f] = points[f * kPoints + k].y();
+    planted[k].resize(frames);
+    for (std::size_t f = 0; f < frames; ++f) {
+      const std::size_t lo = f > window ? f - window : 0, hi = std::min(frames, f + window + 1);
+      span.assign(heights.begin() + static_cast<std::ptrdiff_t>(lo), heights.begin() + static_cast<std::ptrdiff_t>(hi));
+      planted[k][f] = percentile(span, 0.10);
+    }
+  }
+  for (std::size_t f = 0; f < frames; ++f) {
+    double low = 1e300;
+    for (std::size_t k : {0, 1, 2, 3, 10, 11}) low = std::min(low, points[f * kPoints + k].y());
+    lowest[f] = low;
+  }
+  result.groundY = percentile(lowest, 0.10);
+
+  // Foot contacts with hysteresis: a foot enters contact when its ankle or toe is low and
+  // slow by the enter thresholds, and stays until both leave the exit thresholds.
+  for (int s = 0; s < 2; ++s) {
+    auto& contact = result.contact[s];
+    contact.assign(frames, 0);
+    bool on = false;
+    for (std::size_t f = 0; f < frames; ++f) {
+      auto near = [&](std::size_t k, double height, double speed) {
+        const std::size_t i = f * kPoints + k;
+        return points[i].y() - planted[k][f] < height && velocity[i].norm() < speed;
+      };
+      const std::size_t ankle = static_cast<std::size_t>(s), toe = 2 + static_cast<std::size_t>(s);
+      if (on)
+        on = near(ankle, params.contactHeightExit_m, params.contactSpeedExit_mps) ||
+             near(toe, params.contactHeightExit_m, params.contactSpeedExit_mps);
+      else
+        on = near(ankle, params.contactHeightEnter_m, params.contactSpeedEnter_mps) ||
+             near(toe, params.contactHeightEnter_m, params.contactSpeedEnter_mps);
+      contact[f] = on ? 1 : 0;
+    }
+  }
+
+  // Standing height from the motion: the head top above the lower foot while both feet
+  // are down. A high percentile, because boxers stand in a crouch most of the time.
+  std::vector<double> headAbove(frames), standing;
+  for (std::size_t f = 0; f < frames; ++f) headAbove[f] = points[f * kPoints + 12].y() - lowest[f];
+  for (int needed : {2, 1, 0}) {
+    standing.clear();
+    for (std::size_t f = 0; f < frames; ++f)
+      if (result.contact[0][f] + result.contact[1][f] >= needed) standing.push_back(headAbove[f]);
+    if (!standing.empty()) break;
+  }
+  result.standingFrames = standing.size();
+  result.standingHeight = percentile(standing, 0.99);
+  const double knockdownBelow = params.knockdownHeadRatio * result.standingHeight;
+
+  result.frames.resize(frames);
+  for (std::size_t f = 0; f < frames; ++f) {
+    result.frames[f].origin = {rootPosition[f].x(), result.groundY, rootPosition[f].z()};
+    result.frames[f].yaw = std::atan2(facing[f].x(), facing[f].z());
+  }
+
+  // Effective punches (sec. 6.2): fist velocity projected on the forearm axis above a
+  // threshold, and not opposed to it, by a boxer on his feet.
+  std::array<bool, 2> previous{false, false};
+  for (std::size_t f = 0; f < frames; ++f) {
+    const bool down = headAbove[f] < knockdownBelow;
+    result.knockdownFrames += down ? 1 : 0;
+    for (int s = 0; s < 2; ++s) {
+      const std::size_t base = f * kPoints;
+      Eigen::Vector3d axis = points[base + 6 + s] - points[base + 8 + s];
+      bool effective = false;
+      const Eigen::Vector3d& v = velocity[base + 4 + s];
+      const double speed = v.norm();
+      // A one-frame capture glitch is halved by the central difference; the one-sided
+      // speeds on either side show it whole.
+      const double before = f > 0 ? (points[base + 4 + s] - points[base - kPoints + 4 + s]).norm() / motion.frameTime() : 0;
+      const double after = f + 1 < frames ? (points[base + kPoints + 4 + s] - points[base + 4 + s]).norm() / motion.frameTime() : 0;
+      if (std::max({speed, before, after}) > params.punchMaxSpeed_mps) {
+        ++result.glitchFrames;
+      } else if (!down && axis.norm() > 1e-9) {
+        axis.normalize();
+        const double along = v.dot(axis);
+        if (along >= params.punchMinSpeed_mps && along >= params.punchMinAlignment * speed) {
+          effective = true;
+          EffectiveHit hit;
+          hit.frame = static_cast<std::uint32_t>(f);
+          hit.hand = static_cast<Side>(s);
+          hit.tipWorld = points[base + 4 + s];
+          hit.tipAvatar = result.frames[f].toAvatar(hit.tipWorld);
+          hit.speed_mps = speed;
+          hit.alongForearm_mps = along;
+          result.hits.push_back(hit);
+        }
+      }
+      if (effective && !previous[s]) ++result.punches[s];
+      previous[s] = effective;
+    }
+  }
+  return result;
+}
+
+std::string unusualHeightWarning(const Annotation& annotation, std::string_view source) {
+  const double h = annotation.standingHeight;
+  if (h >= kUsualHeightMin_m && h <= kUsualHeightMax_m) return {};
+  return fmt::format("{}: standing height {:.2f} m (head top above the lower foot over {} standing frames), expected "
+                     "{} to {} m for an adult; check the units (--units), the head role (--role head=JOINT) and "
+                     "that the capture has frames standing upright",
+                     source, h, annotation.standingFrames, kUsualHeightMin_m, kUsualHeightMax_m);
+}
+
+}  // namespace mgrl

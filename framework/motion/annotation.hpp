@@ -1,0 +1,108 @@
+#pragma once
+/// \file
+/// Automatic annotation of unlabelled capture (Lee & Lee 2004, sec. 6.2): foot contacts
+/// and effective punches with their hitting points.
+
+#include <array>
+#include <cstdint>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "mgrl/motion/motion.hpp"
+#include "mgrl/motion/roles.hpp"
+
+namespace mgrl {
+
+/// Thresholds in SI units. Defaults suit 30 to 120 fps human capture.
+struct AnnotationParams {
+  /// A foot joint (ankle or toe) is near the ground within this height above its planted
+  /// level (its 10th-percentile height within +-1 s); entering and leaving a contact use
+  /// different thresholds (hysteresis), so contacts do not flicker.
+  double contactHeightEnter_m = 0.05;
+  double contactHeightExit_m = 0.08;
+  /// ...and slower than this (m/s).
+  double contactSpeedEnter_mps = 0.5;
+  double contactSpeedExit_mps = 0.9;
+  /// A punch is effective when the fist tip's velocity along the forearm axis (elbow to
+  /// wrist) exceeds this (m/s)...
+  double punchMinSpeed_mps = 2.0;
+  /// ...and the velocity is not opposed to the axis: the cosine of the angle between them
+  /// is at least this.
+  double punchMinAlignment = 0.5;
+  /// Fist speeds above this are capture glitches (e.g. a 23 m/s spike in SNU 16_28_1),
+  /// never effective hits.
+  double punchMaxSpeed_mps = 15.0;
+  /// No punch counts while the boxer is down (paper sec. 6.2 annotates punches of a
+  /// standing boxer): while the head top is below this fraction of the standing height
+  /// above the lower foot, arm swings are not effective. In [0, 1); 0 turns the rule off.
+  /// 0.6 keeps crouches, weaving and deep stances (CMU's boxing and karate punches all
+  /// stay above 0.68) and drops kneeling, sitting, lying and falling (SNU's sparring has
+  /// take-downs: arms flail on the way down and on the floor).
+  double knockdownHeadRatio = 0.6;
+
+  /// Throws mgrl::Error naming the first out-of-range value.
+  void validate() const;
+};
+
+/// Ground-plane frame of the avatar at one frame (DESIGN.md sec. 3): origin below the root
+/// on the ground, +Z facing, +X to the avatar's left, Y up.
+struct AvatarFrame {
+  Eigen::Vector3d origin = Eigen::Vector3d::Zero();
+  double yaw = 0;  ///< facing angle about +Y; 0 faces world +Z
+
+  /// World point -> avatar frame.
+  Eigen::Vector3d toAvatar(const Eigen::Vector3d& world) const;
+};
+
+/// One frame at which a fist moves as an effective punch (an "effective hitting point").
+struct EffectiveHit {
+  std::uint32_t frame = 0;
+  Side hand = Side::Left;
+  Eigen::Vector3d tipWorld = Eigen::Vector3d::Zero();   ///< fist tip, world (m)
+  Eigen::Vector3d tipAvatar = Eigen::Vector3d::Zero();  ///< fist tip, avatar frame of that frame (m)
+  double speed_mps = 0;                                 ///< fist tip speed
+  double alongForearm_mps = 0;                          ///< its component along the forearm axis
+};
+
+struct Annotation {
+  double groundY = 0;  ///< estimated floor height (m)
+  /// contact[side][frame] is 1 while that foot is on the ground.
+  std::array<std::vector<std::uint8_t>, 2> contact;
+  /// Effective hitting points in frame order.
+  std::vector<EffectiveHit> hits;
+  /// Punches per hand: runs of consecutive effective frames.
+  std::array<int, 2> punches{0, 0};
+  /// Frames where a fist moved faster than punchMaxSpeed_mps (ignored as glitches).
+  int glitchFrames = 0;
+  /// Standing height (m): head top (SkeletonRoles::headTopOffset) above the lower foot's
+  /// lowest point, 99th percentile over the frames with both feet on the ground (over
+  /// frames with one foot down if there are none, else over all frames). From the motion,
+  /// not the rest pose, whose feet or head may not stand as the person does.
+  double standingHeight = 0;
+  /// Frames the standingHeight came from.
+  std::size_t standingFrames = 0;
+  /// Frames where the head top was below knockdownHeadRatio * standingHeight (no
+  /// effective punches there).
+  std::size_t knockdownFrames = 0;
+  /// Avatar frame at every frame.
+  std::vector<AvatarFrame> frames;
+
+  std::size_t contactFrames(Side side) const;
+  std::size_t hitCount(Side side) const;
+};
+
+/// Annotates `motion` (metres). `roles` must come from the motion's skeleton.
+Annotation annotate(const Motion& motion, const SkeletonRoles& roles, const AnnotationParams& params = {});
+
+/// Standing heights outside this range (m) are unusual for an adult: likely a wrong unit,
+/// a mislabelled head or a capture without standing frames.
+inline constexpr double kUsualHeightMin_m = 1.2, kUsualHeightMax_m = 2.2;
+
+/// A warning text when `annotation.standingHeight` is outside the usual range, e.g.
+/// `x.bvh: standing height 0.95 m, expected 1.2 to 2.2 m for an adult: ...`; empty otherwise.
+std::string unusualHeightWarning(const Annotation& annotation, std::string_view source);
+
+}  // namespace mgrl

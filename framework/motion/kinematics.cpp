@@ -1,0 +1,81 @@
+#include "mgrl/motion/kinematics.hpp"
+
+#include <cassert>
+
+namespace mgrl {
+
+void forwardKinematics(const Motion& motion, std::size_t frame, std::span<Eigen::Quaterniond> rotations,
+                       std::span<Eigen::Vector3d> positions) {
+  const Skeleton& skeleton = motion.skeleton();
+  const std::size_t n = skeleton.jointCount();
+  assert(rotations.size() >= n && positions.size() >= n);
+  const auto local = motion.rotations(frame);
+  const auto animated = motion.translations(frame);
+  for (std::size_t j = 0; j < n; ++j) {
+    const Joint& joint = skeleton.joint(j);
+    const int slot = skeleton.translationSlot(j);
+    const Eigen::Vector3d& t = slot < 0 ? joint.offset : animated[slot];
+    if (joint.parent < 0) {
+      rotations[j] = local[j];
+      positions[j] = t;
+    } else {
+      assert(joint.parent < static_cast<int>(j));
+      const auto p = static_cast<std::size_t>(joint.parent);
+      rotations[j] = rotations[p] * local[j];
+      positions[j] = positions[p] + rotations[p] * t;
+    }
+  }
+}
+
+void forwardKinematics(const Skeleton& skeleton, std::span<const Eigen::Quaterniond> localRotations,
+                       std::span<const Eigen::Vector3d> localTranslations,
+                       std::span<Eigen::Quaterniond> rotations, std::span<Eigen::Vector3d> positions) {
+  const std::size_t n = skeleton.jointCount();
+  assert(localRotations.size() >= n && localTranslations.size() >= n);
+  for (std::size_t j = 0; j < n; ++j) {
+    const int parent = skeleton.joint(j).parent;
+    if (parent < 0) {
+      rotations[j] = localRotations[j];
+      positions[j] = localTranslations[j];
+    } else {
+      const auto p = static_cast<std::size_t>(parent);
+      rotations[j] = rotations[p] * localRotations[j];
+      positions[j] = positions[p] + rotations[p] * localTranslations[j];
+    }
+  }
+}
+
+std::vector<Eigen::Vector3d> jointPositions(const Motion& motion) {
+  const std::size_t n = motion.skeleton().jointCount();
+  std::vector<Eigen::Vector3d> positions(motion.frameCount() * n);
+  std::vector<Eigen::Quaterniond> rotations(n);
+  for (std::size_t f = 0; f < motion.frameCount(); ++f)
+    forwardKinematics(motion, f, rotations, std::span(positions).subspan(f * n, n));
+  return positions;
+}
+
+std::vector<Eigen::Vector3d> restPositions(const Skeleton& skeleton) {
+  const std::size_t n = skeleton.jointCount();
+  std::vector<Eigen::Quaterniond> local(n, Eigen::Quaterniond::Identity()), global(n);
+  std::vector<Eigen::Vector3d> offsets(n), positions(n);
+  for (std::size_t j = 0; j < n; ++j) offsets[j] = skeleton.joint(j).offset;
+  forwardKinematics(skeleton, local, offsets, global, positions);
+  return positions;
+}
+
+std::vector<Eigen::Vector3d> velocities(std::span<const Eigen::Vector3d> positions, std::size_t pointCount,
+                                        double frameTime) {
+  const std::size_t frames = pointCount == 0 ? 0 : positions.size() / pointCount;
+  std::vector<Eigen::Vector3d> result(positions.size(), Eigen::Vector3d::Zero());
+  if (frames < 2) return result;
+  for (std::size_t f = 0; f < frames; ++f) {
+    const std::size_t before = f == 0 ? 0 : f - 1;
+    const std::size_t after = f + 1 == frames ? f : f + 1;
+    const double dt = static_cast<double>(after - before) * frameTime;
+    for (std::size_t j = 0; j < pointCount; ++j)
+      result[f * pointCount + j] = (positions[after * pointCount + j] - positions[before * pointCount + j]) / dt;
+  }
+  return result;
+}
+
+}  // namespace mgrl

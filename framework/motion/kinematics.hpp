@@ -1,0 +1,44 @@
+#pragma once
+/// \file
+/// Forward kinematics as one linear pass over parent-before-child joints into caller-owned
+/// buffers (no allocation, no hidden cache), plus helpers built on it.
+
+#include <span>
+#include <vector>
+
+#include <Eigen/Geometry>
+
+#include "mgrl/motion/motion.hpp"
+
+namespace mgrl {
+
+/// Global rotations and positions of every joint at `frame` of `motion`. Both spans must
+/// have jointCount() elements. Root position is the root's local translation.
+void forwardKinematics(const Motion& motion, std::size_t frame, std::span<Eigen::Quaterniond> rotations,
+                       std::span<Eigen::Vector3d> positions);
+
+/// The same pass over explicit local rotations and translations (one per joint), for poses
+/// that are not frames of a Motion (rest pose, blended poses).
+void forwardKinematics(const Skeleton& skeleton, std::span<const Eigen::Quaterniond> localRotations,
+                       std::span<const Eigen::Vector3d> localTranslations,
+                       std::span<Eigen::Quaterniond> rotations, std::span<Eigen::Vector3d> positions);
+
+/// Joint positions for every frame, frame-major: result[f * jointCount + j].
+std::vector<Eigen::Vector3d> jointPositions(const Motion& motion);
+
+/// Rest-pose joint positions (identity rotations, offsets), root at its offset.
+std::vector<Eigen::Vector3d> restPositions(const Skeleton& skeleton);
+
+/// Velocities (units per second) from frame-major positions sampled every `frameTime`
+/// seconds: central differences inside, one-sided at the ends, zero for a single frame.
+std::vector<Eigen::Vector3d> velocities(std::span<const Eigen::Vector3d> positions, std::size_t pointCount,
+                                        double frameTime);
+
+/// Global position of a point given in the frame of joint `joint` (e.g. an end site).
+inline Eigen::Vector3d pointOnJoint(std::span<const Eigen::Quaterniond> rotations,
+                                    std::span<const Eigen::Vector3d> positions, std::size_t joint,
+                                    const Eigen::Vector3d& local) {
+  return positions[joint] + rotations[joint] * local;
+}
+
+}  // namespace mgrl

@@ -1,0 +1,86 @@
+#include "mgrl/motion/motion_database.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+#include <fmt/format.h>
+
+#include "mgrl/motion/motion_io.hpp"
+
+namespace mgrl {
+
+namespace {
+
+// Files of one graph must share joints and hierarchy; bone lengths may differ a little
+// (capture sessions recalibrate) but a different body would make transitions meaningless.
+void requireSameSkeleton(const Skeleton& a, std::string_view nameA, const Skeleton& b, std::string_view nameB) {
+  if (a.jointCount() != b.jointCount())
+    throw Error(fmt::format("{} and {} have different skeletons: expected {} joints, found {}", nameA, nameB,
+                            a.jointCount(), b.jointCount()));
+  for (std::size_t j = 0; j < a.jointCount(); ++j) {
+    const Joint& ja = a.joint(j);
+    const Joint& jb = b.joint(j);
+    if (ja.name != jb.name || ja.parent != jb.parent)
+      throw Error(fmt::format("{} and {} have different skeletons: joint {} is '{}' (parent {}) in the first, "
+                              "'{}' (parent {}) in the second",
+                              nameA, nameB, j, ja.name, ja.parent, jb.name, jb.parent));
+    if (j == 0) continue;  // the root's offset is replaced by its position channels
+    const double la = ja.offset.norm(), lb = jb.offset.norm();
+    if (std::abs(la - lb) > 0.01 + 0.05 * std::max(la, lb))
+      throw Error(fmt::format("{} and {} have different skeletons: bone '{}' is {:.3f} m in the first, {:.3f} m in "
+                              "the second (more than 5 % apart)",
+                              nameA, nameB, ja.name, la, lb));
+  }
+}
+
+}  // namespace
+
+std::size_t MotionDatabase::clipOf(std::uint32_t frame) const {
+  const auto it = std::upper_bound(offsets.begin(), offsets.end(), frame);
+  return static_cast<std::size_t>(it - offsets.begin()) - 1;
+}
+
+MotionDatabase makeMotionDatabase(std::vector<std::pair<std::string, Motion>> motions, const RoleOverrides& roles,
+                                  const AnnotationParams& annotation, const WarningSink& warn) {
+  if (motions.empty()) throw Error("motion: expected at least one motion file, found none");
+  annotation.validate();
+  MotionDatabase db;
+  db.skeleton = motions.front().second.sharedSkeleton();
+  db.frameTime = motions.front().second.frameTime();
+  db.roles = findRoles(*db.skeleton, roles, motions.front().first, warn);
+  db.offsets.push_back(0);
+  for (auto& [name, motion] : motions) {
+    requireSameSkeleton(*db.skeleton, motions.front().first, motion.skeleton(), name);
+    if (std::abs(motion.frameTime() - db.frameTime) > 1e-9)
+      throw Error(fmt::format("{}: expected {} fps like {}, found {} fps", name, 1.0 / db.frameTime,
+                              motions.front().first, motion.fps()));
+    const std::uint64_t total = std::uint64_t{db.offsets.back()} + motion.frameCount();
+    if (total > std::uint64_t{1} << 30)
+      throw Error(fmt::format("motion: expected at most 2^30 frames in one graph, found {}", total));
+    Annotation ann = annotate(motion, db.roles, annotation);
+    if (const std::string unusual = unusualHeightWarning(ann, name); !unusual.empty() && warn) warn(unusual);
+    db.clips.push_back(Clip{name, {}, std::move(motion), std::move(ann)});
+    db.offsets.push_back(static_cast<std::uint32_t>(total));
+  }
+  return db;
+}
+
+MotionDatabase loadMotionDatabase(const MotionSpec& spec, const WarningSink& warn) {
+  if (spec.files.empty()) throw Error("motion.files: expected at least one motion file, found none");
+  std::vector<std::pair<std::string, Motion>> motions;
+  motions.reserve(spec.files.size());
+  for (const auto& file : spec.files) {
+    LoadOptions options;
+    options.units = spec.units;
+    options.fps = spec.fps;
+    options.asf = spec.asf;
+    options.warn = warn;
+    LoadedMotion loaded = loadMotion(file, options);
+    motions.emplace_back(file.filename().string(), std::move(loaded.motion));
+  }
+  MotionDatabase db = makeMotionDatabase(std::move(motions), spec.roles, spec.annotation, warn);
+  for (std::size_t c = 0; c < db.clips.size(); ++c) db.clips[c].path = spec.files[c];
+  return db;
+}
+
+}  // namespace mgrl

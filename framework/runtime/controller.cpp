@@ -1,0 +1,127 @@
+#include "mgrl/runtime/controller.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+#include "mgrl/learning/problem.hpp"
+
+namespace mgrl {
+
+std::size_t RandomController::choose(std::uint32_t s, const Eigen::Vector3d&, Rng& rng) {
+  const std::uint32_t begin = model_.stateActionBegin[s];
+  return begin + rng.below(model_.stateActionBegin[s + 1] - begin);
+}
+
+PolicyController::PolicyController(const StateActionModel& model, std::vector<PolicyPart> parts, Variety variety)
+    : model_(model), parts_(std::move(parts)), variety_(variety) {
+  variety_.topK = std::max(1, variety_.topK);
+}
+
+void PolicyController::score(std::uint32_t s, const Eigen::Vector3d& e) {
+  const std::uint32_t begin = model_.stateActionBegin[s];
+  const std::uint32_t n = model_.stateActionBegin[s + 1] - begin;
+  buffer_.assign(n + 16, 0.0f);  // vector code writes whole 16-float registers
+  count_ = n;
+  for (const PolicyPart& part : parts_) {
+    GridCell cell;
+    if (part.activation == Activation::TargetInside) {
+      if (!part.grid->locate(e, cell)) continue;
+    } else {
+      cell = part.grid->locateClamped(e);
+    }
+    addInterpolated(buffer_.data(), *part.table, s, part.grid->stencil(cell), static_cast<float>(part.weight));
+  }
+}
+
+std::size_t PolicyController::choose(std::uint32_t s, const Eigen::Vector3d& e) {
+  score(s, e);
+  const std::uint32_t begin = model_.stateActionBegin[s];
+  const auto n = static_cast<std::uint32_t>(count_);
+  std::uint32_t best = 0;
+  for (std::uint32_t j = 1; j < n; ++j)
+    if (buffer_[j] > buffer_[best]) best = j;
+  return begin + best;
+}
+
+std::size_t PolicyController::choose(std::uint32_t s, const Eigen::Vector3d& e, Rng& rng) {
+  if (variety_.topK == 1) return choose(s, e);
+  score(s, e);
+  const std::uint32_t begin = model_.stateActionBegin[s];
+  const auto n = static_cast<std::uint32_t>(count_);
+  // The top k by score, ties by index (a stable, seed-independent order).
+  ranked_.resize(n);
+  for (std::uint32_t j = 0; j < n; ++j) ranked_[j] = j;
+  const std::uint32_t k = std::min<std::uint32_t>(n, static_cast<std::uint32_t>(variety_.topK));
+  std::partial_sort(ranked_.begin(), ranked_.begin() + k, ranked_.end(), [&](std::uint32_t a, std::uint32_t b) {
+    return buffer_[a] > buffer_[b] || (buffer_[a] == buffer_[b] && a < b);
+  });
+  std::uint32_t candidates = k;
+  if (variety_.margin > 0) {
+    const double best = buffer_[ranked_[0]];
+    const double floor = best - variety_.margin * std::abs(best);
+    candidates = 1;
+    while (candidates < k && buffer_[ranked_[candidates]] >= floor) ++candidates;
+  }
+  return begin + ranked_[candidates == 1 ? 0 : rng.below(candidates)];
+}
+
+}  // namespace mgrl
+
+namespace mgrl {
+
+OnlineSearchController::OnlineSearchController(const StateActionModel& model, const EnvironmentModel& environment,
+                                               std::vector<SearchPart> parts, int horizon, double gamma)
+    : OnlineSearchController(model, environment, std::move(parts), SearchHorizon{horizon, 0}, gamma) {}
+
+OnlineSearchController::OnlineSearchController(const StateActionModel& model, const EnvironmentModel& environment,
+                                               std::vector<SearchPart> parts, SearchHorizon horizon, double gamma)
+    : model_(model),
+      environment_(environment),
+      parts_(std::move(parts)),
+      horizon_(std::max(1, horizon.actions)),
+      horizonFrames_(horizon.seconds > 0 ? horizon.seconds / model.frameTime
+                                         : std::numeric_limits<double>::infinity()) {
+  discount_.resize(model.actionCount());
+  for (std::size_t a = 0; a < model.actionCount(); ++a)
+    discount_[a] = std::pow(gamma, static_cast<double>(model.actionLength(a)));
+}
+
+double OnlineSearchController::reward(std::size_t a, const Eigen::Vector3d& e) const {
+  double r = 0;
+  for (const SearchPart& part : parts_) {
+    if (part.activation == Activation::TargetInside && !part.grid->inside(e)) continue;
+    r += part.weight * part.reward->evaluate(model_, a, e);
+  }
+  return r;
+}
+
+double OnlineSearchController::value(std::uint32_t s, const Eigen::Vector3d& e, int depth, double frames) {
+  if (depth == 0 || frames <= 0) return 0;
+  double best = -std::numeric_limits<double>::infinity();
+  for (std::uint32_t a = model_.stateActionBegin[s]; a < model_.stateActionBegin[s + 1]; ++a) {
+    ++expanded_;
+    const double q = reward(a, e) + discount_[a] * value(model_.actionTo[a], environment_.next(model_, a, e), depth - 1,
+                                                         frames - static_cast<double>(model_.actionLength(a)));
+    best = std::max(best, q);
+  }
+  return best;
+}
+
+std::size_t OnlineSearchController::choose(std::uint32_t s, const Eigen::Vector3d& e) {
+  expanded_ = 0;
+  std::size_t bestAction = model_.stateActionBegin[s];
+  double best = -std::numeric_limits<double>::infinity();
+  for (std::uint32_t a = model_.stateActionBegin[s]; a < model_.stateActionBegin[s + 1]; ++a) {
+    ++expanded_;
+    const double q = reward(a, e) + discount_[a] * value(model_.actionTo[a], environment_.next(model_, a, e), horizon_ - 1,
+                                                         horizonFrames_ - static_cast<double>(model_.actionLength(a)));
+    if (q > best) {
+      best = q;
+      bestAction = a;
+    }
+  }
+  return bestAction;
+}
+
+}  // namespace mgrl

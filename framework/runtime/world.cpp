@@ -1,0 +1,392 @@
+#include "mgrl/runtime/world.hpp"
+
+#include <algorithm>
+#include <barrier>
+#include <cmath>
+#include <exception>
+#include <limits>
+#include <mutex>
+#include <thread>
+
+#include <fmt/format.h>
+
+#include "mgrl/motion/kinematics.hpp"
+#include "mgrl/graph/motion_graph.hpp"
+#include "mgrl/learning/reward.hpp"
+
+namespace mgrl {
+
+// ---------------------------------------------------------------------------------------
+// World
+
+namespace {
+
+constexpr std::size_t kNever = std::numeric_limits<std::size_t>::max();
+
+// Distance from p to the segment [a, b].
+double segmentDistance(const Eigen::Vector3d& p, const Eigen::Vector3d& a, const Eigen::Vector3d& b) {
+  const Eigen::Vector3d ab = b - a;
+  const double len2 = ab.squaredNorm();
+  const double t = len2 > 0 ? std::clamp((p - a).dot(ab) / len2, 0.0, 1.0) : 0.0;
+  return (p - (a + t * ab)).norm();
+}
+
+// Splits a seed into independent per-avatar seeds (splitmix64).
+std::uint64_t mix(std::uint64_t seed, std::uint64_t i) {
+  std::uint64_t z = seed + 0x9e3779b97f4a7c15ULL * (i + 1);
+  z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9ULL;
+  z = (z ^ (z >> 27)) * 0x94d049bb133111ebULL;
+  return z ^ (z >> 31);
+}
+
+}  // namespace
+
+struct World::Avatar {
+  Rng rng;
+  GroundMotion decision;  ///< avatar frame at the last decision (world)
+  GroundMotion now;       ///< avatar frame at the frame shown (world)
+  std::uint32_t state = 0, action = 0, step = 0, length = 0;
+  std::uint32_t sourceFrame = 0;
+  std::uint32_t hitCursor = 0;  ///< next hit of the action to check
+  std::int32_t partner = -1;
+  std::array<std::size_t, 2> landedFrame{kNever, kNever};  ///< last frame of a landed punch, per hand
+  std::size_t decisions = 0;
+  // Reaction to the last hit taken: displacement `push` of `part`, starting at `reactionStart`.
+  BodyPart part = BodyPart::Head;
+  Eigen::Vector3d push = Eigen::Vector3d::Zero();
+  double reactionStart = -1e30;
+  // Poses (only when asked for).
+  std::unique_ptr<ActionPlayback> playback;
+  Pose pose;
+  std::vector<Eigen::Quaterniond> globals;
+  std::vector<Eigen::Vector3d> positions;
+  std::vector<Pose> recorded;
+};
+
+World::World(WorldSetup setup)
+    : setup_(std::move(setup)), model_(*setup_.model), body_(*setup_.body) {
+  if (setup_.record) setup_.poses = true;
+  if (setup_.avatars == 0) throw Error("world: expected at least one avatar, found 0");
+  if (model_.stateCount() == 0) throw Error("world: expected a model with states, found none");
+  if (setup_.poses && setup_.db == nullptr) throw Error("world: poses need the motion database");
+  if (!setup_.makeController) throw Error("world: expected a controller factory");
+  centroidHeight_ = setup_.params.targetHeight >= 0 ? setup_.params.targetHeight : model_.centroid[1];
+  avatars_.resize(setup_.avatars);
+  targets_.resize(setup_.avatars);
+  heads_.resize(setup_.avatars);
+  for (std::size_t i = 0; i < avatars_.size(); ++i) startAvatar(i);
+  for (std::size_t i = 0; i < avatars_.size(); ++i) heads_[i] = bodyPoint(i, BodyTable::Head);
+}
+
+World::~World() = default;
+
+void World::startAvatar(std::size_t i) {
+  Avatar& a = avatars_[i];
+  a.rng = Rng(mix(setup_.seed, i));
+  const WorldParams& p = setup_.params;
+  const bool sparring = p.mode == "sparring";
+  const std::size_t n = avatars_.size();
+  // Slots on a square grid: one per pair (sparring) or per avatar (targets).
+  const std::size_t slot = sparring ? i / 2 : i;
+  const std::size_t slots = sparring ? (n + 1) / 2 : n;
+  const auto columns = static_cast<std::size_t>(std::ceil(std::sqrt(static_cast<double>(slots))));
+  const std::size_t rows = (slots + columns - 1) / columns;
+  const double cx = (static_cast<double>(slot % columns) - 0.5 * static_cast<double>(columns - 1)) * p.spacing;
+  const double cz = (static_cast<double>(slot / columns) - 0.5 * static_cast<double>(rows - 1)) * p.spacing;
+  const bool paired = sparring && (i ^ 1) < n;
+  a.partner = paired ? static_cast<std::int32_t>(i ^ 1) : -1;
+  const double jitter = (2 * a.rng.uniform() - 1) * 20 * M_PI / 180;  // +-20 degrees
+  if (paired) {
+    const double side = (i % 2 == 0) ? -1 : 1;  // the even partner on the left, facing +X
+    a.decision = {cx + side * 0.5 * p.startDistance, cz, -side * M_PI / 2 + jitter};
+  } else {
+    a.decision = {cx, cz, a.rng.uniform() * 2 * M_PI - M_PI};
+  }
+  a.now = a.decision;
+  a.state = static_cast<std::uint32_t>(a.rng.below(model_.stateCount()));
+  a.sourceFrame = model_.stateFrame[a.state];
+  a.step = a.length = 0;  // decide at the first frame
+  Target& t = targets_[i];
+  if (!paired) {
+    // A target in front, within reach of a few steps (the user's first placement).
+    const double angle = (2 * a.rng.uniform() - 1) * M_PI / 3, distance = 0.8 + a.rng.uniform();
+    t.base = transformPoint(a.decision, {distance * std::sin(angle), centroidHeight_, distance * std::cos(angle)});
+    t.nextMove = p.targetHold;
+  }
+  if (setup_.poses) {
+    a.playback = std::make_unique<ActionPlayback>(*setup_.db, model_, setup_.blendFrames, false);
+    a.playback->reset(a.state, a.decision);
+    const std::size_t joints = setup_.db->skeleton->jointCount();
+    a.globals.resize(joints);
+    a.positions.resize(joints);
+    a.pose.rotations.resize(joints);
+    a.pose.translations.resize(joints);
+  }
+}
+
+Eigen::Vector3d World::bodyPoint(std::size_t i, int which) const {
+  const Avatar& a = avatars_[i];
+  return transformPoint(a.now, body_.point(a.sourceFrame, which));
+}
+
+Eigen::Vector3d World::aim(std::size_t i) const {
+  const Avatar& a = avatars_[i];
+  return a.partner >= 0 ? heads_[static_cast<std::size_t>(a.partner)] : targets_[i].centre();
+}
+
+void World::decide(std::size_t i, Controller& controller) {
+  Avatar& a = avatars_[i];
+  const Eigen::Vector3d e = inverseTransformPoint(a.decision, aim(i));
+  a.action = static_cast<std::uint32_t>(controller.choose(a.state, e, a.rng));
+  a.length = static_cast<std::uint32_t>(model_.actionLength(a.action));
+  a.step = 0;
+  a.hitCursor = model_.actionHitBegin[a.action];
+  ++a.decisions;
+  if (a.playback) a.playback->begin(a.action);
+}
+
+void World::advance(std::size_t begin, std::size_t end, Controller& controller) {
+  const WorldParams& p = setup_.params;
+  const double dt = model_.frameTime;
+  const double time = static_cast<double>(frame_) * dt;  // frame_ already counts this frame
+  const double omega = 2 * M_PI * p.bendFrequency;
+  for (std::size_t i = begin; i < end; ++i) {
+    Avatar& a = avatars_[i];
+    if (a.partner < 0) {
+      // The target: moved by "the user" now and then, and its spring relaxes.
+      Target& t = targets_[i];
+      if (time >= t.nextMove) {
+        const double angle = (2 * a.rng.uniform() - 1) * M_PI, distance = 0.6 + 1.4 * a.rng.uniform();
+        t.base = transformPoint(a.now, {distance * std::sin(angle), centroidHeight_, distance * std::cos(angle)});
+        t.nextMove += p.targetHold;
+      }
+      const Eigen::Vector3d acceleration = -omega * omega * t.bend - 2 * p.bendDamping * omega * t.bendVelocity;
+      t.bendVelocity += dt * acceleration;
+      t.bend += dt * t.bendVelocity;
+      if (t.bend.norm() > p.bendMax) t.bend *= p.bendMax / t.bend.norm();
+    }
+    if (a.step == a.length) {
+      if (a.length > 0) {  // the last action is over: decide where it ended
+        a.decision = compose(a.decision, model_.displacement(a.action));
+        a.state = model_.actionTo[a.action];
+      }
+      decide(i, controller);
+    }
+    ++a.step;
+    const std::size_t k = model_.actionFrameBegin[a.action] + a.step - 1;
+    a.sourceFrame = model_.actionFrames[k];
+    a.now = compose(a.decision, {model_.frameRoot[3 * k], model_.frameRoot[3 * k + 1], model_.frameRoot[3 * k + 2]});
+  }
+  if (setup_.poses) updatePoses(begin, end);
+}
+
+void World::collide(std::size_t begin, std::size_t end, std::vector<HitEvent>& out) {
+  const WorldParams& p = setup_.params;
+  const double time = static_cast<double>(frame_) * model_.frameTime;
+  for (std::size_t i = begin; i < end; ++i) {
+    Avatar& a = avatars_[i];
+    // Effective hits of the action at this frame (paper sec. 6.6: collisions are checked
+    // only there).
+    const std::uint32_t hitEnd = model_.actionHitBegin[a.action + 1];
+    while (a.hitCursor < hitEnd && model_.hits[a.hitCursor].offset < a.step) ++a.hitCursor;
+    for (std::uint32_t h = a.hitCursor; h < hitEnd && model_.hits[h].offset == a.step; ++h) {
+      const ActionHit& hit = model_.hits[h];
+      std::size_t& landed = a.landedFrame[hit.hand];
+      if (landed != kNever && landed + 1 == frame_) {  // the same punch, already landed
+        landed = frame_;
+        continue;
+      }
+      // The fist tip in the world (hits are stored in the decision's avatar frame).
+      const Eigen::Vector3d fist = transformPoint(a.decision, {hit.x, hit.y, hit.z});
+      HitEvent event;
+      bool struck = false;
+      if (a.partner < 0) {
+        struck = (fist - targets_[i].centre()).norm() <= p.targetRadius + p.fistRadius;
+      } else {
+        const auto j = static_cast<std::size_t>(a.partner);
+        struct Capsule {
+          BodyPart part;
+          int from, to;
+          double radius;
+        };
+        const Capsule capsules[] = {{BodyPart::Head, BodyTable::Head, BodyTable::HeadTop, p.headRadius},
+                                    {BodyPart::Chest, BodyTable::Chest, BodyTable::Neck, p.chestRadius},
+                                    {BodyPart::Spine, BodyTable::Pelvis, BodyTable::Chest, p.spineRadius}};
+        double deepest = 0;
+        for (const Capsule& c : capsules) {
+          const double depth =
+              c.radius + p.fistRadius - segmentDistance(fist, bodyPoint(j, c.from), bodyPoint(j, c.to));
+          if (depth >= 0 && (!struck || depth > deepest)) {
+            struck = true;
+            deepest = depth;
+            event.part = c.part;
+          }
+        }
+      }
+      if (!struck) continue;
+      landed = frame_;
+      event.time = time;
+      event.attacker = static_cast<std::uint32_t>(i);
+      event.target = a.partner;
+      event.hand = hit.hand;
+      event.speed = hit.weight * model_.maxHitSpeed_mps;
+      event.point = fist;
+      out.push_back(event);
+    }
+  }
+}
+
+void World::react(const HitEvent& event) {
+  const WorldParams& p = setup_.params;
+  const Avatar& attacker = avatars_[event.attacker];
+  // The punch's direction: from the attacker towards the fist, on the ground plane.
+  Eigen::Vector3d direction(event.point.x() - attacker.now.dx, 0, event.point.z() - attacker.now.dz);
+  if (direction.norm() < 1e-6) direction = {std::sin(attacker.now.dyaw), 0, std::cos(attacker.now.dyaw)};
+  direction.normalize();
+  if (event.target < 0) {
+    Target& t = targets_[event.attacker];
+    // An impulse whose undamped swing is bend_per_speed * speed (at most bend_max).
+    const double amplitude = std::min(p.bendPerSpeed * event.speed, p.bendMax);
+    t.bendVelocity += 2 * M_PI * p.bendFrequency * amplitude * direction;
+  } else {
+    Avatar& victim = avatars_[static_cast<std::size_t>(event.target)];
+    victim.part = event.part;
+    victim.push = std::min(p.reactionPerSpeed * event.speed, p.reactionMax) * direction;
+    victim.reactionStart = event.time;
+  }
+}
+
+void World::updatePoses(std::size_t begin, std::size_t end) {
+  const Skeleton& skeleton = *setup_.db->skeleton;
+  const double time = static_cast<double>(frame_) * model_.frameTime;
+  const double tau = setup_.params.reactionSeconds / 5;  // 5 tau: under 10 % left
+  for (std::size_t i = begin; i < end; ++i) {
+    Avatar& a = avatars_[i];
+    a.playback->next(a.pose);
+    const auto fk = a.playback->positions();
+    std::copy(fk.begin(), fk.end(), a.positions.begin());
+    const auto rot = a.playback->globalRotations();
+    std::copy(rot.begin(), rot.end(), a.globals.begin());
+    const double t = time - a.reactionStart;
+    if (t > 0 && t < 10 * tau) {
+      // Hit reaction (paper sec. 6.6): move the struck point by d(t) = push (t/tau) e^(1 - t/tau),
+      // rising smoothly to `push` at tau and fading, by rotating the joints above it in the
+      // spine chain (rotations only, so bone lengths never change).
+      const double shape = (t / tau) * std::exp(1 - t / tau);
+      const Eigen::Vector3d d = shape * a.push;
+      const int struck = a.part == BodyPart::Head    ? body_.headJoint
+                         : a.part == BodyPart::Chest ? body_.neckJoint
+                                                     : body_.chestJoint;
+      std::vector<int> chain;  // up to 3 joints below the struck one, above the pelvis
+      for (int j = skeleton.joint(static_cast<std::size_t>(struck)).parent;
+           j > 0 && j != body_.pelvisJoint && chain.size() < 3; j = skeleton.joint(static_cast<std::size_t>(j)).parent)
+        chain.push_back(j);
+      const double share = chain.empty() ? 0 : 1.0 / static_cast<double>(chain.size());
+      for (auto it = chain.rbegin(); it != chain.rend(); ++it) {  // from the lowest joint up
+        const auto joint = static_cast<std::size_t>(*it);
+        const auto target = static_cast<std::size_t>(struck);
+        const Eigen::Vector3d from = a.positions[target] - a.positions[joint];
+        const Eigen::Vector3d to = from + share * d;
+        if (from.norm() < 1e-6) continue;
+        const Eigen::Quaterniond turn = Eigen::Quaterniond::FromTwoVectors(from, to);
+        const int parent = skeleton.joint(joint).parent;
+        const Eigen::Quaterniond parentGlobal =
+            parent >= 0 ? a.globals[static_cast<std::size_t>(parent)] : Eigen::Quaterniond::Identity();
+        a.pose.rotations[joint] = (parentGlobal.conjugate() * turn * a.globals[joint]).normalized();
+        forwardKinematics(skeleton, a.pose.rotations, a.pose.translations, a.globals, a.positions);
+      }
+    }
+    if (setup_.record) a.recorded.push_back(a.pose);
+  }
+}
+
+void World::run(std::size_t frames) {
+  const std::size_t n = avatars_.size();
+  // Threads pay off only with many avatars (three barriers per frame).
+  const auto threads = static_cast<unsigned>(
+      std::clamp<std::size_t>(std::min<std::size_t>(setup_.threads, n / 64), 1, 64));
+  while (controllers_.size() < threads) controllers_.push_back(setup_.makeController());
+  std::vector<std::vector<HitEvent>> found(threads);
+  auto range = [&](unsigned w) { return std::pair<std::size_t, std::size_t>{n * w / threads, n * (w + 1) / threads}; };
+  auto finishFrame = [&] {
+    // Events in avatar order whatever the thread count; reactions after every check, so
+    // that no collision sees another's reaction within the frame.
+    for (auto& list : found) {
+      for (const HitEvent& e : list) {
+        events_.push_back(e);
+        react(e);
+      }
+      list.clear();
+    }
+    for (std::size_t i = 0; i < n; ++i) heads_[i] = bodyPoint(i, BodyTable::Head);
+  };
+  if (threads == 1) {
+    for (std::size_t f = 0; f < frames; ++f) {
+      ++frame_;
+      advance(0, n, *controllers_[0]);
+      collide(0, n, found[0]);
+      finishFrame();
+    }
+    return;
+  }
+  std::exception_ptr failure;
+  std::mutex failureMutex;
+  std::barrier sync(static_cast<std::ptrdiff_t>(threads));
+  auto work = [&](unsigned w) {
+    const auto [begin, end] = range(w);
+    for (std::size_t f = 0; f < frames; ++f) {
+      if (w == 0) ++frame_;
+      sync.arrive_and_wait();
+      try {
+        advance(begin, end, *controllers_[w]);
+      } catch (...) {
+        const std::lock_guard lock(failureMutex);
+        if (!failure) failure = std::current_exception();
+      }
+      sync.arrive_and_wait();
+      collide(begin, end, found[w]);
+      sync.arrive_and_wait();
+      if (w == 0) finishFrame();
+    }
+  };
+  std::vector<std::thread> pool;
+  for (unsigned w = 1; w < threads; ++w) pool.emplace_back(work, w);
+  work(0);
+  for (std::thread& t : pool) t.join();
+  if (failure) std::rethrow_exception(failure);
+}
+
+std::size_t World::decisions() const {
+  std::size_t total = 0;
+  for (const Avatar& a : avatars_) total += a.decisions;
+  return total;
+}
+
+void World::moveTarget(std::size_t i, const Eigen::Vector3d& base) {
+  if (i >= avatars_.size() || avatars_[i].partner >= 0)
+    throw Error(fmt::format("world: expected an avatar with a target of its own, found avatar {}", i));
+  targets_[i].base = base;
+  targets_[i].nextMove = std::numeric_limits<double>::infinity();
+}
+
+std::size_t World::avatarCount() const { return avatars_.size(); }
+GroundMotion World::avatarFrame(std::size_t i) const { return avatars_[i].now; }
+int World::partner(std::size_t i) const { return avatars_[i].partner; }
+const Target& World::target(std::size_t i) const { return targets_[i]; }
+const Pose& World::pose(std::size_t i) const { return avatars_[i].pose; }
+std::span<const Eigen::Vector3d> World::jointPositions(std::size_t i) const { return avatars_[i].positions; }
+const std::vector<Pose>& World::recorded(std::size_t i) const { return avatars_[i].recorded; }
+
+std::size_t World::bytesPerAvatar() const {
+  std::size_t bytes = sizeof(Avatar) + sizeof(Target) + sizeof(Eigen::Vector3d);
+  if (setup_.poses) {
+    const std::size_t joints = setup_.db->skeleton->jointCount();
+    // The playback's buffers (5 rotation arrays, 1 position array) and the avatar's pose,
+    // globals and positions.
+    bytes += sizeof(ActionPlayback) + joints * (5 * sizeof(Eigen::Quaterniond) + sizeof(Eigen::Vector3d));
+    bytes += joints * (2 * sizeof(Eigen::Quaterniond) + 2 * sizeof(Eigen::Vector3d));
+  }
+  return bytes;
+}
+
+}  // namespace mgrl

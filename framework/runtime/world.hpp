@@ -1,0 +1,184 @@
+#pragma once
+/// \file
+/// The runtime world (paper sec. 5, 6.6): avatars playing actions chosen by a controller,
+/// targets (static, moved by a user, or another avatar's head), collisions checked only at
+/// effective-punch frames, and reactions (a hit target bends and springs back; a hit
+/// avatar's struck body part gives way through a small inverse-kinematics adjustment).
+///
+/// Avatars move exactly by the model's ground motions (what the learners assumed), so the
+/// control-and-collision loop needs no joint angles: the upper body and the fists come
+/// from per-frame tables. Poses (blending, forward kinematics of every joint, reactions)
+/// are computed only when asked for, from the same avatar states, so asking for them never
+/// changes what happens.
+#include <cstdint>
+#include <functional>
+#include <memory>
+#include <span>
+#include <string>
+#include <vector>
+
+#include <Eigen/Geometry>
+
+#include "mgrl/core/config.hpp"
+#include "mgrl/runtime/controller.hpp"
+#include "mgrl/motion/motion_database.hpp"
+#include "mgrl/core/params.hpp"
+#include "mgrl/graph/playback.hpp"
+#include "mgrl/core/random.hpp"
+#include "mgrl/graph/state_action_model.hpp"
+
+namespace mgrl {
+
+/// The scenario's `world:` section (scenarios/README.md), validated by worldParamSpecs().
+struct WorldParams {
+  /// sparring: avatars in pairs, each using the other's head as its target (an odd one
+  /// out gets a target); targets: every avatar has its own target, moved to a new place
+  /// every `target_hold` seconds (a stand-in for the user's mouse).
+  std::string mode = "sparring";
+  Variety variety{3, 0.1};
+  double spacing = 4.0;           ///< m between the centres of neighbouring pairs
+  double startDistance = 1.6;     ///< m between sparring partners at the start
+  double targetHold = 3.0;        ///< s a target stays before it is moved (targets mode)
+  double targetHeight = -1;       ///< m; < 0: the effective hitting points' centroid height
+  double targetRadius = 0.12;     ///< m, target sphere
+  double fistRadius = 0.05;       ///< m, fist sphere
+  double headRadius = 0.11, chestRadius = 0.16, spineRadius = 0.14;  ///< m, body capsules
+  double bendPerSpeed = 0.03;     ///< m of target bend per m/s of fist speed
+  double bendMax = 0.35;          ///< m
+  double bendFrequency = 1.5;     ///< Hz, the target's spring
+  double bendDamping = 0.25;      ///< damping ratio of the target's spring
+  double reactionPerSpeed = 0.012;  ///< m of body-part displacement per m/s of fist speed
+  double reactionMax = 0.08;      ///< m
+  double reactionSeconds = 0.5;   ///< s until a reaction has (all but) faded
+};
+
+/// The parameters of `world:`, for validation and `mgrl list`.
+const ParamSpecs& worldParamSpecs();
+/// Reads a `world:` block (absent: defaults). Throws ConfigError.
+WorldParams readWorldParams(const ConfigNode& node);
+/// The block as JSON (for reports).
+nlohmann::json worldParamsJson(const WorldParams& params);
+
+/// Body parts the opponent's fists collide with (paper sec. 6.6), as capsules.
+enum class BodyPart : std::uint8_t { Spine = 0, Chest = 1, Head = 2 };
+const char* bodyPartName(BodyPart part);
+
+/// Per source frame, the upper-body points of the capsules in that frame's avatar frame:
+/// pelvis, chest, neck, head, head top (float, 15 per frame). Built once from the capture.
+struct BodyTable {
+  static constexpr int kPoints = 5;
+  enum Point { Pelvis = 0, Chest = 1, Neck = 2, Head = 3, HeadTop = 4 };
+  std::vector<float> points;  ///< frameCount * kPoints * 3
+  /// Joints of the chain used by reactions: the chest and neck joints found from the head
+  /// up to the pelvis.
+  int chestJoint = -1, neckJoint = -1, headJoint = -1, pelvisJoint = -1;
+
+  Eigen::Vector3d point(std::uint32_t frame, int which) const {
+    const float* p = points.data() + (static_cast<std::size_t>(frame) * kPoints + which) * 3;
+    return {p[0], p[1], p[2]};
+  }
+};
+
+/// Finds the chest and neck on the path from the head to the pelvis and tabulates the
+/// points. Throws mgrl::Error if the head is not below the pelvis in the hierarchy.
+BodyTable makeBodyTable(const MotionDatabase& db);
+
+/// One landed punch.
+struct HitEvent {
+  double time = 0;              ///< s since the start
+  std::uint32_t attacker = 0;   ///< avatar index
+  std::int32_t target = -1;     ///< avatar index, or -1 for the attacker's own target
+  std::uint8_t hand = 0;        ///< 0 left, 1 right
+  BodyPart part = BodyPart::Head;  ///< what was struck (Head for a target)
+  double speed = 0;             ///< fist speed, m/s
+  Eigen::Vector3d point = Eigen::Vector3d::Zero();  ///< fist tip, world (m)
+};
+
+/// A target sphere on a springy stand: base position plus a bend that a hit excites and a
+/// damped spring pulls back.
+struct Target {
+  Eigen::Vector3d base = Eigen::Vector3d::Zero();
+  Eigen::Vector3d bend = Eigen::Vector3d::Zero(), bendVelocity = Eigen::Vector3d::Zero();
+  double nextMove = 0;  ///< s, targets mode
+  Eigen::Vector3d centre() const { return base + bend; }
+};
+
+struct WorldSetup {
+  const StateActionModel* model = nullptr;
+  const BodyTable* body = nullptr;
+  /// Required for poses (forward kinematics, BVH); may be null otherwise.
+  const MotionDatabase* db = nullptr;
+  int blendFrames = 6;
+  WorldParams params;
+  /// Makes one controller per worker thread.
+  std::function<std::unique_ptr<Controller>()> makeController;
+  std::size_t avatars = 2;
+  std::uint64_t seed = 1;
+  unsigned threads = 1;
+  /// Compute every joint's pose each frame (blending, forward kinematics, reactions).
+  bool poses = false;
+  /// Keep every avatar's poses for export (implies poses).
+  bool record = false;
+};
+
+class World {
+ public:
+  /// Places the avatars (pairs on a square grid, partners facing each other) at random
+  /// states drawn from the seed. Throws mgrl::Error on an impossible setup.
+  explicit World(WorldSetup setup);
+  ~World();
+  World(const World&) = delete;
+  World& operator=(const World&) = delete;
+
+  /// Simulates `frames` more frames (one model frame each). Deterministic for a seed,
+  /// whatever the thread count.
+  void run(std::size_t frames);
+
+  std::size_t avatarCount() const;
+  std::size_t frame() const { return frame_; }
+  double time() const { return static_cast<double>(frame_) * model_.frameTime; }
+  const std::vector<HitEvent>& events() const { return events_; }
+  std::size_t decisions() const;
+  /// The avatar frame (ground position and facing) of avatar i now, in the world.
+  GroundMotion avatarFrame(std::size_t i) const;
+  /// The point avatar i aims at now (its partner's head or its target's centre).
+  Eigen::Vector3d aim(std::size_t i) const;
+  /// Avatar i's partner, or -1 if it has a target of its own.
+  int partner(std::size_t i) const;
+  const Target& target(std::size_t i) const;
+  /// The user drags avatar i's target (one without a partner) to `base` (world); automatic
+  /// moves stop for it. Throws mgrl::Error for an avatar with a partner.
+  void moveTarget(std::size_t i, const Eigen::Vector3d& base);
+  /// Avatar i's current pose (world), when poses are on.
+  const Pose& pose(std::size_t i) const;
+  /// World joint positions of avatar i's current pose, when poses are on.
+  std::span<const Eigen::Vector3d> jointPositions(std::size_t i) const;
+  /// Every recorded pose of avatar i (one per simulated frame), when recording.
+  const std::vector<Pose>& recorded(std::size_t i) const;
+  /// Bytes of per-avatar state (excluding recordings), for the memory report.
+  std::size_t bytesPerAvatar() const;
+
+ private:
+  struct Avatar;
+  struct Worker;
+  void startAvatar(std::size_t i);
+  void decide(std::size_t i, Controller& controller);
+  void advance(std::size_t begin, std::size_t end, Controller& controller);
+  void collide(std::size_t begin, std::size_t end, std::vector<HitEvent>& out);
+  void react(const HitEvent& event);
+  void updatePoses(std::size_t begin, std::size_t end);
+  Eigen::Vector3d bodyPoint(std::size_t i, int which) const;
+
+  WorldSetup setup_;
+  const StateActionModel& model_;
+  const BodyTable& body_;
+  std::vector<Avatar> avatars_;
+  std::vector<Target> targets_;
+  std::vector<Eigen::Vector3d> heads_;  ///< every avatar's head at the end of the last frame
+  std::vector<HitEvent> events_;
+  std::vector<std::unique_ptr<Controller>> controllers_;
+  std::size_t frame_ = 0;
+  double centroidHeight_ = 0;
+};
+
+}  // namespace mgrl

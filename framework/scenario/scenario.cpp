@@ -1,0 +1,292 @@
+#include "mgrl/scenario/scenario.hpp"
+
+#include <algorithm>
+#include <system_error>
+
+#include <fmt/format.h>
+#include <fmt/ranges.h>
+
+#include "mgrl/core/hash.hpp"
+#include "mgrl/motion/motion_io.hpp"
+#include "mgrl/runtime/world.hpp"
+
+namespace mgrl {
+
+namespace {
+
+// Bump when the graph construction changes what it computes, so old caches go stale.
+// 2: no effective punch while knocked down; the fist falls back to the wrist's end site.
+constexpr int kGraphAlgorithmVersion = 2;
+
+bool wildcardMatch(std::string_view pattern, std::string_view text) {
+  // Iterative '*' / '?' matching with backtracking to the last star.
+  std::size_t p = 0, t = 0, star = std::string_view::npos, mark = 0;
+  while (t < text.size()) {
+    if (p < pattern.size() && (pattern[p] == '?' || pattern[p] == text[t])) {
+      ++p;
+      ++t;
+    } else if (p < pattern.size() && pattern[p] == '*') {
+      star = p++;
+      mark = t;
+    } else if (star != std::string_view::npos) {
+      p = star + 1;
+      t = ++mark;
+    } else {
+      return false;
+    }
+  }
+  while (p < pattern.size() && pattern[p] == '*') ++p;
+  return p == pattern.size();
+}
+
+// A `files:` entry: a path, or a pattern with * and ? in its file name; relative entries
+// are looked up beside the scenario first, then in the data folder.
+std::vector<std::filesystem::path> resolveFiles(const ConfigNode& entry, const std::filesystem::path& scenarioDir,
+                                                const std::filesystem::path& dataDir) {
+  const std::filesystem::path rel = entry.asString();
+  if (rel.empty()) entry.fail("expected a file path, found an empty string");
+  std::vector<std::filesystem::path> bases;
+  if (rel.is_absolute()) bases.push_back("");
+  else bases = {scenarioDir, dataDir};
+  const std::string name = rel.filename().string();
+  const bool pattern = name.find_first_of("*?") != std::string::npos;
+  if (rel.parent_path().string().find_first_of("*?") != std::string::npos)
+    entry.fail(fmt::format("expected wildcards only in the file name, found '{}'", rel.string()));
+  for (const auto& base : bases) {
+    const std::filesystem::path full = base.empty() ? rel : base / rel;
+    std::error_code ec;
+    if (!pattern) {
+      if (std::filesystem::is_regular_file(full, ec)) return {full.lexically_normal()};
+      continue;
+    }
+    std::vector<std::filesystem::path> found;
+    const std::filesystem::path dir = full.parent_path();
+    if (!std::filesystem::is_directory(dir, ec)) continue;
+    for (const auto& item : std::filesystem::directory_iterator(dir, ec))
+      if (item.is_regular_file(ec) && wildcardMatch(name, item.path().filename().string()))
+        found.push_back(item.path().lexically_normal());
+    if (!found.empty()) {
+      std::sort(found.begin(), found.end());
+      return found;
+    }
+  }
+  entry.fail(fmt::format("expected a motion file or pattern matching files, found none for '{}' (looked in {} and "
+                         "the data folder {})",
+                         rel.string(), scenarioDir.string(), dataDir.string()));
+}
+
+MotionSpec readMotion(const ConfigNode& motion, const std::filesystem::path& scenarioDir,
+                      const std::filesystem::path& dataDir) {
+  motion.allowOnly({"files", "fps", "units", "asf", "roles", "annotation"});
+  MotionSpec spec;
+  if (!motion.has("files")) motion.fail("expected a 'files' list, found none");
+  const ConfigNode files = motion.child("files");
+  for (const ConfigNode& entry : files.elements())
+    for (auto& file : resolveFiles(entry, scenarioDir, dataDir)) spec.files.push_back(std::move(file));
+  if (spec.files.empty()) files.fail("expected at least one motion file, found an empty list");
+  spec.fps = motion.number("fps", 30, 1, 1000);
+  if (motion.has("units")) {
+    const ConfigNode units = motion.child("units");
+    spec.units = units.withLocation([&] { return parseLengthUnit(units.asString()); });
+  }
+  if (motion.has("asf")) {
+    const ConfigNode asf = motion.child("asf");
+    std::filesystem::path p = asf.asString();
+    if (p.is_relative()) p = std::filesystem::exists(scenarioDir / p) ? scenarioDir / p : dataDir / p;
+    spec.asf = p;
+  }
+  if (motion.has("roles")) {
+    const ConfigNode roles = motion.child("roles");
+    const std::vector<std::string> known = roleNames();
+    for (const std::string& key : roles.keys()) {
+      if (std::find(known.begin(), known.end(), key) == known.end())
+        roles.child(key).fail(fmt::format("unknown role (expected one of: {})", fmt::join(known, ", ")));
+      spec.roles[key] = roles.child(key).asString();
+    }
+  }
+  if (motion.has("annotation")) {
+    const ConfigNode a = motion.child("annotation");
+    a.allowOnly({"contact_height_enter_m", "contact_height_exit_m", "contact_speed_enter_mps",
+                 "contact_speed_exit_mps", "punch_min_speed_mps", "punch_min_alignment", "punch_max_speed_mps",
+                 "knockdown_head_ratio"});
+    AnnotationParams& p = spec.annotation;
+    p.contactHeightEnter_m = a.number("contact_height_enter_m", p.contactHeightEnter_m, 0, 1);
+    p.contactHeightExit_m = a.number("contact_height_exit_m", p.contactHeightExit_m, 0, 1);
+    p.contactSpeedEnter_mps = a.number("contact_speed_enter_mps", p.contactSpeedEnter_mps, 0, 10);
+    p.contactSpeedExit_mps = a.number("contact_speed_exit_mps", p.contactSpeedExit_mps, 0, 10);
+    p.punchMinSpeed_mps = a.number("punch_min_speed_mps", p.punchMinSpeed_mps, 0, 100);
+    p.punchMinAlignment = a.number("punch_min_alignment", p.punchMinAlignment, -1, 1);
+    p.punchMaxSpeed_mps = a.number("punch_max_speed_mps", p.punchMaxSpeed_mps, 0, 1000);
+    p.knockdownHeadRatio = a.number("knockdown_head_ratio", p.knockdownHeadRatio, 0, 0.99);
+    a.withLocation([&] { p.validate(); });
+  }
+  return spec;
+}
+
+GraphParams readGraph(const ConfigNode& graph) {
+  graph.allowOnly({"threshold", "velocity_weight", "root_height_weight", "contact_event", "local_minimum",
+                   "blend_frames", "min_states", "joint_weights", "threads"});
+  GraphParams p;
+  p.threshold = graph.number("threshold", p.threshold, 1e-6, 10);
+  p.velocityWeight = graph.number("velocity_weight", p.velocityWeight, 0, 10);
+  p.rootHeightWeight = graph.number("root_height_weight", p.rootHeightWeight, 0, 100);
+  if (graph.has("contact_event")) {
+    const ConfigNode event = graph.child("contact_event");
+    p.contactEvent = event.withLocation([&] { return parseContactEvent(event.asString()); });
+  }
+  p.localMinimum = graph.boolean("local_minimum", p.localMinimum);
+  p.blendFrames = static_cast<int>(graph.integer("blend_frames", p.blendFrames, 0, 120));
+  p.minStates = static_cast<int>(graph.integer("min_states", p.minStates, 1, 1000000));
+  p.threads = static_cast<unsigned>(graph.integer("threads", 0, 0, 256));
+  if (graph.has("joint_weights")) {
+    const ConfigNode weights = graph.child("joint_weights");
+    for (const std::string& joint : weights.keys()) p.jointWeights[joint] = weights.child(joint).asNumber(0, 100);
+  }
+  return p;
+}
+
+std::vector<BehaviorSpec> readBehaviors(const ConfigNode& root) {
+  std::vector<BehaviorSpec> result;
+  if (!root.has("behaviors")) return result;
+  const ConfigNode behaviors = root.section("behaviors");
+  for (const std::string& name : behaviors.keys()) {
+    const ConfigNode b = behaviors.child(name);
+    if (name.empty() || name.find_first_not_of("abcdefghijklmnopqrstuvwxyzABCDEFGHIJKLMNOPQRSTUVWXYZ0123456789_-") !=
+                            std::string::npos)
+      b.fail("expected a behaviour name of letters, digits, '_' and '-' (it names files of the policy bundle)");
+    if (!b.isMap()) b.fail("expected a map with discretizer, reward and learner sections");
+    b.allowOnly({"description", "weight", "activation", "discretizer", "reward", "environment", "learner"});
+    BehaviorSpec spec{name,
+                      b.string("description", ""),
+                      b.number("weight", 1.0, -1e6, 1e6),
+                      Activation::Always,
+                      b,
+                      b.section("discretizer"),
+                      b.section("reward"),
+                      b.child("environment"),
+                      b.section("learner")};
+    if (b.has("activation")) {
+      const ConfigNode activation = b.child("activation");
+      const std::string text = activation.asString();
+      spec.activation = activation.withLocation([&] { return parseActivation(text); });
+    }
+    if (!spec.environment.isNull() && !spec.environment.isMap())
+      spec.environment.fail("expected a map with 'type: static_target' or another environment model");
+    result.push_back(std::move(spec));
+  }
+  return result;
+}
+
+// `--set a.b.c=value`: walks (creating) maps down the dotted path and sets a scalar.
+void applyOverride(YAML::Node root, const std::string& text, const std::string& source) {
+  const auto eq = text.find('=');
+  if (eq == std::string::npos || eq == 0)
+    throw ConfigError(fmt::format("{}: --set {}: expected KEY=VALUE with a dotted KEY such as "
+                                  "behaviors.hit.learner.budget",
+                                  source, quoteToken(text)));
+  const std::string key = text.substr(0, eq), value = text.substr(eq + 1);
+  std::vector<std::string> parts;
+  for (std::size_t begin = 0;;) {
+    const std::size_t dot = key.find('.', begin);
+    parts.push_back(key.substr(begin, dot == std::string::npos ? std::string::npos : dot - begin));
+    if (dot == std::string::npos) break;
+    begin = dot + 1;
+  }
+  std::vector<YAML::Node> chain{root};
+  for (std::size_t i = 0; i < parts.size(); ++i) {
+    if (parts[i].empty())
+      throw ConfigError(fmt::format("{}: --set {}: expected a dotted key without empty parts", source, key));
+    YAML::Node& here = chain.back();
+    if (here.IsDefined() && !here.IsMap() && !here.IsNull())
+      throw ConfigError(fmt::format("{}: --set {}: expected '{}' to be a map, found a value", source, key,
+                                    fmt::join(parts.begin(), parts.begin() + static_cast<long>(i), ".")));
+    if (i + 1 == parts.size()) {
+      // A plugin block switched to another type starts afresh: the file's other keys
+      // were that type's parameters.
+      if (parts[i] == "type" && here.IsMap() && here["type"].IsScalar() && here["type"].Scalar() != value)
+        here = YAML::Node(YAML::NodeType::Map);
+      here[parts[i]] = value;
+    } else {
+      chain.push_back(here[parts[i]]);
+    }
+  }
+}
+
+}  // namespace
+
+Scenario parseScenario(std::string_view text, const std::filesystem::path& source,
+                       const std::filesystem::path& dataDir, const std::vector<std::string>& overrides) {
+  ConfigNode root = ConfigNode::parse(text, source.string());
+  if (!root.isMap()) root.fail("expected a scenario (a map with 'motion' and 'graph' sections), found something else");
+  // Type switches first: they reset their block, which must not swallow other overrides.
+  auto switchesType = [](const std::string& o) {
+    const std::string key = o.substr(0, o.find('='));
+    return key == "type" || (key.size() > 5 && key.compare(key.size() - 5, 5, ".type") == 0);
+  };
+  for (const std::string& o : overrides)
+    if (switchesType(o)) applyOverride(root.yaml(), o, source.string());
+  for (const std::string& o : overrides)
+    if (!switchesType(o)) applyOverride(root.yaml(), o, source.string());
+  for (const std::string& o : overrides) root.noteOverride(o.substr(0, o.find('=')), "--set " + o);
+  root.allowOnly({"name", "description", "motion", "graph", "behaviors", "world"});
+  // The world section is read where a world is made (readWorldParams(worldNode(s))); it
+  // is checked here so that a mistake in it fails every command at once.
+  if (root.has("world")) readWorldParams(root.child("world"));
+  const std::filesystem::path dir = source.parent_path().empty() ? std::filesystem::path(".") : source.parent_path();
+  Scenario s{source,
+             root.string("name", source.stem().string()),
+             root.string("description", ""),
+             readMotion(root.section("motion"), dir, dataDir),
+             readGraph(root.section("graph")),
+             readBehaviors(root),
+             root};
+  return s;
+}
+
+Scenario loadScenario(const std::filesystem::path& path, const std::filesystem::path& dataDir,
+                      const std::vector<std::string>& overrides) {
+  return parseScenario(readFile(path), path, dataDir, overrides);
+}
+
+std::string graphCacheKey(const Scenario& s) {
+  Hasher h;
+  h.update(std::string_view("mgrl.graph"));
+  h.update(std::int64_t{kGraphAlgorithmVersion});
+  const MotionSpec& m = s.motion;
+  h.update(std::int64_t(m.files.size()));
+  for (const auto& file : m.files) {
+    h.update(std::string_view(file.filename().string()));
+    h.update(std::string_view(readFile(file)));
+  }
+  if (!m.asf.empty()) h.update(std::string_view(readFile(m.asf)));
+  else {
+    // AMC files take <subject>.asf from beside them: hash those too.
+    for (const auto& file : m.files)
+      if (file.extension() == ".amc" || file.extension() == ".AMC") h.update(std::string_view(readFile(defaultAsfFor(file))));
+  }
+  h.update(m.fps);
+  h.update(std::int64_t(m.units));
+  h.update(std::int64_t(m.roles.size()));
+  for (const auto& [role, joint] : m.roles) {
+    h.update(std::string_view(role));
+    h.update(std::string_view(joint));
+  }
+  const AnnotationParams& a = m.annotation;
+  for (double v : {a.contactHeightEnter_m, a.contactHeightExit_m, a.contactSpeedEnter_mps, a.contactSpeedExit_mps,
+                   a.punchMinSpeed_mps, a.punchMinAlignment, a.punchMaxSpeed_mps, a.knockdownHeadRatio})
+    h.update(v);
+  const GraphParams& g = s.graph;
+  for (double v : {g.threshold, g.velocityWeight, g.rootHeightWeight}) h.update(v);
+  h.update(std::int64_t(g.contactEvent));
+  h.update(std::int64_t(g.localMinimum));
+  h.update(std::int64_t(g.blendFrames));
+  h.update(std::int64_t(g.minStates));
+  h.update(std::int64_t(g.jointWeights.size()));
+  for (const auto& [joint, weight] : g.jointWeights) {
+    h.update(std::string_view(joint));
+    h.update(weight);
+  }
+  return h.hex();
+}
+
+}  // namespace mgrl

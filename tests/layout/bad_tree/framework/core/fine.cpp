@@ -1,0 +1,2 @@
+#include "mgrl/core/error.hpp"
+// Fine: core includes core.

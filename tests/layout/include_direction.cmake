@@ -1,0 +1,72 @@
+# The include-direction rule of framework/README.md, checked on the sources: a file under
+# framework/<stage>/ may include "mgrl/<other>/..." only for a stage at or below its own,
+# and a plug-in folder (discretizers, rewards, environments, learners) only the core and
+# learning stages (the seam headers). Run as
+#   cmake -DROOT=<tree> -P include_direction.cmake
+# and it prints every violation as `file:line: ... includes mgrl/<stage>/...` and fails.
+# tests/layout/bad_tree/ is a small tree that breaks the rule, so the check can be seen
+# to fail (ctest entry layout_include_direction_catches).
+cmake_minimum_required(VERSION 3.22)
+if(NOT DEFINED ROOT)
+  message(FATAL_ERROR "include_direction.cmake: expected -DROOT=<source tree>, found none")
+endif()
+
+get_filename_component(ROOT "${ROOT}" ABSOLUTE)
+set(stages core motion graph learning runtime scenario)
+set(plugin_folders discretizers rewards environments learners)
+set(plugin_allowed core learning)
+
+set(violations "")
+set(checked 0)
+
+# check(<file> <allowed stages...>)
+function(check_file file)
+  set(allowed ${ARGN})
+  list(JOIN allowed "," allowed_text)
+  file(STRINGS "${file}" lines)
+  set(n 0)
+  foreach(line IN LISTS lines)
+    math(EXPR n "${n} + 1")
+    if(line MATCHES "^[ \t]*#[ \t]*include[ \t]+\"mgrl/([a-z_]+)/")
+      set(stage "${CMAKE_MATCH_1}")
+      list(FIND allowed "${stage}" found)
+      if(found EQUAL -1)
+        file(RELATIVE_PATH rel "${ROOT}" "${file}")
+        string(STRIP "${line}" text)
+        list(APPEND violations "${rel}:${n}: ${text}: expected only mgrl/{${allowed_text}}/ here")
+        set(violations "${violations}" PARENT_SCOPE)
+      endif()
+    elseif(line MATCHES "^[ \t]*#[ \t]*include[ \t]+\"mgrl/[a-z_]+\\.hpp\"")
+      file(RELATIVE_PATH rel "${ROOT}" "${file}")
+      list(APPEND violations "${rel}:${n}: a header outside the stage folders (expected mgrl/<stage>/name.hpp)")
+      set(violations "${violations}" PARENT_SCOPE)
+    endif()
+  endforeach()
+endfunction()
+
+set(below "")
+foreach(stage IN LISTS stages)
+  list(APPEND below "${stage}")
+  file(GLOB sources "${ROOT}/framework/${stage}/*.hpp" "${ROOT}/framework/${stage}/*.cpp")
+  foreach(file IN LISTS sources)
+    check_file("${file}" ${below})
+    math(EXPR checked "${checked} + 1")
+  endforeach()
+endforeach()
+foreach(folder IN LISTS plugin_folders)
+  file(GLOB sources "${ROOT}/${folder}/*.hpp" "${ROOT}/${folder}/*.cpp")
+  foreach(file IN LISTS sources)
+    check_file("${file}" ${plugin_allowed})
+    math(EXPR checked "${checked} + 1")
+  endforeach()
+endforeach()
+
+if(checked EQUAL 0)
+  message(FATAL_ERROR "include_direction: expected sources under ${ROOT}/framework/<stage>/, found none")
+endif()
+list(LENGTH violations count)
+if(count GREATER 0)
+  list(JOIN violations "\n" text)
+  message(FATAL_ERROR "include_direction: ${count} includes reach up a stage:\n${text}")
+endif()
+message(STATUS "include_direction: ${checked} files, every include goes down the stages")
