@@ -10,7 +10,7 @@ fail() {
 expect() {  # FILE REGEX WHAT
   grep -Eq "$2" "$1" || fail "expected $3 in $(basename "$1"), found none (regex: $2)"
 }
-expect "$stdout" '^13_17_boxing\.bvh' "the inspect report of 13_17_boxing.bvh"
+expect "$stdout" '^[^ ]*13_17_boxing\.bvh$' "the inspect report of 13_17_boxing.bvh"
 expect "$stdout" '^states +[0-9]+' "the graph's state count"
 expect "$stdout" '^policy bundle: ' "the trained policy bundle's path"
 expect "$stdout" 'success rate [0-9.]+ %' "the evaluation's success rate"
