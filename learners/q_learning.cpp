@@ -5,12 +5,17 @@
 // where e'_v is v moved along by the action (the environment model) and Q(e'_v, .) is
 // interpolated from e'_v's cell (0 when e'_v leaves the grid). Restart when the target
 // itself leaves the grid. alpha falls linearly from 1 over the budget of actions.
+#include <algorithm>
+#include <array>
 #include <chrono>
+#include <cmath>
+#include <limits>
 #include <thread>
 
 #include <fmt/format.h>
 
 #include "learners.hpp"
+#include "mgrl/core/bundle.hpp"
 #include "mgrl/core/error.hpp"
 #include "mgrl/core/random.hpp"
 
@@ -56,17 +61,67 @@ nlohmann::json toJson(const Walk& w) {
           {"target", {w.target.x(), w.target.y(), w.target.z()}}, {"rng", rng}};
 }
 
-Walk walkFromJson(const nlohmann::json& j, std::size_t states) {
-  Walk w;
-  std::array<std::uint64_t, 4> s{};
-  for (int i = 0; i < 4; ++i) s[i] = j.at("rng").at(i).get<std::uint64_t>();
-  w.rng.setState(s);
-  w.updates = j.at("updates").get<std::uint64_t>();
-  w.restarts = j.at("restarts").get<std::uint64_t>();
-  w.state = j.at("state").get<std::uint32_t>();
-  if (w.state >= states) throw Error(fmt::format("expected a state below {}, found {}", states, w.state));
-  w.target = {j.at("target").at(0).get<double>(), j.at("target").at(1).get<double>(), j.at("target").at(2).get<double>()};
-  return w;
+// What a checkpoint holds beside the table. A resumed run trusts all of it, so every
+// member is read strictly: a bad one rejects the checkpoint (see StateCheck).
+struct Saved {
+  Walk walk;
+  double seconds = 0;
+  std::vector<CurvePoint> curve;
+};
+
+// The inverse of the state train() saves, read through `r` (which names the file) at path
+// "state". Throws mgrl::Error naming the member, what was expected and what was found.
+Saved readSaved(const nlohmann::json& state, const ManifestReader& r, std::size_t states, std::uint64_t budget,
+                std::uint64_t curvePoints) {
+  using nlohmann::json;
+  if (!state.is_object()) r.fail("state", "an object", state);
+  for (const auto& item : state.items())
+    if (item.key() != "updates" && item.key() != "walk" && item.key() != "seconds" && item.key() != "curve")
+      r.fail("state", "only the keys updates, walk, seconds, curve", json(item.key()));
+  Saved saved;
+  Walk& w = saved.walk;
+  const json& walk = r.object(state, "state", "walk", {"updates", "restarts", "state", "target", "rng"});
+  w.updates = r.unsignedInteger(walk, "state.walk", "updates", budget);
+  if (r.unsignedInteger(state, "state", "updates", budget) != w.updates)
+    r.fail("state.updates", fmt::format("{}, as state.walk.updates", w.updates), state["updates"]);
+  w.restarts = r.unsignedInteger(walk, "state.walk", "restarts", std::numeric_limits<std::uint64_t>::max());
+  w.state = static_cast<std::uint32_t>(r.unsignedInteger(walk, "state.walk", "state", states - 1));
+  const json& target = r.member(walk, "state.walk", "target");
+  if (!target.is_array() || target.size() != 3 ||
+      !std::all_of(target.begin(), target.end(), [](const json& v) { return v.is_number() && std::isfinite(v.get<double>()); }))
+    r.fail("state.walk.target", "3 finite numbers", target);
+  w.target = {target[0].get<double>(), target[1].get<double>(), target[2].get<double>()};
+  const json& rng = r.member(walk, "state.walk", "rng");
+  if (!rng.is_array() || rng.size() != 4 ||
+      !std::all_of(rng.begin(), rng.end(), [](const json& v) { return v.is_number_unsigned(); }))
+    r.fail("state.walk.rng", "4 integers in [0, 18446744073709551615]", rng);
+  std::array<std::uint64_t, 4> words{};
+  for (int i = 0; i < 4; ++i) words[i] = rng[i].get<std::uint64_t>();
+  // xoshiro's one fixed point: it would return 0 forever.
+  if (words == std::array<std::uint64_t, 4>{}) r.fail("state.walk.rng", "a generator state other than all zeros", rng);
+  w.rng.setState(words);
+
+  saved.seconds = r.number(state, "state", "seconds");
+  if (!(saved.seconds >= 0) || !std::isfinite(saved.seconds))
+    r.fail("state.seconds", "a finite number of seconds of at least 0", state["seconds"]);
+  const json& curve = r.member(state, "state", "curve");
+  if (!curve.is_array() || curve.size() > curvePoints)
+    r.fail("state.curve", fmt::format("an array of at most {} points", curvePoints), curve);
+  for (std::size_t i = 0; i < curve.size(); ++i) {
+    const json& p = curve[i];
+    const std::string path = fmt::format("state.curve[{}]", i);
+    const std::uint64_t after = saved.curve.empty() ? 0 : saved.curve.back().updates;
+    if (!p.is_array() || p.size() != 4 || !p[0].is_number_unsigned() ||
+        !std::all_of(p.begin() + 1, p.end(), [](const json& v) { return v.is_number() && std::isfinite(v.get<double>()); }))
+      r.fail(path, "[updates, seconds, residual, mean residual], all finite numbers", p);
+    const std::uint64_t updates = p[0].get<std::uint64_t>();
+    if (updates <= after || updates > w.updates)
+      r.fail(path + "[0]", fmt::format("an update count in [{}, {}] (after the previous point, not past the walk)",
+                                       after + 1, w.updates),
+             p[0]);
+    saved.curve.push_back({updates, p[1].get<double>(), p[2].get<double>(), p[3].get<double>()});
+  }
+  return saved;
 }
 
 TrainResult QLearning::train(const TrainContext& context) const {
@@ -92,12 +147,16 @@ TrainResult QLearning::train(const TrainContext& context) const {
 
   bool resumed = false;
   if (context.checkpointer) {
-    if (std::optional<nlohmann::json> saved = context.checkpointer->load(q)) {
-      walk = walkFromJson(saved->at("walk"), m.stateCount());
-      secondsBefore = saved->at("seconds").get<double>();
-      for (const auto& point : saved->at("curve"))
-        result.curve.push_back({point.at(0).get<std::uint64_t>(), point.at(1).get<double>(),
-                                point.at(2).get<double>(), point.at(3).get<double>()});
+    // The checkpointer runs this before trusting the checkpoint: a state that fails it is
+    // reported and ignored there, and the table left as it is (all zeros).
+    Saved saved;
+    const StateCheck check = [&](const nlohmann::json& state, const ManifestReader& reader) {
+      saved = readSaved(state, reader, m.stateCount(), total, curvePoints_);
+    };
+    if (context.checkpointer->loadChecked(q, check)) {
+      walk = saved.walk;
+      secondsBefore = saved.seconds;
+      result.curve = std::move(saved.curve);
       resumed = true;
     }
   }

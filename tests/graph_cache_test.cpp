@@ -6,6 +6,7 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <cctype>
 #include <cmath>
 #include <cstdint>
 #include <filesystem>
@@ -17,10 +18,13 @@
 #include <catch2/catch.hpp>
 #include <fmt/format.h>
 
+#include "graph_command.hpp"
+#include "mgrl/core/bundle.hpp"
 #include "mgrl/core/error.hpp"
 #include "mgrl/graph/graph_cache.hpp"
 #include "mgrl/core/hash.hpp"
 #include "mgrl/motion/motion_io.hpp"
+#include "mgrl/scenario/scenario.hpp"
 #include "mgrl/core/npy.hpp"
 #include "test_support.hpp"
 
@@ -415,11 +419,102 @@ TEST_CASE("a bundle of another format version is stale", "[graph_cache]") {
   const fs::path bundle = tmp.path / "graph";
   mgrl::saveGraphBundle(bundle, tinyModel(), provenance("k1"));
   json manifest = json::parse(mgrl::readFile(bundle / "manifest.json"));
-  manifest["version"] = 2;
+  manifest["version"] = mgrl::kGraphFormatVersion + 1;
   writeBytes(bundle / "manifest.json", manifest.dump());
   const GraphBundleLoad load = mgrl::loadGraphBundle(bundle, "k1");
   REQUIRE(load.status == GraphBundleLoad::Stale);
-  REQUIRE_THAT(load.reason, Contains("expected format 'mgrl.graph' version 1, found format 'mgrl.graph' version '2'"));
+  REQUIRE_THAT(load.reason, Contains(fmt::format("expected format 'mgrl.graph' version {}, found format 'mgrl.graph' "
+                                                 "version '{}'",
+                                                 mgrl::kGraphFormatVersion, mgrl::kGraphFormatVersion + 1)));
+}
+
+// Issue 19, defect 3: the scalars were covered by no hash, so one flipped digit of
+// frame_time was reused silently and changed every figure computed from the graph.
+TEST_CASE("a bundle whose manifest has one changed digit is damaged", "[graph_cache]") {
+  mgrl::test::TempDir tmp("graph-cache-test");
+  const fs::path bundle = tmp.path / "graph";
+  mgrl::saveGraphBundle(bundle, tinyModel(), provenance("k1"));
+  const std::string text = mgrl::readFile(bundle / "manifest.json");
+  // The text after `"<member>": `, in the manifest as written.
+  std::string member;
+  SECTION("frame_time") { member = "\"frame_time\": "; }
+  SECTION("centroid") { member = "\"centroid\": [\n"; }
+  SECTION("max_hit_speed_mps") { member = "\"max_hit_speed_mps\": "; }
+  SECTION("frames_total") { member = "\"frames_total\": "; }
+  SECTION("a provenance value") { member = "\"seed\": "; }
+  CAPTURE(member);
+  const std::size_t at = text.find(member);
+  REQUIRE(at != std::string::npos);
+  // The last digit of the (first) number: still a valid manifest, only a different value.
+  std::size_t digit = text.find_first_of("0123456789", at + member.size());
+  while (digit + 1 < text.size() && (std::isdigit(static_cast<unsigned char>(text[digit + 1])) || text[digit + 1] == '.'))
+    ++digit;
+  REQUIRE(std::isdigit(static_cast<unsigned char>(text[digit])));
+  std::string changed = text;
+  changed[digit] = changed[digit] == '7' ? '8' : '7';
+  writeBytes(bundle / "manifest.json", changed);
+  REQUIRE_NOTHROW(json::parse(changed));
+  requireDamaged(bundle, "manifest.json: expected its members to hash to '");
+  requireDamaged(bundle, "(the file was altered)");
+}
+
+// The same through the graph step every command uses: said once, rebuilt, saved again.
+TEST_CASE("a cached graph whose frame time lost a digit is rebuilt with one message", "[graph_cache][data]") {
+  mgrl::test::TempDir tmp("graph-cache-test");
+  const mgrl::Scenario scenario = mgrl::parseScenario("name: mini\nmotion:\n  files: [cmu/bvh/13_17_boxing.bvh]\n"
+                                                      "  fps: 30\ngraph:\n  threshold: 0.4\n",
+                                                      fs::path(MGRL_SOURCE_DIR) / "scenarios" / "test.yaml",
+                                                      mgrl::test::mocap());
+  std::vector<std::string> log;
+  mgrl::app::GraphOptions options;
+  options.cacheDir = tmp.path;
+  options.log = [&](const std::string& line) { log.push_back(line); };
+  const mgrl::app::GraphResult first = mgrl::app::obtainGraph(scenario, options);
+  REQUIRE_FALSE(first.fromCache);
+  const fs::path manifestPath = first.bundle / "manifest.json";
+  std::string text = mgrl::readFile(manifestPath);
+  const std::size_t at = text.find("\"frame_time\": 0.0");
+  REQUIRE(at != std::string::npos);
+  text[at + 17] = text[at + 17] == '3' ? '4' : '3';  // one digit: 1/30 s would read as 1/23 s
+  writeBytes(manifestPath, text);
+
+  log.clear();
+  const mgrl::app::GraphResult second = mgrl::app::obtainGraph(scenario, options);
+  CHECK_FALSE(second.fromCache);
+  CHECK(second.model.frameTime == first.model.frameTime);
+  const auto damaged = std::count_if(log.begin(), log.end(), [&](const std::string& line) {
+    return line.rfind("graph: cache is damaged, rebuilding (" + manifestPath.string() +
+                          ": expected its members to hash to '",
+                      0) == 0;
+  });
+  CAPTURE(log);
+  CHECK(damaged == 1);
+  CHECK(mgrl::app::obtainGraph(scenario, options).fromCache);
+}
+
+TEST_CASE("a graph manifest's hash covers every member but itself", "[graph_cache]") {
+  mgrl::test::TempDir tmp("graph-cache-test");
+  const fs::path bundle = tmp.path / "graph";
+  mgrl::saveGraphBundle(bundle, tinyModel(), provenance("k1"));
+  json manifest = json::parse(mgrl::readFile(bundle / "manifest.json"));
+  REQUIRE(manifest["hash"].is_string());
+  REQUIRE(manifest["hash"] == mgrl::manifestHash(manifest));
+  json other = manifest;
+  other["scalars"]["frame_time"] = manifest["scalars"]["frame_time"].get<double>() * (1 + 1e-15);
+  REQUIRE(mgrl::manifestHash(other) != mgrl::manifestHash(manifest));
+  // The text's layout does not matter, only the values.
+  writeBytes(bundle / "manifest.json", manifest.dump());
+  REQUIRE(mgrl::loadGraphBundle(bundle, "k1").status == GraphBundleLoad::Ok);
+  SECTION("a manifest without its hash is damaged") {
+    manifest.erase("hash");
+    writeBytes(bundle / "manifest.json", manifest.dump());
+    requireDamaged(bundle, "manifest.json: manifest: expected the key 'hash', found none");
+  }
+  SECTION("a hash of another type is damaged") {
+    manifest["hash"] = 12;
+    writeBytes(bundle / "manifest.json", manifest.dump());
+    requireDamaged(bundle, "manifest.json: hash: expected a string, found '12'");
+  }
 }
 
 TEST_CASE("a bundle with a flipped byte is damaged", "[graph_cache]") {
@@ -472,6 +567,8 @@ TEST_CASE("a bundle whose manifest lacks or mistypes a member is damaged", "[gra
   const json good = json::parse(mgrl::readFile(bundle / "manifest.json"));
   json manifest = good;
   std::string reason;
+  // Each edit is sealed with a fresh hash, as a careful hand edit would be, so the member
+  // checks behind the hash are exercised too.
   SECTION("no scalars") {
     manifest.erase("scalars");
     reason = "manifest: expected the key 'scalars', found none";
@@ -504,6 +601,11 @@ TEST_CASE("a bundle whose manifest lacks or mistypes a member is damaged", "[gra
     manifest["arrays"]["frame_root"]["shape"] = json::array({54});
     reason = "frame_root.npy: expected shape (54,) as in manifest.json, found (18, 3)";
   }
+  SECTION("a frame time of 0") {
+    manifest["scalars"]["frame_time"] = 0.0;
+    reason = "frameTime: expected a finite number of seconds above 0, found 0";
+  }
+  manifest["hash"] = mgrl::manifestHash(manifest);
   writeBytes(bundle / "manifest.json", manifest.dump());
   requireDamaged(bundle, reason);
 }
@@ -519,6 +621,7 @@ TEST_CASE("a bundle whose arrays break the model is damaged even with correct ha
     writeBytes(bundle / (name + ".npy"), bytes);
     manifest["arrays"][name]["bytes"] = bytes.size();
     manifest["arrays"][name]["hash"] = mgrl::hexDigest(mgrl::hashBytes(bytes));
+    manifest["hash"] = mgrl::manifestHash(manifest);
     writeBytes(bundle / "manifest.json", manifest.dump());
   };
 
@@ -537,6 +640,7 @@ TEST_CASE("a bundle whose arrays break the model is damaged even with correct ha
   SECTION("a 1-D file where rows of 3 belong") {
     rewrite("frame_root", mgrl::npyEncode<double>(model.frameRoot, {model.frameRoot.size()}));
     manifest["arrays"]["frame_root"]["shape"] = json::array({model.frameRoot.size()});
+    manifest["hash"] = mgrl::manifestHash(manifest);
     writeBytes(bundle / "manifest.json", manifest.dump());
     requireDamaged(bundle, "frame_root.npy: expected shape (N, 3), found (54,)");
   }

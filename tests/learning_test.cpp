@@ -3,13 +3,18 @@
 #include <catch2/catch.hpp>
 
 #include <cmath>
+#include <filesystem>
 
 #include "app/plugins.hpp"
+#include "mgrl/core/bundle.hpp"
+#include "mgrl/core/files.hpp"
+#include "mgrl/learning/checkpoint_store.hpp"
 #include "mgrl/learning/behavior.hpp"
 #include "mgrl/runtime/controller.hpp"
 #include "mgrl/graph/motion_graph.hpp"
 #include "mgrl/learning/problem.hpp"
 #include "mgrl/core/random.hpp"
+#include "test_support.hpp"
 
 namespace mgrl {
 namespace {
@@ -303,6 +308,7 @@ class MemoryCheckpointer final : public Checkpointer {
     return state_;
   }
   int saves = 0;
+  nlohmann::json& state() { return state_; }
 
  private:
   int crashAfter_;
@@ -351,6 +357,163 @@ TEST_CASE("Q-learning is deterministic and a resumed run ends with the uninterru
   REQUIRE(finished.table == whole.table);
   REQUIRE(finished.curve.size() == whole.curve.size());
   REQUIRE(finished.curve.back().residual == whole.curve.back().residual);
+}
+
+// Issue 19, defect 4: state.json was trusted as it stood. One changed digit of the update
+// count or of the generator resumed a different run without a word, and a missing,
+// mistyped or out-of-range member aborted training. Now the checkpoint's hash and the
+// learner's own reading of its state both reject it, the run says so and starts over.
+TEST_CASE("Q-learning reports a damaged or invalid checkpoint, ignores it and trains from the start",
+          "[learning][checkpoint]") {
+  using nlohmann::json;
+  const StateActionModel m = ring();
+  const auto grid = makeGrid("{type: polar2d, radius: 2, rings: 5, sectors: 13}", m);
+  const auto reward = app::plugins().rewards.create(yaml("{type: approach}"));
+  const StaticTarget environment;
+  const Problem problem{m, *grid, *reward, environment};
+  const GridModel g = GridModel::build(problem, 1);
+  const std::string learner = "{type: q_learning, budget: 2000, seed: 9, checkpoint_every: 600, curve_points: 4}";
+  const TrainResult clean = trainWith(learner, problem, g);
+
+  test::TempDir tmp("learning-checkpoint-test");
+  const std::filesystem::path dir = tmp.path / "checkpoint", statePath = dir / "state.json";
+  std::vector<std::string> log;
+  DirectoryCheckpointer store(dir, "run-key", m, g.vertexCount, [&](const std::string& line) { log.push_back(line); });
+  REQUIRE(trainWith(learner, problem, g, &store).table == clean.table);
+  REQUIRE(log.empty());
+  // The learner leaves its last checkpoint (the application removes it after a finished
+  // run): a resume from it at 1800 actions.
+  const std::string text = readFile(statePath);
+  json saved = json::parse(text);
+  REQUIRE(saved["state"]["updates"] == 1800);
+  REQUIRE(saved["state"]["walk"]["updates"] == 1800);
+  REQUIRE(m.stateCount() == 3);
+  // A hand edit that also fixes the hash: only the learner's own checks can catch it.
+  auto sealed = [](json j) {
+    j["hash"] = manifestHash(j);
+    return j.dump(2);
+  };
+  const std::string hashMismatch = "state.json: expected its members to hash to '";
+
+  std::string damaged, message;
+  SECTION("a changed digit of the update count") {
+    damaged = text;
+    const std::size_t at = damaged.rfind("\"updates\": 1800");  // the walk's
+    REQUIRE(at != std::string::npos);
+    damaged[at + 12] = '2';  // 1800 -> 1200
+    message = hashMismatch;
+  }
+  SECTION("a changed word of the random generator") {
+    json j = saved;
+    j["state"]["walk"]["rng"][1] = j["state"]["walk"]["rng"][1].get<std::uint64_t>() ^ 1;
+    damaged = j.dump(2);
+    message = hashMismatch;
+  }
+  SECTION("a missing member") {
+    json j = saved;
+    j["state"]["walk"].erase("restarts");
+    damaged = sealed(j);
+    message = "state.json: state.walk: expected the key 'restarts', found none";
+  }
+  SECTION("a member of the wrong type") {
+    json j = saved;
+    j["state"]["walk"]["state"] = "2";
+    damaged = sealed(j);
+    message = "state.json: state.walk.state: expected an integer in [0, 2], found '\"2\"'";
+  }
+  SECTION("a state out of range") {
+    json j = saved;
+    j["state"]["walk"]["state"] = 3;
+    damaged = sealed(j);
+    message = "state.json: state.walk.state: expected an integer in [0, 2], found '3'";
+  }
+  SECTION("an update count past the budget") {
+    json j = saved;
+    j["state"]["updates"] = j["state"]["walk"]["updates"] = 2400;
+    damaged = sealed(j);
+    message = "state.json: state.walk.updates: expected an integer in [0, 2000], found '2400'";
+  }
+  SECTION("update counts that disagree") {
+    json j = saved;
+    j["state"]["updates"] = 1200;
+    damaged = sealed(j);
+    message = "state.json: state.updates: expected 1800, as state.walk.updates, found '1200'";
+  }
+  SECTION("a generator stuck at zero") {
+    json j = saved;
+    j["state"]["walk"]["rng"] = {0, 0, 0, 0};
+    damaged = sealed(j);
+    message = "state.json: state.walk.rng: expected a generator state other than all zeros, found '[0,0,0,0]'";
+  }
+  SECTION("a target that is not 3 numbers") {
+    json j = saved;
+    j["state"]["walk"]["target"] = {0.5, 1};
+    damaged = sealed(j);
+    message = "state.json: state.walk.target: expected 3 finite numbers, found '[0.5,1]'";
+  }
+  SECTION("a curve point past the walk") {
+    json j = saved;
+    j["state"]["curve"][0][0] = 1900;
+    damaged = sealed(j);
+    message = "state.json: state.curve[0][0]: expected an update count in [1, 1800]";
+  }
+  SECTION("a state that is not an object") {
+    json j = saved;
+    j["state"] = 5;
+    damaged = sealed(j);
+    message = "state.json: state: expected an object, found '5'";
+  }
+  CAPTURE(message);
+  writeFileAtomically(statePath, damaged);
+  log.clear();
+  TrainResult resumed;
+  REQUIRE_NOTHROW(resumed = trainWith(learner, problem, g, &store));
+  CHECK(resumed.stats["resumed"] == false);
+  CHECK(resumed.updates == 2000);
+  CHECK(resumed.table == clean.table);  // nothing of the checkpoint, the table included
+  CHECK(resumed.curve.size() == clean.curve.size());
+  REQUIRE(log.size() == 1);
+  CHECK(log[0].rfind(statePath.string(), 0) == 0);  // names the file first
+  CHECK_THAT(log[0], Catch::Contains(message));
+  CHECK_THAT(log[0], Catch::EndsWith("; ignoring the checkpoint"));
+}
+
+TEST_CASE("Q-learning resumes an intact directory checkpoint to the uninterrupted table", "[learning][checkpoint]") {
+  const StateActionModel m = ring();
+  const auto grid = makeGrid("{type: polar2d, radius: 2, rings: 5, sectors: 13}", m);
+  const auto reward = app::plugins().rewards.create(yaml("{type: approach}"));
+  const StaticTarget environment;
+  const Problem problem{m, *grid, *reward, environment};
+  const GridModel g = GridModel::build(problem, 1);
+  const std::string learner = "{type: q_learning, budget: 2000, seed: 9, checkpoint_every: 600, curve_points: 4}";
+  const TrainResult clean = trainWith(learner, problem, g);
+  test::TempDir tmp("learning-checkpoint-test");
+  std::vector<std::string> log;
+  DirectoryCheckpointer store(tmp.path / "checkpoint", "run-key", m, g.vertexCount,
+                              [&](const std::string& line) { log.push_back(line); });
+  trainWith(learner, problem, g, &store);
+  const TrainResult resumed = trainWith(learner, problem, g, &store);  // from 1800 actions
+  CHECK(log.empty());
+  CHECK(resumed.stats["resumed"] == true);
+  CHECK(resumed.table == clean.table);
+  CHECK(resumed.curve.size() == clean.curve.size());
+}
+
+TEST_CASE("a checkpointer that cannot report refuses a state the learner rejects", "[learning][checkpoint]") {
+  const StateActionModel m = ring();
+  const auto grid = makeGrid("{type: polar2d, radius: 2, rings: 5, sectors: 13}", m);
+  const auto reward = app::plugins().rewards.create(yaml("{type: approach}"));
+  const StaticTarget environment;
+  const Problem problem{m, *grid, *reward, environment};
+  const GridModel g = GridModel::build(problem, 1);
+  const std::string learner = "{type: q_learning, budget: 2000, seed: 9, checkpoint_every: 600, curve_points: 4}";
+  MemoryCheckpointer store(2);
+  REQUIRE_THROWS_WITH(trainWith(learner, problem, g, &store), "simulated crash");
+  MemoryCheckpointer broken = store;
+  broken.state()["walk"]["state"] = 7;
+  REQUIRE_THROWS_AS(trainWith(learner, problem, g, &broken), Error);
+  REQUIRE_THROWS_WITH(trainWith(learner, problem, g, &broken),
+                      "checkpoint: state.walk.state: expected an integer in [0, 2], found '7'");
 }
 
 TEST_CASE("the combined controller takes the best weighted sum of active behaviours", "[learning]") {

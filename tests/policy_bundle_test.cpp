@@ -21,6 +21,7 @@
 #include <fmt/format.h>
 
 #include "mgrl/learning/checkpoint_store.hpp"
+#include "mgrl/core/bundle.hpp"
 #include "mgrl/core/error.hpp"
 #include "mgrl/core/hash.hpp"
 #include "mgrl/motion/motion_io.hpp"
@@ -511,7 +512,29 @@ TEST_CASE("a damaged or foreign checkpoint is reported and ignored", "[policy_bu
     json state = json::parse(mgrl::readFile(dir / "state.json"));
     state["version"] = 7;
     writeBytes(dir / "state.json", state.dump());
-    message = "expected format 'mgrl.checkpoint' version 1, found format 'mgrl.checkpoint' version '7'";
+    message = fmt::format("expected format 'mgrl.checkpoint' version {}, found format 'mgrl.checkpoint' version '7'",
+                          mgrl::kCheckpointFormatVersion);
+  }
+  // Issue 19, defect 4: the learner's state was covered by no hash.
+  SECTION("a changed digit in the learner's state") {
+    std::string text = mgrl::readFile(dir / "state.json");
+    const std::size_t at = text.find("\"episode\": 3");
+    REQUIRE(at != std::string::npos);
+    text[at + 11] = '4';
+    writeBytes(dir / "state.json", text);
+    message = (dir / "state.json").string() + ": expected its members to hash to '";
+  }
+  SECTION("a changed table entry in state.json") {
+    json state = json::parse(mgrl::readFile(dir / "state.json"));
+    state["table"]["shape"] = {6, 3};
+    writeBytes(dir / "state.json", state.dump(2));
+    message = (dir / "state.json").string() + ": expected its members to hash to '";
+  }
+  SECTION("no hash") {
+    json state = json::parse(mgrl::readFile(dir / "state.json"));
+    state.erase("hash");
+    writeBytes(dir / "state.json", state.dump(2));
+    message = (dir / "state.json").string() + ": manifest: expected the key 'hash', found none";
   }
   CAPTURE(message);
   mgrl::DirectoryCheckpointer checkpointer(dir, key, model, vertexCount, log.sink());
@@ -533,6 +556,50 @@ TEST_CASE("a damaged or foreign checkpoint is reported and ignored", "[policy_bu
   } else {
     REQUIRE_THROWS_WITH(checkpointer.save({{"episode", 4}}, table), Contains("not deleting it"));
   }
+}
+
+TEST_CASE("a checkpoint's state.json is sealed by a hash of all its other members", "[policy_bundle][checkpoint]") {
+  mgrl::test::TempDir tmp("policy-bundle-test");
+  const StateActionModel model = tableModel();
+  Log log;
+  mgrl::DirectoryCheckpointer(tmp.path / "checkpoint", "run-key", model, 6, log.sink())
+      .save({{"episode", 3}}, filledTable(model, 6, 1.0f));
+  const json state = json::parse(mgrl::readFile(tmp.path / "checkpoint" / "state.json"));
+  REQUIRE(state["version"] == mgrl::kCheckpointFormatVersion);
+  REQUIRE(state["hash"] == mgrl::manifestHash(state));
+}
+
+TEST_CASE("a checkpoint whose state the learner rejects is reported and ignored, its table unused",
+          "[policy_bundle][checkpoint]") {
+  mgrl::test::TempDir tmp("policy-bundle-test");
+  const StateActionModel model = tableModel();
+  const fs::path dir = tmp.path / "checkpoint";
+  Log log;
+  mgrl::DirectoryCheckpointer checkpointer(dir, "run-key", model, 6, log.sink());
+  checkpointer.save({{"episode", 3}}, filledTable(model, 6, 1.0f));
+
+  // The learner's check reads through the reader, which names the file.
+  std::optional<std::uint64_t> episode;
+  const mgrl::StateCheck check = [&](const json& state, const mgrl::ManifestReader& reader) {
+    episode = reader.unsignedInteger(state, "state", "episode", 2);
+  };
+  QTable table(model, 6);
+  REQUIRE_NOTHROW(checkpointer.loadChecked(table, check));
+  REQUIRE_FALSE(checkpointer.loadChecked(table, check).has_value());
+  REQUIRE(table == QTable(model, 6));  // untouched
+  REQUIRE(log.lines.size() == 2);
+  REQUIRE(log.lines[0] == (dir / "state.json").string() +
+                              ": state.episode: expected an integer in [0, 2], found '3'; ignoring the checkpoint");
+
+  // A state it accepts is returned, with the table.
+  log.lines.clear();
+  const mgrl::StateCheck lenient = [&](const json& state, const mgrl::ManifestReader& reader) {
+    episode = reader.unsignedInteger(state, "state", "episode", 10);
+  };
+  REQUIRE(checkpointer.loadChecked(table, lenient) == json{{"episode", 3}});
+  REQUIRE(episode == 3u);
+  REQUIRE(table == filledTable(model, 6, 1.0f));
+  REQUIRE(log.lines.empty());
 }
 
 TEST_CASE("a checkpointer leaves a directory that is not a checkpoint alone", "[policy_bundle][checkpoint]") {

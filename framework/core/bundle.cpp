@@ -201,6 +201,26 @@ json readManifestObject(const fs::path& path) {
   return manifest;
 }
 
+std::string manifestHash(const json& manifest) {
+  json members = manifest;
+  if (members.is_object()) members.erase("hash");
+  return hexDigest(hashBytes(members.dump()));
+}
+
+void checkManifestHash(const json& manifest, const ManifestReader& reader) {
+  const std::string stored = reader.string(manifest, "", "hash");
+  std::string actual;
+  try {
+    actual = manifestHash(manifest);
+  } catch (const json::exception& e) {
+    throw Error(fmt::format("{}: expected valid UTF-8 strings, found {}", reader.source(), e.what()));
+  }
+  if (actual != stored)
+    throw Error(fmt::format("{}: expected its members to hash to {} as its \"hash\" says, found {} (the file was "
+                            "altered)",
+                            reader.source(), quoteToken(stored), quoteToken(actual)));
+}
+
 template <NpyElement T>
 std::vector<T> loadBundleArray(const fs::path& dir, const ManifestReader& reader, const json& parent,
                                std::string_view parentPath, std::string_view key, std::string_view expectedFile,

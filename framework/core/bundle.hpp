@@ -8,7 +8,8 @@
 /// - the manifest entry of an array, `{"file": "q.npy", "dtype": "<f4", "shape": [A, V],
 ///   "bytes": size, "hash": "<xxh64 hex>"}` (bundleArrayEntry(), encodeBundleArray());
 /// - reading: ManifestReader checks the type of every manifest member it reads, and
-///   loadBundleArray() checks one array file against its entry before decoding it.
+///   loadBundleArray() checks one array file against its entry before decoding it;
+/// - sealing: manifestHash() and checkManifestHash() cover the manifest's own values.
 
 #include <cstddef>
 #include <cstdint>
@@ -121,6 +122,20 @@ class ManifestReader {
  private:
   std::string source_;
 };
+
+/// The digest that seals a manifest: hexDigest(hashBytes()) of `manifest` without its
+/// top-level "hash" member, dumped compactly (keys sorted, numbers in their shortest
+/// round-trip form). It covers every value a reader parses, not the layout of the text, so
+/// a manifest is written with `manifest["hash"] = manifestHash(manifest)` and checked by
+/// checkManifestHash(). Throws nlohmann::json::type_error for strings that are not UTF-8.
+std::string manifestHash(const nlohmann::json& manifest);
+
+/// Requires `manifest["hash"]` to be a string equal to manifestHash(manifest), so that no
+/// scalar of the manifest is trusted unchecked (array files have their own hashes). Throws
+/// mgrl::Error `<source>: expected its members to hash to '<stored>' as its "hash" says,
+/// found '<computed>' (the file was altered)`, or the reader's error if "hash" is missing
+/// or not a string.
+void checkManifestHash(const nlohmann::json& manifest, const ManifestReader& reader);
 
 /// Reads and parses the manifest at `path`, which must hold a JSON object.
 /// Throws mgrl::Error `<path>: expected JSON, found a syntax error (...)`,

@@ -118,6 +118,8 @@ void saveGraphBundle(const std::filesystem::path& dirArgument, const StateAction
   };
   std::string manifestText;
   try {
+    // The scalars are the model's too: sealed like the arrays, so a flipped bit is noticed.
+    manifest["hash"] = manifestHash(manifest);
     manifestText = manifest.dump(2) + "\n";
   } catch (const json::exception& e) {
     throw Error(fmt::format("{}: provenance: expected valid UTF-8 strings, found {}", source, e.what()));
@@ -156,6 +158,8 @@ GraphBundleLoad loadGraphBundle(const std::filesystem::path& dirArgument, std::s
       result.manifest = std::move(manifest);
       return result;
     }
+    // Before anything else is read from it: every value below is then as saved.
+    checkManifestHash(manifest, reader);
     reader.object(manifest, "", "provenance", {});
     const std::string key = reader.string(manifest["provenance"], "provenance", "key");
     if (key != expectedKey) {
@@ -168,8 +172,8 @@ GraphBundleLoad loadGraphBundle(const std::filesystem::path& dirArgument, std::s
     }
     for (const auto& item : manifest.items())
       if (item.key() != "format" && item.key() != "version" && item.key() != "provenance" && item.key() != "scalars" &&
-          item.key() != "arrays")
-        throw Error(fmt::format("{}: expected only the keys format, version, provenance, scalars, arrays, found '{}'",
+          item.key() != "arrays" && item.key() != "hash")
+        throw Error(fmt::format("{}: expected only the keys format, version, provenance, scalars, arrays, hash, found '{}'",
                                 reader.source(), item.key()));
 
     GraphBundleLoad result;

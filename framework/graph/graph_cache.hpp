@@ -6,21 +6,24 @@
 ///
 /// manifest.json:
 ///
-///     {"format": "mgrl.graph", "version": 1,
+///     {"format": "mgrl.graph", "version": 2,
 ///      "provenance": {"key": "<cache key>", ...whatever the caller records},
 ///      "scalars": {"frame_time": s, "frames_total": n, "centroid": [x, y, z],
 ///                  "max_hit_speed_mps": v},
 ///      "arrays": {"action_frames": {"file": "action_frames.npy", "dtype": "<u4",
 ///                                   "shape": [F], "bytes": size, "hash": "<xxh64 hex>"},
-///                 ...}}
+///                 ...},
+///      "hash": "<xxh64 hex of all the other members>"}
 ///
 /// Arrays, named after the fields in snake_case: clip_offset, component_frames,
 /// transitions (T, 2), transition_distance, state_frame, action_from, action_to,
 /// action_frame_begin, action_displacement (A, 3), state_action_begin, action_frames,
 /// frame_root (F, 3), frame_centroid (F, 3), frame_enters_transition, action_hit_begin, and
 /// the hits split by type: hits_index (H, 3) uint32 (action, offset, hand) and hits_value
-/// (H, 4) float32 (x, y, z, weight). The hash is hexDigest(hashBytes(file bytes))
-/// (mgrl/core/hash.hpp: XXH64).
+/// (H, 4) float32 (x, y, z, weight). An array's hash is hexDigest(hashBytes(file bytes))
+/// (mgrl/core/hash.hpp: XXH64); the manifest's own "hash" is manifestHash()
+/// (mgrl/core/bundle.hpp), so the scalars and provenance are checked as the arrays are.
+/// Version 2 added that hash: a version 1 bundle trusted its scalars unchecked.
 
 #include <filesystem>
 #include <string>
@@ -34,7 +37,7 @@ namespace mgrl {
 
 /// The manifest's "format" and "version"; a bundle with others is Stale.
 inline constexpr std::string_view kGraphFormatName = "mgrl.graph";
-inline constexpr int kGraphFormatVersion = 1;
+inline constexpr int kGraphFormatVersion = 2;
 
 
 /// Writes `m` as a bundle at `dir` (see the file comment), replacing a bundle already there.
@@ -68,7 +71,8 @@ struct GraphBundleLoad {
 };
 
 /// Loads the bundle at `dir` if it is whole, unaltered and made for `expectedKey`
-/// (provenance.key). Checks the format and version, every array's file name, dtype, shape,
+/// (provenance.key). Checks the format and version, the manifest's hash (so every scalar
+/// and provenance value is as saved), every array's file name, dtype, shape,
 /// byte size and hash against the manifest, decodes the arrays strictly (mgrl/core/npy.hpp) and
 /// runs checkModel() on the result. Never throws for a bad bundle: the status and reason
 /// say what is wrong, and the caller rebuilds.

@@ -38,13 +38,15 @@ void DirectoryCheckpointer::save(const json& state, const QTable& table) {
   requireTableShape(table);
   EncodedArray array = encodeBundleArray<float>(std::string(kTableFile), table.actionMajor(),
                                                 {actionCount_, vertexCount_});
-  const json manifest = {{"format", std::string(kCheckpointFormatName)},
+  json manifest = {{"format", std::string(kCheckpointFormatName)},
                          {"version", kCheckpointFormatVersion},
                          {"key", key_},
                          {"state", state},
                          {"table", std::move(array.entry)}};
   std::string text;
   try {
+    // The learner's state decides the rest of the run: sealed, so a changed digit is noticed.
+    manifest["hash"] = manifestHash(manifest);
     text = manifest.dump(2) + "\n";
   } catch (const json::exception& e) {
     throw Error(fmt::format("{}: state: expected valid UTF-8 strings, found {}", dir_.string(), e.what()));
@@ -52,7 +54,9 @@ void DirectoryCheckpointer::save(const json& state, const QTable& table) {
   writeBundleDirectory(dir_, {std::move(array.file)}, text, "checkpoint", kStateFile);
 }
 
-std::optional<json> DirectoryCheckpointer::load(QTable& table) {
+std::optional<json> DirectoryCheckpointer::load(QTable& table) { return loadChecked(table, {}); }
+
+std::optional<json> DirectoryCheckpointer::loadChecked(QTable& table, const StateCheck& check) {
   requireTableShape(table);
   std::error_code ec;
   const fs::file_status status = fs::status(dir_, ec);
@@ -75,16 +79,21 @@ std::optional<json> DirectoryCheckpointer::load(QTable& table) {
       throw Error(fmt::format("{}: expected format '{}' version {}, found format {} version {}", reader.source(),
                               kCheckpointFormatName, kCheckpointFormatVersion, quoteToken(format),
                               quoteToken(version.dump(-1, ' ', false, json::error_handler_t::replace))));
+    // Before anything else is read from it: every value below is then as saved.
+    checkManifestHash(manifest, reader);
     const std::string key = reader.string(manifest, "", "key");
     if (key != key_)
       throw Error(fmt::format("{}: expected key {}, found {} (a checkpoint of other inputs or settings)",
                               reader.source(), quoteKey(key_), quoteKey(key)));
     for (const auto& item : manifest.items())
       if (item.key() != "format" && item.key() != "version" && item.key() != "key" && item.key() != "state" &&
-          item.key() != "table")
-        throw Error(fmt::format("{}: expected only the keys format, version, key, state, table, found '{}'",
+          item.key() != "table" && item.key() != "hash")
+        throw Error(fmt::format("{}: expected only the keys format, version, key, state, table, hash, found '{}'",
                                 reader.source(), item.key()));
     json state = reader.member(manifest, "", "state");
+    // A state the learner cannot use is as damaged as a bad hash; checked before the
+    // table is touched, so ignoring the checkpoint leaves the caller's table as it was.
+    if (check) check(state, reader);
 
     std::vector<std::size_t> shape;
     const std::vector<float> values = loadBundleArray<float>(dir_, reader, manifest, "", "table", kTableFile, &shape);

@@ -4,9 +4,14 @@
 /// a learner saved in a directory, written as a bundle (mgrl/core/bundle.hpp) so a crash during
 /// a save leaves the previous checkpoint or the new one, never half of one:
 ///
-///     state.json  {"format": "mgrl.checkpoint", "version": 1, "key": "<run key>",
-///                  "state": {...the learner's JSON}, "table": {"file": "table.npy", ...}}
+///     state.json  {"format": "mgrl.checkpoint", "version": 2, "key": "<run key>",
+///                  "state": {...the learner's JSON}, "table": {"file": "table.npy", ...},
+///                  "hash": "<xxh64 hex of all the other members>"}
 ///     table.npy   float32 (actions, vertices) = QTable::actionMajor()
+///
+/// The "hash" is manifestHash() (mgrl/core/bundle.hpp): one changed digit of the learner's
+/// state (its update count, its random generator) would otherwise resume a different run.
+/// Version 2 added it.
 
 #include <cstddef>
 #include <filesystem>
@@ -25,7 +30,7 @@ namespace mgrl {
 
 /// The state file's "format" and "version"; a checkpoint with others is ignored.
 inline constexpr std::string_view kCheckpointFormatName = "mgrl.checkpoint";
-inline constexpr int kCheckpointFormatVersion = 1;
+inline constexpr int kCheckpointFormatVersion = 2;
 
 /// Keeps one checkpoint in a directory. A checkpoint is only resumed by a run with the
 /// same `key` (the caller's hash of the problem and learner settings); anything else
@@ -46,11 +51,17 @@ class DirectoryCheckpointer final : public Checkpointer {
 
   /// The saved state, with `table` (of the model's actions and vertexCount vertices) set
   /// to the saved values; std::nullopt, leaving `table` unchanged, if there is no
-  /// directory, or, after one line to the log starting with the path concerned, if the
-  /// checkpoint is unreadable, damaged (size or hash mismatch), of another format or
-  /// version, made for another key, or of another table shape. Never throws for a bad
-  /// checkpoint; throws mgrl::Error only if `table` itself has the wrong dimensions.
+  /// directory, or, after one line to the log starting with the path concerned and ending
+  /// "; ignoring the checkpoint", if the checkpoint is unreadable, damaged (size or hash
+  /// mismatch, of the table or of state.json), of another format or version, made for
+  /// another key, or of another table shape. Never throws for a bad checkpoint; throws
+  /// mgrl::Error only if `table` itself has the wrong dimensions.
   std::optional<nlohmann::json> load(QTable& table) override;
+
+  /// load(), also ignoring (with the same log line, `check`'s message naming state.json)
+  /// a checkpoint whose state `check` rejects; `check` runs before `table` is touched.
+  /// An empty `check` accepts any state.
+  std::optional<nlohmann::json> loadChecked(QTable& table, const StateCheck& check) override;
 
   /// Deletes the checkpoint directory (after a finished run), ignoring errors. A
   /// directory that holds no state.json and is not empty is not a checkpoint and is left

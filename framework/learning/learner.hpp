@@ -6,6 +6,7 @@
 /// Checkpointer so that a resumed run ends with the same table as an uninterrupted one.
 #include <atomic>
 #include <cstdint>
+#include <functional>
 #include <memory>
 #include <optional>
 #include <string>
@@ -13,6 +14,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "mgrl/core/bundle.hpp"
 #include "mgrl/core/error.hpp"
 #include "mgrl/learning/problem.hpp"
 #include "mgrl/learning/q_table.hpp"
@@ -41,6 +43,14 @@ class TrainObserver {
   virtual void progress(const TrainProgress&) {}
 };
 
+/// A learner's check of its own saved state, run by Checkpointer::loadChecked() before the
+/// state or table is used: reads every member it will trust (presence, type, range) and
+/// throws mgrl::Error if one is wrong, through `reader`, which names the checkpoint's file,
+/// with the state's members at path "state" (e.g. `run/hit/state.json: state.walk.state:
+/// expected an integer in [0, 41], found '97'`). It may keep what it read (the caller's
+/// variables), but only as the result of a loadChecked() that returns a state.
+using StateCheck = std::function<void(const nlohmann::json& state, const ManifestReader& reader)>;
+
 /// Where a learner keeps a resumable state. A checkpoint is the learner's own JSON plus a
 /// table; `load` returns the last one saved for the same problem, if any.
 class Checkpointer {
@@ -48,6 +58,19 @@ class Checkpointer {
   virtual ~Checkpointer() = default;
   virtual void save(const nlohmann::json& state, const QTable& table) = 0;
   virtual std::optional<nlohmann::json> load(QTable& table) = 0;
+
+  /// load(), accepting the state only if `check` passes it: what learners call. A
+  /// checkpointer that reports damaged checkpoints (DirectoryCheckpointer) overrides this
+  /// to report a rejected state the same way, name its file, leave `table` unchanged and
+  /// return std::nullopt, so the learner starts over. This default, for checkpointers that
+  /// cannot report, refuses instead of starting over silently: it throws mgrl::Error
+  /// `checkpoint: <check's message>` (with `table` already overwritten by load(); the
+  /// caller must not use it).
+  virtual std::optional<nlohmann::json> loadChecked(QTable& table, const StateCheck& check) {
+    std::optional<nlohmann::json> state = load(table);
+    if (state && check) check(*state, ManifestReader("checkpoint"));
+    return state;
+  }
 };
 
 struct TrainResult {
