@@ -25,6 +25,7 @@ struct TrainOptions : LearnOptions {
   std::string behavior;        ///< only this one ("" every behaviour)
   std::filesystem::path out;   ///< policy bundle ("" the default in the cache)
   bool resume = false;         ///< continue from checkpoints left by a killed run
+  double maxMemoryBytes = 1e18;  ///< refuse a behaviour whose training would need more
 };
 
 /// Trains, saves the policy bundle atomically and returns the --json report:

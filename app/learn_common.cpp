@@ -24,6 +24,11 @@ std::string humanCount(double n) {
   return fmt::format("{:.0f} ", n);
 }
 
+std::string humanBytes(double bytes) {
+  if (bytes >= 1e9) return fmt::format("{:.2f} GB", bytes / 1e9);
+  return fmt::format("{:.1f} MB", bytes / 1e6);
+}
+
 std::string countOf(std::size_t n, std::string_view noun) {
   return fmt::format("{} {}{}", n, noun, n == 1 ? "" : "s");
 }

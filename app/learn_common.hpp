@@ -19,6 +19,9 @@ using Clock = std::chrono::steady_clock;
 /// "4.17 M", "850.0 k": counts and rates for people (with a trailing space for units).
 std::string humanCount(double n);
 
+/// "88.3 MB", "47.40 GB".
+std::string humanBytes(double bytes);
+
 /// "1 frame", "30 frames".
 std::string countOf(std::size_t n, std::string_view noun);
 

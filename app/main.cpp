@@ -40,6 +40,13 @@ mgrl::RoleOverrides parseRoles(const std::vector<std::string>& pairs) {
   return roles;
 }
 
+// 80 % of the machine's memory, in GB: what training may plan to use by default.
+double defaultMaxMemoryGb() {
+  const long pages = ::sysconf(_SC_PHYS_PAGES), pageSize = ::sysconf(_SC_PAGE_SIZE);
+  if (pages <= 0 || pageSize <= 0) return 8;
+  return 0.8 * static_cast<double>(pages) * static_cast<double>(pageSize) / 1e9;
+}
+
 // Levenshtein distance, for "did you mean".
 std::size_t editDistance(const std::string& a, const std::string& b) {
   std::vector<std::size_t> row(b.size() + 1);
@@ -134,6 +141,11 @@ int main(int argc, char** argv) {
                                                 "(repeatable)");
   trainCommand->add_option("--out", train.out, "Policy bundle folder (default: <cache>/policies/<scenario>-<hash>)");
   trainCommand->add_flag("--resume", train.resume, "Continue from the checkpoints of an interrupted run");
+  double maxMemoryGb = defaultMaxMemoryGb();
+  trainCommand->add_option("--max-memory", maxMemoryGb,
+                           "Refuse a behaviour whose training needs more memory than this (GB; default: 80 % of "
+                           "this machine's)")
+      ->default_str(fmt::format("{:.1f}", maxMemoryGb));
   trainCommand->add_flag("--json", json, "Print one JSON object on stdout");
   trainCommand->add_option("--data", dataDir, "Motion capture folder (default: MGRL_DATA, else ../shared/mocap)");
   trainCommand->add_option("--cache", cacheDir, "Cache folder (default: MGRL_CACHE, else ~/.cache/mgrl)");
@@ -274,6 +286,9 @@ int main(int argc, char** argv) {
       train.cacheDir = cacheDir;
       train.log = log;
       train.progressBar = ::isatty(2) != 0;
+      if (!(maxMemoryGb > 0 && maxMemoryGb <= 1e6))
+        throw mgrl::Error(fmt::format("--max-memory: expected gigabytes in (0, 1000000], found {}", maxMemoryGb));
+      train.maxMemoryBytes = maxMemoryGb * 1e9;
       const nlohmann::json report = mgrl::app::runTrain(train);
       if (json)
         std::cout << report.dump(2) << '\n';

@@ -1,8 +1,11 @@
 // `mgrl train` (DESIGN.md sec. 5): trains a scenario's behaviours and saves a policy bundle.
 #include <atomic>
 #include <csignal>
+#include <fstream>
 #include <cstdlib>
 #include <iostream>
+
+#include <unistd.h>
 
 #include <fmt/format.h>
 #include <fmt/ranges.h>
@@ -233,6 +236,17 @@ json runTrain(const TrainOptions& options) {
     if (ec) throw Error(fmt::format("--out {}: cannot create {}: {}", out.string(), out.parent_path().string(), ec.message()));
     if (fs::exists(out, ec) && !fs::is_directory(out, ec))
       throw Error(fmt::format("--out {}: expected a policy bundle directory or nothing, found a file", out.string()));
+    // The bundle is written beside `out` and renamed into place: that folder must take a
+    // new file now, not after training (issue 19).
+    const fs::path parent = out.has_parent_path() ? out.parent_path() : fs::path(".");
+    const fs::path probe = parent / fmt::format(".{}.probe-{}", out.filename().string(), ::getpid());
+    {
+      std::ofstream file(probe);
+      if (!(file << "x") || !file.flush())
+        throw Error(fmt::format("--out {}: expected a folder where files can be written, found {} is not writable",
+                                out.string(), parent.string()));
+    }
+    fs::remove(probe, ec);
   }
   Loaded loaded = load(options, std::move(scenario));
   const StateActionModel& model = loaded.graph.model;
@@ -276,6 +290,18 @@ json runTrain(const TrainOptions& options) {
   std::vector<std::string> wanted;
   for (const Behavior& behavior : all)
     if (options.behavior.empty() || behavior.name == options.behavior) wanted.push_back(behavior.name);
+  // Issue 19: every behaviour's size is checked before anything is allocated or trained,
+  // not found by bad_alloc, nor after training the others.
+  for (const Behavior& behavior : all) {
+    if (std::find(wanted.begin(), wanted.end(), behavior.name) == wanted.end()) continue;
+    const double needed = GridModel::trainingBytes(model.actionCount(), behavior.discretizer->vertexCount());
+    if (needed > options.maxMemoryBytes)
+      throw Error(fmt::format("behaviors.{}: training on a {} grid of {} vertices x {} actions needs about {} "
+                              "(tabulated model and Q tables); expected at most {} (--max-memory): use a coarser "
+                              "grid, or raise --max-memory",
+                              behavior.name, behavior.discretizer->type(), behavior.discretizer->vertexCount(),
+                              model.actionCount(), humanBytes(needed), humanBytes(options.maxMemoryBytes)));
+  }
   std::vector<fs::path> checkpoints;
   const StopSignals signals;
   for (Behavior& behavior : all) {

@@ -35,6 +35,7 @@ MGRL_DATA="${MGRL_DATA:-$root/../shared/mocap}" MGRL_CACHE="$fresh/cache" "$fres
   exit 1
 }
 "$root/scripts/check_demo.sh" "$fresh/demo.out" "$fresh/demo.err" "$fresh/mgrl/build/demo"
+tail -n 1 "$fresh/demo.err" >&2  # the demo's wall time
 rm -rf "$fresh"
 trap - EXIT
 

@@ -482,3 +482,34 @@ TEST_CASE("another learner trains into another default bundle", "[cli][data]") {
   CHECK(eval.status == 0);
   CHECK_THAT(eval.err, Contains("using the settings the bundle was trained with (approach.learner.type=value_iteration)"));
 }
+
+// Issue 19: sizes are checked before anything is allocated or trained: a grid too large
+// to exist, and a behaviour whose training would need more memory than --max-memory.
+TEST_CASE("mgrl train refuses a grid or a problem too large before training anything", "[cli][data]") {
+  Sandbox box("toolarge");
+  const fs::path out = box.path("bundle");
+  requireRefusal(box.train(kFast + " --set behaviors.hit.discretizer.angles=300 --set "
+                                   "behaviors.hit.discretizer.distances=300 --set behaviors.hit.discretizer.heights=300 "
+                                   "--out " + shellWord(out)),
+                 "cylindrical3d: expected a grid of at most 20000000 vertices, found 27000000 (300 angle x 300 "
+                 "distance x 300 height)");
+  CHECK_FALSE(fs::exists(out));
+  const Run refused = box.train(kFast + " --max-memory 0.05 --out " + shellWord(out));
+  requireRefusal(refused, "behaviors.hit: training on a cylindrical3d grid of 1920 vertices x ");
+  CHECK_THAT(refused.lastErrorLine(), Contains("expected at most 50.0 MB (--max-memory)"));
+  CHECK_THAT(refused.err, !Contains("train approach:"));  // nothing was trained first
+  CHECK_FALSE(fs::exists(out));
+  requireOneLineRefusal(box.train(kFast + " --max-memory 0"), "--max-memory: expected gigabytes in (0, 1000000], found 0");
+}
+
+// Issue 19: an --out folder that cannot take files is refused before training, not after.
+// /proc takes no new files, even from root (CI runs as root, where permissions would not
+// stop the write).
+TEST_CASE("mgrl train refuses an unwritable --out folder before training", "[cli][data]") {
+  Sandbox box("readonly");
+  const fs::path out = "/proc/mgrl_test_bundle";
+  const Run r = box.train(kFast + " --out " + shellWord(out));
+  requireRefusal(r, "--out " + out.string() + ": expected a folder where files can be written, found /proc is not "
+                    "writable");
+  CHECK_THAT(r.err, !Contains("train approach:"));
+}

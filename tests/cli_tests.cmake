@@ -129,3 +129,8 @@ mgrl_cli_test(set_names_flag_number ARGS eval "${MGRL_SOURCE_DIR}/scenarios/boxi
 mgrl_cli_test(graph_checks_behaviours ARGS graph "${MGRL_SOURCE_DIR}/scenarios/boxing.yaml"
               --set behaviors.hit.learner.type=nope
               REGEX "--set behaviors\\.hit\\.learner\\.type=nope: behaviors\\.hit\\.learner\\.type: unknown learner 'nope'")
+
+# Issue 19: a frame time no capture has (100000 s) is refused at its line, before
+# resampling could ask for gigabytes.
+mgrl_cli_test(huge_frame_time_bvh ARGS inspect huge_frame_time.bvh --fps 30 EXIT 1
+  MESSAGE "huge_frame_time.bvh:13: expected a frame time of at most 1 s (1 fps), found 100000")

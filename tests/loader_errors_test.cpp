@@ -977,3 +977,14 @@ TEST_CASE("amc rejects bone lines before the first frame number", "[loader][erro
     REQUIRE_PARSE_ERROR(amc(withLine(kAmc, 8, "1")), "bad.amc:8: expected a frame number after 1, found '1'");
   }
 }
+
+// Issue 19: a length unit no skeleton has is refused at its line, instead of a skeleton
+// nanometres or millions of metres tall (1e-320 gave height null and ground at 1e300 m).
+TEST_CASE("asf rejects an implausible length unit", "[loader][errors]") {
+  for (const auto& [unit, shown] : {std::pair{"1e-320", "1e-320"}, std::pair{"1e-9", "1e-09"}, std::pair{"5000", "5000"}}) {
+    CAPTURE(unit);
+    REQUIRE_PARSE_ERROR(asf(withLine(kAsf, 5, std::string("  length ") + unit)),
+                        std::string("bad.asf:5: expected a length unit in [0.001, 1000] (CMU: 0.45), found ") + shown);
+  }
+  CHECK_NOTHROW(asf(withLine(kAsf, 5, "  length 1")));
+}

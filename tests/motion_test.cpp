@@ -53,6 +53,17 @@ TEST_CASE("resampling rejects absurd frame rates", "[motion]") {
   CHECK_THROWS_AS(resample(m, 1e9), Error);
 }
 
+// Issue 19: a long capture at a high rate is refused, with its size, before anything is
+// allocated (1001 s at 10000 fps would be 10.01 M frames).
+TEST_CASE("resampling refuses a result too large for memory before allocating it", "[motion][errors]") {
+  const Motion m = spinningChain(1, 1001, 1);
+  REQUIRE(m.duration() == Approx(1001));
+  REQUIRE_THROWS_WITH(resample(m, 10000), Catch::StartsWith("resample: 1001.0 s of motion at 10000 fps is 10010000 "
+                                                            "frames") &&
+                                              Catch::Contains("expected at most 10000000 frames"));
+  CHECK(resample(m, 100).frameCount() > 100000);  // a big but sane request still works
+}
+
 TEST_CASE("resampling 120 to 30 fps keeps the duration and the joint paths", "[motion][data]") {
   const Motion source = test::loadMocap("cmu/bvh/13_17_boxing.bvh").motion;
   const Motion out = resample(source, 30);

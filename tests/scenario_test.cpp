@@ -168,3 +168,26 @@ TEST_CASE("the graph cache is reused, refreshed when inputs change and rebuilt w
   }
   std::filesystem::remove_all(cache);
 }
+
+// Issue 19: a scenario's name becomes a cache folder's name, so it must be a safe word;
+// the error shows a bounded excerpt, never the whole name.
+TEST_CASE("a scenario name is a safe word of bounded length", "[scenario][errors]") {
+  const std::string body = "motion:\n  files: [cmu/bvh/13_17_boxing.bvh]\ngraph: {}\n";
+  for (const std::string& name : {std::string("../../../../../tmp/x"), std::string("a/b/c"), std::string(".hidden"),
+                                   std::string(200, 'n'), std::string("caf\xc3\xa9")}) {
+    CAPTURE(name);
+    try {
+      parse("name: \"" + name + "\"\n" + body);
+      FAIL("expected a refusal");
+    } catch (const ConfigError& e) {
+      const std::string what = e.what();
+      CHECK_THAT(what, Contains("test.yaml:1:7: name: expected a name of 1 to 64 letters, digits, '_', '-' or "
+                                  "'.' (not first), found '"));
+      CHECK(what.size() < 200);
+    }
+  }
+  CHECK(parse("name: boxing-v2.1\n" + body).name == "boxing-v2.1");
+  // Without a name, the file's stem, made safe.
+  CHECK(parseScenario(body, std::filesystem::path("/tmp/my scenario (1).yaml"), test::mocap()).name ==
+        "my_scenario__1_");
+}

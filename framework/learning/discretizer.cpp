@@ -4,6 +4,7 @@
 #include <cmath>
 
 #include <fmt/format.h>
+#include <fmt/ranges.h>
 
 #include "mgrl/core/error.hpp"
 
@@ -80,6 +81,14 @@ void Discretizer::setAxes(std::vector<GridAxis> axes) {
     inverseStep_[i] = even ? 1 / step : 0;
     vertexCount_ *= axis.vertices.size();
     cellCount_ *= cellsPerAxis_[i];
+  }
+  // Issue 19: the size is checked before the corner table is made (a 10000 x 10000 polar
+  // grid spent 30 s and 3 GB before anything said no).
+  if (vertexCount_ > kMaxGridVertices) {
+    std::vector<std::string> sizes;
+    for (const GridAxis& axis : axes) sizes.push_back(fmt::format("{} {}", axis.vertices.size(), axis.name));
+    throw Error(fmt::format("{}: expected a grid of at most {} vertices, found {} ({})", type(), kMaxGridVertices,
+                            vertexCount_, fmt::join(sizes, " x ")));
   }
   axes_ = std::move(axes);
   const int d = dimension();

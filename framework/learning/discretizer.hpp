@@ -43,6 +43,9 @@ struct GridAxis {
   bool wraps = false;        ///< the axis is periodic with period 2 pi (angles only)
 };
 
+/// The most vertices a grid may have (its corner table and every table over it scale with it).
+inline constexpr std::size_t kMaxGridVertices = 20'000'000;
+
 class Discretizer {
  public:
   virtual ~Discretizer() = default;

@@ -12,6 +12,12 @@ std::size_t GridModel::bytes() const {
          actionTo.size() * 4 + incomingBegin.size() * 4 + incoming.size() * 4;
 }
 
+double GridModel::trainingBytes(std::size_t actions, std::size_t vertices) {
+  const double pairs = static_cast<double>(actions) * static_cast<double>(vertices);
+  return pairs * (sizeof(GridTransition) + sizeof(std::uint32_t) + 2 * sizeof(float)) +
+         static_cast<double>(vertices) * 8 * sizeof(std::uint32_t) + static_cast<double>(actions) * 16;
+}
+
 GridModel GridModel::build(const Problem& problem, unsigned threads) {
   const StateActionModel& m = problem.model;
   const Discretizer& grid = problem.grid;

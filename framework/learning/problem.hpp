@@ -48,6 +48,10 @@ struct GridModel {
   std::vector<std::uint32_t> incomingBegin, incoming;
 
   std::size_t bytes() const;
+  /// What training on `actions` x `vertices` needs at most (bytes), before anything is
+  /// allocated: the tabulated model (transitions, incoming lists) and two Q tables (value
+  /// iteration's Jacobi pair; Q-learning uses one).
+  static double trainingBytes(std::size_t actions, std::size_t vertices);
 
   /// The target after action a under a rigid environment model (`rigid` not empty): the
   /// same arithmetic as inverseTransformPoint(), from the precomputed sine and cosine.

@@ -109,7 +109,10 @@ AsfSkeleton parseAsf(std::string_view text, std::string_view source) {
           in.number("a mass unit");
         } else if (token == "length") {
           result.lengthPerInch = in.number("a length unit");
-          if (!(result.lengthPerInch > 0)) in.fail("a positive length unit", fmt::format("{}", result.lengthPerInch));
+          // CMU writes 0.45; a unit far outside [0.001, 1000] makes skeletons of nanometres or
+          // of millions of metres (issue 19), never a person.
+          if (!(result.lengthPerInch >= 1e-3 && result.lengthPerInch <= 1e3))
+            in.fail("a length unit in [0.001, 1000] (CMU: 0.45)", fmt::format("{}", result.lengthPerInch));
         } else if (token == "angle") {
           const std::string_view unit = in.require("deg or rad");
           if (unit == "deg") angleScale = kDegToRad;

@@ -13,6 +13,8 @@ namespace mgrl {
 /// Largest frame count and joint count a BVH file may declare; larger is treated as
 /// corrupt rather than allocated.
 constexpr long long kMaxBvhFrames = 10'000'000;
+/// The largest frame time a BVH may declare (s): capture runs at 1 fps or faster.
+constexpr double kMaxBvhFrameTime_s = 1.0;
 constexpr std::size_t kMaxJoints = 4096;
 
 /// Parses BVH text. Accepts any rotation order per joint, position channels on any joint

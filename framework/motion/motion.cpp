@@ -51,11 +51,19 @@ Motion Motion::slice(std::size_t first, std::size_t count) const {
 Motion resample(const Motion& motion, double fps) {
   if (!(fps > 0) || fps > 10000 || !std::isfinite(fps))
     throw Error(fmt::format("resample: expected a frame rate in (0, 10000], found {}", fps));
-  const std::size_t count =
-      std::max<std::size_t>(1, static_cast<std::size_t>(std::llround(motion.duration() * fps)));
   const Skeleton& skeleton = motion.skeleton();
   const std::size_t joints = skeleton.jointCount();
   const std::size_t translated = skeleton.translatedJoints().size();
+  // The size is checked before anything is reserved (issue 19: a long frame time times a
+  // high rate asked for gigabytes).
+  const double frames = std::max(1.0, std::round(motion.duration() * fps));
+  const double bytes = frames * (static_cast<double>(joints) * sizeof(Eigen::Quaterniond) +
+                                 static_cast<double>(translated) * sizeof(Eigen::Vector3d));
+  if (frames > static_cast<double>(kMaxResampledFrames) || bytes > kMaxResampledBytes)
+    throw Error(fmt::format("resample: {:.1f} s of motion at {} fps is {:.0f} frames ({:.2f} GB); expected at most {} "
+                            "frames and {:.0f} GB",
+                            motion.duration(), fps, frames, bytes / 1e9, kMaxResampledFrames, kMaxResampledBytes / 1e9));
+  const auto count = static_cast<std::size_t>(frames);
   std::vector<Eigen::Quaterniond> rotations;
   std::vector<Eigen::Vector3d> translations;
   rotations.reserve(count * joints);

@@ -62,9 +62,14 @@ class Motion {
   std::vector<Eigen::Vector3d> translations_;
 };
 
+/// Limits of resample(): frames made, and bytes of rotations and translations.
+inline constexpr std::size_t kMaxResampledFrames = 10'000'000;
+inline constexpr double kMaxResampledBytes = 4e9;
+
 /// Resamples to `fps` frames per second: sample k at time k / fps, rotations slerped along
 /// the shorter arc, translations interpolated linearly. Keeps the duration to within one
-/// output frame. Throws mgrl::Error unless 0 < fps <= 10000.
+/// output frame. Throws mgrl::Error unless 0 < fps <= 10000, and, before allocating,
+/// when the result would exceed kMaxResampledFrames frames or kMaxResampledBytes.
 Motion resample(const Motion& motion, double fps);
 
 }  // namespace mgrl

@@ -212,6 +212,32 @@ void applyOverride(YAML::Node root, const std::string& text, const std::string& 
   }
 }
 
+// A scenario's name names its cache entries (<cache>/graphs/<name>-<hash>): a safe word
+// (issue 19: `../../x` wrote outside the cache, `a/b` made folders, a 10 MB name failed
+// as a "damaged cache", a name that is not UTF-8 was silently not cached).
+std::string scenarioName(const ConfigNode& root, const std::filesystem::path& source) {
+  constexpr std::size_t kMaxName = 64;
+  auto safe = [](char c) {
+    return (c >= 'a' && c <= 'z') || (c >= 'A' && c <= 'Z') || (c >= '0' && c <= '9') || c == '_' || c == '-' ||
+           c == '.';
+  };
+  if (root.has("name")) {
+    const ConfigNode node = root.child("name");
+    const std::string name = node.asString();
+    if (name.empty() || name.size() > kMaxName || name.front() == '.' ||
+        !std::all_of(name.begin(), name.end(), safe))
+      node.fail(fmt::format("expected a name of 1 to {} letters, digits, '_', '-' or '.' (not first), found {}",
+                            kMaxName, quoteToken(name)));
+    return name;
+  }
+  // From the file's name: unsafe characters become '_'.
+  std::string name = source.stem().string().substr(0, kMaxName);
+  for (char& c : name)
+    if (!safe(c)) c = '_';
+  if (name.empty() || name.front() == '.') name.insert(name.begin(), 's');
+  return name;
+}
+
 }  // namespace
 
 Scenario parseScenario(std::string_view text, const std::filesystem::path& source,
@@ -234,7 +260,7 @@ Scenario parseScenario(std::string_view text, const std::filesystem::path& sourc
   if (root.has("world")) readWorldParams(root.child("world"));
   const std::filesystem::path dir = source.parent_path().empty() ? std::filesystem::path(".") : source.parent_path();
   Scenario s{source,
-             root.string("name", source.stem().string()),
+             scenarioName(root, source),
              root.string("description", ""),
              readMotion(root.section("motion"), dir, dataDir),
              readGraph(root.section("graph")),
