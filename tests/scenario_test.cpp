@@ -186,6 +186,8 @@ TEST_CASE("a scenario name is a safe word of bounded length", "[scenario][errors
       CHECK(what.size() < 200);
     }
   }
+  // Not UTF-8 at all (issue 19: accepted, then the cache was silently not written).
+  CHECK_THROWS_AS(parse("name: bad\xff\xfe\n" + body), ConfigError);
   CHECK(parse("name: boxing-v2.1\n" + body).name == "boxing-v2.1");
   // Without a name, the file's stem, made safe.
   CHECK(parseScenario(body, std::filesystem::path("/tmp/my scenario (1).yaml"), test::mocap()).name ==
