@@ -126,8 +126,16 @@ class CrashTestCheckpointer final : public Checkpointer {
     }
     if (stopAfter_ > 0 && saved_ == stopAfter_) stopRequested.store(true);
   }
-  std::optional<json> load(QTable& table) override {
-    std::optional<json> state = inner_.load(table);
+  std::optional<json> load(QTable& table) override { return said(inner_.load(table)); }
+  // The learner's own check of its state runs inside the directory checkpointer, which
+  // reports a rejected state (naming state.json) and ignores the checkpoint.
+  std::optional<json> loadChecked(QTable& table, const StateCheck& check) override {
+    return said(inner_.loadChecked(table, check));
+  }
+  bool resumed() const { return resumed_; }
+
+ private:
+  std::optional<json> said(std::optional<json> state) {
     if (state && log_) {
       const json updates = state->is_object() && state->contains("updates") ? (*state)["updates"] : json();
       log_(fmt::format("resume: {}: continuing from the checkpoint{} in {}", behavior_,
@@ -137,9 +145,7 @@ class CrashTestCheckpointer final : public Checkpointer {
     resumed_ = state.has_value();
     return state;
   }
-  bool resumed() const { return resumed_; }
 
- private:
   DirectoryCheckpointer& inner_;
   std::string behavior_;
   WarningSink log_;

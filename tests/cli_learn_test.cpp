@@ -18,6 +18,7 @@
 #include <nlohmann/json.hpp>
 
 #include "cli_support.hpp"
+#include "mgrl/core/bundle.hpp"
 #include "test_support.hpp"
 
 namespace fs = std::filesystem;
@@ -512,4 +513,29 @@ TEST_CASE("mgrl train refuses an unwritable --out folder before training", "[cli
   requireRefusal(r, "--out " + out.string() + ": expected a folder where files can be written, found /proc is not "
                     "writable");
   CHECK_THAT(r.err, !Contains("train approach:"));
+}
+
+// Issue 19, defect 4, through the binary: a checkpoint whose state the learner rejects
+// (here a state index out of range, with the seal recomputed so that only the learner's
+// own check can catch it) is reported, naming state.json, and ignored; the run trains
+// from the start and ends with the table of a clean run.
+TEST_CASE("mgrl train --resume ignores a checkpoint whose learner state is out of range", "[cli][data]") {
+  Sandbox box("badstate");
+  const fs::path out = box.path("bundle"), state = box.path("bundle.checkpoints") / "approach" / "state.json";
+  REQUIRE(box.train(kCheckpointed + " --out " + shellWord(out), "MGRL_EXIT_AFTER_CHECKPOINTS=1").status == 75);
+  json checkpoint = json::parse(readText(state));
+  checkpoint["state"]["walk"]["state"] = 99999;
+  checkpoint["hash"] = mgrl::manifestHash(checkpoint);
+  std::ofstream(state) << checkpoint.dump(2);
+
+  const Run resumed = box.train(kCheckpointed + " --resume --out " + shellWord(out));
+  INFO("stderr: " << resumed.err);
+  const json report = resumed.report();
+  CHECK(report["behaviors"]["approach"]["stats"]["resumed"] == false);
+  CHECK_THAT(resumed.err, Contains(state.string()) && Contains("ignoring the checkpoint") &&
+                              Contains("resume: approach: no checkpoint to continue from, trained from the start"));
+  CHECK_THAT(resumed.err, !Contains("continuing from the checkpoint"));
+  const fs::path straight = box.path("straight");
+  REQUIRE(box.train(kCheckpointed + " --out " + shellWord(straight)).status == 0);
+  CHECK(readText(out / "approach.q.npy") == readText(straight / "approach.q.npy"));
 }
