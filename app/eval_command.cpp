@@ -7,6 +7,7 @@
 #include <fmt/format.h>
 
 #include "learn_common.hpp"
+#include "plural.hpp"
 #include "mgrl/learning/behavior.hpp"
 #include "mgrl/scenario/behaviors.hpp"
 #include "mgrl/runtime/controller.hpp"
@@ -218,7 +219,7 @@ std::string evalText(const json& r) {
   };
   std::string text = fmt::format(
       "controller {}: {}, success rate {:.1f} %, {}, mean return {:.3f}, {}decisions/s\n",
-      r["controller"].get<std::string>(), countOf(r["trials"].get<std::size_t>(), "trial"),
+      r["controller"].get<std::string>(), counted(r["trials"].get<std::size_t>(), "trial"),
       100 * r["success_rate"].get<double>(), timeToHit(r["mean_time_to_hit_s"], r["median_time_to_hit_s"]),
       r["mean_return"].get<double>(), humanCount(r["decisions_per_second"].get<double>()));
   if (r.contains("random_baseline")) {

@@ -29,10 +29,6 @@ std::string humanBytes(double bytes) {
   return fmt::format("{:.1f} MB", bytes / 1e6);
 }
 
-std::string countOf(std::size_t n, std::string_view noun) {
-  return fmt::format("{} {}{}", n, noun, n == 1 ? "" : "s");
-}
-
 std::string humanSeconds(double seconds) {
   if (seconds >= 0.1) return fmt::format("{:.2f} s", seconds);
   if (seconds >= 0.001) return fmt::format("{:.1f} ms", seconds * 1e3);
@@ -139,10 +135,10 @@ BundleSettings bundleSettings(const fs::path& dir, const Scenario& scenario) {
   } catch (const std::exception&) {
     return {};
   }
-  if (!manifest.is_object() || manifest.value("graph_key", json()) != json(graphCacheKey(scenario)) ||
+  const std::string graphKey = graphCacheKey(scenario);
+  if (!manifest.is_object() || manifest.value("graph_key", json()) != json(graphKey) ||
       !manifest.contains("behaviors") || !manifest["behaviors"].is_object())
     return {};
-  const std::string graphKey = graphCacheKey(scenario);
   for (const BehaviorSpec& spec : scenario.behaviors) {
     const json& entry = manifest["behaviors"].contains(spec.name) ? manifest["behaviors"][spec.name] : json();
     if (!entry.is_object() || !entry.contains("record") || !entry["record"].is_object()) continue;

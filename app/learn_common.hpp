@@ -22,9 +22,6 @@ std::string humanCount(double n);
 /// "88.3 MB", "47.40 GB".
 std::string humanBytes(double bytes);
 
-/// "1 frame", "30 frames".
-std::string countOf(std::size_t n, std::string_view noun);
-
 /// A duration for people: "12.31 s", "4.2 ms", "0.3 ms" (never "0.00 s").
 std::string humanSeconds(double seconds);
 

@@ -13,6 +13,7 @@
 #include <fmt/format.h>
 
 #include "learn_common.hpp"
+#include "plural.hpp"
 #include "mgrl/learning/behavior.hpp"
 #include "mgrl/scenario/behaviors.hpp"
 #include "mgrl/motion/bvh.hpp"
@@ -305,14 +306,14 @@ std::string simulateText(const json& r) {
       "simulate ({} controller, {}): {} x {} ({:.1f} s) in {}: {}avatar-frames/s\n"
       "hits: {} ({:.1f} per avatar-minute; head {}, chest {}, spine {}, targets {})\n",
       r["controller"].get<std::string>(), r["mode"].get<std::string>(),
-      countOf(r["avatars"].get<std::size_t>(), "avatar"), countOf(r["frames"].get<std::size_t>(), "frame"),
+      counted(r["avatars"].get<std::size_t>(), "avatar"), counted(r["frames"].get<std::size_t>(), "frame"),
       r["seconds"].get<double>(), humanSeconds(r["wall_seconds"].get<double>()),
       humanCount(r["avatar_frames_per_second"].get<double>()), r["hits"].get<std::size_t>(),
       r["hits_per_avatar_minute"].get<double>(), r["hits_by_part"]["head"].get<std::size_t>(),
       r["hits_by_part"]["chest"].get<std::size_t>(), r["hits_by_part"]["spine"].get<std::size_t>(),
       r["hits_by_part"]["target"].get<std::size_t>());
   if (r.contains("bvh_files"))
-    text += fmt::format("wrote {} BVH file{} to {}\n", r["bvh_files"].size(), r["bvh_files"].size() == 1 ? "" : "s",
+    text += fmt::format("wrote {} to {}\n", counted(r["bvh_files"].size(), "BVH file"),
                         r["bvh_folder"].get<std::string>());
   if (r.contains("events_file")) text += fmt::format("wrote the hits to {}\n", r["events_file"].get<std::string>());
   return text;

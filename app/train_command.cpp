@@ -271,13 +271,12 @@ json runTrain(const TrainOptions& options) {
   if (fs::exists(out / "manifest.json")) {
     try {
       PolicyBundle previous = loadPolicyBundle(out, model, loaded.graph.key);
-      const json unfinished = previous.provenance.value("unfinished", json::array());
+      // A stopped run's bundle holds only finished tables (its unfinished ones are absent).
       for (auto& [name, entry] : previous.behaviors) {
         const auto match = std::find_if(all.begin(), all.end(), [&](const Behavior& b) { return b.name == name; });
         if (match != all.end() && match->key == entry.key) {
           bundle.behaviors.emplace(name, std::move(entry));
-          const bool wasUnfinished = std::find(unfinished.begin(), unfinished.end(), json(name)) != unfinished.end();
-          if (options.resume && !wasUnfinished) finished.insert(name);
+          if (options.resume) finished.insert(name);
         } else {
           log(fmt::format("warning: dropping {}'s table from {}: the scenario {}", name, out.string(),
                           match == all.end() ? "no longer has this behaviour" : "now asks for other settings"));

@@ -329,14 +329,32 @@ StateActionModel ring() {
                        {2, 1, 8, 0.05, 0.2, 2.1, {}}});
 }
 
+// The ring's approach problem with a small checkpointed Q-learning run, for the resume and
+// checkpoint tests.
+struct RingSetup {
+  RingSetup()
+      : model(ring()),
+        grid(makeGrid("{type: polar2d, radius: 2, rings: 5, sectors: 13}", model)),
+        reward(app::plugins().rewards.create(yaml("{type: approach}"))),
+        problem{model, *grid, *reward, environment},
+        tabulated(GridModel::build(problem, 1)) {}
+  StateActionModel model;
+  std::unique_ptr<Discretizer> grid;
+  std::unique_ptr<Reward> reward;
+  StaticTarget environment;
+  Problem problem;
+  GridModel tabulated;
+  RingSetup(const RingSetup&) = delete;  // problem refers to the members
+  RingSetup& operator=(const RingSetup&) = delete;
+};
+constexpr const char* kRingLearner =
+    "{type: q_learning, budget: 2000, seed: 9, checkpoint_every: 600, curve_points: 4}";
+
 TEST_CASE("Q-learning is deterministic and a resumed run ends with the uninterrupted table", "[learning]") {
-  const StateActionModel m = ring();
-  const auto grid = makeGrid("{type: polar2d, radius: 2, rings: 5, sectors: 13}", m);
-  const auto reward = app::plugins().rewards.create(yaml("{type: approach}"));
-  const StaticTarget environment;
-  const Problem problem{m, *grid, *reward, environment};
-  const GridModel g = GridModel::build(problem, 1);
-  const std::string learner = "{type: q_learning, budget: 2000, seed: 9, checkpoint_every: 600, curve_points: 4}";
+  const RingSetup setup;
+  const Problem& problem = setup.problem;
+  const GridModel& g = setup.tabulated;
+  const std::string learner = kRingLearner;
   const TrainResult whole = trainWith(learner, problem, g);
   REQUIRE(whole.finalResidual > 1e-3);  // still learning: the comparisons below mean something
   REQUIRE(trainWith(learner, problem, g).table == whole.table);
@@ -366,13 +384,11 @@ TEST_CASE("Q-learning is deterministic and a resumed run ends with the uninterru
 TEST_CASE("Q-learning reports a damaged or invalid checkpoint, ignores it and trains from the start",
           "[learning][checkpoint]") {
   using nlohmann::json;
-  const StateActionModel m = ring();
-  const auto grid = makeGrid("{type: polar2d, radius: 2, rings: 5, sectors: 13}", m);
-  const auto reward = app::plugins().rewards.create(yaml("{type: approach}"));
-  const StaticTarget environment;
-  const Problem problem{m, *grid, *reward, environment};
-  const GridModel g = GridModel::build(problem, 1);
-  const std::string learner = "{type: q_learning, budget: 2000, seed: 9, checkpoint_every: 600, curve_points: 4}";
+  const RingSetup setup;
+  const StateActionModel& m = setup.model;
+  const Problem& problem = setup.problem;
+  const GridModel& g = setup.tabulated;
+  const std::string learner = kRingLearner;
   const TrainResult clean = trainWith(learner, problem, g);
 
   test::TempDir tmp("learning-checkpoint-test");
@@ -479,13 +495,11 @@ TEST_CASE("Q-learning reports a damaged or invalid checkpoint, ignores it and tr
 }
 
 TEST_CASE("Q-learning resumes an intact directory checkpoint to the uninterrupted table", "[learning][checkpoint]") {
-  const StateActionModel m = ring();
-  const auto grid = makeGrid("{type: polar2d, radius: 2, rings: 5, sectors: 13}", m);
-  const auto reward = app::plugins().rewards.create(yaml("{type: approach}"));
-  const StaticTarget environment;
-  const Problem problem{m, *grid, *reward, environment};
-  const GridModel g = GridModel::build(problem, 1);
-  const std::string learner = "{type: q_learning, budget: 2000, seed: 9, checkpoint_every: 600, curve_points: 4}";
+  const RingSetup setup;
+  const StateActionModel& m = setup.model;
+  const Problem& problem = setup.problem;
+  const GridModel& g = setup.tabulated;
+  const std::string learner = kRingLearner;
   const TrainResult clean = trainWith(learner, problem, g);
   test::TempDir tmp("learning-checkpoint-test");
   std::vector<std::string> log;
@@ -500,13 +514,10 @@ TEST_CASE("Q-learning resumes an intact directory checkpoint to the uninterrupte
 }
 
 TEST_CASE("a checkpointer that cannot report refuses a state the learner rejects", "[learning][checkpoint]") {
-  const StateActionModel m = ring();
-  const auto grid = makeGrid("{type: polar2d, radius: 2, rings: 5, sectors: 13}", m);
-  const auto reward = app::plugins().rewards.create(yaml("{type: approach}"));
-  const StaticTarget environment;
-  const Problem problem{m, *grid, *reward, environment};
-  const GridModel g = GridModel::build(problem, 1);
-  const std::string learner = "{type: q_learning, budget: 2000, seed: 9, checkpoint_every: 600, curve_points: 4}";
+  const RingSetup setup;
+  const Problem& problem = setup.problem;
+  const GridModel& g = setup.tabulated;
+  const std::string learner = kRingLearner;
   MemoryCheckpointer store(2);
   REQUIRE_THROWS_WITH(trainWith(learner, problem, g, &store), "simulated crash");
   MemoryCheckpointer broken = store;
