@@ -17,6 +17,7 @@
 #include "inspect.hpp"
 #include "learn_commands.hpp"
 #include "plugins.hpp"
+#include "serve/serve_command.hpp"
 #include "mgrl/learning/behavior.hpp"
 #include "mgrl/scenario/behaviors.hpp"
 #include "mgrl/core/data_paths.hpp"
@@ -206,6 +207,22 @@ int main(int argc, char** argv) {
   simulateCommand->add_option("--data", dataDir, "Motion capture folder (default: MGRL_DATA, else ../shared/mocap)");
   simulateCommand->add_option("--cache", cacheDir, "Cache folder (default: MGRL_CACHE, else ~/.cache/mgrl)");
 
+  mgrl::serve::ServeCommandOptions serve;
+  CLI::App* serveCommand = app.add_subcommand(
+      "serve", "Serve the interactive viewer (paper sec. 6.6, 6.7) in the browser: drag a target for a boxer, watch "
+               "two boxers spar or a crowd of them; switch controllers and weights live (docs/viewer-protocol.md).");
+  serveCommand->add_option("SCENARIO", scenarioPath, "Scenario YAML file")->required();
+  serveCommand->add_option("--policy", serve.policy,
+                           "Policy bundle folder (default: the one mgrl train writes; none: the online search runs)");
+  serveCommand->add_option("--host", serve.host, "Address to listen on (other than 127.0.0.1: reachable from other "
+                                                 "machines)")->default_str("127.0.0.1");
+  serveCommand->add_option("--port", serve.port, "Port (0: any free one; the URL is printed)")->default_val(8080);
+  serveCommand->add_flag("--open", serve.open, "Open the page in the desktop's browser (xdg-open)");
+  serveCommand->add_option("--web", serve.web, "The viewer's folder (default: MGRL_WEB, else the repository's web/)");
+  serveCommand->add_option("--set", serve.sets, "Override a scenario key (repeatable)");
+  serveCommand->add_option("--data", dataDir, "Motion capture folder (default: MGRL_DATA, else ../shared/mocap)");
+  serveCommand->add_option("--cache", cacheDir, "Cache folder (default: MGRL_CACHE, else ~/.cache/mgrl)");
+
   CLI::App* listCommand =
       app.add_subcommand("list", "List every registered discretizer, reward, environment model and learner with its "
                                  "parameters, defaults and units.");
@@ -324,6 +341,16 @@ int main(int argc, char** argv) {
         std::cout << report.dump(2) << '\n';
       else
         std::cout << mgrl::app::simulateText(report);
+    }
+    if (serveCommand->parsed()) {
+      serve.scenario = scenarioPath;
+      serve.dataDir = dataDir;
+      serve.cacheDir = cacheDir;
+      serve.log = log;
+      serve.announce = [&](const std::string& url) {
+        std::cout << fmt::format("serving {} at {} (Ctrl-C stops)", scenarioPath, url) << std::endl;
+      };
+      mgrl::serve::runServe(serve);
     }
     if (listCommand->parsed()) {
       if (json)

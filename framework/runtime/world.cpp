@@ -300,6 +300,12 @@ void World::updatePoses(std::size_t begin, std::size_t end) {
   }
 }
 
+void World::setControllerFactory(std::function<std::unique_ptr<Controller>()> makeController) {
+  if (!makeController) throw Error("world: expected a controller factory");
+  setup_.makeController = std::move(makeController);
+  controllers_.clear();  // run() makes as many as it needs
+}
+
 void World::run(std::size_t frames) {
   const std::size_t n = avatars_.size();
   // Threads pay off only with many avatars (three barriers per frame).

@@ -133,6 +133,10 @@ class World {
   /// Simulates `frames` more frames (one model frame each). Deterministic for a seed,
   /// whatever the thread count.
   void run(std::size_t frames);
+  /// Replaces the controllers (a live switch in the viewer: another controller, other
+  /// weights); the avatars carry on from where they are, deciding with the new ones from
+  /// their next decision.
+  void setControllerFactory(std::function<std::unique_ptr<Controller>()> makeController);
 
   std::size_t avatarCount() const;
   std::size_t frame() const { return frame_; }

@@ -1,0 +1,414 @@
+#include "serve/viewer.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <optional>
+
+#include <fmt/format.h>
+#include <nlohmann/json.hpp>
+
+#include "learn_common.hpp"
+#include "mgrl/learning/behavior.hpp"
+#include "mgrl/learning/policy_bundle.hpp"
+#include "mgrl/runtime/controller.hpp"
+#include "mgrl/runtime/world.hpp"
+#include "mgrl/scenario/behaviors.hpp"
+#include "plugins.hpp"
+
+namespace mgrl::serve {
+
+namespace fs = std::filesystem;
+using json = nlohmann::json;
+using Clock = std::chrono::steady_clock;
+
+struct ViewerAssets {
+  std::optional<app::Loaded> loaded;
+  std::vector<Behavior> behaviors;
+  PolicyBundle bundle;
+  std::vector<PolicyPart> policy;  ///< empty: no bundle, the policy controller is not offered
+  fs::path policyDir;
+  std::vector<SearchPart> search;
+  StaticTarget environment;
+  double gamma = 0.95;
+  BodyTable body;
+  WorldParams params;
+  double meanOutDegree = 1;  ///< actions per state, for the online search's cost
+  std::string note;          ///< shown on the page (no policy bundle, ...)
+
+  const StateActionModel& model() const { return loaded->graph.model; }
+};
+
+namespace {
+
+// The online search expands about (actions per state)^horizon actions per decision; all
+// avatars of a page decide within a few frames of each other. Above this many expansions
+// per round, the world (and every page, on the one network thread) would stall.
+constexpr double kSearchBudget = 1e6;
+
+double searchCost(const ViewerAssets& assets, int horizon, std::size_t avatars) {
+  return static_cast<double>(avatars) * std::pow(assets.meanOutDegree, horizon);
+}
+
+// The largest horizon the budget allows for `avatars` (at least 1).
+int affordableHorizon(const ViewerAssets& assets, int wanted, std::size_t avatars) {
+  int h = wanted;
+  while (h > 1 && searchCost(assets, h, avatars) > kSearchBudget) --h;
+  return h;
+}
+
+// Decisions timed (paper sec. 6.6 reports the runtime cost of a choice).
+struct DecisionClock {
+  double seconds = 0;
+  std::size_t count = 0;
+};
+
+class TimedController final : public Controller {
+ public:
+  TimedController(std::unique_ptr<Controller> inner, DecisionClock& clock) : inner_(std::move(inner)), clock_(clock) {}
+  std::size_t choose(std::uint32_t s, const Eigen::Vector3d& e, Rng& rng) override {
+    const auto start = Clock::now();
+    const std::size_t a = inner_->choose(s, e, rng);
+    clock_.seconds += std::chrono::duration<double>(Clock::now() - start).count();
+    ++clock_.count;
+    return a;
+  }
+
+ private:
+  std::unique_ptr<Controller> inner_;
+  DecisionClock& clock_;
+};
+
+const char* struckName(const HitEvent& e) { return e.target < 0 ? "target" : bodyPartName(e.part); }
+
+// A page is sent at most this many hit messages per call of advance(); the others are
+// only counted (a crowd of 2,000 lands over a thousand a second).
+constexpr std::size_t kHitMessagesPerAdvance = 30;
+
+}  // namespace
+
+std::shared_ptr<const ViewerAssets> loadViewerAssets(const ServeOptions& options) {
+  auto assets = std::make_shared<ViewerAssets>();
+  Scenario scenario = app::checkedScenario(options);
+  assets->params =
+      readWorldParams(scenario.root.has("world") ? scenario.root.child("world") : ConfigNode::parse("", "world"));
+  // With no --policy, a missing or stale default bundle is not an error: the search runs
+  // and the page says how to train one. An explicit --policy must work.
+  fs::path policyDir;
+  if (!options.policy.empty()) {
+    policyDir = app::resolvePolicy(options.policy, scenario, options);
+  } else {
+    try {
+      policyDir = app::resolvePolicy({}, scenario, options);
+    } catch (const Error& e) {
+      assets->note = fmt::format("No usable policy bundle ({}), so the online search runs instead. Train one with: "
+                                 "mgrl train {}",
+                                 e.what(), options.scenario.string());
+    }
+  }
+  assets->loaded.emplace(app::load(options, std::move(scenario)));
+  const app::Loaded& loaded = *assets->loaded;
+  assets->behaviors = buildBehaviors(loaded.scenario, app::plugins(), loaded.graph.model, loaded.graph.key);
+  if (!policyDir.empty()) {
+    assets->policy = app::policyParts(policyDir, assets->behaviors, loaded.graph, options, assets->bundle);
+    assets->policyDir = policyDir;
+  }
+  for (const Behavior& b : assets->behaviors)
+    assets->search.push_back({b.discretizer.get(), b.reward.get(), b.weight, b.activation});
+  assets->gamma = assets->behaviors.front().reward->gamma();
+  assets->body = makeBodyTable(loaded.graph.db);
+  const StateActionModel& model = loaded.graph.model;
+  assets->meanOutDegree =
+      std::max(1.0, static_cast<double>(model.actionCount()) / static_cast<double>(std::max<std::size_t>(1, model.stateCount())));
+  return assets;
+}
+
+struct ViewerSession::State {
+  std::unique_ptr<World> world;
+  std::string controller;
+  int horizon = 3;
+  std::vector<double> weights;
+  double speed = 1, carry = 0;
+  bool paused = false;
+  int steps = 0;
+  DecisionClock decisions;
+  std::size_t eventsSeen = 0;
+  std::deque<double> hitTimes;  ///< simulated times of the hits of the last 30 s
+  FrameWriter writer;
+  double busySeconds = 0;       ///< simulating and encoding, since the last stats
+  std::size_t busyFrames = 0;
+  std::string adjustment;       ///< what the session changed on its own (scene note)
+};
+
+ViewerSession::ViewerSession(std::shared_ptr<const ViewerAssets> assets)
+    : assets_(std::move(assets)), state_(std::make_unique<State>()) {
+  for (const Behavior& b : assets_->behaviors) state_->weights.push_back(b.weight);
+  state_->controller = assets_->policy.empty() ? "online_search" : "policy";
+  rebuild(Mode::Target, 1);
+}
+
+ViewerSession::~ViewerSession() = default;
+
+double ViewerSession::frameTime() const { return assets_->model().frameTime; }
+std::size_t ViewerSession::avatars() const { return state_->world->avatarCount(); }
+
+void ViewerSession::applyController() {
+  State& s = *state_;
+  const ViewerAssets& a = *assets_;
+  if (s.controller == "online_search") {
+    const int affordable = affordableHorizon(a, s.horizon, s.world->avatarCount());
+    if (affordable < s.horizon) {
+      s.adjustment = fmt::format("The online search's horizon was lowered from {} to {} actions for {} avatars (it "
+                                 "would expand about {:.0f} actions per round of decisions; at most {:.0f} keep the "
+                                 "world running).",
+                                 s.horizon, affordable, s.world->avatarCount(),
+                                 searchCost(a, s.horizon, s.world->avatarCount()), kSearchBudget);
+      s.horizon = affordable;
+    }
+  }
+  std::vector<PolicyPart> policy = a.policy;
+  std::vector<SearchPart> search = a.search;
+  for (std::size_t i = 0; i < s.weights.size(); ++i) {
+    if (i < policy.size()) policy[i].weight = s.weights[i];
+    search[i].weight = s.weights[i];
+  }
+  const std::string kind = s.controller;
+  const int horizon = s.horizon;
+  const ViewerAssets* assets = assets_.get();
+  DecisionClock* clock = &s.decisions;
+  s.world->setControllerFactory([=]() -> std::unique_ptr<Controller> {
+    std::unique_ptr<Controller> inner;
+    if (kind == "policy")
+      inner = std::make_unique<PolicyController>(assets->model(), policy, assets->params.variety);
+    else if (kind == "online_search")
+      inner = std::make_unique<OnlineSearchController>(assets->model(), assets->environment, search,
+                                                       SearchHorizon{horizon, 0}, assets->gamma);
+    else
+      inner = std::make_unique<RandomController>(assets->model());
+    return std::make_unique<TimedController>(std::move(inner), *clock);
+  });
+}
+
+void ViewerSession::rebuild(Mode mode, int avatars) {
+  const ViewerAssets& a = *assets_;
+  State& s = *state_;
+  WorldSetup setup;
+  setup.model = &a.model();
+  setup.body = &a.body;
+  setup.db = &a.loaded->graph.db;
+  setup.blendFrames = a.loaded->scenario.graph.blendFrames;
+  setup.params = a.params;
+  setup.params.mode = mode == Mode::Target ? "targets" : "sparring";
+  setup.avatars = static_cast<std::size_t>(avatars);
+  setup.seed = 1;
+  setup.threads = 1;  // every page on the server's one thread
+  setup.poses = true;
+  setup.makeController = [&a] { return std::make_unique<RandomController>(a.model()); };  // replaced below
+  auto world = std::make_unique<World>(setup);
+  s.world = std::move(world);
+  mode_ = mode;
+  s.adjustment.clear();
+  applyController();
+  s.carry = 0;
+  s.eventsSeen = 0;
+  s.hitTimes.clear();
+  s.decisions = {};
+  s.world->run(1);  // poses exist from the first frame on
+  outbox_.push_back(scene());
+}
+
+std::string ViewerSession::scene() const {
+  const ViewerAssets& a = *assets_;
+  const State& s = *state_;
+  json joints = json::array();
+  for (const Joint& joint : a.loaded->graph.db.skeleton->joints())
+    joints.push_back({{"name", joint.name}, {"parent", joint.parent}});
+  json partners = json::array();
+  for (std::size_t i = 0; i < s.world->avatarCount(); ++i) partners.push_back(s.world->partner(i));
+  json behaviors = json::array();
+  for (std::size_t i = 0; i < a.behaviors.size(); ++i)
+    behaviors.push_back({{"name", a.behaviors[i].name},
+                         {"weight", s.weights[i]},
+                         {"activation", std::string(activationName(a.behaviors[i].activation))}});
+  json controllers = json::array();
+  if (!a.policy.empty()) controllers.push_back("policy");
+  controllers.push_back("online_search");
+  controllers.push_back("random");
+  std::string note = a.note;
+  if (!s.adjustment.empty()) note += (note.empty() ? "" : " ") + s.adjustment;
+  return json{{"type", "scene"},
+              {"mode", modeName(mode_)},
+              {"avatars", s.world->avatarCount()},
+              {"fps", 1.0 / a.model().frameTime},
+              {"joints", joints},
+              {"partners", partners},
+              {"controller", s.controller},
+              {"controllers", controllers},
+              {"horizon", s.horizon},
+              {"behaviors", behaviors},
+              {"policy", a.policyDir.empty() ? json(nullptr) : json(a.policyDir.string())},
+              {"note", note},
+              {"scenario", a.loaded->scenario.name},
+              {"limits",
+               {{"crowd_min", Limits::kCrowdMin},
+                {"crowd_max", Limits::kCrowdMax},
+                {"message_bytes", Limits::kMessageBytes},
+                {"messages_per_second", Limits::kMessagesPerSecond},
+                {"horizon_max", Limits::kHorizonMax},
+                {"weight_max", Limits::kWeightMax},
+                {"speed_min", Limits::kSpeedMin},
+                {"speed_max", Limits::kSpeedMax},
+                {"target_reach", Limits::kTargetReach},
+                {"target_height_max", Limits::kTargetHeightMax}}}}
+      .dump();
+}
+
+void ViewerSession::handle(std::string_view text) {
+  State& s = *state_;
+  const ViewerAssets& a = *assets_;
+  try {
+    const ClientMessage message = parseClientMessage(text);
+    if (const auto* mode = std::get_if<SetMode>(&message)) {
+      rebuild(mode->mode, mode->avatars);
+    } else if (const auto* move = std::get_if<MoveTarget>(&message)) {
+      if (mode_ != Mode::Target)
+        throw Error(fmt::format("move_target: expected target mode, found {} mode", modeName(mode_)));
+      s.world->moveTarget(0, move->position);
+    } else if (const auto* choice = std::get_if<SetController>(&message)) {
+      if (choice->controller == "policy" && a.policy.empty())
+        throw Error("controller.controller: expected online_search or random (this server has no policy bundle), "
+                    "found \"policy\"");
+      const std::string old = s.controller;
+      const int oldHorizon = s.horizon;
+      s.controller = choice->controller;
+      if (choice->horizon > 0) s.horizon = choice->horizon;
+      s.adjustment.clear();
+      try {
+        applyController();
+      } catch (...) {
+        s.controller = old;
+        s.horizon = oldHorizon;
+        applyController();
+        throw;
+      }
+      outbox_.push_back(scene());
+    } else if (const auto* set = std::get_if<SetWeights>(&message)) {
+      std::vector<double> weights = s.weights;
+      for (const auto& [name, weight] : set->weights) {
+        const auto it = std::find_if(a.behaviors.begin(), a.behaviors.end(), [&](const Behavior& b) { return b.name == name; });
+        if (it == a.behaviors.end()) {
+          std::vector<std::string> names;
+          for (const Behavior& b : a.behaviors) names.push_back(b.name);
+          throw Error(fmt::format("weights.weights: expected behaviour names from {}, found \"{}\"", fmt::join(names, ", "),
+                                  name));
+        }
+        weights[static_cast<std::size_t>(it - a.behaviors.begin())] = weight;
+      }
+      s.weights = weights;
+      applyController();
+      outbox_.push_back(scene());
+    } else if (const auto* pause = std::get_if<Pause>(&message)) {
+      s.paused = pause->paused;
+      s.carry = 0;
+    } else if (std::holds_alternative<Step>(message)) {
+      if (!s.paused) throw Error("step: expected a paused world (send {\"type\": \"pause\", \"paused\": true} first)");
+      s.steps = std::min(s.steps + 1, 30);
+    } else if (const auto* speed = std::get_if<SetSpeed>(&message)) {
+      s.speed = speed->speed;
+    }
+  } catch (const Error& e) {
+    outbox_.push_back(json{{"type", "error"}, {"message", e.what()}}.dump());
+  }
+}
+
+bool ViewerSession::advance(double frames) {
+  State& s = *state_;
+  std::size_t n = 0;
+  if (s.paused) {
+    n = static_cast<std::size_t>(s.steps);
+    s.steps = 0;
+  } else {
+    s.carry += frames * s.speed;
+    n = static_cast<std::size_t>(std::floor(s.carry));
+    s.carry -= static_cast<double>(n);
+    if (n > 8) {  // a late timer does not make the world race to catch up
+      n = 8;
+      s.carry = 0;
+    }
+  }
+  if (n == 0) return false;
+  const auto start = Clock::now();
+  s.world->run(n);
+  s.busySeconds += std::chrono::duration<double>(Clock::now() - start).count();
+  s.busyFrames += n;
+  const auto& events = s.world->events();
+  std::size_t sent = 0;
+  for (; s.eventsSeen < events.size(); ++s.eventsSeen) {
+    const HitEvent& e = events[s.eventsSeen];
+    s.hitTimes.push_back(e.time);
+    if (sent++ >= kHitMessagesPerAdvance) continue;
+    outbox_.push_back(json{{"type", "hit"},
+                           {"time", e.time},
+                           {"attacker", e.attacker},
+                           {"target", e.target},
+                           {"part", struckName(e)},
+                           {"hand", e.hand == 0 ? "left" : "right"},
+                           {"speed", e.speed},
+                           {"point", {e.point.x(), e.point.y(), e.point.z()}}}
+                          .dump());
+  }
+  while (!s.hitTimes.empty() && s.hitTimes.front() < s.world->time() - 30) s.hitTimes.pop_front();
+  return true;
+}
+
+const std::vector<std::uint8_t>& ViewerSession::frame() {
+  State& s = *state_;
+  const World& world = *s.world;
+  const auto start = Clock::now();
+  std::uint32_t targets = 0;
+  for (std::size_t i = 0; i < world.avatarCount(); ++i) targets += world.partner(i) < 0;
+  FrameHeader header;
+  header.joints = static_cast<std::uint16_t>(assets_->loaded->graph.db.skeleton->jointCount());
+  header.avatars = static_cast<std::uint32_t>(world.avatarCount());
+  header.targets = targets;
+  header.frame = static_cast<std::uint32_t>(world.frame());
+  header.time = static_cast<float>(world.time());
+  s.writer.begin(header);
+  for (std::size_t i = 0; i < world.avatarCount(); ++i) s.writer.avatar(world.jointPositions(i));
+  for (std::size_t i = 0; i < world.avatarCount(); ++i)
+    if (world.partner(i) < 0) s.writer.target(static_cast<std::uint32_t>(i), world.target(i).centre());
+  const auto& bytes = s.writer.finish();
+  s.busySeconds += std::chrono::duration<double>(Clock::now() - start).count();
+  return bytes;
+}
+
+std::string ViewerSession::stats(std::size_t framesSent, std::size_t framesDropped) {
+  State& s = *state_;
+  const World& world = *s.world;
+  const double window = std::min(30.0, std::max(world.time(), 1.0));
+  json j = {{"type", "stats"},
+            {"time", world.time()},
+            {"frame", world.frame()},
+            {"paused", s.paused},
+            {"speed", s.speed},
+            {"hits", world.events().size()},
+            {"hits_per_minute", static_cast<double>(s.hitTimes.size()) / window * 60.0},
+            {"decisions", world.decisions()},
+            {"decision_us", s.decisions.count ? s.decisions.seconds / static_cast<double>(s.decisions.count) * 1e6 : 0.0},
+            {"server_ms_per_frame", s.busyFrames ? s.busySeconds / static_cast<double>(s.busyFrames) * 1e3 : 0.0},
+            {"frames_sent", framesSent},
+            {"frames_dropped", framesDropped},
+            {"bytes_per_avatar_frame",
+             avatarRecordBytes(assets_->loaded->graph.db.skeleton->jointCount())}};
+  s.decisions = {};
+  s.busySeconds = 0;
+  s.busyFrames = 0;
+  return j.dump();
+}
+
+std::vector<std::string> ViewerSession::takeOutbox() {
+  std::vector<std::string> out;
+  out.swap(outbox_);
+  return out;
+}
+
+}  // namespace mgrl::serve

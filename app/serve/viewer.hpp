@@ -1,0 +1,67 @@
+#pragma once
+/// \file
+/// What `mgrl serve` runs for each page (docs/viewer-protocol.md): a world of its own
+/// (paper sec. 6.6: one boxer and a target the user drags; sec. 6.7: sparring pairs, a
+/// crowd of them), its controller switched live, and the messages and pose frames the
+/// page is sent. Knows nothing of sockets: the server calls it.
+#include <chrono>
+#include <deque>
+#include <filesystem>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "learn_commands.hpp"
+#include "serve/protocol.hpp"
+
+namespace mgrl::serve {
+
+struct ServeOptions : app::LearnOptions {
+  std::filesystem::path policy;  ///< "" the scenario's default bundle, if trained
+};
+
+/// Everything the sessions share, loaded once: the graph, the behaviours, the policy
+/// bundle (if any), the body table. Read-only once made.
+struct ViewerAssets;
+std::shared_ptr<const ViewerAssets> loadViewerAssets(const ServeOptions& options);
+
+/// One page's world and clock.
+class ViewerSession {
+ public:
+  explicit ViewerSession(std::shared_ptr<const ViewerAssets> assets);
+  ~ViewerSession();
+  ViewerSession(const ViewerSession&) = delete;
+  ViewerSession& operator=(const ViewerSession&) = delete;
+
+  /// Acts on one page message (text). Refusals (mgrl::Error) are answered with an `error`
+  /// message in the outbox and change nothing.
+  void handle(std::string_view text);
+  /// Advances the world by `frames` frames of its clock times the speed (fractions carry
+  /// over); nothing while paused unless a step was asked for. True if it moved.
+  bool advance(double frames);
+  /// The pose frame of now.
+  const std::vector<std::uint8_t>& frame();
+  /// The `stats` message, with the transport's frame counters (the session's own
+  /// counters restart).
+  std::string stats(std::size_t framesSent, std::size_t framesDropped);
+  /// Text messages waiting to be sent (scene, hits, errors), oldest first; cleared.
+  std::vector<std::string> takeOutbox();
+
+  /// The world's frame time, s.
+  double frameTime() const;
+  Mode mode() const { return mode_; }
+  std::size_t avatars() const;
+
+ private:
+  struct State;
+  void rebuild(Mode mode, int avatars);
+  void applyController();
+  std::string scene() const;
+
+  std::shared_ptr<const ViewerAssets> assets_;
+  std::unique_ptr<State> state_;
+  Mode mode_ = Mode::Target;
+  std::vector<std::string> outbox_;
+};
+
+}  // namespace mgrl::serve
