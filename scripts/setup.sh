@@ -1,8 +1,16 @@
 #!/usr/bin/env bash
-# Installs what mgrl needs to build and test, from Debian 12 packages, if missing.
+# Installs what mgrl needs to build and test, from Debian 12 packages, if missing, and the
+# viewer's three.js (web/, from npm, exactly as web/package-lock.json says).
+#   scripts/setup.sh          what building, the demo and `mgrl serve` need
+#   scripts/setup.sh --test   also Chromium, for the browser test (tests/web/)
 set -euo pipefail
+root="$(cd "$(dirname "$0")/.." && pwd)"
 
-packages=(g++ cmake ninja-build pkg-config git python3 libeigen3-dev libfmt-dev libcli11-dev nlohmann-json3-dev libyaml-cpp-dev catch2)
+packages=(g++ cmake ninja-build pkg-config git python3 libeigen3-dev libfmt-dev libcli11-dev nlohmann-json3-dev
+          libyaml-cpp-dev catch2 libboost-dev)
+command -v node >/dev/null 2>&1 || packages+=(nodejs)
+command -v npm >/dev/null 2>&1 || packages+=(npm)
+[ "${1:-}" = "--test" ] && packages+=(chromium)
 
 missing=()
 for p in "${packages[@]}"; do
@@ -15,4 +23,12 @@ if ((${#missing[@]})); then
   export DEBIAN_FRONTEND=noninteractive
   $sudo apt-get update -qq
   $sudo apt-get install -y -qq --no-install-recommends "${missing[@]}" >/dev/null
+fi
+
+# three.js and playwright-core, pinned by the lock file; again only when the lock changed.
+stamp="$root/web/node_modules/.mgrl-lock"
+if ! cmp -s "$root/web/package-lock.json" "$stamp" 2>/dev/null; then
+  echo "setup: installing the viewer's packages (npm ci in web/)" >&2
+  (cd "$root/web" && npm ci --no-audit --no-fund --loglevel=error >/dev/null)
+  cp "$root/web/package-lock.json" "$stamp"
 fi

@@ -7,11 +7,14 @@ root="$(cd "$(dirname "$0")/.." && pwd)"
 jobs="$(nproc)"
 start=$SECONDS
 say() { echo "== [$((SECONDS - start)) s] $*" >&2; }
-"$root/scripts/setup.sh"
+"$root/scripts/setup.sh" --test
 
 say "Release build and full test suite"
 "$root/scripts/build.sh" "$root/build"
 (cd "$root/build" && ctest --output-on-failure -j "$jobs")
+
+say "browser test: a real mgrl serve in headless Chromium (tests/web/)"
+"$root/scripts/browser_test.sh" "$root/build"
 
 say "README sample outputs against the program's (scripts/readme_outputs.py)"
 python3 "$root/scripts/readme_outputs.py" --check --mgrl "$root/build/app/mgrl"

@@ -1,0 +1,458 @@
+// mgrl serve (docs/viewer-protocol.md): the page's messages, the pose frame, static files,
+// a page's world, and the real server over real sockets with hostile pages beside a good one.
+#include <chrono>
+#include <fstream>
+#include <thread>
+#include <utility>  // before Boost 1.74's asio, which uses std::exchange without it
+
+#include <boost/asio.hpp>
+#include <boost/beast/core.hpp>
+#include <boost/beast/http.hpp>
+#include <boost/beast/websocket.hpp>
+#include <catch2/catch.hpp>
+#include <nlohmann/json.hpp>
+
+#include "learn_commands.hpp"
+#include "serve/protocol.hpp"
+#include "serve/server.hpp"
+#include "serve/static_files.hpp"
+#include "serve/viewer.hpp"
+#include "test_support.hpp"
+
+namespace mgrl {
+namespace {
+
+namespace fs = std::filesystem;
+namespace beast = boost::beast;
+namespace http = beast::http;
+namespace websocket = beast::websocket;
+namespace net = boost::asio;
+using tcp = net::ip::tcp;
+using json = nlohmann::json;
+using serve::parseClientMessage;
+
+void writeFile(const fs::path& path, const std::string& text) {
+  fs::create_directories(path.parent_path());
+  std::ofstream(path) << text;
+}
+
+TEST_CASE("page messages are taken only when every field is what the protocol says", "[serve]") {
+  const auto mode = std::get<serve::SetMode>(parseClientMessage(R"({"type": "mode", "mode": "crowd", "avatars": 100})"));
+  CHECK(mode.mode == serve::Mode::Crowd);
+  CHECK(mode.avatars == 100);
+  CHECK(std::get<serve::SetMode>(parseClientMessage(R"({"type": "mode", "mode": "crowd"})")).avatars == 30);
+  CHECK(std::get<serve::SetMode>(parseClientMessage(R"({"type": "mode", "mode": "sparring"})")).avatars == 2);
+  const auto move = std::get<serve::MoveTarget>(parseClientMessage(R"({"type": "move_target", "position": [1.5, 1.2, -0.5]})"));
+  CHECK(move.position.isApprox(Eigen::Vector3d(1.5, 1.2, -0.5)));
+  const auto controller =
+      std::get<serve::SetController>(parseClientMessage(R"({"type": "controller", "controller": "online_search", "horizon": 2})"));
+  CHECK(controller.controller == "online_search");
+  CHECK(controller.horizon == 2);
+  CHECK(std::get<serve::SetWeights>(parseClientMessage(R"({"type": "weights", "weights": {"hit": 2.5}})")).weights.at("hit") == 2.5);
+  CHECK(std::get<serve::Pause>(parseClientMessage(R"({"type": "pause", "paused": true})")).paused);
+  CHECK(std::holds_alternative<serve::Step>(parseClientMessage(R"({"type": "step"})")));
+  CHECK(std::get<serve::SetSpeed>(parseClientMessage(R"({"type": "speed", "speed": 0.5})")).speed == 0.5);
+
+  const std::vector<std::pair<std::string, std::string>> refused = {
+      {"not json", "expected a JSON object, found text that is not JSON"},
+      {"[1, 2]", "expected a JSON object, found [1,2]"},
+      {R"({"mode": "target"})", "expected a field \"type\""},
+      {R"({"type": 7})", "message.type: expected a string, found 7"},
+      {R"({"type": "explode"})", "expected one of mode, move_target, controller, weights, pause, step, speed, found \"explode\""},
+      {R"({"type": "step", "extra": 1})", "step: unexpected field \"extra\""},
+      {R"({"type": "mode", "mode": "dance"})", "mode.mode: expected one of target, sparring, crowd, found \"dance\""},
+      {R"({"type": "mode", "mode": "crowd", "avatars": 2001})", "mode.avatars: expected a whole number in [2, 2000], found 2001"},
+      {R"({"type": "mode", "mode": "crowd", "avatars": 2.5})", "mode.avatars: expected a whole number in [2, 2000], found 2.5"},
+      {R"({"type": "mode", "mode": "sparring", "avatars": 4})", "\"avatars\" is only for the crowd"},
+      {R"({"type": "move_target", "position": [1, 2]})", "move_target.position: expected [x, y, z] in metres"},
+      {R"({"type": "move_target", "position": [1, 9, 0]})", "move_target.position[1]: expected a number in [0, 3], found 9"},
+      {R"({"type": "move_target", "position": [1e300, 1, 0]})", "move_target.position[0]: expected a number in [-100, 100]"},
+      {R"({"type": "move_target", "position": ["1", 1, 0]})", "move_target.position[0]: expected a number"},
+      {R"({"type": "controller", "controller": "magic"})", "controller.controller: expected one of policy, online_search, random"},
+      {R"({"type": "controller", "controller": "random", "horizon": 9})", "controller.horizon: expected a whole number in [1, 5], found 9"},
+      {R"({"type": "weights", "weights": {"hit": -1}})", "weights.weights[\"hit\"]: expected a number in [0, 10], found -1"},
+      {R"({"type": "weights", "weights": []})", "weights.weights: expected an object of behaviour names and weights"},
+      {R"({"type": "pause", "paused": "yes"})", "pause.paused: expected true or false, found \"yes\""},
+      {R"({"type": "speed"})", "speed: expected a field \"speed\", found none"},
+      {R"({"type": "speed", "speed": 100})", "speed.speed: expected a number in [0.1, 4], found 100"},
+      {std::string(5000, ' '), "message: expected at most 4096 bytes, found 5000"},
+  };
+  for (const auto& [text, message] : refused) {
+    INFO(text.substr(0, 80));
+    REQUIRE_THROWS_WITH(parseClientMessage(text), Catch::Contains(message));
+  }
+}
+
+TEST_CASE("a pose frame carries every joint within half a millimetre and its sizes add up", "[serve]") {
+  std::vector<Eigen::Vector3d> a = {{10.0, 0.95, -3.0}, {10.1, 1.5, -3.2}, {9.7, 1.8, -2.9}};
+  std::vector<Eigen::Vector3d> b = {{-4.0, 1.0, 2.0}, {-4.0, 1.6, 2.0}, {-50.0, 1.0, 2.0}};  // 46 m: clamped
+  serve::FrameWriter writer;
+  writer.begin({3, 2, 1, 77, 2.5f});
+  writer.avatar(a);
+  writer.avatar(b);
+  writer.target(0, {1.0, 1.4, 0.5});
+  const std::vector<std::uint8_t> bytes = writer.finish();
+  CHECK(bytes.size() == serve::kFrameHeaderBytes + 2 * serve::avatarRecordBytes(3) + serve::kTargetRecordBytes);
+  CHECK(std::string(bytes.begin(), bytes.begin() + 4) == "MGRF");
+  const serve::DecodedFrame frame = serve::decodeFrame(bytes);
+  CHECK(frame.header.frame == 77);
+  CHECK(frame.header.time == 2.5f);
+  for (std::size_t j = 0; j < 3; ++j) CHECK((frame.avatars[0][j] - a[j]).cwiseAbs().maxCoeff() <= 0.0005 + 1e-6);
+  CHECK(frame.avatars[1][2].x() == Approx(-4.0 - 32.767));  // clamped, not wrapped around
+  CHECK(frame.targets.at(0).first == 0);
+  CHECK(frame.targets.at(0).second.isApprox(Eigen::Vector3d(1.0, 1.4, 0.5), 1e-6));
+
+  serve::FrameWriter short_;
+  short_.begin({3, 2, 0, 0, 0});
+  short_.avatar(a);
+  REQUIRE_THROWS_WITH(short_.finish(), Catch::Contains("expected 2 avatars and 0 targets, found 1 and 0"));
+  REQUIRE_THROWS_WITH(short_.avatar(std::vector<Eigen::Vector3d>(2)), Catch::Contains("with 3 joints, found 2 joints"));
+  std::vector<std::uint8_t> cut(bytes.begin(), bytes.end() - 1);
+  REQUIRE_THROWS_WITH(serve::decodeFrame(cut), Catch::Contains("pose frame: expected"));
+}
+
+TEST_CASE("static files come only from inside the web folder", "[serve]") {
+  test::TempDir temp("serve-static");
+  const fs::path web = temp.path / "web";
+  writeFile(web / "index.html", "<html></html>");
+  writeFile(web / "js" / "app.js", "export {};");
+  writeFile(temp.path / "secret.txt", "secret");
+  fs::create_directory_symlink(temp.path, web / "escape");
+  const fs::path root = fs::canonical(web);
+
+  CHECK(serve::lookupStatic(root, "/").file == root / "index.html");
+  CHECK(serve::lookupStatic(root, "/js/app.js?v=3").file == root / "js" / "app.js");
+  CHECK(serve::lookupStatic(root, "/js//app.js").status == 200);
+  CHECK(serve::lookupStatic(root, "/%6As/app.js").status == 200);  // %6A is j
+  CHECK(serve::lookupStatic(root, "/missing.js").status == 404);
+  CHECK(serve::lookupStatic(root, "/js").status == 404);  // a folder
+  for (const char* hostile : {"/../secret.txt", "/js/../../secret.txt", "/%2e%2e/secret.txt", "/%2E%2E%2Fsecret.txt",
+                              "/..%2fsecret.txt", "/escape/secret.txt", "/js/%00app.js", "/js\\..\\..\\secret.txt",
+                              "/%zz", "/%2", "js/app.js", "/./index.html"}) {
+    INFO(hostile);
+    CHECK(serve::lookupStatic(root, hostile).status == 400);
+  }
+  CHECK(serve::mimeType("a.js") == "text/javascript; charset=utf-8");
+  CHECK(serve::mimeType("a.html") == "text/html; charset=utf-8");
+  CHECK(serve::mimeType("a.png") == "image/png");
+  CHECK(serve::mimeType("a.exe") == "application/octet-stream");
+}
+
+// Boxing with a policy trained by value iteration (about two seconds with the graph).
+struct BoxingAssets {
+  test::TempDir temp{"serve"};
+  std::shared_ptr<const serve::ViewerAssets> assets;
+
+  explicit BoxingAssets(bool withPolicy = true) {
+    app::TrainOptions train;
+    train.scenario = fs::path(MGRL_SOURCE_DIR) / "scenarios" / "boxing.yaml";
+    train.dataDir = test::mocap();
+    train.cacheDir = temp.path / "cache";
+    train.out = temp.path / "policy";
+    train.sets = {"behaviors.approach.learner.type=value_iteration", "behaviors.hit.learner.type=value_iteration"};
+    if (withPolicy) app::runTrain(train);
+    serve::ServeOptions options;
+    static_cast<app::LearnOptions&>(options) = train;
+    if (withPolicy) options.policy = train.out;
+    assets = serve::loadViewerAssets(options);
+  }
+};
+
+std::vector<json> textMessages(serve::ViewerSession& session) {
+  std::vector<json> out;
+  for (const std::string& text : session.takeOutbox()) out.push_back(json::parse(text));
+  return out;
+}
+
+TEST_CASE("a page's world: the boxer punches the target where it is dragged; weights and controllers switch live",
+          "[serve][data]") {
+  const BoxingAssets boxing;
+  serve::ViewerSession session(boxing.assets);
+  std::vector<json> out = textMessages(session);
+  REQUIRE(out.size() == 1);
+  const json scene = out[0];
+  CHECK(scene["type"] == "scene");
+  CHECK(scene["mode"] == "target");
+  CHECK(scene["controller"] == "policy");
+  CHECK(scene["controllers"] == json::array({"policy", "online_search", "random"}));
+  CHECK(scene["note"] == "");
+  CHECK(scene["joints"].size() > 20);
+  CHECK(scene["partners"] == json::array({-1}));
+
+  // Drag the target 1.5 m to the side of where the boxer stands, at chest height.
+  const serve::DecodedFrame before = serve::decodeFrame(session.frame());
+  const Eigen::Vector3d root = before.avatars.at(0).at(0);
+  const Eigen::Vector3d spot(root.x() + 1.5, 1.3, root.z());
+  session.handle(json{{"type", "move_target"}, {"position", {spot.x(), spot.y(), spot.z()}}}.dump());
+  REQUIRE(textMessages(session).empty());
+  const int frames15s = static_cast<int>(15 / session.frameTime());
+  int hitFrame = -1;
+  for (int f = 0; f < frames15s && hitFrame < 0; ++f) {
+    session.advance(1.0);
+    for (const json& m : textMessages(session))
+      if (m["type"] == "hit" && m["target"] == -1) hitFrame = f;
+  }
+  INFO("the boxer did not punch the dragged target within 15 s");
+  CHECK(hitFrame >= 0);
+  const serve::DecodedFrame after = serve::decodeFrame(session.frame());
+  CHECK((after.targets.at(0).second - spot).norm() < 0.4);  // the target (bend included) is where it was put
+  CHECK((after.avatars[0][0] - spot).head<1>().norm() < (root - spot).head<1>().norm());  // the boxer went there
+
+  json stats = json::parse(session.stats(5, 1));
+  CHECK(stats["hits"].get<int>() >= 1);
+  CHECK(stats["frames_sent"] == 5);
+  CHECK(stats["decision_us"].get<double>() > 0);
+
+  session.handle(R"({"type": "weights", "weights": {"hit": 0}})");
+  out = textMessages(session);
+  REQUIRE(out.size() == 1);
+  CHECK(out[0]["behaviors"][1]["weight"] == 0.0);
+  session.handle(R"({"type": "weights", "weights": {"kick": 1}})");
+  out = textMessages(session);
+  REQUIRE(out.size() == 1);
+  CHECK(out[0]["type"] == "error");
+  CHECK(out[0]["message"].get<std::string>().find("expected behaviour names from approach, hit, found \"kick\"") !=
+        std::string::npos);
+
+  session.handle(R"({"type": "move_target", "position": [0, 1, 0]})");  // fine in target mode
+  REQUIRE(textMessages(session).empty());
+  session.handle(R"({"type": "mode", "mode": "crowd", "avatars": 100})");
+  out = textMessages(session);
+  REQUIRE(out.size() == 1);
+  CHECK(out[0]["avatars"] == 100);
+  CHECK(serve::decodeFrame(session.frame()).avatars.size() == 100);
+  session.handle(R"({"type": "move_target", "position": [0, 1, 0]})");
+  CHECK(textMessages(session).at(0)["message"] == "move_target: expected target mode, found crowd mode");
+  // A deep search for 100 avatars would stall every page: the horizon is lowered, and said.
+  session.handle(R"({"type": "controller", "controller": "online_search", "horizon": 5})");
+  out = textMessages(session);
+  REQUIRE(out.size() == 1);
+  CHECK(out[0]["controller"] == "online_search");
+  CHECK(out[0]["horizon"].get<int>() < 5);
+  CHECK(out[0]["note"].get<std::string>().find("horizon was lowered from 5") != std::string::npos);
+  const auto start = std::chrono::steady_clock::now();
+  session.advance(1.0);
+  CHECK(std::chrono::steady_clock::now() - start < std::chrono::seconds(2));
+
+  session.handle(R"({"type": "step"})");
+  CHECK(textMessages(session).at(0)["type"] == "error");
+  session.handle(R"({"type": "pause", "paused": true})");
+  const std::uint32_t frame = serve::decodeFrame(session.frame()).header.frame;
+  CHECK_FALSE(session.advance(5.0));
+  session.handle(R"({"type": "step"})");
+  CHECK(session.advance(1.0));
+  CHECK(serve::decodeFrame(session.frame()).header.frame == frame + 1);
+}
+
+TEST_CASE("with no policy bundle, the page is told and the online search runs", "[serve][data]") {
+  const BoxingAssets boxing(/*withPolicy=*/false);
+  serve::ViewerSession session(boxing.assets);
+  const json scene = json::parse(session.takeOutbox().at(0));
+  CHECK(scene["controller"] == "online_search");
+  CHECK(scene["controllers"] == json::array({"online_search", "random"}));
+  CHECK(scene["note"].get<std::string>().find("mgrl train") != std::string::npos);
+  session.handle(R"({"type": "controller", "controller": "policy"})");
+  CHECK(json::parse(session.takeOutbox().at(0))["message"].get<std::string>().find("no policy bundle") !=
+        std::string::npos);
+}
+
+// The server on a free port, in a thread of its own, serving a small web folder.
+struct RunningServer {
+  test::TempDir web{"serve-web"};
+  std::unique_ptr<serve::Server> server;
+  std::thread thread;
+
+  RunningServer(std::shared_ptr<const serve::ViewerAssets> assets, int maxSessions) {
+    writeFile(web.path / "index.html", "<!doctype html><title>mgrl</title>");
+    writeFile(web.path / "viewer.js", "export const x = 1;");
+    writeFile(web.path / "node_modules" / "three" / "build" / "three.module.js", "export {};");
+    serve::ServerOptions options;
+    options.port = 0;
+    options.webRoot = web.path;
+    options.maxSessions = maxSessions;
+    server = std::make_unique<serve::Server>(std::move(assets), options);
+    thread = std::thread([this] { server->run(); });
+  }
+  ~RunningServer() {
+    server->stop();
+    thread.join();
+  }
+  std::uint16_t port() const { return server->port(); }
+};
+
+struct HttpReply {
+  int status = 0;
+  std::string type, body;
+};
+
+// One request on a fresh connection; `target` is sent as is.
+HttpReply get(std::uint16_t port, const std::string& target, http::verb verb = http::verb::get, bool upgrade = false) {
+  net::io_context ioc;
+  beast::tcp_stream stream(ioc);
+  stream.expires_after(std::chrono::seconds(10));
+  stream.connect(tcp::endpoint(net::ip::make_address("127.0.0.1"), port));
+  http::request<http::empty_body> request{verb, target, 11};
+  request.set(http::field::host, "127.0.0.1");
+  if (upgrade) {  // a WebSocket handshake by hand, to see the refusal's status
+    request.set(http::field::connection, "Upgrade");
+    request.set(http::field::upgrade, "websocket");
+    request.set(http::field::sec_websocket_key, "dGhlIHNhbXBsZSBub25jZQ==");
+    request.set(http::field::sec_websocket_version, "13");
+  }
+  http::write(stream, request);
+  beast::flat_buffer buffer;
+  http::response_parser<http::string_body> parser;
+  parser.skip(verb == http::verb::head);
+  http::read(stream, buffer, parser);
+  const auto& response = parser.get();
+  return {static_cast<int>(response.result_int()), std::string(response[http::field::content_type]), response.body()};
+}
+
+// A page over a real WebSocket, every read bounded by a timeout.
+struct Page {
+  net::io_context ioc;
+  websocket::stream<beast::tcp_stream> ws{ioc};
+  beast::flat_buffer buffer;
+
+  explicit Page(std::uint16_t port) {
+    beast::get_lowest_layer(ws).expires_after(std::chrono::seconds(10));
+    beast::get_lowest_layer(ws).connect(tcp::endpoint(net::ip::make_address("127.0.0.1"), port));
+    ws.handshake("127.0.0.1", "/ws");
+  }
+  struct Message {
+    beast::error_code error;
+    bool binary = false;
+    std::string data;
+  };
+  Message read() {
+    Message m;
+    beast::get_lowest_layer(ws).expires_after(std::chrono::seconds(10));
+    buffer.consume(buffer.size());
+    ws.async_read(buffer, [&](beast::error_code ec, std::size_t) { m.error = ec; });
+    ioc.restart();
+    ioc.run();
+    m.binary = ws.got_binary();
+    m.data = beast::buffers_to_string(buffer.data());
+    return m;
+  }
+  // Reads until a message of the kind asked for (or an error).
+  Message readUntil(bool binary, const std::string& textType = "") {
+    for (int i = 0; i < 1000; ++i) {
+      Message m = read();
+      if (m.error) return m;
+      if (m.binary == binary && (binary || textType.empty() || json::parse(m.data)["type"] == textType)) return m;
+    }
+    return {};
+  }
+  beast::error_code send(const std::string& text, bool binary = false) {
+    beast::error_code ec;
+    ws.binary(binary);
+    ws.write(net::buffer(text), ec);
+    return ec;
+  }
+  // Reads until the server closes; returns the close code it gave (0 if it did not close).
+  int closeCode() {
+    for (int i = 0; i < 5000; ++i) {
+      const Message m = read();
+      if (m.error == websocket::error::closed) return static_cast<int>(ws.reason().code);
+      if (m.error) return -1;
+    }
+    return 0;
+  }
+};
+
+TEST_CASE("the server serves the page's files, refuses traversal and other methods", "[serve][data]") {
+  const BoxingAssets boxing;
+  RunningServer running(boxing.assets, 4);
+  const HttpReply index = get(running.port(), "/");
+  CHECK(index.status == 200);
+  CHECK(index.type == "text/html; charset=utf-8");
+  CHECK(index.body == "<!doctype html><title>mgrl</title>");
+  CHECK(get(running.port(), "/viewer.js").type == "text/javascript; charset=utf-8");
+  CHECK(get(running.port(), "/node_modules/three/build/three.module.js").status == 200);
+  CHECK(get(running.port(), "/missing.js").status == 404);
+  for (const char* hostile : {"/../CMakeLists.txt", "/%2e%2e/CMakeLists.txt", "/..%2f..%2fetc/passwd", "/%00"}) {
+    INFO(hostile);
+    CHECK(get(running.port(), hostile).status == 400);
+  }
+  CHECK(get(running.port(), "/", http::verb::post).status == 405);
+  CHECK(get(running.port(), "/", http::verb::head).status == 200);
+}
+
+TEST_CASE("hostile pages get an error or a closed socket while a good page keeps receiving frames",
+          "[serve][data]") {
+  const BoxingAssets boxing;
+  RunningServer running(boxing.assets, 6);
+  Page good(running.port());
+  const Page::Message scene = good.readUntil(false, "scene");
+  REQUIRE_FALSE(scene.error);
+  const std::size_t joints = json::parse(scene.data)["joints"].size();
+  auto frameNumber = [&](Page& page) {
+    const Page::Message m = page.readUntil(true);
+    REQUIRE_FALSE(m.error);
+    const serve::DecodedFrame frame = serve::decodeFrame(
+        std::span(reinterpret_cast<const std::uint8_t*>(m.data.data()), m.data.size()));
+    REQUIRE(frame.header.joints == joints);
+    return frame.header.frame;
+  };
+  const std::uint32_t first = frameNumber(good);
+
+  {  // malformed: one error back, and the page goes on
+    Page page(running.port());
+    REQUIRE_FALSE(page.send("{\"type\": \"mode\", \"mode\": "));
+    const Page::Message error = page.readUntil(false, "error");
+    REQUIRE_FALSE(error.error);
+    CHECK(json::parse(error.data)["message"] == "message: expected a JSON object, found text that is not JSON");
+    REQUIRE_FALSE(page.send(R"({"type": "mode", "mode": "sparring"})"));
+    const Page::Message again = page.readUntil(false, "scene");
+    REQUIRE_FALSE(again.error);
+    CHECK(json::parse(again.data)["avatars"] == 2);
+  }
+  {  // oversized: closed with 1009
+    Page page(running.port());
+    page.send(std::string(serve::Limits::kMessageBytes + 1, 'x'));
+    CHECK(page.closeCode() == 1009);
+  }
+  {  // binary: closed with 1003
+    Page page(running.port());
+    page.send("\x01\x02", /*binary=*/true);
+    CHECK(page.closeCode() == 1003);
+  }
+  {  // a flood: closed with 1008
+    Page page(running.port());
+    for (int i = 0; i < serve::Limits::kMessagesPerSecond + 50; ++i)
+      if (page.send(R"({"type": "speed", "speed": 1})")) break;
+    CHECK(page.closeCode() == 1008);
+  }
+  {  // half a frame, then gone
+    net::io_context ioc;
+    tcp::socket raw(ioc);
+    raw.connect(tcp::endpoint(net::ip::make_address("127.0.0.1"), running.port()));
+    const std::string upgrade =
+        "GET /ws HTTP/1.1\r\nHost: 127.0.0.1\r\nUpgrade: websocket\r\nConnection: Upgrade\r\n"
+        "Sec-WebSocket-Key: dGhlIHNhbXBsZSBub25jZQ==\r\nSec-WebSocket-Version: 13\r\n\r\n";
+    net::write(raw, net::buffer(upgrade));
+    std::string reply(12, '\0');
+    net::read(raw, net::buffer(reply.data(), reply.size()));
+    CHECK(reply == "HTTP/1.1 101");
+    const unsigned char partial[] = {0x81, 0x80 | 100, 1, 2, 3, 4, 'a', 'b', 'c'};  // text, masked, 100 bytes; 3 sent
+    net::write(raw, net::buffer(partial, sizeof partial));
+    raw.close();
+  }
+  {  // the page limit: the seventh is refused with 503 (good + six)
+    std::vector<std::unique_ptr<Page>> pages;
+    // Closed pages leave within moments; wait for the count to settle.
+    for (int i = 0; i < 100 && running.server->sessions() > 1; ++i) std::this_thread::sleep_for(std::chrono::milliseconds(50));
+    for (int i = 0; i < 5; ++i) pages.push_back(std::make_unique<Page>(running.port()));
+    const HttpReply refused = get(running.port(), "/ws", http::verb::get, /*upgrade=*/true);
+    CHECK(refused.status == 503);
+    CHECK(refused.body == "expected at most 6 pages at once; close one\n");
+  }
+  // Through all of it the good page's world went on, and files are still served.
+  const std::uint32_t later = frameNumber(good);
+  CHECK(later > first);
+  CHECK(get(running.port(), "/").status == 200);
+}
+
+}  // namespace
+}  // namespace mgrl
