@@ -17,6 +17,7 @@ expect "$stdout" 'success rate [0-9.]+ %' "the evaluation's success rate"
 expect "$stdout" '2 avatars x [0-9]+ frames' "the two-boxer bout"
 expect "$stdout" '30 avatars x [0-9]+ frames' "the 30-boxer crowd"
 expect "$stderr" 'demo: \[[0-9]+ s\] done' "the demo's last step"
+expect "$stderr" 'watch it in the browser: scripts/demo.sh --serve' "the command that opens the viewer"
 for f in avatar_000.bvh avatar_001.bvh hits.jsonl; do
   [ -f "$dir/$f" ] || fail "expected $dir/$f, found none"
 done

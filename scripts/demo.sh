@@ -5,19 +5,26 @@
 # then run a two-boxer bout (BVH files and hits in build/demo/) and the paper's 30-boxer
 # crowd.
 #
-# Usage: scripts/demo.sh [--quick] [extra `mgrl graph` arguments]
+# Usage: scripts/demo.sh [--quick] [--serve] [extra `mgrl graph` arguments]
 #   --quick   small training budgets and short runs (about 1 minute after the build): the
 #             same steps, used by scripts/test.sh from a fresh clone so a broken main job
 #             cannot land.
+#   --serve   then start the browser viewer on the trained policy (mgrl serve; Ctrl-C
+#             stops it).
 # Environment: MGRL_DATA (motion capture, default ../shared/mocap), MGRL_CACHE (graphs and
 # policies, default ~/.cache/mgrl), MGRL_BUILD_DIR (default build/).
 set -euo pipefail
 root="$(cd "$(dirname "$0")/.." && pwd)"
 quick=0
-if [ "${1:-}" = "--quick" ]; then
-  quick=1
+serve=0
+while [ $# -gt 0 ]; do
+  case "$1" in
+    --quick) quick=1 ;;
+    --serve) serve=1 ;;
+    *) break ;;
+  esac
   shift
-fi
+done
 build="${MGRL_BUILD_DIR:-$root/build}"
 out="$build/demo"
 data="${MGRL_DATA:-$root/../shared/mocap}"
@@ -75,3 +82,9 @@ step "simulate: a two-boxer bout of $bout s (BVH and hits in $out)"
 step "simulate: the paper's crowd of 30 sparring boxers"
 "$mgrl" simulate "$root/scenarios/boxing.yaml" --data "$data" --avatars 30 --seconds "$crowd" "${train_sets[@]}"
 step "done: BVH files and hits in $out"
+if ((serve)); then
+  step "serve: the viewer (drag the target, sparring, crowds); Ctrl-C stops it"
+  exec "$mgrl" serve "$root/scenarios/boxing.yaml" --data "$data" "${train_sets[@]}"
+fi
+say "watch it in the browser: scripts/demo.sh --serve, or $mgrl serve scenarios/boxing.yaml$(
+  ((quick)) && printf ' %s' "${train_sets[@]}") and open http://127.0.0.1:8080/"

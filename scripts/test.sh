@@ -38,7 +38,11 @@ MGRL_DATA="${MGRL_DATA:-$root/../shared/mocap}" MGRL_CACHE="$fresh/cache" "$fres
   exit 1
 }
 "$root/scripts/check_demo.sh" "$fresh/demo.out" "$fresh/demo.err" "$fresh/mgrl/build/demo"
-tail -n 1 "$fresh/demo.err" >&2  # the demo's wall time
+grep -E 'demo: \[[0-9]+ s\] done' "$fresh/demo.err" >&2  # the demo's wall time
+# What `scripts/demo.sh --serve` starts, from the same clone: its page and three.js.
+MGRL_DATA="${MGRL_DATA:-$root/../shared/mocap}" MGRL_CACHE="$fresh/cache" \
+  "$root/scripts/check_serve.sh" "$fresh/mgrl/build/app/mgrl" "$fresh/mgrl/scenarios/boxing.yaml" \
+  --set behaviors.approach.learner.budget=200000 --set behaviors.hit.learner.budget=400000
 rm -rf "$fresh"
 trap - EXIT
 
