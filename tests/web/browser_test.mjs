@@ -1,0 +1,467 @@
+// The viewer end to end (issue 14): the real `mgrl serve`, the real page in headless
+// Chromium, real mouse events. See tests/web/README.md.
+//
+//   MGRL_BINARY=build/app/mgrl node tests/web/browser_test.mjs
+//
+// Environment: MGRL_BINARY (default build/app/mgrl), MGRL_SERVE_ARGS (more words for
+// `mgrl serve`, e.g. "--data DIR --cache DIR"), MGRL_SCREENSHOT_DIR (default docs/img),
+// MGRL_CHROMIUM (default /usr/bin/chromium), MGRL_WEB_TEST_TIMEOUT_S (default 240).
+import {spawn} from 'node:child_process';
+import {createRequire} from 'node:module';
+import {mkdirSync} from 'node:fs';
+import path from 'node:path';
+import {fileURLToPath} from 'node:url';
+
+const repo = path.resolve(path.dirname(fileURLToPath(import.meta.url)), '../..');
+// playwright-core comes from web/node_modules (scripts/setup.sh runs `npm ci` there); it
+// drives the system's Chromium and never downloads a browser of its own.
+const {chromium} = createRequire(path.join(repo, 'web/package.json'))('playwright-core');
+
+const binary = path.resolve(process.env.MGRL_BINARY ?? path.join(repo, 'build/app/mgrl'));
+const serveArgs = (process.env.MGRL_SERVE_ARGS ?? '').split(/\s+/).filter((w) => w.length > 0);
+const screenshotDir = path.resolve(repo, process.env.MGRL_SCREENSHOT_DIR ?? 'docs/img');
+const chromiumPath = process.env.MGRL_CHROMIUM ?? '/usr/bin/chromium';
+const overallSeconds = Number(process.env.MGRL_WEB_TEST_TIMEOUT_S ?? 240);
+
+const kServerStartSeconds = 120;   // the first start may load the capture and build a graph
+const kMinFramesPerSecond = 20;
+const kTargetTolerance = 0.2;      // m
+const kHitWithinSimSeconds = 15;
+const kStepDistance = 0.1;         // m closer to the target: the boxer's first step
+const kSideDistance = 1.5;         // m beside the boxer, where the target is dragged
+const kMinVariance = 30;           // luminance variance of a canvas that shows something
+
+let passed = 0;
+let server = null;
+let browser = null;
+let page = null;
+const serverLines = [];
+
+class CheckFailed extends Error {}
+
+function ok(what) {
+  passed += 1;
+  console.log(`ok   - ${what}`);
+}
+
+function check(condition, what, detail = '') {
+  if (!condition) throw new CheckFailed(`${what}${detail ? ': ' + detail : ''}`);
+  ok(what);
+}
+
+const sleep = (ms) => new Promise((resolve) => setTimeout(resolve, ms));
+
+// ---- the server ------------------------------------------------------------------
+
+function startServer() {
+  const args = ['serve', 'scenarios/boxing.yaml', '--port', '0', ...serveArgs];
+  console.log(`# starting ${binary} ${args.join(' ')} (cwd ${repo})`);
+  server = spawn(binary, args, {cwd: repo, stdio: ['ignore', 'pipe', 'pipe']});
+  const exited = new Promise((resolve) => server.once('exit', (code, signal) => resolve({code, signal})));
+  server.exited = exited;
+  const url = new Promise((resolve, reject) => {
+    const timer = setTimeout(() => reject(new CheckFailed(
+      `the server printed no http://127.0.0.1:PORT/ line within ${kServerStartSeconds} s`)), kServerStartSeconds * 1000);
+    let pending = '';
+    const keep = (line) => {
+      serverLines.push(line);
+      if (serverLines.length > 200) serverLines.shift();
+    };
+    server.stdout.on('data', (chunk) => {
+      pending += chunk.toString();
+      const lines = pending.split('\n');
+      pending = lines.pop();
+      for (const line of lines) {
+        keep(line);
+        const match = /http:\/\/127\.0\.0\.1:(\d+)\//.exec(line);
+        if (match) {
+          clearTimeout(timer);
+          resolve(match[0]);
+        }
+      }
+    });
+    server.stderr.on('data', (chunk) => chunk.toString().split('\n').filter((l) => l).forEach(keep));
+    server.once('error', (e) => {
+      clearTimeout(timer);
+      reject(new CheckFailed(`could not start ${binary}: ${e.message}`));
+    });
+    exited.then(({code, signal}) => {
+      clearTimeout(timer);
+      reject(new CheckFailed(`the server exited (code ${code}, signal ${signal}) before it was listening`));
+    });
+  });
+  return url;
+}
+
+async function stopServer() {
+  if (server === null || server.exitCode !== null || server.signalCode !== null) return;
+  server.kill('SIGINT');
+  const stopped = await Promise.race([server.exited.then(() => true), sleep(5000).then(() => false)]);
+  if (!stopped) {
+    console.log('# the server did not stop within 5 s of SIGINT: SIGKILL');
+    server.kill('SIGKILL');
+    await server.exited;
+  }
+}
+
+async function cleanUp() {
+  if (browser !== null) await browser.close().catch(() => {});
+  browser = null;
+  await stopServer();
+}
+
+// ---- the page --------------------------------------------------------------------
+
+/** Waits until `predicate(arg)` (run in the page) is true; fails with `what` after `ms`. */
+async function waitInPage(page, predicate, arg, ms, what) {
+  try {
+    await page.waitForFunction(predicate, arg, {timeout: ms, polling: 100});
+  } catch (e) {
+    const seen = await page.evaluate(() => ({
+      scene: window.mgrl?.state.scene && {mode: mgrl.state.scene.mode, avatars: mgrl.state.scene.avatars},
+      frames: window.mgrl?.state.frames.count, last: window.mgrl?.state.frames.last,
+      error: window.mgrl?.state.lastError,
+    })).catch(() => 'page not answering');
+    throw new CheckFailed(`${what} (waited ${ms / 1000} s; page state ${JSON.stringify(seen)})`);
+  }
+}
+
+/** Frames received and drawn per second over `seconds`, measured in the page. */
+function framesPerSecond(page, seconds) {
+  return page.evaluate(async (ms) => {
+    const frames0 = mgrl.state.frames.count, draws0 = mgrl.state.draw.count, t0 = performance.now();
+    await new Promise((resolve) => setTimeout(resolve, ms));
+    const elapsed = (performance.now() - t0) / 1000;
+    return {received: (mgrl.state.frames.count - frames0) / elapsed, drawn: (mgrl.state.draw.count - draws0) / elapsed,
+            drawMs: mgrl.state.draw.cycleMs};
+  }, seconds * 1000);
+}
+
+async function screenshot(page, name) {
+  const file = path.join(screenshotDir, name);
+  await page.screenshot({path: file});
+  const {mean, variance} = await page.evaluate(() => mgrl.pixelStats());
+  check(variance > kMinVariance, `screenshot ${path.relative(repo, file)} is not blank`,
+        `canvas luminance mean ${mean.toFixed(1)}, variance ${variance.toFixed(1)} (need > ${kMinVariance})`);
+  console.log(`#      canvas luminance mean ${mean.toFixed(1)}, variance ${variance.toFixed(1)}`);
+}
+
+async function waitForWorld(page, mode, avatars) {
+  await waitInPage(page, ([m, n]) => {
+    const s = window.mgrl?.state;
+    return s?.scene?.mode === m && s.scene.avatars === n && s.frames.last?.avatars === n;
+  }, [mode, avatars], 60000, `the server switches to ${mode} with ${avatars} avatars and sends its frames`);
+  ok(`scene and frames in ${mode} mode with ${avatars} avatars`);
+}
+
+// Avatar 0 and its target now (read in one go, so they belong to the same frame).
+const snapshot = (page) => page.evaluate(() => ({
+  root: mgrl.rootOf(0), target: mgrl.targetOf(0), time: mgrl.state.frames.last?.time,
+}));
+const floorDistance = (a, b) => Math.hypot(a[0] - b[0], a[2] - b[2]);
+
+// ---- the checks ------------------------------------------------------------------
+
+async function targetMode(page) {
+  await waitInPage(page, () => {
+    const s = window.mgrl?.state;
+    return s?.scene?.mode === 'target' && s.frames.count > 0 && window.mgrl.targetOf(0) !== null && s.draw.count >= 5;
+  }, null, 30000, 'the page gets a target-mode scene and a frame with a target, and draws');
+  const scene = await page.evaluate(() => mgrl.state.scene);
+  check(scene.avatars === 1 && Array.isArray(scene.joints) && scene.joints.length > 0,
+        'the scene is target mode with 1 avatar and a skeleton', `avatars ${scene.avatars}, ${scene.joints?.length} joints`);
+  check(Array.isArray(scene.controllers) && scene.controllers.includes(scene.controller),
+        'the scene lists its controllers', `controller ${scene.controller}, controllers ${JSON.stringify(scene.controllers)}`);
+  console.log(`#      controller ${scene.controller}${scene.note ? `; note: ${scene.note}` : ''}`);
+  const webgl = await page.evaluate(() => mgrl.pixelStats());
+  check(webgl.variance > kMinVariance, 'the page draws (WebGL canvas not blank)', `variance ${webgl.variance.toFixed(1)}`);
+
+  // A spot on the floor kSideDistance beside the boxer: perpendicular to its line to
+  // the target (two consecutive roots say little about where it faces).
+  const before = await snapshot(page);
+  const [rx, , rz] = before.root;
+  let dx = before.target[0] - rx, dz = before.target[2] - rz;
+  const length = Math.hypot(dx, dz);
+  if (length < 0.05) { dx = 1; dz = 0; } else { dx /= length; dz /= length; }
+  const height = before.target[1];
+  // Either side will do: the one whose spot shows on the canvas (not under the panels).
+  const onCanvas = (p) => page.evaluate(({x, y}) => document.elementFromPoint(x, y)?.tagName === 'CANVAS', p);
+  const from = await page.evaluate((p) => mgrl.project(p), before.target);
+  let spot = null, to = null;
+  for (const side of [1, -1]) {
+    const candidate = [rx - side * dz * kSideDistance, 0, rz + side * dx * kSideDistance];
+    const pixel = await page.evaluate((p) => mgrl.project(p), candidate);
+    if (await onCanvas(pixel)) {
+      spot = candidate;
+      to = pixel;
+      break;
+    }
+    if (spot === null) to = pixel;
+  }
+  check(await onCanvas(from) && spot !== null, 'the target and a spot beside the boxer are on screen',
+        `target at (${from.x.toFixed(0)}, ${from.y.toFixed(0)}) px, spot at (${to.x.toFixed(0)}, ${to.y.toFixed(0)}) px`);
+
+  // The drag, with real mouse events: press on the sphere, move over the floor, release.
+  const landmark = [0, 0, 0];   // where it shows on screen says whether the camera moved
+  const landmarkBefore = await page.evaluate((p) => mgrl.project(p), landmark);
+  await page.mouse.move(from.x, from.y);
+  await page.mouse.down();
+  await page.mouse.move(to.x, to.y, {steps: 15});
+  await page.mouse.up();
+  const dragEnd = (await snapshot(page)).time;
+  const landmarkAfter = await page.evaluate((p) => mgrl.project(p), landmark);
+  check(Math.hypot(landmarkAfter.x - landmarkBefore.x, landmarkAfter.y - landmarkBefore.y) < 1,
+        'the camera stays put while the target is dragged (orbit controls off)',
+        `the world origin moved from (${landmarkBefore.x.toFixed(0)}, ${landmarkBefore.y.toFixed(0)}) to ` +
+        `(${landmarkAfter.x.toFixed(0)}, ${landmarkAfter.y.toFixed(0)}) px`);
+  console.log(`#      dragged the target from (${before.target.map((v) => v.toFixed(2))}) to the floor spot ` +
+              `(${spot[0].toFixed(2)}, ${spot[2].toFixed(2)}) at simulated ${dragEnd.toFixed(2)} s`);
+
+  await waitInPage(page, ([x, z, tolerance]) => {
+    const t = mgrl.targetOf(0);
+    return t !== null && Math.hypot(t[0] - x, t[2] - z) < tolerance;
+  }, [spot[0], spot[2], kTargetTolerance], 5000, `the server's target moves to within ${kTargetTolerance} m of the spot`);
+  const moved = await snapshot(page);
+  check(floorDistance(moved.target, spot) < kTargetTolerance && Math.abs(moved.target[1] - height) < kTargetTolerance,
+        `the server's target is where it was dragged (within ${kTargetTolerance} m, height kept)`,
+        `target (${moved.target.map((v) => v.toFixed(2))}), spot (${spot[0].toFixed(2)}, ${height.toFixed(2)}, ${spot[2].toFixed(2)})`);
+
+  // Then the boxer goes after it: its first step (the root 0.1 m closer) and a punch on
+  // its own target, both timed in simulated seconds from the end of the drag.
+  const startDistance = floorDistance(moved.root, moved.target);
+  let stepAfter = null, hit = null, now = moved;
+  const wallLimit = Date.now() + (kHitWithinSimSeconds / 0.5 + 10) * 1000;   // if the clock crawls
+  while (hit === null && now.time - dragEnd <= kHitWithinSimSeconds && Date.now() < wallLimit) {
+    await sleep(50);
+    now = await snapshot(page);
+    if (stepAfter === null && floorDistance(now.root, now.target) <= startDistance - kStepDistance) {
+      stepAfter = now.time - dragEnd;
+    }
+    hit = await page.evaluate((t) => mgrl.state.hits.find((h) => h.target === -1 && h.time >= t) ?? null, dragEnd);
+  }
+  if (hit !== null) await screenshot(page, 'viewer-target.png');   // the flash is still showing
+  check(stepAfter !== null || hit !== null, 'the boxer steps toward the dragged target',
+        `root stayed ${startDistance.toFixed(2)} m from it`);
+  console.log(`#      drag to first step: ${stepAfter === null ? 'none before the hit' : stepAfter.toFixed(2) + ' s'} ` +
+              `(simulated; the root was ${startDistance.toFixed(2)} m from the target)`);
+  check(hit !== null && hit.time - dragEnd <= kHitWithinSimSeconds,
+        `a hit on its own target (target -1) within ${kHitWithinSimSeconds} s of simulated time after the drag`,
+        hit === null ? `none by simulated ${now.time.toFixed(1)} s (drag ended at ${dragEnd.toFixed(1)} s)`
+                     : `first at ${hit.time.toFixed(1)} s`);
+  console.log(`#      hit ${(hit.time - dragEnd).toFixed(2)} s after the drag: ${hit.hand} hand, ${hit.speed.toFixed(1)} m/s ` +
+              `at (${hit.point.map((v) => v.toFixed(2))})`);
+
+  // The height by the wheel over the sphere: four notches up, 5 cm each, and the camera
+  // does not zoom.
+  const over = await page.evaluate(() => mgrl.project(mgrl.targetOf(0)));
+  const heightBefore = (await snapshot(page)).target[1];
+  const zoomBefore = await page.evaluate((p) => mgrl.project(p), landmark);
+  await page.mouse.move(over.x, over.y);
+  for (let k = 0; k < 4; ++k) {
+    await page.mouse.wheel(0, -100);
+    await sleep(50);
+  }
+  await sleep(1000);
+  const heightAfter = (await snapshot(page)).target[1];
+  const zoomAfter = await page.evaluate((p) => mgrl.project(p), landmark);
+  check(Math.abs(heightAfter - heightBefore - 0.2) < 0.1 && Math.hypot(zoomAfter.x - zoomBefore.x, zoomAfter.y - zoomBefore.y) < 1,
+        'the wheel over the target raises it (4 notches: 0.2 m) without zooming the camera',
+        `height ${heightBefore.toFixed(2)} -> ${heightAfter.toFixed(2)} m, origin moved ` +
+        `${Math.hypot(zoomAfter.x - zoomBefore.x, zoomAfter.y - zoomBefore.y).toFixed(1)} px`);
+  return {stepAfter, hitAfter: hit.time - dragEnd};
+}
+
+/** Sets a range input as a user's drag would end: its value, then `input` and `change`. */
+function setRange(page, selector, value) {
+  return page.$eval(selector, (input, v) => {
+    input.value = String(v);
+    input.dispatchEvent(new Event('input', {bubbles: true}));
+    input.dispatchEvent(new Event('change', {bubbles: true}));
+  }, value);
+}
+
+// The panel's controls, each through the page's own inputs, and what the server says back.
+async function panelControls(page) {
+  await page.click('#pause');
+  await waitInPage(page, () => mgrl.state.stats?.paused === true, null, 5000, 'pause: the stats say paused');
+  await sleep(300);
+  const frameBefore = await page.evaluate(() => mgrl.state.frames.last.frame);
+  await page.click('#step');
+  await waitInPage(page, (f) => mgrl.state.frames.last.frame === f + 1, frameBefore, 5000, 'step: one more frame');
+  await sleep(500);
+  const frameAfter = await page.evaluate(() => mgrl.state.frames.last.frame);
+  check(frameAfter === frameBefore + 1, 'pause holds the world and step advances it by one frame',
+        `frame ${frameBefore} -> ${frameAfter}`);
+  await page.click('#pause');
+  await waitInPage(page, () => mgrl.state.stats?.paused === false, null, 5000, 'resume: the stats say running');
+
+  await setRange(page, '#speed', 2);
+  await waitInPage(page, () => mgrl.state.stats?.speed === 2, null, 5000, 'speed: the stats say 2');
+  await setRange(page, '#speed', 1);
+  await waitInPage(page, () => mgrl.state.stats?.speed === 1, null, 5000, 'speed: the stats say 1');
+  ok('the speed slider sets the server clock (2, then 1)');
+
+  const scene = await page.evaluate(() => mgrl.state.scene);
+  for (const controller of scene.controllers.filter((c) => c !== scene.controller).concat([scene.controller])) {
+    await page.selectOption('#controller', controller);
+    await waitInPage(page, (c) => mgrl.state.scene.controller === c, controller, 10000, `controller ${controller} taken`);
+  }
+  ok(`the controller select switches the server's controller (${scene.controllers.join(', ')})`);
+  if (scene.controllers.includes('online_search')) {
+    await page.selectOption('#controller', 'online_search');
+    await page.fill('#horizon', '2');
+    await page.press('#horizon', 'Enter');
+    await waitInPage(page, () => mgrl.state.scene.controller === 'online_search' && mgrl.state.scene.horizon === 2,
+                     null, 10000, 'online search horizon 2 taken');
+    ok('the horizon input sets the online search horizon (2)');
+    // Back to the scene's controller and horizon, which the measurements below are of.
+    await page.fill('#horizon', String(scene.horizon));
+    await page.press('#horizon', 'Enter');
+    await waitInPage(page, (h) => mgrl.state.scene.horizon === h, scene.horizon, 10000, `horizon ${scene.horizon} again`);
+    await page.selectOption('#controller', scene.controller);
+    await waitInPage(page, ([c, h]) => mgrl.state.scene.controller === c && mgrl.state.scene.horizon === h,
+                     [scene.controller, scene.horizon], 10000, `controller ${scene.controller} (horizon ${scene.horizon}) again`);
+  }
+
+  const behaviour = scene.behaviors[0];
+  await setRange(page, `input[data-behaviour="${behaviour.name}"]`, 2.5);
+  await waitInPage(page, (name) => mgrl.state.scene.behaviors.find((b) => b.name === name)?.weight === 2.5,
+                   behaviour.name, 5000, `weight of ${behaviour.name} taken`);
+  await setRange(page, `input[data-behaviour="${behaviour.name}"]`, behaviour.weight);
+  await waitInPage(page, ([name, w]) => mgrl.state.scene.behaviors.find((b) => b.name === name)?.weight === w,
+                   [behaviour.name, behaviour.weight], 5000, `weight of ${behaviour.name} restored`);
+  ok(`the weight slider of ${behaviour.name} sets its weight (2.5, then ${behaviour.weight})`);
+
+  // A message the server must refuse: its error shows on the page.
+  await page.evaluate(() => mgrl.send({type: 'speed', speed: 9}));
+  await waitInPage(page, () => mgrl.state.lastError !== null, null, 5000, 'an error for speed 9');
+  const shown = await page.$eval('#error', (e) => (e.hidden ? '' : e.textContent));
+  const error = await page.evaluate(() => mgrl.state.lastError);
+  check(shown.includes(error), 'a refused message (speed 9) comes back as an error shown on the page', `"${error}"`);
+  console.log(`#      server error: ${error}`);
+}
+
+async function measured(page, avatars) {
+  await sleep(1000);   // past the switch
+  const {received: fps, drawn, drawMs} = await framesPerSecond(page, 3);
+  const stats = await page.evaluate(() => mgrl.state.stats);
+  const last = await page.evaluate(() => mgrl.state.frames.last);
+  return {avatars, fps, drawn, drawMs, bytes: stats?.bytes_per_avatar_frame, frameBytes: last?.bytes,
+          serverMs: stats?.server_ms_per_frame, decisionUs: stats?.decision_us, dropped: stats?.frames_dropped};
+}
+
+async function setCrowdSize(page, avatars) {
+  await page.fill('#crowd-count', String(avatars));
+  await page.press('#crowd-count', 'Enter');   // a change: sent only when in crowd mode
+}
+
+async function main() {
+  mkdirSync(screenshotDir, {recursive: true});
+  const url = await startServer();
+  ok(`the server listens at ${url}`);
+
+  browser = await chromium.launch({
+    executablePath: chromiumPath,
+    headless: true,
+    args: ['--headless', '--no-sandbox', '--disable-gpu', '--disable-background-networking',
+           '--disable-component-update', '--no-first-run',
+           // WebGL without a GPU: ANGLE on SwiftShader, the software Vulkan.
+           '--use-angle=swiftshader', '--enable-unsafe-swiftshader'],
+  });
+  page = await browser.newPage({viewport: {width: 1280, height: 800}});
+  const pageErrors = [];
+  page.on('pageerror', (e) => pageErrors.push(e.message));
+  page.on('console', (message) => {
+    // (ReadPixels stalls are pixelStats()'s own doing.)
+    if ((message.type() === 'warning' || message.type() === 'error') && !/GL Driver Message/.test(message.text())) console.log(`#      page ${message.type()}: ${message.text()}`);
+  });
+  const outside = [];
+  page.on('request', (request) => {
+    if (!request.url().startsWith('data:') && !request.url().startsWith(url) && !request.url().startsWith(url.replace('http:', 'ws:'))) outside.push(request.url());
+  });
+  await page.goto(url);
+
+  const target = await targetMode(page);
+
+  await page.click('#mode-sparring');
+  await waitForWorld(page, 'sparring', 2);
+  const sparring = await measured(page, 2);
+  check(sparring.fps >= kMinFramesPerSecond, `sparring: frames keep arriving (>= ${kMinFramesPerSecond}/s over 3 s)`,
+        `${sparring.fps.toFixed(1)}/s`);
+  await screenshot(page, 'viewer-sparring.png');
+
+  // Follow: the camera keeps looking at avatar 0 (its root, at 1 m) as it moves.
+  await page.check('#follow');
+  await sleep(1500);
+  const centre = await page.evaluate(() => {
+    const [x, , z] = mgrl.rootOf(0);
+    const p = mgrl.project([x, 1, z]);
+    return {dx: p.x - innerWidth / 2, dy: p.y - innerHeight / 2};
+  });
+  await page.uncheck('#follow');
+  check(Math.hypot(centre.dx, centre.dy) < 40, 'follow keeps avatar 0 in the middle of the view',
+        `${Math.hypot(centre.dx, centre.dy).toFixed(0)} px off centre`);
+
+  await setCrowdSize(page, 100);
+  await page.click('#mode-crowd');
+  await waitForWorld(page, 'crowd', 100);
+  const crowd100 = await measured(page, 100);
+  check(crowd100.fps >= kMinFramesPerSecond, `crowd of 100: frames keep arriving (>= ${kMinFramesPerSecond}/s over 3 s)`,
+        `${crowd100.fps.toFixed(1)}/s`);
+  await screenshot(page, 'viewer-crowd.png');
+  await panelControls(page);
+
+  const table = [sparring];
+  for (const avatars of [60, 1000]) {
+    await setCrowdSize(page, avatars);
+    await waitForWorld(page, 'crowd', avatars);
+    table.push(await measured(page, avatars));
+  }
+  table.splice(2, 0, crowd100);
+
+  console.log('#');
+  console.log('#      avatars | frames/s received | drawn/s | page ms/draw | bytes/avatar-frame | frame bytes | server ms/frame | decision us | dropped');
+  for (const row of table) {
+    const cell = (v, digits = 0, width = 8) => String(Number.isFinite(v) ? v.toFixed(digits) : '?').padStart(width);
+    console.log(`#     ${cell(row.avatars, 0, 8)} | ${cell(row.fps, 1, 17)} | ${cell(row.drawn, 1, 7)} | ${cell(row.drawMs, 1, 12)} | ${cell(row.bytes, 0, 18)} | ` +
+                `${cell(row.frameBytes, 0, 11)} | ${cell(row.serverMs, 2, 15)} | ${cell(row.decisionUs, 2, 11)} | ${cell(row.dropped, 0, 7)}`);
+  }
+  console.log(`#      drag to first step ${target.stepAfter === null ? 'n/a' : target.stepAfter.toFixed(2) + ' s'}, ` +
+              `drag to first hit ${target.hitAfter.toFixed(2)} s (simulated)`);
+  console.log('#');
+
+  const errors = await page.evaluate(() => mgrl.state.errors);
+  check(errors.length === 1, 'no error from the server but the one asked for', errors.join('; '));
+  const bad = await page.evaluate(() => mgrl.state.frames.bad);
+  check(bad === 0, 'every binary frame was well-formed', `${bad} refused`);
+  check(pageErrors.length === 0, 'no script errors in the page', pageErrors.join('; '));
+  check(outside.length === 0, 'the page loads nothing from outside the server', outside.join(', '));
+}
+
+const overall = setTimeout(async () => {
+  console.log(`FAIL - the test did not finish within ${overallSeconds} s`);
+  await cleanUp();
+  process.exit(1);
+}, overallSeconds * 1000);
+
+process.on('exit', () => { if (server !== null && server.exitCode === null) server.kill('SIGKILL'); });
+
+let failure = null;
+try {
+  await main();
+} catch (e) {
+  failure = e;
+}
+clearTimeout(overall);
+if (failure !== null && page !== null) {
+  const file = path.join(screenshotDir, 'viewer-failure.png');
+  if (await page.screenshot({path: file, timeout: 10000}).then(() => true, () => false)) console.log(`# the page at the failure: ${file}`);
+}
+await cleanUp();
+if (failure !== null) {
+  console.log(`FAIL - ${failure instanceof CheckFailed ? failure.message : failure.stack}`);
+  if (serverLines.length > 0) console.log(`# the server's last lines:\n${serverLines.slice(-30).map((l) => '#   ' + l).join('\n')}`);
+  console.log(`${passed} passed, 1 failed`);
+  process.exit(1);
+}
+console.log(`${passed} passed, 0 failed`);

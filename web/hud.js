@@ -1,0 +1,87 @@
+// The heads-up display: what the server says (scene, stats, hits, errors) and how fast
+// frames reach this page. Redrawn a few times a second, not per frame.
+
+const $ = (id) => document.getElementById(id);
+const kHitLines = 5;
+
+const fixed = (v, digits) => (Number.isFinite(v) ? v.toFixed(digits) : '–');
+
+export class Hud {
+  constructor() {
+    this.scene = null;
+    this.stats = null;
+    this.framesPerSecond = 0;
+    this.frameTime = null;
+    this.hitLines = [];
+  }
+
+  setConnection(text) { $('connection').textContent = text; }
+
+  setScene(scene) {
+    this.scene = scene;
+    const note = $('note');
+    note.hidden = !(typeof scene.note === 'string' && scene.note.length > 0);
+    note.textContent = note.hidden ? '' : scene.note;
+  }
+
+  setStats(stats) { this.stats = stats; }
+
+  setError(message) {
+    const error = $('error');
+    error.hidden = false;
+    error.textContent = `last error: ${message}`;
+  }
+
+  /** A `hit` message: one line "hit 4.1 m/s" with who hit what. */
+  addHit(hit) {
+    const who = hit.target === -1 ? 'target' : `avatar ${hit.target} ${hit.part ?? ''}`;
+    const line = `hit ${fixed(hit.speed, 1)} m/s — ${hit.hand ?? '?'} hand of ${hit.attacker} on ${who} (t ${fixed(hit.time, 1)} s)`;
+    this.hitLines.unshift({line, at: performance.now()});
+    this.hitLines.length = Math.min(this.hitLines.length, kHitLines);
+  }
+
+  clearHits() { this.hitLines = []; }
+
+  render(framesPerSecond, framesDrawn, frameTime, frameAvatars, draw) {
+    const s = this.stats ?? {};
+    const c = this.scene ?? {};
+    const rows = [
+      ['mode', c.mode ?? '–'],
+      ['avatars', frameAvatars ?? c.avatars ?? '–'],
+      ['controller', c.controller ? (c.controller === 'online_search' ? `${c.controller} (h ${c.horizon})` : c.controller) : '–'],
+      ['simulated time', `${fixed(frameTime ?? s.time, 1)} s${s.paused ? ' (paused)' : ''}`],
+      ['speed', `${fixed(s.speed, 1)}×`],
+      ['frames received', `${fixed(framesPerSecond, 1)} /s`],
+      ['frames drawn', `${fixed(framesDrawn, 1)} /s${draw?.software ? ' (software)' : ''}`],
+      ['page draw', `${fixed(draw?.cycleMs, 1)} ms`],
+      ['decision', `${fixed(s.decision_us, 2)} µs`],
+      ['server', `${fixed(s.server_ms_per_frame, 2)} ms/frame`],
+      ['frames dropped', s.frames_dropped ?? '–'],
+      ['hits', s.hits ?? '–'],
+      ['hits per minute', fixed(s.hits_per_minute, 1)],
+      ['bytes per avatar-frame', s.bytes_per_avatar_frame ?? '–'],
+    ];
+    const table = $('hud-table');
+    if (table.rows.length !== rows.length) {
+      table.replaceChildren(...rows.map(() => {
+        const tr = document.createElement('tr');
+        tr.append(document.createElement('th'), document.createElement('td'));
+        return tr;
+      }));
+    }
+    rows.forEach(([name, value], k) => {
+      const [th, td] = table.rows[k].cells;
+      th.textContent = name;
+      td.textContent = String(value);
+    });
+
+    const now = performance.now();
+    const list = $('hits');
+    list.replaceChildren(...this.hitLines.map(({line, at}) => {
+      const li = document.createElement('li');
+      li.textContent = line;
+      if (now - at > 1500) li.className = 'old';
+      return li;
+    }));
+  }
+}
