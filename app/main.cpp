@@ -13,6 +13,7 @@
 #include <fmt/format.h>
 #include <fmt/ranges.h>
 
+#include "compare_command.hpp"
 #include "graph_command.hpp"
 #include "inspect.hpp"
 #include "learn_commands.hpp"
@@ -46,6 +47,22 @@ double defaultMaxMemoryGb() {
   const long pages = ::sysconf(_SC_PHYS_PAGES), pageSize = ::sysconf(_SC_PAGE_SIZE);
   if (pages <= 0 || pageSize <= 0) return 8;
   return 0.8 * static_cast<double>(pages) * static_cast<double>(pageSize) / 1e9;
+}
+
+// "a, b,c" -> {"a", "b", "c"}; empty items are kept (as "") so that they are reported.
+std::vector<std::string> splitList(const std::string& text) {
+  std::vector<std::string> items;
+  std::size_t begin = 0;
+  while (true) {
+    const std::size_t end = std::min(text.find(',', begin), text.size());
+    std::string item = text.substr(begin, end - begin);
+    item.erase(0, item.find_first_not_of(' '));
+    item.erase(item.find_last_not_of(' ') + 1);
+    items.push_back(item);
+    if (end == text.size()) break;
+    begin = end + 1;
+  }
+  return items;
 }
 
 // Levenshtein distance, for "did you mean".
@@ -207,6 +224,27 @@ int main(int argc, char** argv) {
   simulateCommand->add_option("--data", dataDir, "Motion capture folder (default: MGRL_DATA, else ../shared/mocap)");
   simulateCommand->add_option("--cache", cacheDir, "Cache folder (default: MGRL_CACHE, else ~/.cache/mgrl)");
 
+  mgrl::app::CompareOptions compare;
+  std::string compareLearners, compareSeeds = "1";
+  CLI::App* compareCommand = app.add_subcommand(
+      "compare", "Compare learners on one behaviour: train each with each seed on the same graph, evaluate every "
+                 "policy on the same trials, and measure each table against value iteration's on the same grid.");
+  compareCommand->add_option("SCENARIO", scenarioPath, "Scenario YAML file")->required();
+  compareCommand->add_option("--behavior,--behaviour", compare.behavior, "The behaviour whose learner varies")
+      ->required();
+  compareCommand->add_option("--learners", compareLearners, "Comma-separated learners (see mgrl list)")->required();
+  compareCommand->add_option("--seeds", compareSeeds, "Comma-separated seeds for seeded learners")->default_str("1");
+  compareCommand->add_option("--learner-set", compare.learnerSets,
+                             "LEARNER:KEY=VALUE: a parameter of one learner (repeatable), e.g. q_learning:budget=2000000");
+  compareCommand->add_option("--trials", compare.trials, "Evaluation trials per run (the same starts for all)")
+      ->default_val(100);
+  compareCommand->add_option("--seconds", compare.seconds, "Motion per trial (s)")->default_val(10);
+  compareCommand->add_option("--report", compare.report, "Write index.html (plots), results.json and results.csv here");
+  compareCommand->add_option("--set", compare.sets, "Override a scenario key (repeatable)");
+  compareCommand->add_flag("--json", json, "Print one JSON object on stdout");
+  compareCommand->add_option("--data", dataDir, "Motion capture folder (default: MGRL_DATA, else ../shared/mocap)");
+  compareCommand->add_option("--cache", cacheDir, "Cache folder (default: MGRL_CACHE, else ~/.cache/mgrl)");
+
   mgrl::serve::ServeCommandOptions serve;
   CLI::App* serveCommand = app.add_subcommand(
       "serve", "Serve the interactive viewer (paper sec. 6.6, 6.7) in the browser: drag a target for a boxer, watch "
@@ -341,6 +379,31 @@ int main(int argc, char** argv) {
         std::cout << report.dump(2) << '\n';
       else
         std::cout << mgrl::app::simulateText(report);
+    }
+    if (compareCommand->parsed()) {
+      compare.scenario = scenarioPath;
+      compare.dataDir = dataDir;
+      compare.cacheDir = cacheDir;
+      compare.log = log;
+      compare.learners = splitList(compareLearners);
+      compare.seeds.clear();
+      for (const std::string& word : splitList(compareSeeds)) {
+        std::size_t used = 0;
+        unsigned long long value = 0;
+        try {
+          value = std::stoull(word, &used);
+        } catch (const std::exception&) {
+          used = 0;
+        }
+        if (used != word.size() || word.empty() || word[0] == '-')
+          throw mgrl::Error(fmt::format("--seeds: expected whole numbers >= 0 separated by commas, found '{}'", word));
+        compare.seeds.push_back(value);
+      }
+      const nlohmann::json report = mgrl::app::runCompare(compare);
+      if (json)
+        std::cout << report.dump(2) << '\n';
+      else
+        std::cout << mgrl::app::compareText(report);
     }
     if (serveCommand->parsed()) {
       serve.scenario = scenarioPath;

@@ -1,0 +1,32 @@
+#pragma once
+/// \file
+/// `mgrl compare` (issue 15): several learners, several seeds, one behaviour, on the same
+/// motion graph and the same evaluation trials, against a value-iteration reference.
+#include <cstdint>
+#include <filesystem>
+#include <string>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+#include "learn_commands.hpp"
+
+namespace mgrl::app {
+
+struct CompareOptions : LearnOptions {
+  std::string behavior;                    ///< the behaviour whose learner varies
+  std::vector<std::string> learners;       ///< registered learner names, no repeats
+  std::vector<std::uint64_t> seeds{1};     ///< for learners with a `seed` parameter
+  std::vector<std::string> learnerSets;    ///< LEARNER:KEY=VALUE
+  std::size_t trials = 100;                ///< evaluation trials (the same starts for every run)
+  double seconds = 10;                     ///< motion per trial
+  std::filesystem::path report;            ///< "" none; else results.json, results.csv, index.html
+};
+
+/// Trains (or reuses from <cache>/compare/) and evaluates every learner x seed and returns
+/// {"behavior", "reference", "runs": [...], "learners": {NAME: {"mean": {...}, "sd": {...}}},
+/// "flags": [...]}. Every mistake in the options is reported before any training.
+nlohmann::json runCompare(const CompareOptions& options);
+std::string compareText(const nlohmann::json& report);
+
+}  // namespace mgrl::app
