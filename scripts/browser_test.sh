@@ -1,8 +1,10 @@
 #!/usr/bin/env bash
-# The viewer's browser test (tests/web/browser_test.mjs): a real `mgrl serve` from
-# BUILD_DIR driven by headless Chromium, with a boxing policy trained by value iteration
-# (about a second) into BUILD_DIR/browser-test/. Screenshots go to MGRL_SCREENSHOT_DIR
-# (default BUILD_DIR/browser-test/img; docs/img holds the README's).
+# The browser tests (tests/web/): the page's frame reader (node --test), the viewer end to
+# end (browser_test.mjs: a real `mgrl serve` from BUILD_DIR driven by headless Chromium,
+# with a boxing policy trained by value iteration, about a second, into
+# BUILD_DIR/browser-test/), and the `mgrl compare` report (report_test.mjs). Screenshots
+# go to MGRL_SCREENSHOT_DIR (default BUILD_DIR/browser-test/img; docs/img holds the
+# README's).
 #   scripts/browser_test.sh [BUILD_DIR]
 set -euo pipefail
 root="$(cd "$(dirname "$0")/.." && pwd)"
@@ -16,5 +18,14 @@ mkdir -p "$work"
   --set behaviors.hit.learner.type=value_iteration --out "$work/policy" --cache "$work/cache" --data "$data" \
   >"$work/train.out" 2>"$work/train.err" || { cat "$work/train.err" >&2; exit 1; }
 cd "$root"
+node --test "$root/tests/web/protocol_test.mjs" >"$work/protocol.out" 2>&1 || { cat "$work/protocol.out" >&2; exit 1; }
+echo "browser_test: the page's frame reader passed (tests/web/protocol_test.mjs)" >&2
+shots="${MGRL_SCREENSHOT_DIR:-$work/img}"
+mkdir -p "$shots"
+"$mgrl" compare "$root/scenarios/boxing.yaml" --behavior hit --learners q_learning,value_iteration --seeds 1,2 \
+  --learner-set q_learning:budget=300000 --set behaviors.approach.learner.budget=200000 --trials 20 \
+  --cache "$work/cache" --data "$data" --report "$work/report" >"$work/compare.out" 2>"$work/compare.err" ||
+  { cat "$work/compare.err" >&2; exit 1; }
+node "$root/tests/web/report_test.mjs" "$work/report" "$shots/compare-report.png"
 MGRL_BINARY="$mgrl" MGRL_SERVE_ARGS="--policy $work/policy --cache $work/cache --data $data" \
-  MGRL_SCREENSHOT_DIR="${MGRL_SCREENSHOT_DIR:-$work/img}" node "$root/tests/web/browser_test.mjs"
+  MGRL_SCREENSHOT_DIR="$shots" node "$root/tests/web/browser_test.mjs"
