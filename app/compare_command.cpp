@@ -53,6 +53,7 @@ const std::vector<std::pair<std::string, std::string>> kMetrics = {
     {"updates", "updates"},          {"table_bytes", "table (bytes)"},
     {"decision_us", "decision (us)"}, {"value_rmse", "V RMSE vs reference"},
     {"greedy_agreement", "greedy agreement"}, {"touched_share", "Q entries touched"},
+    {"cell_coverage", "grid cells walked"},
 };
 
 Scenario loadChecked(const LearnOptions& options, const std::vector<std::string>& sets, const std::string& what) {
@@ -431,6 +432,8 @@ json runCompare(const CompareOptions& options) {
               {"value_rmse", c.rmse},
               {"greedy_agreement", c.agreement},
               {"touched_share", touchedShare(trained.table)},
+              {"cell_coverage", trained.record.contains("stats") ? trained.record["stats"].value("cell_coverage", json())
+                                                                 : json()},
               {"curve", trained.record.value("curve", json::array())}};
     if (c.agreement < kAgreementFlag)
       report["flags"].push_back(fmt::format(

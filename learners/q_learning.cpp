@@ -4,7 +4,9 @@
 //     Q(v, a) += alpha (r(v, a) + gamma^t_a max_a' Q(e'_v, a') - Q(v, a)),
 // where e'_v is v moved along by the action (the environment model) and Q(e'_v, .) is
 // interpolated from e'_v's cell (0 when e'_v leaves the grid). Restart when the target
-// itself leaves the grid. alpha falls linearly from 1 over the budget of actions.
+// itself leaves the grid (or, with max_episode_actions, after that many actions: an
+// option beyond the paper for captures whose avatar hardly travels). alpha falls linearly
+// from 1 over the budget of actions.
 #include <algorithm>
 #include <array>
 #include <chrono>
@@ -33,6 +35,7 @@ class QLearning final : public Learner {
         alphaFinal_(p.number("alpha_final")),
         curvePoints_(static_cast<std::uint64_t>(p.integer("curve_points"))),
         checkpointEvery_(static_cast<std::uint64_t>(p.integer("checkpoint_every"))),
+        maxEpisode_(static_cast<std::uint64_t>(p.integer("max_episode_actions"))),
         threads_(static_cast<unsigned>(p.integer("threads"))) {}
 
   std::string type() const override { return "q_learning"; }
@@ -43,6 +46,7 @@ class QLearning final : public Learner {
   std::uint64_t budget_, seed_;
   double alphaFinal_;
   std::uint64_t curvePoints_, checkpointEvery_;
+  std::uint64_t maxEpisode_;  ///< 0: the paper's rule (restart only when the target leaves)
   unsigned threads_;
 };
 
@@ -50,15 +54,20 @@ class QLearning final : public Learner {
 struct Walk {
   Rng rng;
   std::uint64_t updates = 0, restarts = 0;
+  std::uint64_t episodeActions = 0;  ///< actions since the last restart (for max_episode_actions)
   std::uint32_t state = 0;
   Eigen::Vector3d target{0, 0, 0};
 };
 
-nlohmann::json toJson(const Walk& w) {
+// `capped`: the episode length is limited, so it is part of the state (absent otherwise,
+// so that checkpoints of the paper's rule keep their format).
+nlohmann::json toJson(const Walk& w, bool capped) {
   nlohmann::json rng = nlohmann::json::array();
   for (std::uint64_t word : w.rng.state()) rng.push_back(word);
-  return {{"updates", w.updates}, {"restarts", w.restarts}, {"state", w.state},
-          {"target", {w.target.x(), w.target.y(), w.target.z()}}, {"rng", rng}};
+  nlohmann::json j = {{"updates", w.updates}, {"restarts", w.restarts}, {"state", w.state},
+                      {"target", {w.target.x(), w.target.y(), w.target.z()}}, {"rng", rng}};
+  if (capped) j["episode_actions"] = w.episodeActions;
+  return j;
 }
 
 // What a checkpoint holds beside the table. A resumed run trusts all of it, so every
@@ -72,7 +81,7 @@ struct Saved {
 // The inverse of the state train() saves, read through `r` (which names the file) at path
 // "state". Throws mgrl::Error naming the member, what was expected and what was found.
 Saved readSaved(const nlohmann::json& state, const ManifestReader& r, std::size_t states, std::uint64_t budget,
-                std::uint64_t curvePoints) {
+                std::uint64_t curvePoints, std::uint64_t maxEpisode) {
   using nlohmann::json;
   if (!state.is_object()) r.fail("state", "an object", state);
   for (const auto& item : state.items())
@@ -80,7 +89,11 @@ Saved readSaved(const nlohmann::json& state, const ManifestReader& r, std::size_
       r.fail("state", "only the keys updates, walk, seconds, curve", json(item.key()));
   Saved saved;
   Walk& w = saved.walk;
-  const json& walk = r.object(state, "state", "walk", {"updates", "restarts", "state", "target", "rng"});
+  const json& walk =
+      maxEpisode > 0 ? r.object(state, "state", "walk", {"updates", "restarts", "state", "target", "rng", "episode_actions"})
+                     : r.object(state, "state", "walk", {"updates", "restarts", "state", "target", "rng"});
+  if (maxEpisode > 0)
+    w.episodeActions = r.unsignedInteger(walk, "state.walk", "episode_actions", maxEpisode - 1);
   w.updates = r.unsignedInteger(walk, "state.walk", "updates", budget);
   if (r.unsignedInteger(state, "state", "updates", budget) != w.updates)
     r.fail("state.updates", fmt::format("{}, as state.walk.updates", w.updates), state["updates"]);
@@ -143,6 +156,7 @@ TrainResult QLearning::train(const TrainContext& context) const {
     do w.target = grid.sample({w.rng.uniform(), w.rng.uniform(), w.rng.uniform()});
     while (!grid.inside(w.target));
     ++w.restarts;
+    w.episodeActions = 0;
   };
 
   bool resumed = false;
@@ -151,7 +165,7 @@ TrainResult QLearning::train(const TrainContext& context) const {
     // reported and ignored there, and the table left as it is (all zeros).
     Saved saved;
     const StateCheck check = [&](const nlohmann::json& state, const ManifestReader& reader) {
-      saved = readSaved(state, reader, m.stateCount(), total, curvePoints_);
+      saved = readSaved(state, reader, m.stateCount(), total, curvePoints_, maxEpisode_);
     };
     if (context.checkpointer->loadChecked(q, check)) {
       walk = saved.walk;
@@ -188,6 +202,9 @@ TrainResult QLearning::train(const TrainContext& context) const {
   // the caches and random actions defeat the hardware's own prefetching), and with two
   // threads the next chunk is walked while this one is updated. Chunks end at progress,
   // curve and checkpoint points, so the same seed gives the same table either way.
+  // Cells the walk has been in (since this process started the run), for the coverage
+  // report: the paper's rule can keep a walk in a few cells for its whole budget.
+  std::vector<std::uint8_t> cellSeen(grid.cellCount(), 0);
   auto walkChunk = [&](Walk& w, std::uint64_t stop, std::vector<Step>& steps) {
     steps.clear();
     GridCell cell;
@@ -199,9 +216,14 @@ TrainResult QLearning::train(const TrainContext& context) const {
       const std::uint32_t s = w.state;
       const std::size_t a = stateBegin[s] + static_cast<std::uint32_t>(w.rng.below(stateBegin[s + 1] - stateBegin[s]));
       steps.push_back({static_cast<std::uint32_t>(a), cell.cell});
+      cellSeen[cell.cell] = 1;
       w.target = rigid ? g.rigidNext(a, w.target) : environment.next(m, a, w.target);
       w.state = m.actionTo[a];
-      if (!grid.locate(w.target, cell)) {
+      ++w.episodeActions;
+      // The paper restarts when the target leaves the grid (sec. 4.2); a cap on the
+      // episode also restarts a walk whose avatar hardly travels, which would otherwise
+      // keep the target in a few cells for the whole budget.
+      if (!grid.locate(w.target, cell) || (maxEpisode_ > 0 && w.episodeActions >= maxEpisode_)) {
         restart(w);
         grid.locate(w.target, cell);
       }
@@ -305,7 +327,7 @@ TrainResult QLearning::train(const TrainContext& context) const {
       nlohmann::json curve = nlohmann::json::array();
       for (const CurvePoint& p : result.curve) curve.push_back({p.updates, p.seconds, p.residual, p.meanResidual});
       context.checkpointer->save(
-          {{"updates", walk.updates}, {"walk", toJson(walk)}, {"seconds", elapsed()}, {"curve", curve}}, q);
+          {{"updates", walk.updates}, {"walk", toJson(walk, maxEpisode_ > 0)}, {"seconds", elapsed()}, {"curve", curve}}, q);
     }
     if (context.observer) context.observer->progress({walk.updates, total, elapsed(), lastResidual});
     if (stopping) throw TrainInterrupted(walk.updates, total, context.checkpointer != nullptr);
@@ -314,7 +336,10 @@ TrainResult QLearning::train(const TrainContext& context) const {
   result.updates = walk.updates;
   result.seconds = elapsed();
   result.finalResidual = result.curve.empty() ? bellmanResidual(q, g, threads).max : result.curve.back().residual;
+  const auto cellsVisited = static_cast<std::size_t>(std::count(cellSeen.begin(), cellSeen.end(), 1));
   result.stats = {{"restarts", walk.restarts},
+                  {"cells_visited", cellsVisited},
+                  {"cell_coverage", cellSeen.empty() ? 0.0 : static_cast<double>(cellsVisited) / static_cast<double>(cellSeen.size())},
                   {"mean_episode_actions", walk.restarts > 0 ? static_cast<double>(walk.updates) / walk.restarts : 0.0},
                   {"resumed", resumed}};
   return result;
@@ -334,6 +359,9 @@ void registerQLearning(LearnerRegistry& registry) {
                            "training-curve points, each measuring the Bellman residual with a full sweep"),
         ParamSpec::integer("checkpoint_every", 10'000'000, 0, 1'000'000'000'000LL, "actions",
                            "save a resumable checkpoint this often (0: never)"),
+        ParamSpec::integer("max_episode_actions", 0, 0, 1'000'000'000'000LL, "actions",
+                           "restart the walk after this many actions even if the target stays on the grid (0: only "
+                           "when it leaves, the paper's rule)"),
         threadsSpec()},
        [](const Params& p) { return std::make_unique<QLearning>(p); }});
 }

@@ -350,6 +350,47 @@ struct RingSetup {
 constexpr const char* kRingLearner =
     "{type: q_learning, budget: 2000, seed: 9, checkpoint_every: 600, curve_points: 4}";
 
+// Issue 15: the paper restarts Q-learning's walk only when the target leaves the grid. On a
+// capture whose avatar hardly travels the target never leaves, one episode takes the whole
+// budget and the walk stays in the first target's cell. max_episode_actions restarts it
+// anyway; left at 0 it changes nothing (and no behaviour key: tables trained before it
+// keep theirs).
+TEST_CASE("Q-learning's episode cap restores coverage where the avatar stands still", "[learning]") {
+  const ActionHit punch{0, 3, 1, 0.0f, 1.0f, 0.5f, 1.0f};
+  const StateActionModel standing =
+      handModel(2, {{0, 1, 5, 0, 0, 0, {punch}}, {0, 0, 5, 0, 0, 0, {}}, {1, 0, 5, 0, 0, 0, {}}, {1, 1, 5, 0, 0, 0, {punch}}});
+  const auto grid = makeGrid(kCorridorGrid, standing);
+  const auto reward = app::plugins().rewards.create(yaml("{type: hit, contact_radius: 0.1}"));
+  const StaticTarget environment;
+  const Problem problem{standing, *grid, *reward, environment};
+  const GridModel g = GridModel::build(problem, 2);
+
+  const TrainResult paper = trainWith("{type: q_learning, budget: 20000, seed: 4, curve_points: 2}", problem, g);
+  CHECK(paper.stats["restarts"] == 1);  // one episode for the whole budget
+  CHECK(paper.stats["cells_visited"] == 1);
+  const TrainResult capped =
+      trainWith("{type: q_learning, budget: 20000, seed: 4, curve_points: 2, max_episode_actions: 20}", problem, g);
+  CHECK(capped.stats["restarts"].get<std::uint64_t>() >= 1000);
+  CHECK(capped.stats["cell_coverage"].get<double>() > 0.95);
+  // Coverage is what lets the values spread: more vertices hold a learned value.
+  auto nonZero = [](const QTable& q) {
+    return std::count_if(q.values().begin(), q.values().end(), [](float x) { return x != 0.0f; });
+  };
+  CHECK(nonZero(capped.table) > 4 * nonZero(paper.table));
+  // A cap longer than the budget is the paper's rule: the same table.
+  CHECK(trainWith("{type: q_learning, budget: 20000, seed: 4, curve_points: 2, max_episode_actions: 100000}", problem, g)
+            .table == paper.table);
+
+  // The cap is part of a table's key only when it is set.
+  BehaviorSpec spec{"hit", "", 1, Activation::Always, yaml("{}"), yaml(kCorridorGrid), yaml("{type: hit}"),
+                    ConfigNode::parse("", "none"), yaml("{type: q_learning}")};
+  const std::string plain = behaviorConfigAndKey(spec, app::plugins(), "graph").second;
+  spec.learner = yaml("{type: q_learning, max_episode_actions: 0}");
+  CHECK(behaviorConfigAndKey(spec, app::plugins(), "graph").second == plain);
+  spec.learner = yaml("{type: q_learning, max_episode_actions: 50}");
+  CHECK(behaviorConfigAndKey(spec, app::plugins(), "graph").second != plain);
+}
+
 TEST_CASE("Q-learning is deterministic and a resumed run ends with the uninterrupted table", "[learning]") {
   const RingSetup setup;
   const Problem& problem = setup.problem;

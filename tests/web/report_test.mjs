@@ -14,7 +14,7 @@ if (!reportDir) {
   console.error('usage: node tests/web/report_test.mjs REPORT_DIR [SCREENSHOT.png]');
   process.exit(2);
 }
-const kMetrics = 10;  // bar charts, one per metric in app/compare_command.cpp, plus the residual curve
+const kMetrics = 11;  // bar charts, one per metric in app/compare_command.cpp, plus the residual curve
 
 const timer = setTimeout(() => {
   console.error('report_test: no result within 60 s');
