@@ -58,7 +58,7 @@ TEST_CASE("page messages are taken only when every field is what the protocol sa
       {"[1, 2]", "expected a JSON object, found [1,2]"},
       {R"({"mode": "target"})", "expected a field \"type\""},
       {R"({"type": 7})", "message.type: expected a string, found 7"},
-      {R"({"type": "explode"})", "expected one of mode, move_target, controller, weights, pause, step, speed, found \"explode\""},
+      {R"({"type": "explode"})", "expected one of mode, move_target, controller, weights, pause, step, speed, values, found \"explode\""},
       {R"({"type": "step", "extra": 1})", "step: unexpected field \"extra\""},
       {R"({"type": "mode", "mode": "dance"})", "mode.mode: expected one of target, sparring, crowd, found \"dance\""},
       {R"({"type": "mode", "mode": "crowd", "avatars": 2001})", "mode.avatars: expected a whole number in [2, 2000], found 2001"},
@@ -198,6 +198,37 @@ TEST_CASE("a page's world: the boxer punches the target where it is dragged; wei
   CHECK((after.targets.at(0).second - spot).norm() < 0.4);  // the target (bend included) is where it was put
   CHECK((after.avatars[0][0] - spot).head<1>().norm() < (root - spot).head<1>().norm());  // the boxer went there
 
+  // The teaching view: hit's values around the boxer at its last decision, the layer of the
+  // hit grid nearest the target's height, and the path of the action it took.
+  session.handle(R"({"type": "values", "behavior": "hit"})");
+  out = textMessages(session);
+  REQUIRE(out.size() == 1);
+  const json values = out[0];
+  CHECK(values["type"] == "values");
+  CHECK(values["behavior"] == "hit");
+  CHECK(values["points"].size() == 20 * 16);  // one layer of the 20 x 16 x 6 grid
+  CHECK(values["v_max"].get<double>() > values["v_min"].get<double>());
+  CHECK(values["chosen"].get<std::size_t>() < values["actions"].get<std::size_t>());
+  CHECK(values["path"].size() >= 2);
+  for (const json& p : values["points"]) {
+    CHECK(p[1].get<double>() == Approx(values["height"].get<double>()).margin(1e-3));
+    CHECK(p[4].get<std::size_t>() < values["actions"].get<std::size_t>());
+  }
+  // It follows the boxer: more come as the world runs, none once stopped.
+  int more = 0;
+  for (int f = 0; f < 30; ++f) {
+    session.advance(1.0);
+    for (const json& m : textMessages(session)) more += m["type"] == "values";
+  }
+  CHECK(more >= 4);
+  session.handle(R"({"type": "values", "behavior": null})");
+  for (int f = 0; f < 30; ++f) {
+    session.advance(1.0);
+    for (const json& m : textMessages(session)) CHECK(m["type"] != "values");
+  }
+  session.handle(R"({"type": "values", "behavior": "kick"})");
+  CHECK(textMessages(session).at(0)["message"] == "values.behavior: expected one of approach, hit or null, found \"kick\"");
+
   json stats = json::parse(session.stats(5, 1));
   CHECK(stats["hits"].get<int>() >= 1);
   CHECK(stats["frames_sent"] == 5);
@@ -253,6 +284,9 @@ TEST_CASE("with no policy bundle, the page is told and the online search runs", 
   CHECK(scene["note"].get<std::string>().find("mgrl train") != std::string::npos);
   session.handle(R"({"type": "controller", "controller": "policy"})");
   CHECK(json::parse(session.takeOutbox().at(0))["message"].get<std::string>().find("no policy bundle") !=
+        std::string::npos);
+  session.handle(R"({"type": "values", "behavior": "hit"})");
+  CHECK(json::parse(session.takeOutbox().at(0))["message"].get<std::string>().find("expected a policy bundle") !=
         std::string::npos);
 }
 

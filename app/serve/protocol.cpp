@@ -151,9 +151,14 @@ ClientMessage parseClientMessage(std::string_view text) {
     result = Step{};
   } else if (type == "speed") {
     result = SetSpeed{fields.number(fields.required("speed"), "speed", Limits::kSpeedMin, Limits::kSpeedMax)};
+  } else if (type == "values") {
+    const json& b = fields.required("behavior");
+    if (!(b.is_null() || (b.is_string() && b.get<std::string>().size() <= 64)))
+      throw Error(fmt::format("values.behavior: expected a behaviour name or null, found {}", shown(b)));
+    result = ShowValues{b.is_null() ? std::string() : b.get<std::string>()};
   } else {
     throw Error(fmt::format(
-        "message.type: expected one of mode, move_target, controller, weights, pause, step, speed, found {}",
+        "message.type: expected one of mode, move_target, controller, weights, pause, step, speed, values, found {}",
         shown(*typeIt)));
   }
   fields.finish();

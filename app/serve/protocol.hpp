@@ -51,8 +51,12 @@ struct Step {};
 struct SetSpeed {
   double speed = 1;
 };
+/// The teaching view: stream a behaviour's values around avatar 0 ("" stops).
+struct ShowValues {
+  std::string behavior;
+};
 
-using ClientMessage = std::variant<SetMode, MoveTarget, SetController, SetWeights, Pause, Step, SetSpeed>;
+using ClientMessage = std::variant<SetMode, MoveTarget, SetController, SetWeights, Pause, Step, SetSpeed, ShowValues>;
 
 /// Parses and checks one page message. Throws mgrl::Error whose text says which field was
 /// expected to hold what and what it held (the server sends it back as an `error`).

@@ -8,6 +8,7 @@
 #include <nlohmann/json.hpp>
 
 #include "learn_common.hpp"
+#include "mgrl/graph/motion_graph.hpp"
 #include "mgrl/learning/behavior.hpp"
 #include "mgrl/learning/policy_bundle.hpp"
 #include "mgrl/runtime/controller.hpp"
@@ -137,6 +138,8 @@ struct ViewerSession::State {
   double busySeconds = 0;       ///< simulating and encoding, since the last stats
   std::size_t busyFrames = 0;
   std::string adjustment;       ///< what the session changed on its own (scene note)
+  int shown = -1;               ///< behaviour whose values are streamed (-1 none)
+  std::size_t valuesFrame = 0;  ///< world frame of the last `values` message
 };
 
 ViewerSession::ViewerSession(std::shared_ptr<const ViewerAssets> assets)
@@ -314,6 +317,24 @@ void ViewerSession::handle(std::string_view text) {
       s.steps = std::min(s.steps + 1, 30);
     } else if (const auto* speed = std::get_if<SetSpeed>(&message)) {
       s.speed = speed->speed;
+    } else if (const auto* show = std::get_if<ShowValues>(&message)) {
+      if (show->behavior.empty()) {
+        s.shown = -1;
+      } else {
+        const auto it = std::find_if(a.behaviors.begin(), a.behaviors.end(),
+                                     [&](const Behavior& b) { return b.name == show->behavior; });
+        if (it == a.behaviors.end()) {
+          std::vector<std::string> names;
+          for (const Behavior& b : a.behaviors) names.push_back(b.name);
+          throw Error(fmt::format("values.behavior: expected one of {} or null, found \"{}\"", fmt::join(names, ", "),
+                                  show->behavior));
+        }
+        if (a.policy.empty())
+          throw Error("values: expected a policy bundle to take values from; this server has none (mgrl train makes one)");
+        s.shown = static_cast<int>(it - a.behaviors.begin());
+        outbox_.push_back(values());
+        s.valuesFrame = s.world->frame();
+      }
     }
   } catch (const Error& e) {
     outbox_.push_back(json{{"type", "error"}, {"message", e.what()}}.dump());
@@ -357,6 +378,11 @@ bool ViewerSession::advance(double frames) {
                           .dump());
   }
   while (!s.hitTimes.empty() && s.hitTimes.front() < s.world->time() - 30) s.hitTimes.pop_front();
+  // The teaching view follows avatar 0 five times a second of simulated time.
+  if (s.shown >= 0 && s.world->frame() >= s.valuesFrame + 6) {
+    outbox_.push_back(values());
+    s.valuesFrame = s.world->frame();
+  }
   return true;
 }
 
@@ -379,6 +405,61 @@ const std::vector<std::uint8_t>& ViewerSession::frame() {
   const auto& bytes = s.writer.finish();
   s.busySeconds += std::chrono::duration<double>(Clock::now() - start).count();
   return bytes;
+}
+
+// What the policy saw at avatar 0's last decision (paper sec. 5): at its state s, for every
+// vertex v of the behaviour's grid (a 3-D grid's layer nearest the target's height), the
+// value max_a Q(s, v, a) and the greedy action, placed around the avatar as it stood then;
+// and the root path of the action it took.
+std::string ViewerSession::values() const {
+  const ViewerAssets& a = *assets_;
+  const State& s = *state_;
+  const Behavior& behavior = a.behaviors[static_cast<std::size_t>(s.shown)];
+  const PolicyBehavior& trained = a.bundle.behaviors.at(behavior.name);
+  const QTable& q = trained.table;
+  const World::Decision d = s.world->lastDecision(0);
+  const Eigen::Vector3d e = inverseTransformPoint(d.frame, s.world->aim(0));
+  const std::size_t vertices = q.vertexCount();
+  double level = trained.vertices.empty() ? 0 : trained.vertices[1];
+  for (std::size_t v = 0; v < vertices; ++v)
+    if (std::abs(trained.vertices[3 * v + 1] - e.y()) < std::abs(level - e.y())) level = trained.vertices[3 * v + 1];
+  const std::size_t n = q.actionsOf(d.state);
+  json points = json::array();
+  double lo = 0, hi = 0;
+  bool first = true;
+  for (std::size_t v = 0; v < vertices; ++v) {
+    const double* p = &trained.vertices[3 * v];
+    if (std::abs(p[1] - level) > 1e-6 || n == 0) continue;
+    const float* row = q.row(d.state, v);
+    const std::size_t best = static_cast<std::size_t>(std::max_element(row, row + n) - row);
+    const Eigen::Vector3d w = transformPoint(d.frame, {p[0], p[1], p[2]});
+    const double value = row[best];
+    lo = first ? value : std::min(lo, value);
+    hi = first ? value : std::max(hi, value);
+    first = false;
+    points.push_back({std::round(w.x() * 1000) / 1000, std::round(w.y() * 1000) / 1000, std::round(w.z() * 1000) / 1000,
+                      value, best});
+  }
+  const StateActionModel& model = a.model();
+  json path = json::array();
+  for (std::uint32_t k = model.actionFrameBegin[d.action]; k < model.actionFrameBegin[d.action + 1]; ++k) {
+    const Eigen::Vector3d w = transformPoint(d.frame, {model.frameRoot[3 * k], 0, model.frameRoot[3 * k + 1]});
+    path.push_back({std::round(w.x() * 1000) / 1000, 0, std::round(w.z() * 1000) / 1000});
+  }
+  return json{{"type", "values"},
+              {"behavior", behavior.name},
+              {"avatar", 0},
+              {"time", s.world->time()},
+              {"state", d.state},
+              {"actions", n},
+              {"chosen", d.action - model.stateActionBegin[d.state]},
+              {"height", level},
+              {"target_inside", behavior.discretizer->inside(e)},
+              {"v_min", lo},
+              {"v_max", hi},
+              {"points", points},
+              {"path", path}}
+      .dump();
 }
 
 std::string ViewerSession::stats(std::size_t framesSent, std::size_t framesDropped) {

@@ -57,6 +57,8 @@ class ViewerSession {
   void rebuild(Mode mode, int avatars);
   void applyController();
   std::string scene() const;
+  /// The `values` message of the behaviour shown (docs/viewer-protocol.md).
+  std::string values() const;
 
   std::shared_ptr<const ViewerAssets> assets_;
   std::unique_ptr<State> state_;

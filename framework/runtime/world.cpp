@@ -377,6 +377,10 @@ void World::moveTarget(std::size_t i, const Eigen::Vector3d& base) {
 
 std::size_t World::avatarCount() const { return avatars_.size(); }
 GroundMotion World::avatarFrame(std::size_t i) const { return avatars_[i].now; }
+World::Decision World::lastDecision(std::size_t i) const {
+  const Avatar& a = avatars_[i];
+  return {a.state, a.action, a.decision};
+}
 int World::partner(std::size_t i) const { return avatars_[i].partner; }
 const Target& World::target(std::size_t i) const { return targets_[i]; }
 const Pose& World::pose(std::size_t i) const { return avatars_[i].pose; }

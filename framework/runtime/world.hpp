@@ -145,6 +145,13 @@ class World {
   std::size_t decisions() const;
   /// The avatar frame (ground position and facing) of avatar i now, in the world.
   GroundMotion avatarFrame(std::size_t i) const;
+  /// Avatar i's last decision: the state it decided at, the action it took and its avatar
+  /// frame then (world). For views that show what the controller saw.
+  struct Decision {
+    std::uint32_t state = 0, action = 0;
+    GroundMotion frame;
+  };
+  Decision lastDecision(std::size_t i) const;
   /// The point avatar i aims at now (its partner's head or its target's centre).
   Eigen::Vector3d aim(std::size_t i) const;
   /// Avatar i's partner, or -1 if it has a target of its own.
