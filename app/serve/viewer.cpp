@@ -228,10 +228,20 @@ std::string ViewerSession::scene() const {
   json partners = json::array();
   for (std::size_t i = 0; i < s.world->avatarCount(); ++i) partners.push_back(s.world->partner(i));
   json behaviors = json::array();
-  for (std::size_t i = 0; i < a.behaviors.size(); ++i)
-    behaviors.push_back({{"name", a.behaviors[i].name},
-                         {"weight", s.weights[i]},
-                         {"activation", std::string(activationName(a.behaviors[i].activation))}});
+  for (std::size_t i = 0; i < a.behaviors.size(); ++i) {
+    json b = {{"name", a.behaviors[i].name},
+              {"weight", s.weights[i]},
+              {"activation", std::string(activationName(a.behaviors[i].activation))}};
+    // The bundle's training record: its learner and curve (updates, seconds, residual,
+    // mean residual), for the page's learning-curve view.
+    const auto trained = a.bundle.behaviors.find(a.behaviors[i].name);
+    if (!a.policy.empty() && trained != a.bundle.behaviors.end()) {
+      b["learner"] = trained->second.record.value("learner", std::string());
+      b["curve"] = trained->second.record.value("curve", json::array());
+      b["vertices"] = trained->second.table.vertexCount();
+    }
+    behaviors.push_back(std::move(b));
+  }
   json controllers = json::array();
   if (!a.policy.empty()) controllers.push_back("policy");
   controllers.push_back("online_search");
