@@ -225,7 +225,25 @@ std::vector<PolicyPart> policyParts(const fs::path& dir, const std::vector<Behav
                               "vs {}); retrain with mgrl train {} --behavior {}{}",
                               dir.string(), b.name, found->second.key.substr(0, 16), b.key.substr(0, 16),
                               options.scenario.string(), b.name, setFlags(options.sets)));
-    parts.push_back({b.discretizer.get(), &found->second.table, b.weight, b.activation});
+    // A grid with its own structure (kd_tree refined by adaptive_value_iteration) is rebuilt
+    // from the bundle's arrays; the scenario's parameters give the rest.
+    PolicyBehavior& trained = found->second;
+    const Discretizer* grid = b.discretizer.get();
+    if (!trained.grid.empty()) {
+      if (trained.gridType != b.discretizer->type())
+        throw Error(fmt::format("{}: behaviour '{}' was trained on a {} grid, the scenario asks for {}; retrain with "
+                                "mgrl train {} --behavior {}{}",
+                                dir.string(), b.name, trained.gridType, b.discretizer->type(),
+                                options.scenario.string(), b.name, setFlags(options.sets)));
+      trained.restoredGrid = b.discretizer->restored(trained.grid);
+      grid = trained.restoredGrid.get();
+    }
+    if (grid->vertexCount() != trained.table.vertexCount())
+      throw Error(fmt::format("{}: behaviour '{}': expected a table over the grid's {} vertices, found {}; retrain "
+                              "with mgrl train {} --behavior {}{}",
+                              dir.string(), b.name, grid->vertexCount(), trained.table.vertexCount(),
+                              options.scenario.string(), b.name, setFlags(options.sets)));
+    parts.push_back({grid, &trained.table, b.weight, b.activation});
   }
   return parts;
 }

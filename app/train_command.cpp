@@ -343,6 +343,8 @@ json runTrain(const TrainOptions& options) {
       log(fmt::format("resume: {}: no checkpoint to continue from, trained from the start", behavior.name));
     TrainResult& result = *trained;
 
+    // An adaptive learner returns the grid it refined: the table's vertices are its.
+    const Discretizer& tableGrid = result.grid ? *result.grid : *behavior.discretizer;
     json curve = json::array();
     for (const CurvePoint& p : result.curve) curve.push_back({p.updates, p.seconds, p.residual, p.meanResidual});
     const double rate = result.seconds > 0 ? static_cast<double>(result.updates) / result.seconds : 0;
@@ -352,7 +354,7 @@ json runTrain(const TrainOptions& options) {
                     {"updates_per_second", rate},
                     {"final_residual", result.finalResidual},
                     {"table_bytes", result.table.bytes()},
-                    {"vertices", behavior.discretizer->vertexCount()},
+                    {"vertices", tableGrid.vertexCount()},
                     {"actions", model.actionCount()},
                     {"tabulate_seconds", tabulateSeconds},
                     {"stats", result.stats}};
@@ -361,11 +363,13 @@ json runTrain(const TrainOptions& options) {
     record["config"] = behavior.config;
     record["weight"] = behavior.weight;
     record["activation"] = std::string(activationName(behavior.activation));
-    record["grid"] = behavior.discretizer->describe();
+    record["grid"] = tableGrid.describe();
     record["curve_columns"] = {"updates", "seconds", "residual", "mean_residual"};
     record["curve"] = curve;
-    bundle.behaviors[behavior.name] =
-        PolicyBehavior{behavior.key, record, std::move(result.table), vertexPositions(*behavior.discretizer)};
+    bundle.behaviors[behavior.name] = PolicyBehavior{behavior.key,          record,
+                                                     std::move(result.table), vertexPositions(tableGrid),
+                                                     tableGrid.type(),      tableGrid.structure(),
+                                                     nullptr};
     log(fmt::format("train {}: {} updates in {:.2f} s ({}updates/s), Bellman residual {:.3g}", behavior.name,
                     result.updates, result.seconds, humanCount(rate), result.finalResidual));
   }

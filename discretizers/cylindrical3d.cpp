@@ -10,12 +10,8 @@
 namespace mgrl::discretizers {
 
 namespace {
-
 constexpr double kDeg = M_PI / 180;
-
-struct Bounds {
-  double angle[2], distance[2], height[2];
-};
+}  // namespace
 
 // The bounding volume, in (angle, distance, height), of the effective hitting points as
 // seen from the decision that leads to them: a target there can be hit by some action.
@@ -63,6 +59,8 @@ Bounds givenBounds(const Params& p) {
   if (!(b.height[1] > b.height[0])) p.fail("height_max", "expected more than height_min");
   return b;
 }
+
+namespace {
 
 class Cylindrical3d final : public Discretizer {
  public:
@@ -115,6 +113,7 @@ void registerCylindrical3d(DiscretizerRegistry& registry) {
 void registerAll(DiscretizerRegistry& registry) {
   registerPolar2d(registry);
   registerCylindrical3d(registry);
+  registerKdTree(registry);
 }
 
 }  // namespace mgrl::discretizers

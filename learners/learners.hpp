@@ -6,10 +6,11 @@
 
 namespace mgrl::learners {
 
-/// Adds q_learning and value_iteration.
+/// Adds q_learning, value_iteration and adaptive_value_iteration.
 void registerAll(LearnerRegistry& registry);
 void registerQLearning(LearnerRegistry& registry);
 void registerValueIteration(LearnerRegistry& registry);
+void registerAdaptiveValueIteration(LearnerRegistry& registry);
 
 /// The `threads` parameter both learners share.
 ParamSpec threadsSpec();

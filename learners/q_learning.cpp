@@ -144,6 +144,11 @@ TrainResult QLearning::train(const TrainContext& context) const {
   const GridModel& g = context.grid;
   const unsigned threads = threads_ > 0 ? threads_ : context.threads;
   const std::uint64_t total = budget_;
+  // Its updates move vertices one by one; a hanging vertex must follow its coarse face.
+  if (!g.hanging.empty())
+    throw Error(fmt::format("q_learning: the {} grid has {} hanging vertices, which its updates cannot keep "
+                            "continuous; use value_iteration or adaptive_value_iteration",
+                            grid.type(), g.hanging.size()));
 
   TrainResult result;
   result.table = QTable(m, g.vertexCount);

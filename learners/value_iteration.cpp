@@ -82,6 +82,7 @@ void registerValueIteration(LearnerRegistry& registry) {
 void registerAll(LearnerRegistry& registry) {
   registerQLearning(registry);
   registerValueIteration(registry);
+  registerAdaptiveValueIteration(registry);
 }
 
 }  // namespace mgrl::learners

@@ -114,6 +114,32 @@ void Discretizer::setAxes(std::vector<GridAxis> axes) {
   }
 }
 
+void Discretizer::setCells(std::size_t vertexCount, std::size_t cellCount, std::vector<std::uint32_t> corners,
+                           HangingVertices hanging) {
+  if (corners.size() != cellCount << dimension())
+    throw Error(fmt::format("{}: expected {} cell corners, found {}", type(), cellCount << dimension(), corners.size()));
+  if (vertexCount > kMaxGridVertices)
+    throw Error(fmt::format("{}: expected a grid of at most {} vertices, found {}", type(), kMaxGridVertices,
+                            vertexCount));
+  vertexCount_ = vertexCount;
+  cellCount_ = cellCount;
+  corners_ = std::move(corners);
+  hanging_ = std::move(hanging);
+}
+
+Eigen::Vector3d Discretizer::cellCentre(std::uint32_t) const {
+  throw Error(fmt::format("{}: a fixed grid has no adaptive cells", type()));
+}
+
+std::unique_ptr<Discretizer> Discretizer::refined(const std::vector<std::uint32_t>&) const {
+  throw Error(fmt::format("{}: a fixed grid cannot be refined; use discretizer type kd_tree", type()));
+}
+
+std::unique_ptr<Discretizer> Discretizer::restored(const std::vector<StructureArray>& arrays) const {
+  throw Error(fmt::format("{}: a fixed {} grid has no saved structure to restore",
+                          arrays.empty() || arrays[0].source.empty() ? type() : arrays[0].source, type()));
+}
+
 bool Discretizer::locate(const Eigen::Vector3d& e, GridCell& out) const {
   const std::array<double, 3> c = coordinates(e);
   std::size_t cell = 0, stride = 1;

@@ -43,6 +43,42 @@ struct GridAxis {
   bool wraps = false;        ///< the axis is periodic with period 2 pi (angles only)
 };
 
+/// Vertices whose value is not free but the interpolation of other vertices' values
+/// (kd_tree's hanging vertices, on a coarser neighbour's face): vertex[i] takes
+/// sum over k in [begin[i], begin[i + 1]) of weight[k] * value(source[k]), and every source
+/// is a free vertex. Learners keep these equations after each backup so that the
+/// interpolated function stays continuous; fixed grids have none.
+struct HangingVertices {
+  std::vector<std::uint32_t> vertex;
+  std::vector<std::uint32_t> begin{0};
+  std::vector<std::uint32_t> source;
+  std::vector<float> weight;
+  bool empty() const { return vertex.empty(); }
+  std::size_t size() const { return vertex.size(); }
+  /// values[vertex[i] * stride] = sum_k weight[k] values[source[k] * stride], for every i.
+  template <class T>
+  void apply(T* values, std::size_t stride = 1) const {
+    for (std::size_t i = 0; i < vertex.size(); ++i) {
+      T sum = 0;
+      for (std::uint32_t k = begin[i]; k < begin[i + 1]; ++k) sum += static_cast<T>(weight[k]) * values[source[k] * stride];
+      values[vertex[i] * stride] = sum;
+    }
+  }
+};
+
+/// A named array of a discretizer's own structure (kd_tree: its tree), saved in policy
+/// bundles as `<behaviour>.grid.<name>.npy` so that a table can be used with the grid it
+/// was trained on. Exactly one of `ints` (int32) and `reals` (float64) holds the values.
+struct StructureArray {
+  std::string name;
+  std::vector<std::size_t> shape;
+  std::vector<std::int32_t> ints;
+  std::vector<double> reals;
+  bool integer = true;
+  /// Where it was read from, for messages (the .npy file's path); empty when made in memory.
+  std::string source;
+};
+
 /// The most vertices a grid may have (its corner table and every table over it scale with it).
 inline constexpr std::size_t kMaxGridVertices = 20'000'000;
 
@@ -67,9 +103,9 @@ class Discretizer {
   virtual Eigen::Vector3d position(const std::array<double, 3>& coordinates) const = 0;
 
   /// Locates e: false if it lies outside the grid (future value 0 there, paper sec. 4.2).
-  bool locate(const Eigen::Vector3d& e, GridCell& out) const;
+  virtual bool locate(const Eigen::Vector3d& e, GridCell& out) const;
   /// The cell of the nearest grid point to e (e itself if inside).
-  GridCell locateClamped(const Eigen::Vector3d& e) const;
+  virtual GridCell locateClamped(const Eigen::Vector3d& e) const;
   bool inside(const Eigen::Vector3d& e) const {
     GridCell ignored;
     return locate(e, ignored);
@@ -77,22 +113,49 @@ class Discretizer {
   /// Vertices and multilinear weights of a located point.
   Stencil stencil(const GridCell& cell) const;
   /// The position of vertex v.
-  Eigen::Vector3d vertexPosition(std::size_t v) const;
+  virtual Eigen::Vector3d vertexPosition(std::size_t v) const;
   /// A point uniform in grid coordinates, from u uniform in [0, 1)^3.
   Eigen::Vector3d sample(const std::array<double, 3>& u) const;
 
   /// {"type", "axes": [{"name", "unit", "vertices": [...], "wraps"}], "vertex_count", "cell_count"}.
-  nlohmann::json describe() const;
+  virtual nlohmann::json describe() const;
+
+  /// Vertices whose values are tied to others' (see HangingVertices); none for fixed grids.
+  const HangingVertices& hanging() const { return hanging_; }
+
+  // Adaptive resolution (issue 16; Munos & Moore 2002). Fixed grids keep these defaults.
+
+  /// True if refined() can split cells.
+  virtual bool refinable() const { return false; }
+  /// True if cell c may still be split (below the discretizer's depth limit).
+  virtual bool splittable(std::uint32_t) const { return false; }
+  /// The target position at the centre of cell c (grid coordinates halfway along each axis).
+  virtual Eigen::Vector3d cellCentre(std::uint32_t cell) const;
+  /// A copy with each listed cell split in two (cells not splittable() are skipped); its
+  /// cells and vertices are numbered afresh. Throws mgrl::Error for fixed grids.
+  virtual std::unique_ptr<Discretizer> refined(const std::vector<std::uint32_t>& cells) const;
+  /// The arrays that describe this discretizer beyond its YAML parameters (empty for fixed
+  /// grids, whose parameters say everything).
+  virtual std::vector<StructureArray> structure() const { return {}; }
+  /// A discretizer with this one's parameters and the structure `arrays` (as structure()
+  /// returned them). Throws mgrl::Error naming the array's source on any inconsistency.
+  virtual std::unique_ptr<Discretizer> restored(const std::vector<StructureArray>& arrays) const;
 
  protected:
   /// Called by a derived constructor once its axes are known: checks them (at least 2
   /// vertices each, ascending, wrapping axes span less than 2 pi) and builds the cell table.
   void setAxes(std::vector<GridAxis> axes);
+  /// For discretizers whose cells are not a product grid (kd_tree), after setAxes() with the
+  /// bounding axes: the vertex and cell counts, the corner table (cellCount x 2^dimension)
+  /// and the hanging vertices.
+  void setCells(std::size_t vertexCount, std::size_t cellCount, std::vector<std::uint32_t> corners,
+                HangingVertices hanging);
 
  private:
   std::vector<GridAxis> axes_;
   std::size_t vertexCount_ = 0, cellCount_ = 0;
   std::vector<std::uint32_t> corners_;
+  HangingVertices hanging_;
   std::array<std::size_t, 3> cellsPerAxis_{1, 1, 1};
   /// Evenly spaced axes are located by arithmetic instead of a search: 1 / spacing, or 0.
   std::array<double, 3> inverseStep_{0, 0, 0};

@@ -80,6 +80,9 @@ struct TrainResult {
   double finalResidual = 0;
   std::vector<CurvePoint> curve;
   nlohmann::json stats = nlohmann::json::object();  ///< learner-specific figures
+  /// The grid the table's vertices belong to when the learner refined it (adaptive
+  /// learners); null when it is the problem's own grid.
+  std::shared_ptr<const Discretizer> grid;
 };
 
 struct TrainContext {

@@ -22,6 +22,9 @@ constexpr std::string_view kRetrain = "retrain with `mgrl train`";
 
 std::string tableFile(std::string_view name) { return fmt::format("{}.q.npy", name); }
 std::string verticesFile(std::string_view name) { return fmt::format("{}.vertices.npy", name); }
+std::string structureFile(std::string_view name, std::string_view array) {
+  return fmt::format("{}.grid.{}.npy", name, array);
+}
 
 template <class T>
 std::optional<std::size_t> firstNonFinite(std::span<const T> values) {
@@ -85,6 +88,22 @@ void savePolicyBundle(const fs::path& dirArgument, const PolicyBundle& bundle) {
                        {"vertices", std::move(verticesArray.entry)}};
     files.push_back(std::move(tableArray.file));
     files.push_back(std::move(verticesArray.file));
+    if (!behavior.grid.empty()) {
+      json arrays = json::object();
+      for (const StructureArray& array : behavior.grid) {
+        if (!isPolicyBehaviorName(array.name) || arrays.contains(array.name))
+          throw Error(fmt::format("{}.grid: expected distinct array names made of letters, digits, '_' and '-', "
+                                  "found {}",
+                                  here, quoteToken(array.name)));
+        EncodedArray encoded =
+            array.integer
+                ? encodeBundleArray<std::int32_t>(structureFile(name, array.name), array.ints, array.shape)
+                : encodeBundleArray<double>(structureFile(name, array.name), array.reals, array.shape);
+        arrays[array.name] = std::move(encoded.entry);
+        files.push_back(std::move(encoded.file));
+      }
+      behaviors[name]["grid"] = {{"type", behavior.gridType}, {"arrays", std::move(arrays)}};
+    }
   }
 
   const json manifest = {
@@ -150,7 +169,7 @@ PolicyBundle loadPolicyBundle(const fs::path& dirArgument, const StateActionMode
                                 "files), found {}",
                                 reader.source(), quoteToken(name)));
       const std::string path = ManifestReader::join("behaviors", name);
-      const json& entry = reader.object(behaviors, "behaviors", name, {"key", "record", "table", "vertices"});
+      const json& entry = reader.object(behaviors, "behaviors", name, {"key", "record", "table", "vertices", "grid"});
       PolicyBehavior behavior;
       behavior.key = reader.string(entry, path, "key");
       behavior.record = reader.object(entry, path, "record", {});
@@ -175,6 +194,31 @@ PolicyBundle loadPolicyBundle(const fs::path& dirArgument, const StateActionMode
       if (const auto i = firstNonFinite<double>(behavior.vertices))
         throw Error(fmt::format("{}: expected finite positions, found {} at vertex {}", verticesSource,
                                 behavior.vertices[*i], *i / 3));
+
+      if (entry.contains("grid")) {
+        const std::string gridPath = ManifestReader::join(path, "grid");
+        const json& grid = reader.object(entry, path, "grid", {"type", "arrays"});
+        behavior.gridType = reader.string(grid, gridPath, "type");
+        const json& arrays = reader.object(grid, gridPath, "arrays", {});
+        const std::string arraysPath = ManifestReader::join(gridPath, "arrays");
+        for (const auto& array : arrays.items()) {
+          if (!isPolicyBehaviorName(array.key()))
+            throw Error(fmt::format("{}: {}: expected names made of letters, digits, '_' and '-', found {}",
+                                    reader.source(), arraysPath, quoteToken(array.key())));
+          StructureArray loaded;
+          loaded.name = array.key();
+          loaded.source = (dir / structureFile(name, array.key())).string();
+          const json& arrayEntry = reader.object(arrays, arraysPath, array.key(), {});
+          loaded.integer = arrayEntry.value("dtype", json()) == json(npyDescr<std::int32_t>());
+          if (loaded.integer)
+            loaded.ints = loadBundleArray<std::int32_t>(dir, reader, arrays, arraysPath, array.key(),
+                                                        structureFile(name, array.key()), &loaded.shape);
+          else
+            loaded.reals = loadBundleArray<double>(dir, reader, arrays, arraysPath, array.key(),
+                                                   structureFile(name, array.key()), &loaded.shape);
+          behavior.grid.push_back(std::move(loaded));
+        }
+      }
 
       behavior.table = QTable(model, vertexCount);
       behavior.table.setActionMajor(q);

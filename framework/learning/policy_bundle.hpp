@@ -19,6 +19,11 @@
 /// `<name>.q.npy` holds Q(v, a) with row a = action a's table over the V vertices
 /// (QTable::actionMajor()); `<name>.vertices.npy` holds the vertices' positions, one row
 /// each. Array entries are as in mgrl/core/bundle.hpp.
+///
+/// A behaviour trained on a grid with its own structure (kd_tree, Discretizer::structure())
+/// also has `"grid": {"type": "kd_tree", "arrays": {"split_axis": {entry}, ...}}`, each array
+/// in `<name>.grid.<array>.npy` (int32 or float64); the caller rebuilds the grid from them
+/// with Discretizer::restored(), which checks their consistency.
 
 #include <filesystem>
 #include <map>
@@ -28,6 +33,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "mgrl/learning/discretizer.hpp"
 #include "mgrl/learning/q_table.hpp"
 #include "mgrl/graph/state_action_model.hpp"
 
@@ -48,6 +54,12 @@ struct PolicyBehavior {
   QTable table;
   /// (vertexCount, 3) vertex positions, row-major, saved as `<name>.vertices.npy` float64.
   std::vector<double> vertices;
+  /// The grid's type and structure (Discretizer::structure()); empty for fixed grids.
+  std::string gridType;
+  std::vector<StructureArray> grid;
+  /// Not saved: the grid rebuilt from `grid` by whoever uses the table (see policyParts in
+  /// the application), kept here so that it lives as long as the table.
+  std::shared_ptr<const Discretizer> restoredGrid;
 };
 
 /// Everything a policy bundle holds.

@@ -26,6 +26,7 @@ GridModel GridModel::build(const Problem& problem, unsigned threads) {
   g.actionCount = m.actionCount();
   g.dimension = grid.dimension();
   g.corners = grid.cellCorners();
+  g.hanging = grid.hanging();
   g.actionTo = m.actionTo;
   g.stateActionBegin = m.stateActionBegin;
   const std::size_t pairs = g.vertexCount * g.actionCount;
@@ -218,6 +219,8 @@ double sweep(const QTable& in, QTable& out, const GridModel& g, unsigned threads
       const std::size_t a = g.incoming[i];
       float* values = &stage[a * V];
       for (std::size_t v = 0; v < V; ++v) values[v] = backup(in, g, a, v);
+      // Hanging vertices keep to their coarse face (continuity across it), whatever their backup.
+      g.hanging.apply(values);
     }
   });
   // Then into the state-major layout, block by block, measuring the change.
@@ -246,10 +249,14 @@ double sweep(const QTable& in, QTable& out, const GridModel& g, unsigned threads
 Residual bellmanResidual(const QTable& q, const GridModel& g, unsigned threads) {
   const std::size_t states = g.incomingBegin.size() - 1;
   std::vector<double> largest(states, 0.0), sum(states, 0.0);
+  // A hanging vertex's value is an interpolation, not a fixed point of the backup.
+  std::vector<std::uint8_t> tied(g.hanging.empty() ? 0 : g.vertexCount, 0);
+  for (std::uint32_t v : g.hanging.vertex) tied[v] = 1;
   parallelFor(states, threads, [&](std::size_t s, unsigned) {
     for (std::uint32_t i = g.incomingBegin[s]; i < g.incomingBegin[s + 1]; ++i) {
       const std::size_t a = g.incoming[i];
       for (std::size_t v = 0; v < g.vertexCount; ++v) {
+        if (!tied.empty() && tied[v]) continue;
         const double r = std::fabs(static_cast<double>(backup(q, g, a, v)) - q.at(a, v));
         largest[s] = std::max(largest[s], r);
         sum[s] += r;
@@ -261,7 +268,7 @@ Residual bellmanResidual(const QTable& q, const GridModel& g, unsigned threads) 
     result.max = std::max(result.max, largest[s]);
     result.mean += sum[s];
   }
-  const std::size_t pairs = g.vertexCount * g.actionCount;
+  const std::size_t pairs = (g.vertexCount - g.hanging.size()) * g.actionCount;
   if (pairs > 0) result.mean /= static_cast<double>(pairs);
   return result;
 }

@@ -37,6 +37,9 @@ struct GridModel {
   std::size_t vertexCount = 0, actionCount = 0;
   int dimension = 0;
   std::vector<std::uint32_t> corners;     ///< the grid's cell corner table
+  /// The grid's hanging vertices (Discretizer::hanging()): sweep() sets their values from
+  /// their sources' after every backup, and bellmanResidual() skips them.
+  HangingVertices hanging;
   std::vector<GridTransition> transition;  ///< per (a, v)
   std::vector<float> discount;            ///< per action: gamma^(frames of a)
   /// Per action, if the environment model moves the target rigidly (EnvironmentModel::
@@ -84,7 +87,8 @@ inline float backup(const QTable& q, const GridModel& g, std::size_t a, std::siz
 
 /// One Jacobi sweep: out(v, a) = backup of `in` for every pair, in parallel over end
 /// states (each reads one block of `in`, which stays in cache). Returns max |out - in|.
-/// Deterministic whatever the thread count; a sweep over a subset of states is a function
+/// Hanging vertices (g.hanging) receive the interpolation of their sources' new values
+/// instead of a backup. Deterministic whatever the thread count; a sweep over a subset of states is a function
 /// of `in` alone (DESIGN.md sec. 8).
 double sweep(const QTable& in, QTable& out, const GridModel& g, unsigned threads);
 /// The same with a scratch buffer kept between sweeps (actions x vertices floats).

@@ -1,0 +1,556 @@
+// kd_tree: an adaptive grid over the same avatar-frame coordinates as polar2d and
+// cylindrical3d (issue 16; Munos & Moore 2002's kd-trie). Leaves are boxes, values live at
+// their corners, and a point is interpolated multilinearly from the corners of its leaf.
+//
+// Continuity. A corner of a fine leaf that lies inside a face (or edge) of a coarser
+// neighbour is a hanging vertex: its value is not free but the coarse leaf's interpolation
+// at that point (HangingVertices), expanded down to free vertices. The fine side then
+// interpolates a multilinear function restricted to a sub-box, which it reproduces
+// exactly, so the two sides agree on the face. For that argument to hold in 3-D the face a
+// fine leaf shares with a coarse one must be a face of the fine leaf; splitting every cell
+// at its midpoint along an axis fixed by its depth (the same sequence for the whole tree)
+// guarantees it: the leaves at depth k are cells of one uniform grid G_k, and G_k refines
+// every G_j, j < k. (With a free choice of axis per cell two leaves can meet on a rectangle
+// whose corners belong to neither, and no vertex equation makes them agree.)
+#include <algorithm>
+#include <cmath>
+#include <map>
+
+#include <fmt/format.h>
+
+#include "discretizers.hpp"
+#include "mgrl/core/bundle.hpp"
+#include "mgrl/core/error.hpp"
+
+namespace mgrl::discretizers {
+
+namespace {
+
+constexpr double kDeg = M_PI / 180;
+constexpr double kTwoPi = 2 * M_PI;
+constexpr int kMaxAxisSplits = 30;  // integer corner coordinates fit in 32 bits
+
+using Key = std::array<std::uint64_t, 3>;
+
+class KdTree final : public Discretizer {
+ public:
+  KdTree(const Params& p, const StateActionModel& m) {
+    const std::string& kind = p.choice("coordinates");
+    dimension_ = kind == "distance" ? 1 : kind == "polar" ? 2 : 3;
+    coordinates_ = dimension_;
+    height_ = p.number("height");
+    const Bounds b = p.choice("bounds") == "hits" ? boundsOfHits(p, m) : givenBounds(p);
+    // Axes in the order of polar2d / cylindrical3d; the 1-D tree is the distance straight ahead.
+    std::vector<GridAxis> axes;
+    std::array<long long, 3> cells{1, 1, 1};
+    const long long angleCells = p.integer("angle_cells"), distanceCells = p.integer("distance_cells"),
+                    heightCells = p.integer("height_cells");
+    auto add = [&](std::string name, double lo, double hi, bool wraps, long long n, std::string_view key) {
+      if (n <= 0 || (n & (n - 1)) != 0) p.fail(key, fmt::format("expected a power of two, found {}", n));
+      const int i = static_cast<int>(axes.size());
+      lo_[i] = lo;
+      span_[i] = wraps ? kTwoPi : hi - lo;
+      wraps_[i] = wraps;
+      cells[i] = n;
+      // A wrapping axis is shown by its start and half a turn (setAxes needs a span < 2 pi).
+      axes.push_back(GridAxis{std::move(name), i == 0 && dimension_ > 1 ? "rad" : "m",
+                              {lo, wraps ? lo + M_PI : hi}, wraps});
+    };
+    if (dimension_ == 1) {
+      add("distance", b.distance[0], b.distance[1], false, distanceCells, "distance_cells");
+    } else {
+      const bool wrap = b.angle[1] - b.angle[0] >= kTwoPi - 1e-9;
+      add("angle", b.angle[0], wrap ? b.angle[0] + kTwoPi : b.angle[1], wrap, angleCells, "angle_cells");
+      add("distance", b.distance[0], b.distance[1], false, distanceCells, "distance_cells");
+      if (dimension_ == 3) add("height", b.height[0], b.height[1], false, heightCells, "height_cells");
+    }
+    // The split sequence: first the initial cells, round robin over the axes that still
+    // need splits, then round robin over every axis.
+    std::array<int, 3> remaining{0, 0, 0};
+    for (int i = 0; i < dimension_; ++i)
+      while ((1LL << remaining[i]) < cells[i]) ++remaining[i];
+    initialDepth_ = remaining[0] + remaining[1] + remaining[2];
+    maxDepth_ = static_cast<int>(p.integer("max_depth"));
+    if (maxDepth_ < initialDepth_)
+      p.fail("max_depth", fmt::format("expected at least the {} splits of the initial cells, found {}", initialDepth_,
+                                      maxDepth_));
+    for (int i = 0; dimension_ > 0 && std::any_of(remaining.begin(), remaining.end(), [](int r) { return r > 0; });
+         i = (i + 1) % dimension_)
+      if (remaining[i] > 0) {
+        sequence_.push_back(i);
+        --remaining[i];
+      }
+    for (int i = 0; static_cast<int>(sequence_.size()) < maxDepth_; i = (i + 1) % dimension_) sequence_.push_back(i);
+    for (int axis : sequence_) ++levels_[axis];
+    for (int i = 0; i < dimension_; ++i)
+      if (levels_[i] > kMaxAxisSplits)
+        p.fail("max_depth", fmt::format("expected at most {} halvings of the {} axis, found {}; lower max_depth",
+                                        kMaxAxisSplits, axes[i].name, levels_[i]));
+    setAxes(std::move(axes));
+    // The initial tree: every leaf split down to the initial depth.
+    axis_ = {-1};
+    children_ = {-1, -1};
+    for (int depth = 0; depth < initialDepth_; ++depth) {
+      const std::size_t nodes = axis_.size();
+      for (std::size_t n = 0; n < nodes; ++n)
+        if (axis_[n] < 0 && nodeDepth(n) == depth) split(n);
+    }
+    rebuild("kd_tree");
+  }
+
+  std::string type() const override { return "kd_tree"; }
+
+  std::array<double, 3> coordinates(const Eigen::Vector3d& e) const override {
+    const double angle = std::atan2(e.x(), e.z()), distance = std::hypot(e.x(), e.z());
+    if (coordinates_ == 1) return {std::copysign(distance, e.z()), 0, 0};
+    return {angle, distance, coordinates_ == 3 ? e.y() : 0.0};
+  }
+  Eigen::Vector3d position(const std::array<double, 3>& c) const override {
+    if (coordinates_ == 1) return {0, height_, c[0]};
+    return {c[1] * std::sin(c[0]), coordinates_ == 3 ? c[2] : height_, c[1] * std::cos(c[0])};
+  }
+
+  bool locate(const Eigen::Vector3d& e, GridCell& out) const override {
+    std::array<double, 3> c = coordinates(e);
+    for (int i = 0; i < dimension_; ++i) {
+      if (!std::isfinite(c[i])) return false;
+      if (wraps_[i]) c[i] = wrapped(i, c[i]);
+      else if (!(c[i] >= lo_[i] && c[i] <= lo_[i] + span_[i])) return false;
+    }
+    out = find(c);
+    return true;
+  }
+
+  GridCell locateClamped(const Eigen::Vector3d& e) const override {
+    std::array<double, 3> c = coordinates(e);
+    for (int i = 0; i < dimension_; ++i) {
+      if (std::isnan(c[i])) c[i] = lo_[i];
+      c[i] = wraps_[i] ? wrapped(i, c[i]) : std::clamp(c[i], lo_[i], lo_[i] + span_[i]);
+    }
+    return find(c);
+  }
+
+  Eigen::Vector3d vertexPosition(std::size_t v) const override {
+    std::array<double, 3> c{0, 0, 0};
+    for (int i = 0; i < dimension_; ++i) c[i] = vertexCoordinates_[v * dimension_ + i];
+    return position(c);
+  }
+
+  nlohmann::json describe() const override {
+    nlohmann::json d = Discretizer::describe();
+    nlohmann::json bounds = nlohmann::json::array();
+    for (int i = 0; i < dimension_; ++i) bounds.push_back({lo_[i], lo_[i] + span_[i]});
+    int deepest = 0;
+    for (std::int32_t node : leafNode_) deepest = std::max(deepest, nodeDepth(static_cast<std::size_t>(node)));
+    d["bounds"] = bounds;
+    d["node_count"] = axis_.size();
+    d["leaf_count"] = leafNode_.size();
+    d["hanging_vertex_count"] = hanging().size();
+    d["deepest_leaf"] = deepest;
+    d["initial_depth"] = initialDepth_;
+    d["max_depth"] = maxDepth_;
+    return d;
+  }
+
+  bool refinable() const override { return true; }
+  bool splittable(std::uint32_t cell) const override {
+    return cell < leafNode_.size() && nodeDepth(static_cast<std::size_t>(leafNode_[cell])) < maxDepth_;
+  }
+  Eigen::Vector3d cellCentre(std::uint32_t cell) const override {
+    std::array<double, 3> c{0, 0, 0};
+    for (int i = 0; i < dimension_; ++i) c[i] = 0.5 * (leafLo_[3 * cell + i] + leafHi_[3 * cell + i]);
+    return position(c);
+  }
+
+  std::unique_ptr<Discretizer> refined(const std::vector<std::uint32_t>& cells) const override {
+    auto copy = std::make_unique<KdTree>(*this);
+    std::vector<std::uint32_t> sorted(cells);
+    std::sort(sorted.begin(), sorted.end());
+    sorted.erase(std::unique(sorted.begin(), sorted.end()), sorted.end());
+    for (std::uint32_t cell : sorted)
+      if (splittable(cell)) copy->split(static_cast<std::size_t>(leafNode_[cell]));
+    copy->rebuild("kd_tree");
+    return copy;
+  }
+
+  std::vector<StructureArray> structure() const override {
+    const std::size_t nodes = axis_.size(), leaves = leafNode_.size(), corners = std::size_t{1} << dimension_;
+    std::vector<StructureArray> out;
+    StructureArray axis{"split_axis", {nodes}, axis_, {}, true, {}};
+    StructureArray value{"split_value", {nodes}, {}, std::vector<double>(nodes, NAN), false, {}};
+    for (std::size_t n = 0; n < nodes; ++n)
+      if (axis_[n] >= 0) value.reals[n] = splitValue(n);
+    StructureArray children{"children", {nodes, 2}, children_, {}, true, {}};
+    StructureArray leafCorners{"leaf_corners", {leaves, corners}, {}, {}, true, {}};
+    for (std::uint32_t v : cellCorners()) leafCorners.ints.push_back(static_cast<std::int32_t>(v));
+    StructureArray bounds{"bounds", {static_cast<std::size_t>(dimension_), 2}, {}, {}, false, {}};
+    for (int i = 0; i < dimension_; ++i) bounds.reals.insert(bounds.reals.end(), {lo_[i], lo_[i] + span_[i]});
+    StructureArray coordinates{"vertex_coordinates", {vertexCount(), static_cast<std::size_t>(dimension_)},
+                               {}, vertexCoordinates_, false, {}};
+    out.push_back(std::move(axis));
+    out.push_back(std::move(value));
+    out.push_back(std::move(children));
+    out.push_back(std::move(leafCorners));
+    out.push_back(std::move(bounds));
+    out.push_back(std::move(coordinates));
+    return out;
+  }
+
+  std::unique_ptr<Discretizer> restored(const std::vector<StructureArray>& arrays) const override;
+
+ private:
+  // The axis split at `depth` and the depth of node n (by walking up from the root would
+  // need parents; depth is kept per node instead).
+  int nodeDepth(std::size_t n) const { return depth_.empty() ? 0 : depth_[n]; }
+  double wrapped(int i, double c) const {
+    if (c < lo_[i] || c >= lo_[i] + kTwoPi) {
+      c = lo_[i] + std::fmod(std::fmod(c - lo_[i], kTwoPi) + kTwoPi, kTwoPi);
+      if (c >= lo_[i] + kTwoPi) c = lo_[i];
+    }
+    return c;
+  }
+  // The coordinate of integer position k on axis i (units of span / 2^levels).
+  double coordinate(int i, std::uint64_t k) const {
+    return lo_[i] + span_[i] * std::ldexp(static_cast<double>(k), -levels_[i]);
+  }
+  double splitValue(std::size_t n) const { return coordinate(axis_[n], splitKey_[n]); }
+
+  void split(std::size_t n) {
+    const int depth = nodeDepth(n);
+    const auto low = static_cast<std::int32_t>(axis_.size());
+    axis_[n] = sequence_[static_cast<std::size_t>(depth)];
+    children_[2 * n] = low;
+    children_[2 * n + 1] = low + 1;
+    axis_.insert(axis_.end(), {-1, -1});
+    children_.insert(children_.end(), {-1, -1, -1, -1});
+    depth_.resize(axis_.size(), 0);
+    depth_[low] = depth_[low + 1] = depth + 1;
+  }
+
+  GridCell find(const std::array<double, 3>& c) const {
+    std::size_t n = 0;
+    while (axis_[n] >= 0) n = static_cast<std::size_t>(children_[2 * n + (c[axis_[n]] >= splitCoordinate_[n] ? 1 : 0)]);
+    GridCell out;
+    const std::int32_t leaf = nodeLeaf_[n];
+    out.cell = static_cast<std::uint32_t>(leaf);
+    for (int i = 0; i < dimension_; ++i) {
+      const double lo = leafLo_[3 * leaf + i], hi = leafHi_[3 * leaf + i];
+      out.frac[i] = static_cast<float>(std::clamp((c[i] - lo) / (hi - lo), 0.0, 1.0));
+    }
+    return out;
+  }
+
+  // Leaves, vertices and hanging vertices from the nodes (axis_, children_). `source` names
+  // the tree in messages. Throws mgrl::Error for a cycle, an unreachable node or a node
+  // split on another axis than its depth's.
+  void rebuild(const std::string& source);
+
+  // Leaves whose closed box holds integer point k, with their depth, into `out`.
+  void containing(const Key& k, std::vector<std::int32_t>& out) const;
+
+  int dimension_ = 0, coordinates_ = 0, initialDepth_ = 0, maxDepth_ = 0;
+  double height_ = 0;
+  std::array<double, 3> lo_{0, 0, 0}, span_{1, 1, 1};
+  std::array<bool, 3> wraps_{false, false, false};
+  std::array<int, 3> levels_{0, 0, 0};  // halvings of each axis down to max_depth
+  std::vector<int> sequence_;            // split axis by depth
+  // Nodes: split axis (-1 leaf), children (low, high; -1 for leaves), depth.
+  std::vector<std::int32_t> axis_, children_;
+  std::vector<int> depth_{0};
+  // Derived by rebuild().
+  std::vector<std::uint64_t> splitKey_;
+  std::vector<double> splitCoordinate_;
+  std::vector<std::int32_t> leafNode_, nodeLeaf_;
+  std::vector<Key> leafLoKey_, leafHiKey_;
+  std::vector<double> leafLo_, leafHi_, vertexCoordinates_;
+};
+
+void KdTree::rebuild(const std::string& source) {
+  const std::size_t nodes = axis_.size();
+  const int d = dimension_;
+  depth_.assign(nodes, 0);
+  splitKey_.assign(nodes, 0);
+  splitCoordinate_.assign(nodes, 0);
+  nodeLeaf_.assign(nodes, -1);
+  leafNode_.clear();
+  leafLoKey_.clear();
+  leafHiKey_.clear();
+  Key full{0, 0, 0};
+  for (int i = 0; i < d; ++i) full[i] = std::uint64_t{1} << levels_[i];
+  // Depth-first, low child first: the leaf order. A node reached twice is a cycle or a
+  // shared child.
+  std::vector<std::uint8_t> seen(nodes, 0);
+  struct Item {
+    std::size_t node;
+    Key lo, hi;
+    int depth;
+  };
+  std::vector<Item> stack{{0, {0, 0, 0}, full, 0}};
+  while (!stack.empty()) {
+    const Item item = stack.back();
+    stack.pop_back();
+    const std::size_t n = item.node;
+    if (seen[n]) throw Error(fmt::format("{}: node {} is reached twice (a cycle or a shared child)", source, n));
+    seen[n] = 1;
+    depth_[n] = item.depth;
+    if (axis_[n] < 0) {
+      nodeLeaf_[n] = static_cast<std::int32_t>(leafNode_.size());
+      leafNode_.push_back(static_cast<std::int32_t>(n));
+      leafLoKey_.push_back(item.lo);
+      leafHiKey_.push_back(item.hi);
+      continue;
+    }
+    if (item.depth >= maxDepth_)
+      throw Error(fmt::format("{}: node {} at depth {} is split, expected no split below max_depth {}", source, n,
+                              item.depth, maxDepth_));
+    const int axis = axis_[n];
+    if (axis != sequence_[static_cast<std::size_t>(item.depth)])
+      throw Error(fmt::format("{}: node {} at depth {} is split on axis {}, expected axis {}", source, n, item.depth,
+                              axis, sequence_[static_cast<std::size_t>(item.depth)]));
+    const std::uint64_t mid = (item.lo[axis] + item.hi[axis]) / 2;
+    splitKey_[n] = mid;
+    splitCoordinate_[n] = coordinate(axis, mid);
+    Item low = item, high = item;
+    low.node = static_cast<std::size_t>(children_[2 * n]);
+    high.node = static_cast<std::size_t>(children_[2 * n + 1]);
+    low.hi[axis] = mid;
+    high.lo[axis] = mid;
+    low.depth = high.depth = item.depth + 1;
+    stack.push_back(high);
+    stack.push_back(low);
+  }
+  for (std::size_t n = 0; n < nodes; ++n)
+    if (!seen[n]) throw Error(fmt::format("{}: node {} is not reachable from the root", source, n));
+
+  // Vertices: leaf corners, numbered by first appearance; a wrapping axis's end is its start.
+  const std::size_t leaves = leafNode_.size(), cornerCount = std::size_t{1} << d;
+  std::map<Key, std::uint32_t> index;
+  std::vector<Key> keys;
+  std::vector<std::uint32_t> corners(leaves << d);
+  auto canonical = [&](Key k) {
+    for (int i = 0; i < d; ++i)
+      if (wraps_[i] && k[i] == full[i]) k[i] = 0;
+    return k;
+  };
+  leafLo_.assign(3 * leaves, 0);
+  leafHi_.assign(3 * leaves, 0);
+  for (std::size_t l = 0; l < leaves; ++l) {
+    for (int i = 0; i < d; ++i) {
+      leafLo_[3 * l + i] = coordinate(i, leafLoKey_[l][i]);
+      leafHi_[3 * l + i] = coordinate(i, leafHiKey_[l][i]);
+    }
+    for (std::size_t k = 0; k < cornerCount; ++k) {
+      Key key{0, 0, 0};
+      for (int i = 0; i < d; ++i) key[i] = (k >> i & 1) ? leafHiKey_[l][i] : leafLoKey_[l][i];
+      key = canonical(key);
+      const auto [it, added] = index.try_emplace(key, static_cast<std::uint32_t>(keys.size()));
+      if (added) keys.push_back(key);
+      corners[(l << d) | k] = it->second;
+    }
+  }
+  const std::size_t vertices = keys.size();
+  vertexCoordinates_.assign(vertices * d, 0);
+  for (std::size_t v = 0; v < vertices; ++v)
+    for (int i = 0; i < d; ++i) vertexCoordinates_[v * d + i] = coordinate(i, keys[v][i]);
+
+  // Each vertex inside a leaf's box without being its corner is tied to the coarsest such
+  // leaf's interpolation (ties: the first leaf).
+  std::vector<std::vector<std::pair<std::uint32_t, double>>> tie(vertices);
+  std::vector<std::int32_t> found;
+  for (std::size_t v = 0; v < vertices; ++v) {
+    // On a wrapping axis the start is also the end: look at both images.
+    std::vector<Key> images{keys[v]};
+    for (int i = 0; i < d; ++i)
+      if (wraps_[i] && keys[v][i] == 0) {
+        const std::size_t count = images.size();
+        for (std::size_t j = 0; j < count; ++j) {
+          Key image = images[j];
+          image[i] = full[i];
+          images.push_back(image);
+        }
+      }
+    std::int32_t best = -1;
+    Key bestImage{};
+    for (const Key& image : images) {
+      found.clear();
+      containing(image, found);
+      for (std::int32_t leaf : found) {
+        bool corner = true;
+        for (int i = 0; i < d; ++i)
+          corner = corner && (image[i] == leafLoKey_[leaf][i] || image[i] == leafHiKey_[leaf][i]);
+        if (corner) continue;
+        const int depth = depth_[static_cast<std::size_t>(leafNode_[leaf])];
+        if (best < 0 || depth < depth_[static_cast<std::size_t>(leafNode_[best])] ||
+            (depth == depth_[static_cast<std::size_t>(leafNode_[best])] && leaf < best)) {
+          best = leaf;
+          bestImage = image;
+        }
+      }
+    }
+    if (best < 0) continue;
+    for (std::size_t k = 0; k < cornerCount; ++k) {
+      double w = 1;
+      for (int i = 0; i < d; ++i) {
+        const double f = static_cast<double>(bestImage[i] - leafLoKey_[best][i]) /
+                         static_cast<double>(leafHiKey_[best][i] - leafLoKey_[best][i]);
+        w *= (k >> i & 1) ? f : 1 - f;
+      }
+      if (w > 0) tie[v].push_back({corners[(static_cast<std::size_t>(best) << d) | k], w});
+    }
+  }
+  // Expanded down to free vertices; a hanging vertex depends only on coarser leaves, so the
+  // recursion ends, and a cycle means a corrupt tree.
+  std::vector<std::uint8_t> state(vertices, 0);
+  std::vector<std::map<std::uint32_t, double>> expanded(vertices);
+  auto expand = [&](auto&& self, std::uint32_t v) -> void {
+    if (state[v] == 2) return;
+    if (state[v] == 1) throw Error(fmt::format("{}: hanging vertices depend on each other in a cycle", source));
+    state[v] = 1;
+    for (const auto& [u, w] : tie[v]) {
+      if (tie[u].empty()) {
+        expanded[v][u] += w;
+        continue;
+      }
+      self(self, u);
+      for (const auto& [f, fw] : expanded[u]) expanded[v][f] += w * fw;
+    }
+    state[v] = 2;
+  };
+  HangingVertices hanging;
+  for (std::uint32_t v = 0; v < vertices; ++v) {
+    if (tie[v].empty()) continue;
+    expand(expand, v);
+    hanging.vertex.push_back(v);
+    for (const auto& [f, w] : expanded[v]) {
+      hanging.source.push_back(f);
+      hanging.weight.push_back(static_cast<float>(w));
+    }
+    hanging.begin.push_back(static_cast<std::uint32_t>(hanging.source.size()));
+  }
+  setCells(vertices, leaves, std::move(corners), std::move(hanging));
+}
+
+void KdTree::containing(const Key& k, std::vector<std::int32_t>& out) const {
+  std::vector<std::size_t> stack{0};
+  while (!stack.empty()) {
+    const std::size_t n = stack.back();
+    stack.pop_back();
+    if (axis_[n] < 0) {
+      out.push_back(nodeLeaf_[n]);
+      continue;
+    }
+    const int axis = axis_[n];
+    if (k[axis] <= splitKey_[n]) stack.push_back(static_cast<std::size_t>(children_[2 * n]));
+    if (k[axis] >= splitKey_[n]) stack.push_back(static_cast<std::size_t>(children_[2 * n + 1]));
+  }
+}
+
+std::unique_ptr<Discretizer> KdTree::restored(const std::vector<StructureArray>& arrays) const {
+  auto get = [&](std::string_view name, bool integer) -> const StructureArray& {
+    for (const StructureArray& a : arrays)
+      if (a.name == name) {
+        if (a.integer != integer)
+          throw Error(fmt::format("{}: expected {} values, found {}", a.source.empty() ? a.name : a.source,
+                                  integer ? "int32" : "float64", integer ? "float64" : "int32"));
+        return a;
+      }
+    throw Error(fmt::format("{}: kd_tree: expected the tree array '{}', found none",
+                            arrays.empty() ? std::string("policy bundle") : arrays[0].source, name));
+  };
+  auto where = [](const StructureArray& a) { return a.source.empty() ? a.name : a.source; };
+  const StructureArray& bounds = get("bounds", false);
+  const auto d = static_cast<std::size_t>(dimension_);
+  if (bounds.shape != std::vector<std::size_t>{d, 2})
+    throw Error(fmt::format("{}: expected shape ({}, 2) for the scenario's {}-dimensional kd_tree, found {} (a "
+                            "tree of another dimension)",
+                            where(bounds), d, d, formatShape(bounds.shape)));
+  for (std::size_t i = 0; i < d; ++i)
+    if (std::fabs(bounds.reals[2 * i] - lo_[i]) > 1e-9 * (1 + std::fabs(lo_[i])) ||
+        std::fabs(bounds.reals[2 * i + 1] - (lo_[i] + span_[i])) > 1e-9 * (1 + std::fabs(lo_[i] + span_[i])))
+      throw Error(fmt::format("{}: expected the bounds of the scenario's tree on axis {} ([{}, {}]), found [{}, {}]",
+                              where(bounds), i, lo_[i], lo_[i] + span_[i], bounds.reals[2 * i],
+                              bounds.reals[2 * i + 1]));
+  const StructureArray& axis = get("split_axis", true);
+  const StructureArray& value = get("split_value", false);
+  const StructureArray& children = get("children", true);
+  const StructureArray& leafCorners = get("leaf_corners", true);
+  const std::size_t nodes = axis.ints.size();
+  if (axis.shape.size() != 1 || nodes == 0 || nodes > 2 * kMaxGridVertices)
+    throw Error(fmt::format("{}: expected shape (N,) with N >= 1 nodes, found {}", where(axis),
+                            formatShape(axis.shape)));
+  if (value.shape != std::vector<std::size_t>{nodes})
+    throw Error(fmt::format("{}: expected shape ({},) like split_axis, found {}", where(value), nodes,
+                            formatShape(value.shape)));
+  if (children.shape != std::vector<std::size_t>{nodes, 2})
+    throw Error(fmt::format("{}: expected shape ({}, 2) like split_axis, found {}", where(children), nodes,
+                            formatShape(children.shape)));
+  for (std::size_t n = 0; n < nodes; ++n) {
+    const std::int32_t a = axis.ints[n], low = children.ints[2 * n], high = children.ints[2 * n + 1];
+    if (a < -1 || a >= dimension_)
+      throw Error(fmt::format("{}: node {}: expected a split axis in [-1, {}], found {}", where(axis), n,
+                              dimension_ - 1, a));
+    const bool leaf = a < 0;
+    if (leaf && (low != -1 || high != -1))
+      throw Error(fmt::format("{}: node {} is a leaf (split axis -1), expected children -1 -1, found {} {}",
+                              where(children), n, low, high));
+    if (!leaf && (low <= 0 || high <= 0 || static_cast<std::size_t>(low) >= nodes ||
+                  static_cast<std::size_t>(high) >= nodes || low == high))
+      throw Error(fmt::format("{}: node {}: expected two distinct children in [1, {}), found {} {} (out of range)",
+                              where(children), n, nodes, low, high));
+  }
+  auto copy = std::make_unique<KdTree>(*this);
+  copy->axis_ = axis.ints;
+  copy->children_ = children.ints;
+  copy->depth_.assign(nodes, 0);
+  copy->rebuild(where(children));
+  for (std::size_t n = 0; n < nodes; ++n)
+    if (copy->axis_[n] >= 0 &&
+        !(std::fabs(value.reals[n] - copy->splitValue(n)) <= 1e-9 * (1 + std::fabs(copy->splitValue(n)))))
+      throw Error(fmt::format("{}: node {}: expected the midpoint {} of its box, found {}", where(value), n,
+                              copy->splitValue(n), value.reals[n]));
+  const std::size_t cornerCount = std::size_t{1} << dimension_;
+  if (leafCorners.shape != std::vector<std::size_t>{copy->leafNode_.size(), cornerCount})
+    throw Error(fmt::format("{}: expected shape ({}, {}) (the tree's leaves and their corners), found {}",
+                            where(leafCorners), copy->leafNode_.size(), cornerCount,
+                            formatShape(leafCorners.shape)));
+  for (std::size_t k = 0; k < leafCorners.ints.size(); ++k)
+    if (leafCorners.ints[k] != static_cast<std::int32_t>(copy->cellCorners()[k]))
+      throw Error(fmt::format("{}: leaf {} corner {}: expected vertex {} as the tree numbers them, found {}",
+                              where(leafCorners), k / cornerCount, k % cornerCount, copy->cellCorners()[k],
+                              leafCorners.ints[k]));
+  return copy;
+}
+
+}  // namespace
+
+void registerKdTree(DiscretizerRegistry& registry) {
+  registry.add(
+      {"kd_tree",
+       "adaptive grid (Munos & Moore 2002's kd-trie): boxes split at their midpoints, values at box corners, "
+       "multilinear inside a box and continuous across faces (hanging corners tied to the coarse face); refined by "
+       "adaptive_value_iteration",
+       {ParamSpec::choice("coordinates", "cylindrical", {"distance", "polar", "cylindrical"},
+                          "distance: ground distance straight ahead (1-D); polar: angle x distance as polar2d; "
+                          "cylindrical: angle x distance x height as cylindrical3d"),
+        ParamSpec::integer("angle_cells", 4, 1, 1024, "cells", "initial cells along the angle (a power of two)"),
+        ParamSpec::integer("distance_cells", 4, 1, 1024, "cells", "initial cells along the distance (a power of two)"),
+        ParamSpec::integer("height_cells", 2, 1, 1024, "cells", "initial cells along the height (a power of two)"),
+        ParamSpec::integer("max_depth", 24, 0, 90, "splits", "no leaf is split more often than this (initial splits "
+                                                              "included)"),
+        ParamSpec::number("height", 0.0, -10, 10, "m", "distance, polar: the height of the target's position"),
+        ParamSpec::choice("bounds", "given", {"hits", "given"},
+                          "hits: the bounding volume of the graph's effective hitting points; given: the *_min/*_max "
+                          "parameters"),
+        ParamSpec::number("margin", 0.0, 0, 10, "m", "bounds: hits: widen distance and height by this much"),
+        ParamSpec::number("angle_margin", 0.0, 0, 180, "deg", "bounds: hits: widen the angle range by this much"),
+        ParamSpec::number("angle_min", -180, -360, 360, "deg",
+                          "bounds: given: first angle (0 ahead, + left); 360 degrees wrap around"),
+        ParamSpec::number("angle_max", 180, -360, 360, "deg", "bounds: given: last angle"),
+        ParamSpec::number("distance_min", 0.0, -100, 100, "m", "bounds: given: nearest ground distance"),
+        ParamSpec::number("distance_max", 2.0, -100, 100, "m", "bounds: given: farthest ground distance"),
+        ParamSpec::number("height_min", 0.8, -10, 10, "m", "bounds: given: lowest height"),
+        ParamSpec::number("height_max", 1.8, -10, 10, "m", "bounds: given: highest height")},
+       [](const Params& p, const StateActionModel& m) { return std::make_unique<KdTree>(p, m); }});
+}
+
+}  // namespace mgrl::discretizers

@@ -1,0 +1,281 @@
+// adaptive_value_iteration: variable resolution after R. Munos and A. Moore, "Variable
+// resolution discretization in optimal control", Machine Learning 49 (2002). Their
+// top-down scheme: start from a coarse kd-trie, solve the discrete problem on it, split the
+// cells a splitting criterion ranks highest ("with some rate"), re-solve, repeat. Of their
+// criteria this implements the local ones (the section "splitting methods based on local
+// considerations"): value non-linearity (the backup at a cell's centre against the value
+// interpolated there from its corners), policy disagreement (the corners' greedy actions
+// differ) and the combination of the two. Their non-local influence x variance criterion is
+// not implemented. Interpolation is multilinear in the kd_tree's boxes, not their Kuhn
+// triangulation, so that the runtime controller interpolates as it does on the fixed grids.
+//
+// Each solve is value_iteration's (the same framework sweep and backup), warm-started from
+// the previous tree's solution interpolated onto the new vertices. Nothing is random: the
+// same problem and parameters give the same tree and table.
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <limits>
+#include <numeric>
+
+#include <fmt/format.h>
+
+#include "learners.hpp"
+#include "mgrl/core/error.hpp"
+#include "mgrl/core/parallel.hpp"
+
+namespace mgrl::learners {
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+struct LeafScores {
+  std::vector<double> value;   // mean over motion states of |backup - interpolation| at the centre
+  std::vector<double> policy;  // fraction of motion states whose corners disagree on the action
+};
+
+class AdaptiveValueIteration final : public Learner {
+ public:
+  explicit AdaptiveValueIteration(const Params& p)
+      : maxVertices_(static_cast<std::size_t>(p.integer("max_vertices"))),
+        maxRounds_(static_cast<int>(p.integer("max_rounds"))),
+        splitFraction_(p.number("split_fraction")),
+        splitTolerance_(p.number("split_tolerance")),
+        criterion_(p.choice("criterion")),
+        tolerance_(p.number("tolerance")),
+        maxSweeps_(static_cast<std::uint64_t>(p.integer("max_sweeps"))),
+        threads_(static_cast<unsigned>(p.integer("threads"))) {}
+
+  std::string type() const override { return "adaptive_value_iteration"; }
+
+  TrainResult train(const TrainContext& context) const override;
+
+ private:
+  LeafScores score(const Problem& problem, const Discretizer& grid, const GridModel& g, const QTable& q,
+                   unsigned threads) const;
+  std::vector<std::uint32_t> choose(const Discretizer& grid, const LeafScores& scores) const;
+
+  std::size_t maxVertices_;
+  int maxRounds_;
+  double splitFraction_, splitTolerance_;
+  std::string criterion_;
+  double tolerance_;
+  std::uint64_t maxSweeps_;
+  unsigned threads_;
+};
+
+// Q of `from` interpolated at every vertex of `to` (the warm start of the next solve).
+QTable interpolated(const QTable& from, const Discretizer& fromGrid, const Discretizer& toGrid,
+                    const StateActionModel& model, unsigned threads) {
+  QTable to(model, toGrid.vertexCount());
+  const std::size_t states = from.stateCount();
+  std::size_t widest = 0;
+  for (std::size_t s = 0; s < states; ++s) widest = std::max(widest, from.actionsOf(s));
+  std::vector<Stencil> stencils(toGrid.vertexCount());
+  for (std::size_t v = 0; v < toGrid.vertexCount(); ++v)
+    stencils[v] = fromGrid.stencil(fromGrid.locateClamped(toGrid.vertexPosition(v)));
+  parallelFor(states, threads, [&](std::size_t s, unsigned) {
+    std::vector<float> sum(widest + QTable::kPadding);
+    const std::size_t n = from.actionsOf(s);
+    for (std::size_t v = 0; v < toGrid.vertexCount(); ++v) {
+      std::fill(sum.begin(), sum.end(), 0.0f);
+      addInterpolated(sum.data(), from, static_cast<std::uint32_t>(s), stencils[v], 1.0f);
+      std::copy(sum.begin(), sum.begin() + static_cast<std::ptrdiff_t>(n), to.row(s, v));
+    }
+  });
+  return to;
+}
+
+LeafScores AdaptiveValueIteration::score(const Problem& problem, const Discretizer& grid, const GridModel& g,
+                                         const QTable& q, unsigned threads) const {
+  const StateActionModel& m = problem.model;
+  const std::size_t leaves = grid.cellCount(), states = q.stateCount();
+  const int corners = 1 << grid.dimension();
+  std::size_t widest = 0;
+  for (std::size_t s = 0; s < states; ++s) widest = std::max(widest, q.actionsOf(s));
+  LeafScores out{std::vector<double>(leaves, 0.0), std::vector<double>(leaves, 0.0)};
+  parallelFor(leaves, threads, [&](std::size_t leaf, unsigned) {
+    const Eigen::Vector3d centre = grid.cellCentre(static_cast<std::uint32_t>(leaf));
+    GridCell cell;
+    if (!grid.locate(centre, cell)) return;
+    const Stencil stencil = grid.stencil(cell);
+    std::vector<float> sum(widest + QTable::kPadding);
+    double valueGap = 0, disagreements = 0;
+    for (std::size_t s = 0; s < states; ++s) {
+      const std::size_t n = q.actionsOf(s);
+      if (n == 0) continue;
+      // Value non-linearity: V_s at the centre by one backup of each out-action against V_s
+      // interpolated from the corners.
+      double backedUp = -std::numeric_limits<double>::infinity();
+      for (std::size_t j = 0; j < n; ++j) {
+        const std::size_t a = m.stateActionBegin[s] + j;
+        double value = problem.reward.evaluate(m, a, centre);
+        GridCell next;
+        if (grid.locate(problem.environment.next(m, a, centre), next))
+          value += g.discount[a] * maxInterpolated(q, g, g.actionTo[a], next.cell, next.frac.data());
+        backedUp = std::max(backedUp, value);
+      }
+      std::fill(sum.begin(), sum.end(), 0.0f);
+      addInterpolated(sum.data(), q, static_cast<std::uint32_t>(s), stencil, 1.0f);
+      const double interpolatedValue = *std::max_element(sum.begin(), sum.begin() + static_cast<std::ptrdiff_t>(n));
+      valueGap += std::fabs(backedUp - interpolatedValue);
+      // Policy disagreement: the greedy action of every corner.
+      std::size_t first = 0;
+      bool differ = false;
+      for (int k = 0; k < corners; ++k) {
+        const float* row = q.row(s, stencil.vertex[k]);
+        const auto best = static_cast<std::size_t>(std::max_element(row, row + n) - row);
+        if (k == 0) first = best;
+        else differ = differ || best != first;
+      }
+      disagreements += differ ? 1 : 0;
+    }
+    out.value[leaf] = valueGap / static_cast<double>(states);
+    out.policy[leaf] = disagreements / static_cast<double>(states);
+  });
+  return out;
+}
+
+// The leaves to split this round: the highest ranked by the criterion (ties: lower leaf
+// index), a fraction of the leaves, no more than the vertex budget allows (a split adds at
+// most 2^(d-1) vertices, the corners of the new face).
+std::vector<std::uint32_t> AdaptiveValueIteration::choose(const Discretizer& grid, const LeafScores& scores) const {
+  const std::size_t leaves = grid.cellCount();
+  const std::size_t perSplit = std::size_t{1} << (grid.dimension() - 1);
+  const std::size_t room = grid.vertexCount() >= maxVertices_ ? 0 : (maxVertices_ - grid.vertexCount()) / perSplit;
+  const std::size_t wanted = std::min(
+      room, std::max<std::size_t>(1, static_cast<std::size_t>(std::ceil(splitFraction_ * static_cast<double>(leaves)))));
+  auto ranked = [&](const std::vector<double>& score, double threshold) {
+    std::vector<std::uint32_t> order;
+    for (std::uint32_t l = 0; l < leaves; ++l)
+      if (score[l] > threshold && grid.splittable(l)) order.push_back(l);
+    std::stable_sort(order.begin(), order.end(), [&](std::uint32_t a, std::uint32_t b) { return score[a] > score[b]; });
+    return order;
+  };
+  const std::vector<std::uint32_t> byValue = criterion_ == "policy" ? std::vector<std::uint32_t>{}
+                                                                      : ranked(scores.value, splitTolerance_);
+  const std::vector<std::uint32_t> byPolicy = criterion_ == "value" ? std::vector<std::uint32_t>{}
+                                                                      : ranked(scores.policy, 0.0);
+  // "both": the two rankings taken in turn (Munos & Moore's combination of the two criteria).
+  std::vector<std::uint32_t> chosen;
+  std::vector<std::uint8_t> taken(leaves, 0);
+  for (std::size_t i = 0; chosen.size() < wanted && (i < byValue.size() || i < byPolicy.size()); ++i)
+    for (const std::vector<std::uint32_t>* list : {&byValue, &byPolicy})
+      if (i < list->size() && chosen.size() < wanted && !taken[(*list)[i]]) {
+        taken[(*list)[i]] = 1;
+        chosen.push_back((*list)[i]);
+      }
+  return chosen;
+}
+
+TrainResult AdaptiveValueIteration::train(const TrainContext& context) const {
+  const Problem& problem = context.problem;
+  const unsigned threads = threads_ > 0 ? threads_ : context.threads;
+  const auto start = Clock::now();
+  auto elapsed = [&] { return std::chrono::duration<double>(Clock::now() - start).count(); };
+  if (!problem.grid.refinable())
+    throw Error(fmt::format("adaptive_value_iteration: expected a discretizer that can be refined (type kd_tree), "
+                            "found {}",
+                            problem.grid.type()));
+  if (problem.grid.vertexCount() > maxVertices_)
+    throw Error(fmt::format("adaptive_value_iteration: max_vertices: expected at least the initial tree's {} "
+                            "vertices, found {}",
+                            problem.grid.vertexCount(), maxVertices_));
+
+  TrainResult result;
+  std::shared_ptr<const Discretizer> owned;  // the current tree once refined
+  const Discretizer* grid = &problem.grid;
+  QTable q(problem.model, grid->vertexCount()), next;
+  std::vector<float> stage;
+  std::uint64_t updates = 0, totalSweeps = 0;
+  double change = 0;
+  nlohmann::json rounds = nlohmann::json::array();
+  std::string stopped = "max_rounds";
+  for (int round = 0;; ++round) {
+    GridModel built;
+    if (round > 0) built = GridModel::build({problem.model, *grid, problem.reward, problem.environment}, threads);
+    const GridModel& g = round == 0 ? context.grid : built;
+    // Value iteration on the current tree (value_iteration's Jacobi sweeps).
+    next = q;
+    const std::uint64_t pairs = static_cast<std::uint64_t>(g.vertexCount) * g.actionCount;
+    std::uint64_t sweeps = 0;
+    while (sweeps < maxSweeps_) {
+      change = sweep(q, next, g, threads, stage);
+      std::swap(q, next);
+      ++sweeps;
+      updates += pairs;
+      result.curve.push_back({updates, elapsed(), change, 0});
+      if (context.observer) context.observer->progress({updates, 0, elapsed(), change});
+      if (context.stop && context.stop->load(std::memory_order_relaxed) && change >= tolerance_)
+        throw TrainInterrupted(updates, 0, false);
+      if (change < tolerance_) break;
+    }
+    totalSweeps += sweeps;
+    nlohmann::json record = {{"vertices", grid->vertexCount()},
+                             {"leaves", grid->cellCount()},
+                             {"hanging_vertices", grid->hanging().size()},
+                             {"sweeps", sweeps},
+                             {"last_change", change}};
+    if (grid->vertexCount() >= maxVertices_) stopped = "max_vertices";
+    if (round >= maxRounds_) stopped = "max_rounds";
+    if (grid->vertexCount() >= maxVertices_ || round >= maxRounds_) {
+      rounds.push_back(record);
+      result.finalResidual = bellmanResidual(q, g, threads).max;
+      break;
+    }
+    const LeafScores scores = score(problem, *grid, g, q, threads);
+    record["largest_value_gap"] = *std::max_element(scores.value.begin(), scores.value.end());
+    record["largest_policy_disagreement"] = *std::max_element(scores.policy.begin(), scores.policy.end());
+    const std::vector<std::uint32_t> splits = choose(*grid, scores);
+    record["splits"] = splits.size();
+    rounds.push_back(record);
+    if (splits.empty()) {
+      // Every leaf is within the tolerance, at the depth limit, or the budget is spent.
+      stopped = grid->vertexCount() + (std::size_t{1} << (grid->dimension() - 1)) > maxVertices_ ? "max_vertices"
+                                                                                                  : "tolerance";
+      result.finalResidual = bellmanResidual(q, g, threads).max;
+      break;
+    }
+    std::shared_ptr<const Discretizer> refined = grid->refined(splits);
+    q = interpolated(q, *grid, *refined, problem.model, threads);
+    owned = std::move(refined);
+    grid = owned.get();
+  }
+  result.table = std::move(q);
+  result.grid = owned;
+  result.updates = updates;
+  result.seconds = elapsed();
+  result.stats = {{"rounds", rounds},
+                  {"stopped_by", stopped},
+                  {"sweeps", totalSweeps},
+                  {"vertices", grid->vertexCount()},
+                  {"leaves", grid->cellCount()},
+                  {"hanging_vertices", grid->hanging().size()},
+                  {"last_change", change}};
+  return result;
+}
+
+}  // namespace
+
+void registerAdaptiveValueIteration(LearnerRegistry& registry) {
+  registry.add(
+      {"adaptive_value_iteration",
+       "value iteration on a kd_tree grid that splits the cells where the value is not linear or the corners' "
+       "greedy actions disagree, and solves again, up to a vertex budget (Munos & Moore 2002)",
+       {ParamSpec::integer("max_vertices", 4000, 1, static_cast<long long>(kMaxGridVertices), "vertices",
+                           "vertex budget: no refinement past it (at least the initial tree's)"),
+        ParamSpec::integer("max_rounds", 30, 0, 100000, "rounds", "give up refining after this many rounds"),
+        ParamSpec::number("split_fraction", 0.1, 1e-6, 1, "", "split at most this fraction of the leaves per round"),
+        ParamSpec::number("split_tolerance", 1e-3, 0, 1e9, "",
+                          "value criterion: split only leaves whose mean value gap is above this"),
+        ParamSpec::choice("criterion", "both", {"value", "policy", "both"},
+                          "value: value non-linearity; policy: policy disagreement between corners; both: the two "
+                          "rankings in turn"),
+        ParamSpec::number("tolerance", 1e-4, 1e-9, 1, "", "each solve stops when no value changes more than this"),
+        ParamSpec::integer("max_sweeps", 1000, 1, 1'000'000, "sweeps", "each solve gives up after this many sweeps"),
+        threadsSpec()},
+       [](const Params& p) { return std::make_unique<AdaptiveValueIteration>(p); }});
+}
+
+}  // namespace mgrl::learners

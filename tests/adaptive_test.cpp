@@ -1,0 +1,405 @@
+// Issue 16: the kd_tree discretizer (weights, linear reproduction, continuity across
+// hanging faces, a wrapping angle, its saved structure) and adaptive_value_iteration on
+// problems whose value function is known by hand (a step in 1-D and a disc in 2-D).
+#include <catch2/catch.hpp>
+
+#include <cmath>
+#include <random>
+
+#include "app/plugins.hpp"
+#include "mgrl/core/config.hpp"
+#include "mgrl/core/error.hpp"
+#include "mgrl/learning/policy_bundle.hpp"
+#include "mgrl/learning/problem.hpp"
+#include "mgrl/learning/reward.hpp"
+#include "test_support.hpp"
+
+namespace mgrl {
+namespace {
+
+using Catch::Contains;
+
+ConfigNode yamlNode(const std::string& text) { return ConfigNode::parse(text, "adaptive.yaml"); }
+
+// One motion state with two 5-frame self-loops that leave the target where it is: `wait`
+// (no reward) and `punch` (an effective hit at (0, 1, 0.5) on its third frame). With the
+// hit reward the value is a step: gamma^3 / (1 - gamma^5) within the contact radius of the
+// fist, 0 elsewhere.
+StateActionModel punchModel() {
+  StateActionModel m;
+  m.frameTime = 1.0 / 30;
+  m.stateFrame = {0};
+  m.stateActionBegin = {0, 2};
+  m.actionFrameBegin = {0};
+  m.actionHitBegin = {0};
+  for (std::uint32_t a = 0; a < 2; ++a) {
+    m.actionFrom.push_back(0);
+    m.actionTo.push_back(0);
+    m.actionDisplacement.insert(m.actionDisplacement.end(), {0.0, 0.0, 0.0});
+    for (int t = 0; t < 5; ++t) {
+      m.actionFrames.push_back(0);
+      m.frameRoot.insert(m.frameRoot.end(), {0.0, 0.0, 0.0});
+      m.frameCentroid.insert(m.frameCentroid.end(), {0.0f, 1.0f, 0.5f});
+      m.frameEntersTransition.push_back(0);
+    }
+    m.actionFrameBegin.push_back(static_cast<std::uint32_t>(m.actionFrames.size()));
+    if (a == 1) m.hits.push_back(ActionHit{1, 3, 1, 0.0f, 1.0f, 0.5f, 1.0f});
+    m.actionHitBegin.push_back(static_cast<std::uint32_t>(m.hits.size()));
+  }
+  m.framesTotal = static_cast<std::uint32_t>(m.actionFrames.size());
+  m.centroid[1] = 1;
+  m.centroid[2] = 0.5;
+  return m;
+}
+
+const double kGamma = 0.97;
+const double kInside = std::pow(kGamma, 3) / (1 - std::pow(kGamma, 5));
+
+std::unique_ptr<Discretizer> makeGrid(const std::string& text, const StateActionModel& m) {
+  return app::plugins().discretizers.create(yamlNode(text), m);
+}
+
+// The problem on a kd_tree and its solution by adaptive_value_iteration.
+struct Solved {
+  Solved(const std::string& gridYaml, const std::string& learnerYaml, unsigned threads = 2)
+      : model(punchModel()),
+        grid(makeGrid(gridYaml, model)),
+        reward(app::plugins().rewards.create(yamlNode("{type: hit, contact_radius: 0.1}"))),
+        problem{model, *grid, *reward, environment},
+        tabulated(GridModel::build(problem, threads)),
+        learner(app::plugins().learners.create(yamlNode(learnerYaml))),
+        result(learner->train({problem, tabulated, nullptr, nullptr, threads})) {}
+  const Discretizer& tree() const { return result.grid ? *result.grid : *grid; }
+  // max_a Q(e, a), interpolated.
+  double value(const Eigen::Vector3d& e) const {
+    GridCell cell;
+    if (!tree().locate(e, cell)) return 0;
+    const Stencil s = tree().stencil(cell);
+    double best = -1e30;
+    for (std::size_t a = 0; a < 2; ++a) {
+      double v = 0;
+      for (int k = 0; k < s.size; ++k) v += s.weight[k] * result.table.at(a, s.vertex[k]);
+      best = std::max(best, v);
+    }
+    return best;
+  }
+  StateActionModel model;
+  std::unique_ptr<Discretizer> grid;
+  std::unique_ptr<Reward> reward;
+  StaticTarget environment;
+  Problem problem;
+  GridModel tabulated;
+  std::unique_ptr<Learner> learner;
+  TrainResult result;
+};
+
+// A leaf's box in grid coordinates, from its first and last corners.
+std::pair<std::array<double, 3>, std::array<double, 3>> leafBox(const Discretizer& grid, std::uint32_t leaf,
+                                                                const std::vector<std::array<double, 3>>& coords) {
+  const int d = grid.dimension();
+  const std::vector<std::uint32_t>& corners = grid.cellCorners();
+  std::array<double, 3> lo{0, 0, 0}, hi{0, 0, 0};
+  for (int i = 0; i < d; ++i) {
+    lo[i] = coords[corners[(static_cast<std::size_t>(leaf) << d)]][i];
+    hi[i] = coords[corners[(static_cast<std::size_t>(leaf) << d) | ((1u << d) - 1)]][i];
+  }
+  return {lo, hi};
+}
+
+// Vertex coordinates from the saved structure (positions lose the angle at distance 0).
+std::vector<std::array<double, 3>> vertexCoordinates(const Discretizer& grid) {
+  std::vector<std::array<double, 3>> out(grid.vertexCount(), {0, 0, 0});
+  for (const StructureArray& a : grid.structure())
+    if (a.name == "vertex_coordinates")
+      for (std::size_t v = 0; v < grid.vertexCount(); ++v)
+        for (int i = 0; i < grid.dimension(); ++i) out[v][i] = a.reals[v * grid.dimension() + i];
+  return out;
+}
+
+// A tree refined at pseudo-random leaves: hanging vertices of every kind.
+std::unique_ptr<Discretizer> randomlyRefined(const std::string& gridYaml, const StateActionModel& m, int rounds,
+                                             unsigned seed) {
+  std::unique_ptr<Discretizer> grid = makeGrid(gridYaml, m);
+  std::mt19937 rng(seed);
+  for (int r = 0; r < rounds; ++r) {
+    std::vector<std::uint32_t> cells;
+    for (std::uint32_t l = 0; l < grid->cellCount(); ++l)
+      if (rng() % 4 == 0) cells.push_back(l);
+    grid = grid->refined(cells);
+  }
+  return grid;
+}
+
+double interpolate(const Discretizer& grid, const std::vector<double>& values, const std::array<double, 3>& c) {
+  GridCell cell;
+  REQUIRE(grid.locate(grid.position(c), cell));
+  const Stencil s = grid.stencil(cell);
+  double sum = 0;
+  for (int k = 0; k < s.size; ++k) sum += s.weight[k] * values[s.vertex[k]];
+  return sum;
+}
+
+constexpr const char* k3d =
+    "{type: kd_tree, coordinates: cylindrical, angle_cells: 2, distance_cells: 2, height_cells: 1, angle_min: -90, "
+    "angle_max: 90, distance_min: 0.5, distance_max: 2.5, height_min: 0.5, height_max: 1.5}";
+constexpr const char* k2d =
+    "{type: kd_tree, coordinates: polar, angle_cells: 2, distance_cells: 2, angle_min: -90, angle_max: 90, "
+    "distance_min: 0.5, distance_max: 2.5}";
+
+}  // namespace
+
+TEST_CASE("kd_tree weights are non-negative, sum to 1 and reproduce linear functions across hanging vertices",
+          "[kd_tree]") {
+  const StateActionModel m = punchModel();
+  for (const char* yaml : {k2d, k3d}) {
+    CAPTURE(yaml);
+    const auto grid = randomlyRefined(yaml, m, 5, 7);
+    REQUIRE(!grid->hanging().empty());
+    const int d = grid->dimension();
+    const auto coords = vertexCoordinates(*grid);
+    std::vector<double> values(grid->vertexCount());
+    auto linear = [&](const std::array<double, 3>& c) { return 0.3 + 1.7 * c[0] - 2.1 * c[1] + (d == 3 ? 0.9 * c[2] : 0); };
+    for (std::size_t v = 0; v < values.size(); ++v) values[v] = linear(coords[v]);
+    // The hanging vertices' equations hold for a linear function.
+    std::vector<double> tied = values;
+    grid->hanging().apply(tied.data());
+    for (std::size_t v = 0; v < values.size(); ++v) REQUIRE(tied[v] == Approx(values[v]).margin(1e-5));
+    std::mt19937 rng(3);
+    std::uniform_real_distribution<double> u(0, 1);
+    for (int t = 0; t < 2000; ++t) {
+      const std::array<double, 3> c{-M_PI / 2 + M_PI * u(rng), 0.5 + 2 * u(rng), 0.5 + u(rng)};
+      GridCell cell;
+      REQUIRE(grid->locate(grid->position(c), cell));
+      const Stencil s = grid->stencil(cell);
+      REQUIRE(s.size == (1 << d));
+      double sum = 0;
+      for (int k = 0; k < s.size; ++k) {
+        REQUIRE(s.weight[k] >= 0);
+        sum += s.weight[k];
+      }
+      REQUIRE(sum == Approx(1).margin(1e-6));
+      const std::array<double, 3> back = grid->coordinates(grid->position(c));
+      REQUIRE(interpolate(*grid, values, c) == Approx(linear(back)).margin(1e-4));
+    }
+  }
+}
+
+TEST_CASE("kd_tree interpolation does not jump across a face with hanging vertices", "[kd_tree]") {
+  const StateActionModel m = punchModel();
+  for (const char* yaml : {k2d, k3d}) {
+    CAPTURE(yaml);
+    const auto grid = randomlyRefined(yaml, m, 6, 11);
+    const int d = grid->dimension();
+    const auto coords = vertexCoordinates(*grid);
+    std::mt19937 rng(5);
+    std::uniform_real_distribution<double> u(0, 1);
+    std::vector<double> free(grid->vertexCount());
+    for (double& v : free) v = u(rng);
+    std::vector<double> tied = free;
+    grid->hanging().apply(tied.data());
+    // Points on leaf faces inside the domain, evaluated just either side.
+    double largestTied = 0, largestFree = 0;
+    for (std::uint32_t leaf = 0; leaf < grid->cellCount(); ++leaf) {
+      const auto [lo, hi] = leafBox(*grid, leaf, coords);
+      for (int axis = 0; axis < d; ++axis)
+        for (int side = 0; side < 2; ++side) {
+          const double face = side ? hi[axis] : lo[axis];
+          const double domainLo = axis == 0 ? -M_PI / 2 : 0.5, domainHi = axis == 0 ? M_PI / 2 : axis == 1 ? 2.5 : 1.5;
+          if (face <= domainLo + 1e-9 || face >= domainHi - 1e-9) continue;
+          for (int t = 0; t < 8; ++t) {
+            std::array<double, 3> c{0, 0, 0};
+            for (int i = 0; i < d; ++i) c[i] = lo[i] + (hi[i] - lo[i]) * (0.02 + 0.96 * u(rng));
+            const double eps = 1e-7 * (hi[axis] - lo[axis]);
+            std::array<double, 3> below = c, above = c;
+            below[axis] = face - eps;
+            above[axis] = face + eps;
+            largestTied = std::max(largestTied, std::fabs(interpolate(*grid, tied, above) - interpolate(*grid, tied, below)));
+            largestFree = std::max(largestFree, std::fabs(interpolate(*grid, free, above) - interpolate(*grid, free, below)));
+          }
+        }
+    }
+    REQUIRE(largestTied < 1e-4);
+    // The same samples do see the jump when the hanging vertices keep arbitrary values.
+    REQUIRE(largestFree > 1e-2);
+  }
+}
+
+TEST_CASE("kd_tree wraps a full circle of angle", "[kd_tree]") {
+  const StateActionModel m = punchModel();
+  const auto grid = randomlyRefined("{type: kd_tree, coordinates: polar, angle_cells: 4, distance_cells: 2}", m, 3, 2);
+  REQUIRE(grid->axes()[0].wraps);
+  // Just either side of angle +-180 degrees: the same leaf corners along the seam.
+  std::vector<double> values(grid->vertexCount());
+  std::mt19937 rng(1);
+  for (double& v : values) v = std::uniform_real_distribution<double>(0, 1)(rng);
+  grid->hanging().apply(values.data());
+  for (double r : {0.3, 0.9, 1.7}) {
+    const double a = interpolate(*grid, values, {M_PI - 1e-9, r, 0});
+    const double b = interpolate(*grid, values, {-M_PI + 1e-9, r, 0});
+    REQUIRE(a == Approx(b).margin(1e-5));
+  }
+  GridCell cell;
+  REQUIRE(grid->locate(Eigen::Vector3d(0, 0, -1), cell));  // straight behind
+  REQUIRE(!grid->locate(Eigen::Vector3d(0, 0, 2.5), cell));  // beyond the radius
+}
+
+TEST_CASE("adaptive_value_iteration concentrates a 1-D tree at the steps of the value", "[adaptive]") {
+  const Solved solved(
+      "{type: kd_tree, coordinates: distance, height: 1, distance_cells: 4, distance_min: 0, distance_max: 2}",
+      "{type: adaptive_value_iteration, max_vertices: 40, split_fraction: 0.25, tolerance: 1e-7, criterion: value}");
+  const Discretizer& tree = solved.tree();
+  REQUIRE(tree.vertexCount() <= 40);
+  REQUIRE(tree.vertexCount() > 20);
+  // The value: a step up at 0.4 m and down at 0.6 m (the fist at 0.5 m, contact radius 0.1).
+  REQUIRE(solved.value({0, 1, 0.5}) == Approx(kInside).epsilon(1e-4));
+  REQUIRE(solved.value({0, 1, 1.5}) == Approx(0).margin(1e-6));
+  const auto coords = vertexCoordinates(tree);
+  double nearStep = 1e9, far = 0;
+  for (std::uint32_t leaf = 0; leaf < tree.cellCount(); ++leaf) {
+    const auto [lo, hi] = leafBox(tree, leaf, coords);
+    const double width = hi[0] - lo[0];
+    if ((lo[0] <= 0.4 && hi[0] >= 0.4) || (lo[0] <= 0.6 && hi[0] >= 0.6)) nearStep = std::min(nearStep, width);
+    if (lo[0] >= 1.0) far = std::max(far, width);
+  }
+  // Cells at the steps are split many times; far from them the initial cells stay.
+  REQUIRE(nearStep <= 2.0 / 64);
+  REQUIRE(far == Approx(0.5));
+  // And the interpolated value there is a sharp step.
+  REQUIRE(solved.value({0, 1, 0.45}) == Approx(kInside).epsilon(1e-3));
+  REQUIRE(solved.value({0, 1, 0.35}) < 0.05 * kInside);
+}
+
+TEST_CASE("adaptive_value_iteration concentrates a 2-D tree at the rim of the disc it can hit", "[adaptive]") {
+  const Solved solved(
+      "{type: kd_tree, coordinates: polar, height: 1, angle_cells: 4, distance_cells: 4, distance_max: 2}",
+      "{type: adaptive_value_iteration, max_vertices: 400, split_fraction: 0.2, tolerance: 1e-7}");
+  const Discretizer& tree = solved.tree();
+  REQUIRE(tree.vertexCount() <= 400);
+  REQUIRE(!tree.hanging().empty());
+  REQUIRE(solved.value({0, 1, 0.5}) == Approx(kInside).epsilon(1e-3));
+  REQUIRE(solved.value({0, 1, -1.0}) == Approx(0).margin(1e-6));
+  // Leaves crossing the rim (0.1 m around the fist at (0, 0.5)) are small; leaves far from it
+  // are not refined.
+  const Eigen::Vector2d fist(0, 0.5);
+  double rim = 0, farSmallest = 1e9;
+  std::size_t rimLeaves = 0;
+  for (std::uint32_t leaf = 0; leaf < tree.cellCount(); ++leaf) {
+    const Stencil corners = tree.stencil(GridCell{leaf, {0.5f, 0.5f, 0}});
+    double nearest = 1e9, farthest = 0, extent = 0;
+    for (int k = 0; k < corners.size; ++k) {
+      const Eigen::Vector3d p = tree.vertexPosition(corners.vertex[k]);
+      const double r = (Eigen::Vector2d(p.x(), p.z()) - fist).norm();
+      nearest = std::min(nearest, r);
+      farthest = std::max(farthest, r);
+      for (int j = 0; j < corners.size; ++j)
+        extent = std::max(extent, (tree.vertexPosition(corners.vertex[j]) - p).norm());
+    }
+    if (nearest < 0.1 && farthest > 0.1) {
+      rim = std::max(rim, extent);
+      ++rimLeaves;
+    }
+    if (nearest > 1.0) farSmallest = std::min(farSmallest, extent);
+  }
+  REQUIRE(rimLeaves > 0);
+  REQUIRE(rim < 0.25 * farSmallest);
+}
+
+TEST_CASE("adaptive_value_iteration is deterministic whatever the thread count", "[adaptive]") {
+  const std::string grid = "{type: kd_tree, coordinates: polar, height: 1, angle_cells: 4, distance_cells: 4}";
+  const std::string learner = "{type: adaptive_value_iteration, max_vertices: 200}";
+  const Solved one(grid, learner, 1), two(grid, learner, 2);
+  REQUIRE(one.tree().vertexCount() == two.tree().vertexCount());
+  REQUIRE(one.tree().cellCorners() == two.tree().cellCorners());
+  REQUIRE(one.result.table == two.result.table);
+  REQUIRE(one.result.stats == two.result.stats);
+}
+
+TEST_CASE("a refined kd_tree round-trips through a policy bundle and a corrupt tree is refused", "[adaptive][kd_tree]") {
+  const Solved solved("{type: kd_tree, coordinates: polar, height: 1, angle_cells: 4, distance_cells: 4}",
+                      "{type: adaptive_value_iteration, max_vertices: 150}");
+  const Discretizer& tree = solved.tree();
+  test::TempDir dir("adaptive-bundle");
+  auto save = [&](std::vector<StructureArray> structure) {
+    PolicyBundle bundle;
+    bundle.graphKey = "k";
+    std::vector<double> vertices;
+    for (std::size_t v = 0; v < tree.vertexCount(); ++v) {
+      const Eigen::Vector3d p = tree.vertexPosition(v);
+      vertices.insert(vertices.end(), {p.x(), p.y(), p.z()});
+    }
+    bundle.behaviors["hit"] = PolicyBehavior{"key", nlohmann::json::object(), solved.result.table, vertices, "kd_tree", std::move(structure), nullptr};
+    savePolicyBundle(dir.path / "policy", bundle);
+    return loadPolicyBundle(dir.path / "policy", solved.model, "k");
+  };
+  const PolicyBundle loaded = save(tree.structure());
+  const PolicyBehavior& hit = loaded.behaviors.at("hit");
+  REQUIRE(hit.table == solved.result.table);
+  // Restored from the arrays through the scenario's (unrefined) tree.
+  const auto restored = solved.grid->restored(hit.grid);
+  REQUIRE(restored->vertexCount() == tree.vertexCount());
+  REQUIRE(restored->cellCorners() == tree.cellCorners());
+  REQUIRE(restored->hanging().vertex == tree.hanging().vertex);
+  std::mt19937 rng(9);
+  for (int t = 0; t < 200; ++t) {
+    const Eigen::Vector3d e(std::uniform_real_distribution<double>(-2, 2)(rng), 1,
+                            std::uniform_real_distribution<double>(-2, 2)(rng));
+    GridCell a, b;
+    REQUIRE(tree.locate(e, a) == restored->locate(e, b));
+    REQUIRE(a.cell == b.cell);
+  }
+
+  auto array = [](std::vector<StructureArray>& arrays, const std::string& name) -> StructureArray& {
+    for (StructureArray& a : arrays)
+      if (a.name == name) return a;
+    FAIL("no array " << name);
+    return arrays[0];
+  };
+  SECTION("a cycle") {
+    std::vector<StructureArray> bad = tree.structure();
+    StructureArray& children = array(bad, "children");
+    // The root's high child (node 2) takes the low child's subtree (node 1) as its own.
+    REQUIRE(children.ints[0] == 1);
+    REQUIRE(children.ints[1] == 2);
+    children.ints[2 * 2] = 1;
+    const PolicyBundle corrupt = save(bad);
+    REQUIRE_THROWS_WITH(solved.grid->restored(corrupt.behaviors.at("hit").grid),
+                        Contains("hit.grid.children.npy") && Contains("reached twice"));
+  }
+  SECTION("an out-of-range child") {
+    std::vector<StructureArray> bad = tree.structure();
+    array(bad, "children").ints[0] = 100000;
+    const PolicyBundle corrupt = save(bad);
+    REQUIRE_THROWS_WITH(solved.grid->restored(corrupt.behaviors.at("hit").grid),
+                        Contains("hit.grid.children.npy") && Contains("out of range"));
+  }
+  SECTION("a tree of another dimension") {
+    const auto grid3 = makeGrid("{type: kd_tree, coordinates: cylindrical}", solved.model);
+    const PolicyBundle other = save(tree.structure());
+    REQUIRE_THROWS_WITH(grid3->restored(other.behaviors.at("hit").grid),
+                        Contains("hit.grid.bounds.npy") && Contains("another dimension"));
+  }
+}
+
+TEST_CASE("adaptive_value_iteration and kd_tree refuse bad parameters with one line", "[adaptive][kd_tree]") {
+  const StateActionModel m = punchModel();
+  REQUIRE_THROWS_WITH(app::plugins().learners.create(yamlNode("{type: adaptive_value_iteration, max_vertices: 0}")),
+                      Contains("max_vertices"));
+  REQUIRE_THROWS_WITH(makeGrid("{type: kd_tree, angle_cells: 3}", m), Contains("angle_cells") && Contains("power of two"));
+  REQUIRE_THROWS_WITH(makeGrid("{type: kd_tree, max_depth: 2}", m), Contains("max_depth"));
+  REQUIRE_THROWS_WITH(makeGrid("{type: kd_tree, colour: red}", m), Contains("colour"));
+  // A budget below the initial tree, and a grid that cannot be refined.
+  REQUIRE_THROWS_WITH(Solved("{type: kd_tree, coordinates: polar}", "{type: adaptive_value_iteration, max_vertices: 5}"),
+                      Contains("max_vertices") && Contains("initial tree"));
+  REQUIRE_THROWS_WITH(Solved("{type: polar2d}", "{type: adaptive_value_iteration}"), Contains("kd_tree"));
+  // Q-learning cannot keep hanging vertices continuous: it says so instead of breaking them.
+  const auto refined = randomlyRefined(k2d, m, 2, 3);
+  REQUIRE(!refined->hanging().empty());
+  const auto reward = app::plugins().rewards.create(yamlNode("{type: hit}"));
+  const StaticTarget environment;
+  const Problem problem{m, *refined, *reward, environment};
+  const GridModel g = GridModel::build(problem, 1);
+  const auto q = app::plugins().learners.create(yamlNode("{type: q_learning, budget: 10}"));
+  REQUIRE_THROWS_WITH(q->train({problem, g, nullptr, nullptr, 1}), Contains("hanging"));
+}
+
+}  // namespace mgrl
