@@ -10,6 +10,8 @@
 #include <cmath>
 #include <fstream>
 #include <map>
+#include <memory>
+#include <optional>
 #include <set>
 
 #include <unistd.h>
@@ -44,6 +46,7 @@ struct Run {
   bool seeded = false;               ///< the learner has a seed parameter
   std::vector<std::string> sets;     ///< the scenario's --set plus this run's
   fs::path dir;                      ///< its policy bundle
+  std::shared_ptr<const Scenario> scenario;  ///< the scenario with `sets`
 };
 
 // The metrics of one run, in the order they are reported.
@@ -70,7 +73,10 @@ Scenario loadChecked(const LearnOptions& options, const std::vector<std::string>
 struct Comparison {
   double rmse = 0, agreement = 0;
 };
-Comparison compareTables(const QTable& q, const QTable& reference) {
+// Both tables on the same grid; another grid (an adaptive learner's refined tree) has no
+// vertex-by-vertex comparison: nullopt.
+std::optional<Comparison> compareTables(const QTable& q, const QTable& reference) {
+  if (q.vertexCount() != reference.vertexCount() || q.actionCount() != reference.actionCount()) return std::nullopt;
   double squares = 0;
   std::size_t agree = 0, count = 0;
   for (std::size_t s = 0; s < q.stateCount(); ++s) {
@@ -87,8 +93,8 @@ Comparison compareTables(const QTable& q, const QTable& reference) {
       ++count;
     }
   }
-  return {count ? std::sqrt(squares / static_cast<double>(count)) : 0.0,
-          count ? static_cast<double>(agree) / static_cast<double>(count) : 0.0};
+  return Comparison{count ? std::sqrt(squares / static_cast<double>(count)) : 0.0,
+                    count ? static_cast<double>(agree) / static_cast<double>(count) : 0.0};
 }
 
 double touchedShare(const QTable& q) {
@@ -332,20 +338,22 @@ json runCompare(const CompareOptions& options) {
     const bool seeded = std::any_of(params.begin(), params.end(), [](const ParamSpec& p) { return p.name == "seed"; });
     // A learner with no seed is deterministic: one run stands for every seed.
     for (std::size_t k = 0; k < (seeded ? options.seeds.size() : 1); ++k) {
-      Run run{learner, seeded ? options.seeds[k] : 0, seeded, runSets(learner), {}};
+      Run run{learner, seeded ? options.seeds[k] : 0, seeded, runSets(learner), {}, nullptr};
       if (seeded) run.sets.push_back(fmt::format("behaviors.{}.learner.seed={}", options.behavior, run.seed));
       const Scenario checked = loadChecked(options, run.sets, fmt::format("--learners {}", learner));
       run.dir = defaultPolicyDirectory(compareCache, checked);
+      run.scenario = std::make_shared<Scenario>(checked);
       runs.push_back(std::move(run));
     }
   }
   // The reference: value iteration on the behaviour's grid.
-  Run reference{"value_iteration", 0, false, runSets("value_iteration"), {}};
+  Run reference{"value_iteration", 0, false, runSets("value_iteration"), {}, nullptr};
   if (learnerSets.count("value_iteration") == 0) {
     reference.sets = options.sets;
     reference.sets.push_back(fmt::format("behaviors.{}.learner.type=value_iteration", options.behavior));
   }
-  reference.dir = defaultPolicyDirectory(compareCache, loadChecked(options, reference.sets, "reference"));
+  reference.scenario = std::make_shared<Scenario>(loadChecked(options, reference.sets, "reference"));
+  reference.dir = defaultPolicyDirectory(compareCache, *reference.scenario);
   if (!options.report.empty()) {
     std::error_code ec;
     fs::create_directories(options.report, ec);
@@ -361,8 +369,27 @@ json runCompare(const CompareOptions& options) {
   auto log = [&](const std::string& line) {
     if (options.log) options.log(line);
   };
-  // The shared behaviours, trained once with the scenario's settings.
+  // The graph first (cached after the first time): every learner is checked against its
+  // grid before anything is trained.
   const fs::path base = compareCache / fmt::format("{}-shared", defaultPolicyDirectory(compareCache, scenario).filename().string());
+  Loaded loaded = load(options, std::move(scenario));
+  const StateActionModel& model = loaded.graph.model;
+  for (const Run* run : [&] {
+         std::vector<const Run*> all{&reference};
+         for (const Run& r : runs) all.push_back(&r);
+         return all;
+       }()) {
+    for (const Behavior& b : buildBehaviors(*run->scenario, plugins(), model, loaded.graph.key))
+      if (b.name == options.behavior) {
+        try {
+          b.learner->checkGrid(*b.discretizer);
+        } catch (const Error& e) {
+          throw Error(fmt::format("--learners {}: behaviors.{}: {}", run->learner, b.name, e.what()));
+        }
+      }
+  }
+
+  // The shared behaviours, trained once with the scenario's settings.
   for (const std::string& name : names) {
     if (name == options.behavior) continue;
     TrainOptions train;
@@ -374,8 +401,6 @@ json runCompare(const CompareOptions& options) {
     runTrain(train);
   }
 
-  Loaded loaded = load(options, std::move(scenario));
-  const StateActionModel& model = loaded.graph.model;
   auto trainRun = [&](const Run& run, const std::string& label) {
     if (names.size() > 1) seedBundle(base, run.dir);
     TrainOptions train;
@@ -416,7 +441,7 @@ json runCompare(const CompareOptions& options) {
     const json evaluated = runEval(eval);
     PolicyBundle bundle = loadPolicyBundle(run.dir, model, loaded.graph.key);
     const PolicyBehavior& trained = bundle.behaviors.at(options.behavior);
-    const Comparison c = compareTables(trained.table, referenceTable);
+    const std::optional<Comparison> c = compareTables(trained.table, referenceTable);
     const double perSecond = evaluated["decisions_per_second"].get<double>();
     json r = {{"learner", run.learner},
               {"seed", run.seeded ? json(run.seed) : json(nullptr)},
@@ -429,17 +454,21 @@ json runCompare(const CompareOptions& options) {
               {"table_bytes", trained.table.bytes()},
               {"final_residual", trained.record.value("final_residual", 0.0)},
               {"decision_us", perSecond > 0 ? 1e6 / perSecond : 0.0},
-              {"value_rmse", c.rmse},
-              {"greedy_agreement", c.agreement},
+              {"value_rmse", c ? json(c->rmse) : json()},
+              {"greedy_agreement", c ? json(c->agreement) : json()},
               {"touched_share", touchedShare(trained.table)},
               {"cell_coverage", trained.record.contains("stats") ? trained.record["stats"].value("cell_coverage", json())
                                                                  : json()},
               {"curve", trained.record.value("curve", json::array())}};
-    if (c.agreement < kAgreementFlag)
+    if (!c)
+      report["flags"].push_back(fmt::format("{}: its table is on another grid ({} vertices, the reference's {}): no "
+                                            "value comparison",
+                                            label, trained.table.vertexCount(), referenceTable.vertexCount()));
+    else if (c->agreement < kAgreementFlag)
       report["flags"].push_back(fmt::format(
           "{}: its greedy policy agrees with the reference's on {:.1f} % of (state, vertex) pairs (value RMSE {:.3g}; "
           "{:.1f} % of its Q entries were ever updated)",
-          label, 100 * c.agreement, c.rmse, 100 * r["touched_share"].get<double>()));
+          label, 100 * c->agreement, c->rmse, 100 * r["touched_share"].get<double>()));
     report["runs"].push_back(r);
   }
   for (const std::string& learner : options.learners) {

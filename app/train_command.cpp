@@ -299,6 +299,11 @@ json runTrain(const TrainOptions& options) {
   // not found by bad_alloc, nor after training the others.
   for (const Behavior& behavior : all) {
     if (std::find(wanted.begin(), wanted.end(), behavior.name) == wanted.end()) continue;
+    try {
+      behavior.learner->checkGrid(*behavior.discretizer);
+    } catch (const Error& e) {
+      throw Error(fmt::format("behaviors.{}: {}", behavior.name, e.what()));
+    }
     const double needed = GridModel::trainingBytes(model.actionCount(), behavior.discretizer->vertexCount());
     if (needed > options.maxMemoryBytes)
       throw Error(fmt::format("behaviors.{}: training on a {} grid of {} vertices x {} actions needs about {} "

@@ -48,6 +48,12 @@ class AdaptiveValueIteration final : public Learner {
         threads_(static_cast<unsigned>(p.integer("threads"))) {}
 
   std::string type() const override { return "adaptive_value_iteration"; }
+  void checkGrid(const Discretizer& grid) const override {
+    if (!grid.refinable())
+      throw Error(fmt::format("adaptive_value_iteration: expected a discretizer that can be refined (type kd_tree), "
+                              "found {}",
+                              grid.type()));
+  }
 
   TrainResult train(const TrainContext& context) const override;
 
@@ -174,10 +180,7 @@ TrainResult AdaptiveValueIteration::train(const TrainContext& context) const {
   const unsigned threads = threads_ > 0 ? threads_ : context.threads;
   const auto start = Clock::now();
   auto elapsed = [&] { return std::chrono::duration<double>(Clock::now() - start).count(); };
-  if (!problem.grid.refinable())
-    throw Error(fmt::format("adaptive_value_iteration: expected a discretizer that can be refined (type kd_tree), "
-                            "found {}",
-                            problem.grid.type()));
+  checkGrid(problem.grid);
   if (problem.grid.vertexCount() > maxVertices_)
     throw Error(fmt::format("adaptive_value_iteration: max_vertices: expected at least the initial tree's {} "
                             "vertices, found {}",

@@ -91,6 +91,10 @@ TEST_CASE("mgrl compare refuses mistakes in one line before training anything", 
       {"compare " + shellWord(kBoxing) + " --behavior kick --learners q_learning",
        "--behavior: expected one of the scenario's behaviours (approach, hit), found 'kick'"},
       {base + "--learners q_learning --report /proc/mgrl-report", "--report /proc/mgrl-report: expected a folder"},
+      // A learner that does not fit the behaviour's grid (checked once the graph is loaded).
+      {base + "--learners q_learning,adaptive_value_iteration",
+       "--learners adaptive_value_iteration: behaviors.hit: adaptive_value_iteration: expected a discretizer that can "
+       "be refined (type kd_tree), found cylindrical3d"},
   };
   for (const auto& [arguments, message] : cases) {
     INFO(arguments);
@@ -101,6 +105,12 @@ TEST_CASE("mgrl compare refuses mistakes in one line before training anything", 
     CHECK(refused.err.find("train ") == std::string::npos);
   }
   CHECK_FALSE(fs::exists(box.cache() / "compare"));
+  // mgrl train refuses the same before training the other behaviour.
+  const Run train = box.run("train " + shellWord(kBoxing) + " --set behaviors.hit.learner.type=adaptive_value_iteration");
+  CHECK(train.status == 1);
+  CHECK_THAT(train.lastErrorLine(), Contains("behaviors.hit: adaptive_value_iteration: expected a discretizer that can be "
+                                             "refined (type kd_tree), found cylindrical3d"));
+  CHECK(train.err.find("train approach") == std::string::npos);
 }
 
 }  // namespace

@@ -115,6 +115,9 @@ class Learner {
   virtual ~Learner() = default;
   virtual std::string type() const = 0;
   virtual TrainResult train(const TrainContext& context) const = 0;
+  /// Throws mgrl::Error (what was expected, what was found) if this learner cannot train on
+  /// `grid`, so that commands refuse a mismatch before training anything.
+  virtual void checkGrid(const Discretizer& grid) const { (void)grid; }
 };
 
 using LearnerRegistry = Registry<Learner>;
