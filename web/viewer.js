@@ -1,7 +1,8 @@
 // The page of `mgrl serve` (docs/viewer-protocol.md): the three.js scene, the socket, and
 // the glue between them. The pieces live in their own modules: protocol.js (frames and
 // messages), avatars.js (bodies, targets, hit flashes), target_drag.js (target mode's
-// mouse input), panel.js (controls), hud.js (read-outs), floor.js (the grid).
+// mouse input), panel.js (controls), hud.js (read-outs), floor.js (the grid), teach.js
+// and values_view.js (the learned values around avatar 0, the learning curves).
 import * as THREE from 'three';
 import {OrbitControls} from 'three/addons/controls/OrbitControls.js';
 import {Connection, PoseFrame} from './protocol.js';
@@ -10,6 +11,8 @@ import {TargetDrag} from './target_drag.js';
 import {makeFloor} from './floor.js';
 import {Panel} from './panel.js';
 import {Hud} from './hud.js';
+import {ValuesView} from './values_view.js';
+import {Teach} from './teach.js';
 
 const kKeptTimestamps = 20000;   // frame arrival times kept for window.mgrl (about 10 min)
 const kKeptHits = 10000;
@@ -57,6 +60,7 @@ controls.maxPolarAngle = Math.PI * 0.495;   // stay above the floor
 const avatars = new Avatars(scene3d);
 const targets = new Targets(scene3d);
 const flashes = new HitFlashes(scene3d);
+const valuesView = new ValuesView(scene3d);
 
 // ---- what the page knows (also window.mgrl.state, for tests) -----------------------
 
@@ -71,6 +75,7 @@ const state = {
   // The page's own cost, ms (moving averages): writing the instances, the draw call,
   // and from a draw to the next animation frame (what the page waits for the picture).
   draw: {updateMs: 0, renderMs: 0, cycleMs: 0, count: 0, software: false},
+  values: null,            // the teaching view's record (teach.js), set below
 };
 state.draw.software = software;
 let latest = null;       // the newest PoseFrame
@@ -84,6 +89,8 @@ const hud = new Hud();
 let connection = null;
 const send = (message) => connection.send(message);
 const panel = new Panel(send);
+const teach = new Teach(send, valuesView, () => { dirty = true; });
+state.values = teach.record;
 const drag = new TargetDrag({
   container, canvas: renderer.domElement, camera, controls, scene: scene3d, send,
   heightInput: document.getElementById('height'),
@@ -103,12 +110,14 @@ function onScene(message) {
   avatars.setPartners(message.partners);
   state.scene = message;
   // A mode change (or a new crowd size) is a new world: frame it, forget its flashes.
-  if (previous === null || previous.mode !== message.mode || previous.avatars !== message.avatars) {
+  const newWorld = previous === null || previous.mode !== message.mode || previous.avatars !== message.avatars;
+  if (newWorld) {
     fitAfter = state.frames.count;
     flashes.removeAll();
     drag.reset(message.mode === 'target');
   }
   panel.setScene(message);
+  teach.setScene(message, newWorld && previous !== null);
   hud.setScene(message);
   dirty = true;
 }
@@ -129,6 +138,9 @@ function onMessage(message) {
       flashes.add(message, performance.now());
       hud.addHit(message);
       if (performance.now() - hudAt > 100) renderHud();   // the line shows with its flash
+      break;
+    case 'values':
+      teach.onValues(message);
       break;
     case 'error':
       state.lastError = String(message.message);
@@ -191,6 +203,23 @@ function fit(frame) {
   dirty = true;
 }
 
+/** Looks down on avatar 0 from 60 degrees up, near enough to read the teaching view's grids. */
+function lookDown(frame) {
+  const root = frame.root(0);
+  if (root === null) return;
+  const direction = camera.position.clone().sub(controls.target).setY(0);
+  if (direction.lengthSq() < 1e-8) direction.set(0, 0, 1);
+  direction.normalize();
+  const elevation = THREE.MathUtils.degToRad(60), distance = 6;
+  controls.target.set(root[0], 0.5, root[2]);
+  camera.position.copy(controls.target).addScaledVector(direction, distance * Math.cos(elevation));
+  camera.position.y += distance * Math.sin(elevation);
+  scene3d.fog.near = distance * 1.5;
+  scene3d.fog.far = distance * 3;
+  controls.update();
+  dirty = true;
+}
+
 function follow(frame) {
   const root = frame.root(0);
   if (root === null) return;
@@ -202,6 +231,7 @@ function follow(frame) {
 }
 
 document.getElementById('fit').addEventListener('click', () => { if (latest) fit(latest); });
+document.getElementById('look-down').addEventListener('click', () => { if (latest) lookDown(latest); });
 controls.addEventListener('change', () => { dirty = true; });
 
 function resize() {
@@ -285,7 +315,7 @@ connection = new Connection(`${location.protocol === 'https:' ? 'wss' : 'ws'}://
   message: onMessage,
   frame: onFrame,
   // A new connection is a new world (the server starts each page in target mode).
-  open: () => { state.connected = true; state.scene = null; hud.setConnection('connected'); },
+  open: () => { state.connected = true; state.scene = null; teach.reset(); hud.setConnection('connected'); },
   close: (reason) => { state.connected = false; hud.setConnection(reason); },
 });
 
@@ -306,9 +336,16 @@ window.mgrl = {
   targetOf: (i) => latest?.targetOf(i) ?? null,
   /** Sends a raw page message (an object). */
   send: (message) => connection.send(message),
-  /** Mean and variance of the canvas's luminance (0..255): a blank canvas has variance 0. */
-  pixelStats() {
+  /**
+   * Mean and variance of the canvas's luminance (0..255): a blank canvas has variance 0.
+   * `withoutValues`: drawn once without the teaching view's heat map and path (then
+   * drawn again as it was), so a test can tell what the heat map adds.
+   */
+  pixelStats({withoutValues = false} = {}) {
+    const shown = valuesView.group.visible;
+    if (withoutValues) valuesView.group.visible = false;
     renderer.render(scene3d, camera);
+    valuesView.group.visible = shown;
     const source = renderer.domElement;
     const canvas = document.createElement('canvas');
     canvas.width = source.width;
@@ -324,7 +361,24 @@ window.mgrl = {
       sumSquares += l * l;
     }
     const mean = sum / n;
+    if (withoutValues) dirty = true;
     return {mean, variance: sumSquares / n - mean * mean};
   },
+  /**
+   * The teaching view now: the behaviour shown, heat-map cells and chosen-action rings
+   * drawn, the last `values` message's point count, and the legend's and read-outs' text.
+   */
+  teach: () => ({
+    behavior: state.values.behavior,
+    colourBy: state.values.colourBy,
+    instances: valuesView.instances,
+    chosenMarks: valuesView.chosenMarks,
+    points: state.values.last?.points.length ?? null,
+    pathPoints: state.values.last?.path?.length ?? null,
+    pathTriangles: valuesView.group.visible ? (valuesView.path.geometry.index?.count ?? 0) / 3 : 0,
+    legend: {min: document.getElementById('legend-min').textContent, max: document.getElementById('legend-max').textContent,
+             caption: document.getElementById('legend-caption').textContent, shown: !document.getElementById('teach-hud').hidden},
+    stateLine: document.getElementById('teach-state').textContent,
+  }),
   fit: () => { if (latest) fit(latest); },
 };

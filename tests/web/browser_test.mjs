@@ -30,6 +30,8 @@ const kHitWithinSimSeconds = 15;
 const kStepDistance = 0.1;         // m closer to the target: the boxer's first step
 const kSideDistance = 1.5;         // m beside the boxer, where the target is dragged
 const kMinVariance = 30;           // luminance variance of a canvas that shows something
+const kValuesWithinSimSeconds = 2; // the teaching view: values messages counted over this
+const kMinValuesMessages = 3;      //   many simulated seconds, at least this many (5/s sent)
 
 let passed = 0;
 let server = null;
@@ -271,6 +273,133 @@ async function targetMode(page) {
   return {stepAfter, hitAfter: hit.time - dragEnd};
 }
 
+// ---- the teaching views (issue 15) ------------------------------------------------
+
+/** Simulated time of the newest frame. */
+const frameTime = (page) => page.evaluate(() => mgrl.state.frames.last.time);
+
+/** Waits until the world's clock is `seconds` past `from` (simulated), or 30 s of wall time. */
+async function waitSimulated(page, from, seconds, what) {
+  await waitInPage(page, (t) => mgrl.state.frames.last.time >= t, from + seconds, 30000, what);
+}
+
+/** `values` messages of `behaviour` received with a time in [from, from + seconds]. */
+function valuesBetween(page, behaviour, from, seconds) {
+  return page.evaluate(([b, t0, dt]) => mgrl.state.values.received
+    .filter((m) => m.behavior === b && m.time >= t0 - 1e-6 && m.time <= t0 + dt).length, [behaviour, from, seconds]);
+}
+
+// One behaviour's values through the panel's select: the messages keep coming, the heat
+// map has a cell per point and changes the picture, the HUD shows the legend and state.
+async function showValues(page, behaviour, screenshotName) {
+  const from = await frameTime(page);
+  await page.selectOption('#values-behavior', behaviour);
+  await waitSimulated(page, from, kValuesWithinSimSeconds + 0.3, `${kValuesWithinSimSeconds} s of simulated time after asking for ${behaviour}'s values`);
+  const count = await valuesBetween(page, behaviour, from, kValuesWithinSimSeconds);
+  check(count >= kMinValuesMessages,
+        `values of ${behaviour}: ${kMinValuesMessages} or more messages within ${kValuesWithinSimSeconds} s of simulated time`,
+        `${count} from simulated ${from.toFixed(2)} s`);
+
+  // In one go, so the legend and the heat map are of the same message.
+  const seen = await page.evaluate(() => {
+    const m = mgrl.state.values.last;
+    return {teach: mgrl.teach(), behavior: m.behavior, points: m.points.length, vMin: m.v_min, vMax: m.v_max,
+            state: m.state, chosen: m.chosen, actions: m.actions, inside: m.target_inside, height: m.height,
+            withValues: mgrl.pixelStats(), without: mgrl.pixelStats({withoutValues: true})};
+  });
+  const t = seen.teach;
+  check(seen.behavior === behaviour && t.instances === seen.points && seen.points > 0,
+        `values of ${behaviour}: the heat map draws one cell per point (${seen.points})`,
+        `${t.instances} cells for ${seen.points} points of ${seen.behavior}`);
+  check(t.pathTriangles > 0 && t.pathPoints > 1, `values of ${behaviour}: the chosen action's path is drawn on the floor`,
+        `${t.pathPoints} path points, ${t.pathTriangles} triangles`);
+  const dMean = seen.withValues.mean - seen.without.mean, dVariance = seen.withValues.variance - seen.without.variance;
+  check(Math.abs(dMean) > 0.5 || Math.abs(dVariance) > 5, `values of ${behaviour}: the heat map changes the picture (pixelStats)`,
+        `luminance mean ${seen.without.mean.toFixed(2)} -> ${seen.withValues.mean.toFixed(2)}, ` +
+        `variance ${seen.without.variance.toFixed(1)} -> ${seen.withValues.variance.toFixed(1)}`);
+  console.log(`#      ${behaviour}: ${count} values messages in ${kValuesWithinSimSeconds} s simulated; ${seen.points} points at height ` +
+              `${seen.height.toFixed(2)} m, ${t.chosenMarks} greedy = chosen; luminance mean ${seen.without.mean.toFixed(2)} -> ` +
+              `${seen.withValues.mean.toFixed(2)}, variance ${seen.without.variance.toFixed(1)} -> ${seen.withValues.variance.toFixed(1)}`);
+  const near = (text, v) => Math.abs(Number.parseFloat(text) - v) <= 0.006 * Math.abs(v) + 1e-9;
+  check(t.legend.shown && near(t.legend.min, seen.vMin) && near(t.legend.max, seen.vMax),
+        `values of ${behaviour}: the legend shows v_min and v_max`,
+        `legend "${t.legend.min}" .. "${t.legend.max}", message ${seen.vMin} .. ${seen.vMax}`);
+  const line = `state ${seen.state}, chosen action ${seen.chosen} of ${seen.actions}`;
+  check(t.stateLine.startsWith(line) && t.stateLine.includes(`target inside grid: ${seen.inside ? 'yes' : 'no'}`),
+        `values of ${behaviour}: the HUD shows the state, the chosen action and whether the target is inside the grid`,
+        `"${t.stateLine}"`);
+  await screenshot(page, screenshotName);
+}
+
+async function teachViews(page) {
+  const scene = await page.evaluate(() => mgrl.state.scene);
+  const curves = scene.behaviors.filter((b) => Array.isArray(b.curve) && b.curve.some((r) => r[2] > 0));
+  check(scene.behaviors.every((b) => typeof b.learner === 'string' && Number.isInteger(b.vertices) && Array.isArray(b.curve)),
+        'the scene carries each behaviour\'s learner, vertex count and training curve',
+        JSON.stringify(scene.behaviors.map((b) => ({name: b.name, learner: b.learner, vertices: b.vertices, curve: b.curve?.length}))));
+
+  await page.click('#look-down');
+  await showValues(page, 'hit', 'teach-values-hit.png');
+  await showValues(page, 'approach', 'teach-values-approach.png');
+
+  // Greedy-action colours: the legend runs over the action indices.
+  const messages = await page.evaluate(() => mgrl.state.values.received.length);
+  await page.click('#colour-greedy');
+  await waitInPage(page, (n) => mgrl.state.values.received.length > n, messages, 10000, 'a values message after the colour switch');
+  const greedy = await page.evaluate(() => ({teach: mgrl.teach(), actions: mgrl.state.values.last.actions}));
+  check(greedy.teach.colourBy === 'greedy' && greedy.teach.legend.min === '0' &&
+        greedy.teach.legend.max === String(greedy.actions - 1),
+        'colour by greedy action: the legend runs over the action indices',
+        `legend "${greedy.teach.legend.min}" .. "${greedy.teach.legend.max}" for ${greedy.actions} actions`);
+
+  // The learning curves: one line per behaviour that has a curve, a point per row.
+  await page.check('#curves-toggle');
+  const chart = await page.evaluate(() => ({
+    shown: !document.getElementById('curves').hidden,
+    lines: [...document.querySelectorAll('#curves-chart polyline.chart-line')].map((l) => ({
+      behavior: l.dataset.behavior, points: l.getAttribute('points').trim().split(/\s+/).length})),
+    legend: document.querySelector('#curves-chart .chart-legend')?.textContent ?? '',
+  }));
+  const expected = curves.map((b) => ({behavior: b.name, points: b.curve.filter((r) => r[0] > 0 && r[2] > 0).length}));
+  check(chart.shown && JSON.stringify(chart.lines) === JSON.stringify(expected) && expected.every((e) => e.points >= 2),
+        `the learning-curve chart has one line per behaviour with its curve's points (${expected.map((e) => `${e.behavior} ${e.points}`).join(', ')})`,
+        `drawn ${JSON.stringify(chart.lines)}, expected ${JSON.stringify(expected)}`);
+  check(curves.every((b) => chart.legend.includes(`${b.name} (${b.learner})`)),
+        'the chart\'s legend names each behaviour and its learner', `"${chart.legend}"`);
+  await screenshot(page, 'teach-curves.png');
+  await page.uncheck('#curves-toggle');
+  await page.click('#colour-value');
+
+  // None: the messages stop and the heat map goes.
+  await page.selectOption('#values-behavior', '');
+  await sleep(500);   // what the server sent before it read "none"
+  const stoppedAt = await frameTime(page);
+  const countBefore = await page.evaluate(() => mgrl.state.values.received.length);
+  await waitSimulated(page, stoppedAt, kValuesWithinSimSeconds, `${kValuesWithinSimSeconds} s of simulated time after "none"`);
+  const after = await page.evaluate(() => ({count: mgrl.state.values.received.length, teach: mgrl.teach()}));
+  check(after.count === countBefore && after.teach.instances === 0 && after.teach.pathTriangles === 0 && !after.teach.legend.shown,
+        `values of none: no more messages over ${kValuesWithinSimSeconds} s of simulated time, heat map, path and legend gone`,
+        `${after.count - countBefore} more messages, ${after.teach.instances} cells, legend shown ${after.teach.legend.shown}`);
+}
+
+// A new world (mode change) while values are shown: the page asks again and the new
+// world's values arrive at once.
+async function valuesAcrossModeChange(page) {
+  await page.selectOption('#values-behavior', 'approach');
+  await waitInPage(page, () => mgrl.teach().instances > 0, null, 10000, 'approach values before the mode change');
+  await page.click('#mode-sparring');
+  await waitForWorld(page, 'sparring', 2);
+  const from = await frameTime(page);
+  await waitSimulated(page, from, kValuesWithinSimSeconds + 0.3, `${kValuesWithinSimSeconds} s of sparring`);
+  const count = await valuesBetween(page, 'approach', from, kValuesWithinSimSeconds);
+  const cells = await page.evaluate(() => mgrl.teach().instances);
+  check(count >= kMinValuesMessages && cells > 0,
+        `values of approach keep coming after a switch to sparring (${kMinValuesMessages} or more within ${kValuesWithinSimSeconds} s simulated)`,
+        `${count} messages from simulated ${from.toFixed(2)} s, ${cells} cells`);
+  await page.selectOption('#values-behavior', '');
+  await waitInPage(page, () => mgrl.teach().instances === 0, null, 5000, 'the heat map gone after none');
+}
+
 /** Sets a range input as a user's drag would end: its value, then `input` and `change`. */
 function setRange(page, selector, value) {
   return page.$eval(selector, (input, v) => {
@@ -382,9 +511,8 @@ async function main() {
   await page.goto(url);
 
   const target = await targetMode(page);
-
-  await page.click('#mode-sparring');
-  await waitForWorld(page, 'sparring', 2);
+  await teachViews(page);
+  await valuesAcrossModeChange(page);
   const sparring = await measured(page, 2);
   check(sparring.fps >= kMinFramesPerSecond, `sparring: frames keep arriving (>= ${kMinFramesPerSecond}/s over 3 s)`,
         `${sparring.fps.toFixed(1)}/s`);
