@@ -178,6 +178,12 @@ async function targetMode(page) {
   const webgl = await page.evaluate(() => mgrl.pixelStats());
   check(webgl.variance > kMinVariance, 'the page draws (WebGL canvas not blank)', `variance ${webgl.variance.toFixed(1)}`);
 
+  // The world held still while the target is aimed at and dragged: until the page first
+  // moves it, the server moves the target by itself every few seconds (world.target_hold,
+  // 3 s), and one such move between aiming and pressing made the press miss the sphere
+  // and orbit the camera instead.
+  await setPaused(page, true);
+
   // A spot on the floor kSideDistance beside the boxer: perpendicular to its line to
   // the target (two consecutive roots say little about where it faces).
   const before = await snapshot(page);
@@ -211,6 +217,7 @@ async function targetMode(page) {
   await page.mouse.move(to.x, to.y, {steps: 15});
   await page.mouse.up();
   const dragEnd = (await snapshot(page)).time;
+  await setPaused(page, false);
   const landmarkAfter = await page.evaluate((p) => mgrl.project(p), landmark);
   check(Math.hypot(landmarkAfter.x - landmarkBefore.x, landmarkAfter.y - landmarkBefore.y) < 1,
         'the camera stays put while the target is dragged (orbit controls off)',
@@ -299,6 +306,9 @@ async function showValues(page, behaviour, screenshotName) {
   check(count >= kMinValuesMessages,
         `values of ${behaviour}: ${kMinValuesMessages} or more messages within ${kValuesWithinSimSeconds} s of simulated time`,
         `${count} from simulated ${from.toFixed(2)} s`);
+  // Held still for the checks and the screenshot (values come only as the world runs),
+  // so the heat map, the HUD and the picture are of one message.
+  await setPaused(page, true);
 
   // In one go, so the legend and the heat map are of the same message.
   const seen = await page.evaluate(() => {
@@ -329,6 +339,14 @@ async function showValues(page, behaviour, screenshotName) {
         `values of ${behaviour}: the HUD shows the state, the chosen action and whether the target is inside the grid`,
         `"${t.stateLine}"`);
   await screenshot(page, screenshotName);
+  await setPaused(page, false);
+}
+
+/** Pauses or resumes the world (a page message) and waits until the stats say so. */
+async function setPaused(page, paused) {
+  await page.evaluate((p) => mgrl.send({type: 'pause', paused: p}), paused);
+  await waitInPage(page, (p) => mgrl.state.stats?.paused === p, paused, 5000, paused ? 'paused' : 'running again');
+  if (paused) await sleep(600);   // what was sent before the pause, and its draw
 }
 
 async function teachViews(page) {
@@ -342,10 +360,10 @@ async function teachViews(page) {
   await showValues(page, 'hit', 'teach-values-hit.png');
   await showValues(page, 'approach', 'teach-values-approach.png');
 
-  // Greedy-action colours: the legend runs over the action indices.
-  const messages = await page.evaluate(() => mgrl.state.values.received.length);
+  // Greedy-action colours (redrawn from the last message at once): the legend runs
+  // over the action indices.
+  await setPaused(page, true);
   await page.click('#colour-greedy');
-  await waitInPage(page, (n) => mgrl.state.values.received.length > n, messages, 10000, 'a values message after the colour switch');
   const greedy = await page.evaluate(() => ({teach: mgrl.teach(), actions: mgrl.state.values.last.actions}));
   check(greedy.teach.colourBy === 'greedy' && greedy.teach.legend.min === '0' &&
         greedy.teach.legend.max === String(greedy.actions - 1),
@@ -369,6 +387,7 @@ async function teachViews(page) {
   await screenshot(page, 'teach-curves.png');
   await page.uncheck('#curves-toggle');
   await page.click('#colour-value');
+  await setPaused(page, false);
 
   // None: the messages stop and the heat map goes.
   await page.selectOption('#values-behavior', '');
@@ -511,8 +530,9 @@ async function main() {
   await page.goto(url);
 
   const target = await targetMode(page);
-  await teachViews(page);
-  await valuesAcrossModeChange(page);
+
+  await page.click('#mode-sparring');
+  await waitForWorld(page, 'sparring', 2);
   const sparring = await measured(page, 2);
   check(sparring.fps >= kMinFramesPerSecond, `sparring: frames keep arriving (>= ${kMinFramesPerSecond}/s over 3 s)`,
         `${sparring.fps.toFixed(1)}/s`);
@@ -562,6 +582,19 @@ async function main() {
   check(errors.length === 1, 'no error from the server but the one asked for', errors.join('; '));
   const bad = await page.evaluate(() => mgrl.state.frames.bad);
   check(bad === 0, 'every binary frame was well-formed', `${bad} refused`);
+
+  // The teaching views on the page loaded afresh, as a class would open it: a new
+  // connection is a new world in target mode, with a clean HUD and the first camera.
+  await page.goto(url);
+  await waitInPage(page, () => {
+    const s = window.mgrl?.state;
+    return s?.scene?.mode === 'target' && s.frames.count > 0 && s.draw.count >= 5;
+  }, null, 30000, 'the reloaded page gets a target-mode scene and frames, and draws');
+  await teachViews(page);
+  await valuesAcrossModeChange(page);
+  const after = await page.evaluate(() => ({errors: mgrl.state.errors, bad: mgrl.state.frames.bad}));
+  check(after.errors.length === 0 && after.bad === 0, 'the teaching views: no error from the server, every frame well-formed',
+        `${after.errors.join('; ')}; ${after.bad} frames refused`);
   check(pageErrors.length === 0, 'no script errors in the page', pageErrors.join('; '));
   check(outside.length === 0, 'the page loads nothing from outside the server', outside.join(', '));
 }
