@@ -279,7 +279,12 @@ void writeReport(const fs::path& dir, const json& report) {
     html += "</ul>\n";
   }
   html += "<div class=\"plots\">";
-  for (const auto& [key, label] : kMetrics) html += barChart(report, key, label) + "\n";
+  for (const auto& [key, label] : kMetrics) {
+    // A metric no learner has (bundles trained before it was recorded) gets no plot.
+    const bool any = std::any_of(report["learners"].begin(), report["learners"].end(),
+                                 [&](const json& l) { return l["mean"][key].is_number(); });
+    if (any) html += barChart(report, key, label) + "\n";
+  }
   html += residualChart(report) + "</div>\n</body></html>\n";
   writeFileAtomically(dir / "index.html", html);
 }

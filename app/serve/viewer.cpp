@@ -215,6 +215,7 @@ void ViewerSession::rebuild(Mode mode, int avatars) {
   s.eventsSeen = 0;
   s.hitTimes.clear();
   s.decisions = {};
+  s.valuesFrame = 0;  // the new world counts frames from 0
   s.world->run(1);  // poses exist from the first frame on
   outbox_.push_back(scene());
 }
