@@ -8,7 +8,10 @@
 #include <map>
 #include <sstream>
 
+#include <signal.h>
 #include <unistd.h>
+
+#include <cerrno>
 
 #include <fmt/format.h>
 
@@ -58,6 +61,23 @@ class ScratchDirectory {
 
 std::string scratchName() { return fmt::format(".mgrl-simulate-{}", ::getpid()); }
 
+// Issue 19, defect 5: the scratch folders of runs that were killed (their process is gone)
+// are removed; a live run's are left alone.
+void removeStaleScratch(const fs::path& dir) {
+  std::error_code ec;
+  constexpr std::string_view prefix = ".mgrl-simulate-";
+  for (fs::directory_iterator it(dir, ec), end; !ec && it != end; it.increment(ec)) {
+    const std::string name = it->path().filename().string();
+    if (name.rfind(prefix, 0) != 0 || name.size() == prefix.size() || name.size() > prefix.size() + 10 ||
+        name.find_first_not_of("0123456789", prefix.size()) != std::string::npos)
+      continue;
+    const long pid = std::stol(name.substr(prefix.size()));
+    if (pid == ::getpid() || ::kill(static_cast<pid_t>(pid), 0) == 0 || errno == EPERM) continue;
+    std::error_code ignored;
+    fs::remove_all(it->path(), ignored);
+  }
+}
+
 // Creates `dir` if needed and a scratch folder inside it; throws if either fails (and
 // then leaves nothing created).
 std::unique_ptr<ScratchDirectory> prepareFolder(const fs::path& dir, std::string_view flag) {
@@ -74,6 +94,7 @@ std::unique_ptr<ScratchDirectory> prepareFolder(const fs::path& dir, std::string
     throw Error(fmt::format("{} {}: expected a folder that can be created, found: {}", flag, dir.string(),
                             ec ? ec.message() : std::string("not a folder")));
   }
+  removeStaleScratch(dir);
   const fs::path scratch = dir / scratchName();
   fs::remove_all(scratch, ec);
   auto guard = std::make_unique<ScratchDirectory>(scratch, created);

@@ -261,6 +261,19 @@ TEST_CASE("mgrl simulate --bvh-out writes one readable BVH per avatar", "[cli][d
   box.trainPolicy();
   const fs::path dir = box.path("out") / "bvh";  // made, parents and all
   const json r = box.simulate("--json --avatars 3 --seconds 10 --seed 4 --bvh-out " + shellWord(dir)).report();
+  {
+    // Issue 19, defect 5: a killed run's scratch folder (its process gone) goes with the
+    // next run into the same folder.
+    const pid_t child = ::fork();
+    if (child == 0) ::_exit(0);
+    int status = 0;
+    ::waitpid(child, &status, 0);
+    const fs::path stale = dir / (".mgrl-simulate-" + std::to_string(child));
+    fs::create_directories(stale);
+    std::ofstream(stale / "avatar_000.bvh") << "half";
+    REQUIRE(box.simulate("--json --avatars 3 --seconds 10 --seed 4 --bvh-out " + shellWord(dir)).status == 0);
+    CHECK_FALSE(fs::exists(stale));
+  }
   CHECK(r["poses"] == true);  // implied by --bvh-out
   const std::vector<std::string> names = {"avatar_000.bvh", "avatar_001.bvh", "avatar_002.bvh"};
   // Exactly these files: nothing else, no scratch folder.

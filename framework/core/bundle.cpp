@@ -1,5 +1,8 @@
 #include "mgrl/core/bundle.hpp"
 
+#include <signal.h>
+#include <stdio.h>  // renameat2
+#include <fcntl.h>  // AT_FDCWD
 #include <unistd.h>
 
 #include <atomic>
@@ -26,6 +29,21 @@ void renameOrThrow(const fs::path& from, const fs::path& to, std::string_view so
   std::error_code ec;
   fs::rename(from, to, ec);
   if (ec) throw Error(fmt::format("{}: cannot rename {} to {}: {}", source, from.string(), to.string(), ec.message()));
+}
+
+// Swaps `from` and `to` in one step (both must exist), so that `to` is never missing.
+// False if the file system cannot (the caller falls back to two renames).
+bool exchange(const fs::path& from, const fs::path& to, std::error_code& ec) {
+  ec.clear();
+  if (::renameat2(AT_FDCWD, from.c_str(), AT_FDCWD, to.c_str(), RENAME_EXCHANGE) == 0) return true;
+  ec = std::error_code(errno, std::generic_category());
+  return false;
+}
+
+// True while process `pid` exists (EPERM: it exists, owned by someone else).
+bool processAlive(long pid) {
+  if (pid <= 0 || pid > std::numeric_limits<pid_t>::max()) return false;
+  return pid == ::getpid() || ::kill(static_cast<pid_t>(pid), 0) == 0 || errno == EPERM;
 }
 
 std::string dumpForMessage(const json& value) {
@@ -60,6 +78,57 @@ fs::path freshSibling(const fs::path& dir, std::string_view tag, bool create) {
   throw Error(fmt::format("{}: expected a free name for a {} directory beside it, found none", dir.string(), tag));
 }
 
+std::vector<StaleSibling> staleSiblings(const fs::path& dirArgument) {
+  const fs::path dir = dirArgument.has_filename() ? dirArgument : dirArgument.parent_path();
+  std::vector<StaleSibling> found;
+  const fs::path parent = dir.has_parent_path() ? dir.parent_path() : fs::path(".");
+  const std::string stem = dir.filename().string();
+  std::error_code ec;
+  for (fs::directory_iterator it(parent, ec), end; !ec && it != end; it.increment(ec)) {
+    const std::string name = it->path().filename().string();
+    // <stem>.<tag>-<pid>-<counter>, as freshSibling() names them.
+    if (name.size() <= stem.size() + 1 || name.compare(0, stem.size(), stem) != 0 || name[stem.size()] != '.') continue;
+    const std::string_view rest = std::string_view(name).substr(stem.size() + 1);
+    std::string_view tag;
+    if (rest.rfind("tmp-", 0) == 0 || rest.rfind("old-", 0) == 0) tag = rest.substr(0, 3);
+    else continue;
+    const std::string_view numbers = rest.substr(4);
+    const std::size_t dash = numbers.find('-');
+    if (dash == 0 || dash == std::string_view::npos || dash > 12 || dash + 1 == numbers.size() ||
+        numbers.find_first_not_of("0123456789-") != std::string_view::npos ||
+        numbers.find('-', dash + 1) != std::string_view::npos)
+      continue;
+    const long pid = std::stol(std::string(numbers.substr(0, dash)));
+    if (processAlive(pid)) continue;
+    found.push_back({it->path(), std::string(tag)});
+  }
+  std::sort(found.begin(), found.end(), [](const StaleSibling& a, const StaleSibling& b) { return a.path < b.path; });
+  return found;
+}
+
+void recoverBundleDirectory(const fs::path& dirArgument, std::string_view manifestName, const WarningSink& log) {
+  const fs::path dir = dirArgument.has_filename() ? dirArgument : dirArgument.parent_path();
+  std::vector<StaleSibling> stale = staleSiblings(dir);
+  if (stale.empty()) return;
+  std::error_code ec;
+  if (!fs::exists(fs::symlink_status(dir, ec))) {
+    // A writer died between its renames: put back the newest complete bundle, a finished
+    // temporary (it has its manifest, written last) before a replaced old one.
+    for (const char* tag : {"tmp", "old"})
+      for (const StaleSibling& s : stale)
+        if (s.tag == tag && fs::exists(s.path / manifestName, ec) && !fs::exists(fs::symlink_status(dir, ec))) {
+          fs::rename(s.path, dir, ec);
+          if (!ec && log) log(fmt::format("{}: recovered the bundle a killed process left in {}", dir.string(), s.path.filename().string()));
+        }
+  }
+  for (const StaleSibling& s : stale) {
+    if (!fs::exists(fs::symlink_status(s.path, ec))) continue;  // recovered above
+    const auto removed = fs::remove_all(s.path, ec);
+    if (!ec && removed > 0 && log)
+      log(fmt::format("{}: removed {}, left by a process that is gone", dir.string(), s.path.filename().string()));
+  }
+}
+
 bool isPlainFileName(std::string_view name) {
   return !name.empty() && name != "." && name != ".." && name.find_first_of(std::string_view("/\\\0", 3)) == name.npos;
 }
@@ -74,6 +143,7 @@ void writeBundleDirectory(const fs::path& dirArgument, const std::vector<BundleF
       throw Error(fmt::format("{}: expected plain file names in a {} other than {}, found {}", source, kind,
                               manifestName, quoteToken(file.name)));
 
+  recoverBundleDirectory(dir, manifestName);
   // Never delete something that is not ours to replace.
   std::error_code ec;
   const fs::file_status existing = fs::symlink_status(dir, ec);
@@ -96,22 +166,44 @@ void writeBundleDirectory(const fs::path& dirArgument, const std::vector<BundleF
     for (const BundleFile& file : files) writeWholeFile(temporary / file.name, file.bytes);
     // Last, so a directory with a manifest has all its files.
     writeWholeFile(temporary / manifestName, manifestText);
-    if (!replacing) {
-      renameOrThrow(temporary, dir, source);
-      return;
-    }
-    const fs::path old = freshSibling(dir, "old", false);
-    renameOrThrow(dir, old, source);
-    try {
-      renameOrThrow(temporary, dir, source);
-    } catch (const Error&) {
+    // Issue 19, defects 5 and 8: the destination is never missing (an existing bundle is
+    // swapped with the new one in one step), and another process writing the same bundle
+    // at the same time makes neither fail: the last swap wins, each is complete.
+    for (int attempt = 0;; ++attempt) {
+      std::error_code renamed;
+      fs::rename(temporary, dir, renamed);  // onto nothing or an empty directory
+      if (!renamed) return;
+      if (renamed != std::errc::directory_not_empty && renamed != std::errc::file_exists)
+        throw Error(fmt::format("{}: cannot rename {} to {}: {}", source, temporary.string(), dir.string(),
+                                renamed.message()));
+      const fs::file_status now = fs::symlink_status(dir, ec);
+      if (!fs::is_directory(now) || (!fs::exists(dir / manifestName, ec) && !fs::is_empty(dir, ec)))
+        throw Error(fmt::format("{}: expected a {} (with {}) or an empty directory to replace, "
+                                "found a directory with other files; not deleting it",
+                                source, kind, manifestName));
+      std::error_code swapped;
+      if (exchange(temporary, dir, swapped)) break;  // `temporary` now holds the old bundle
+      if (swapped == std::errc::no_such_file_or_directory && attempt < 100) continue;  // it went meanwhile
+      if (swapped != std::errc::invalid_argument && swapped != std::errc::operation_not_supported)
+        throw Error(fmt::format("{}: cannot swap {} with {}: {}", source, temporary.string(), dir.string(),
+                                swapped.message()));
+      // A file system without atomic exchange: rename the old one aside first.
+      const fs::path old = freshSibling(dir, "old", false);
+      renameOrThrow(dir, old, source);
+      try {
+        renameOrThrow(temporary, dir, source);
+      } catch (const Error&) {
+        std::error_code ignored;
+        fs::rename(old, dir, ignored);  // put the previous bundle back
+        throw;
+      }
       std::error_code ignored;
-      fs::rename(old, dir, ignored);  // put the previous bundle back
-      throw;
+      fs::remove_all(old, ignored);
+      return;
     }
     // The new bundle is in place; an old copy that cannot be removed only wastes space.
     std::error_code ignored;
-    fs::remove_all(old, ignored);
+    fs::remove_all(temporary, ignored);
   } catch (...) {
     std::error_code ignored;
     fs::remove_all(temporary, ignored);

@@ -23,6 +23,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "mgrl/core/error.hpp"
 #include "mgrl/core/npy.hpp"
 
 namespace mgrl {
@@ -35,17 +36,34 @@ struct BundleFile {
 
 /// Writes `files` and then `manifestText` (as `manifestName`) into a fresh temporary
 /// directory beside `dir` and renames it onto `dir`, so a crash leaves either a whole
-/// bundle at `dir` or none. An old bundle at `dir` is first renamed aside, then removed
-/// (and put back if the rename of the new one fails). A trailing '/' in `dir` is ignored;
+/// bundle at `dir` or none. A trailing '/' in `dir` is ignored;
 /// `dir`'s parent is created if needed. `kind` names the bundle in messages ("graph
-/// bundle", "policy bundle"). Not safe against another process writing the same `dir` at
-/// the same time.
+/// bundle", "policy bundle"). An existing bundle is swapped with the new one in one step
+/// (renameat2 RENAME_EXCHANGE), so `dir` is never missing; another process writing the
+/// same `dir` at the same time makes neither fail (the last one wins). Leftovers of killed
+/// writers are cleaned first (recoverBundleDirectory()).
 /// Throws mgrl::Error, leaving no temporary directory, if a file name is not a plain name
 /// (isPlainFileName()), if `dir` is something other than a directory holding
 /// `manifestName` or an empty directory (it is never deleted then), or on any I/O failure.
 void writeBundleDirectory(const std::filesystem::path& dir, const std::vector<BundleFile>& files,
                           std::string_view manifestText, std::string_view kind,
                           std::string_view manifestName = "manifest.json");
+
+/// What a killed writer left beside `dir`: `<dir>.tmp-PID-N` (a bundle being written; a
+/// complete one when it holds its manifest) or `<dir>.old-PID-N` (a replaced bundle), of a
+/// process that no longer exists.
+struct StaleSibling {
+  std::filesystem::path path;
+  std::string tag;  ///< "tmp" or "old"
+};
+std::vector<StaleSibling> staleSiblings(const std::filesystem::path& dir);
+
+/// Issue 19, defect 5: removes the stale siblings of `dir`; if `dir` is missing, first
+/// puts back the newest complete one (a temporary holding `manifestName`, else an old
+/// bundle). Those of live processes (this one included) are left alone. `log` hears what
+/// was done.
+void recoverBundleDirectory(const std::filesystem::path& dir, std::string_view manifestName,
+                            const WarningSink& log = {});
 
 /// A name beside `dir` that nothing has: `<dir>.<tag>-<pid>-<counter>`. With `create`, the
 /// directory is made by the same call that proves the name free, so two writers never

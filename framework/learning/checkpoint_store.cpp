@@ -59,6 +59,7 @@ std::optional<json> DirectoryCheckpointer::load(QTable& table) { return loadChec
 std::optional<json> DirectoryCheckpointer::loadChecked(QTable& table, const StateCheck& check) {
   requireTableShape(table);
   std::error_code ec;
+  recoverBundleDirectory(dir_, kStateFile);  // what a killed writer left (issue 19)
   const fs::file_status status = fs::status(dir_, ec);
   if (status.type() == fs::file_type::not_found) return std::nullopt;
 

@@ -125,6 +125,7 @@ void savePolicyBundle(const fs::path& dirArgument, const PolicyBundle& bundle) {
 
 PolicyBundle loadPolicyBundle(const fs::path& dirArgument, const StateActionModel& model, std::string_view graphKey) {
   const fs::path dir = dirArgument.has_filename() ? dirArgument : dirArgument.parent_path();
+  recoverBundleDirectory(dir, "manifest.json");  // what a killed writer left (issue 19)
   std::error_code ec;
   const fs::file_status status = fs::status(dir, ec);
   if (status.type() == fs::file_type::not_found)

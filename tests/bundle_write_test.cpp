@@ -1,0 +1,148 @@
+// Issue 19, defects 5 and 8: bundle directories (graph cache, policy bundles, checkpoints)
+// under kills and concurrent writers. A replaced bundle is never missing, two writers of
+// one bundle both succeed, and what a killed writer left is recovered or cleaned on the
+// next run (only a dead process's).
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <atomic>
+#include <barrier>
+#include <filesystem>
+#include <fstream>
+#include <thread>
+
+#include <catch2/catch.hpp>
+#include <fmt/format.h>
+
+#include "mgrl/core/bundle.hpp"
+#include "mgrl/core/files.hpp"
+#include "test_support.hpp"
+
+namespace mgrl {
+namespace {
+
+namespace fs = std::filesystem;
+
+// A pid that belonged to a process that has exited (and been reaped).
+pid_t deadPid() {
+  const pid_t child = ::fork();
+  if (child == 0) ::_exit(0);
+  int status = 0;
+  ::waitpid(child, &status, 0);
+  return child;
+}
+
+void writeBundle(const fs::path& dir, const std::string& content) {
+  writeBundleDirectory(dir, {{"data.txt", content}}, "{\"content\": \"" + content + "\"}", "test bundle");
+}
+
+std::string contentOf(const fs::path& dir) { return readFile(dir / "data.txt"); }
+
+// `<stem>.<tag>-<pid>-<n>`, as a writer names its temporaries.
+std::string sibling(std::string_view stem, std::string_view tag, long pid, std::string_view n) {
+  return fmt::format("{}.{}-{}-{}", stem, tag, pid, n);
+}
+
+void makeLeftover(const fs::path& path, bool withManifest, const std::string& content) {
+  fs::create_directories(path);
+  std::ofstream(path / "data.txt") << content;
+  if (withManifest) std::ofstream(path / "manifest.json") << "{}";
+}
+
+TEST_CASE("a replaced bundle is never missing, even for a moment", "[bundle][harden]") {
+  test::TempDir temp("bundle-replace");
+  const fs::path dir = temp.path / "b";
+  writeBundle(dir, "first");
+  std::atomic<bool> done{false};
+  std::atomic<int> missing{0};
+  std::thread watcher([&] {
+    std::error_code ec;
+    while (!done)
+      if (!fs::exists(dir / "manifest.json", ec)) ++missing;
+  });
+  for (int i = 0; i < 300; ++i) writeBundle(dir, fmt::format("version {}", i));
+  done = true;
+  watcher.join();
+  CHECK(missing == 0);
+  CHECK(contentOf(dir) == "version 299");
+  // Nothing is left beside it.
+  std::size_t entries = 0;
+  for ([[maybe_unused]] const auto& e : fs::directory_iterator(temp.path)) ++entries;
+  CHECK(entries == 1);
+}
+
+TEST_CASE("two writers of one bundle both succeed and leave one complete bundle", "[bundle][harden]") {
+  test::TempDir temp("bundle-race");
+  for (int round = 0; round < 300; ++round) {
+    const fs::path dir = temp.path / fmt::format("b{}", round % 3);
+    if (round % 2 == 0) fs::remove_all(dir);  // half the rounds race to create, half to replace
+    std::atomic<int> failures{0};
+    std::barrier start(2);
+    auto write = [&](const std::string& content) {
+      start.arrive_and_wait();  // both at once
+      try {
+        writeBundle(dir, content);
+      } catch (const std::exception& e) {
+        UNSCOPED_INFO(e.what());
+        ++failures;
+      }
+    };
+    std::thread a(write, "from a"), b(write, "from b");
+    a.join();
+    b.join();
+    REQUIRE(failures == 0);
+    const std::string content = contentOf(dir);
+    CHECK((content == "from a" || content == "from b"));
+  }
+  std::size_t entries = 0;
+  for ([[maybe_unused]] const auto& e : fs::directory_iterator(temp.path)) ++entries;
+  CHECK(entries == 3);
+}
+
+TEST_CASE("what a killed writer left is recovered or removed, a live writer's is kept", "[bundle][harden]") {
+  test::TempDir temp("bundle-leftovers");
+  const fs::path dir = temp.path / "policy";
+  const pid_t dead = deadPid();
+
+  SECTION("killed between the renames: the complete temporary comes back") {
+    makeLeftover(temp.path / sibling("policy", "tmp", dead, "0"), true, "new");
+    makeLeftover(temp.path / sibling("policy", "old", dead, "1"), true, "old");
+    recoverBundleDirectory(dir, "manifest.json");
+    CHECK(contentOf(dir) == "new");
+    CHECK_FALSE(fs::exists(temp.path / sibling("policy", "old", dead, "1")));
+  }
+  SECTION("killed while writing: the old bundle comes back, the half-written one goes") {
+    makeLeftover(temp.path / sibling("policy", "tmp", dead, "0"), false, "half");
+    makeLeftover(temp.path / sibling("policy", "old", dead, "1"), true, "old");
+    recoverBundleDirectory(dir, "manifest.json");
+    CHECK(contentOf(dir) == "old");
+    CHECK_FALSE(fs::exists(temp.path / sibling("policy", "tmp", dead, "0")));
+  }
+  SECTION("with the bundle in place, a dead writer's leftovers are removed when writing") {
+    writeBundle(dir, "current");
+    makeLeftover(temp.path / sibling("policy", "tmp", dead, "7"), false, "22 MB of a checkpoint");
+    makeLeftover(temp.path / sibling("policy", "old", dead, "8"), true, "older");
+    writeBundle(dir, "next");
+    CHECK(contentOf(dir) == "next");
+    std::size_t entries = 0;
+    for ([[maybe_unused]] const auto& e : fs::directory_iterator(temp.path)) ++entries;
+    CHECK(entries == 1);
+  }
+  SECTION("a live process's temporary and names that only look alike are kept") {
+    writeBundle(dir, "current");
+    const fs::path live = temp.path / sibling("policy", "tmp", ::getpid(), "99");
+    makeLeftover(live, false, "being written");
+    const fs::path other = temp.path / sibling("policy-2", "tmp", dead, "0");  // another bundle's
+    makeLeftover(other, false, "x");
+    const fs::path odd = temp.path / "policy.tmp-notapid";
+    makeLeftover(odd, false, "x");
+    recoverBundleDirectory(dir, "manifest.json");
+    CHECK(fs::exists(live));
+    CHECK(fs::exists(other));
+    CHECK(fs::exists(odd));
+    CHECK(contentOf(dir) == "current");
+  }
+}
+
+}  // namespace
+}  // namespace mgrl
