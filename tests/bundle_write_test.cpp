@@ -6,6 +6,7 @@
 #include <unistd.h>
 
 #include <atomic>
+#include <cstdio>
 #include <barrier>
 #include <filesystem>
 #include <fstream>
@@ -97,6 +98,45 @@ TEST_CASE("two writers of one bundle both succeed and leave one complete bundle"
   std::size_t entries = 0;
   for ([[maybe_unused]] const auto& e : fs::directory_iterator(temp.path)) ++entries;
   CHECK(entries == 3);
+}
+
+TEST_CASE("two processes writing one bundle both succeed", "[bundle][harden]") {
+  test::TempDir temp("bundle-processes");
+  const fs::path dir = temp.path / "graph";
+  for (int round = 0; round < 40; ++round) {
+    if (round % 2 == 0) fs::remove_all(dir);  // half the rounds race to create, half to replace
+    // Two children wait on a pipe, so that both start writing at once; each exits 1 if its
+    // write fails.
+    int gate[2];
+    REQUIRE(::pipe(gate) == 0);
+    auto child = [&](const char* who) {
+      const pid_t pid = ::fork();
+      if (pid != 0) return pid;
+      char go = 0;
+      if (::read(gate[0], &go, 1) != 1) ::_exit(2);
+      try {
+        writeBundle(dir, who);
+      } catch (const std::exception& e) {
+        std::fprintf(stderr, "writer %s: %s\n", who, e.what());
+        ::_exit(1);
+      }
+      ::_exit(0);
+    };
+    const pid_t a = child("a"), b = child("b");
+    REQUIRE(::write(gate[1], "gg", 2) == 2);
+    ::close(gate[0]);
+    ::close(gate[1]);
+    int statusA = -1, statusB = -1;
+    ::waitpid(a, &statusA, 0);
+    ::waitpid(b, &statusB, 0);
+    REQUIRE((WIFEXITED(statusA) && WEXITSTATUS(statusA) == 0));
+    REQUIRE((WIFEXITED(statusB) && WEXITSTATUS(statusB) == 0));
+    const std::string content = contentOf(dir);
+    CHECK((content == "a" || content == "b"));
+  }
+  std::size_t entries = 0;
+  for ([[maybe_unused]] const auto& e : fs::directory_iterator(temp.path)) ++entries;
+  CHECK(entries == 1);  // nothing left beside it
 }
 
 TEST_CASE("what a killed writer left is recovered or removed, a live writer's is kept", "[bundle][harden]") {
