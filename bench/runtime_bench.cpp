@@ -7,12 +7,12 @@
 // Medians of several runs (the machine is shared and noisy).
 //
 // Usage: mgrl_bench_runtime [--quick] [--runs N] [--threads T]
+#include <malloc.h>
 #include <unistd.h>
 
 #include <chrono>
 #include <cstdio>
 #include <cstring>
-#include <fstream>
 #include <string>
 
 #include <fmt/format.h>
@@ -36,13 +36,13 @@ double since(Clock::time_point start) { return std::chrono::duration<double>(Clo
 
 volatile std::size_t observed = 0;
 
-// Resident memory of this process (bytes).
-double residentBytes() {
-  std::ifstream statm("/proc/self/statm");
-  double pages = 0, resident = 0;
-  statm >> pages >> resident;
-  return resident * static_cast<double>(::sysconf(_SC_PAGESIZE));
+// Heap bytes in use (glibc's count: freed memory that the allocator keeps for reuse is
+// not counted, unlike resident growth after other worlds were freed).
+double heapBytes() {
+  const struct mallinfo2 info = ::mallinfo2();
+  return static_cast<double>(info.uordblks + info.hblkhd);
 }
+
 
 }  // namespace
 
@@ -140,11 +140,11 @@ int main(int argc, char** argv) {
     }
     // Measured memory: resident growth for 10,000 avatars with poses.
     {
-      const double before = residentBytes();
+      const double before = heapBytes();
       mgrl::World world(setup(10000, true));
       world.run(1);
-      const double after = residentBytes();
-      std::printf("  resident memory for 10,000 avatars with poses: %.1f MB (%.0f B per avatar)\n",
+      const double after = heapBytes();
+      std::printf("  heap memory for 10,000 avatars with poses: %.1f MB (%.0f B per avatar)\n",
                   (after - before) / 1e6, (after - before) / 10000);
     }
 

@@ -29,6 +29,8 @@ ActionPlayback::ActionPlayback(const MotionDatabase& db, const StateActionModel&
   source_.rotations.resize(joints);
   previous_.rotations.resize(joints);
   offset_.assign(joints, Eigen::Quaterniond::Identity());
+  offsetHalfAngle_.assign(joints, 0.0);
+  offsetAxis_.assign(joints, Eigen::Vector3d::UnitX());
   fkRotations_.resize(joints);
   fkPositions_.resize(joints);
 }
@@ -55,6 +57,7 @@ void ActionPlayback::reset(std::uint32_t state, const GroundMotion& world) {
   frame_ = model_.stateFrame[state];
   sourceLocal(frame_, current_);
   std::fill(offset_.begin(), offset_.end(), Eigen::Quaterniond::Identity());
+  std::fill(offsetHalfAngle_.begin(), offsetHalfAngle_.end(), 0.0);
   heightOffset_ = 0;
   sinceTransition_ = 1 << 30;
   correction_.setZero();
@@ -89,6 +92,9 @@ bool ActionPlayback::next(Pose& pose) {
       for (std::size_t j = 0; j < joints; ++j) {
         offset_[j] = current_.rotations[j] * previous_.rotations[j].conjugate();
         if (offset_[j].w() < 0) offset_[j].coeffs() = -offset_[j].coeffs();
+        const double sinHalf = offset_[j].vec().norm();
+        offsetHalfAngle_[j] = std::atan2(sinHalf, offset_[j].w());
+        offsetAxis_[j] = sinHalf > 1e-12 ? Eigen::Vector3d(offset_[j].vec() / sinHalf) : Eigen::Vector3d::UnitX();
       }
       heightOffset_ = current_.height - previous_.height;
       sinceTransition_ = 0;
@@ -96,10 +102,17 @@ bool ActionPlayback::next(Pose& pose) {
     ++sinceTransition_;
     sourceLocal(v, source_);
     const double alpha = fade(sinceTransition_, blendFrames_);
-    for (std::size_t j = 0; j < joints; ++j)
-      current_.rotations[j] =
-          alpha > 0 ? Eigen::Quaterniond::Identity().slerp(alpha, offset_[j]) * source_.rotations[j]
-                    : source_.rotations[j];
+    // slerp(identity, offset, alpha) = (cos(alpha h), sin(alpha h) axis) for the offset's
+    // half angle h and axis, both found at the transition.
+    for (std::size_t j = 0; j < joints; ++j) {
+      if (alpha > 0) {
+        const double h = alpha * offsetHalfAngle_[j];
+        const Eigen::Vector3d axis = std::sin(h) * offsetAxis_[j];
+        current_.rotations[j] = Eigen::Quaterniond(std::cos(h), axis.x(), axis.y(), axis.z()) * source_.rotations[j];
+      } else {
+        current_.rotations[j] = source_.rotations[j];
+      }
+    }
     current_.height = source_.height + alpha * heightOffset_;
     current_.rootOffset = source_.rootOffset;
 

@@ -75,6 +75,10 @@ class ActionPlayback {
   GroundMotion world_;
   Local current_, source_, previous_;
   std::vector<Eigen::Quaterniond> offset_;
+  /// Per joint, the offset as an angle and axis, found once per transition: the blended
+  /// rotation of each frame is then one sine and cosine (issue 20), not a full slerp.
+  std::vector<double> offsetHalfAngle_;
+  std::vector<Eigen::Vector3d> offsetAxis_;
   double heightOffset_ = 0;
   int sinceTransition_ = 1 << 30;
   Eigen::Vector2d correction_ = Eigen::Vector2d::Zero();  // world (x, z) shift from foot locking

@@ -391,9 +391,10 @@ std::size_t World::bytesPerAvatar() const {
   std::size_t bytes = sizeof(Avatar) + sizeof(Target) + sizeof(Eigen::Vector3d);
   if (setup_.poses) {
     const std::size_t joints = setup_.db->skeleton->jointCount();
-    // The playback's buffers (5 rotation arrays, 1 position array) and the avatar's pose,
-    // globals and positions.
-    bytes += sizeof(ActionPlayback) + joints * (5 * sizeof(Eigen::Quaterniond) + sizeof(Eigen::Vector3d));
+    // The playback's buffers (5 rotation arrays, 1 position array, the blend offsets' half
+    // angles and axes) and the avatar's pose, globals and positions.
+    bytes += sizeof(ActionPlayback) +
+             joints * (5 * sizeof(Eigen::Quaterniond) + 2 * sizeof(Eigen::Vector3d) + sizeof(double));
     bytes += joints * (2 * sizeof(Eigen::Quaterniond) + 2 * sizeof(Eigen::Vector3d));
   }
   return bytes;
