@@ -323,11 +323,9 @@ json runCompare(const CompareOptions& options) {
   }
 
   Scenario scenario = checkedScenario(options);
+  requireBehavior(scenario, options.behavior);
   std::vector<std::string> names;
   for (const BehaviorSpec& spec : scenario.behaviors) names.push_back(spec.name);
-  if (std::find(names.begin(), names.end(), options.behavior) == names.end())
-    throw Error(fmt::format("--behavior: expected one of the scenario's behaviours ({}), found {}",
-                            fmt::join(names, ", "), quoteToken(options.behavior)));
 
   const fs::path cacheDir = options.cacheDir.empty() ? defaultCacheDirectory() : options.cacheDir;
   const fs::path compareCache = cacheDir / "compare";

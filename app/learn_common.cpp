@@ -171,6 +171,14 @@ BundleSettings bundleSettings(const fs::path& dir, const Scenario& scenario) {
 
 }  // namespace
 
+void requireBehavior(const Scenario& scenario, const std::string& name) {
+  std::vector<std::string> names;
+  for (const BehaviorSpec& spec : scenario.behaviors) names.push_back(spec.name);
+  if (std::find(names.begin(), names.end(), name) == names.end())
+    throw Error(fmt::format("--behavior: expected one of the scenario's behaviours ({}), found {}",
+                            fmt::join(names, ", "), quoteToken(name)));
+}
+
 fs::path resolvePolicy(const fs::path& policy, Scenario& scenario, const LearnOptions& options) {
   const fs::path cacheDir = options.cacheDir.empty() ? defaultCacheDirectory() : options.cacheDir;
   if (policy.empty()) {

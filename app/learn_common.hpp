@@ -37,6 +37,10 @@ struct Loaded {
   GraphResult graph;
 };
 
+/// Throws mgrl::Error ("--behavior: expected one of the scenario's behaviours (...), found
+/// ...") unless `name` names one of `scenario`'s behaviours.
+void requireBehavior(const Scenario& scenario, const std::string& name);
+
 /// The scenario's graph, from the cache or built (options.log hears about it).
 Loaded load(const LearnOptions& options, Scenario scenario);
 

@@ -225,13 +225,7 @@ json runTrain(const TrainOptions& options) {
     if (options.log) options.log(m);
   };
   Scenario scenario = checkedScenario(options);
-  if (!options.behavior.empty()) {
-    std::vector<std::string> names;
-    for (const BehaviorSpec& spec : scenario.behaviors) names.push_back(spec.name);
-    if (std::find(names.begin(), names.end(), options.behavior) == names.end())
-      throw Error(fmt::format("--behavior: expected one of the scenario's behaviours ({}), found {}",
-                              fmt::join(names, ", "), quoteToken(options.behavior)));
-  }
+  if (!options.behavior.empty()) requireBehavior(scenario, options.behavior);
   const fs::path cacheDir = options.cacheDir.empty() ? defaultCacheDirectory() : options.cacheDir;
   fs::path out = options.out.empty() ? defaultPolicyDirectory(cacheDir, scenario) : options.out;
   if (!out.has_filename()) out = out.parent_path();

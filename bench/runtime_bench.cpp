@@ -21,6 +21,7 @@
 #include "app/learn_common.hpp"
 #include "app/plugins.hpp"
 #include "bench_support.hpp"
+#include "boxing_setup.hpp"
 #include "mgrl/learning/behavior.hpp"
 #include "mgrl/scenario/behaviors.hpp"
 #include "mgrl/core/data_paths.hpp"
@@ -64,15 +65,8 @@ int main(int argc, char** argv) {
     }
   }
   try {
-    // Boxing, both behaviours trained by value iteration into a scratch folder.
-    const fs::path scratch = fs::temp_directory_path() / fmt::format("mgrl-bench-runtime-{}", ::getpid());
-    mgrl::app::TrainOptions train;
-    train.scenario = fs::path(MGRL_SOURCE_DIR) / "scenarios" / "boxing.yaml";
-    train.dataDir = mgrl::dataDirectory("");
-    train.cacheDir = scratch;
-    train.out = scratch / "policy";
-    train.sets = {"behaviors.approach.learner.type=value_iteration", "behaviors.hit.learner.type=value_iteration"};
-    mgrl::app::runTrain(train);
+    const mgrl::app::TrainOptions train = mgrl::bench::trainBoxingByValueIteration("runtime");
+    const fs::path scratch = train.cacheDir;
     mgrl::app::Loaded loaded = mgrl::app::load(train, mgrl::app::checkedScenario(train));
     const mgrl::StateActionModel& model = loaded.graph.model;
     std::vector<mgrl::Behavior> behaviors =

@@ -16,6 +16,7 @@
 
 #include "app/learn_commands.hpp"
 #include "bench_support.hpp"
+#include "boxing_setup.hpp"
 #include "mgrl/core/data_paths.hpp"
 #include "serve/viewer.hpp"
 
@@ -43,14 +44,8 @@ int main(int argc, char** argv) {
     }
   }
   try {
-    const fs::path scratch = fs::temp_directory_path() / fmt::format("mgrl-bench-serve-{}", ::getpid());
-    mgrl::app::TrainOptions train;
-    train.scenario = fs::path(MGRL_SOURCE_DIR) / "scenarios" / "boxing.yaml";
-    train.dataDir = mgrl::dataDirectory("");
-    train.cacheDir = scratch;
-    train.out = scratch / "policy";
-    train.sets = {"behaviors.approach.learner.type=value_iteration", "behaviors.hit.learner.type=value_iteration"};
-    mgrl::app::runTrain(train);
+    const mgrl::app::TrainOptions train = mgrl::bench::trainBoxingByValueIteration("serve");
+    const fs::path scratch = train.cacheDir;
     mgrl::serve::ServeOptions options;
     static_cast<mgrl::app::LearnOptions&>(options) = train;
     options.policy = train.out;

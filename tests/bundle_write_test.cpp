@@ -6,6 +6,7 @@
 #include <unistd.h>
 
 #include <atomic>
+#include <iterator>
 #include <cstdio>
 #include <barrier>
 #include <filesystem>
@@ -44,6 +45,12 @@ std::string sibling(std::string_view stem, std::string_view tag, long pid, std::
   return fmt::format("{}.{}-{}-{}", stem, tag, pid, n);
 }
 
+// How many entries `dir` holds: a bundle's folder has nothing beside it when its parent
+// holds only it.
+std::size_t entriesIn(const fs::path& dir) {
+  return static_cast<std::size_t>(std::distance(fs::directory_iterator(dir), fs::directory_iterator()));
+}
+
 void makeLeftover(const fs::path& path, bool withManifest, const std::string& content) {
   fs::create_directories(path);
   std::ofstream(path / "data.txt") << content;
@@ -67,8 +74,7 @@ TEST_CASE("a replaced bundle is never missing, even for a moment", "[bundle][har
   CHECK(missing == 0);
   CHECK(contentOf(dir) == "version 299");
   // Nothing is left beside it.
-  std::size_t entries = 0;
-  for ([[maybe_unused]] const auto& e : fs::directory_iterator(temp.path)) ++entries;
+  const std::size_t entries = entriesIn(temp.path);
   CHECK(entries == 1);
 }
 
@@ -95,8 +101,7 @@ TEST_CASE("two writers of one bundle both succeed and leave one complete bundle"
     const std::string content = contentOf(dir);
     CHECK((content == "from a" || content == "from b"));
   }
-  std::size_t entries = 0;
-  for ([[maybe_unused]] const auto& e : fs::directory_iterator(temp.path)) ++entries;
+  const std::size_t entries = entriesIn(temp.path);
   CHECK(entries == 3);
 }
 
@@ -134,8 +139,7 @@ TEST_CASE("two processes writing one bundle both succeed", "[bundle][harden]") {
     const std::string content = contentOf(dir);
     CHECK((content == "a" || content == "b"));
   }
-  std::size_t entries = 0;
-  for ([[maybe_unused]] const auto& e : fs::directory_iterator(temp.path)) ++entries;
+  const std::size_t entries = entriesIn(temp.path);
   CHECK(entries == 1);  // nothing left beside it
 }
 
@@ -164,8 +168,7 @@ TEST_CASE("what a killed writer left is recovered or removed, a live writer's is
     makeLeftover(temp.path / sibling("policy", "old", dead, "8"), true, "older");
     writeBundle(dir, "next");
     CHECK(contentOf(dir) == "next");
-    std::size_t entries = 0;
-    for ([[maybe_unused]] const auto& e : fs::directory_iterator(temp.path)) ++entries;
+    const std::size_t entries = entriesIn(temp.path);
     CHECK(entries == 1);
   }
   SECTION("a live process's temporary and names that only look alike are kept") {

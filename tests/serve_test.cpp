@@ -10,10 +10,12 @@
 #include <boost/beast/http.hpp>
 #include <boost/beast/websocket.hpp>
 #include <catch2/catch.hpp>
+#include <fmt/format.h>
 #include <nlohmann/json.hpp>
 
 #include "learn_commands.hpp"
 #include "serve/protocol.hpp"
+#include "serve/serve_command.hpp"
 #include "serve/server.hpp"
 #include "serve/static_files.hpp"
 #include "serve/viewer.hpp"
@@ -411,6 +413,32 @@ TEST_CASE("the server serves the page's files, refuses traversal and other metho
   }
   CHECK(get(running.port(), "/", http::verb::post).status == 405);
   CHECK(get(running.port(), "/", http::verb::head).status == 200);
+}
+
+TEST_CASE("the server refuses a web folder, address or port it cannot use, in one line", "[serve][data]") {
+  const BoxingAssets boxing;
+  test::TempDir web("serve-bad-web");
+  serve::ServerOptions options;
+  options.port = 0;
+  options.webRoot = web.path;
+  REQUIRE_THROWS_WITH(serve::Server(boxing.assets, options),
+                      Catch::Contains("expected the viewer's folder with index.html, found no index.html"));
+  writeFile(web.path / "index.html", "<!doctype html>");
+  REQUIRE_THROWS_WITH(serve::Server(boxing.assets, options),
+                      Catch::Contains("expected three.js in node_modules/three (installed by scripts/setup.sh), found "
+                                      "none: run `npm ci --prefix"));
+  writeFile(web.path / "node_modules" / "three" / "build" / "three.module.js", "export {};");
+  options.host = "localhost:80";
+  REQUIRE_THROWS_WITH(serve::Server(boxing.assets, options), "--host: expected an IP address, found localhost:80");
+  options.host = "127.0.0.1";
+  const serve::Server first(boxing.assets, options);
+  options.port = first.port();  // taken
+  REQUIRE_THROWS_WITH(serve::Server(boxing.assets, options),
+                      Catch::Contains(fmt::format("--port {}: cannot listen on 127.0.0.1:{}: ", first.port(), first.port())));
+
+  serve::ServeCommandOptions command;
+  command.port = 70000;
+  REQUIRE_THROWS_WITH(serve::runServe(command), "--port: expected a port in [0, 65535] (0: any free one), found 70000");
 }
 
 TEST_CASE("hostile pages get an error or a closed socket while a good page keeps receiving frames",

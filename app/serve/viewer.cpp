@@ -276,6 +276,18 @@ std::string ViewerSession::scene() const {
       .dump();
 }
 
+int ViewerSession::behaviorIndex(std::string_view name) const {
+  const auto& behaviors = assets_->behaviors;
+  const auto it = std::find_if(behaviors.begin(), behaviors.end(), [&](const Behavior& b) { return b.name == name; });
+  return it == behaviors.end() ? -1 : static_cast<int>(it - behaviors.begin());
+}
+
+std::string ViewerSession::behaviorNames() const {
+  std::vector<std::string> names;
+  for (const Behavior& b : assets_->behaviors) names.push_back(b.name);
+  return fmt::format("{}", fmt::join(names, ", "));
+}
+
 void ViewerSession::handle(std::string_view text) {
   State& s = *state_;
   const ViewerAssets& a = *assets_;
@@ -308,14 +320,11 @@ void ViewerSession::handle(std::string_view text) {
     } else if (const auto* set = std::get_if<SetWeights>(&message)) {
       std::vector<double> weights = s.weights;
       for (const auto& [name, weight] : set->weights) {
-        const auto it = std::find_if(a.behaviors.begin(), a.behaviors.end(), [&](const Behavior& b) { return b.name == name; });
-        if (it == a.behaviors.end()) {
-          std::vector<std::string> names;
-          for (const Behavior& b : a.behaviors) names.push_back(b.name);
-          throw Error(fmt::format("weights.weights: expected behaviour names from {}, found \"{}\"", fmt::join(names, ", "),
+        const int i = behaviorIndex(name);
+        if (i < 0)
+          throw Error(fmt::format("weights.weights: expected behaviour names from {}, found \"{}\"", behaviorNames(),
                                   name));
-        }
-        weights[static_cast<std::size_t>(it - a.behaviors.begin())] = weight;
+        weights[static_cast<std::size_t>(i)] = weight;
       }
       s.weights = weights;
       applyController();
@@ -332,17 +341,13 @@ void ViewerSession::handle(std::string_view text) {
       if (show->behavior.empty()) {
         s.shown = -1;
       } else {
-        const auto it = std::find_if(a.behaviors.begin(), a.behaviors.end(),
-                                     [&](const Behavior& b) { return b.name == show->behavior; });
-        if (it == a.behaviors.end()) {
-          std::vector<std::string> names;
-          for (const Behavior& b : a.behaviors) names.push_back(b.name);
-          throw Error(fmt::format("values.behavior: expected one of {} or null, found \"{}\"", fmt::join(names, ", "),
+        const int i = behaviorIndex(show->behavior);
+        if (i < 0)
+          throw Error(fmt::format("values.behavior: expected one of {} or null, found \"{}\"", behaviorNames(),
                                   show->behavior));
-        }
         if (a.policy.empty())
           throw Error("values: expected a policy bundle to take values from; this server has none (mgrl train makes one)");
-        s.shown = static_cast<int>(it - a.behaviors.begin());
+        s.shown = i;
         outbox_.push_back(values());
         s.valuesFrame = s.world->frame();
       }

@@ -57,6 +57,9 @@ class ViewerSession {
   void rebuild(Mode mode, int avatars);
   void applyController();
   std::string scene() const;
+  /// The index of the behaviour called `name`, or -1; the names, comma-separated.
+  int behaviorIndex(std::string_view name) const;
+  std::string behaviorNames() const;
   /// The `values` message of the behaviour shown (docs/viewer-protocol.md).
   std::string values() const;
 
