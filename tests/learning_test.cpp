@@ -14,6 +14,7 @@
 #include "mgrl/graph/motion_graph.hpp"
 #include "mgrl/learning/problem.hpp"
 #include "mgrl/core/random.hpp"
+#include "learners/q_learning_steps.hpp"
 #include "test_support.hpp"
 
 namespace mgrl {
@@ -416,6 +417,50 @@ TEST_CASE("Q-learning is deterministic and a resumed run ends with the uninterru
   REQUIRE(finished.table == whole.table);
   REQUIRE(finished.curve.size() == whole.curve.size());
   REQUIRE(finished.curve.back().residual == whole.curve.back().residual);
+}
+
+// Issue 15: the viewer's learn panel steps Q-learning one action at a time. It must be the
+// paper's algorithm, not a look-alike: the same seed and budget end with q_learning's
+// table bit for bit, and every step reports the update rule's own numbers.
+TEST_CASE("Q-learning taken step by step is q_learning, and each step reports its update", "[learning][lesson]") {
+  const RingSetup setup;
+  const Problem& problem = setup.problem;
+  const TrainResult whole = trainWith("{type: q_learning, budget: 2000, seed: 9, curve_points: 4}", problem, setup.tabulated);
+  learners::QLearningSteps steps(problem, 2000, 9);
+  REQUIRE(steps.restarts() == 1);
+  QTable previous = steps.table();
+  std::size_t restarts = 0, futures = 0;
+  while (!steps.done()) {
+    const learners::QStep step = steps.step();
+    REQUIRE(step.vertices.size() == 4);  // a 2-D grid's cell
+    CHECK(step.alpha == Approx(1.0 - static_cast<double>(step.update - 1) / 2000).epsilon(1e-6));
+    REQUIRE(step.action >= setup.model.stateActionBegin[step.state]);
+    REQUIRE(step.action < setup.model.stateActionBegin[step.state + 1]);
+    CHECK(step.nextState == setup.model.actionTo[step.action]);
+    double weights = 0;
+    for (const learners::QStepVertex& v : step.vertices) {
+      weights += v.weight;
+      CHECK(v.before == previous.at(step.action, v.vertex));
+      CHECK(v.backup == Approx(v.reward + v.discount * v.future).margin(1e-6));
+      CHECK(v.after == Approx(v.before + step.alpha * (v.backup - v.before)).margin(1e-6));
+      CHECK(v.after == steps.table().at(step.action, v.vertex));
+      if (!v.nextInside) CHECK(v.future == 0);
+      futures += v.future != 0;
+      previous.at(step.action, v.vertex) = static_cast<float>(v.after);
+    }
+    CHECK(weights == Approx(1.0).margin(1e-5));
+    restarts += step.restarted;
+  }
+  REQUIRE(futures > 0);  // later steps do look ahead into learned values
+  REQUIRE(steps.restarts() == restarts + 1);
+  REQUIRE(steps.touched() > 0);
+  REQUIRE(steps.table() == whole.table);
+  REQUIRE(steps.updates() == 2000);
+  REQUIRE_THROWS_WITH(steps.step(), Catch::Contains("budget of 2000 actions is spent"));
+  // Another seed walks elsewhere.
+  learners::QLearningSteps other(problem, 2000, 10);
+  while (!other.done()) other.step();
+  REQUIRE_FALSE(other.table() == whole.table);
 }
 
 // Issue 19, defect 4: state.json was trusted as it stood. One changed digit of the update

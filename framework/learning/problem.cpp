@@ -18,7 +18,7 @@ double GridModel::trainingBytes(std::size_t actions, std::size_t vertices) {
          static_cast<double>(vertices) * 8 * sizeof(std::uint32_t) + static_cast<double>(actions) * 16;
 }
 
-GridModel GridModel::build(const Problem& problem, unsigned threads) {
+GridModel GridModel::frame(const Problem& problem) {
   const StateActionModel& m = problem.model;
   const Discretizer& grid = problem.grid;
   GridModel g;
@@ -29,8 +29,6 @@ GridModel GridModel::build(const Problem& problem, unsigned threads) {
   g.hanging = grid.hanging();
   g.actionTo = m.actionTo;
   g.stateActionBegin = m.stateActionBegin;
-  const std::size_t pairs = g.vertexCount * g.actionCount;
-  g.transition.assign(pairs, GridTransition{});
   g.discount.resize(g.actionCount);
   const double gamma = problem.reward.gamma();
   for (std::size_t a = 0; a < g.actionCount; ++a)
@@ -46,6 +44,26 @@ GridModel GridModel::build(const Problem& problem, unsigned threads) {
       g.rigid[4 * a + 3] = d.dz;
     }
   }
+  return g;
+}
+
+GridTransition tabulate(const Problem& problem, std::size_t a, const Eigen::Vector3d& vertex) {
+  GridTransition t;
+  t.reward = static_cast<float>(problem.reward.evaluate(problem.model, a, vertex));
+  GridCell cell;
+  if (problem.grid.locate(problem.environment.next(problem.model, a, vertex), cell)) {
+    t.cell = static_cast<std::int32_t>(cell.cell);
+    for (int k = 0; k < 3; ++k) t.frac[k] = cell.frac[k];
+  }
+  return t;
+}
+
+GridModel GridModel::build(const Problem& problem, unsigned threads) {
+  const StateActionModel& m = problem.model;
+  const Discretizer& grid = problem.grid;
+  GridModel g = frame(problem);
+  const std::size_t pairs = g.vertexCount * g.actionCount;
+  g.transition.assign(pairs, GridTransition{});
 
   std::vector<Eigen::Vector3d> vertex(g.vertexCount);
   for (std::size_t v = 0; v < g.vertexCount; ++v) vertex[v] = grid.vertexPosition(v);
@@ -53,15 +71,7 @@ GridModel GridModel::build(const Problem& problem, unsigned threads) {
   parallelFor((g.actionCount + kChunk - 1) / kChunk, threads, [&](std::size_t chunk, unsigned) {
     const std::size_t end = std::min(g.actionCount, (chunk + 1) * kChunk);
     for (std::size_t a = chunk * kChunk; a < end; ++a)
-      for (std::size_t v = 0; v < g.vertexCount; ++v) {
-        GridTransition& t = g.transition[a * g.vertexCount + v];
-        t.reward = static_cast<float>(problem.reward.evaluate(m, a, vertex[v]));
-        GridCell cell;
-        if (grid.locate(problem.environment.next(m, a, vertex[v]), cell)) {
-          t.cell = static_cast<std::int32_t>(cell.cell);
-          for (int k = 0; k < 3; ++k) t.frac[k] = cell.frac[k];
-        }
-      }
+      for (std::size_t v = 0; v < g.vertexCount; ++v) g.transition[a * g.vertexCount + v] = tabulate(problem, a, vertex[v]);
   });
 
   const std::size_t states = m.stateCount();

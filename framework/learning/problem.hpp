@@ -66,7 +66,16 @@ struct GridModel {
 
   /// Tabulates `problem` on `threads` threads. The same inputs give the same bytes.
   static GridModel build(const Problem& problem, unsigned threads);
+  /// Everything build() makes except the per-(action, vertex) transitions and the incoming
+  /// lists: enough for maxInterpolated() and for stepping a walk (rigidNext) when the
+  /// transitions a step needs are computed one by one with tabulate() (the viewer's learn
+  /// panel, which takes a few steps of Q-learning where build() would tabulate them all).
+  static GridModel frame(const Problem& problem);
 };
+
+/// The transition record of action a from the grid vertex at `vertex`: what build() stores
+/// at (a, v), the same bytes.
+GridTransition tabulate(const Problem& problem, std::size_t a, const Eigen::Vector3d& vertex);
 
 /// max over s's out-actions a' of the Q(., a') interpolated at the point with cell
 /// `cell` and fractions `frac` (the paper's "max_a' Q(e', a')").
@@ -79,10 +88,12 @@ void addInterpolated(float* sum, const QTable& q, std::uint32_t s, const Stencil
 
 /// The backup of (action a, vertex v): r(v, a) + gamma^t_a max_a' Q(e'(v, a), a'), with
 /// future value 0 when e' leaves the grid.
-inline float backup(const QTable& q, const GridModel& g, std::size_t a, std::size_t v) {
-  const GridTransition& t = g.transition[a * g.vertexCount + v];
+inline float backup(const QTable& q, const GridModel& g, std::size_t a, const GridTransition& t) {
   if (t.cell < 0) return t.reward;
   return t.reward + g.discount[a] * maxInterpolated(q, g, g.actionTo[a], static_cast<std::uint32_t>(t.cell), t.frac);
+}
+inline float backup(const QTable& q, const GridModel& g, std::size_t a, std::size_t v) {
+  return backup(q, g, a, g.transition[a * g.vertexCount + v]);
 }
 
 /// One Jacobi sweep: out(v, a) = backup of `in` for every pair, in parallel over end
