@@ -250,7 +250,7 @@ int main(int argc, char** argv) {
   compareCommand->add_option("--reference-set", compare.referenceSets,
                              "KEY=VALUE: a parameter of the behaviour's discretizer for the reference only (repeatable), "
                              "e.g. angles=40: value iteration on that grid, interpolated at each table's vertices");
-  compareCommand->add_option("--report", compare.report, "Write index.html (plots), results.json and results.csv here");
+  compareCommand->add_option("--report", compare.report, "Write index.html (plots, learning curves), results.json, results.csv and curves.csv here");
   compareCommand->add_option("--set", compare.sets, "Override a scenario key (repeatable)");
   compareCommand->add_flag("--json", json, "Print one JSON object on stdout");
   compareCommand->add_option("--data", dataDir, "Motion capture folder (default: MGRL_DATA, else ../shared/mocap)");
