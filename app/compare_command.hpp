@@ -20,12 +20,25 @@ struct CompareOptions : LearnOptions {
   std::vector<std::string> learnerSets;    ///< LEARNER:KEY=VALUE
   std::size_t trials = 100;                ///< evaluation trials (the same starts for every run)
   double seconds = 10;                     ///< motion per trial
-  std::filesystem::path report;            ///< "" none; else results.json, results.csv, index.html
+  std::filesystem::path report;            ///< "" none; else results.json, results.csv, curves.csv, index.html
+  /// Policies evaluated along each run's training, at about this many evenly spaced points
+  /// (TrainObserver::snapshot); 0: none.
+  std::size_t snapshots = 10;
+  /// Trials per snapshot: the first of the same starts as the final evaluation; 0: the
+  /// smaller of kDefaultSnapshotTrials and `trials`.
+  std::size_t snapshotTrials = 0;
+  /// KEY=VALUE: parameters of the behaviour's discretizer for the reference only (value
+  /// iteration on a finer grid, say angles=40); empty: the behaviour's own grid.
+  std::vector<std::string> referenceSets;
 };
 
+inline constexpr std::size_t kDefaultSnapshotTrials = 50;
+
 /// Trains (or reuses from <cache>/compare/) and evaluates every learner x seed and returns
-/// {"behavior", "reference", "runs": [...], "learners": {NAME: {"mean": {...}, "sd": {...}}},
-/// "flags": [...]}. Every mistake in the options is reported before any training.
+/// {"behavior", "reference", "runs": [...], "learners": {NAME: {"mean": {...}, "sd": {...},
+/// "success_curve": [...]}}, "flags": [...]}; each run carries its residual "curve" and its
+/// "snapshots" (success rate along training). Every mistake in the options is reported
+/// before any training.
 nlohmann::json runCompare(const CompareOptions& options);
 std::string compareText(const nlohmann::json& report);
 

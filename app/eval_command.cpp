@@ -15,6 +15,7 @@
 #include "mgrl/learning/policy_bundle.hpp"
 #include "mgrl/core/random.hpp"
 #include "plugins.hpp"
+#include "trials.hpp"
 
 namespace mgrl::app {
 
@@ -26,12 +27,6 @@ namespace {
 // Makes a timed loop's result observable, so the compiler cannot drop the calls.
 volatile std::size_t observed = 0;
 void keepResult(std::size_t value) { observed = value; }
-
-struct TrialStats {
-  std::size_t successes = 0, decisions = 0;
-  std::vector<double> hitTimes;
-  double returns = 0;
-};
 
 }  // namespace
 
@@ -58,27 +53,7 @@ json runEval(const EvalOptions& options) {
   std::vector<PolicyPart> parts;
   if (options.controller == "policy") parts = policyParts(dir, behaviors, loaded.graph, options, bundle);
 
-  // The approach region: the first always-active behaviour's grid, sampled uniformly by area.
-  const auto region = std::find_if(behaviors.begin(), behaviors.end(),
-                                   [](const Behavior& b) { return b.activation == Activation::Always; });
-  const Discretizer& regionGrid = *(region != behaviors.end() ? region : behaviors.begin())->discretizer;
-  double reach = 0;
-  for (const GridAxis& axis : regionGrid.axes())
-    if (axis.name == "distance") reach = axis.vertices.back();
-  if (!(reach > 0))
-    throw Error(fmt::format("{}: expected a behaviour whose grid has a distance axis to place targets in, found none",
-                            loaded.scenario.path.string()));
-  // The target's height: given, else that of the effective hitting points' centroid (a
-  // target at punching height, as the user's target in the paper's demo).
-  const double targetHeight = std::isnan(options.targetHeight) ? model.centroid[1] : options.targetHeight;
-  double contactRadius = 0.15;
-  // A hit lands within the first hit reward's contact radius; returns are discounted with
-  // the first behaviour's gamma.
-  for (const Behavior& b : behaviors)
-    if (b.reward->type() == "hit") {
-      contactRadius = b.config["reward"].value("contact_radius", contactRadius);
-      break;
-    }
+  const Trials trials(model, behaviors, options.targetHeight, loaded.scenario.path.string());
   const double gamma = behaviors.front().reward->gamma();
   const StaticTarget environment;
   PolicyController controller(model, parts);
@@ -94,75 +69,15 @@ json runEval(const EvalOptions& options) {
     expanded += search.expanded();
     return a;
   };
-
   auto run = [&](const std::string& kind, std::vector<std::pair<std::uint32_t, Eigen::Vector3d>>* decisions) {
-    Rng starts(options.seed), choices(options.seed ^ 0x5eed5eed5eedULL);
-    TrialStats stats;
-    const double limit = options.seconds / model.frameTime;
-    for (std::size_t trial = 0; trial < options.trials; ++trial) {
-      auto s = static_cast<std::uint32_t>(starts.below(model.stateCount()));
-      Eigen::Vector3d e;
-      do e = {(2 * starts.uniform() - 1) * reach, 0, (2 * starts.uniform() - 1) * reach};
-      while (!regionGrid.inside(e));
-      e.y() = targetHeight;
-      double elapsed = 0, discount = 1, trialReturn = 0;
-      bool hit = false;
-      while (elapsed < limit && !hit) {
-        std::size_t a;
-        if (kind != "random") {
-          if (decisions) decisions->emplace_back(s, e);
-          a = choose(kind, s, e);
-        } else {
-          a = model.stateActionBegin[s] + choices.below(model.stateActionBegin[s + 1] - model.stateActionBegin[s]);
-        }
-        ++stats.decisions;
-        double reward = 0;
-        for (const Behavior& b : behaviors) {
-          if (b.activation == Activation::TargetInside && !b.discretizer->inside(e)) continue;
-          reward += b.weight * b.reward->evaluate(model, a, e);
-        }
-        trialReturn += discount * reward;
-        for (const ActionHit& h : model.hitsOf(a)) {
-          const Eigen::Vector3d fist(h.x, h.y, h.z);
-          if ((fist - e).norm() <= contactRadius) {
-            hit = true;
-            stats.hitTimes.push_back((elapsed + h.offset) * model.frameTime);
-            break;
-          }
-        }
-        const auto frames = static_cast<double>(model.actionLength(a));
-        discount *= std::pow(gamma, frames);
-        elapsed += frames;
-        e = environment.next(model, a, e);
-        s = model.actionTo[a];
-      }
-      stats.successes += hit;
-      stats.returns += trialReturn;
-    }
-    return stats;
-  };
-
-  auto summarize = [&](TrialStats& stats) {
-    std::sort(stats.hitTimes.begin(), stats.hitTimes.end());
-    const std::size_t n = stats.hitTimes.size();
-    double mean = 0;
-    for (double t : stats.hitTimes) mean += t;
-    json times = nullptr, median = nullptr;
-    if (n > 0) {
-      times = mean / static_cast<double>(n);
-      median = n % 2 ? stats.hitTimes[n / 2] : (stats.hitTimes[n / 2 - 1] + stats.hitTimes[n / 2]) / 2;
-    }
-    return json{{"success_rate", static_cast<double>(stats.successes) / static_cast<double>(options.trials)},
-                {"successes", stats.successes},
-                {"mean_time_to_hit_s", times},
-                {"median_time_to_hit_s", median},
-                {"mean_return", stats.returns / static_cast<double>(options.trials)},
-                {"decisions", stats.decisions}};
+    ChooseAction chooser;
+    if (kind != "random") chooser = [&](std::uint32_t s, const Eigen::Vector3d& e) { return choose(kind, s, e); };
+    return trials.run(chooser, options.trials, options.seconds, options.seed, decisions);
   };
 
   std::vector<std::pair<std::uint32_t, Eigen::Vector3d>> decisions;
   TrialStats stats = run(options.controller, options.controller != "random" ? &decisions : nullptr);
-  json report = summarize(stats);
+  json report = Trials::summary(stats);
   if (options.controller == "online_search") {
     report["horizon"] = options.horizon;
     report["horizon_seconds"] = options.horizonSeconds;
@@ -199,12 +114,11 @@ json runEval(const EvalOptions& options) {
   report["trials"] = options.trials;
   report["seed"] = options.seed;
   report["seconds_per_trial"] = options.seconds;
-  report["contact_radius_m"] = contactRadius;
-  report["target_height_m"] = targetHeight;
+  report["contact_radius_m"] = trials.contactRadius();
+  report["target_height_m"] = trials.targetHeight();
   if (options.controller == "policy") report["policy"] = dir.string();
   if (options.controller != "random") {
-    TrialStats baseline = run("random", nullptr);
-    report["random_baseline"] = summarize(baseline);
+    report["random_baseline"] = Trials::summary(run("random", nullptr));
   }
   return report;
 }

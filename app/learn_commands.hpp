@@ -3,6 +3,8 @@
 /// `mgrl train` and `mgrl eval` (DESIGN.md sec. 5).
 #include <cstdint>
 #include <filesystem>
+#include <functional>
+#include <memory>
 #include <limits>
 #include <string>
 #include <vector>
@@ -10,9 +12,16 @@
 #include <nlohmann/json.hpp>
 
 #include "mgrl/core/error.hpp"
+#include "mgrl/learning/learner.hpp"
 #include "mgrl/scenario/scenario.hpp"
 
+namespace mgrl {
+struct Behavior;
+}
+
 namespace mgrl::app {
+
+struct GraphResult;
 
 struct LearnOptions {
   std::filesystem::path scenario, dataDir, cacheDir;
@@ -21,11 +30,27 @@ struct LearnOptions {
   bool progressBar = false;       ///< draw a progress bar on stderr (a terminal)
 };
 
+/// Hears one behaviour's training beside the progress report (compare's snapshot
+/// evaluator): progress and snapshots as a TrainObserver, and a record kept in the bundle.
+class TrainListener : public TrainObserver {
+ public:
+  /// Kept in the behaviour's record in the policy bundle under "snapshots" (null: nothing).
+  virtual nlohmann::json record() const { return nullptr; }
+  /// Appended to the progress line (say, the last snapshot's success rate); "" nothing.
+  virtual std::string status() const { return {}; }
+};
+
+/// Called once per behaviour about to be trained, with the scenario's behaviours and the
+/// graph the tables are for (both outlive the listener); may return null.
+using ListenerFactory = std::function<std::unique_ptr<TrainListener>(
+    const Behavior& trained, const std::vector<Behavior>& all, const GraphResult& graph)>;
+
 struct TrainOptions : LearnOptions {
   std::string behavior;        ///< only this one ("" every behaviour)
   std::filesystem::path out;   ///< policy bundle ("" the default in the cache)
   bool resume = false;         ///< continue from checkpoints left by a killed run
   double maxMemoryBytes = 1e18;  ///< refuse a behaviour whose training would need more
+  ListenerFactory listen;        ///< null: no listener
 };
 
 /// Trains, saves the policy bundle atomically and returns the --json report:

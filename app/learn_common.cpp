@@ -219,10 +219,12 @@ fs::path resolvePolicy(const fs::path& policy, Scenario& scenario, const LearnOp
 }
 
 std::vector<PolicyPart> policyParts(const fs::path& dir, const std::vector<Behavior>& behaviors,
-                                    const GraphResult& graph, const LearnOptions& options, PolicyBundle& bundle) {
+                                    const GraphResult& graph, const LearnOptions& options, PolicyBundle& bundle,
+                                    const std::string& skip) {
   bundle = loadPolicyBundle(dir, graph.model, graph.key);
   std::vector<PolicyPart> parts;
   for (const Behavior& b : behaviors) {
+    if (b.name == skip) continue;
     const auto found = bundle.behaviors.find(b.name);
     if (found == bundle.behaviors.end())
       throw Error(fmt::format("{}: expected a trained table for behaviour '{}' that the scenario asks for, found "

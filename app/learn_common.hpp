@@ -57,8 +57,10 @@ std::filesystem::path resolvePolicy(const std::filesystem::path& policy, Scenari
                                     const LearnOptions& options);
 
 /// Loads the bundle into `bundle` and returns one part per behaviour (pointing into
-/// `bundle` and `behaviors`). Throws mgrl::Error for a missing or stale behaviour.
+/// `bundle` and `behaviors`), in order, leaving out the behaviour named `skip` (compare
+/// supplies that one's table itself). Throws mgrl::Error for a missing or stale behaviour.
 std::vector<PolicyPart> policyParts(const std::filesystem::path& dir, const std::vector<Behavior>& behaviors,
-                                    const GraphResult& graph, const LearnOptions& options, PolicyBundle& bundle);
+                                    const GraphResult& graph, const LearnOptions& options, PolicyBundle& bundle,
+                                    const std::string& skip = {});
 
 }  // namespace mgrl::app

@@ -228,7 +228,9 @@ int main(int argc, char** argv) {
   std::string compareLearners, compareSeeds = "1";
   CLI::App* compareCommand = app.add_subcommand(
       "compare", "Compare learners on one behaviour: train each with each seed on the same graph, evaluate every "
-                 "policy on the same trials, and measure each table against value iteration's on the same grid.");
+                 "policy on the same trials (and snapshots of it along training, for learning curves of success "
+                 "rate), and measure each table against value iteration's on the same grid or a finer one "
+                 "(--reference-set).");
   compareCommand->add_option("SCENARIO", scenarioPath, "Scenario YAML file")->required();
   compareCommand->add_option("--behavior,--behaviour", compare.behavior, "The behaviour whose learner varies")
       ->required();
@@ -239,7 +241,16 @@ int main(int argc, char** argv) {
   compareCommand->add_option("--trials", compare.trials, "Evaluation trials per run (the same starts for all)")
       ->default_val(100);
   compareCommand->add_option("--seconds", compare.seconds, "Motion per trial (s)")->default_val(10);
-  compareCommand->add_option("--report", compare.report, "Write index.html (plots), results.json and results.csv here");
+  compareCommand->add_option("--snapshots", compare.snapshots,
+                             "Policies evaluated along each run's training, at about this many evenly spaced points, "
+                             "for the success-rate learning curves (0: none)")
+      ->default_val(10);
+  compareCommand->add_option("--snapshot-trials", compare.snapshotTrials,
+                             "Trials per snapshot: the first of the same starts (default: 50, at most --trials)");
+  compareCommand->add_option("--reference-set", compare.referenceSets,
+                             "KEY=VALUE: a parameter of the behaviour's discretizer for the reference only (repeatable), "
+                             "e.g. angles=40: value iteration on that grid, interpolated at each table's vertices");
+  compareCommand->add_option("--report", compare.report, "Write index.html (plots, learning curves), results.json, results.csv and curves.csv here");
   compareCommand->add_option("--set", compare.sets, "Override a scenario key (repeatable)");
   compareCommand->add_flag("--json", json, "Print one JSON object on stdout");
   compareCommand->add_option("--data", dataDir, "Motion capture folder (default: MGRL_DATA, else ../shared/mocap)");
@@ -399,6 +410,8 @@ int main(int argc, char** argv) {
           throw mgrl::Error(fmt::format("--seeds: expected whole numbers >= 0 separated by commas, found '{}'", word));
         compare.seeds.push_back(value);
       }
+      if (compareCommand->get_option("--snapshot-trials")->count() > 0 && compare.snapshotTrials == 0)
+        throw mgrl::Error("--snapshot-trials: expected a number of trials of at least 1, found 0");
       const nlohmann::json report = mgrl::app::runCompare(compare);
       if (json)
         std::cout << report.dump(2) << '\n';

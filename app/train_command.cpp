@@ -34,13 +34,19 @@ namespace {
 // every 10 s through the log.
 class ProgressReporter final : public TrainObserver {
  public:
-  ProgressReporter(std::string name, bool bar, WarningSink log)
-      : name_(std::move(name)), bar_(bar), log_(std::move(log)), start_(Clock::now()) {}
+  ProgressReporter(std::string name, bool bar, WarningSink log, TrainListener* listener)
+      : name_(std::move(name)), bar_(bar), log_(std::move(log)), listener_(listener), start_(Clock::now()) {}
   ~ProgressReporter() override {
     if (drawn_) std::cerr << '\n';
   }
 
+  std::size_t snapshotCount() const override { return listener_ ? listener_->snapshotCount() : 0; }
+  void snapshot(const QTable& table, const CurvePoint& point, const Discretizer* grid) override {
+    if (listener_) listener_->snapshot(table, point, grid);
+  }
+
   void progress(const TrainProgress& p) override {
+    if (listener_) listener_->progress(p);
     const double now = since(start_);
     const bool done = p.total > 0 && p.updates >= p.total;
     if (!done && now - last_ < (bar_ ? 0.2 : 10.0)) return;
@@ -60,6 +66,10 @@ class ProgressReporter final : public TrainObserver {
       line = fmt::format("{}: {}updates  {}updates/s{}", name_, humanCount(p.updates), humanCount(rate),
                          p.residual < 0 ? std::string() : fmt::format("  largest change {:.3g}", p.residual));
     }
+    if (listener_) {
+      const std::string status = listener_->status();
+      if (!status.empty()) line += "  " + status;
+    }
     if (bar_) {
       std::cerr << '\r' << line << "\x1b[K" << std::flush;
       drawn_ = true;
@@ -72,6 +82,7 @@ class ProgressReporter final : public TrainObserver {
   std::string name_;
   bool bar_;
   WarningSink log_;
+  TrainListener* listener_;
   Clock::time_point start_;
   double last_ = -1e9;
   bool drawn_ = false;
@@ -330,8 +341,9 @@ json runTrain(const TrainOptions& options) {
     CrashTestCheckpointer checkpointer(directory, behavior.name, options.log);
     checkpoints.push_back(directory.directory());
     std::optional<TrainResult> trained;
+    std::unique_ptr<TrainListener> listener = options.listen ? options.listen(behavior, all, loaded.graph) : nullptr;
     {
-      ProgressReporter progress(behavior.name, options.progressBar, options.log);
+      ProgressReporter progress(behavior.name, options.progressBar, options.log, listener.get());
       try {
         trained = behavior.learner->train({problem, grid, &progress, &checkpointer, threads, &stopRequested});
       } catch (const TrainInterrupted& stop) {
@@ -365,6 +377,10 @@ json runTrain(const TrainOptions& options) {
     record["grid"] = tableGrid.describe();
     record["curve_columns"] = {"updates", "seconds", "residual", "mean_residual"};
     record["curve"] = curve;
+    if (listener) {
+      json snapshots = listener->record();
+      if (!snapshots.is_null()) record["snapshots"] = std::move(snapshots);
+    }
     bundle.behaviors[behavior.name] = PolicyBehavior{behavior.key,          record,
                                                      std::move(result.table), vertexPositions(tableGrid),
                                                      tableGrid.type(),      tableGrid.structure(),

@@ -179,7 +179,8 @@ TrainResult AdaptiveValueIteration::train(const TrainContext& context) const {
   const Problem& problem = context.problem;
   const unsigned threads = threads_ > 0 ? threads_ : context.threads;
   const auto start = Clock::now();
-  auto elapsed = [&] { return std::chrono::duration<double>(Clock::now() - start).count(); };
+  double paused = 0;  // spent on snapshots (TrainObserver::snapshot): not training
+  auto elapsed = [&] { return std::chrono::duration<double>(Clock::now() - start).count() - paused; };
   checkGrid(problem.grid);
   if (problem.grid.vertexCount() > maxVertices_)
     throw Error(fmt::format("adaptive_value_iteration: max_vertices: expected at least the initial tree's {} "
@@ -215,6 +216,8 @@ TrainResult AdaptiveValueIteration::train(const TrainContext& context) const {
       if (change < tolerance_) break;
     }
     totalSweeps += sweeps;
+    if (snapshotsWanted(context.observer) > 0)  // one per round: the values converged on this tree
+      paused += takeSnapshot(*context.observer, q, result.curve.back(), grid == &problem.grid ? nullptr : grid);
     nlohmann::json record = {{"vertices", grid->vertexCount()},
                              {"leaves", grid->cellCount()},
                              {"hanging_vertices", grid->hanging().size()},

@@ -182,10 +182,16 @@ TrainResult QLearning::train(const TrainContext& context) const {
   if (!resumed) restart(walk);
 
   const auto start = Clock::now();
-  auto elapsed = [&] { return secondsBefore + std::chrono::duration<double>(Clock::now() - start).count(); };
+  double paused = 0;  // spent on snapshots: not training
+  auto elapsed = [&] { return secondsBefore + std::chrono::duration<double>(Clock::now() - start).count() - paused; };
   auto curveAt = [&](std::uint64_t i) { return total * i / curvePoints_; };
   std::uint64_t nextCurveIndex = 1;
   while (nextCurveIndex <= curvePoints_ && curveAt(nextCurveIndex) <= walk.updates) ++nextCurveIndex;
+  // Snapshots for an observer that wants them, at budget * i / n; none before a resume point.
+  const std::uint64_t snapshots = snapshotsWanted(context.observer);
+  auto snapshotAt = [&](std::uint64_t i) { return total * i / snapshots; };
+  std::uint64_t nextSnapshotIndex = 1;
+  while (nextSnapshotIndex <= snapshots && snapshotAt(nextSnapshotIndex) <= walk.updates) ++nextSnapshotIndex;
   double lastResidual = result.curve.empty() ? -1 : result.curve.back().residual;
 
   constexpr std::uint64_t kProgressEvery = 1 << 16;
@@ -286,6 +292,12 @@ TrainResult QLearning::train(const TrainContext& context) const {
         stop = std::min(stop, curveAt(i));
         break;
       }
+    // The same for snapshots: where chunks end does not change the table.
+    for (std::uint64_t i = std::max<std::uint64_t>(1, snapshots > 0 ? from * snapshots / total : 1); i <= snapshots; ++i)
+      if (snapshotAt(i) > from) {
+        stop = std::min(stop, snapshotAt(i));
+        break;
+      }
     if (checkpointEvery_ > 0) stop = std::min(stop, (from / checkpointEvery_ + 1) * checkpointEvery_);
     return stop;
   };
@@ -323,6 +335,20 @@ TrainResult QLearning::train(const TrainContext& context) const {
       result.curve.push_back({walk.updates, elapsed(), r.max, r.mean});
       lastResidual = r.max;
       ++nextCurveIndex;
+    }
+    while (nextSnapshotIndex <= snapshots && snapshotAt(nextSnapshotIndex) < walk.updates) ++nextSnapshotIndex;
+    if (nextSnapshotIndex <= snapshots && walk.updates == snapshotAt(nextSnapshotIndex)) {
+      const auto before = Clock::now();
+      // The residual of a curve point taken here, else one measured for the snapshot alone.
+      CurvePoint point = !result.curve.empty() && result.curve.back().updates == walk.updates ? result.curve.back()
+                                                                                              : CurvePoint{};
+      if (point.updates != walk.updates) {
+        const Residual r = bellmanResidual(q, g, threads);
+        paused += std::chrono::duration<double>(Clock::now() - before).count();
+        point = {walk.updates, elapsed(), r.max, r.mean};
+      }
+      paused += takeSnapshot(*context.observer, q, point);
+      while (nextSnapshotIndex <= snapshots && snapshotAt(nextSnapshotIndex) <= walk.updates) ++nextSnapshotIndex;
     }
     const bool stopping = context.stop && context.stop->load(std::memory_order_relaxed) && walk.updates < total;
     // A chunk ends where an uninterrupted run's chunk ends too, so a checkpoint saved on

@@ -1,7 +1,9 @@
 // value_iteration: the q_learning backup (paper sec. 4.2) swept over every (vertex,
 // action) pair until nothing changes more than a tolerance: the exact answer on the grid,
 // the reference other learners are measured against (DESIGN.md sec. 4).
+#include <algorithm>
 #include <chrono>
+#include <cmath>
 
 #include "learners.hpp"
 
@@ -27,7 +29,11 @@ class ValueIteration final : public Learner {
     const GridModel& g = context.grid;
     const unsigned threads = threads_ > 0 ? threads_ : context.threads;
     const auto start = Clock::now();
-    auto elapsed = [&] { return std::chrono::duration<double>(Clock::now() - start).count(); };
+    double paused = 0;  // spent on snapshots: not training
+    auto elapsed = [&] { return std::chrono::duration<double>(Clock::now() - start).count() - paused; };
+    const std::size_t snapshots = snapshotsWanted(context.observer);
+    std::size_t taken = 0;
+    double previousChange = 0;
     TrainResult result;
     QTable current(context.problem.model, g.vertexCount), next = current;
     const std::uint64_t pairs = static_cast<std::uint64_t>(g.vertexCount) * g.actionCount;
@@ -41,6 +47,21 @@ class ValueIteration final : public Learner {
       ++sweeps;
       result.curve.push_back({sweeps * pairs, elapsed(), change, 0});
       if (context.observer) context.observer->progress({sweeps * pairs, 0, elapsed(), change});
+      if (snapshots > 0) {
+        // The sweep count is not known ahead, but the change shrinks by a nearly constant
+        // factor per sweep: the sweeps left are estimated from the last two changes, and a
+        // snapshot taken at each n-th of the estimated total (and at the last sweep).
+        double estimate = static_cast<double>(maxSweeps_);
+        if (sweeps >= 2 && change > 0 && change < previousChange)
+          estimate = std::min(estimate, static_cast<double>(sweeps) + std::max(0.0, std::log(tolerance_ / change) /
+                                                                                         std::log(change / previousChange)));
+        const bool last = change < tolerance_ || sweeps == maxSweeps_;
+        if (last || static_cast<double>(sweeps) >= estimate * static_cast<double>(taken + 1) / static_cast<double>(snapshots)) {
+          paused += takeSnapshot(*context.observer, current, result.curve.back());
+          ++taken;
+        }
+      }
+      previousChange = change;
       // Sweeps are short and need no checkpoint: a stopped run starts over.
       if (context.stop && context.stop->load(std::memory_order_relaxed) && change >= tolerance_)
         throw TrainInterrupted(sweeps * pairs, 0, false);

@@ -314,6 +314,30 @@ TEST_CASE("adaptive_value_iteration is deterministic whatever the thread count",
   REQUIRE(one.result.stats == two.result.stats);
 }
 
+// Issue 15: a snapshot at the end of each refinement round, with the tree its table is on.
+TEST_CASE("adaptive_value_iteration hands out a snapshot per round on its current tree", "[adaptive]") {
+  struct Recorder final : TrainObserver {
+    std::size_t snapshotCount() const override { return 10; }
+    void snapshot(const QTable& table, const CurvePoint& point, const Discretizer* grid) override {
+      vertices.push_back(table.vertexCount());
+      gridVertices.push_back(grid ? grid->vertexCount() : 0);
+      updates.push_back(point.updates);
+    }
+    std::vector<std::size_t> vertices, gridVertices;
+    std::vector<std::uint64_t> updates;
+  } recorder;
+  const std::string grid = "{type: kd_tree, coordinates: polar, height: 1, angle_cells: 4, distance_cells: 4}";
+  const std::string learner = "{type: adaptive_value_iteration, max_vertices: 200}";
+  const Solved plain(grid, learner);
+  const TrainResult observed = plain.learner->train({plain.problem, plain.tabulated, &recorder, nullptr, 2});
+  REQUIRE(observed.table == plain.result.table);
+  REQUIRE(recorder.vertices.size() == plain.result.stats["rounds"].size());
+  CHECK(recorder.gridVertices.front() == 0);  // round 0 is on the problem's own grid
+  CHECK(recorder.vertices.back() == plain.tree().vertexCount());
+  for (std::size_t i = 1; i < recorder.vertices.size(); ++i) CHECK(recorder.gridVertices[i] == recorder.vertices[i]);
+  CHECK(recorder.updates.back() == plain.result.updates);
+}
+
 TEST_CASE("a refined kd_tree round-trips through a policy bundle and a corrupt tree is refused", "[adaptive][kd_tree]") {
   const Solved solved("{type: kd_tree, coordinates: polar, height: 1, angle_cells: 4, distance_cells: 4}",
                       "{type: adaptive_value_iteration, max_vertices: 150}");

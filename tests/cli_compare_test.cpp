@@ -3,6 +3,7 @@
 // bundles, the report folder holds the plots and tables, and mistakes are refused in one
 // line before anything is trained.
 #include <filesystem>
+#include <fstream>
 #include <string>
 
 #include <catch2/catch.hpp>
@@ -60,10 +61,41 @@ TEST_CASE("mgrl compare reports what separate train and eval runs measure, and r
   CHECK(means["success_rate"].get<double>() ==
         Approx((q1["success_rate"].get<double>() + report["runs"][1]["success_rate"].get<double>()) / 2));
 
+  // Learning curves: 10 snapshots per run (the default), each evaluated on the first 20 of
+  // the same starts (the default 50, capped by --trials 20); q_learning's at budget * i / 10.
+  CHECK(report["snapshots"] == 10);
+  CHECK(report["snapshot_trials"] == 20);
+  for (const json& run : report["runs"]) {
+    INFO(run["learner"].dump() + " seed " + run["seed"].dump());
+    REQUIRE(run["snapshots"].is_object());
+    const json& points = run["snapshots"]["points"];
+    REQUIRE(points.size() >= 3);
+    for (const json& p : points) {
+      CHECK(p[3].get<double>() >= 0);
+      CHECK(p[3].get<double>() <= 1);
+    }
+    // The last snapshot is of the final table, on the same 20 trials as the final evaluation.
+    CHECK(points.back()[0] == run["updates"]);
+    CHECK(points.back()[3] == run["success_rate"]);
+    CHECK(points.back()[5] == run["mean_return"]);
+    if (run["learner"] == "q_learning") {
+      REQUIRE(points.size() == 10);
+      for (std::size_t i = 0; i < 10; ++i) CHECK(points[i][0] == 300000 * (i + 1) / 10);
+    }
+  }
+  CHECK(report["learners"]["q_learning"]["success_curve"].size() == 10);
+
+
   // The report: the tables and a plot per metric, nothing fetched from the network.
   const std::string html = readText(box.path("report") / "index.html");
   CHECK(html.find("<svg") != std::string::npos);
   CHECK(html.find("Bellman residual against updates") != std::string::npos);
+  CHECK(html.find("Bellman residual against training seconds") != std::string::npos);
+  CHECK(html.find("Success rate against updates") != std::string::npos);
+  CHECK(html.find("Success rate against training seconds") != std::string::npos);
+  const std::string curves = readText(box.path("report") / "curves.csv");
+  CHECK(curves.find("q_learning,2,snapshot,300000,") != std::string::npos);
+  CHECK(curves.find("q_learning,1,training,") != std::string::npos);
   CHECK(html.find("src=") == std::string::npos);  // self-contained: it opens from disk, offline
   CHECK(html.find("href=\"http") == std::string::npos);
   CHECK(readText(box.path("report") / "results.csv").find("q_learning,2,") != std::string::npos);
@@ -74,6 +106,72 @@ TEST_CASE("mgrl compare reports what separate train and eval runs measure, and r
   REQUIRE(again.status == 0);
   CHECK(again.err.find("train hit:") == std::string::npos);
   CHECK(again.report()["runs"][0]["success_rate"] == q1["success_rate"]);
+  CHECK(again.report()["runs"][0]["snapshots"] == q1["snapshots"]);  // kept in the cached bundle
+  CHECK(again.err.find("success % along training") != std::string::npos);
+}
+
+// A bundle cached before snapshots were recorded (or with other snapshot settings) still
+// loads; when snapshots are asked for, its run is trained again to take them: the same table.
+TEST_CASE("mgrl compare reuses bundles cached without snapshots and retrains them when curves are asked for",
+          "[cli][data]") {
+  Sandbox box;
+  const std::string compare = "compare " + shellWord(kBoxing) + " --behavior hit --learners q_learning " +
+                              "--learner-set q_learning:budget=200000 --trials 10 --json " + kFastApproach;
+  const json first = box.run(compare + " --snapshots 4").report();
+  REQUIRE(first["runs"][0]["snapshots"]["points"].size() == 4);
+  // Make it an old entry: no "snapshots" in its record.
+  const fs::path manifest = fs::path(first["runs"][0]["policy"].get<std::string>()) / "manifest.json";
+  json m = json::parse(readText(manifest));
+  REQUIRE(m["behaviors"]["hit"]["record"].erase("snapshots") == 1);
+  std::ofstream(manifest) << m.dump(2);
+
+  const Run without = box.run(compare + " --snapshots 0");
+  REQUIRE(without.status == 0);
+  CHECK(without.err.find("train hit:") == std::string::npos);  // loaded, not trained
+  CHECK(without.report()["runs"][0]["snapshots"].is_null());
+  CHECK(without.report()["runs"][0]["value_rmse"] == first["runs"][0]["value_rmse"]);
+
+  const Run with = box.run(compare + " --snapshots 4");
+  REQUIRE(with.status == 0);
+  CHECK(with.err.find("no snapshots taken with these settings; training again") != std::string::npos);
+  const json withReport = with.report();
+  const json& again = withReport["runs"][0]["snapshots"]["points"];
+  REQUIRE(again.size() == 4);
+  for (std::size_t i = 0; i < 4; ++i) {  // the same tables on the same trials (the seconds differ)
+    CHECK(again[i][0] == first["runs"][0]["snapshots"]["points"][i][0]);
+    CHECK(again[i][3] == first["runs"][0]["snapshots"]["points"][i][3]);
+  }
+  CHECK(withReport["runs"][0]["value_rmse"] == first["runs"][0]["value_rmse"]);  // the same table
+  // Other snapshot settings: trained again too.
+  const Run other = box.run(compare + " --snapshots 4 --snapshot-trials 5");
+  REQUIRE(other.status == 0);
+  CHECK(other.err.find("training again") != std::string::npos);
+  CHECK(other.report()["snapshot_trials"] == 5);
+}
+
+// --reference-set: value iteration on a finer grid, read at each table's vertices.
+TEST_CASE("mgrl compare measures tables against value iteration on a finer grid", "[cli][data]") {
+  Sandbox box;
+  const std::string compare = "compare " + shellWord(kBoxing) +
+                              " --behavior hit --learners value_iteration --trials 10 --snapshots 3 --json " +
+                              kFastApproach;
+  // The behaviour's grid given explicitly is the same grid: vertex by vertex, no difference.
+  const json same = box.run(compare + " --reference-set angles=20").report();
+  CHECK(same["runs"][0]["value_rmse"] == 0.0);
+  CHECK(same["runs"][0]["greedy_agreement"] == 1.0);
+  CHECK(same["runs"][0]["reference_interpolated"] == false);
+  // A finer grid (the coarse angles and heights halved): interpolated at the coarse vertices.
+  const json finer =
+      box.run(compare + " --reference-set angles=39 --reference-set heights=11").report();
+  const json& reference = finer["reference"];
+  CHECK(reference["vertices"] == 39 * 16 * 11);
+  CHECK_THAT(reference["description"].get<std::string>(), Contains("interpolated at each table's vertices"));
+  const json& run = finer["runs"][0];
+  CHECK(run["reference_interpolated"] == true);
+  CHECK(run["value_rmse"].get<double>() > 0);  // the coarse grid's values are not the fine grid's
+  CHECK(run["value_rmse"].get<double>() < 0.5);
+  CHECK(run["greedy_agreement"].get<double>() > 0.3);
+  CHECK(run["greedy_agreement"].get<double>() < 1.0);
 }
 
 TEST_CASE("mgrl compare refuses mistakes in one line before training anything", "[cli][data]") {
@@ -91,6 +189,22 @@ TEST_CASE("mgrl compare refuses mistakes in one line before training anything", 
       {"compare " + shellWord(kBoxing) + " --behavior kick --learners q_learning",
        "--behavior: expected one of the scenario's behaviours (approach, hit), found 'kick'"},
       {base + "--learners q_learning --report /proc/mgrl-report", "--report /proc/mgrl-report: expected a folder"},
+      {base + "--learners q_learning --snapshots 5000", "--snapshots: expected a number of snapshots per run in [0, 1000], found 5000"},
+      {base + "--learners q_learning --trials 20 --snapshot-trials 30",
+       "--snapshot-trials: expected at most --trials (20): snapshots are evaluated on the first of the same trial "
+       "starts, found 30"},
+      {base + "--learners q_learning --snapshot-trials 0", "--snapshot-trials: expected a number of trials of at least 1, found 0"},
+      {base + "--learners q_learning --reference-set angles",
+       "--reference-set: expected KEY=VALUE, KEY a parameter of behaviors.hit.discretizer (e.g. angles=40), found 'angles'"},
+      {base + "--learners q_learning --reference-set learner.tolerance=1e-6",
+       "--reference-set: expected KEY=VALUE, KEY a parameter of behaviors.hit.discretizer (e.g. angles=40), found "
+       "'learner.tolerance=1e-6'"},
+      {base + "--learners q_learning --reference-set anglez=40", "--reference-set: "},
+      {base + "--learners q_learning --reference-set angles=1", "--reference-set: "},
+      // A reference that does not cover the behaviour's grid (checked once the graph is loaded).
+      {base + "--learners q_learning --reference-set bounds=given --reference-set angle_min=-10 "
+              "--reference-set angle_max=10",
+       "--reference-set: expected a reference grid that covers behaviors.hit's grid, found its vertex 0 at angle"},
       // A learner that does not fit the behaviour's grid (checked once the graph is loaded).
       {base + "--learners q_learning,adaptive_value_iteration",
        "--learners adaptive_value_iteration: behaviors.hit: adaptive_value_iteration: expected a discretizer that can "

@@ -463,6 +463,86 @@ TEST_CASE("Q-learning taken step by step is q_learning, and each step reports it
   REQUIRE_FALSE(other.table() == whole.table);
 }
 
+namespace {
+
+// Keeps what each snapshot showed: its point, the table's value sum and its grid.
+class SnapshotRecorder final : public TrainObserver {
+ public:
+  explicit SnapshotRecorder(std::size_t wanted) : wanted_(wanted) {}
+  std::size_t snapshotCount() const override { return wanted_; }
+  void snapshot(const QTable& table, const CurvePoint& point, const Discretizer* grid) override {
+    points.push_back(point);
+    double sum = 0;
+    for (float x : table.values()) sum += x;
+    sums.push_back(sum);
+    grids.push_back(grid);
+  }
+  std::vector<CurvePoint> points;
+  std::vector<double> sums;
+  std::vector<const Discretizer*> grids;
+
+ private:
+  std::size_t wanted_;
+};
+
+TrainResult trainObserved(const std::string& learnerYaml, const Problem& problem, const GridModel& g,
+                          TrainObserver& observer) {
+  return app::plugins().learners.create(yaml(learnerYaml))->train({problem, g, &observer, nullptr, 2});
+}
+
+}  // namespace
+
+// Issue 15: learning curves of success rate need the table along training. Learners hand
+// out snapshots at about n evenly spaced points only to an observer that asks, and train
+// the same table either way.
+TEST_CASE("learners hand out snapshots along training and train the same table", "[learning]") {
+  SECTION("q_learning: at budget * i / n, the last the final table") {
+    const RingSetup setup;
+    for (std::size_t n : {std::size_t{1}, std::size_t{3}, std::size_t{7}}) {
+      CAPTURE(n);
+      // curve_points 4 and checkpoint_every 600 do not line up with sevenths: chunks end at both.
+      const TrainResult plain = trainWith(kRingLearner, setup.problem, setup.tabulated);
+      SnapshotRecorder recorder(n);
+      const TrainResult observed = trainObserved(kRingLearner, setup.problem, setup.tabulated, recorder);
+      REQUIRE(observed.table == plain.table);
+      REQUIRE(observed.curve.size() == plain.curve.size());
+      for (std::size_t i = 0; i < plain.curve.size(); ++i) REQUIRE(observed.curve[i].residual == plain.curve[i].residual);
+      REQUIRE(recorder.points.size() == n);
+      for (std::size_t i = 0; i < n; ++i) {
+        CHECK(recorder.points[i].updates == 2000 * (i + 1) / n);
+        CHECK(recorder.points[i].residual > 0);
+        CHECK(recorder.grids[i] == nullptr);
+        if (i > 0) CHECK(recorder.points[i].seconds >= recorder.points[i - 1].seconds);
+      }
+      double sum = 0;
+      for (float x : plain.table.values()) sum += x;
+      CHECK(recorder.sums.back() == sum);
+      // At a curve point (2000 * 1 / 1 = the last of 4) its residual is the curve's.
+      if (n == 1) CHECK(recorder.points.back().residual == plain.curve.back().residual);
+    }
+    // Nobody listening (snapshotCount() 0): no snapshot.
+    SnapshotRecorder none(0);
+    trainObserved(kRingLearner, setup.problem, setup.tabulated, none);
+    CHECK(none.points.empty());
+  }
+  SECTION("value_iteration: about n of its sweeps, the last one always") {
+    const CorridorSetup parts(2);
+    const std::string learner = "{type: value_iteration, tolerance: 1e-7}";
+    const TrainResult plain = trainWith(learner, parts.problem, parts.tabulated);
+    const std::size_t sweeps = plain.stats["sweeps"].get<std::size_t>();
+    REQUIRE(sweeps >= 20);
+    SnapshotRecorder recorder(5);
+    const TrainResult observed = trainObserved(learner, parts.problem, parts.tabulated, recorder);
+    REQUIRE(observed.table == plain.table);
+    CAPTURE(sweeps, recorder.points.size());
+    CHECK(recorder.points.size() >= 3);
+    CHECK(recorder.points.size() <= 8);
+    CHECK(recorder.points.back().updates == plain.updates);
+    CHECK(recorder.points.back().residual == plain.curve.back().residual);
+    for (std::size_t i = 1; i < recorder.points.size(); ++i) CHECK(recorder.points[i].updates > recorder.points[i - 1].updates);
+  }
+}
+
 // Issue 19, defect 4: state.json was trusted as it stood. One changed digit of the update
 // count or of the generator resumed a different run without a word, and a missing,
 // mistyped or out-of-range member aborted training. Now the checkpoint's hash and the

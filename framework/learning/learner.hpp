@@ -5,6 +5,7 @@
 /// leaves through a TrainObserver, and long runs save their whole state through a
 /// Checkpointer so that a resumed run ends with the same table as an uninterrupted one.
 #include <atomic>
+#include <chrono>
 #include <cstdint>
 #include <functional>
 #include <memory>
@@ -41,7 +42,36 @@ class TrainObserver {
   virtual ~TrainObserver() = default;
   /// Called often (at most every few milliseconds of work); cheap.
   virtual void progress(const TrainProgress&) {}
+
+  /// How many snapshots of the table this observer wants along training (0, the default:
+  /// none, and learners then do no extra work). Learners take them at about this many
+  /// evenly spaced points of their work (q_learning: budget * i / n for i = 1..n;
+  /// value_iteration: its sweep count estimated from the shrinking change, the last sweep
+  /// always; adaptive_value_iteration: the end of each refinement round), so a learning
+  /// curve can be measured on policies, not only on residuals.
+  virtual std::size_t snapshotCount() const { return 0; }
+  /// The table as it stands at a snapshot point: `point` has the updates and training
+  /// seconds so far and the Bellman residual there; `grid` is the grid the table's
+  /// vertices belong to when the learner refined it (null: the problem's own grid). The
+  /// table is valid only during the call. Learners leave the time spent here (and on a
+  /// residual measured only for it) out of their training seconds, and train the same
+  /// table as without snapshots.
+  virtual void snapshot(const QTable& table, const CurvePoint& point, const Discretizer* grid) {
+    (void)table, (void)point, (void)grid;
+  }
 };
+
+/// The number of snapshots `observer` wants (0 for none or no observer).
+inline std::size_t snapshotsWanted(const TrainObserver* observer) { return observer ? observer->snapshotCount() : 0; }
+
+/// Gives `observer` a snapshot and returns the seconds it took, for the learner to leave
+/// out of its training time.
+inline double takeSnapshot(TrainObserver& observer, const QTable& table, const CurvePoint& point,
+                           const Discretizer* grid = nullptr) {
+  const auto start = std::chrono::steady_clock::now();
+  observer.snapshot(table, point, grid);
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+}
 
 /// A learner's check of its own saved state, run by Checkpointer::loadChecked() before the
 /// state or table is used: reads every member it will trust (presence, type, range) and

@@ -1,5 +1,6 @@
 // The `mgrl compare` report (issue 15) in headless Chromium: it opens from disk with no
-// network, and every plot is drawn (each SVG has a size and shapes in it).
+// network, and every plot is drawn (each SVG has a size and shapes in it), the learning
+// curves with a line per run.
 //
 //   node tests/web/report_test.mjs REPORT_DIR [SCREENSHOT.png]
 import {createRequire} from 'node:module';
@@ -14,7 +15,11 @@ if (!reportDir) {
   console.error('usage: node tests/web/report_test.mjs REPORT_DIR [SCREENSHOT.png]');
   process.exit(2);
 }
-const kMetrics = 11;  // bar charts, one per metric in app/compare_command.cpp, plus the residual curve
+const kMetrics = 11;  // bar charts, one per metric in app/compare_report.cpp
+// The learning curves, every run on one plot each (issue 15): success rate from the
+// snapshots along training, Bellman residual as recorded, against updates and seconds.
+const kCurves = ['Success rate against updates', 'Success rate against training seconds',
+                 'Bellman residual against updates', 'Bellman residual against training seconds'];
 
 const timer = setTimeout(() => {
   console.error('report_test: no result within 60 s');
@@ -43,13 +48,25 @@ try {
   await page.goto(pathToFileURL(path.resolve(reportDir, 'index.html')).href);
   const plots = await page.evaluate(() => [...document.querySelectorAll('svg')].map((svg) => {
     const box = svg.getBoundingClientRect();
-    const shapes = svg.querySelectorAll('rect, polyline, line').length;
-    return {label: svg.getAttribute('aria-label'), width: box.width, height: box.height, shapes};
+    const shapes = svg.querySelectorAll('rect, polyline, line, circle').length;
+    // Each line's drawn points (a polyline with fewer than 2 draws nothing).
+    const lines = [...svg.querySelectorAll('polyline')].map(
+        (p) => p.getAttribute('points').trim().split(/\s+/).filter((xy) => xy.length > 0).length);
+    const dots = svg.querySelectorAll('circle').length;
+    return {label: svg.getAttribute('aria-label'), width: box.width, height: box.height, shapes, lines, dots};
   }));
   // A metric no learner recorded (bundles from before it existed) has no plot.
-  check(plots.length >= kMetrics - 2 && plots.length <= kMetrics + 1,
-        `the report has a plot per metric recorded and the residual curve (${kMetrics + 1} at most)`,
-        `found ${plots.length}`);
+  check(plots.length >= kMetrics - 2 + kCurves.length && plots.length <= kMetrics + kCurves.length,
+        `the report has a plot per metric recorded and the ${kCurves.length} learning curves ` +
+        `(${kMetrics + kCurves.length} at most)`, `found ${plots.length}`);
+  for (const label of kCurves) {
+    const plot = plots.find((p) => p.label === label);
+    const drawn = plot ? plot.lines.filter((n) => n >= 2).length : 0;
+    check(plot && drawn >= 2, `"${label}" has a line of at least 2 points per learner`,
+          plot ? `lines of ${plot.lines.join(', ')} points` : 'no such plot');
+    if (label.startsWith('Success rate'))
+      check(plot && plot.dots >= 2 * 5, `"${label}" marks each snapshot`, plot ? `${plot.dots} dots` : '');
+  }
   for (const plot of plots)
     check(plot.width > 100 && plot.height > 40 && plot.shapes > 0, `plot "${plot.label}" is drawn`,
           `${plot.width}x${plot.height} px, ${plot.shapes} shapes`);

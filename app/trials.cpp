@@ -1,0 +1,112 @@
+// The trials `mgrl eval` reports and `mgrl compare` evaluates snapshots with (trials.hpp).
+#include "trials.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+#include <fmt/format.h>
+
+#include "mgrl/core/error.hpp"
+#include "mgrl/core/random.hpp"
+#include "mgrl/runtime/controller.hpp"
+
+namespace mgrl::app {
+
+using json = nlohmann::json;
+
+Trials::Trials(const StateActionModel& model, const std::vector<Behavior>& behaviors, double targetHeight,
+               const std::string& source)
+    : model_(model), behaviors_(behaviors) {
+  // The approach region: the first always-active behaviour's grid, sampled uniformly by area.
+  const auto region = std::find_if(behaviors.begin(), behaviors.end(),
+                                   [](const Behavior& b) { return b.activation == Activation::Always; });
+  region_ = (region != behaviors.end() ? region : behaviors.begin())->discretizer.get();
+  for (const GridAxis& axis : region_->axes())
+    if (axis.name == "distance") reach_ = axis.vertices.back();
+  if (!(reach_ > 0))
+    throw Error(fmt::format("{}: expected a behaviour whose grid has a distance axis to place targets in, found none",
+                            source));
+  // The target's height: given, else that of the effective hitting points' centroid (a
+  // target at punching height, as the user's target in the paper's demo).
+  targetHeight_ = std::isnan(targetHeight) ? model.centroid[1] : targetHeight;
+  // A hit lands within the first hit reward's contact radius; returns are discounted with
+  // the first behaviour's gamma.
+  for (const Behavior& b : behaviors)
+    if (b.reward->type() == "hit") {
+      contactRadius_ = b.config["reward"].value("contact_radius", contactRadius_);
+      break;
+    }
+  gamma_ = behaviors.front().reward->gamma();
+}
+
+TrialStats Trials::run(const ChooseAction& choose, std::size_t count, double seconds, std::uint64_t seed,
+                       std::vector<std::pair<std::uint32_t, Eigen::Vector3d>>* decisions) const {
+  const StateActionModel& model = model_;
+  const StaticTarget environment;
+  Rng starts(seed), choices(seed ^ 0x5eed5eed5eedULL);
+  TrialStats stats;
+  stats.trials = count;
+  const double limit = seconds / model.frameTime;
+  for (std::size_t trial = 0; trial < count; ++trial) {
+    auto s = static_cast<std::uint32_t>(starts.below(model.stateCount()));
+    Eigen::Vector3d e;
+    do e = {(2 * starts.uniform() - 1) * reach_, 0, (2 * starts.uniform() - 1) * reach_};
+    while (!region_->inside(e));
+    e.y() = targetHeight_;
+    double elapsed = 0, discount = 1, trialReturn = 0;
+    bool hit = false;
+    while (elapsed < limit && !hit) {
+      std::size_t a;
+      if (choose) {
+        if (decisions) decisions->emplace_back(s, e);
+        a = choose(s, e);
+      } else {
+        a = model.stateActionBegin[s] + choices.below(model.stateActionBegin[s + 1] - model.stateActionBegin[s]);
+      }
+      ++stats.decisions;
+      double reward = 0;
+      for (const Behavior& b : behaviors_) {
+        if (b.activation == Activation::TargetInside && !b.discretizer->inside(e)) continue;
+        reward += b.weight * b.reward->evaluate(model, a, e);
+      }
+      trialReturn += discount * reward;
+      for (const ActionHit& h : model.hitsOf(a)) {
+        const Eigen::Vector3d fist(h.x, h.y, h.z);
+        if ((fist - e).norm() <= contactRadius_) {
+          hit = true;
+          stats.hitTimes.push_back((elapsed + h.offset) * model.frameTime);
+          break;
+        }
+      }
+      const auto frames = static_cast<double>(model.actionLength(a));
+      discount *= std::pow(gamma_, frames);
+      elapsed += frames;
+      e = environment.next(model, a, e);
+      s = model.actionTo[a];
+    }
+    stats.successes += hit;
+    stats.returns += trialReturn;
+  }
+  return stats;
+}
+
+json Trials::summary(TrialStats stats) {
+  std::sort(stats.hitTimes.begin(), stats.hitTimes.end());
+  const std::size_t n = stats.hitTimes.size();
+  double mean = 0;
+  for (double t : stats.hitTimes) mean += t;
+  json times = nullptr, median = nullptr;
+  if (n > 0) {
+    times = mean / static_cast<double>(n);
+    median = n % 2 ? stats.hitTimes[n / 2] : (stats.hitTimes[n / 2 - 1] + stats.hitTimes[n / 2]) / 2;
+  }
+  const auto trials = static_cast<double>(std::max<std::size_t>(1, stats.trials));
+  return json{{"success_rate", static_cast<double>(stats.successes) / trials},
+              {"successes", stats.successes},
+              {"mean_time_to_hit_s", times},
+              {"median_time_to_hit_s", median},
+              {"mean_return", stats.returns / trials},
+              {"decisions", stats.decisions}};
+}
+
+}  // namespace mgrl::app

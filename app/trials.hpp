@@ -1,0 +1,59 @@
+#pragma once
+/// \file
+/// The evaluation trials of `mgrl eval` and `mgrl compare` (DESIGN.md sec. 5): from random
+/// starts (a state of the graph, a static target on the floor of the first always-active
+/// behaviour's grid, at the target height) a controller acts until an effective hit lands
+/// within the hit reward's contact radius, or the trial's motion runs out.
+#include <cstddef>
+#include <cstdint>
+#include <functional>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include <Eigen/Core>
+#include <nlohmann/json.hpp>
+
+#include "mgrl/graph/state_action_model.hpp"
+#include "mgrl/learning/behavior.hpp"
+
+namespace mgrl::app {
+
+struct TrialStats {
+  std::size_t trials = 0, successes = 0, decisions = 0;
+  std::vector<double> hitTimes;  ///< seconds to the hit, one per success
+  double returns = 0;            ///< sum over trials of the discounted weighted reward
+};
+
+/// Picks an action of state s (a global action index) for the target at e (avatar frame).
+using ChooseAction = std::function<std::size_t(std::uint32_t s, const Eigen::Vector3d& e)>;
+
+class Trials {
+ public:
+  /// `targetHeight` NaN: the effective hitting points' centroid height. Throws mgrl::Error
+  /// naming `source` (the scenario) if no behaviour's grid has a distance axis to place
+  /// targets in. Keeps references to `model` and `behaviors`.
+  Trials(const StateActionModel& model, const std::vector<Behavior>& behaviors, double targetHeight,
+         const std::string& source);
+
+  /// Runs `count` trials of `seconds` of motion each from the starts drawn with `seed`:
+  /// the first k trials of any count start alike. `choose` null: uniformly random actions.
+  /// `decisions`, if given, receives every (state, target) a decision was asked for.
+  TrialStats run(const ChooseAction& choose, std::size_t count, double seconds, std::uint64_t seed,
+                 std::vector<std::pair<std::uint32_t, Eigen::Vector3d>>* decisions = nullptr) const;
+
+  /// {"success_rate", "successes", "mean_time_to_hit_s" (null without a hit),
+  ///  "median_time_to_hit_s", "mean_return", "decisions"}.
+  static nlohmann::json summary(TrialStats stats);
+
+  double contactRadius() const { return contactRadius_; }
+  double targetHeight() const { return targetHeight_; }
+
+ private:
+  const StateActionModel& model_;
+  const std::vector<Behavior>& behaviors_;
+  const Discretizer* region_ = nullptr;
+  double reach_ = 0, targetHeight_ = 0, contactRadius_ = 0.15, gamma_ = 0.97;
+};
+
+}  // namespace mgrl::app
