@@ -80,6 +80,26 @@ class KdTree final : public Discretizer {
         sequence_.push_back(i);
         --remaining[i];
       }
+    if (p.choice("split_axes") == "longest") {
+      // Each further depth halves the axis whose cells are then longest in metres (an angle
+      // as the arc at the middle distance), ties to the first axis: resolution goes where the
+      // volume is long instead of evenly to every axis. Still one axis per depth, so the
+      // continuity argument above holds.
+      std::array<double, 3> length{0, 0, 0};
+      const double radius = dimension_ > 1 ? std::max(0.5 * (b.distance[0] + b.distance[1]), 0.1) : 1.0;
+      for (int i = 0; i < dimension_; ++i) {
+        int halvings = 0;
+        for (int axis : sequence_) halvings += axis == i ? 1 : 0;
+        length[i] = std::ldexp(span_[i] * (i == 0 && dimension_ > 1 ? radius : 1.0), -halvings);
+      }
+      while (static_cast<int>(sequence_.size()) < maxDepth_) {
+        int longest = 0;
+        for (int i = 1; i < dimension_; ++i)
+          if (length[i] > length[longest] * (1 + 1e-9)) longest = i;
+        sequence_.push_back(longest);
+        length[longest] /= 2;
+      }
+    }
     for (int i = 0; static_cast<int>(sequence_.size()) < maxDepth_; i = (i + 1) % dimension_) sequence_.push_back(i);
     for (int axis : sequence_) ++levels_[axis];
     for (int i = 0; i < dimension_; ++i)
@@ -537,6 +557,10 @@ void registerKdTree(DiscretizerRegistry& registry) {
         ParamSpec::integer("height_cells", 2, 1, 1024, "cells", "initial cells along the height (a power of two)"),
         ParamSpec::integer("max_depth", 24, 0, 90, "splits", "no leaf is split more often than this (initial splits "
                                                               "included)"),
+        ParamSpec::choice("split_axes", "round_robin", {"round_robin", "longest"},
+                          "the axis each depth past the initial cells halves: round_robin: every axis in turn; "
+                          "longest: the axis whose cells are then longest in metres (angles as the arc at the middle "
+                          "distance)"),
         ParamSpec::number("height", 0.0, -10, 10, "m", "distance, polar: the height of the target's position"),
         ParamSpec::choice("bounds", "given", {"hits", "given"},
                           "hits: the bounding volume of the graph's effective hitting points; given: the *_min/*_max "

@@ -30,9 +30,22 @@ namespace {
 
 using Clock = std::chrono::steady_clock;
 
+// The influence and variance fixed points stop at this relative change or sweep count.
+constexpr double kInfluenceTolerance = 1e-4;
+constexpr int kInfluenceSweeps = 2000;
+
 struct LeafScores {
   std::vector<double> value;   // mean over motion states of |backup - interpolation| at the centre
   std::vector<double> policy;  // fraction of motion states whose corners disagree on the action
+  // Sum over motion states of the largest influence x standard deviation at a free corner
+  // (influence_policy: only the states whose corners disagree); empty unless asked for.
+  std::vector<double> influence;
+};
+
+// Influence and standard deviation at every (motion state, vertex), index s * V + v.
+struct InfluenceField {
+  std::vector<double> influence, deviation;
+  int sweeps = 0;
 };
 
 class AdaptiveValueIteration final : public Learner {
@@ -43,6 +56,7 @@ class AdaptiveValueIteration final : public Learner {
         splitFraction_(p.number("split_fraction")),
         splitTolerance_(p.number("split_tolerance")),
         criterion_(p.choice("criterion")),
+        countFree_(p.choice("count_vertices") == "free"),
         tolerance_(p.number("tolerance")),
         maxSweeps_(static_cast<std::uint64_t>(p.integer("max_sweeps"))),
         threads_(static_cast<unsigned>(p.integer("threads"))) {}
@@ -61,11 +75,16 @@ class AdaptiveValueIteration final : public Learner {
   LeafScores score(const Problem& problem, const Discretizer& grid, const GridModel& g, const QTable& q,
                    unsigned threads) const;
   std::vector<std::uint32_t> choose(const Discretizer& grid, const LeafScores& scores) const;
+  // The vertices counted against max_vertices: all of them (table rows) or the free ones.
+  std::size_t counted(const Discretizer& grid) const {
+    return countFree_ ? grid.vertexCount() - grid.hanging().size() : grid.vertexCount();
+  }
 
   std::size_t maxVertices_;
   int maxRounds_;
   double splitFraction_, splitTolerance_;
   std::string criterion_;
+  bool countFree_;
   double tolerance_;
   std::uint64_t maxSweeps_;
   unsigned threads_;
@@ -93,6 +112,118 @@ QTable interpolated(const QTable& from, const Discretizer& fromGrid, const Discr
   return to;
 }
 
+// Munos & Moore 2002, "influence" and "variance": the greedy policy on the current
+// solution, with the interpolation at the successor read as a transition to the corners
+// of its cell with probabilities the weights (hanging corners passed on to their sources).
+// sigma^2(x) = gamma^2 sum_k w_k (V(c_k) - sum_j w_j V(c_j))^2 + gamma^2 sum_k w_k sigma^2(c_k)
+// and I(x) = 1 + sum_y gamma(y) p(x | y) I(y), both fixed points of a contraction, iterated
+// to a relative change below `tolerance` (at most `maxSweeps` sweeps). The variance sweeps
+// gather (parallel, deterministic); the influence sweeps scatter, serially so that the
+// sums are formed in one order.
+InfluenceField influenceField(const GridModel& g, const QTable& q, double tolerance, int maxSweeps, unsigned threads) {
+  const std::size_t V = g.vertexCount, states = q.stateCount();
+  const int d = g.dimension, corners = 1 << d;
+  std::vector<std::int32_t> tiedAt(V, -1);
+  for (std::size_t i = 0; i < g.hanging.size(); ++i) tiedAt[g.hanging.vertex[i]] = static_cast<std::int32_t>(i);
+  std::vector<std::int64_t> greedy(states * V, -1);
+  std::vector<double> value(states * V, 0.0);
+  parallelFor(states, threads, [&](std::size_t s, unsigned) {
+    const std::size_t n = q.actionsOf(s);
+    if (n == 0) return;
+    for (std::size_t v = 0; v < V; ++v) {
+      const float* row = q.row(s, v);
+      const auto best = static_cast<std::size_t>(std::max_element(row, row + n) - row);
+      greedy[s * V + v] = static_cast<std::int64_t>(g.stateActionBegin[s] + best);
+      value[s * V + v] = row[best];
+    }
+  });
+  // The motion state the greedy action at (s, v) ends at, if its target stays in the grid.
+  auto successorState = [&](std::size_t s, std::size_t v, std::size_t& next) {
+    const std::int64_t a = greedy[s * V + v];
+    if (a < 0 || g.transition[static_cast<std::size_t>(a) * V + v].cell < 0) return false;
+    next = g.actionTo[static_cast<std::size_t>(a)];
+    return true;
+  };
+  // Calls f(vertex, weight) for the free vertices that the successor of (s, v) lands on.
+  auto successors = [&](std::size_t s, std::size_t v, auto&& f) {
+    const std::int64_t a = greedy[s * V + v];
+    if (a < 0) return;
+    const GridTransition& t = g.transition[static_cast<std::size_t>(a) * V + v];
+    if (t.cell < 0) return;
+    float w[8];
+    cornerWeights(d, {t.frac[0], t.frac[1], t.frac[2]}, w);
+    const std::uint32_t* c = &g.corners[static_cast<std::size_t>(t.cell) << d];
+    for (int k = 0; k < corners; ++k) {
+      if (w[k] == 0) continue;
+      const std::int32_t tie = tiedAt[c[k]];
+      if (tie < 0) {
+        f(c[k], static_cast<double>(w[k]));
+        continue;
+      }
+      for (std::uint32_t j = g.hanging.begin[tie]; j < g.hanging.begin[tie + 1]; ++j)
+        f(g.hanging.source[j], static_cast<double>(w[k]) * g.hanging.weight[j]);
+    }
+  };
+  InfluenceField out;
+  std::vector<double> variance(states * V, 0.0), nextVariance(states * V, 0.0);
+  std::vector<double> change(states, 0.0);
+  for (int sweep = 0; sweep < maxSweeps; ++sweep) {
+    parallelFor(states, threads, [&](std::size_t s, unsigned) {
+      double largest = 0;
+      for (std::size_t v = 0; v < V; ++v) {
+        if (tiedAt[v] >= 0) continue;
+        const std::int64_t a = greedy[s * V + v];
+        double square = 0, carried = 0;
+        std::size_t next = 0;
+        if (successorState(s, v, next)) {
+          // The weighted mean of the successor corners' values, then the spread about it.
+          double m = 0;
+          successors(s, v, [&](std::uint32_t u, double w) { m += w * value[next * V + u]; });
+          successors(s, v, [&](std::uint32_t u, double w) {
+            const double gap = value[next * V + u] - m;
+            square += w * gap * gap;
+            carried += w * variance[next * V + u];
+          });
+        }
+        const double gamma = a >= 0 ? g.discount[static_cast<std::size_t>(a)] : 0.0;
+        const double updated = gamma * gamma * (square + carried);
+        largest = std::max(largest, std::fabs(updated - variance[s * V + v]));
+        nextVariance[s * V + v] = updated;
+      }
+      change[s] = largest;
+    });
+    std::swap(variance, nextVariance);
+    out.sweeps = std::max(out.sweeps, sweep + 1);
+    const double scale = *std::max_element(variance.begin(), variance.end());
+    if (*std::max_element(change.begin(), change.end()) <= tolerance * (scale + 1e-30)) break;
+  }
+  std::vector<double> influence(states * V, 0.0), nextInfluence(states * V, 0.0);
+  for (int sweep = 0; sweep < maxSweeps; ++sweep) {
+    for (std::size_t i = 0; i < states * V; ++i) nextInfluence[i] = tiedAt[i % V] >= 0 ? 0.0 : 1.0;
+    for (std::size_t s = 0; s < states; ++s)
+      for (std::size_t v = 0; v < V; ++v) {
+        const std::int64_t a = greedy[s * V + v];
+        if (a < 0 || tiedAt[v] >= 0) continue;
+        const double mass = g.discount[static_cast<std::size_t>(a)] * influence[s * V + v];
+        std::size_t next = 0;
+        if (!successorState(s, v, next)) continue;
+        successors(s, v, [&](std::uint32_t u, double w) { nextInfluence[next * V + u] += w * mass; });
+      }
+    double largest = 0, scale = 0;
+    for (std::size_t i = 0; i < states * V; ++i) {
+      largest = std::max(largest, std::fabs(nextInfluence[i] - influence[i]));
+      scale = std::max(scale, nextInfluence[i]);
+    }
+    std::swap(influence, nextInfluence);
+    out.sweeps = std::max(out.sweeps, sweep + 1);
+    if (largest <= tolerance * scale) break;
+  }
+  out.influence = std::move(influence);
+  out.deviation.resize(states * V);
+  for (std::size_t i = 0; i < states * V; ++i) out.deviation[i] = std::sqrt(variance[i]);
+  return out;
+}
+
 LeafScores AdaptiveValueIteration::score(const Problem& problem, const Discretizer& grid, const GridModel& g,
                                          const QTable& q, unsigned threads) const {
   const StateActionModel& m = problem.model;
@@ -100,14 +231,23 @@ LeafScores AdaptiveValueIteration::score(const Problem& problem, const Discretiz
   const int corners = 1 << grid.dimension();
   std::size_t widest = 0;
   for (std::size_t s = 0; s < states; ++s) widest = std::max(widest, q.actionsOf(s));
-  LeafScores out{std::vector<double>(leaves, 0.0), std::vector<double>(leaves, 0.0)};
+  LeafScores out{std::vector<double>(leaves, 0.0), std::vector<double>(leaves, 0.0), {}};
+  const bool byInfluence = criterion_ == "influence" || criterion_ == "influence_policy";
+  InfluenceField field;
+  std::vector<std::uint8_t> tied(grid.vertexCount(), 0);
+  if (byInfluence) {
+    field = influenceField(g, q, kInfluenceTolerance, kInfluenceSweeps, threads);
+    out.influence.assign(leaves, 0.0);
+    for (std::uint32_t v : grid.hanging().vertex) tied[v] = 1;
+  }
+  const std::size_t V = grid.vertexCount();
   parallelFor(leaves, threads, [&](std::size_t leaf, unsigned) {
     const Eigen::Vector3d centre = grid.cellCentre(static_cast<std::uint32_t>(leaf));
     GridCell cell;
     if (!grid.locate(centre, cell)) return;
     const Stencil stencil = grid.stencil(cell);
     std::vector<float> sum(widest + QTable::kPadding);
-    double valueGap = 0, disagreements = 0;
+    double valueGap = 0, disagreements = 0, influence = 0;
     for (std::size_t s = 0; s < states; ++s) {
       const std::size_t n = q.actionsOf(s);
       if (n == 0) continue;
@@ -136,7 +276,16 @@ LeafScores AdaptiveValueIteration::score(const Problem& problem, const Discretiz
         else differ = differ || best != first;
       }
       disagreements += differ ? 1 : 0;
+      if (byInfluence && (differ || criterion_ == "influence")) {
+        double largest = 0;
+        for (int k = 0; k < corners; ++k) {
+          const std::uint32_t v = stencil.vertex[k];
+          if (!tied[v]) largest = std::max(largest, field.influence[s * V + v] * field.deviation[s * V + v]);
+        }
+        influence += largest;
+      }
     }
+    if (byInfluence) out.influence[leaf] = influence;
     out.value[leaf] = valueGap / static_cast<double>(states);
     out.policy[leaf] = disagreements / static_cast<double>(states);
   });
@@ -149,7 +298,8 @@ LeafScores AdaptiveValueIteration::score(const Problem& problem, const Discretiz
 std::vector<std::uint32_t> AdaptiveValueIteration::choose(const Discretizer& grid, const LeafScores& scores) const {
   const std::size_t leaves = grid.cellCount();
   const std::size_t perSplit = std::size_t{1} << (grid.dimension() - 1);
-  const std::size_t room = grid.vertexCount() >= maxVertices_ ? 0 : (maxVertices_ - grid.vertexCount()) / perSplit;
+  const std::size_t used = counted(grid);
+  const std::size_t room = used >= maxVertices_ ? 0 : (maxVertices_ - used) / perSplit;
   const std::size_t wanted = std::min(
       room, std::max<std::size_t>(1, static_cast<std::size_t>(std::ceil(splitFraction_ * static_cast<double>(leaves)))));
   auto ranked = [&](const std::vector<double>& score, double threshold) {
@@ -159,6 +309,13 @@ std::vector<std::uint32_t> AdaptiveValueIteration::choose(const Discretizer& gri
     std::stable_sort(order.begin(), order.end(), [&](std::uint32_t a, std::uint32_t b) { return score[a] > score[b]; });
     return order;
   };
+  if (!scores.influence.empty()) {
+    // influence: the largest influence x deviation; influence_policy: the same among the
+    // leaves whose corners disagree (the score is 0 for the others).
+    std::vector<std::uint32_t> order = ranked(scores.influence, 0.0);
+    if (order.size() > wanted) order.resize(wanted);
+    return order;
+  }
   const std::vector<std::uint32_t> byValue = criterion_ == "policy" ? std::vector<std::uint32_t>{}
                                                                       : ranked(scores.value, splitTolerance_);
   const std::vector<std::uint32_t> byPolicy = criterion_ == "value" ? std::vector<std::uint32_t>{}
@@ -182,10 +339,10 @@ TrainResult AdaptiveValueIteration::train(const TrainContext& context) const {
   double paused = 0;  // spent on snapshots (TrainObserver::snapshot): not training
   auto elapsed = [&] { return std::chrono::duration<double>(Clock::now() - start).count() - paused; };
   checkGrid(problem.grid);
-  if (problem.grid.vertexCount() > maxVertices_)
+  if (counted(problem.grid) > maxVertices_)
     throw Error(fmt::format("adaptive_value_iteration: max_vertices: expected at least the initial tree's {} "
-                            "vertices, found {}",
-                            problem.grid.vertexCount(), maxVertices_));
+                            "{}vertices, found {}",
+                            counted(problem.grid), countFree_ ? "free " : "", maxVertices_));
 
   TrainResult result;
   std::shared_ptr<const Discretizer> owned;  // the current tree once refined
@@ -219,13 +376,14 @@ TrainResult AdaptiveValueIteration::train(const TrainContext& context) const {
     if (snapshotsWanted(context.observer) > 0)  // one per round: the values converged on this tree
       paused += takeSnapshot(*context.observer, q, result.curve.back(), grid == &problem.grid ? nullptr : grid);
     nlohmann::json record = {{"vertices", grid->vertexCount()},
+                             {"free_vertices", grid->vertexCount() - grid->hanging().size()},
                              {"leaves", grid->cellCount()},
                              {"hanging_vertices", grid->hanging().size()},
                              {"sweeps", sweeps},
                              {"last_change", change}};
-    if (grid->vertexCount() >= maxVertices_) stopped = "max_vertices";
+    if (counted(*grid) >= maxVertices_) stopped = "max_vertices";
     if (round >= maxRounds_) stopped = "max_rounds";
-    if (grid->vertexCount() >= maxVertices_ || round >= maxRounds_) {
+    if (counted(*grid) >= maxVertices_ || round >= maxRounds_) {
       rounds.push_back(record);
       result.finalResidual = bellmanResidual(q, g, threads).max;
       break;
@@ -233,13 +391,15 @@ TrainResult AdaptiveValueIteration::train(const TrainContext& context) const {
     const LeafScores scores = score(problem, *grid, g, q, threads);
     record["largest_value_gap"] = *std::max_element(scores.value.begin(), scores.value.end());
     record["largest_policy_disagreement"] = *std::max_element(scores.policy.begin(), scores.policy.end());
+    if (!scores.influence.empty())
+      record["largest_influence_deviation"] = *std::max_element(scores.influence.begin(), scores.influence.end());
     const std::vector<std::uint32_t> splits = choose(*grid, scores);
     record["splits"] = splits.size();
     rounds.push_back(record);
     if (splits.empty()) {
       // Every leaf is within the tolerance, at the depth limit, or the budget is spent.
-      stopped = grid->vertexCount() + (std::size_t{1} << (grid->dimension() - 1)) > maxVertices_ ? "max_vertices"
-                                                                                                  : "tolerance";
+      stopped = counted(*grid) + (std::size_t{1} << (grid->dimension() - 1)) > maxVertices_ ? "max_vertices"
+                                                                                             : "tolerance";
       result.finalResidual = bellmanResidual(q, g, threads).max;
       break;
     }
@@ -256,6 +416,8 @@ TrainResult AdaptiveValueIteration::train(const TrainContext& context) const {
                   {"stopped_by", stopped},
                   {"sweeps", totalSweeps},
                   {"vertices", grid->vertexCount()},
+                  {"free_vertices", grid->vertexCount() - grid->hanging().size()},
+                  {"table_bytes", result.table.bytes()},
                   {"leaves", grid->cellCount()},
                   {"hanging_vertices", grid->hanging().size()},
                   {"last_change", change}};
@@ -270,14 +432,18 @@ void registerAdaptiveValueIteration(LearnerRegistry& registry) {
        "value iteration on a kd_tree grid that splits the cells where the value is not linear or the corners' "
        "greedy actions disagree, and solves again, up to a vertex budget (Munos & Moore 2002)",
        {ParamSpec::integer("max_vertices", 4000, 1, static_cast<long long>(kMaxGridVertices), "vertices",
-                           "vertex budget: no refinement past it (at least the initial tree's)"),
+                           "vertex budget (see count_vertices): no refinement past it (at least the initial tree's)"),
         ParamSpec::integer("max_rounds", 30, 0, 100000, "rounds", "give up refining after this many rounds"),
         ParamSpec::number("split_fraction", 0.1, 1e-6, 1, "", "split at most this fraction of the leaves per round"),
         ParamSpec::number("split_tolerance", 1e-3, 0, 1e9, "",
                           "value criterion: split only leaves whose mean value gap is above this"),
-        ParamSpec::choice("criterion", "both", {"value", "policy", "both"},
+        ParamSpec::choice("criterion", "both", {"value", "policy", "both", "influence", "influence_policy"},
                           "value: value non-linearity; policy: policy disagreement between corners; both: the two "
-                          "rankings in turn"),
+                          "rankings in turn; influence: influence x standard deviation (Munos & Moore's stdev_inf); "
+                          "influence_policy: influence x standard deviation over the states whose corners disagree"),
+        ParamSpec::choice("count_vertices", "all", {"all", "free"},
+                          "what max_vertices counts: all: every vertex (the table's rows); free: only vertices not "
+                          "tied to a coarser face (the table still holds a row for each tied one)"),
         ParamSpec::number("tolerance", 1e-4, 1e-9, 1, "", "each solve stops when no value changes more than this"),
         ParamSpec::integer("max_sweeps", 1000, 1, 1'000'000, "sweeps", "each solve gives up after this many sweeps"),
         threadsSpec()},

@@ -6,6 +6,8 @@
 #include <cmath>
 #include <random>
 
+#include <fmt/format.h>
+
 #include "app/plugins.hpp"
 #include "mgrl/core/config.hpp"
 #include "mgrl/core/error.hpp"
@@ -25,7 +27,7 @@ ConfigNode yamlNode(const std::string& text) { return ConfigNode::parse(text, "a
 // (no reward) and `punch` (an effective hit at (0, 1, 0.5) on its third frame). With the
 // hit reward the value is a step: gamma^3 / (1 - gamma^5) within the contact radius of the
 // fist, 0 elsewhere.
-StateActionModel punchModel() {
+StateActionModel punchModel(double waitStep = 0) {
   StateActionModel m;
   m.frameTime = 1.0 / 30;
   m.stateFrame = {0};
@@ -35,7 +37,8 @@ StateActionModel punchModel() {
   for (std::uint32_t a = 0; a < 2; ++a) {
     m.actionFrom.push_back(0);
     m.actionTo.push_back(0);
-    m.actionDisplacement.insert(m.actionDisplacement.end(), {0.0, 0.0, 0.0});
+    // `wait` may step forward: the target comes `waitStep` closer (dx, dz, dyaw).
+    m.actionDisplacement.insert(m.actionDisplacement.end(), {0.0, a == 0 ? waitStep : 0.0, 0.0});
     for (int t = 0; t < 5; ++t) {
       m.actionFrames.push_back(0);
       m.frameRoot.insert(m.frameRoot.end(), {0.0, 0.0, 0.0});
@@ -61,8 +64,8 @@ std::unique_ptr<Discretizer> makeGrid(const std::string& text, const StateAction
 
 // The problem on a kd_tree and its solution by adaptive_value_iteration.
 struct Solved {
-  Solved(const std::string& gridYaml, const std::string& learnerYaml, unsigned threads = 2)
-      : model(punchModel()),
+  Solved(const std::string& gridYaml, const std::string& learnerYaml, unsigned threads = 2, double waitStep = 0)
+      : model(punchModel(waitStep)),
         grid(makeGrid(gridYaml, model)),
         reward(app::plugins().rewards.create(yamlNode("{type: hit, contact_radius: 0.1}"))),
         problem{model, *grid, *reward, environment},
@@ -142,6 +145,9 @@ double interpolate(const Discretizer& grid, const std::vector<double>& values, c
 constexpr const char* k3d =
     "{type: kd_tree, coordinates: cylindrical, angle_cells: 2, distance_cells: 2, height_cells: 1, angle_min: -90, "
     "angle_max: 90, distance_min: 0.5, distance_max: 2.5, height_min: 0.5, height_max: 1.5}";
+constexpr const char* k3dLongest =
+    "{type: kd_tree, coordinates: cylindrical, angle_cells: 2, distance_cells: 2, height_cells: 1, angle_min: -90, "
+    "angle_max: 90, distance_min: 0.5, distance_max: 2.5, height_min: 0.5, height_max: 1.5, split_axes: longest}";
 constexpr const char* k2d =
     "{type: kd_tree, coordinates: polar, angle_cells: 2, distance_cells: 2, angle_min: -90, angle_max: 90, "
     "distance_min: 0.5, distance_max: 2.5}";
@@ -151,7 +157,7 @@ constexpr const char* k2d =
 TEST_CASE("kd_tree weights are non-negative, sum to 1 and reproduce linear functions across hanging vertices",
           "[kd_tree]") {
   const StateActionModel m = punchModel();
-  for (const char* yaml : {k2d, k3d}) {
+  for (const char* yaml : {k2d, k3d, k3dLongest}) {
     CAPTURE(yaml);
     const auto grid = randomlyRefined(yaml, m, 5, 7);
     REQUIRE(!grid->hanging().empty());
@@ -186,7 +192,7 @@ TEST_CASE("kd_tree weights are non-negative, sum to 1 and reproduce linear funct
 
 TEST_CASE("kd_tree interpolation does not jump across a face with hanging vertices", "[kd_tree]") {
   const StateActionModel m = punchModel();
-  for (const char* yaml : {k2d, k3d}) {
+  for (const char* yaml : {k2d, k3d, k3dLongest}) {
     CAPTURE(yaml);
     const auto grid = randomlyRefined(yaml, m, 6, 11);
     const int d = grid->dimension();
@@ -338,6 +344,134 @@ TEST_CASE("adaptive_value_iteration hands out a snapshot per round on its curren
   CHECK(recorder.updates.back() == plain.result.updates);
 }
 
+TEST_CASE("kd_tree split_axes longest halves the axis whose cells are longest in metres", "[kd_tree]") {
+  const StateActionModel m = punchModel();
+  // Half a turn at the middle distance 1.5 m is a 4.7 m arc against 2 m of distance: the
+  // angle is halved twice (4.7 -> 2.4 -> 1.2 m) before the distance (2 -> 1 m).
+  const std::string base = "{type: kd_tree, coordinates: polar, angle_cells: 1, distance_cells: 1, angle_min: -90, "
+                           "angle_max: 90, distance_min: 0.5, distance_max: 2.5";
+  auto distinct = [](const Discretizer& grid, int axis) {
+    std::vector<double> values;
+    for (const auto& c : vertexCoordinates(grid)) values.push_back(c[axis]);
+    std::sort(values.begin(), values.end());
+    return static_cast<std::size_t>(std::unique(values.begin(), values.end()) - values.begin());
+  };
+  auto everyLeafSplit = [](std::unique_ptr<Discretizer> grid, int times) {
+    for (int t = 0; t < times; ++t) {
+      std::vector<std::uint32_t> all(grid->cellCount());
+      for (std::uint32_t l = 0; l < all.size(); ++l) all[l] = l;
+      grid = grid->refined(all);
+    }
+    return grid;
+  };
+  // Four depths: angle 4.7 -> 2.4 -> 1.2, distance 2 -> 1, angle 1.2 -> 0.6 m.
+  const auto longest = everyLeafSplit(makeGrid(base + ", split_axes: longest}", m), 4);
+  REQUIRE(distinct(*longest, 0) == 9);  // 8 angle cells
+  REQUIRE(distinct(*longest, 1) == 3);  // 2 distance cells
+  const auto roundRobin = everyLeafSplit(makeGrid(base + "}", m), 4);
+  REQUIRE(distinct(*roundRobin, 0) == 5);
+  REQUIRE(distinct(*roundRobin, 1) == 5);
+  // The order is part of the tree: a saved longest tree restores through a longest tree only.
+  const auto fresh = makeGrid(base + ", split_axes: longest}", m);
+  REQUIRE(fresh->restored(longest->structure())->cellCorners() == longest->cellCorners());
+  REQUIRE_THROWS_WITH(makeGrid(base + "}", m)->restored(longest->structure()), Contains("expected axis"));
+}
+
+TEST_CASE("adaptive_value_iteration count_vertices free spends the budget on free vertices only", "[adaptive]") {
+  const std::string grid = "{type: kd_tree, coordinates: polar, height: 1, angle_cells: 4, distance_cells: 4}";
+  const Solved all(grid, "{type: adaptive_value_iteration, max_vertices: 150}");
+  const Solved free(grid, "{type: adaptive_value_iteration, max_vertices: 150, count_vertices: free}");
+  const std::size_t allFree = all.tree().vertexCount() - all.tree().hanging().size();
+  const std::size_t freeFree = free.tree().vertexCount() - free.tree().hanging().size();
+  REQUIRE(all.tree().vertexCount() <= 150);
+  REQUIRE(freeFree <= 150);
+  REQUIRE(freeFree > allFree);
+  REQUIRE(free.tree().vertexCount() > 150);  // the tied ones on top, each a row of the table
+  REQUIRE(free.result.stats["free_vertices"] == freeFree);
+  REQUIRE(free.result.stats["table_bytes"] == free.result.table.bytes());
+}
+
+// Munos & Moore's variance comes from interpolating the successor, so the influence
+// criterion needs a target that moves: `wait` steps 0.13 m forward. Straight ahead the value
+// is then 0 below 0.4 m (the fist can no longer reach the target), kInside at the fist and a
+// staircase beyond, falling by gamma^5 per step; the largest jump is at 0.4 m.
+// Neither influence criterion refines the jump at 0.4 m itself: both corners of that cell
+// have sigma 0 (below it wait leads to more zeros, above it punch loops in place), so the
+// splits go to the staircase beyond the fist, where a step's successor straddles a
+// jump. This test pins down what they do: refine there, leave the flat zero region alone.
+TEST_CASE("adaptive_value_iteration influence_policy refines a 1-D tree where successors straddle a jump",
+          "[adaptive]") {
+  for (const char* criterion : {"influence_policy"}) {
+    CAPTURE(criterion);
+    const Solved solved(
+        "{type: kd_tree, coordinates: distance, height: 1, distance_cells: 8, distance_min: 0, distance_max: 2}",
+        fmt::format("{{type: adaptive_value_iteration, max_vertices: 40, split_fraction: 0.25, tolerance: 1e-7, "
+                    "criterion: {}}}",
+                    criterion),
+        2, 0.13);
+    const Discretizer& tree = solved.tree();
+    REQUIRE(tree.vertexCount() > 15);
+    REQUIRE(tree.vertexCount() <= 40);
+    const auto coords = vertexCoordinates(tree);
+    double flat = 0;
+    for (std::uint32_t leaf = 0; leaf < tree.cellCount(); ++leaf) {
+      const auto [lo, hi] = leafBox(tree, leaf, coords);
+      if (hi[0] <= 0.25) flat = std::max(flat, hi[0] - lo[0]);
+    }
+    double staircase = 1e9;
+    for (std::uint32_t leaf = 0; leaf < tree.cellCount(); ++leaf) {
+      const auto [lo, hi] = leafBox(tree, leaf, coords);
+      if (lo[0] >= 0.5) staircase = std::min(staircase, hi[0] - lo[0]);
+    }
+    REQUIRE(staircase <= 2.0 / 32);
+    REQUIRE(flat == Approx(0.25));  // where the value is flat 0 and stays so, nothing is split
+    REQUIRE(solved.value({0, 1, 0.5}) == Approx(kInside).epsilon(1e-3));
+  }
+}
+
+TEST_CASE("adaptive_value_iteration influence_policy refines a 2-D tree where the greedy action changes",
+          "[adaptive]") {
+  const Solved solved(
+      "{type: kd_tree, coordinates: polar, height: 1, angle_cells: 4, distance_cells: 4, distance_max: 2}",
+      "{type: adaptive_value_iteration, max_vertices: 400, split_fraction: 0.2, tolerance: 1e-7, "
+      "criterion: influence_policy}",
+      2, 0.13);
+  const Discretizer& tree = solved.tree();
+  REQUIRE(tree.vertexCount() > 100);
+  // The leaves crossing the rim of the disc the fist reaches are much smaller than those
+  // behind the avatar, which no step brings within reach (value 0, one greedy action).
+  const Eigen::Vector2d fist(0, 0.5);
+  double rim = 0, behindSmallest = 1e9;
+  for (std::uint32_t leaf = 0; leaf < tree.cellCount(); ++leaf) {
+    const Stencil corners = tree.stencil(GridCell{leaf, {0.5f, 0.5f, 0}});
+    double nearest = 1e9, farthest = 0, extent = 0, ahead = -1e9;
+    for (int k = 0; k < corners.size; ++k) {
+      const Eigen::Vector3d p = tree.vertexPosition(corners.vertex[k]);
+      const double r = (Eigen::Vector2d(p.x(), p.z()) - fist).norm();
+      nearest = std::min(nearest, r);
+      farthest = std::max(farthest, r);
+      ahead = std::max(ahead, p.z());
+      for (int j = 0; j < corners.size; ++j)
+        extent = std::max(extent, (tree.vertexPosition(corners.vertex[j]) - p).norm());
+    }
+    if (nearest < 0.1 && farthest > 0.1) rim = std::max(rim, extent);
+    if (ahead < -0.3) behindSmallest = std::min(behindSmallest, extent);
+  }
+  REQUIRE(rim > 0);
+  REQUIRE(rim < 0.25 * behindSmallest);
+}
+
+TEST_CASE("adaptive_value_iteration influence criterion is deterministic whatever the thread count", "[adaptive]") {
+  const std::string grid =
+      "{type: kd_tree, coordinates: polar, height: 1, angle_cells: 4, distance_cells: 4, split_axes: longest}";
+  const std::string learner = "{type: adaptive_value_iteration, max_vertices: 200, criterion: influence_policy}";
+  const Solved one(grid, learner, 1), two(grid, learner, 2), again(grid, learner, 2);
+  REQUIRE(one.tree().cellCorners() == two.tree().cellCorners());
+  REQUIRE(one.result.table == two.result.table);
+  REQUIRE(one.result.stats == two.result.stats);
+  REQUIRE(two.result.table == again.result.table);
+}
+
 TEST_CASE("a refined kd_tree round-trips through a policy bundle and a corrupt tree is refused", "[adaptive][kd_tree]") {
   const Solved solved("{type: kd_tree, coordinates: polar, height: 1, angle_cells: 4, distance_cells: 4}",
                       "{type: adaptive_value_iteration, max_vertices: 150}");
@@ -411,6 +545,16 @@ TEST_CASE("adaptive_value_iteration and kd_tree refuse bad parameters with one l
   REQUIRE_THROWS_WITH(makeGrid("{type: kd_tree, angle_cells: 3}", m), Contains("angle_cells") && Contains("power of two"));
   REQUIRE_THROWS_WITH(makeGrid("{type: kd_tree, max_depth: 2}", m), Contains("max_depth"));
   REQUIRE_THROWS_WITH(makeGrid("{type: kd_tree, colour: red}", m), Contains("colour"));
+  REQUIRE_THROWS_WITH(makeGrid("{type: kd_tree, split_axes: widest}", m),
+                      Contains("split_axes") && Contains("widest") && Contains("longest"));
+  REQUIRE_THROWS_WITH(app::plugins().learners.create(yamlNode("{type: adaptive_value_iteration, criterion: variance}")),
+                      Contains("criterion") && Contains("variance") && Contains("influence_policy"));
+  REQUIRE_THROWS_WITH(
+      app::plugins().learners.create(yamlNode("{type: adaptive_value_iteration, count_vertices: leaves}")),
+      Contains("count_vertices") && Contains("leaves"));
+  REQUIRE_THROWS_WITH(Solved("{type: kd_tree, coordinates: polar}",
+                             "{type: adaptive_value_iteration, max_vertices: 5, count_vertices: free}"),
+                      Contains("max_vertices") && Contains("free vertices"));
   // A budget below the initial tree, and a grid that cannot be refined.
   REQUIRE_THROWS_WITH(Solved("{type: kd_tree, coordinates: polar}", "{type: adaptive_value_iteration, max_vertices: 5}"),
                       Contains("max_vertices") && Contains("initial tree"));

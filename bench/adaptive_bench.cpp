@@ -1,0 +1,268 @@
+// Adaptive resolution benchmark (issue 16) on the real boxing capture's hit behaviour.
+//   - Value error: value iteration on a fine uniform cylindrical3d grid is the reference;
+//     uniform grids and adaptive_value_iteration kd_trees at several vertex budgets are
+//     compared with it at random targets inside the hitting volume (uniform in grid
+//     coordinates) at every motion state: RMSE of V_s(e) = max_a Q(e, a), greedy agreement
+//     (the same action as the reference's greedy one), and the mean regret (the
+//     reference's best value minus its value of the tested grid's greedy action).
+//   - Decision cost of the combined policy with a kd_tree hit table against the uniform
+//     one's (the runtime target: <= 0.5 us).
+//
+// Usage: mgrl_bench_adaptive [--quick] [--runs N] [--reference A,D,H] [--points N] [--no-error] [--no-decision]
+// --quick uses a 30 x 24 x 9 reference and fewer budgets.
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <cstring>
+#include <string>
+
+#include <fmt/format.h>
+
+#include "app/learn_commands.hpp"
+#include "app/learn_common.hpp"
+#include "app/plugins.hpp"
+#include "bench_support.hpp"
+#include "boxing_setup.hpp"
+#include "mgrl/core/parallel.hpp"
+#include "mgrl/core/random.hpp"
+#include "mgrl/learning/behavior.hpp"
+#include "mgrl/runtime/controller.hpp"
+#include "mgrl/scenario/behaviors.hpp"
+
+namespace {
+
+namespace fs = std::filesystem;
+using Clock = std::chrono::steady_clock;
+double since(Clock::time_point start) { return std::chrono::duration<double>(Clock::now() - start).count(); }
+
+volatile std::size_t observed = 0;
+
+mgrl::ConfigNode yaml(const std::string& text) { return mgrl::ConfigNode::parse(text, "bench"); }
+
+// A hit table and the grid its vertices belong to.
+struct Solution {
+  std::string name;
+  std::shared_ptr<const mgrl::Discretizer> grid;
+  mgrl::QTable table;
+  double seconds = 0;
+  std::size_t hanging = 0;
+};
+
+Solution solve(const std::string& name, const mgrl::StateActionModel& model, const mgrl::Reward& reward,
+               const std::string& gridYaml, const std::string& learnerYaml, unsigned threads) {
+  const mgrl::StaticTarget environment;
+  std::shared_ptr<const mgrl::Discretizer> grid = mgrl::app::plugins().discretizers.create(yaml(gridYaml), model);
+  const auto start = Clock::now();
+  const mgrl::Problem problem{model, *grid, reward, environment};
+  const mgrl::GridModel tabulated = mgrl::GridModel::build(problem, threads);
+  const auto learner = mgrl::app::plugins().learners.create(yaml(learnerYaml));
+  mgrl::TrainResult result = learner->train({problem, tabulated, nullptr, nullptr, threads});
+  Solution out;
+  out.name = name;
+  out.seconds = since(start);
+  out.grid = result.grid ? result.grid : grid;
+  out.table = std::move(result.table);
+  out.hanging = out.grid->hanging().size();
+  return out;
+}
+
+// Q of state s's actions at e, interpolated on `x` (false outside its grid).
+bool interpolate(const Solution& x, std::uint32_t s, const Eigen::Vector3d& e, std::vector<float>& sum) {
+  mgrl::GridCell cell;
+  if (!x.grid->locate(e, cell)) return false;
+  std::fill(sum.begin(), sum.end(), 0.0f);
+  mgrl::addInterpolated(sum.data(), x.table, s, x.grid->stencil(cell), 1.0f);
+  return true;
+}
+
+struct Error {
+  double rmse = 0, agreement = 0, regret = 0;
+};
+
+Error compare(const Solution& x, const Solution& reference, const mgrl::StateActionModel& model,
+              const std::vector<Eigen::Vector3d>& points) {
+  std::size_t widest = 0;
+  for (std::size_t s = 0; s < model.stateCount(); ++s) widest = std::max(widest, x.table.actionsOf(s));
+  std::vector<float> a(widest + mgrl::QTable::kPadding), b(widest + mgrl::QTable::kPadding);
+  double squares = 0, agree = 0, regret = 0, count = 0;
+  for (std::uint32_t s = 0; s < model.stateCount(); ++s) {
+    const std::size_t n = x.table.actionsOf(s);
+    if (n == 0) continue;
+    for (const Eigen::Vector3d& e : points) {
+      if (!interpolate(x, s, e, a) || !interpolate(reference, s, e, b)) continue;
+      const auto best = static_cast<std::size_t>(std::max_element(a.begin(), a.begin() + n) - a.begin());
+      const auto truth = static_cast<std::size_t>(std::max_element(b.begin(), b.begin() + n) - b.begin());
+      const double gap = static_cast<double>(a[best]) - b[truth];
+      squares += gap * gap;
+      agree += best == truth ? 1 : 0;
+      regret += static_cast<double>(b[truth]) - b[best];
+      count += 1;
+    }
+  }
+  return {std::sqrt(squares / count), agree / count, regret / count};
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  int runs = 5;
+  bool quick = false, error = true, decision = true;
+  std::array<int, 3> reference{40, 32, 12};
+  std::size_t pointCount = 3000;
+  for (int i = 1; i < argc; ++i) {
+    if (!std::strcmp(argv[i], "--quick")) {
+      quick = true;
+      runs = 3;
+      reference = {30, 24, 9};
+      pointCount = 1000;
+    } else if (!std::strcmp(argv[i], "--runs") && i + 1 < argc) {
+      runs = std::max(1, std::atoi(argv[++i]));
+    } else if (!std::strcmp(argv[i], "--points") && i + 1 < argc) {
+      pointCount = static_cast<std::size_t>(std::max(1, std::atoi(argv[++i])));
+    } else if (!std::strcmp(argv[i], "--reference") && i + 1 < argc &&
+               std::sscanf(argv[i + 1], "%d,%d,%d", &reference[0], &reference[1], &reference[2]) == 3) {
+      ++i;
+    } else if (!std::strcmp(argv[i], "--no-error")) {
+      error = false;
+    } else if (!std::strcmp(argv[i], "--no-decision")) {
+      decision = false;
+    } else {
+      std::fprintf(stderr,
+                   "usage: mgrl_bench_adaptive [--quick] [--runs N] [--reference A,D,H] [--points N] [--no-error] "
+                   "[--no-decision]\n");
+      return 2;
+    }
+  }
+  try {
+    const unsigned threads = mgrl::defaultThreadCount();
+    // The adaptive trees: over the hitting volume, halving their longest side.
+    const std::string kdBase = "type: kd_tree, bounds: hits, split_axes: longest";
+    if (error) {
+      // The boxing model (graph from the cache of a value-iteration training).
+      const mgrl::app::TrainOptions train = mgrl::bench::trainBoxingByValueIteration("adaptive");
+      mgrl::app::Loaded loaded = mgrl::app::load(train, mgrl::app::checkedScenario(train));
+      fs::remove_all(train.cacheDir);
+      const mgrl::StateActionModel& model = loaded.graph.model;
+      // The scenario's hit reward.
+      std::vector<mgrl::Behavior> behaviors =
+          mgrl::buildBehaviors(loaded.scenario, mgrl::app::plugins(), model, loaded.graph.key);
+      const auto hit = std::find_if(behaviors.begin(), behaviors.end(), [](const mgrl::Behavior& b) { return b.name == "hit"; });
+      if (hit == behaviors.end()) throw mgrl::Error("boxing.yaml: expected a behaviour 'hit', found none");
+      const mgrl::Reward* reward = hit->reward.get();
+      const std::string vi = "{type: value_iteration}";
+      auto uniform = [](int a, int d, int h) {
+        return fmt::format("{{type: cylindrical3d, angles: {}, distances: {}, heights: {}, bounds: hits}}", a, d, h);
+      };
+      const auto start = Clock::now();
+      const Solution truth = solve("reference", model, *reward, uniform(reference[0], reference[1], reference[2]),
+                                   vi, threads);
+      std::printf("boxing hit: %zu states, %zu actions; reference: value iteration on a %d x %d x %d uniform grid "
+                  "(%zu vertices, %.1f s); %zu random targets x every state\n",
+                  model.stateCount(), model.actionCount(), reference[0], reference[1], reference[2],
+                  truth.grid->vertexCount(), since(start), pointCount);
+      mgrl::Rng rng(7);
+      std::vector<Eigen::Vector3d> points;
+      for (std::size_t i = 0; i < pointCount; ++i)
+        points.push_back(truth.grid->sample({rng.uniform(), rng.uniform(), rng.uniform()}));
+
+      struct Budget {
+        std::array<int, 3> uniform;
+      };
+      const std::vector<Budget> budgets = quick ? std::vector<Budget>{{{8, 6, 5}}, {{10, 8, 6}}, {{20, 16, 6}}}
+                                                : std::vector<Budget>{{{6, 5, 4}}, {{8, 6, 5}}, {{10, 8, 6}},
+                                                                      {{14, 12, 6}}, {{20, 16, 6}}};
+      std::printf("\n%-34s %8s %8s %8s %10s %9s %9s %10s %8s\n", "grid", "vertices", "free", "tied", "table B", "RMSE",
+                  "agree", "regret", "train s");
+      auto row = [&](const Solution& x) {
+        const Error e = compare(x, truth, model, points);
+        std::printf("%-34s %8zu %8zu %8zu %10zu %9.5f %8.2f%% %10.6f %8.2f\n", x.name.c_str(), x.grid->vertexCount(),
+                    x.grid->vertexCount() - x.hanging, x.hanging, x.table.bytes(), e.rmse, 100 * e.agreement,
+                    e.regret, x.seconds);
+        std::fflush(stdout);
+      };
+      for (const Budget& b : budgets) {
+        const auto [a, d, h] = b.uniform;
+        const std::size_t vertices = static_cast<std::size_t>(a * d * h);
+        row(solve(fmt::format("uniform {}x{}x{}", a, d, h), model, *reward, uniform(a, d, h), vi, threads));
+        // Large budgets start from a finer tree (fewer rounds).
+        const std::string cells = vertices >= 1500 ? "angle_cells: 8, distance_cells: 8, height_cells: 4"
+                                                   : "angle_cells: 4, distance_cells: 4, height_cells: 2";
+        const std::string grid = "{" + kdBase + ", " + cells + "}";
+        for (const char* criterion : {"both", "influence_policy"})
+          row(solve(fmt::format("adaptive {} {}", vertices, criterion), model, *reward, grid,
+                    fmt::format("{{type: adaptive_value_iteration, max_vertices: {}, criterion: {}}}", vertices,
+                                criterion),
+                    threads));
+      }
+    }
+
+    if (decision) {
+      // The combined controller (approach on its polar grid, hit on a refined kd_tree), the
+      // same queries as mgrl_bench_runtime's.
+      namespace fs = std::filesystem;
+      const fs::path scratch = fs::temp_directory_path() / fmt::format("mgrl-bench-adaptive-{}", ::getpid());
+      auto controllerFor = [&](const std::vector<std::string>& sets, auto&& use) {
+        mgrl::app::TrainOptions train;
+        train.scenario = fs::path(MGRL_SOURCE_DIR) / "scenarios" / "boxing.yaml";
+        train.dataDir = mgrl::dataDirectory("");
+        train.cacheDir = scratch;
+        train.out = scratch / "policy";
+        train.sets = sets;
+        mgrl::app::runTrain(train);
+        mgrl::app::Loaded loaded = mgrl::app::load(train, mgrl::app::checkedScenario(train));
+        std::vector<mgrl::Behavior> behaviors =
+            mgrl::buildBehaviors(loaded.scenario, mgrl::app::plugins(), loaded.graph.model, loaded.graph.key);
+        mgrl::PolicyBundle bundle;
+        const std::vector<mgrl::PolicyPart> parts =
+            mgrl::app::policyParts(train.out, behaviors, loaded.graph, train, bundle);
+        mgrl::PolicyController greedy(loaded.graph.model, parts);
+        use(loaded.graph.model, greedy);
+      };
+      auto time = [&](const mgrl::StateActionModel& model, mgrl::Controller& c) {
+        std::vector<std::pair<std::uint32_t, Eigen::Vector3d>> queries;
+        mgrl::Rng rng(3);
+        for (int q = 0; q < 2000; ++q) {
+          const auto s = static_cast<std::uint32_t>(rng.below(model.stateCount()));
+          queries.emplace_back(s, Eigen::Vector3d((2 * rng.uniform() - 1) * 1.5, model.centroid[1],
+                                                  (2 * rng.uniform() - 1) * 1.5));
+        }
+        std::vector<double> samples;
+        mgrl::Rng draws(1);
+        for (int r = 0; r < runs; ++r) {
+          std::size_t sink = 0, calls = 0;
+          const auto start = Clock::now();
+          do {
+            for (const auto& [s, e] : queries) sink += c.choose(s, e, draws);
+            calls += queries.size();
+          } while (since(start) < 0.2);
+          samples.push_back(since(start) / static_cast<double>(calls));
+          observed = sink;
+        }
+        return mgrl::bench::median(samples);
+      };
+      std::printf("\ndecision cost of the combined policy (greedy), 2000 random (state, target) queries, median of "
+                  "%d runs (target <= 0.5 us)\n",
+                  runs);
+      const std::string approach = "behaviors.approach.learner.type=value_iteration";
+      controllerFor({approach, "behaviors.hit.learner.type=value_iteration"},
+                    [&](const mgrl::StateActionModel& m, mgrl::Controller& c) {
+                      std::printf("  %-44s %8.3f us\n", "hit uniform 20x16x6 (1,920 vertices)", 1e6 * time(m, c));
+                    });
+      for (const char* budget : {"480", "1920"})
+        controllerFor({approach, "behaviors.hit.discretizer.type=kd_tree", "behaviors.hit.discretizer.bounds=hits",
+                       "behaviors.hit.discretizer.split_axes=longest",
+                       "behaviors.hit.learner.type=adaptive_value_iteration",
+                       std::string("behaviors.hit.learner.max_vertices=") + budget,
+                       "behaviors.hit.learner.criterion=influence_policy"},
+                      [&](const mgrl::StateActionModel& m, mgrl::Controller& c) {
+                        std::printf("  %-44s %8.3f us\n", fmt::format("hit kd_tree, {} vertices", budget).c_str(),
+                                    1e6 * time(m, c));
+                      });
+      fs::remove_all(scratch);
+    }
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "mgrl_bench_adaptive: %s\n", e.what());
+    return 1;
+  }
+  return 0;
+}

@@ -1,0 +1,130 @@
+#!/usr/bin/env python3
+"""Adaptive against uniform hit grids on boxing (issue 16), with `mgrl train` and `mgrl eval`.
+
+Trains the approach behaviour once (the scenario's own learner), then for each
+configuration trains only hit into a copy of that bundle and evaluates the combined policy
+with `mgrl eval --trials N --seed S` for each seed. Prints one row per configuration:
+vertices (all, free, tied), the hit table's bytes, hit training seconds, success rate and
+mean time to hit per seed.
+
+    scripts/adaptive_compare.py [--mgrl build/app/mgrl] [--trials 300] [--seeds 1,2,3]
+                                [--only NAME,...] [--json OUT]
+
+Every row is reproducible by hand: the script prints the `mgrl` commands it runs (stderr).
+MGRL_DATA and MGRL_CACHE are passed through (set MGRL_CACHE to keep the graph cache apart).
+"""
+import argparse
+import json
+import os
+import shutil
+import subprocess
+import sys
+import tempfile
+
+ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+SCENARIO = "scenarios/boxing.yaml"
+
+UNIFORM = "behaviors.hit.learner.type=value_iteration"
+KD = "behaviors.hit.discretizer.type=kd_tree behaviors.hit.discretizer.bounds=hits"
+AVI = "behaviors.hit.learner.type=adaptive_value_iteration"
+
+
+def uniform(a, d, h):
+    return f"{UNIFORM} behaviors.hit.discretizer.angles={a} behaviors.hit.discretizer.distances={d} " \
+           f"behaviors.hit.discretizer.heights={h}"
+
+
+def adaptive(cells, extra):
+    a, d, h = cells
+    return f"{KD} behaviors.hit.discretizer.angle_cells={a} behaviors.hit.discretizer.distance_cells={d} " \
+           f"behaviors.hit.discretizer.height_cells={h} {AVI} {extra}"
+
+
+# name -> --set flags (space separated). Equal table rows: 480 and 1,920 vertices.
+CONFIGS = {
+    "uniform 10x8x6": uniform(10, 8, 6),
+    "uniform 20x16x6": uniform(20, 16, 6),
+    "adaptive 480 (old: both, round robin)": adaptive((4, 4, 2), "behaviors.hit.learner.max_vertices=480"),
+    "adaptive 480 longest": adaptive((4, 4, 2), "behaviors.hit.discretizer.split_axes=longest "
+                                                "behaviors.hit.learner.max_vertices=480"),
+    "adaptive 480 longest influence_policy": adaptive(
+        (4, 4, 2), "behaviors.hit.discretizer.split_axes=longest behaviors.hit.learner.max_vertices=480 "
+                   "behaviors.hit.learner.criterion=influence_policy"),
+    "adaptive 1920 longest influence_policy": adaptive(
+        (8, 8, 4), "behaviors.hit.discretizer.split_axes=longest behaviors.hit.learner.max_vertices=1920 "
+                   "behaviors.hit.learner.criterion=influence_policy"),
+}
+
+
+def run(mgrl, args, env):
+    print("+ mgrl " + " ".join(args), file=sys.stderr)
+    result = subprocess.run([mgrl] + args, cwd=ROOT, env=env, capture_output=True, text=True)
+    if result.returncode != 0:
+        sys.exit(f"adaptive_compare: `mgrl {' '.join(args)}` failed ({result.returncode}):\n{result.stderr}")
+    return json.loads(result.stdout)
+
+
+def sets(flags):
+    out = []
+    for flag in flags.split():
+        out += ["--set", flag]
+    return out
+
+
+def main():
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--mgrl", default=os.path.join(ROOT, "build/app/mgrl"))
+    parser.add_argument("--trials", type=int, default=300)
+    parser.add_argument("--seeds", default="1,2,3")
+    parser.add_argument("--only", default="", help="comma-separated configuration names (default: all)")
+    parser.add_argument("--set", action="append", default=[], help="NAME=FLAGS: add a configuration")
+    parser.add_argument("--json", default="", help="also write the rows here")
+    args = parser.parse_args()
+    configs = dict(CONFIGS)
+    if args.only:
+        wanted = args.only.split(",")
+        configs = {k: v for k, v in configs.items() if k in wanted}
+    for item in args.set:
+        name, flags = item.split("=", 1)
+        configs[name] = flags
+    env = dict(os.environ)
+    seeds = [int(s) for s in args.seeds.split(",")]
+    scratch = tempfile.mkdtemp(prefix="mgrl-adaptive-compare-")
+    rows = []
+    try:
+        base = os.path.join(scratch, "approach")
+        run(args.mgrl, ["train", SCENARIO, "--behavior", "approach", "--out", base, "--json"], env)
+        for name, flags in configs.items():
+            out = os.path.join(scratch, f"run{len(rows)}")
+            shutil.copytree(base, out)
+            trained = run(args.mgrl, ["train", SCENARIO, "--behavior", "hit", "--out", out, "--json"] + sets(flags),
+                          env)
+            hit = trained["behaviors"]["hit"]
+            vertices = hit["vertices"]
+            tied = hit["stats"].get("hanging_vertices", 0)
+            row = {"name": name, "flags": flags, "vertices": vertices, "free": vertices - tied, "tied": tied,
+                   "table_bytes": hit["table_bytes"], "train_s": hit["seconds"] + hit["tabulate_seconds"],
+                   "seeds": {}}
+            for seed in seeds:
+                result = run(args.mgrl, ["eval", SCENARIO, "--policy", out, "--trials", str(args.trials), "--seed",
+                                         str(seed), "--json"] + sets(flags), env)
+                row["seeds"][seed] = {"success": result["success_rate"], "time": result["mean_time_to_hit_s"]}
+            rows.append(row)
+            print_row(row, seeds)
+    finally:
+        shutil.rmtree(scratch, ignore_errors=True)
+    if args.json:
+        with open(args.json, "w") as f:
+            json.dump(rows, f, indent=1)
+
+
+def print_row(row, seeds):
+    cells = "  ".join(f"{100 * row['seeds'][s]['success']:5.1f}% {row['seeds'][s]['time']:.2f}s" for s in seeds)
+    times = [row["seeds"][s]["time"] for s in seeds]
+    print(f"{row['name']:<44} {row['vertices']!s:>6} {row['free']!s:>6} {row['tied']!s:>6} "
+          f"{row['table_bytes']!s:>9} {row['train_s'] or 0:7.1f}s  {cells}  mean {sum(times) / len(times):.2f}s",
+          flush=True)
+
+
+if __name__ == "__main__":
+    main()
