@@ -54,13 +54,35 @@ TEST_CASE("page messages are taken only when every field is what the protocol sa
   CHECK(std::get<serve::Pause>(parseClientMessage(R"({"type": "pause", "paused": true})")).paused);
   CHECK(std::holds_alternative<serve::Step>(parseClientMessage(R"({"type": "step"})")));
   CHECK(std::get<serve::SetSpeed>(parseClientMessage(R"({"type": "speed", "speed": 0.5})")).speed == 0.5);
+  const auto start = std::get<serve::Learn>(
+      parseClientMessage(R"({"type": "learn", "command": "start", "behavior": "hit", "seed": 4, "budget": 500})"));
+  CHECK((start.command == serve::Learn::Command::Start && start.behavior == "hit" && start.seed == 4 && start.budget == 500));
+  CHECK(std::get<serve::Learn>(parseClientMessage(R"({"type": "learn", "command": "step", "steps": 10})")).steps == 10);
+  CHECK(std::get<serve::Learn>(parseClientMessage(R"({"type": "learn", "command": "run", "rate": 50})")).rate == 50);
+  const auto retrain = std::get<serve::Retrain>(
+      parseClientMessage(R"({"type": "retrain", "behavior": "hit", "set": {"reward.contact_radius": 0.2, "discretizer.angles": 12}})"));
+  CHECK((retrain.behavior == "hit" && retrain.set.at("reward.contact_radius") == 0.2 && retrain.set.at("discretizer.angles") == 12));
 
   const std::vector<std::pair<std::string, std::string>> refused = {
       {"not json", "expected a JSON object, found text that is not JSON"},
       {"[1, 2]", "expected a JSON object, found [1,2]"},
       {R"({"mode": "target"})", "expected a field \"type\""},
       {R"({"type": 7})", "message.type: expected a string, found 7"},
-      {R"({"type": "explode"})", "expected one of mode, move_target, controller, weights, pause, step, speed, values, found \"explode\""},
+      {R"({"type": "explode"})", "expected one of mode, move_target, controller, weights, pause, step, speed, values, learn, retrain, found \"explode\""},
+      {R"({"type": "learn"})", "learn: expected a field \"command\""},
+      {R"({"type": "learn", "command": "teach"})", "learn.command: expected one of start, step, run, stop, found \"teach\""},
+      {R"({"type": "learn", "command": "start"})", "learn: expected a field \"behavior\""},
+      {R"({"type": "learn", "command": "start", "behavior": "hit", "budget": 0})", "learn.budget: expected a whole number in [1, 10000000], found 0"},
+      {R"({"type": "learn", "command": "start", "behavior": "hit", "seed": -1})", "learn.seed: expected a whole number in [0, 2147483647], found -1"},
+      {R"({"type": "learn", "command": "step", "steps": 1001})", "learn.steps: expected a whole number in [1, 1000], found 1001"},
+      {R"({"type": "learn", "command": "step", "behavior": "hit"})", "learn: unexpected field \"behavior\""},
+      {R"({"type": "learn", "command": "run", "rate": 1e9})", "learn.rate: expected a number in [0, 2000], found 1000000000"},
+      {R"({"type": "retrain", "behavior": "hit"})", "retrain: expected a field \"set\""},
+      {R"({"type": "retrain", "behavior": "hit", "set": [1]})", "retrain.set: expected an object of at most 8 parameters"},
+      {R"({"type": "retrain", "behavior": "hit", "set": {"learner.budget": 5}})", "expected parameters named reward.NAME or discretizer.NAME, found \"learner.budget\""},
+      {R"({"type": "retrain", "behavior": "hit", "set": {"reward.": 5}})", "found \"reward.\""},
+      {R"({"type": "retrain", "behavior": "hit", "set": {"reward.a.b": 5}})", "found \"reward.a.b\""},
+      {R"({"type": "retrain", "behavior": "hit", "set": {"reward.sigma": "wide"}})", "retrain.set[\"reward.sigma\"]: expected a number"},
       {R"({"type": "step", "extra": 1})", "step: unexpected field \"extra\""},
       {R"({"type": "mode", "mode": "dance"})", "mode.mode: expected one of target, sparring, crowd, found \"dance\""},
       {R"({"type": "mode", "mode": "crowd", "avatars": 2001})", "mode.avatars: expected a whole number in [2, 2000], found 2001"},
@@ -290,6 +312,88 @@ TEST_CASE("with no policy bundle, the page is told and the online search runs", 
   session.handle(R"({"type": "values", "behavior": "hit"})");
   CHECK(json::parse(session.takeOutbox().at(0))["message"].get<std::string>().find("expected a policy bundle") !=
         std::string::npos);
+}
+
+// Issue 15: the learn panel steps the paper's Q-learning on a table of the page's own, and
+// live retraining swaps a behaviour's table for value iteration's on changed parameters.
+TEST_CASE("a page's lesson steps Q-learning and a retraining switches the policy", "[serve][data]") {
+  const BoxingAssets boxing;
+  serve::ViewerSession session(boxing.assets);
+  const json original = textMessages(session).at(0)["behaviors"][1];
+  REQUIRE(original["name"] == "hit");
+  CHECK(original["parameters"]["reward.contact_radius"] == 0.15);
+  auto only = [&](const char* type) {
+    std::vector<json> found;
+    for (const json& m : textMessages(session))
+      if (m["type"] == type) found.push_back(m);
+    REQUIRE(found.size() == 1);
+    return found[0];
+  };
+  session.handle(R"({"type": "learn", "command": "step"})");
+  CHECK_THAT(only("error")["message"].get<std::string>(), Catch::Contains("expected a lesson started first"));
+  session.handle(R"({"type": "learn", "command": "start", "behavior": "kick"})");
+  CHECK_THAT(only("error")["message"].get<std::string>(), Catch::Contains("expected one of approach, hit, found \"kick\""));
+
+  session.handle(R"({"type": "learn", "command": "start", "behavior": "approach", "seed": 3, "budget": 50})");
+  const json lesson = only("lesson");
+  CHECK(lesson["updates"] == 0);
+  CHECK(lesson["budget"] == 50);
+  session.handle(R"({"type": "learn", "command": "step", "steps": 49})");
+  const json step = only("learn_step");
+  CHECK(step["update"] == 49);
+  CHECK(step["taken"] == 49);
+  CHECK(step["done"] == false);
+  for (const json& v : step["vertices"])
+    CHECK(v["after"].get<double>() ==
+          Approx(v["before"].get<double>() + step["alpha"].get<double>() * (v["backup"].get<double>() - v["before"].get<double>()))
+              .margin(1e-6));
+  // Running: the steps come with the clock, and stop at the budget.
+  session.handle(R"({"type": "learn", "command": "run", "rate": 2000})");
+  session.advance(1.0);
+  const json last = only("learn_step");
+  CHECK(last["update"] == 50);
+  CHECK(last["done"] == true);
+  session.handle(R"({"type": "learn", "command": "step"})");
+  CHECK_THAT(only("error")["message"].get<std::string>(), Catch::Contains("budget of 50 actions is spent"));
+
+  // Retraining: a bad value is refused at once, naming it; a good one trains on a thread.
+  session.handle(R"({"type": "retrain", "behavior": "hit", "set": {"reward.contact_radius": -1}})");
+  CHECK_THAT(only("error")["message"].get<std::string>(), Catch::Contains("contact_radius"));
+  session.handle(R"({"type": "retrain", "behavior": "hit", "set": {"reward.nonsense": 1}})");
+  CHECK_THAT(only("error")["message"].get<std::string>(), Catch::Contains("nonsense"));
+  session.handle(R"({"type": "retrain", "behavior": "hit", "set": {"discretizer.angles": 100000}})");
+  CHECK_THAT(only("error")["message"].get<std::string>(), Catch::Contains("angles"));
+  session.handle(R"({"type": "retrain", "behavior": "hit", "set": {"discretizer.angles": 10}})");
+  CHECK(only("retrain")["status"] == "started");
+  session.handle(R"({"type": "retrain", "behavior": "hit", "set": {"discretizer.angles": 12}})");
+  CHECK_THAT(only("error")["message"].get<std::string>(), Catch::Contains("expected no retraining under way"));
+  json done, scene;
+  for (int k = 0; k < 6000 && done.is_null(); ++k) {  // at most a minute
+    std::this_thread::sleep_for(std::chrono::milliseconds(10));
+    session.advance(0.0);
+    for (const json& m : textMessages(session)) {
+      if (m["type"] == "retrain") done = m;
+      if (m["type"] == "scene") scene = m;
+    }
+  }
+  REQUIRE(done["status"] == "done");
+  CHECK(done["before"]["success_rate"].get<double>() >= 0);
+  CHECK(done["after"]["success_rate"].get<double>() >= 0);
+  const json& hit = scene["behaviors"][1];
+  CHECK(hit["retrained"]["discretizer.angles"] == 10);
+  CHECK(hit["parameters"]["discretizer.angles"] == 10);
+  CHECK(hit["vertices"] == done["vertices"]);
+  CHECK(hit["vertices"].get<std::size_t>() * 2 == original["vertices"].get<std::size_t>());  // 10 angles, not 20
+  // The retrained table is the one the page's values come from.
+  session.handle(R"({"type": "values", "behavior": "hit"})");
+  const json values = only("values");
+  CHECK(values["points"].size() * 6 == done["vertices"].get<std::size_t>());  // one of 6 layers
+  // Back to the bundle.
+  session.handle(R"({"type": "retrain", "behavior": "hit", "set": {}})");
+  std::vector<json> back = textMessages(session);
+  REQUIRE(back.size() == 2);
+  CHECK(back[1]["status"] == "reverted");
+  CHECK_FALSE(back[0]["behaviors"][1].contains("retrained"));
 }
 
 // The server on a free port, in a thread of its own, serving a small web folder.

@@ -2,7 +2,8 @@
 // the glue between them. The pieces live in their own modules: protocol.js (frames and
 // messages), avatars.js (bodies, targets, hit flashes), target_drag.js (target mode's
 // mouse input), panel.js (controls), hud.js (read-outs), floor.js (the grid), teach.js
-// and values_view.js (the learned values around avatar 0, the learning curves).
+// and values_view.js (the learned values around avatar 0, the learning curves), learn.js
+// (Q-learning step by step, live retraining).
 import * as THREE from 'three';
 import {OrbitControls} from 'three/addons/controls/OrbitControls.js';
 import {Connection, PoseFrame} from './protocol.js';
@@ -13,6 +14,7 @@ import {Panel} from './panel.js';
 import {Hud} from './hud.js';
 import {ValuesView} from './values_view.js';
 import {Teach} from './teach.js';
+import {Learn} from './learn.js';
 
 const kKeptTimestamps = 20000;   // frame arrival times kept for window.mgrl (about 10 min)
 const kKeptHits = 10000;
@@ -76,6 +78,7 @@ const state = {
   // and from a draw to the next animation frame (what the page waits for the picture).
   draw: {updateMs: 0, renderMs: 0, cycleMs: 0, count: 0, software: false},
   values: null,            // the teaching view's record (teach.js), set below
+  learn: null,             // the learn panel's record (learn.js), set below
 };
 state.draw.software = software;
 let latest = null;       // the newest PoseFrame
@@ -91,6 +94,8 @@ const send = (message) => connection.send(message);
 const panel = new Panel(send);
 const teach = new Teach(send, valuesView, () => { dirty = true; });
 state.values = teach.record;
+const learn = new Learn(send);
+state.learn = learn.record;
 const drag = new TargetDrag({
   container, canvas: renderer.domElement, camera, controls, scene: scene3d, send,
   heightInput: document.getElementById('height'),
@@ -118,6 +123,7 @@ function onScene(message) {
   }
   panel.setScene(message);
   teach.setScene(message, newWorld && previous !== null);
+  learn.setScene(message);
   hud.setScene(message);
   dirty = true;
 }
@@ -141,6 +147,15 @@ function onMessage(message) {
       break;
     case 'values':
       teach.onValues(message);
+      break;
+    case 'lesson':
+      learn.onLesson(message);
+      break;
+    case 'learn_step':
+      learn.onStep(message);
+      break;
+    case 'retrain':
+      learn.onRetrain(message);
       break;
     case 'error':
       state.lastError = String(message.message);
@@ -315,7 +330,7 @@ connection = new Connection(`${location.protocol === 'https:' ? 'wss' : 'ws'}://
   message: onMessage,
   frame: onFrame,
   // A new connection is a new world (the server starts each page in target mode).
-  open: () => { state.connected = true; state.scene = null; teach.reset(); hud.setConnection('connected'); },
+  open: () => { state.connected = true; state.scene = null; teach.reset(); learn.reset(); hud.setConnection('connected'); },
   close: (reason) => { state.connected = false; hud.setConnection(reason); },
 });
 

@@ -25,6 +25,14 @@ struct Limits {
   static constexpr double kWeightMax = 10;
   static constexpr double kSpeedMin = 0.1, kSpeedMax = 4;
   static constexpr int kMaxSessions = 16;
+  // The learn panel (Q-learning stepped on the page).
+  static constexpr int kLearnBudgetMax = 10'000'000;  ///< actions; alpha falls from 1 over the budget
+  static constexpr int kLearnBudgetDefault = 20'000;
+  static constexpr int kLearnStepsMax = 1000;         ///< per `step` message
+  static constexpr double kLearnRateMax = 2000;       ///< steps per second while running
+  static constexpr double kLessonBytes = 64e6;        ///< one page's lesson table, at most
+  // Live retraining.
+  static constexpr int kRetrainKeysMax = 8;
 };
 
 enum class Mode { Target, Sparring, Crowd };
@@ -56,7 +64,27 @@ struct ShowValues {
   std::string behavior;
 };
 
-using ClientMessage = std::variant<SetMode, MoveTarget, SetController, SetWeights, Pause, Step, SetSpeed, ShowValues>;
+/// The learn panel: Q-learning (paper sec. 4.2) on one behaviour's problem, a step at a
+/// time, from an all-zero table of the page's own.
+struct Learn {
+  enum class Command { Start, Step, Run, Stop };
+  Command command = Command::Step;
+  std::string behavior;  ///< start
+  std::uint64_t seed = 1;  ///< start
+  std::uint64_t budget = Limits::kLearnBudgetDefault;  ///< start
+  int steps = 1;         ///< step
+  double rate = 0;       ///< run: steps per second (0 pauses)
+};
+/// Live retraining: value iteration on one behaviour with some of its reward's or grid's
+/// parameters changed ("reward.sigma", "discretizer.angles"); none: back to the policy
+/// bundle's table.
+struct Retrain {
+  std::string behavior;
+  std::map<std::string, double> set;
+};
+
+using ClientMessage =
+    std::variant<SetMode, MoveTarget, SetController, SetWeights, Pause, Step, SetSpeed, ShowValues, Learn, Retrain>;
 
 /// Parses and checks one page message. Throws mgrl::Error whose text says which field was
 /// expected to hold what and what it held (the server sends it back as an `error`).

@@ -1,13 +1,18 @@
 #include "serve/viewer.hpp"
 
 #include <algorithm>
+#include <atomic>
 #include <cmath>
+#include <mutex>
 #include <optional>
+#include <thread>
 
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>
 
 #include "learn_common.hpp"
+#include "learners/q_learning_steps.hpp"
+#include "trials.hpp"
 #include "mgrl/graph/motion_graph.hpp"
 #include "mgrl/learning/behavior.hpp"
 #include "mgrl/learning/policy_bundle.hpp"
@@ -35,6 +40,7 @@ struct ViewerAssets {
   WorldParams params;
   double meanOutDegree = 1;  ///< actions per state, for the online search's cost
   std::string note;          ///< shown on the page (no policy bundle, ...)
+  ServeOptions options;      ///< what the server was started with (live retraining adds --set's)
 
   const StateActionModel& model() const { return loaded->graph.model; }
 };
@@ -89,6 +95,8 @@ constexpr std::size_t kHitMessagesPerAdvance = 30;
 
 std::shared_ptr<const ViewerAssets> loadViewerAssets(const ServeOptions& options) {
   auto assets = std::make_shared<ViewerAssets>();
+  assets->options = options;
+  assets->options.log = {};  // never called from a retraining thread
   Scenario scenario = app::checkedScenario(options);
   assets->params =
       readWorldParams(scenario.root.has("world") ? scenario.root.child("world") : ConfigNode::parse("", "world"));
@@ -123,6 +131,39 @@ std::shared_ptr<const ViewerAssets> loadViewerAssets(const ServeOptions& options
   return assets;
 }
 
+namespace {
+
+// A behaviour retrained by one page (live retraining): its plugins built with the page's
+// changed parameters, value iteration's table on them, and what evaluation said.
+struct Retrained {
+  Behavior behavior;
+  std::shared_ptr<const Discretizer> refined;  ///< the learner's own grid, if it refined one
+  QTable table;
+  std::vector<double> vertices;  ///< (vertices, 3) positions, avatar frame
+  json set;                      ///< the parameters changed, as the page sent them
+  json curve = json::array();    ///< [updates, seconds, residual, mean residual]
+  json before, after;            ///< Trials::summary of the policy without and with this table
+  double trainSeconds = 0, totalSeconds = 0;
+  std::uint64_t updates = 0;
+
+  const Discretizer& grid() const { return refined ? *refined : *behavior.discretizer; }
+};
+
+// At most one retraining at a time on the whole server: it takes every core for a second
+// or two, and the pages' worlds share them.
+std::atomic<bool> gRetraining{false};
+
+// What trials say about a retrained policy: this many trials of this much motion each.
+constexpr std::size_t kRetrainTrials = 200;
+constexpr double kRetrainTrialSeconds = 10;
+// The tabulated problem and two tables of a retraining, at most.
+constexpr double kRetrainBytes = 1e9;
+
+double round3(double x) { return std::round(x * 1000) / 1000; }
+json point3(const Eigen::Vector3d& p) { return json::array({round3(p.x()), round3(p.y()), round3(p.z())}); }
+
+}  // namespace
+
 struct ViewerSession::State {
   std::unique_ptr<World> world;
   std::string controller;
@@ -140,11 +181,44 @@ struct ViewerSession::State {
   std::string adjustment;       ///< what the session changed on its own (scene note)
   int shown = -1;               ///< behaviour whose values are streamed (-1 none)
   std::size_t valuesFrame = 0;  ///< world frame of the last `values` message
+
+  // The policy this page runs: the bundle's parts, a retrained behaviour's replaced.
+  std::vector<PolicyPart> policy;
+  std::vector<std::shared_ptr<const Retrained>> retrained;  ///< per behaviour; null: the bundle's
+
+  // The learn panel: Q-learning a step at a time on one behaviour's problem.
+  struct Lesson {
+    int behavior = -1;
+    std::shared_ptr<const Retrained> keep;  ///< the retrained plugins the lesson's problem uses
+    std::unique_ptr<learners::QLearningSteps> steps;
+    double rate = 0, carry = 0;  ///< steps per second while running
+  };
+  std::unique_ptr<Lesson> lesson;
+
+  // A retraining under way on its own thread.
+  struct Job {
+    int behavior = -1;
+    Clock::time_point started;
+    std::atomic<bool> stop{false}, done{false};
+    std::shared_ptr<Retrained> result;  ///< read once done
+    std::string failure;                ///< set instead of a usable result
+    std::thread thread;
+  };
+  std::unique_ptr<Job> job;
+
+  ~State() {
+    if (job && job->thread.joinable()) {
+      job->stop = true;
+      job->thread.join();
+    }
+  }
 };
 
 ViewerSession::ViewerSession(std::shared_ptr<const ViewerAssets> assets)
     : assets_(std::move(assets)), state_(std::make_unique<State>()) {
   for (const Behavior& b : assets_->behaviors) state_->weights.push_back(b.weight);
+  state_->policy = assets_->policy;
+  state_->retrained.resize(assets_->behaviors.size());
   state_->controller = assets_->policy.empty() ? "online_search" : "policy";
   rebuild(Mode::Target, 1);
 }
@@ -168,7 +242,7 @@ void ViewerSession::applyController() {
       s.horizon = affordable;
     }
   }
-  std::vector<PolicyPart> policy = a.policy;
+  std::vector<PolicyPart> policy = s.policy;
   std::vector<SearchPart> search = a.search;
   for (std::size_t i = 0; i < s.weights.size(); ++i) {
     if (i < policy.size()) policy[i].weight = s.weights[i];
@@ -178,7 +252,9 @@ void ViewerSession::applyController() {
   const int horizon = s.horizon;
   const ViewerAssets* assets = assets_.get();
   DecisionClock* clock = &s.decisions;
+  const std::vector<std::shared_ptr<const Retrained>> keep = s.retrained;  // the tables `policy` points into
   s.world->setControllerFactory([=]() -> std::unique_ptr<Controller> {
+    (void)keep;
     std::unique_ptr<Controller> inner;
     if (kind == "policy")
       inner = std::make_unique<PolicyController>(assets->model(), policy, assets->params.variety);
@@ -236,11 +312,25 @@ std::string ViewerSession::scene() const {
     // The bundle's training record: its learner and curve (updates, seconds, residual,
     // mean residual), for the page's learning-curve view.
     const auto trained = a.bundle.behaviors.find(a.behaviors[i].name);
-    if (!a.policy.empty() && trained != a.bundle.behaviors.end()) {
+    if (const Retrained* r = s.retrained[i].get()) {
+      // Retrained by this page: value iteration on the changed parameters.
+      b["learner"] = "value_iteration";
+      b["curve"] = r->curve;
+      b["vertices"] = r->table.vertexCount();
+      b["retrained"] = r->set;
+    } else if (!a.policy.empty() && trained != a.bundle.behaviors.end()) {
       b["learner"] = trained->second.record.value("learner", std::string());
       b["curve"] = trained->second.record.value("curve", json::array());
       b["vertices"] = trained->second.table.vertexCount();
     }
+    // The parameters live retraining may change: the reward's and the grid's numbers.
+    json parameters = json::object();
+    for (const char* section : {"reward", "discretizer"})
+      for (const auto& [key, value] : a.behaviors[i].config[section].items())
+        if (value.is_number()) parameters[fmt::format("{}.{}", section, key)] = value;
+    if (const Retrained* r = s.retrained[i].get())
+      for (const auto& [key, value] : r->set.items()) parameters[key] = value;
+    b["parameters"] = parameters;
     behaviors.push_back(std::move(b));
   }
   json controllers = json::array();
@@ -351,14 +441,294 @@ void ViewerSession::handle(std::string_view text) {
         outbox_.push_back(values());
         s.valuesFrame = s.world->frame();
       }
+    } else if (const auto* learnMessage = std::get_if<Learn>(&message)) {
+      learn(*learnMessage);
+    } else if (const auto* retrainMessage = std::get_if<Retrain>(&message)) {
+      retrain(*retrainMessage);
     }
   } catch (const Error& e) {
     outbox_.push_back(json{{"type", "error"}, {"message", e.what()}}.dump());
   }
 }
 
+// The learn panel (issue 15): the paper's Q-learning (sec. 4.2) on one behaviour's problem
+// with a table of the page's own, all zeros at the start, taken a step at a time so that
+// each update can be looked at as the paper's Fig. 4 draws it.
+void ViewerSession::learn(const Learn& message) {
+  State& s = *state_;
+  const ViewerAssets& a = *assets_;
+  using Command = Learn::Command;
+  if (message.command == Command::Start) {
+    const int i = behaviorIndex(message.behavior);
+    if (i < 0)
+      throw Error(fmt::format("learn.behavior: expected one of {}, found \"{}\"", behaviorNames(), message.behavior));
+    auto lesson = std::make_unique<State::Lesson>();
+    lesson->behavior = i;
+    lesson->keep = s.retrained[static_cast<std::size_t>(i)];
+    const Behavior& b = lesson->keep ? lesson->keep->behavior : a.behaviors[static_cast<std::size_t>(i)];
+    const Problem problem = b.problem(a.model());
+    const double bytes = learners::QLearningSteps::tableBytes(problem);
+    if (bytes > Limits::kLessonBytes)
+      throw Error(fmt::format("learn: expected a lesson table of at most {} for one page, found {} for {} ({} vertices "
+                              "x {} actions); choose a behaviour with a smaller grid",
+                              app::humanBytes(Limits::kLessonBytes), app::humanBytes(bytes), b.name,
+                              b.discretizer->vertexCount(), a.model().actionCount()));
+    lesson->steps = std::make_unique<learners::QLearningSteps>(problem, message.budget, message.seed);
+    s.lesson = std::move(lesson);
+    outbox_.push_back(lessonMessage());
+    return;
+  }
+  if (!s.lesson)
+    throw Error("learn.command: expected a lesson started first ({\"type\": \"learn\", \"command\": \"start\", "
+                "\"behavior\": ...}), found none");
+  State::Lesson& lesson = *s.lesson;
+  if (message.command == Command::Stop) {
+    s.lesson.reset();
+    outbox_.push_back(json{{"type", "lesson"}, {"behavior", nullptr}}.dump());
+  } else if (message.command == Command::Run) {
+    lesson.rate = message.rate;
+    lesson.carry = 0;
+  } else {
+    if (lesson.steps->done())
+      throw Error(fmt::format("learn: the lesson's budget of {} actions is spent; start a new one",
+                              lesson.steps->budget()));
+    const std::size_t n =
+        std::min<std::uint64_t>(static_cast<std::uint64_t>(message.steps), lesson.steps->budget() - lesson.steps->updates());
+    learners::QStep last;
+    for (std::size_t k = 0; k < n; ++k) last = lesson.steps->step();
+    outbox_.push_back(stepMessage(last, n));
+  }
+}
+
+void ViewerSession::advanceLesson(double frames) {
+  State& s = *state_;
+  if (!s.lesson || s.lesson->rate <= 0) return;
+  State::Lesson& lesson = *s.lesson;
+  lesson.carry += frames * frameTime() * lesson.rate;
+  // A late timer does not make the lesson race to catch up.
+  const double most = std::max(1.0, 8 * frameTime() * Limits::kLearnRateMax);
+  auto n = static_cast<std::size_t>(std::min(std::floor(lesson.carry), most));
+  lesson.carry = std::min(lesson.carry - static_cast<double>(n), 1.0);
+  n = std::min<std::uint64_t>(n, lesson.steps->budget() - lesson.steps->updates());
+  if (n == 0) return;
+  learners::QStep last;
+  for (std::size_t k = 0; k < n; ++k) last = lesson.steps->step();
+  if (lesson.steps->done()) lesson.rate = 0;
+  outbox_.push_back(stepMessage(last, n));
+}
+
+std::string ViewerSession::lessonMessage() const {
+  const State& s = *state_;
+  const ViewerAssets& a = *assets_;
+  const State::Lesson& lesson = *s.lesson;
+  const learners::QLearningSteps& steps = *lesson.steps;
+  const Behavior& b = lesson.keep ? lesson.keep->behavior : a.behaviors[static_cast<std::size_t>(lesson.behavior)];
+  json vertices = json::array();
+  for (std::size_t v = 0; v < b.discretizer->vertexCount(); ++v) vertices.push_back(point3(b.discretizer->vertexPosition(v)));
+  return json{{"type", "lesson"},
+              {"behavior", b.name},
+              {"budget", steps.budget()},
+              {"dimension", b.discretizer->dimension()},
+              {"grid", b.discretizer->type()},
+              {"vertices", vertices},
+              {"states", a.model().stateCount()},
+              {"actions", a.model().actionCount()},
+              {"pairs", steps.table().vertexCount() * steps.table().actionCount()},
+              {"gamma", b.reward->gamma()},
+              {"state", steps.state()},
+              {"target", point3(steps.target())},
+              {"updates", steps.updates()},
+              {"restarts", steps.restarts()},
+              {"touched", steps.touched()}}
+      .dump();
+}
+
+std::string ViewerSession::stepMessage(const learners::QStep& step, std::size_t taken) const {
+  const State& s = *state_;
+  const StateActionModel& model = assets_->model();
+  const learners::QLearningSteps& steps = *s.lesson->steps;
+  json vertices = json::array();
+  for (const learners::QStepVertex& v : step.vertices)
+    vertices.push_back({{"vertex", v.vertex},
+                        {"position", point3(v.position)},
+                        {"weight", v.weight},
+                        {"reward", v.reward},
+                        {"next", point3(v.next)},
+                        {"next_inside", v.nextInside},
+                        {"discount", v.discount},
+                        {"future", v.future},
+                        {"backup", v.backup},
+                        {"before", v.before},
+                        {"after", v.after}});
+  // The action's root path on the floor, in the avatar's frame before it.
+  json path = json::array();
+  for (std::uint32_t k = model.actionFrameBegin[step.action]; k < model.actionFrameBegin[step.action + 1]; ++k)
+    path.push_back({round3(model.frameRoot[3 * k]), 0, round3(model.frameRoot[3 * k + 1])});
+  return json{{"type", "learn_step"},
+              {"behavior", assets_->behaviors[static_cast<std::size_t>(s.lesson->behavior)].name},
+              {"update", step.update},
+              {"budget", steps.budget()},
+              {"taken", taken},
+              {"alpha", step.alpha},
+              {"state", step.state},
+              {"next_state", step.nextState},
+              {"action", step.action},
+              {"action_index", step.action - model.stateActionBegin[step.state]},
+              {"actions", model.stateActionBegin[step.state + 1] - model.stateActionBegin[step.state]},
+              {"frames", step.frames},
+              {"target", point3(step.target)},
+              {"target_next", point3(step.targetNext)},
+              {"restarted", step.restarted},
+              {"restarts", steps.restarts()},
+              {"touched", steps.touched()},
+              {"pairs", steps.table().vertexCount() * steps.table().actionCount()},
+              {"done", steps.done()},
+              {"path", path},
+              {"vertices", vertices}}
+      .dump();
+}
+
+// Live retraining (issue 15): value iteration on one behaviour with some of its reward's or
+// grid's parameters changed, on a thread of its own; the page's avatar switches to the new
+// table when it is done, and both policies are evaluated on the same trials.
+void ViewerSession::retrain(const Retrain& message) {
+  State& s = *state_;
+  const ViewerAssets& a = *assets_;
+  const int i = behaviorIndex(message.behavior);
+  if (i < 0)
+    throw Error(fmt::format("retrain.behavior: expected one of {}, found \"{}\"", behaviorNames(), message.behavior));
+  if (a.policy.empty())
+    throw Error("retrain: expected a policy bundle to start from; this server has none (mgrl train makes one)");
+  if (s.job)
+    throw Error(fmt::format("retrain: expected no retraining under way on this page, found one of {} (started {:.1f} s "
+                            "ago)",
+                            a.behaviors[static_cast<std::size_t>(s.job->behavior)].name,
+                            std::chrono::duration<double>(Clock::now() - s.job->started).count()));
+  const auto index = static_cast<std::size_t>(i);
+  if (message.set.empty()) {  // back to the bundle's table
+    s.retrained[index].reset();
+    s.policy[index] = a.policy[index];
+    applyController();
+    outbox_.push_back(scene());
+    outbox_.push_back(json{{"type", "retrain"}, {"behavior", message.behavior}, {"status", "reverted"}}.dump());
+    return;
+  }
+  // The changed scenario, checked like `--set` on the command line: a wrong name or value
+  // is refused here, before anything is trained.
+  ServeOptions options = a.options;
+  json set = json::object();
+  for (const auto& [key, value] : message.set) {
+    options.sets.push_back(fmt::format("behaviors.{}.{}={}", message.behavior, key, value));
+    set[key] = value;
+  }
+  Scenario scenario = app::checkedScenario(options);
+  std::vector<Behavior> built =
+      buildBehaviors(scenario, app::plugins(), a.model(), a.loaded->graph.key, message.behavior);
+  auto result = std::make_shared<Retrained>(Retrained{std::move(built.front())});
+  result->set = set;
+  const double bytes = GridModel::trainingBytes(a.model().actionCount(), result->behavior.discretizer->vertexCount());
+  if (bytes > kRetrainBytes)
+    throw Error(fmt::format("retrain: expected training to need at most {}, found {} for {} vertices x {} actions; "
+                            "choose a coarser grid",
+                            app::humanBytes(kRetrainBytes), app::humanBytes(bytes),
+                            result->behavior.discretizer->vertexCount(), a.model().actionCount()));
+  bool idle = false;
+  if (!gRetraining.compare_exchange_strong(idle, true))
+    throw Error("retrain: expected the server's one retraining slot to be free, found another page's retraining "
+                "under way; try again when it ends");
+
+  auto job = std::make_unique<State::Job>();
+  job->behavior = i;
+  job->started = Clock::now();
+  job->result = result;
+  // What the trials compare: this page's policy as it is, and with the new table.
+  std::vector<PolicyPart> before = s.policy;
+  for (std::size_t k = 0; k < before.size(); ++k) before[k].weight = s.weights[k];
+  State::Job* j = job.get();
+  std::shared_ptr<const ViewerAssets> assets = assets_;
+  const std::vector<std::shared_ptr<const Retrained>> keep = s.retrained;  // `before` points into these
+  job->thread = std::thread([j, assets, before, keep, result, index] {
+    try {
+      const StateActionModel& model = assets->model();
+      const unsigned threads = std::max(1u, std::thread::hardware_concurrency());
+      const auto start = Clock::now();
+      const Problem problem = result->behavior.problem(model);
+      const GridModel grid = GridModel::build(problem, threads);
+      const auto learner = app::plugins().learners.create(ConfigNode::parse("{type: value_iteration}", "retrain"));
+      TrainResult trained = learner->train({problem, grid, nullptr, nullptr, threads, &j->stop});
+      result->trainSeconds = std::chrono::duration<double>(Clock::now() - start).count();
+      result->table = std::move(trained.table);
+      result->refined = trained.grid;
+      result->updates = trained.updates;
+      for (const CurvePoint& p : trained.curve) result->curve.push_back({p.updates, p.seconds, p.residual, p.meanResidual});
+      const Discretizer& g = result->grid();
+      for (std::size_t v = 0; v < g.vertexCount(); ++v) {
+        const Eigen::Vector3d p = g.vertexPosition(v);
+        result->vertices.insert(result->vertices.end(), {p.x(), p.y(), p.z()});
+      }
+      // Success as the scenario defines it (its contact radius), on the same starts.
+      const app::Trials trials(model, assets->behaviors, std::numeric_limits<double>::quiet_NaN(),
+                               assets->loaded->scenario.path.string());
+      std::vector<PolicyPart> after = before;
+      after[index].grid = &g;
+      after[index].table = &result->table;
+      auto evaluate = [&](const std::vector<PolicyPart>& parts) {
+        PolicyController controller(model, parts);
+        return app::Trials::summary(trials.run([&](std::uint32_t s, const Eigen::Vector3d& e) { return controller.choose(s, e); },
+                                               kRetrainTrials, kRetrainTrialSeconds, 1));
+      };
+      result->before = evaluate(before);
+      result->after = evaluate(after);
+      result->totalSeconds = std::chrono::duration<double>(Clock::now() - start).count();
+    } catch (const TrainInterrupted&) {
+      j->failure = "interrupted";
+    } catch (const std::exception& e) {
+      j->failure = e.what();
+    }
+    (void)keep;
+    gRetraining = false;
+    j->done = true;
+  });
+  s.job = std::move(job);
+  outbox_.push_back(json{{"type", "retrain"}, {"behavior", message.behavior}, {"status", "started"}, {"set", set}}.dump());
+}
+
+void ViewerSession::collectRetraining() {
+  State& s = *state_;
+  if (!s.job || !s.job->done) return;
+  s.job->thread.join();
+  const std::unique_ptr<State::Job> job = std::move(s.job);
+  const auto index = static_cast<std::size_t>(job->behavior);
+  const std::string& name = assets_->behaviors[index].name;
+  if (!job->failure.empty()) {
+    outbox_.push_back(json{{"type", "retrain"}, {"behavior", name}, {"status", "failed"}, {"message", job->failure}}.dump());
+    return;
+  }
+  const std::shared_ptr<const Retrained> r = job->result;
+  s.retrained[index] = r;
+  s.policy[index].grid = &r->grid();
+  s.policy[index].table = &r->table;
+  applyController();
+  outbox_.push_back(scene());
+  outbox_.push_back(json{{"type", "retrain"},
+                         {"behavior", name},
+                         {"status", "done"},
+                         {"set", r->set},
+                         {"learner", "value_iteration"},
+                         {"vertices", r->table.vertexCount()},
+                         {"updates", r->updates},
+                         {"train_seconds", r->trainSeconds},
+                         {"seconds", std::chrono::duration<double>(Clock::now() - job->started).count()},
+                         {"trials", kRetrainTrials},
+                         {"before", r->before},
+                         {"after", r->after}}
+                        .dump());
+}
+
 bool ViewerSession::advance(double frames) {
   State& s = *state_;
+  advanceLesson(frames);
+  collectRetraining();
   std::size_t n = 0;
   if (s.paused) {
     n = static_cast<std::size_t>(s.steps);
@@ -430,21 +800,24 @@ const std::vector<std::uint8_t>& ViewerSession::frame() {
 std::string ViewerSession::values() const {
   const ViewerAssets& a = *assets_;
   const State& s = *state_;
-  const Behavior& behavior = a.behaviors[static_cast<std::size_t>(s.shown)];
-  const PolicyBehavior& trained = a.bundle.behaviors.at(behavior.name);
-  const QTable& q = trained.table;
+  const auto shown = static_cast<std::size_t>(s.shown);
+  const Retrained* retrained = s.retrained[shown].get();
+  const Behavior& behavior = retrained ? retrained->behavior : a.behaviors[shown];
+  const std::vector<double>& vertexPositions =
+      retrained ? retrained->vertices : a.bundle.behaviors.at(behavior.name).vertices;
+  const QTable& q = *s.policy[shown].table;
   const World::Decision d = s.world->lastDecision(0);
   const Eigen::Vector3d e = inverseTransformPoint(d.frame, s.world->aim(0));
   const std::size_t vertices = q.vertexCount();
-  double level = trained.vertices.empty() ? 0 : trained.vertices[1];
+  double level = vertexPositions.empty() ? 0 : vertexPositions[1];
   for (std::size_t v = 0; v < vertices; ++v)
-    if (std::abs(trained.vertices[3 * v + 1] - e.y()) < std::abs(level - e.y())) level = trained.vertices[3 * v + 1];
+    if (std::abs(vertexPositions[3 * v + 1] - e.y()) < std::abs(level - e.y())) level = vertexPositions[3 * v + 1];
   const std::size_t n = q.actionsOf(d.state);
   json points = json::array();
   double lo = 0, hi = 0;
   bool first = true;
   for (std::size_t v = 0; v < vertices; ++v) {
-    const double* p = &trained.vertices[3 * v];
+    const double* p = &vertexPositions[3 * v];
     if (std::abs(p[1] - level) > 1e-6 || n == 0) continue;
     const float* row = q.row(d.state, v);
     const std::size_t best = static_cast<std::size_t>(std::max_element(row, row + n) - row);
@@ -470,7 +843,7 @@ std::string ViewerSession::values() const {
               {"actions", n},
               {"chosen", d.action - model.stateActionBegin[d.state]},
               {"height", level},
-              {"target_inside", behavior.discretizer->inside(e)},
+              {"target_inside", s.policy[shown].grid->inside(e)},
               {"v_min", lo},
               {"v_max", hi},
               {"points", points},

@@ -14,6 +14,10 @@
 #include "learn_commands.hpp"
 #include "serve/protocol.hpp"
 
+namespace mgrl::learners {
+struct QStep;
+}
+
 namespace mgrl::serve {
 
 struct ServeOptions : app::LearnOptions {
@@ -62,6 +66,14 @@ class ViewerSession {
   std::string behaviorNames() const;
   /// The `values` message of the behaviour shown (docs/viewer-protocol.md).
   std::string values() const;
+  /// The learn panel (Q-learning a step at a time) and live retraining.
+  void learn(const Learn& message);
+  void retrain(const Retrain& message);
+  /// Runs the lesson at its rate and takes a finished retraining, with their messages.
+  void advanceLesson(double frames);
+  void collectRetraining();
+  std::string lessonMessage() const;
+  std::string stepMessage(const learners::QStep& step, std::size_t taken) const;
 
   std::shared_ptr<const ViewerAssets> assets_;
   std::unique_ptr<State> state_;

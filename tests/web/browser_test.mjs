@@ -5,7 +5,7 @@
 //
 // Environment: MGRL_BINARY (default build/app/mgrl), MGRL_SERVE_ARGS (more words for
 // `mgrl serve`, e.g. "--data DIR --cache DIR"), MGRL_SCREENSHOT_DIR (default docs/img),
-// MGRL_CHROMIUM (default /usr/bin/chromium), MGRL_WEB_TEST_TIMEOUT_S (default 240).
+// MGRL_CHROMIUM (default /usr/bin/chromium), MGRL_WEB_TEST_TIMEOUT_S (default 420).
 import {spawn} from 'node:child_process';
 import {createRequire} from 'node:module';
 import {mkdirSync} from 'node:fs';
@@ -21,7 +21,7 @@ const binary = path.resolve(process.env.MGRL_BINARY ?? path.join(repo, 'build/ap
 const serveArgs = (process.env.MGRL_SERVE_ARGS ?? '').split(/\s+/).filter((w) => w.length > 0);
 const screenshotDir = path.resolve(repo, process.env.MGRL_SCREENSHOT_DIR ?? 'docs/img');
 const chromiumPath = process.env.MGRL_CHROMIUM ?? '/usr/bin/chromium';
-const overallSeconds = Number(process.env.MGRL_WEB_TEST_TIMEOUT_S ?? 240);
+const overallSeconds = Number(process.env.MGRL_WEB_TEST_TIMEOUT_S ?? 420);
 
 const kServerStartSeconds = 120;   // the first start may load the capture and build a graph
 const kMinFramesPerSecond = 20;
@@ -503,6 +503,132 @@ async function setCrowdSize(page, avatars) {
   await page.press('#crowd-count', 'Enter');   // a change: sent only when in crowd mode
 }
 
+
+// The learn panel (issue 15): Q-learning stepped on the page, each update shown as the
+// paper's Fig. 4 draws it. The server's own numbers must obey the update rule, the table
+// of a fresh lesson starts at zero, and the page must show what it was sent.
+function ruleHolds(step) {
+  const close = (a, b) => Math.abs(a - b) <= 1e-5 * Math.max(1, Math.abs(a), Math.abs(b));
+  return step.vertices.every((v) => close(v.backup, v.reward + v.discount * v.future) &&
+                                    close(v.after, v.before + step.alpha * (v.backup - v.before)) &&
+                                    (v.next_inside || v.future === 0));
+}
+
+async function learnPanel(page) {
+  const scene = await page.evaluate(() => mgrl.state.scene);
+  const approach = scene.behaviors.find((b) => b.name === 'approach');
+  await page.selectOption('#learn-behavior', 'approach');
+  await page.fill('#learn-budget', '20000');
+  await page.click('#learn-start');
+  await waitInPage(page, () => mgrl.state.learn.lesson?.behavior === 'approach', null, 10000, 'a lesson on approach');
+  const lesson = await page.evaluate(() => mgrl.state.learn.lesson);
+  check(lesson.vertices.length === approach.vertices && lesson.updates === 0 && lesson.budget === 20000,
+        'learn: a lesson starts on approach\'s grid with no update yet',
+        `${lesson.vertices.length} vertices (scene: ${approach.vertices}), ${lesson.updates} updates`);
+
+  await page.click('#learn-step');
+  await waitInPage(page, () => mgrl.state.learn.steps.length === 1, null, 5000, 'the first step');
+  const first = await page.evaluate(() => mgrl.state.learn.last);
+  check(first.update === 1 && first.alpha === 1 && first.vertices.length === 4 &&
+        first.vertices.every((v) => v.before === 0 && v.future === 0 && v.after === v.reward),
+        'learn: the first update starts from zeros (alpha 1, max Q(e\') = 0, Q after = r)',
+        JSON.stringify(first.vertices.map((v) => [v.before, v.future, v.reward, v.after])));
+  check(ruleHolds(first), 'learn: the first update obeys Q += alpha (r + gamma^t max Q(e\'_v) - Q) at each corner');
+  const drawn = await page.evaluate(() => ({
+    corners: document.querySelectorAll('#lesson-chart .lesson-corner').length,
+    e: document.querySelectorAll('#lesson-chart .lesson-e, #lesson-chart .lesson-e-next').length,
+    path: document.querySelector('#lesson-chart .lesson-path')?.getAttribute('d') ?? '',
+    rows: [...document.querySelectorAll('#lesson-table tr')].map((tr) => [...tr.children].map((c) => c.textContent)),
+    shown: !document.getElementById('lesson').hidden,
+  }));
+  check(drawn.shown && drawn.corners === 4 && drawn.e === 2 && drawn.path.length > 0,
+        'learn: the Fig. 4 view draws the cell\'s 4 corners, e, e\' and the action\'s path', JSON.stringify(drawn).slice(0, 200));
+  check(drawn.rows.length === 5 && drawn.rows.slice(1).every((r, k) => Number(r[0]) === first.vertices[k].vertex),
+        'learn: the table lists each updated vertex', JSON.stringify(drawn.rows));
+
+  // Ten at a time, then running faster: the count and alpha follow, and every update shown
+  // obeys the rule; values learned earlier come back as look-ahead.
+  await page.click('#learn-step10');
+  await waitInPage(page, () => mgrl.state.learn.last?.update === 11, null, 5000, '10 more steps');
+  const ten = await page.evaluate(() => mgrl.state.learn.last);
+  check(ten.taken === 10 && Math.abs(ten.alpha - (1 - 10 / 20000)) < 1e-6 && ruleHolds(ten),
+        'learn: 10 steps at once: update 11, alpha falls linearly over the budget, the rule holds',
+        `taken ${ten.taken}, alpha ${ten.alpha}`);
+  await page.click('#learn-run');
+  for (let k = 0; k < 3; ++k) await page.click('#learn-faster');
+  await waitInPage(page, () => mgrl.state.learn.last?.update > 1500, null, 20000, 'the lesson running fast');
+  await page.click('#learn-run');   // pause
+  const run = await page.evaluate(() => mgrl.state.learn.steps);
+  const looked = run.filter((m) => m.vertices.some((v) => v.future !== 0)).length;
+  const changed = run.filter((m) => m.vertices.some((v) => v.after !== v.before)).length;
+  check(run.every(ruleHolds) && looked > 0 && changed > 0,
+        `learn: running, ${run.length} updates shown, each obeys the rule; ${looked} look ahead into learned values`,
+        `${run.filter((m) => !ruleHolds(m)).length} break it`);
+  await screenshot(page, 'teach-learn.png');
+
+  // The hit grid is 3-D: 8 corners per update.
+  await page.selectOption('#learn-behavior', 'hit');
+  await page.click('#learn-start');
+  await waitInPage(page, () => mgrl.state.learn.lesson?.behavior === 'hit', null, 10000, 'a lesson on hit');
+  await page.click('#learn-step');
+  await waitInPage(page, () => mgrl.state.learn.last?.update === 1, null, 5000, 'the first hit step');
+  const hit = await page.evaluate(() => mgrl.state.learn.last);
+  check(hit.vertices.length === 8 && ruleHolds(hit), 'learn: a hit update changes the 8 corners of a 3-D cell by the rule');
+  await page.click('#learn-stop');
+  await waitInPage(page, () => mgrl.state.learn.lesson === null, null, 5000, 'the lesson stopped');
+  check(await page.evaluate(() => document.getElementById('lesson').hidden), 'learn: stop hides the lesson view');
+}
+
+// Live retraining (issue 15): a reward parameter and a grid resolution changed on the page;
+// the server retrains with value iteration and the avatar's policy switches.
+async function retrainOnce(page, behaviour, parameter, value) {
+  const before = await page.evaluate(() => mgrl.state.learn.retrain.length);
+  await page.selectOption('#retrain-behavior', behaviour);
+  await page.selectOption('#retrain-parameter', parameter);
+  await page.fill('#retrain-value', String(value));
+  const started = Date.now();
+  await page.click('#retrain-go');
+  await waitInPage(page, (n) => mgrl.state.learn.retrain.slice(n).some((m) => m.status === 'done' || m.status === 'failed'),
+                   before, 60000, `retraining ${behaviour} with ${parameter} = ${value}`);
+  const seconds = (Date.now() - started) / 1000;
+  const message = await page.evaluate((n) => mgrl.state.learn.retrain.slice(n).find((m) => m.status !== 'started'), before);
+  return {seconds, message};
+}
+
+async function liveRetraining(page) {
+  const radius = await retrainOnce(page, 'hit', 'reward.contact_radius', 0.3);
+  const m = radius.message;
+  check(m.status === 'done' && m.learner === 'value_iteration' && Number.isFinite(m.before?.success_rate) &&
+        Number.isFinite(m.after?.success_rate) && m.set['reward.contact_radius'] === 0.3,
+        `retrain: hit with contact radius 0.3 m retrained by value iteration in ${radius.seconds.toFixed(1)} s ` +
+        `(server ${Number(m.seconds).toFixed(1)} s); success ${(100 * m.before?.success_rate).toFixed(1)} % -> ` +
+        `${(100 * m.after?.success_rate).toFixed(1)} % on ${m.trials} trials`, JSON.stringify(m).slice(0, 300));
+  const scene = await page.evaluate(() => mgrl.state.scene.behaviors.find((b) => b.name === 'hit'));
+  const status = await page.evaluate(() => document.getElementById('retrain-status').textContent);
+  check(scene.retrained?.['reward.contact_radius'] === 0.3 && scene.learner === 'value_iteration' &&
+        scene.parameters['reward.contact_radius'] === 0.3 && status.includes('→'),
+        'retrain: the scene says hit is retrained and the page shows old -> new success', `${JSON.stringify(scene.retrained)}; "${status}"`);
+
+  const grid = await retrainOnce(page, 'hit', 'discretizer.angles', 10);
+  check(grid.message.status === 'done' && grid.message.vertices !== m.vertices && grid.message.set['discretizer.angles'] === 10,
+        `retrain: hit on a coarser grid (10 angles, ${grid.message.vertices} vertices against ${m.vertices}) in ` +
+        `${grid.seconds.toFixed(1)} s`, JSON.stringify(grid.message).slice(0, 300));
+
+  // A value the reward refuses: one error naming it, nothing retrained.
+  const errorsBefore = await page.evaluate(() => mgrl.state.errors.length);
+  await page.selectOption('#retrain-parameter', 'reward.contact_radius');
+  await page.fill('#retrain-value', '-1');
+  await page.click('#retrain-go');
+  await waitInPage(page, (n) => mgrl.state.errors.length > n, errorsBefore, 10000, 'the refusal of a negative radius');
+  const error = await page.evaluate(() => mgrl.state.lastError);
+  check(/contact_radius/.test(error), 'retrain: a negative contact radius is refused naming the parameter', error);
+
+  await page.click('#retrain-revert');
+  await waitInPage(page, () => !mgrl.state.scene.behaviors.find((b) => b.name === 'hit').retrained, null, 10000, 'revert');
+  ok('retrain: revert goes back to the policy bundle\'s table');
+  console.log(`#      retraining hit from the page: contact radius ${radius.seconds.toFixed(1)} s, angles ${grid.seconds.toFixed(1)} s (click to new policy)`);
+}
+
 async function main() {
   mkdirSync(screenshotDir, {recursive: true});
   const url = await startServer();
@@ -595,6 +721,11 @@ async function main() {
   const after = await page.evaluate(() => ({errors: mgrl.state.errors, bad: mgrl.state.frames.bad}));
   check(after.errors.length === 0 && after.bad === 0, 'the teaching views: no error from the server, every frame well-formed',
         `${after.errors.join('; ')}; ${after.bad} frames refused`);
+  await learnPanel(page);
+  await liveRetraining(page);
+  const learnt = await page.evaluate(() => ({errors: mgrl.state.errors, bad: mgrl.state.frames.bad}));
+  check(learnt.errors.length === 1 && learnt.bad === 0, 'learn and retrain: no error from the server but the one asked for',
+        learnt.errors.join('; '));
   check(pageErrors.length === 0, 'no script errors in the page', pageErrors.join('; '));
   check(outside.length === 0, 'the page loads nothing from outside the server', outside.join(', '));
 }
