@@ -35,8 +35,6 @@ namespace fs = std::filesystem;
 using Clock = std::chrono::steady_clock;
 double since(Clock::time_point start) { return std::chrono::duration<double>(Clock::now() - start).count(); }
 
-volatile std::size_t observed = 0;
-
 mgrl::ConfigNode yaml(const std::string& text) { return mgrl::ConfigNode::parse(text, "bench"); }
 
 // A hit table and the grid its vertices belong to.
@@ -219,26 +217,8 @@ int main(int argc, char** argv) {
         use(loaded.graph.model, greedy);
       };
       auto time = [&](const mgrl::StateActionModel& model, mgrl::Controller& c) {
-        std::vector<std::pair<std::uint32_t, Eigen::Vector3d>> queries;
-        mgrl::Rng rng(3);
-        for (int q = 0; q < 2000; ++q) {
-          const auto s = static_cast<std::uint32_t>(rng.below(model.stateCount()));
-          queries.emplace_back(s, Eigen::Vector3d((2 * rng.uniform() - 1) * 1.5, model.centroid[1],
-                                                  (2 * rng.uniform() - 1) * 1.5));
-        }
-        std::vector<double> samples;
-        mgrl::Rng draws(1);
-        for (int r = 0; r < runs; ++r) {
-          std::size_t sink = 0, calls = 0;
-          const auto start = Clock::now();
-          do {
-            for (const auto& [s, e] : queries) sink += c.choose(s, e, draws);
-            calls += queries.size();
-          } while (since(start) < 0.2);
-          samples.push_back(since(start) / static_cast<double>(calls));
-          observed = sink;
-        }
-        return mgrl::bench::median(samples);
+        const std::vector<mgrl::bench::DecisionQuery> queries = mgrl::bench::decisionQueries(model);
+        return mgrl::bench::decisionSeconds(c, queries, queries.size(), runs);
       };
       std::printf("\ndecision cost of the combined policy (greedy), 2000 random (state, target) queries, median of "
                   "%d runs (target <= 0.5 us)\n",

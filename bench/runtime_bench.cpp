@@ -35,8 +35,6 @@ using Clock = std::chrono::steady_clock;
 
 double since(Clock::time_point start) { return std::chrono::duration<double>(Clock::now() - start).count(); }
 
-volatile std::size_t observed = 0;
-
 // Heap bytes in use (glibc's count: freed memory that the allocator keeps for reuse is
 // not counted, unlike resident growth after other worlds were freed).
 double heapBytes() {
@@ -144,27 +142,9 @@ int main(int argc, char** argv) {
 
     // Decision cost: the same queries (state, target) from a sparring run for every controller.
     {
-      std::vector<std::pair<std::uint32_t, Eigen::Vector3d>> queries;
-      mgrl::Rng rng(3);
-      for (int q = 0; q < 2000; ++q) {
-        const auto s = static_cast<std::uint32_t>(rng.below(model.stateCount()));
-        queries.emplace_back(s, Eigen::Vector3d((2 * rng.uniform() - 1) * 1.5, model.centroid[1],
-                                                (2 * rng.uniform() - 1) * 1.5));
-      }
+      const std::vector<mgrl::bench::DecisionQuery> queries = mgrl::bench::decisionQueries(model);
       auto timeController = [&](mgrl::Controller& c, std::size_t count) {
-        std::vector<double> samples;
-        mgrl::Rng draws(1);
-        for (int r = 0; r < runs; ++r) {
-          std::size_t sink = 0, calls = 0;
-          const auto start = Clock::now();
-          do {
-            for (std::size_t q = 0; q < count; ++q) sink += c.choose(queries[q].first, queries[q].second, draws);
-            calls += count;
-          } while (since(start) < 0.2);
-          samples.push_back(since(start) / static_cast<double>(calls));
-          observed = sink;
-        }
-        return mgrl::bench::median(samples);
+        return mgrl::bench::decisionSeconds(c, queries, count, runs);
       };
       std::printf("\ndecision cost (same %zu random (state, target) queries)\n", queries.size());
       mgrl::PolicyController greedy(model, parts);
