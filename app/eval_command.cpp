@@ -11,6 +11,7 @@
 #include "mgrl/learning/behavior.hpp"
 #include "mgrl/scenario/behaviors.hpp"
 #include "mgrl/runtime/controller.hpp"
+#include "mgrl/runtime/world.hpp"
 #include "mgrl/motion/motion_io.hpp"
 #include "mgrl/learning/policy_bundle.hpp"
 #include "mgrl/core/random.hpp"
@@ -53,7 +54,14 @@ json runEval(const EvalOptions& options) {
   std::vector<PolicyPart> parts;
   if (options.controller == "policy") parts = policyParts(dir, behaviors, loaded.graph, options, bundle);
 
-  const Trials trials(model, behaviors, options.targetHeight, loaded.scenario.path.string());
+  // The target's height: --target-height, else the scenario's world.target_height, else
+  // the hitting points' centroid's.
+  double targetHeight = options.targetHeight;
+  if (std::isnan(targetHeight) && loaded.scenario.root.has("world")) {
+    const double worldHeight = readWorldParams(loaded.scenario.root.child("world")).targetHeight;
+    if (worldHeight >= 0) targetHeight = worldHeight;
+  }
+  const Trials trials(model, behaviors, targetHeight, loaded.scenario.path.string());
   const double gamma = behaviors.front().reward->gamma();
   const StaticTarget environment;
   PolicyController controller(model, parts);
@@ -114,7 +122,7 @@ json runEval(const EvalOptions& options) {
   report["trials"] = options.trials;
   report["seed"] = options.seed;
   report["seconds_per_trial"] = options.seconds;
-  report["contact_radius_m"] = trials.contactRadius();
+  report["success"] = trials.successJson();
   report["target_height_m"] = trials.targetHeight();
   if (options.controller == "policy") report["policy"] = dir.string();
   if (options.controller != "random") {
@@ -124,14 +132,19 @@ json runEval(const EvalOptions& options) {
 }
 
 std::string evalText(const json& r) {
-  // "time to hit mean 3.40 s median 3.38 s", or "no hit" when no trial succeeded.
-  auto timeToHit = [](const json& mean, const json& median) {
-    if (mean.is_null()) return std::string("no hit");
-    std::string text = fmt::format("time to hit mean {:.2f} s", mean.get<double>());
+  // "time to hit mean 3.40 s median 3.38 s", or "no hit" when no trial succeeded; "success"
+  // instead of "hit" for a declared criterion, which the first line then states.
+  const bool declared = r.contains("success") && r["success"].value("from", "") == "declared";
+  const char* event = declared ? "success" : "hit";
+  auto timeToHit = [&](const json& mean, const json& median) {
+    if (mean.is_null()) return fmt::format("no {}", event);
+    std::string text = fmt::format("time to {} mean {:.2f} s", event, mean.get<double>());
     if (!median.is_null()) text += fmt::format(" median {:.2f} s", median.get<double>());
     return text;
   };
-  std::string text = fmt::format(
+  std::string text;
+  if (declared) text += fmt::format("success: {}\n", r["success"]["text"].get<std::string>());
+  text += fmt::format(
       "controller {}: {}, success rate {:.1f} %, {}, mean return {:.3f}, {}decisions/s\n",
       r["controller"].get<std::string>(), counted(r["trials"].get<std::size_t>(), "trial"),
       100 * r["success_rate"].get<double>(), timeToHit(r["mean_time_to_hit_s"], r["median_time_to_hit_s"]),

@@ -53,6 +53,14 @@ FileReport inspectFile(const std::filesystem::path& path, const InspectOptions& 
       report.peakHitSpeed_mps = std::max(report.peakHitSpeed_mps, hit.speed_mps);
     }
   }
+  report.kicks = annotation.kickCount;
+  if (!annotation.kicks.empty()) report.kickMin = report.kickMax = annotation.kicks.front().tipAvatar;
+  for (const EffectiveHit& kick : annotation.kicks) {
+    ++report.kickFrames[static_cast<int>(kick.hand)];
+    report.kickMin = report.kickMin.cwiseMin(kick.tipAvatar);
+    report.kickMax = report.kickMax.cwiseMax(kick.tipAvatar);
+    report.peakKickSpeed_mps = std::max(report.peakKickSpeed_mps, kick.speed_mps);
+  }
   return report;
 }
 
@@ -77,6 +85,13 @@ nlohmann::json toJson(const std::vector<FileReport>& reports) {
         {"effective_hits", {{"left", r.hits[0]}, {"right", r.hits[1]}, {"total", r.hits[0] + r.hits[1]}}},
         {"punches", {{"left", r.punches[0]}, {"right", r.punches[1]}, {"total", r.punches[0] + r.punches[1]}}},
         {"peak_hit_speed_mps", rounded(r.peakHitSpeed_mps, 3)},
+        {"effective_kick_frames",
+         {{"left", r.kickFrames[0]}, {"right", r.kickFrames[1]}, {"total", r.kickFrames[0] + r.kickFrames[1]}}},
+        {"kicks", {{"left", r.kicks[0]}, {"right", r.kicks[1]}, {"total", r.kicks[0] + r.kicks[1]}}},
+        {"peak_kick_speed_mps", rounded(r.peakKickSpeed_mps, 3)},
+        {"kick_bounds_m", r.kickFrames[0] + r.kickFrames[1] == 0
+                              ? nlohmann::json(nullptr)
+                              : nlohmann::json{{"min", vec(r.kickMin)}, {"max", vec(r.kickMax)}}},
         {"glitch_frames", r.glitchFrames},
         {"knockdown_frames", r.knockdownFrames},
         {"hit_bounds_m", r.hits[0] + r.hits[1] == 0 ? nlohmann::json(nullptr)
@@ -107,6 +122,13 @@ std::string toText(const std::vector<FileReport>& reports) {
                          "z [{:.2f}, {:.2f}] (forward +)\n",
                          r.hitMin.x(), r.hitMax.x(), r.hitMin.y(), r.hitMax.y(), r.hitMin.z(), r.hitMax.z());
     }
+    // Kicks only where there are some: a boxer's report reads as before.
+    if (r.kickFrames[0] + r.kickFrames[1] > 0)
+      out += fmt::format("  effective kicks: left {} in {}, right {} in {}; peak toe speed {:.2f} m/s, toe tips "
+                         "y [{:.2f}, {:.2f}] m\n",
+                         counted(r.kickFrames[0], "frame"), counted(static_cast<std::size_t>(r.kicks[0]), "kick"),
+                         counted(r.kickFrames[1], "frame"), counted(static_cast<std::size_t>(r.kicks[1]), "kick"),
+                         r.peakKickSpeed_mps, r.kickMin.y(), r.kickMax.y());
     if (r.glitchFrames > 0)
       out += fmt::format("  {} ignored (faster than the glitch threshold)\n",
                          counted(static_cast<std::size_t>(r.glitchFrames), "fist-speed glitch frame"));

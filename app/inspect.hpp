@@ -36,6 +36,12 @@ struct FileReport {
   std::size_t knockdownFrames = 0;  ///< frames with no punch counted: the boxer is down
   double knockdownRatio = 0;        ///< AnnotationParams::knockdownHeadRatio used
   double peakHitSpeed_mps = 0;
+  /// Effective kicks (Annotation::kicks): frames and kicks per foot, peak toe speed, and
+  /// the toe tips' bounds in the avatar frame.
+  std::array<std::size_t, 2> kickFrames{};
+  std::array<int, 2> kicks{};
+  double peakKickSpeed_mps = 0;
+  Eigen::Vector3d kickMin = Eigen::Vector3d::Zero(), kickMax = Eigen::Vector3d::Zero();
   Eigen::Vector3d hitMin = Eigen::Vector3d::Zero(), hitMax = Eigen::Vector3d::Zero();
 };
 

@@ -51,16 +51,32 @@ nlohmann::json toJson(const Registry& registry) {
   return list;
 }
 
+nlohmann::json termsJson() {
+  nlohmann::json list = nlohmann::json::array();
+  for (const rewards::TermKind& k : rewards::termKinds())
+    list.push_back({{"name", k.name}, {"summary", k.summary}, {"parameters", paramsJson(k.params)}});
+  return list;
+}
+
 }  // namespace
 
 std::string listText(const Plugins& p) {
   std::string text;
   describe(text, p.discretizers, "discretizers (behaviors.NAME.discretizer.type)");
   describe(text, p.rewards, "rewards (behaviors.NAME.reward.type)");
+  text += "reward terms (behaviors.NAME.reward.terms, with type: terms):\n";
+  text += rewards::describeTerms("  ");
+  text += "\n";
   describe(text, p.environments, "environment models (behaviors.NAME.environment.type, default static_target)");
   describe(text, p.learners, "learners (behaviors.NAME.learner.type)");
   text += "Behaviour keys: description, weight (default 1), activation (always | target_inside), discretizer, "
-          "reward, environment, learner. See scenarios/README.md.\n\n";
+          "reward, environment, learner, success. See scenarios/README.md.\n";
+  text += "success (behaviors.NAME.success; eval's trials stop when one behaviour's is met):\n"
+          "  {term: contact, effector: E, radius: R}          an effective strike lands (default: the reward's contact)\n"
+          "  {term: distance, point: P, d0: D, within: W}     |distance - d0| <= within (m)\n"
+          "  {term: facing, angle_deg: A, within_deg: W}      |facing error - angle| <= within (deg)\n"
+          "  hold_s: S beside one condition, or {all: [conditions], hold_s: S}: held S seconds\n"
+          "  left out: the behaviour's contact reward (the paper's hit), else an effective punch within 0.15 m\n\n";
   text += "controllers (mgrl eval / simulate --controller):\n"
           "  policy: the trained behaviours' weighted Q values, with the world's variety in simulate\n"
           "  online_search: depth-limited graph search for the best discounted reward (--horizon, --horizon-seconds)\n"
@@ -73,6 +89,7 @@ std::string listText(const Plugins& p) {
 nlohmann::json listJson(const Plugins& p) {
   return {{"discretizers", toJson(p.discretizers)},
           {"rewards", toJson(p.rewards)},
+          {"reward_terms", termsJson()},
           {"environments", toJson(p.environments)},
           {"learners", toJson(p.learners)},
           {"controllers", {"policy", "online_search", "random"}},

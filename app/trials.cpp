@@ -5,6 +5,7 @@
 #include <cmath>
 
 #include <fmt/format.h>
+#include <fmt/ranges.h>
 
 #include "mgrl/core/error.hpp"
 #include "mgrl/core/random.hpp"
@@ -29,13 +30,24 @@ Trials::Trials(const StateActionModel& model, const std::vector<Behavior>& behav
   // The target's height: given, else that of the effective hitting points' centroid (a
   // target at punching height, as the user's target in the paper's demo).
   targetHeight_ = std::isnan(targetHeight) ? model.centroid[1] : targetHeight;
-  // A hit lands within the first hit reward's contact radius; returns are discounted with
-  // the first behaviour's gamma.
+  // Success: what the behaviours declare, else what the first contact reward implies, else
+  // a punch (what trials counted before success criteria). Returns are discounted with the
+  // first behaviour's gamma.
   for (const Behavior& b : behaviors)
-    if (b.reward->type() == "hit") {
-      contactRadius_ = b.config["reward"].value("contact_radius", contactRadius_);
-      break;
-    }
+    if (b.successDeclared && b.success) criteria_.push_back(*b.success);
+  criteriaFrom_ = "declared";
+  if (criteria_.empty()) {
+    criteriaFrom_ = "implied";
+    for (const Behavior& b : behaviors)
+      if (b.success) {
+        criteria_.push_back(*b.success);
+        break;
+      }
+  }
+  if (criteria_.empty()) {
+    criteriaFrom_ = "fallback";
+    criteria_.push_back(SuccessCriterion::punch(0.15));
+  }
   gamma_ = behaviors.front().reward->gamma();
 }
 
@@ -55,6 +67,8 @@ TrialStats Trials::run(const ChooseAction& choose, std::size_t count, double sec
     e.y() = targetHeight_;
     double elapsed = 0, discount = 1, trialReturn = 0;
     bool hit = false;
+    std::vector<SuccessCriterion::Tracker> trackers;
+    for (const SuccessCriterion& c : criteria_) trackers.emplace_back(c, model.frameTime);
     while (elapsed < limit && !hit) {
       std::size_t a;
       if (choose) {
@@ -70,13 +84,12 @@ TrialStats Trials::run(const ChooseAction& choose, std::size_t count, double sec
         reward += b.weight * b.reward->evaluate(model, a, e);
       }
       trialReturn += discount * reward;
-      for (const ActionHit& h : model.hitsOf(a)) {
-        const Eigen::Vector3d fist(h.x, h.y, h.z);
-        if ((fist - e).norm() <= contactRadius_) {
-          hit = true;
-          stats.hitTimes.push_back((elapsed + h.offset) * model.frameTime);
-          break;
-        }
+      std::uint32_t first = 0;  // the earliest offset any criterion is met at
+      for (SuccessCriterion::Tracker& tracker : trackers)
+        if (const std::uint32_t t = tracker.play(model, a, e); t > 0 && (first == 0 || t < first)) first = t;
+      if (first > 0) {
+        hit = true;
+        stats.hitTimes.push_back((elapsed + first) * model.frameTime);
       }
       const auto frames = static_cast<double>(model.actionLength(a));
       discount *= std::pow(gamma_, frames);
@@ -88,6 +101,16 @@ TrialStats Trials::run(const ChooseAction& choose, std::size_t count, double sec
     stats.returns += trialReturn;
   }
   return stats;
+}
+
+json Trials::successJson() const {
+  json criteria = json::array();
+  std::vector<std::string> texts;
+  for (const SuccessCriterion& c : criteria_) {
+    criteria.push_back(c.toJson());
+    texts.push_back(c.describe());
+  }
+  return {{"criteria", criteria}, {"from", criteriaFrom_}, {"text", fmt::format("{}", fmt::join(texts, ", or "))}};
 }
 
 json Trials::summary(TrialStats stats) {

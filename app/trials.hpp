@@ -2,8 +2,11 @@
 /// \file
 /// The evaluation trials of `mgrl eval` and `mgrl compare` (DESIGN.md sec. 5): from random
 /// starts (a state of the graph, a static target on the floor of the first always-active
-/// behaviour's grid, at the target height) a controller acts until an effective hit lands
-/// within the hit reward's contact radius, or the trial's motion runs out.
+/// behaviour's grid, at the target height) a controller acts until the scenario's success
+/// criterion is met (mgrl/learning/success.hpp), or the trial's motion runs out. The
+/// criterion: the behaviours' declared `success:` (any of them met), else the first one
+/// implied by a reward's contact term (the paper's hit: an effective punch within
+/// contact_radius), else an effective punch within 0.15 m.
 #include <cstddef>
 #include <cstdint>
 #include <functional>
@@ -21,7 +24,7 @@ namespace mgrl::app {
 
 struct TrialStats {
   std::size_t trials = 0, successes = 0, decisions = 0;
-  std::vector<double> hitTimes;  ///< seconds to the hit, one per success
+  std::vector<double> hitTimes;  ///< seconds to success, one per success
   double returns = 0;            ///< sum over trials of the discounted weighted reward
 };
 
@@ -42,18 +45,23 @@ class Trials {
   TrialStats run(const ChooseAction& choose, std::size_t count, double seconds, std::uint64_t seed,
                  std::vector<std::pair<std::uint32_t, Eigen::Vector3d>>* decisions = nullptr) const;
 
-  /// {"success_rate", "successes", "mean_time_to_hit_s" (null without a hit),
-  ///  "median_time_to_hit_s", "mean_return", "decisions"}.
+  /// {"success_rate", "successes", "mean_time_to_hit_s" (seconds to success; null without
+  ///  one), "median_time_to_hit_s", "mean_return", "decisions"}.
   static nlohmann::json summary(TrialStats stats);
 
-  double contactRadius() const { return contactRadius_; }
   double targetHeight() const { return targetHeight_; }
+  /// The criteria a trial succeeds by (any of them), and where they came from.
+  const std::vector<SuccessCriterion>& criteria() const { return criteria_; }
+  /// {"criteria": [SuccessCriterion::toJson()...], "from": "declared"|"implied"|"fallback", "text": "..."}.
+  nlohmann::json successJson() const;
 
  private:
   const StateActionModel& model_;
   const std::vector<Behavior>& behaviors_;
   const Discretizer* region_ = nullptr;
-  double reach_ = 0, targetHeight_ = 0, contactRadius_ = 0.15, gamma_ = 0.97;
+  double reach_ = 0, targetHeight_ = 0, gamma_ = 0.97;
+  std::vector<SuccessCriterion> criteria_;
+  std::string criteriaFrom_;
 };
 
 }  // namespace mgrl::app

@@ -73,6 +73,7 @@ void registerAll(RewardRegistry& registry) {
                  gammaSpec(),
                  ParamSpec::boolean("use_speed", true, "weight a hit by its normalised fist speed (false: 1)")},
                 [](const Params& p) { return std::make_unique<Hit>(p); }});
+  registerTerms(registry);
 }
 
 }  // namespace mgrl::rewards

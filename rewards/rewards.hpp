@@ -1,11 +1,28 @@
 #pragma once
 /// \file
 /// The reward plugins (paper sec. 4.1, 6.4).
+#include <string>
+#include <string_view>
+#include <vector>
+
 #include "mgrl/learning/reward.hpp"
 
 namespace mgrl::rewards {
 
-/// Adds approach and hit.
+/// Adds approach, hit (the paper's, as named presets) and terms (the vocabulary).
 void registerAll(RewardRegistry& registry);
+
+/// Adds terms (rewards/terms.cpp).
+void registerTerms(RewardRegistry& registry);
+
+/// Text for `mgrl list`: every term of the vocabulary with its parameters.
+std::string describeTerms(std::string_view indent);
+/// A term of the vocabulary: its name, what its signal is, its parameters.
+struct TermKind {
+  const char* name;
+  const char* summary;
+  ParamSpecs params;
+};
+const std::vector<TermKind>& termKinds();
 
 }  // namespace mgrl::rewards

@@ -207,7 +207,7 @@ TEST_CASE("behaviour mistakes name the file, line, column and key", "[behaviors]
     REQUIRE_CONFIG_ERROR(build(approachWith(8, "    wieght: 1")),
                          at(8, 13,
                             "behaviors.approach.wieght: unknown key (expected one of: description, weight, "
-                            "activation, discretizer, reward, environment, learner)"));
+                            "activation, discretizer, reward, environment, learner, success)"));
   }
   SECTION("an unknown plugin type lists the known names, seam by seam") {
     REQUIRE_CONFIG_ERROR(build(approachWith(11, "      type: hexgrid")),
@@ -215,7 +215,7 @@ TEST_CASE("behaviour mistakes name the file, line, column and key", "[behaviors]
                             "behaviors.approach.discretizer.type: unknown discretizer 'hexgrid' (known: "
                             "polar2d, cylindrical3d, kd_tree)"));
     REQUIRE_CONFIG_ERROR(build(approachWith(16, "      type: punch")),
-                         at(16, 13, "behaviors.approach.reward.type: unknown reward 'punch' (known: approach, hit)"));
+                         at(16, 13, "behaviors.approach.reward.type: unknown reward 'punch' (known: approach, hit, terms)"));
     REQUIRE_CONFIG_ERROR(
         build(approachWith(20, "      type: sarsa")),
         at(20, 13, "behaviors.approach.learner.type: unknown learner 'sarsa' (known: q_learning, value_iteration, adaptive_value_iteration)"));
@@ -310,7 +310,7 @@ TEST_CASE("behaviour mistakes name the file, line, column and key", "[behaviors]
     REQUIRE_CONFIG_ERROR(build(approachWith(16, "")),
                          at(16, 7,
                             "behaviors.approach.reward: expected a 'type' key naming the reward (approach, "
-                            "hit)"));
+                            "hit, terms)"));
     REQUIRE_CONFIG_ERROR(build(approachInserting(19, "    environment: {}")),
                          at(19, 18,
                             "behaviors.approach.environment: expected a 'type' key naming the environment "

@@ -73,6 +73,9 @@ StateActionModel tinyModel() {
   m.centroid[1] = 1.2;
   m.centroid[2] = 0.35;
   m.maxHitSpeed_mps = 7.25;
+  m.kicks = {{2, 2, 1, 0.3f, 0.9f, 0.8f, 1.0f}};
+  m.actionKickBegin = {0, 0, 0, 1, 1};
+  m.maxKickSpeed_mps = 9.5;
   return m;
 }
 
@@ -98,6 +101,17 @@ void requireSameModel(const StateActionModel& a, const StateActionModel& b) {
   CHECK(a.frameCentroid == b.frameCentroid);
   CHECK(a.frameEntersTransition == b.frameEntersTransition);
   CHECK(a.actionHitBegin == b.actionHitBegin);
+  CHECK(a.actionKickBegin == b.actionKickBegin);
+  CHECK(a.maxKickSpeed_mps == b.maxKickSpeed_mps);
+  REQUIRE(a.kicks.size() == b.kicks.size());
+  for (std::size_t k = 0; k < a.kicks.size(); ++k) {
+    CAPTURE(k);
+    CHECK(a.kicks[k].action == b.kicks[k].action);
+    CHECK(a.kicks[k].offset == b.kicks[k].offset);
+    CHECK(a.kicks[k].hand == b.kicks[k].hand);
+    CHECK(a.kicks[k].x == b.kicks[k].x);
+    CHECK(a.kicks[k].weight == b.kicks[k].weight);
+  }
   REQUIRE(a.hits.size() == b.hits.size());
   for (std::size_t h = 0; h < a.hits.size(); ++h) {
     CAPTURE(h);
@@ -270,6 +284,14 @@ TEST_CASE("checkModel names the array and index that break an invariant", "[grap
     m.hits[0].hand = 2;
     message = "tiny: hits[0].hand: expected 0 (left) or 1 (right), found 2";
   }
+  SECTION("kick offset") {
+    m.kicks[0].offset = 9;
+    message = "tiny: kicks[0].offset: expected an offset in [1, 4] (the length of action 2), found 9";
+  }
+  SECTION("kick begin size") {
+    m.actionKickBegin.pop_back();
+    message = "tiny: actionKickBegin: expected 5 entries (actions + 1), found 4";
+  }
   SECTION("hit weight") {
     m.hits[2].weight = 0;
     message = "tiny: hits[2].weight: expected a weight in (0, 1], found 0";
@@ -315,7 +337,7 @@ TEST_CASE("a graph bundle round-trips every field of the model", "[graph_cache]"
   REQUIRE(manifest["version"] == mgrl::kGraphFormatVersion);
   REQUIRE(manifest["provenance"] == provenance("k1"));
   REQUIRE(manifest["scalars"]["frames_total"] == 20);
-  REQUIRE(manifest["arrays"].size() == 17);
+  REQUIRE(manifest["arrays"].size() == 20);
   REQUIRE(manifest["arrays"]["hits_index"]["shape"] == json::array({4, 3}));
   REQUIRE(manifest["arrays"]["hits_value"]["dtype"] == "<f4");
   REQUIRE(manifest["arrays"]["frame_root"]["shape"] == json::array({18, 3}));
@@ -349,7 +371,7 @@ TEST_CASE("saving the same model twice writes byte-identical files", "[graph_cac
   const auto first = filesIn(tmp.path / "a");
   mgrl::saveGraphBundle(tmp.path / "a", tinyModel(), provenance("k1"));
   mgrl::saveGraphBundle(tmp.path / "b", tinyModel(), provenance("k1"));
-  REQUIRE(first.size() == 18);
+  REQUIRE(first.size() == 21);
   REQUIRE(filesIn(tmp.path / "a") == first);
   REQUIRE(filesIn(tmp.path / "b") == first);
 }
@@ -440,6 +462,7 @@ TEST_CASE("a bundle whose manifest has one changed digit is damaged", "[graph_ca
   SECTION("frame_time") { member = "\"frame_time\": "; }
   SECTION("centroid") { member = "\"centroid\": [\n"; }
   SECTION("max_hit_speed_mps") { member = "\"max_hit_speed_mps\": "; }
+  SECTION("max_kick_speed_mps") { member = "\"max_kick_speed_mps\": "; }
   SECTION("frames_total") { member = "\"frames_total\": "; }
   SECTION("a provenance value") { member = "\"seed\": "; }
   CAPTURE(member);
@@ -635,7 +658,7 @@ TEST_CASE("a bundle whose arrays break the model is damaged even with correct ha
     for (const auto& hit : model.hits) index.insert(index.end(), {hit.action, hit.offset, hit.hand});
     index[2] = 257;
     rewrite("hits_index", mgrl::npyEncode<std::uint32_t>(index, {4, 3}));
-    requireDamaged(bundle, "hits_index.npy: hit 0: expected hand 0 or 1, found 257");
+    requireDamaged(bundle, "hits_index.npy: row 0: expected side 0 or 1 in column 2, found 257");
   }
   SECTION("a 1-D file where rows of 3 belong") {
     rewrite("frame_root", mgrl::npyEncode<double>(model.frameRoot, {model.frameRoot.size()}));

@@ -13,6 +13,7 @@
 #include "mgrl/runtime/controller.hpp"
 #include "mgrl/graph/motion_graph.hpp"
 #include "mgrl/learning/problem.hpp"
+#include "mgrl/learning/success.hpp"
 #include "mgrl/core/random.hpp"
 #include "learners/q_learning_steps.hpp"
 #include "test_support.hpp"
@@ -732,6 +733,178 @@ TEST_CASE("the online search baseline finds the corridor's best first action wit
   for (int horizon = 1; horizon <= 4; ++horizon) {
     OnlineSearchController any(m, parts.environment, search, horizon, 0.97);
     REQUIRE(any.choose(0, {0, 1, 0.5}) == 2);
+  }
+}
+
+// --- The reward vocabulary and success criteria (scenarios/README.md, "reward terms") ---
+
+// The tiny action model of "rewards match hand-computed values" plus a right-foot kick at
+// frame 3 of the walk, its toe 0.2 m left, 0.9 m up and 0.7 m ahead, weight 0.8.
+namespace {
+StateActionModel kickingModel() {
+  const ActionHit hit{0, 2, 1, 0.0f, 1.3f, 0.6f, 0.5f};
+  StateActionModel m = handModel(1, {{0, 0, 4, 0, 0.4, 0, {hit}}, {0, 0, 4, 0, 0, 0, {}}});
+  m.kicks.push_back({0, 3, 1, 0.2f, 0.9f, 0.7f, 0.8f});
+  m.actionKickBegin = {0, 1, 1};
+  m.maxKickSpeed_mps = 5;
+  return m;
+}
+
+double termsReward(const StateActionModel& m, const std::string& block, std::size_t a, const Eigen::Vector3d& e) {
+  return app::plugins().rewards.create(yaml(block))->evaluate(m, a, e);
+}
+}  // namespace
+
+TEST_CASE("a terms reward of one distance or contact term is the paper's approach or hit", "[learning][terms]") {
+  const StateActionModel m = kickingModel();
+  const auto approach = app::plugins().rewards.create(yaml("{type: approach, sigma: 0.1, gamma: 0.9}"));
+  const auto distance = app::plugins().rewards.create(yaml("{type: terms, gamma: 0.9, terms: [{term: distance, sigma: 0.1}]}"));
+  const auto hit = app::plugins().rewards.create(yaml("{type: hit, contact_radius: 0.1, gamma: 0.9}"));
+  const auto contact = app::plugins().rewards.create(yaml("{type: terms, gamma: 0.9, terms: [{term: contact, radius: 0.1}]}"));
+  Rng rng(7);
+  for (int i = 0; i < 200; ++i) {
+    const Eigen::Vector3d e(rng.uniform() - 0.5, 1 + 0.6 * rng.uniform(), rng.uniform());
+    for (std::size_t a = 0; a < 2; ++a) {
+      CAPTURE(i, a);
+      CHECK(distance->evaluate(m, a, e) == Approx(approach->evaluate(m, a, e)).epsilon(1e-12));
+      CHECK(contact->evaluate(m, a, e) == Approx(hit->evaluate(m, a, e)).epsilon(1e-12));
+    }
+  }
+  CHECK(contact->evaluate(m, 0, {0, 1.3, 0.6}) == Approx(0.81 * 0.5));  // the punch lands
+}
+
+TEST_CASE("each reward term gives its hand-computed value", "[learning][terms]") {
+  const StateActionModel m = kickingModel();  // action 0 walks 0.1 m a frame, action 1 stands
+  const double g = 0.9;
+  SECTION("distance with a preferred distance, max and sum") {
+    // Standing with the target 1 m ahead of the pelvis: the signal is 1 at every frame.
+    const std::string keep = "{type: terms, gamma: 0.9, terms: [{term: distance, point: pelvis, d0: 1, sigma: 0.2}]";
+    CHECK(termsReward(m, keep + "}", 1, {0, 0, 1}) == Approx(g));
+    CHECK(termsReward(m, keep + ", combine: sum}", 1, {0, 0, 1}) == Approx(g + g * g + g * g * g + g * g * g * g));
+    // 1.2 m away: exp(-0.2 / 0.2) at every frame.
+    CHECK(termsReward(m, keep + "}", 1, {0, 0, 1.2}) == Approx(g * std::exp(-1.0)));
+    // Walking toward a target 1.4 m ahead reaches 1 m from it at frame 4.
+    CHECK(termsReward(m, keep + "}", 0, {0, 0, 1.4}) == Approx(g * g * g * g));
+  }
+  SECTION("facing with a preferred angle") {
+    const Eigen::Vector3d left(1, 0, 0);  // 90 degrees to the avatar's left
+    CHECK(termsReward(m, "{type: terms, gamma: 0.9, terms: [{term: facing, angle_deg: 90}]}", 1, left) == Approx(g));
+    CHECK(termsReward(m, "{type: terms, gamma: 0.9, terms: [{term: facing, sigma_deg: 30}]}", 1, left) ==
+          Approx(g * std::exp(-3.0)));
+    CHECK(termsReward(m, "{type: terms, gamma: 0.9, terms: [{term: facing}]}", 1, {0, 0, 2}) == Approx(g));
+  }
+  SECTION("contact by a chosen effector") {
+    const Eigen::Vector3d kick(0.2, 0.9, 0.7), punch(0, 1.3, 0.6);
+    const std::string feet = "{type: terms, gamma: 0.9, terms: [{term: contact, effector: feet, radius: 0.1}]}";
+    CHECK(termsReward(m, feet, 0, kick) == Approx(g * g * g * 0.8));
+    CHECK(termsReward(m, feet, 0, punch) == 0);
+    CHECK(termsReward(m, "{type: terms, gamma: 0.9, terms: [{term: contact, effector: right_foot, radius: 0.1}]}", 0,
+                      kick) == Approx(g * g * g * 0.8));
+    CHECK(termsReward(m, "{type: terms, gamma: 0.9, terms: [{term: contact, effector: left_foot, radius: 0.1}]}", 0,
+                      kick) == 0);
+    CHECK(termsReward(m, "{type: terms, gamma: 0.9, terms: [{term: contact, effector: fists, radius: 0.1}]}", 0,
+                      kick) == 0);
+    CHECK(termsReward(m, "{type: terms, gamma: 0.9, terms: [{term: contact, effector: any, radius: 0.1}]}", 0,
+                      punch) == Approx(g * g * 0.5));
+    CHECK(termsReward(m, "{type: terms, gamma: 0.9, terms: [{term: contact, effector: feet, radius: 0.1, "
+                         "use_speed: false}]}",
+                      0, kick) == Approx(g * g * g));
+  }
+  SECTION("travel toward or away, effort") {
+    // 0.1 m of progress a frame toward a target 2 m ahead, full signal at 0.4 m (frame 4).
+    CHECK(termsReward(m, "{type: terms, gamma: 0.9, terms: [{term: travel, scale_m: 0.4}]}", 0, {0, 0, 2}) ==
+          Approx(g * g * g * g));
+    CHECK(termsReward(m, "{type: terms, gamma: 0.9, terms: [{term: travel, direction: away}]}", 0, {0, 0, 2}) == 0);
+    CHECK(termsReward(m, "{type: terms, gamma: 0.9, terms: [{term: travel, direction: away, scale_m: 0.4}]}", 0,
+                      {0, 0, -2}) == Approx(g * g * g * g));
+    // 0.1 m a frame at 30 fps is 3 m/s.
+    CHECK(termsReward(m, "{type: terms, gamma: 0.9, terms: [{term: effort, speed_mps: 3}]}", 0, {0, 0, 2}) ==
+          Approx(g * std::exp(-1.0)));
+    CHECK(termsReward(m, "{type: terms, gamma: 0.9, terms: [{term: effort, speed_mps: 3}]}", 1, {0, 0, 2}) == Approx(g));
+  }
+  SECTION("weights add the terms' signals frame by frame") {
+    const std::string both =
+        "{type: terms, gamma: 0.9, terms: [{term: distance, point: pelvis, d0: 1, sigma: 0.2, weight: 2}, "
+        "{term: facing, angle_deg: 90, weight: 0.5}]}";
+    // Target 1 m to the left: distance signal 1 (weight 2), facing signal 1 (weight 0.5).
+    CHECK(termsReward(m, both, 1, {1, 0, 0}) == Approx(g * 2.5));
+  }
+}
+
+TEST_CASE("reward terms refuse bad YAML with the line, column and key", "[learning][terms]") {
+  const auto build = [](const std::string& text) { return app::plugins().rewards.create(yaml(text)); };
+  CHECK_THROWS_WITH(build("{type: terms}"), Catch::StartsWith("test.yaml:1:1: ") && Catch::Contains("expected a 'terms' list"));
+  CHECK_THROWS_WITH(build("{type: terms, terms: []}"),
+                    Catch::StartsWith("test.yaml:1:22: terms: ") && Catch::Contains("expected at least one term"));
+  CHECK_THROWS_WITH(build("{type: terms, terms: [{term: dist}]}"),
+                    Catch::StartsWith("test.yaml:1:30: terms[0].term: ") &&
+                        Catch::Contains("unknown term 'dist' (known: distance, facing, contact, travel, effort)"));
+  CHECK_THROWS_WITH(build("{type: terms, terms: [{term: distance, sigma: 0}]}"),
+                    Catch::StartsWith("test.yaml:1:47: terms[0].sigma: "));
+  CHECK_THROWS_WITH(build("{type: terms, terms: [{term: distance, point: pelvis, dims: 3}]}"),
+                    Catch::Contains("terms[0].dims: expected 2 with point: pelvis"));
+  CHECK_THROWS_WITH(build("{type: terms, terms: [{term: contact, effector: nose}]}"),
+                    Catch::Contains("terms[0].effector: ") && Catch::Contains("left_foot"));
+  CHECK_THROWS_WITH(build("{type: terms, terms: [{term: facing, d0: 1}]}"),
+                    Catch::Contains("terms[0].d0: unknown key"));
+  CHECK_THROWS_WITH(build("{type: terms, combine: mean, terms: [{term: facing}]}"),
+                    Catch::Contains("combine: ") && Catch::Contains("max, sum"));
+  CHECK_THROWS_WITH(build("{type: terms, terms: [facing]}"),
+                    Catch::Contains("terms[0]: expected a map with 'term: <distance|facing|contact|travel|effort>'"));
+  CHECK_NOTHROW(build("{type: terms, terms: [{term: facing}]}"));
+}
+
+TEST_CASE("success criteria take what they leave out from the reward and hold for hold_s", "[learning][terms]") {
+  const StateActionModel m = kickingModel();
+  const nlohmann::json keep = {
+      {"type", "terms"},
+      {"terms", {{{"term", "distance"}, {"point", "pelvis"}, {"dims", 2}, {"d0", 1.0}, {"sigma", 0.2}}}}};
+  SECTION("a distance held for 0.1 s (3 frames)") {
+    const SuccessCriterion c = SuccessCriterion::read(yaml("{term: distance, within: 0.1, hold_s: 0.1}"), keep);
+    REQUIRE(c.conditions().size() == 1);
+    CHECK(c.conditions()[0].point == BodyPoint::Pelvis);
+    CHECK(c.conditions()[0].d0 == 1.0);
+    SuccessCriterion::Tracker near(c, m.frameTime), far(c, m.frameTime);
+    CHECK(near.play(m, 1, {0, 0, 1.05}) == 3);
+    CHECK(far.play(m, 1, {0, 0, 1.2}) == 0);
+    CHECK(c.describe().find("pelvis") != std::string::npos);
+  }
+  SECTION("a hold carries across actions and breaks when the condition fails") {
+    const SuccessCriterion c = SuccessCriterion::read(yaml("{term: distance, within: 0.1, hold_s: 0.2}"), keep);
+    SuccessCriterion::Tracker tracker(c, m.frameTime);
+    CHECK(tracker.play(m, 1, {0, 0, 1.05}) == 0);  // 4 of 6 frames
+    CHECK(tracker.play(m, 1, {0, 0, 1.05}) == 2);
+    SuccessCriterion::Tracker broken(c, m.frameTime);
+    CHECK(broken.play(m, 1, {0, 0, 1.05}) == 0);
+    CHECK(broken.play(m, 1, {0, 0, 3}) == 0);  // out of range: the count starts over
+    CHECK(broken.play(m, 1, {0, 0, 1.05}) == 0);
+  }
+  SECTION("all conditions at once") {
+    const SuccessCriterion c = SuccessCriterion::read(
+        yaml("{all: [{term: distance, within: 0.1}, {term: facing, within_deg: 10}], hold_s: 0}"), keep);
+    SuccessCriterion::Tracker ahead(c, m.frameTime), side(c, m.frameTime);
+    CHECK(ahead.play(m, 1, {0, 0, 1}) == 1);
+    CHECK(side.play(m, 1, {1, 0, 0}) == 0);  // 1 m away but 90 degrees off
+  }
+  SECTION("contact: the hit preset implies it, kicks count with feet") {
+    const auto implied = SuccessCriterion::implied({{"type", "hit"}, {"contact_radius", 0.1}});
+    REQUIRE(implied);
+    SuccessCriterion::Tracker punch(*implied, m.frameTime);
+    CHECK(punch.play(m, 0, {0, 1.3, 0.6}) == 2);
+    CHECK_FALSE(SuccessCriterion::implied({{"type", "approach"}}));
+    const SuccessCriterion kick = SuccessCriterion::read(yaml("{term: contact, effector: feet, radius: 0.1}"), keep);
+    SuccessCriterion::Tracker foot(kick, m.frameTime);
+    CHECK(foot.play(m, 0, {0.2, 0.9, 0.7}) == 3);
+  }
+  SECTION("mistakes name the line, column and key") {
+    CHECK_THROWS_WITH(SuccessCriterion::read(yaml("{term: contact, hold_s: 1}"), keep),
+                      Catch::Contains("hold_s: expected no hold_s with a contact condition"));
+    CHECK_THROWS_WITH(SuccessCriterion::read(yaml("{term: distance, within: -1}"), keep),
+                      Catch::StartsWith("test.yaml:1:26: within: "));
+    CHECK_THROWS_WITH(SuccessCriterion::read(yaml("{term: speed}"), keep), Catch::Contains("term: ") && Catch::Contains("speed"));
+    CHECK_THROWS_WITH(SuccessCriterion::read(yaml("{term: distance, sigma: 1}"), keep),
+                      Catch::Contains("sigma: unknown key"));
+    CHECK_THROWS_WITH(SuccessCriterion::read(yaml("[distance]"), keep), Catch::Contains("expected a map"));
   }
 }
 

@@ -624,7 +624,8 @@ void ViewerSession::retrain(const Retrain& message) {
   Scenario scenario = app::checkedScenario(options);
   std::vector<Behavior> built =
       buildBehaviors(scenario, app::plugins(), a.model(), a.loaded->graph.key, message.behavior);
-  auto result = std::make_shared<Retrained>(Retrained{std::move(built.front())});
+  auto result = std::make_shared<Retrained>();
+  result->behavior = std::move(built.front());
   result->set = set;
   const double bytes = GridModel::trainingBytes(a.model().actionCount(), result->behavior.discretizer->vertexCount());
   if (bytes > kRetrainBytes)
@@ -674,7 +675,7 @@ void ViewerSession::retrain(const Retrain& message) {
       after[index].table = &result->table;
       auto evaluate = [&](const std::vector<PolicyPart>& parts) {
         PolicyController controller(model, parts);
-        return app::Trials::summary(trials.run([&](std::uint32_t s, const Eigen::Vector3d& e) { return controller.choose(s, e); },
+        return app::Trials::summary(trials.run([&](std::uint32_t node, const Eigen::Vector3d& e) { return controller.choose(node, e); },
                                                kRetrainTrials, kRetrainTrialSeconds, 1));
       };
       result->before = evaluate(before);

@@ -60,6 +60,9 @@ class Params {
   long long integer(std::string_view name) const;
   const std::string& choice(std::string_view name) const;
   bool boolean(std::string_view name) const;
+  /// The YAML block the parameters were read from (null for defaults()): plugins that
+  /// read keys of their own (Registry::Entry::blockKeys) find them here.
+  const ConfigNode* block() const { return node_ ? &*node_ : nullptr; }
   /// Whether the YAML gave this parameter (false for a default).
   bool given(std::string_view name) const;
 

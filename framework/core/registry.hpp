@@ -10,6 +10,7 @@
 #include <vector>
 
 #include <fmt/format.h>
+#include <nlohmann/json.hpp>
 #include <fmt/ranges.h>
 
 #include "mgrl/core/config.hpp"
@@ -26,6 +27,12 @@ class Registry {
     std::string summary;  ///< one line for `mgrl list`
     ParamSpecs params;
     Factory make;
+    /// Keys of the block besides `type` and the parameters that a plugin reads itself
+    /// (e.g. a reward's list of `terms`), with the function that checks them and returns
+    /// their normalised JSON (defaults filled in) for manifests and keys. The factory
+    /// reaches them through Params::block().
+    std::vector<std::string> blockKeys = {};
+    std::function<nlohmann::json(const ConfigNode& block)> readBlock = nullptr;
   };
 
   /// `seam` names the kind of plugin in messages: "discretizer", "reward", ...
@@ -66,7 +73,35 @@ class Registry {
 
   /// Checks a block's type and parameters without building the plugin (checks that need
   /// the plugin's context, e.g. the graph, happen in create()).
-  Params check(const ConfigNode& block) const { return Params::read(block, entryFor(block).params, {"type"}); }
+  Params check(const ConfigNode& block) const {
+    const Entry& entry = entryFor(block);
+    std::vector<std::string> extra{"type"};
+    extra.insert(extra.end(), entry.blockKeys.begin(), entry.blockKeys.end());
+    Params params = Params::read(block, entry.params, extra);
+    if (entry.readBlock) entry.readBlock(block);
+    return params;
+  }
+
+  /// The block's parameters as JSON, defaults filled in, with the normalised extra keys
+  /// (Entry::readBlock); {"type": type} alone for an unknown type. A null block: the
+  /// defaults of `fallbackType`.
+  nlohmann::json blockJson(const ConfigNode& block, const std::string& fallbackType) const {
+    const std::string type = block.isNull() ? fallbackType : block.child("type").asString();
+    nlohmann::json json = nlohmann::json::object();
+    json["type"] = type;
+    const Entry* entry = find(type);
+    if (!entry) return json;
+    const Params params = block.isNull() ? Params::defaults(entry->params) : check(block);
+    // Named, not iterated as temporaries: items() would outlive them (C++20 extends only
+    // the range's own lifetime).
+    const nlohmann::json values = params.toJson();
+    for (const auto& item : values.items()) json[item.key()] = item.value();
+    if (entry->readBlock && !block.isNull()) {
+      const nlohmann::json extra = entry->readBlock(block);
+      for (const auto& item : extra.items()) json[item.key()] = item.value();
+    }
+    return json;
+  }
 
   const std::vector<Entry>& entries() const { return entries_; }
 

@@ -40,6 +40,7 @@ void forEachArray(Model& m, Visitor&& visit) {
   visit("frame_centroid", m.frameCentroid, 3);
   visit("frame_enters_transition", m.frameEntersTransition, 1);
   visit("action_hit_begin", m.actionHitBegin, 1);
+  visit("action_kick_begin", m.actionKickBegin, 1);
 }
 
 constexpr std::size_t kHitIndexColumns = 3;  // action, offset, hand
@@ -96,14 +97,16 @@ void saveGraphBundle(const std::filesystem::path& dirArgument, const StateAction
     files.push_back(std::move(array.file));
   };
   forEachArray(m, encode);
-  std::vector<std::uint32_t> hitsIndex;
-  std::vector<float> hitsValue;
-  for (const ActionHit& hit : m.hits) {
-    hitsIndex.insert(hitsIndex.end(), {hit.action, hit.offset, hit.hand});
-    hitsValue.insert(hitsValue.end(), {hit.x, hit.y, hit.z, hit.weight});
+  for (const auto& [name, list] : {std::pair{"hits", &m.hits}, std::pair{"kicks", &m.kicks}}) {
+    std::vector<std::uint32_t> index;
+    std::vector<float> value;
+    for (const ActionHit& hit : *list) {
+      index.insert(index.end(), {hit.action, hit.offset, hit.hand});
+      value.insert(value.end(), {hit.x, hit.y, hit.z, hit.weight});
+    }
+    encode(fmt::format("{}_index", name), index, kHitIndexColumns);
+    encode(fmt::format("{}_value", name), value, kHitValueColumns);
   }
-  encode("hits_index", hitsIndex, kHitIndexColumns);
-  encode("hits_value", hitsValue, kHitValueColumns);
 
   json manifest = {
       {"format", std::string(kGraphFormatName)},
@@ -113,7 +116,8 @@ void saveGraphBundle(const std::filesystem::path& dirArgument, const StateAction
        {{"frame_time", m.frameTime},
         {"frames_total", m.framesTotal},
         {"centroid", {m.centroid[0], m.centroid[1], m.centroid[2]}},
-        {"max_hit_speed_mps", m.maxHitSpeed_mps}}},
+        {"max_hit_speed_mps", m.maxHitSpeed_mps},
+        {"max_kick_speed_mps", m.maxKickSpeed_mps}}},
       {"arrays", std::move(arrays)},
   };
   std::string manifestText;
@@ -180,7 +184,8 @@ GraphBundleLoad loadGraphBundle(const std::filesystem::path& dirArgument, std::s
     GraphBundleLoad result;
     StateActionModel& m = result.model;
     const json& scalars =
-        reader.object(manifest, "", "scalars", {"frame_time", "frames_total", "centroid", "max_hit_speed_mps"});
+        reader.object(manifest, "", "scalars",
+                      {"frame_time", "frames_total", "centroid", "max_hit_speed_mps", "max_kick_speed_mps"});
     m.frameTime = reader.number(scalars, "scalars", "frame_time");
     m.framesTotal = static_cast<std::uint32_t>(
         reader.unsignedInteger(scalars, "scalars", "frames_total", std::numeric_limits<std::uint32_t>::max()));
@@ -190,6 +195,7 @@ GraphBundleLoad loadGraphBundle(const std::filesystem::path& dirArgument, std::s
       reader.fail("scalars.centroid", "3 numbers", centroid);
     for (int i = 0; i < 3; ++i) m.centroid[i] = centroid[i].get<double>();
     m.maxHitSpeed_mps = reader.number(scalars, "scalars", "max_hit_speed_mps");
+    m.maxKickSpeed_mps = reader.number(scalars, "scalars", "max_kick_speed_mps");
 
     const json& arrays = reader.object(manifest, "", "arrays", {});
     std::set<std::string, std::less<>> known;
@@ -199,30 +205,39 @@ GraphBundleLoad loadGraphBundle(const std::filesystem::path& dirArgument, std::s
       known.emplace(name);
     };
     forEachArray(m, load);
-    std::vector<std::uint32_t> hitsIndex;
-    std::vector<float> hitsValue;
+    std::vector<std::uint32_t> hitsIndex, kicksIndex;
+    std::vector<float> hitsValue, kicksValue;
     load("hits_index", hitsIndex, kHitIndexColumns);
     load("hits_value", hitsValue, kHitValueColumns);
+    load("kicks_index", kicksIndex, kHitIndexColumns);
+    load("kicks_value", kicksValue, kHitValueColumns);
     for (const auto& item : arrays.items())
       if (!known.contains(item.key()))
         throw Error(fmt::format("{}: arrays: expected only the arrays of a state-action model, found '{}'",
                                 reader.source(), item.key()));
 
-    const std::size_t hitCount = hitsIndex.size() / kHitIndexColumns;
-    if (hitsValue.size() != hitCount * kHitValueColumns)
-      throw Error(fmt::format("{}: expected {} rows, as hits_index.npy has, found {}",
-                              (dir / "hits_value.npy").string(), hitCount, hitsValue.size() / kHitValueColumns));
-    m.hits.resize(hitCount);
-    for (std::size_t h = 0; h < hitCount; ++h) {
-      const std::uint32_t* index = &hitsIndex[kHitIndexColumns * h];
-      const float* value = &hitsValue[kHitValueColumns * h];
-      // Checked here because narrowing to uint8 would hide a bad hand (257 -> 1).
-      if (index[2] > 1)
-        throw Error(fmt::format("{}: hit {}: expected hand 0 or 1, found {}", (dir / "hits_index.npy").string(), h,
-                                index[2]));
-      m.hits[h] = ActionHit{index[0], index[1], static_cast<std::uint8_t>(index[2]),
-                            value[0], value[1], value[2], value[3]};
-    }
+    // Strikes: effective punches (hits, hand 0/1) and kicks (foot 0/1), split in two arrays each.
+    auto strikes = [&](std::string_view name, const std::vector<std::uint32_t>& indexes,
+                       const std::vector<float>& values, std::vector<ActionHit>& out) {
+      const std::size_t count = indexes.size() / kHitIndexColumns;
+      if (values.size() != count * kHitValueColumns)
+        throw Error(fmt::format("{}: expected {} rows, as {}_index.npy has, found {}",
+                                (dir / fmt::format("{}_value.npy", name)).string(), count, name,
+                                values.size() / kHitValueColumns));
+      out.resize(count);
+      for (std::size_t h = 0; h < count; ++h) {
+        const std::uint32_t* index = &indexes[kHitIndexColumns * h];
+        const float* value = &values[kHitValueColumns * h];
+        // Checked here because narrowing to uint8 would hide a bad side (257 -> 1).
+        if (index[2] > 1)
+          throw Error(fmt::format("{}: row {}: expected side 0 or 1 in column 2, found {}",
+                                  (dir / fmt::format("{}_index.npy", name)).string(), h, index[2]));
+        out[h] = ActionHit{index[0], index[1], static_cast<std::uint8_t>(index[2]), value[0], value[1], value[2],
+                           value[3]};
+      }
+    };
+    strikes("hits", hitsIndex, hitsValue, m.hits);
+    strikes("kicks", kicksIndex, kicksValue, m.kicks);
 
     checkModel(m, dir.string());
     result.status = GraphBundleLoad::Ok;

@@ -23,7 +23,9 @@
 /// (H, 4) float32 (x, y, z, weight). An array's hash is hexDigest(hashBytes(file bytes))
 /// (mgrl/core/hash.hpp: XXH64); the manifest's own "hash" is manifestHash()
 /// (mgrl/core/bundle.hpp), so the scalars and provenance are checked as the arrays are.
-/// Version 2 added that hash: a version 1 bundle trusted its scalars unchecked.
+/// Version 2 added that hash: a version 1 bundle trusted its scalars unchecked. Version 3
+/// added the effective kicks: kicks_index (K, 3) (action, offset, foot), kicks_value (K, 4),
+/// action_kick_begin and the scalar max_kick_speed_mps.
 
 #include <filesystem>
 #include <string>
@@ -37,7 +39,7 @@ namespace mgrl {
 
 /// The manifest's "format" and "version"; a bundle with others is Stale.
 inline constexpr std::string_view kGraphFormatName = "mgrl.graph";
-inline constexpr int kGraphFormatVersion = 2;
+inline constexpr int kGraphFormatVersion = 3;
 
 
 /// Writes `m` as a bundle at `dir` (see the file comment), replacing a bundle already there.

@@ -172,32 +172,51 @@ StateActionModel buildStateActionModel(const MotionDatabase& db, const GraphPara
   }
 
   // Effective hitting points of the data: their centroid (the paper's p(t) follows it) and
-  // the fastest one (the hit reward's w(t) is normalised by it).
-  std::vector<std::uint32_t> hitBegin(n + 1, 0);
-  std::vector<const EffectiveHit*> hitList;
-  {
-    Eigen::Vector3d sum = Eigen::Vector3d::Zero();
+  // the fastest one (the hit reward's w(t) is normalised by it). Kicks the same way, apart:
+  // they leave the centroid and the paper's hit reward as they were.
+  struct StrikeIndex {
+    std::vector<std::uint32_t> begin;  // per global frame
+    std::vector<const EffectiveHit*> list;
+  };
+  auto indexStrikes = [&](auto member, double& fastest, Eigen::Vector3d* centroidSum) {
+    StrikeIndex index;
+    index.begin.assign(n + 1, 0);
     std::size_t count = 0;
     for (std::size_t c = 0; c < db.clips.size(); ++c)
-      for (const EffectiveHit& h : db.clips[c].annotation.hits) {
-        ++hitBegin[db.offsets[c] + h.frame + 1];
-        sum += h.tipAvatar;
+      for (const EffectiveHit& h : db.clips[c].annotation.*member) {
+        ++index.begin[db.offsets[c] + h.frame + 1];
+        if (centroidSum) *centroidSum += h.tipAvatar;
         ++count;
-        m.maxHitSpeed_mps = std::max(m.maxHitSpeed_mps, h.speed_mps);
+        fastest = std::max(fastest, h.speed_mps);
       }
-    if (count) sum /= static_cast<double>(count);
-    for (int i = 0; i < 3; ++i) m.centroid[i] = sum[i];
-    for (std::uint32_t f = 0; f < n; ++f) hitBegin[f + 1] += hitBegin[f];
-    hitList.resize(hitBegin[n]);
-    std::vector<std::uint32_t> fill(hitBegin.begin(), hitBegin.end() - 1);
+    if (centroidSum && count) *centroidSum /= static_cast<double>(count);
+    for (std::uint32_t f = 0; f < n; ++f) index.begin[f + 1] += index.begin[f];
+    index.list.resize(index.begin[n]);
+    std::vector<std::uint32_t> fill(index.begin.begin(), index.begin.end() - 1);
     for (std::size_t c = 0; c < db.clips.size(); ++c)
-      for (const EffectiveHit& h : db.clips[c].annotation.hits) hitList[fill[db.offsets[c] + h.frame]++] = &h;
-  }
+      for (const EffectiveHit& h : db.clips[c].annotation.*member) index.list[fill[db.offsets[c] + h.frame]++] = &h;
+    return index;
+  };
+  Eigen::Vector3d sum = Eigen::Vector3d::Zero();
+  const StrikeIndex punches = indexStrikes(&Annotation::hits, m.maxHitSpeed_mps, &sum);
+  for (int i = 0; i < 3; ++i) m.centroid[i] = sum[i];
+  const StrikeIndex kicks = indexStrikes(&Annotation::kicks, m.maxKickSpeed_mps, nullptr);
+  // The strikes at frame v, carried into the decision's avatar frame by `root`.
+  auto addStrikes = [](const StrikeIndex& index, std::uint32_t v, const GroundMotion& root, std::uint32_t a,
+                       std::uint32_t offset, double fastest, std::vector<ActionHit>& into) {
+    for (std::uint32_t h = index.begin[v]; h < index.begin[v + 1]; ++h) {
+      const EffectiveHit& hit = *index.list[h];
+      const Eigen::Vector3d p = transformPoint(root, hit.tipAvatar);
+      into.push_back({a, offset, static_cast<std::uint8_t>(hit.hand), static_cast<float>(p.x()),
+                     static_cast<float>(p.y()), static_cast<float>(p.z()), static_cast<float>(hit.speed_mps / fastest)});
+    }
+  };
 
   // Collapse: every out-edge of a state starts an action that runs until the next state.
   m.stateActionBegin.push_back(0);
   m.actionFrameBegin.push_back(0);
   m.actionHitBegin.push_back(0);
+  m.actionKickBegin.push_back(0);
   const Eigen::Vector3d centroid(m.centroid[0], m.centroid[1], m.centroid[2]);
   for (std::uint32_t s = 0; s < m.stateFrame.size(); ++s) {
     const std::uint32_t from = m.stateFrame[s];
@@ -218,13 +237,8 @@ StateActionModel buildStateActionModel(const MotionDatabase& db, const GraphPara
         m.frameCentroid.insert(m.frameCentroid.end(),
                                {static_cast<float>(pc.x()), static_cast<float>(pc.y()), static_cast<float>(pc.z())});
         m.frameEntersTransition.push_back(v != previous + 1 ? 1 : 0);
-        for (std::uint32_t h = hitBegin[v]; h < hitBegin[v + 1]; ++h) {
-          const EffectiveHit& hit = *hitList[h];
-          const Eigen::Vector3d p = transformPoint(root, hit.tipAvatar);
-          m.hits.push_back({a, offset, static_cast<std::uint8_t>(hit.hand), static_cast<float>(p.x()),
-                            static_cast<float>(p.y()), static_cast<float>(p.z()),
-                            static_cast<float>(hit.speed_mps / m.maxHitSpeed_mps)});
-        }
+        addStrikes(punches, v, root, a, offset, m.maxHitSpeed_mps, m.hits);
+        addStrikes(kicks, v, root, a, offset, m.maxKickSpeed_mps, m.kicks);
         if (stateOf[v] != UINT32_MAX) break;
         outInside(v, out);  // exactly one edge: v is not a state
         previous = v;
@@ -235,6 +249,7 @@ StateActionModel buildStateActionModel(const MotionDatabase& db, const GraphPara
       m.actionFrameBegin.push_back(static_cast<std::uint32_t>(m.actionFrames.size()));
       m.actionDisplacement.insert(m.actionDisplacement.end(), {root.dx, root.dz, root.dyaw});
       m.actionHitBegin.push_back(static_cast<std::uint32_t>(m.hits.size()));
+      m.actionKickBegin.push_back(static_cast<std::uint32_t>(m.kicks.size()));
     }
     m.stateActionBegin.push_back(static_cast<std::uint32_t>(m.actionFrom.size()));
   }

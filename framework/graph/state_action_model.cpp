@@ -68,6 +68,8 @@ void checkModel(const StateActionModel& m, std::string_view source) {
       fail(source, fmt::format("centroid[{}]", i), "a finite number", fmt::format("{}", m.centroid[i]));
   if (!(m.maxHitSpeed_mps >= 0) || !std::isfinite(m.maxHitSpeed_mps))
     fail(source, "maxHitSpeed_mps", "a finite speed of at least 0", fmt::format("{}", m.maxHitSpeed_mps));
+  if (!(m.maxKickSpeed_mps >= 0) || !std::isfinite(m.maxKickSpeed_mps))
+    fail(source, "maxKickSpeed_mps", "a finite speed of at least 0", fmt::format("{}", m.maxKickSpeed_mps));
 
   // Sizes first, so the checks after them index safely.
   if (m.clipOffset.empty()) fail(source, "clipOffset", "at least one entry", "none");
@@ -82,6 +84,9 @@ void checkModel(const StateActionModel& m, std::string_view source) {
   requireSize(source, "actionFrameBegin", m.actionFrameBegin.size(), actions + 1, "actions + 1");
   requireSize(source, "actionDisplacement", m.actionDisplacement.size(), 3 * actions, "3 per action");
   requireSize(source, "actionHitBegin", m.actionHitBegin.size(), actions + 1, "actions + 1");
+  // No kicks at all may also be said with no actionKickBegin (models made by hand).
+  if (!(m.actionKickBegin.empty() && m.kicks.empty()))
+    requireSize(source, "actionKickBegin", m.actionKickBegin.size(), actions + 1, "actions + 1");
   requireSize(source, "stateActionBegin", m.stateActionBegin.size(), states + 1, "states + 1");
   requireSize(source, "frameRoot", m.frameRoot.size(), 3 * frames, "3 per action frame");
   requireSize(source, "frameCentroid", m.frameCentroid.size(), 3 * frames, "3 per action frame");
@@ -91,6 +96,8 @@ void checkModel(const StateActionModel& m, std::string_view source) {
   requireOffsets(source, "actionFrameBegin", m.actionFrameBegin, frames, "the size of actionFrames");
   requireOffsets(source, "stateActionBegin", m.stateActionBegin, actions, "the number of actions");
   requireOffsets(source, "actionHitBegin", m.actionHitBegin, m.hits.size(), "the number of hits");
+  if (!m.actionKickBegin.empty())
+    requireOffsets(source, "actionKickBegin", m.actionKickBegin, m.kicks.size(), "the number of kicks");
 
   requireBelow(source, "componentFrames", m.componentFrames, m.framesTotal, "a frame", "framesTotal");
   requireAscending(source, "componentFrames", m.componentFrames);
@@ -142,33 +149,39 @@ void checkModel(const StateActionModel& m, std::string_view source) {
       fail(source, fmt::format("frameEntersTransition[{}]", i), "0 or 1",
            fmt::format("{}", m.frameEntersTransition[i]));
 
-  for (std::size_t a = 0; a < actions; ++a) {
-    for (std::size_t h = m.actionHitBegin[a]; h < m.actionHitBegin[a + 1]; ++h) {
-      const ActionHit& hit = m.hits[h];
-      if (hit.action != a)
-        fail(source, fmt::format("hits[{}].action", h), fmt::format("{} (actionHitBegin)", a),
-             fmt::format("{}", hit.action));
-      if (hit.offset < 1 || hit.offset > m.actionLength(a))
-        fail(source, fmt::format("hits[{}].offset", h),
-             fmt::format("an offset in [1, {}] (the length of action {})", m.actionLength(a), a),
-             fmt::format("{}", hit.offset));
-      if (hit.hand > 1)
-        fail(source, fmt::format("hits[{}].hand", h), "0 (left) or 1 (right)", fmt::format("{}", hit.hand));
-      if (h > m.actionHitBegin[a]) {
-        const ActionHit& previous = m.hits[h - 1];
-        if (hit.offset < previous.offset || (hit.offset == previous.offset && hit.hand < previous.hand))
-          fail(source, fmt::format("hits[{}]", h),
-               fmt::format("hits sorted by (offset, hand), at least ({}, {})", previous.offset, previous.hand),
-               fmt::format("({}, {})", hit.offset, hit.hand));
+  // Strikes (punches and kicks): each belongs to its action, sorted by (offset, side) there.
+  auto checkStrikes = [&](std::string_view name, const std::vector<ActionHit>& list,
+                          const std::vector<std::uint32_t>& begin, std::string_view beginName) {
+    for (std::size_t a = 0; a < actions; ++a) {
+      for (std::size_t h = begin[a]; h < begin[a + 1]; ++h) {
+        const ActionHit& hit = list[h];
+        if (hit.action != a)
+          fail(source, fmt::format("{}[{}].action", name, h), fmt::format("{} ({})", a, beginName),
+               fmt::format("{}", hit.action));
+        if (hit.offset < 1 || hit.offset > m.actionLength(a))
+          fail(source, fmt::format("{}[{}].offset", name, h),
+               fmt::format("an offset in [1, {}] (the length of action {})", m.actionLength(a), a),
+               fmt::format("{}", hit.offset));
+        if (hit.hand > 1)
+          fail(source, fmt::format("{}[{}].hand", name, h), "0 (left) or 1 (right)", fmt::format("{}", hit.hand));
+        if (h > begin[a]) {
+          const ActionHit& previous = list[h - 1];
+          if (hit.offset < previous.offset || (hit.offset == previous.offset && hit.hand < previous.hand))
+            fail(source, fmt::format("{}[{}]", name, h),
+                 fmt::format("sorted by (offset, side), at least ({}, {})", previous.offset, previous.hand),
+                 fmt::format("({}, {})", hit.offset, hit.hand));
+        }
+        const float values[3] = {hit.x, hit.y, hit.z};
+        for (int k = 0; k < 3; ++k)
+          if (!std::isfinite(values[k]))
+            fail(source, fmt::format("{}[{}].{}", name, h, "xyz"[k]), "a finite number", fmt::format("{}", values[k]));
+        if (!(hit.weight > 0 && hit.weight <= 1))
+          fail(source, fmt::format("{}[{}].weight", name, h), "a weight in (0, 1]", fmt::format("{}", hit.weight));
       }
-      const float values[3] = {hit.x, hit.y, hit.z};
-      for (int k = 0; k < 3; ++k)
-        if (!std::isfinite(values[k]))
-          fail(source, fmt::format("hits[{}].{}", h, "xyz"[k]), "a finite number", fmt::format("{}", values[k]));
-      if (!(hit.weight > 0 && hit.weight <= 1))
-        fail(source, fmt::format("hits[{}].weight", h), "a weight in (0, 1]", fmt::format("{}", hit.weight));
     }
-  }
+  };
+  checkStrikes("hits", m.hits, m.actionHitBegin, "actionHitBegin");
+  if (!m.actionKickBegin.empty()) checkStrikes("kicks", m.kicks, m.actionKickBegin, "actionKickBegin");
 }
 
 }  // namespace mgrl

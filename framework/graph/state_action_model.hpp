@@ -20,13 +20,14 @@ struct GroundMotion {
   double dx = 0, dz = 0, dyaw = 0;
 };
 
-/// One effective hitting point inside an action (paper sec. 6.2).
+/// One effective hitting point inside an action (paper sec. 6.2): a punch's fist tip, or
+/// a kick's toe tip (StateActionModel::kicks).
 struct ActionHit {
   std::uint32_t action = 0;
   std::uint32_t offset = 0;  ///< frames after the decision (1 = the action's first frame)
-  std::uint8_t hand = 0;     ///< 0 left, 1 right
-  float x = 0, y = 0, z = 0;  ///< fist tip in the avatar frame of the decision (m)
-  float weight = 0;           ///< fist speed / fastest effective hit in the data, in (0, 1]
+  std::uint8_t hand = 0;     ///< 0 left, 1 right (the foot, for a kick)
+  float x = 0, y = 0, z = 0;  ///< fist (toe) tip in the avatar frame of the decision (m)
+  float weight = 0;           ///< speed / fastest effective hit (kick) in the data, in (0, 1]
 };
 
 /// Everything the graph builder produces. Frame indices are global: clip c's frame f is
@@ -70,11 +71,16 @@ struct StateActionModel {
   /// Effective hits inside actions, sorted by (action, offset, hand).
   std::vector<ActionHit> hits;
   std::vector<std::uint32_t> actionHitBegin;  ///< actionCount() + 1 entries
+  /// Effective kicks inside actions (Annotation::kicks), the same way: hand is the foot.
+  std::vector<ActionHit> kicks;
+  std::vector<std::uint32_t> actionKickBegin;  ///< actionCount() + 1 entries
 
   /// The centroid of all effective hitting points in the avatar frame (m), and the fastest
   /// effective hit's speed (m/s, 0 if there is none).
   double centroid[3] = {0, 0, 0};
   double maxHitSpeed_mps = 0;
+  /// The fastest effective kick's toe speed (m/s, 0 if there is none).
+  double maxKickSpeed_mps = 0;
 
   std::size_t stateCount() const { return stateFrame.size(); }
   std::size_t actionCount() const { return actionFrom.size(); }
@@ -84,6 +90,9 @@ struct StateActionModel {
   }
   std::span<const ActionHit> hitsOf(std::size_t a) const {
     return {hits.data() + actionHitBegin[a], actionHitBegin[a + 1] - actionHitBegin[a]};
+  }
+  std::span<const ActionHit> kicksOf(std::size_t a) const {
+    return {kicks.data() + actionKickBegin[a], actionKickBegin[a + 1] - actionKickBegin[a]};
   }
   GroundMotion displacement(std::size_t a) const {
     return {actionDisplacement[3 * a], actionDisplacement[3 * a + 1], actionDisplacement[3 * a + 2]};

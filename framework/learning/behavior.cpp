@@ -14,15 +14,7 @@ namespace {
 // The parameters of a plugin block, defaults filled in, as the registry reads them.
 template <class Registry>
 nlohmann::json blockJson(const Registry& registry, const ConfigNode& block, const std::string& fallbackType) {
-  const std::string type = block.isNull() ? fallbackType : block.child("type").asString();
-  const auto* entry = registry.find(type);
-  nlohmann::json json = nlohmann::json::object();
-  json["type"] = type;
-  if (!entry) return json;
-  const Params params = block.isNull() ? Params::defaults(entry->params) : Params::read(block, entry->params, {"type"});
-  const nlohmann::json values = params.toJson();
-  for (const auto& item : values.items()) json[item.key()] = item.value();
-  return json;
+  return registry.blockJson(block, fallbackType);
 }
 
 }  // namespace
@@ -62,6 +54,9 @@ Behavior buildBehavior(const BehaviorSpec& spec, const Plugins& plugins, const S
   }
   b.learner = plugins.learners.create(spec.learner);
   std::tie(b.config, b.key) = behaviorConfigAndKey(spec, plugins, graphKey);
+  b.successDeclared = !spec.success.isNull();
+  b.success = b.successDeclared ? SuccessCriterion::read(spec.success, b.config["reward"])
+                                : SuccessCriterion::implied(b.config["reward"]);
   return b;
 }
 

@@ -4,6 +4,7 @@
 /// plugin instances through the registries, and the key that says which trained table
 /// belongs to it.
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -13,6 +14,7 @@
 #include "mgrl/learning/learner.hpp"
 #include "mgrl/learning/reward.hpp"
 #include "mgrl/learning/behavior_spec.hpp"
+#include "mgrl/learning/success.hpp"
 
 namespace mgrl {
 
@@ -38,6 +40,10 @@ struct Behavior {
   /// Hash of the graph key and everything in `config` that changes the trained table (not
   /// weight or activation, not threads, curve_points or checkpoint_every).
   std::string key;
+  /// What success means for it (`success:`, else implied by its reward's contact term;
+  /// none for a reward without one). Not part of the key: it does not change the table.
+  std::optional<SuccessCriterion> success;
+  bool successDeclared = false;  ///< `success:` was given
 
   Problem problem(const StateActionModel& model) const { return {model, *discretizer, *reward, *environment}; }
 };

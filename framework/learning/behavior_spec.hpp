@@ -25,6 +25,7 @@ struct BehaviorSpec {
   Activation activation = Activation::Always;
   ConfigNode node;  ///< the behaviour's block
   ConfigNode discretizer, reward, environment, learner;  ///< environment may be absent (static_target)
+  ConfigNode success = ConfigNode::parse("", "success");  ///< may be absent (mgrl/learning/success.hpp: implied by the reward)
 };
 
 }  // namespace mgrl

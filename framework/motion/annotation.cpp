@@ -37,6 +37,15 @@ void AnnotationParams::validate() const {
   if (!(knockdownHeadRatio >= 0 && knockdownHeadRatio < 1))
     throw Error(fmt::format("annotation: knockdown_head_ratio: expected a value in [0, 1) (0: off), found {}",
                             knockdownHeadRatio));
+  positive(kickMinSpeed_mps, "kick_min_speed_mps");
+  positive(kickMaxSpeed_mps, "kick_max_speed_mps");
+  if (!(kickMinAlignment >= 0 && kickMinAlignment <= 1))
+    throw Error(fmt::format("annotation: kick_min_alignment: expected a value in [0, 1], found {}", kickMinAlignment));
+  if (!(kickMinHeight_m >= 0 && kickMinHeight_m <= 3))
+    throw Error(fmt::format("annotation: kick_min_height_m: expected a height in [0, 3] m, found {}", kickMinHeight_m));
+  if (kickMaxSpeed_mps <= kickMinSpeed_mps)
+    throw Error(fmt::format("annotation: kick_max_speed_mps: expected a value above kick_min_speed_mps ({}), found {}",
+                            kickMinSpeed_mps, kickMaxSpeed_mps));
   if (punchMaxSpeed_mps <= punchMinSpeed_mps)
     throw Error(fmt::format("annotation: punch_max_speed_mps: expected a value above punch_min_speed_mps ({}), found {}",
                             punchMinSpeed_mps, punchMaxSpeed_mps));
@@ -65,8 +74,8 @@ Annotation annotate(const Motion& motion, const SkeletonRoles& roles, const Anno
   const std::size_t n = skeleton.jointCount();
 
   // Tracked points per frame: ankle L/R, toe L/R, fist tip L/R, wrist L/R, forearm L/R,
-  // toe tip L/R, head top.
-  constexpr std::size_t kPoints = 13;
+  // toe tip L/R, head top, knee L/R (the ankle's parent).
+  constexpr std::size_t kPoints = 15;
   std::vector<Eigen::Vector3d> points(frames * kPoints);
   std::vector<Eigen::Vector3d> rootPosition(frames), facing(frames);
   std::vector<Eigen::Quaterniond> rotations(n);
@@ -83,6 +92,10 @@ Annotation annotate(const Motion& motion, const SkeletonRoles& roles, const Anno
       p[10 + s] = pointOnJoint(rotations, positions, roles.toe[s], roles.toeTipOffset[s]);
     }
     p[12] = pointOnJoint(rotations, positions, roles.head, roles.headTopOffset);
+    for (int s = 0; s < 2; ++s) {
+      const int knee = skeleton.joint(static_cast<std::size_t>(roles.ankle[s])).parent;
+      p[13 + s] = positions[knee >= 0 ? knee : roles.ankle[s]];
+    }
     rootPosition[f] = positions[0];
     facing[f] = rotations[0] * roles.forward;
   }
@@ -189,6 +202,41 @@ Annotation annotate(const Motion& motion, const SkeletonRoles& roles, const Anno
       }
       if (effective && !previous[s]) ++result.punches[s];
       previous[s] = effective;
+    }
+  }
+
+  // Effective kicks, by analogy with the punches: the toe tip driven along the shin (knee
+  // to ankle), high enough off the floor not to be a step, by a fighter on his feet.
+  std::array<bool, 2> kicking{false, false};
+  for (std::size_t f = 0; f < frames; ++f) {
+    const bool down = headAbove[f] < knockdownBelow;
+    for (int s = 0; s < 2; ++s) {
+      const std::size_t base = f * kPoints;
+      const Eigen::Vector3d& tip = points[base + 10 + s];
+      Eigen::Vector3d axis = points[base + s] - points[base + 13 + s];
+      const Eigen::Vector3d& v = velocity[base + 10 + s];
+      const double speed = v.norm();
+      const double before = f > 0 ? (tip - points[base - kPoints + 10 + s]).norm() / motion.frameTime() : 0;
+      const double after = f + 1 < frames ? (points[base + kPoints + 10 + s] - tip).norm() / motion.frameTime() : 0;
+      bool effective = false;
+      if (!down && axis.norm() > 1e-9 && std::max({speed, before, after}) <= params.kickMaxSpeed_mps &&
+          tip.y() - result.groundY >= params.kickMinHeight_m) {
+        axis.normalize();
+        const double along = v.dot(axis);
+        if (along >= params.kickMinSpeed_mps && along >= params.kickMinAlignment * speed) {
+          effective = true;
+          EffectiveHit kick;
+          kick.frame = static_cast<std::uint32_t>(f);
+          kick.hand = static_cast<Side>(s);
+          kick.tipWorld = tip;
+          kick.tipAvatar = result.frames[f].toAvatar(tip);
+          kick.speed_mps = speed;
+          kick.alongForearm_mps = along;
+          result.kicks.push_back(kick);
+        }
+      }
+      if (effective && !kicking[s]) ++result.kickCount[s];
+      kicking[s] = effective;
     }
   }
   return result;

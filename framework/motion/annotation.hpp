@@ -42,6 +42,15 @@ struct AnnotationParams {
   /// stay above 0.68) and drops kneeling, sitting, lying and falling (SNU's sparring has
   /// take-downs: arms flail on the way down and on the floor).
   double knockdownHeadRatio = 0.6;
+  /// A kick is effective (by analogy with the punch, paper sec. 6.2) when the toe tip's
+  /// velocity along the shin axis (knee to ankle) exceeds this (m/s), is not opposed to it
+  /// (cosine at least kickMinAlignment), the toe tip is at least kickMinHeight_m above the
+  /// floor (steps and shuffles stay below), and the fighter is on his feet.
+  double kickMinSpeed_mps = 3.0;
+  double kickMinAlignment = 0.5;
+  double kickMinHeight_m = 0.3;
+  /// Toe speeds above this are capture glitches, never effective kicks.
+  double kickMaxSpeed_mps = 25.0;
 
   /// Throws mgrl::Error naming the first out-of-range value.
   void validate() const;
@@ -75,6 +84,10 @@ struct Annotation {
   std::vector<EffectiveHit> hits;
   /// Punches per hand: runs of consecutive effective frames.
   std::array<int, 2> punches{0, 0};
+  /// Effective kicks (hand is the foot; tip is the toe tip, along the shin), frame order.
+  std::vector<EffectiveHit> kicks;
+  /// Kicks per foot: runs of consecutive effective frames.
+  std::array<int, 2> kickCount{0, 0};
   /// Frames where a fist moved faster than punchMaxSpeed_mps (ignored as glitches).
   int glitchFrames = 0;
   /// Standing height (m): head top (SkeletonRoles::headTopOffset) above the lower foot's

@@ -13,6 +13,7 @@ void checkBehaviors(const Scenario& scenario, const Plugins& plugins) {
     plugins.rewards.check(spec.reward);
     if (!spec.environment.isNull()) plugins.environments.check(spec.environment);
     plugins.learners.check(spec.learner);
+    if (!spec.success.isNull()) SuccessCriterion::read(spec.success, plugins.rewards.blockJson(spec.reward, ""));
   }
 }
 

@@ -16,7 +16,7 @@ namespace {
 
 // Bump when the graph construction changes what it computes, so old caches go stale.
 // 2: no effective punch while knocked down; the fist falls back to the wrist's end site.
-constexpr int kGraphAlgorithmVersion = 2;
+constexpr int kGraphAlgorithmVersion = 3;  // 3: effective kicks
 
 bool wildcardMatch(std::string_view pattern, std::string_view text) {
   // Iterative '*' / '?' matching with backtracking to the last star.
@@ -108,7 +108,8 @@ MotionSpec readMotion(const ConfigNode& motion, const std::filesystem::path& sce
     const ConfigNode a = motion.child("annotation");
     a.allowOnly({"contact_height_enter_m", "contact_height_exit_m", "contact_speed_enter_mps",
                  "contact_speed_exit_mps", "punch_min_speed_mps", "punch_min_alignment", "punch_max_speed_mps",
-                 "knockdown_head_ratio"});
+                 "knockdown_head_ratio", "kick_min_speed_mps", "kick_min_alignment", "kick_min_height_m",
+                 "kick_max_speed_mps"});
     AnnotationParams& p = spec.annotation;
     p.contactHeightEnter_m = a.number("contact_height_enter_m", p.contactHeightEnter_m, 0, 1);
     p.contactHeightExit_m = a.number("contact_height_exit_m", p.contactHeightExit_m, 0, 1);
@@ -118,6 +119,10 @@ MotionSpec readMotion(const ConfigNode& motion, const std::filesystem::path& sce
     p.punchMinAlignment = a.number("punch_min_alignment", p.punchMinAlignment, -1, 1);
     p.punchMaxSpeed_mps = a.number("punch_max_speed_mps", p.punchMaxSpeed_mps, 0, 1000);
     p.knockdownHeadRatio = a.number("knockdown_head_ratio", p.knockdownHeadRatio, 0, 0.99);
+    p.kickMinSpeed_mps = a.number("kick_min_speed_mps", p.kickMinSpeed_mps, 0, 100);
+    p.kickMinAlignment = a.number("kick_min_alignment", p.kickMinAlignment, -1, 1);
+    p.kickMinHeight_m = a.number("kick_min_height_m", p.kickMinHeight_m, 0, 3);
+    p.kickMaxSpeed_mps = a.number("kick_max_speed_mps", p.kickMaxSpeed_mps, 0, 1000);
     a.withLocation([&] { p.validate(); });
   }
   return spec;
@@ -155,7 +160,7 @@ std::vector<BehaviorSpec> readBehaviors(const ConfigNode& root) {
                             std::string::npos)
       b.fail("expected a behaviour name of letters, digits, '_' and '-' (it names files of the policy bundle)");
     if (!b.isMap()) b.fail("expected a map with discretizer, reward and learner sections");
-    b.allowOnly({"description", "weight", "activation", "discretizer", "reward", "environment", "learner"});
+    b.allowOnly({"description", "weight", "activation", "discretizer", "reward", "environment", "learner", "success"});
     BehaviorSpec spec{name,
                       b.string("description", ""),
                       b.number("weight", 1.0, -1e6, 1e6),
@@ -164,7 +169,8 @@ std::vector<BehaviorSpec> readBehaviors(const ConfigNode& root) {
                       b.section("discretizer"),
                       b.section("reward"),
                       b.child("environment"),
-                      b.section("learner")};
+                      b.section("learner"),
+                      b.child("success")};
     if (b.has("activation")) {
       const ConfigNode activation = b.child("activation");
       const std::string text = activation.asString();
@@ -299,7 +305,8 @@ std::string graphCacheKey(const Scenario& s) {
   }
   const AnnotationParams& a = m.annotation;
   for (double v : {a.contactHeightEnter_m, a.contactHeightExit_m, a.contactSpeedEnter_mps, a.contactSpeedExit_mps,
-                   a.punchMinSpeed_mps, a.punchMinAlignment, a.punchMaxSpeed_mps, a.knockdownHeadRatio})
+                   a.punchMinSpeed_mps, a.punchMinAlignment, a.punchMaxSpeed_mps, a.knockdownHeadRatio,
+                   a.kickMinSpeed_mps, a.kickMinAlignment, a.kickMinHeight_m, a.kickMaxSpeed_mps})
     h.update(v);
   const GraphParams& g = s.graph;
   for (double v : {g.threshold, g.velocityWeight, g.rootHeightWeight}) h.update(v);

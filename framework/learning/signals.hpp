@@ -1,0 +1,61 @@
+#pragma once
+/// \file
+/// Body signals along an action (scenarios/README.md, "reward terms"): what the reward
+/// vocabulary and the success criteria measure at the action's frames, from the
+/// state-action model alone. Frame t of action a (1 = the first frame after the decision)
+/// is the model's action frame actionFrameBegin[a] + t - 1; the target e is in the
+/// decision's avatar frame (DESIGN.md sec. 3: +Z facing, +X left, Y up), as the learners
+/// see it.
+#include <cstddef>
+#include <cstdint>
+#include <string>
+#include <string_view>
+
+#include <Eigen/Core>
+
+#include "mgrl/graph/state_action_model.hpp"
+
+namespace mgrl {
+
+/// A point of the body a distance is measured from.
+enum class BodyPoint {
+  Centroid,  ///< the effective hitting points' centroid carried along (the paper's p(t), sec. 6.4)
+  Pelvis,    ///< the ground point below the root (the avatar frame's origin)
+};
+BodyPoint parseBodyPoint(std::string_view name);  ///< "centroid", "pelvis"; mgrl::Error otherwise
+std::string_view bodyPointName(BodyPoint point);
+
+/// Which limbs' effective strikes count: a bit set of the four effectors.
+enum Effector : std::uint8_t {
+  kLeftFist = 1,
+  kRightFist = 2,
+  kLeftFoot = 4,
+  kRightFoot = 8,
+  kFists = kLeftFist | kRightFist,
+  kFeet = kLeftFoot | kRightFoot,
+  kAnyLimb = kFists | kFeet,
+};
+/// "left_fist", "right_fist", "fists", "left_foot", "right_foot", "feet", "any".
+std::uint8_t parseEffector(std::string_view name);
+inline constexpr const char* kEffectorNames[] = {"fists", "left_fist", "right_fist", "feet",
+                                                 "left_foot", "right_foot", "any"};
+
+/// The ground (dims 2) or 3-D (dims 3, centroid only) distance from the body point to the
+/// target at action frame `frame` (a global action-frame index).
+double bodyDistance(const StateActionModel& m, std::size_t frame, BodyPoint point, int dims, const Eigen::Vector3d& e);
+
+/// The unsigned angle (radians, [0, pi]) between the avatar's facing at `frame` and the
+/// ground direction from it to the target; 0 when the target is straight ahead.
+double facingError(const StateActionModel& m, std::size_t frame, const Eigen::Vector3d& e);
+
+/// The avatar's ground speed at offset t of action a (m/s): its root's displacement from
+/// frame t - 1 (the decision at t = 1) to frame t, over the frame time.
+double rootSpeed(const StateActionModel& m, std::size_t a, std::size_t t);
+
+/// The best effective strike of the `effectors` landing within `radius` of e at offset t
+/// of action a: its speed weight (or 1 without use_speed), 0 if none lands. Punches come
+/// from m.hits, kicks from m.kicks.
+double strikeAt(const StateActionModel& m, std::size_t a, std::uint32_t t, std::uint8_t effectors, double radius,
+                bool useSpeed, const Eigen::Vector3d& e);
+
+}  // namespace mgrl

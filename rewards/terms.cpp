@@ -1,0 +1,201 @@
+// The reward vocabulary (scenarios/README.md, "reward terms"): a reward made of terms, each
+// a signal s_k(t) in [0, 1] over the action's frames, combined as the paper combines its
+// one signal (sec. 4.1: r = max_t gamma^t s(t)) or summed (r = sum_t gamma^t s(t)), with
+// s(t) = sum_k w_k s_k(t). t counts frames after the decision (1 = the first).
+#include <algorithm>
+#include <cmath>
+#include <numbers>
+#include <vector>
+
+#include <fmt/format.h>
+
+#include "mgrl/learning/signals.hpp"
+#include "rewards.hpp"
+
+namespace mgrl::rewards {
+
+namespace {
+
+using nlohmann::json;
+
+constexpr double kDegree = std::numbers::pi / 180;
+
+ParamSpec weightSpec() {
+  return ParamSpec::number("weight", 1, 0, 1000, "", "w_k: the term's share of the frame's signal");
+}
+
+
+const TermKind* findKind(std::string_view name) {
+  for (const TermKind& k : termKinds())
+    if (name == k.name) return &k;
+  return nullptr;
+}
+
+// Reads and checks the `terms` list of a block: ConfigError at the first mistake. Returns
+// each term's parameters, defaults filled in.
+std::vector<json> readTerms(const ConfigNode& block) {
+  if (!block.has("terms"))
+    block.fail("expected a 'terms' list, e.g. terms: [{term: distance, point: pelvis, d0: 1.4}]");
+  const ConfigNode list = block.child("terms");
+  const std::vector<ConfigNode> elements = list.elements();
+  if (elements.empty()) list.fail("expected at least one term, found an empty list");
+  std::vector<std::string> names;
+  for (const TermKind& k : termKinds()) names.push_back(k.name);
+  std::vector<json> terms;
+  for (const ConfigNode& element : elements) {
+    if (!element.isMap() || !element.has("term"))
+      element.fail(fmt::format("expected a map with 'term: <{}>'", fmt::join(names, "|")));
+    const ConfigNode termNode = element.child("term");
+    const std::string name = termNode.asString();
+    const TermKind* kind = findKind(name);
+    if (!kind) termNode.fail(fmt::format("unknown term {} (known: {})", quoteToken(name), fmt::join(names, ", ")));
+    const Params params = Params::read(element, kind->params, {"term"});
+    if (name == "distance" && params.choice("point") == "pelvis" && params.integer("dims") == 3)
+      params.fail("dims", "expected 2 with point: pelvis (a ground point has no height), found 3");
+    json term = params.toJson();
+    term["term"] = name;
+    terms.push_back(std::move(term));
+  }
+  return terms;
+}
+
+class Terms final : public Reward {
+ public:
+  Terms(const Params& p, const std::vector<json>& terms)
+      : gamma_(p.number("gamma")), sum_(p.choice("combine") == "sum") {
+    for (const json& t : terms) {
+      Term term;
+      const std::string name = t["term"];
+      term.weight = t["weight"];
+      if (name == "distance") {
+        term.kind = Kind::Distance;
+        term.point = parseBodyPoint(t["point"].get<std::string>());
+        term.dims = t["dims"];
+        term.target = t["d0"];
+        term.scale = t["sigma"];
+      } else if (name == "facing") {
+        term.kind = Kind::Facing;
+        term.target = t["angle_deg"].get<double>() * kDegree;
+        term.scale = t["sigma_deg"].get<double>() * kDegree;
+      } else if (name == "contact") {
+        term.kind = Kind::Contact;
+        term.effectors = parseEffector(t["effector"].get<std::string>());
+        term.scale = t["radius"];
+        term.useSpeed = t["use_speed"];
+      } else if (name == "travel") {
+        term.kind = Kind::Travel;
+        term.sign = t["direction"] == "toward" ? 1 : -1;
+        term.scale = t["scale_m"];
+      } else {
+        term.kind = Kind::Effort;
+        term.scale = t["speed_mps"];
+      }
+      terms_.push_back(term);
+    }
+  }
+  std::string type() const override { return "terms"; }
+  double gamma() const override { return gamma_; }
+
+  double evaluate(const StateActionModel& m, std::size_t a, const Eigen::Vector3d& e) const override {
+    const std::size_t begin = m.actionFrameBegin[a], frames = m.actionLength(a);
+    const double start = std::hypot(e.x(), e.z());  // the pelvis is at the origin at the decision
+    double result = 0, discount = 1;
+    for (std::size_t t = 1; t <= frames; ++t) {
+      discount *= gamma_;
+      const std::size_t frame = begin + t - 1;
+      double signal = 0;
+      for (const Term& term : terms_) {
+        double s = 0;
+        switch (term.kind) {
+          case Kind::Distance:
+            s = std::exp(-std::abs(bodyDistance(m, frame, term.point, term.dims, e) - term.target) / term.scale);
+            break;
+          case Kind::Facing:
+            s = std::exp(-std::abs(facingError(m, frame, e) - term.target) / term.scale);
+            break;
+          case Kind::Contact:
+            s = strikeAt(m, a, static_cast<std::uint32_t>(t), term.effectors, term.scale, term.useSpeed, e);
+            break;
+          case Kind::Travel: {
+            const double progress = term.sign * (start - bodyDistance(m, frame, BodyPoint::Pelvis, 2, e));
+            s = std::clamp(progress / term.scale, 0.0, 1.0);
+            break;
+          }
+          case Kind::Effort:
+            s = std::exp(-rootSpeed(m, a, t) / term.scale);
+            break;
+        }
+        signal += term.weight * s;
+      }
+      result = sum_ ? result + discount * signal : std::max(result, discount * signal);
+    }
+    return result;
+  }
+
+ private:
+  enum class Kind { Distance, Facing, Contact, Travel, Effort };
+  struct Term {
+    Kind kind = Kind::Distance;
+    double weight = 1, target = 0, scale = 1;
+    BodyPoint point = BodyPoint::Centroid;
+    int dims = 2, sign = 1;
+    std::uint8_t effectors = kFists;
+    bool useSpeed = true;
+  };
+  double gamma_;
+  bool sum_;
+  std::vector<Term> terms_;
+};
+
+}  // namespace
+
+const std::vector<TermKind>& termKinds() {
+  static const std::vector<TermKind> kinds = {
+      {"distance", "exp(-|d - d0| / sigma), d the distance from a body point to the target",
+       {ParamSpec::choice("point", "centroid", {"centroid", "pelvis"},
+                          "centroid: the effective hitting points' centroid (the paper's); pelvis: the ground point "
+                          "below the root"),
+        ParamSpec::integer("dims", 2, 2, 3, "", "2: distance on the ground; 3: in space (centroid only)"),
+        ParamSpec::number("d0", 0, 0, 100, "m", "preferred distance"),
+        ParamSpec::number("sigma", 0.1, 1e-4, 100, "m", "distance scale of the exponential"), weightSpec()}},
+      {"facing", "exp(-|angle - angle0| / sigma), angle between the avatar's facing and the target's direction",
+       {ParamSpec::number("angle_deg", 0, 0, 180, "deg", "preferred angle (0: target straight ahead)"),
+        ParamSpec::number("sigma_deg", 30, 0.1, 360, "deg", "angle scale of the exponential"), weightSpec()}},
+      {"contact", "an effective strike of the effector within radius of the target, weighted by its speed",
+       {ParamSpec::choice("effector", "fists", {std::begin(kEffectorNames), std::end(kEffectorNames)},
+                          "which limbs' effective strikes count (feet: effective kicks)"),
+        ParamSpec::number("radius", 0.15, 1e-4, 10, "m", "a strike counts when its tip is this close to the target"),
+        ParamSpec::boolean("use_speed", true, "weight a strike by its normalised speed (false: 1)"), weightSpec()}},
+      {"travel", "clamp(progress / scale_m, 0, 1): ground progress toward (or away from) the target since the decision",
+       {ParamSpec::choice("direction", "toward", {"toward", "away"}, "which way counts as progress"),
+        ParamSpec::number("scale_m", 1, 1e-3, 100, "m", "progress that earns the full signal"), weightSpec()}},
+      {"effort", "exp(-v / speed_mps), v the avatar's ground speed: economy, standing still earns 1",
+       {ParamSpec::number("speed_mps", 1, 1e-3, 100, "m/s", "speed scale of the exponential"), weightSpec()}},
+  };
+  return kinds;
+}
+
+void registerTerms(RewardRegistry& registry) {
+  RewardRegistry::Entry entry{
+      "terms",
+      "a list of terms (distance, facing, contact, travel, effort), each a signal over the action's frames; "
+      "combine: max gives max_t gamma^t sum_k w_k s_k(t) (paper sec. 4.1), sum gives the sum over t",
+      {ParamSpec::choice("combine", "max", {"max", "sum"},
+                         "max: the best discounted frame (the paper's); sum: every frame's discounted signal"),
+       ParamSpec::number("gamma", 0.97, 1e-6, 1, "per frame", "discount per frame, inside and after the action")},
+      [](const Params& p) { return std::make_unique<Terms>(p, readTerms(*p.block())); }};
+  entry.blockKeys = {"terms"};
+  entry.readBlock = [](const ConfigNode& block) { return json{{"terms", readTerms(block)}}; };
+  registry.add(std::move(entry));
+}
+
+std::string describeTerms(std::string_view indent) {
+  std::string out;
+  for (const TermKind& k : termKinds()) {
+    out += fmt::format("{}term: {}  {}\n", indent, k.name, k.summary);
+    out += describeParams(k.params, fmt::format("{}  ", indent));
+  }
+  return out;
+}
+
+}  // namespace mgrl::rewards
