@@ -8,8 +8,11 @@
 //   - Decision cost of the combined policy with a kd_tree hit table against the uniform
 //     one's (the runtime target: <= 0.5 us).
 //
-// Usage: mgrl_bench_adaptive [--quick] [--runs N] [--reference A,D,H] [--points N] [--no-error] [--no-decision]
-// --quick uses a 30 x 24 x 9 reference and fewer budgets.
+// Usage: mgrl_bench_adaptive [--quick] [--runs N] [--reference A,D,H] [--points N] [--budget A,D,H]...
+//                            [--variant NAME;GRID;LEARNER]... [--no-error] [--no-decision]
+// --quick uses a 30 x 24 x 9 reference and fewer budgets. --budget replaces the budgets (the
+// uniform grid's vertex counts); --variant replaces the adaptive configurations (extra
+// kd_tree keys; extra adaptive_value_iteration keys, YAML flow style).
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -102,8 +105,20 @@ Error compare(const Solution& x, const Solution& reference, const mgrl::StateAct
 
 }  // namespace
 
+// A budget: the uniform grid's vertex counts (angle, distance, height); the adaptive
+// trees get its vertex count as max_vertices.
+struct Budget {
+  std::array<int, 3> uniform;
+};
+// An adaptive configuration: extra kd_tree and adaptive_value_iteration YAML keys.
+struct Variant {
+  std::string name, grid, learner;
+};
+
 int main(int argc, char** argv) {
   int runs = 5;
+  std::vector<Budget> budgets;
+  std::vector<Variant> variants;
   bool quick = false, error = true, decision = true;
   std::array<int, 3> reference{40, 32, 12};
   std::size_t pointCount = 3000;
@@ -120,14 +135,31 @@ int main(int argc, char** argv) {
     } else if (!std::strcmp(argv[i], "--reference") && i + 1 < argc &&
                std::sscanf(argv[i + 1], "%d,%d,%d", &reference[0], &reference[1], &reference[2]) == 3) {
       ++i;
+    } else if (!std::strcmp(argv[i], "--budget") && i + 1 < argc) {
+      Budget b{};
+      if (std::sscanf(argv[++i], "%d,%d,%d", &b.uniform[0], &b.uniform[1], &b.uniform[2]) != 3) {
+        std::fprintf(stderr, "mgrl_bench_adaptive: --budget: expected A,D,H, found '%s'\n", argv[i]);
+        return 2;
+      }
+      budgets.push_back(b);
+    } else if (!std::strcmp(argv[i], "--variant") && i + 1 < argc) {
+      // NAME;GRID KEYS;LEARNER KEYS, e.g. "conf;refinement: conforming;criterion: influence_policy"
+      const std::string text = argv[++i];
+      const std::size_t a = text.find(';'), b = a == std::string::npos ? a : text.find(';', a + 1);
+      if (b == std::string::npos) {
+        std::fprintf(stderr, "mgrl_bench_adaptive: --variant: expected NAME;GRID;LEARNER, found '%s'\n",
+                     text.c_str());
+        return 2;
+      }
+      variants.push_back({text.substr(0, a), text.substr(a + 1, b - a - 1), text.substr(b + 1)});
     } else if (!std::strcmp(argv[i], "--no-error")) {
       error = false;
     } else if (!std::strcmp(argv[i], "--no-decision")) {
       decision = false;
     } else {
       std::fprintf(stderr,
-                   "usage: mgrl_bench_adaptive [--quick] [--runs N] [--reference A,D,H] [--points N] [--no-error] "
-                   "[--no-decision]\n");
+                   "usage: mgrl_bench_adaptive [--quick] [--runs N] [--reference A,D,H] [--points N] [--budget A,D,H]... "
+                   "[--variant NAME;GRID;LEARNER]... [--no-error] [--no-decision]\n");
       return 2;
     }
   }
@@ -163,12 +195,13 @@ int main(int argc, char** argv) {
       for (std::size_t i = 0; i < pointCount; ++i)
         points.push_back(truth.grid->sample({rng.uniform(), rng.uniform(), rng.uniform()}));
 
-      struct Budget {
-        std::array<int, 3> uniform;
-      };
-      const std::vector<Budget> budgets = quick ? std::vector<Budget>{{{8, 6, 5}}, {{10, 8, 6}}, {{20, 16, 6}}}
-                                                : std::vector<Budget>{{{6, 5, 4}}, {{8, 6, 5}}, {{10, 8, 6}},
-                                                                      {{14, 12, 6}}, {{20, 16, 6}}};
+      if (budgets.empty())
+        budgets = quick ? std::vector<Budget>{{{8, 6, 5}}, {{10, 8, 6}}, {{20, 16, 6}}}
+                        : std::vector<Budget>{{{6, 5, 4}}, {{8, 6, 5}}, {{10, 8, 6}}, {{14, 12, 6}}, {{20, 16, 6}}};
+      if (variants.empty())
+        variants = {{"both", "", "criterion: both"},
+                    {"influence_policy", "", "criterion: influence_policy"},
+                    {"conforming influence_policy", "refinement: conforming", "criterion: influence_policy"}};
       std::printf("\n%-34s %8s %8s %8s %10s %9s %9s %10s %8s\n", "grid", "vertices", "free", "tied", "table B", "RMSE",
                   "agree", "regret", "train s");
       auto row = [&](const Solution& x) {
@@ -182,15 +215,17 @@ int main(int argc, char** argv) {
         const auto [a, d, h] = b.uniform;
         const std::size_t vertices = static_cast<std::size_t>(a * d * h);
         row(solve(fmt::format("uniform {}x{}x{}", a, d, h), model, *reward, uniform(a, d, h), vi, threads));
-        // Large budgets start from a finer tree (fewer rounds).
-        const std::string cells = vertices >= 1500 ? "angle_cells: 8, distance_cells: 8, height_cells: 4"
-                                                   : "angle_cells: 4, distance_cells: 4, height_cells: 2";
-        const std::string grid = "{" + kdBase + ", " + cells + "}";
-        for (const char* criterion : {"both", "influence_policy"})
-          row(solve(fmt::format("adaptive {} {}", vertices, criterion), model, *reward, grid,
-                    fmt::format("{{type: adaptive_value_iteration, max_vertices: {}, criterion: {}}}", vertices,
-                                criterion),
+        for (const Variant& v : variants) {
+          // Large budgets start from a finer tree (fewer rounds) unless the variant says.
+          const std::string cells = v.grid.find("_cells") != std::string::npos ? ""
+                                    : vertices >= 1500 ? ", angle_cells: 8, distance_cells: 8, height_cells: 4"
+                                                       : ", angle_cells: 4, distance_cells: 4, height_cells: 2";
+          const std::string grid = "{" + kdBase + cells + (v.grid.empty() ? "" : ", " + v.grid) + "}";
+          row(solve(fmt::format("adaptive {} {}", vertices, v.name), model, *reward, grid,
+                    fmt::format("{{type: adaptive_value_iteration, max_vertices: {}{}}}", vertices,
+                                v.learner.empty() ? "" : ", " + v.learner),
                     threads));
+        }
       }
     }
 

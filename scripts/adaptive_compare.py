@@ -53,6 +53,14 @@ CONFIGS = {
     "adaptive 1920 longest influence_policy": adaptive(
         (8, 8, 4), "behaviors.hit.discretizer.split_axes=longest behaviors.hit.learner.max_vertices=1920 "
                    "behaviors.hit.learner.criterion=influence_policy"),
+    # Conforming splits: the neighbours around a split leaf's new corners split too, so that
+    # those corners are free (discretizers/README.md).
+    "adaptive 480 conforming influence_policy": adaptive(
+        (4, 4, 2), "behaviors.hit.discretizer.split_axes=longest behaviors.hit.discretizer.refinement=conforming "
+                   "behaviors.hit.learner.max_vertices=480 behaviors.hit.learner.criterion=influence_policy"),
+    "adaptive 480 conforming both": adaptive(
+        (4, 4, 2), "behaviors.hit.discretizer.split_axes=longest behaviors.hit.discretizer.refinement=conforming "
+                   "behaviors.hit.learner.max_vertices=480 behaviors.hit.learner.criterion=both"),
 }
 
 
