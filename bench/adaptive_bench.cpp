@@ -9,10 +9,12 @@
 //     one's (the runtime target: <= 0.5 us).
 //
 // Usage: mgrl_bench_adaptive [--quick] [--runs N] [--reference A,D,H] [--points N] [--budget A,D,H]...
-//                            [--variant NAME;GRID;LEARNER]... [--no-error] [--no-decision]
+//                            [--variant NAME;GRID;LEARNER]... [--start SHARE] [--no-error] [--no-decision]
 // --quick uses a 30 x 24 x 9 reference and fewer budgets. --budget replaces the budgets (the
 // uniform grid's vertex counts); --variant replaces the adaptive configurations (extra
-// kd_tree keys; extra adaptive_value_iteration keys, YAML flow style).
+// kd_tree keys; extra adaptive_value_iteration keys, YAML flow style). A tree starts from
+// power-of-two cells with at most SHARE (0.85) of the budget's vertices unless its variant
+// sets *_cells.
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -115,10 +117,26 @@ struct Variant {
   std::string name, grid, learner;
 };
 
+std::string startCells(std::size_t budget, double share) {
+  std::array<std::size_t, 3> best{1, 1, 1};
+  std::size_t bestVertices = 0;
+  for (std::size_t d = 1; d <= 64; d *= 2)
+    for (std::size_t a : {d, 2 * d})
+      for (std::size_t h : {std::max<std::size_t>(1, d / 2), d}) {
+        const std::size_t vertices = (a + 1) * (d + 1) * (h + 1);
+        if (static_cast<double>(vertices) <= share * static_cast<double>(budget) && vertices > bestVertices) {
+          best = {a, d, h};
+          bestVertices = vertices;
+        }
+      }
+  return fmt::format(", angle_cells: {}, distance_cells: {}, height_cells: {}", best[0], best[1], best[2]);
+}
+
 int main(int argc, char** argv) {
   int runs = 5;
   std::vector<Budget> budgets;
   std::vector<Variant> variants;
+  double startShare = 0.85;
   bool quick = false, error = true, decision = true;
   std::array<int, 3> reference{40, 32, 12};
   std::size_t pointCount = 3000;
@@ -152,6 +170,8 @@ int main(int argc, char** argv) {
         return 2;
       }
       variants.push_back({text.substr(0, a), text.substr(a + 1, b - a - 1), text.substr(b + 1)});
+    } else if (!std::strcmp(argv[i], "--start") && i + 1 < argc) {
+      startShare = std::atof(argv[++i]);
     } else if (!std::strcmp(argv[i], "--no-error")) {
       error = false;
     } else if (!std::strcmp(argv[i], "--no-decision")) {
@@ -159,7 +179,7 @@ int main(int argc, char** argv) {
     } else {
       std::fprintf(stderr,
                    "usage: mgrl_bench_adaptive [--quick] [--runs N] [--reference A,D,H] [--points N] [--budget A,D,H]... "
-                   "[--variant NAME;GRID;LEARNER]... [--no-error] [--no-decision]\n");
+                   "[--variant NAME;GRID;LEARNER]... [--start SHARE] [--no-error] [--no-decision]\n");
       return 2;
     }
   }
@@ -199,8 +219,9 @@ int main(int argc, char** argv) {
         budgets = quick ? std::vector<Budget>{{{8, 6, 5}}, {{10, 8, 6}}, {{20, 16, 6}}}
                         : std::vector<Budget>{{{6, 5, 4}}, {{8, 6, 5}}, {{10, 8, 6}}, {{14, 12, 6}}, {{20, 16, 6}}};
       if (variants.empty())
-        variants = {{"both", "", "criterion: both"},
-                    {"influence_policy", "", "criterion: influence_policy"},
+        variants = {{"local both", "", "criterion: both"},
+                    {"local influence_policy", "", "criterion: influence_policy"},
+                    {"conforming both", "refinement: conforming", "criterion: both"},
                     {"conforming influence_policy", "refinement: conforming", "criterion: influence_policy"}};
       std::printf("\n%-34s %8s %8s %8s %10s %9s %9s %10s %8s\n", "grid", "vertices", "free", "tied", "table B", "RMSE",
                   "agree", "regret", "train s");
@@ -216,10 +237,10 @@ int main(int argc, char** argv) {
         const std::size_t vertices = static_cast<std::size_t>(a * d * h);
         row(solve(fmt::format("uniform {}x{}x{}", a, d, h), model, *reward, uniform(a, d, h), vi, threads));
         for (const Variant& v : variants) {
-          // Large budgets start from a finer tree (fewer rounds) unless the variant says.
-          const std::string cells = v.grid.find("_cells") != std::string::npos ? ""
-                                    : vertices >= 1500 ? ", angle_cells: 8, distance_cells: 8, height_cells: 4"
-                                                       : ", angle_cells: 4, distance_cells: 4, height_cells: 2";
+          // Unless the variant says, the tree starts as the largest power-of-two cells of the
+          // uniform grids' proportions (angle d or 2d, height d/2 or d cells for d distance
+          // cells) whose vertices are at most `startShare` of the budget.
+          const std::string cells = v.grid.find("_cells") != std::string::npos ? "" : startCells(vertices, startShare);
           const std::string grid = "{" + kdBase + cells + (v.grid.empty() ? "" : ", " + v.grid) + "}";
           row(solve(fmt::format("adaptive {} {}", vertices, v.name), model, *reward, grid,
                     fmt::format("{{type: adaptive_value_iteration, max_vertices: {}{}}}", vertices,

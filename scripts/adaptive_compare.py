@@ -58,6 +58,11 @@ CONFIGS = {
     "adaptive 480 conforming influence_policy": adaptive(
         (4, 4, 2), "behaviors.hit.discretizer.split_axes=longest behaviors.hit.discretizer.refinement=conforming "
                    "behaviors.hit.learner.max_vertices=480 behaviors.hit.learner.criterion=influence_policy"),
+    # From the largest power-of-two cells of the uniform grids' proportions within 85 % of the
+    # budget (mgrl_bench_adaptive's start): 8 x 8 x 4 cells, 405 vertices.
+    "adaptive 480 conforming both 8x8x4": adaptive(
+        (8, 8, 4), "behaviors.hit.discretizer.split_axes=longest behaviors.hit.discretizer.refinement=conforming "
+                   "behaviors.hit.learner.max_vertices=480 behaviors.hit.learner.criterion=both"),
     "adaptive 480 conforming both": adaptive(
         (4, 4, 2), "behaviors.hit.discretizer.split_axes=longest behaviors.hit.discretizer.refinement=conforming "
                    "behaviors.hit.learner.max_vertices=480 behaviors.hit.learner.criterion=both"),
