@@ -223,11 +223,11 @@ int main(int argc, char** argv) {
                     {"local influence_policy", "", "criterion: influence_policy"},
                     {"conforming both", "refinement: conforming", "criterion: both"},
                     {"conforming influence_policy", "refinement: conforming", "criterion: influence_policy"}};
-      std::printf("\n%-34s %8s %8s %8s %10s %9s %9s %10s %8s\n", "grid", "vertices", "free", "tied", "table B", "RMSE",
+      std::printf("\n%-44s %8s %8s %8s %10s %9s %9s %10s %8s\n", "grid", "vertices", "free", "tied", "table B", "RMSE",
                   "agree", "regret", "train s");
       auto row = [&](const Solution& x) {
         const Error e = compare(x, truth, model, points);
-        std::printf("%-34s %8zu %8zu %8zu %10zu %9.5f %8.2f%% %10.6f %8.2f\n", x.name.c_str(), x.grid->vertexCount(),
+        std::printf("%-44s %8zu %8zu %8zu %10zu %9.5f %8.2f%% %10.6f %8.2f\n", x.name.c_str(), x.grid->vertexCount(),
                     x.grid->vertexCount() - x.hanging, x.hanging, x.table.bytes(), e.rmse, 100 * e.agreement,
                     e.regret, x.seconds);
         std::fflush(stdout);
@@ -286,10 +286,10 @@ int main(int argc, char** argv) {
                     });
       for (const char* budget : {"480", "1920"})
         controllerFor({approach, "behaviors.hit.discretizer.type=kd_tree", "behaviors.hit.discretizer.bounds=hits",
-                       "behaviors.hit.discretizer.split_axes=longest",
+                       "behaviors.hit.discretizer.split_axes=longest", "behaviors.hit.discretizer.refinement=conforming",
                        "behaviors.hit.learner.type=adaptive_value_iteration",
                        std::string("behaviors.hit.learner.max_vertices=") + budget,
-                       "behaviors.hit.learner.criterion=influence_policy"},
+                       "behaviors.hit.learner.criterion=both"},
                       [&](const mgrl::StateActionModel& m, mgrl::Controller& c) {
                         std::printf("  %-44s %8.3f us\n", fmt::format("hit kd_tree, {} vertices", budget).c_str(),
                                     1e6 * time(m, c));
