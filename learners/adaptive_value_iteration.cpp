@@ -5,8 +5,10 @@
 // criteria this implements the local ones (the section "splitting methods based on local
 // considerations"): value non-linearity (the backup at a cell's centre against the value
 // interpolated there from its corners), policy disagreement (the corners' greedy actions
-// differ) and the combination of the two. Their non-local influence x variance criterion is
-// not implemented. Interpolation is multilinear in the kd_tree's boxes, not their Kuhn
+// differ) and the combination of the two; and their non-local influence x standard
+// deviation criterion (influenceField below). On a kd_tree with refinement: conforming a
+// split also splits neighbours, so a round's vertex count is checked after refining (see
+// train()). Interpolation is multilinear in the kd_tree's boxes, not their Kuhn
 // triangulation, so that the runtime controller interpolates as it does on the fixed grids.
 //
 // Each solve is value_iteration's (the same framework sweep and backup), warm-started from
