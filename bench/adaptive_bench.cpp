@@ -8,8 +8,13 @@
 //   - Decision cost of the combined policy with a kd_tree hit table against the uniform
 //     one's (the runtime target: <= 0.5 us).
 //
-// Usage: mgrl_bench_adaptive [--quick] [--runs N] [--reference A,D,H] [--points N] [--no-error] [--no-decision]
-// --quick uses a 30 x 24 x 9 reference and fewer budgets.
+// Usage: mgrl_bench_adaptive [--quick] [--runs N] [--reference A,D,H] [--points N] [--budget A,D,H]...
+//                            [--variant NAME;GRID;LEARNER]... [--start SHARE] [--no-error] [--no-decision]
+// --quick uses a 30 x 24 x 9 reference and fewer budgets. --budget replaces the budgets (the
+// uniform grid's vertex counts); --variant replaces the adaptive configurations (extra
+// kd_tree keys; extra adaptive_value_iteration keys, YAML flow style). A tree starts from
+// power-of-two cells with at most SHARE (0.85) of the budget's vertices unless its variant
+// sets *_cells.
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -102,8 +107,36 @@ Error compare(const Solution& x, const Solution& reference, const mgrl::StateAct
 
 }  // namespace
 
+// A budget: the uniform grid's vertex counts (angle, distance, height); the adaptive
+// trees get its vertex count as max_vertices.
+struct Budget {
+  std::array<int, 3> uniform;
+};
+// An adaptive configuration: extra kd_tree and adaptive_value_iteration YAML keys.
+struct Variant {
+  std::string name, grid, learner;
+};
+
+std::string startCells(std::size_t budget, double share) {
+  std::array<std::size_t, 3> best{1, 1, 1};
+  std::size_t bestVertices = 0;
+  for (std::size_t d = 1; d <= 64; d *= 2)
+    for (std::size_t a : {d, 2 * d})
+      for (std::size_t h : {std::max<std::size_t>(1, d / 2), d}) {
+        const std::size_t vertices = (a + 1) * (d + 1) * (h + 1);
+        if (static_cast<double>(vertices) <= share * static_cast<double>(budget) && vertices > bestVertices) {
+          best = {a, d, h};
+          bestVertices = vertices;
+        }
+      }
+  return fmt::format(", angle_cells: {}, distance_cells: {}, height_cells: {}", best[0], best[1], best[2]);
+}
+
 int main(int argc, char** argv) {
   int runs = 5;
+  std::vector<Budget> budgets;
+  std::vector<Variant> variants;
+  double startShare = 0.85;
   bool quick = false, error = true, decision = true;
   std::array<int, 3> reference{40, 32, 12};
   std::size_t pointCount = 3000;
@@ -120,14 +153,33 @@ int main(int argc, char** argv) {
     } else if (!std::strcmp(argv[i], "--reference") && i + 1 < argc &&
                std::sscanf(argv[i + 1], "%d,%d,%d", &reference[0], &reference[1], &reference[2]) == 3) {
       ++i;
+    } else if (!std::strcmp(argv[i], "--budget") && i + 1 < argc) {
+      Budget b{};
+      if (std::sscanf(argv[++i], "%d,%d,%d", &b.uniform[0], &b.uniform[1], &b.uniform[2]) != 3) {
+        std::fprintf(stderr, "mgrl_bench_adaptive: --budget: expected A,D,H, found '%s'\n", argv[i]);
+        return 2;
+      }
+      budgets.push_back(b);
+    } else if (!std::strcmp(argv[i], "--variant") && i + 1 < argc) {
+      // NAME;GRID KEYS;LEARNER KEYS, e.g. "conf;refinement: conforming;criterion: influence_policy"
+      const std::string text = argv[++i];
+      const std::size_t a = text.find(';'), b = a == std::string::npos ? a : text.find(';', a + 1);
+      if (b == std::string::npos) {
+        std::fprintf(stderr, "mgrl_bench_adaptive: --variant: expected NAME;GRID;LEARNER, found '%s'\n",
+                     text.c_str());
+        return 2;
+      }
+      variants.push_back({text.substr(0, a), text.substr(a + 1, b - a - 1), text.substr(b + 1)});
+    } else if (!std::strcmp(argv[i], "--start") && i + 1 < argc) {
+      startShare = std::atof(argv[++i]);
     } else if (!std::strcmp(argv[i], "--no-error")) {
       error = false;
     } else if (!std::strcmp(argv[i], "--no-decision")) {
       decision = false;
     } else {
       std::fprintf(stderr,
-                   "usage: mgrl_bench_adaptive [--quick] [--runs N] [--reference A,D,H] [--points N] [--no-error] "
-                   "[--no-decision]\n");
+                   "usage: mgrl_bench_adaptive [--quick] [--runs N] [--reference A,D,H] [--points N] [--budget A,D,H]... "
+                   "[--variant NAME;GRID;LEARNER]... [--start SHARE] [--no-error] [--no-decision]\n");
       return 2;
     }
   }
@@ -163,17 +215,19 @@ int main(int argc, char** argv) {
       for (std::size_t i = 0; i < pointCount; ++i)
         points.push_back(truth.grid->sample({rng.uniform(), rng.uniform(), rng.uniform()}));
 
-      struct Budget {
-        std::array<int, 3> uniform;
-      };
-      const std::vector<Budget> budgets = quick ? std::vector<Budget>{{{8, 6, 5}}, {{10, 8, 6}}, {{20, 16, 6}}}
-                                                : std::vector<Budget>{{{6, 5, 4}}, {{8, 6, 5}}, {{10, 8, 6}},
-                                                                      {{14, 12, 6}}, {{20, 16, 6}}};
-      std::printf("\n%-34s %8s %8s %8s %10s %9s %9s %10s %8s\n", "grid", "vertices", "free", "tied", "table B", "RMSE",
+      if (budgets.empty())
+        budgets = quick ? std::vector<Budget>{{{8, 6, 5}}, {{10, 8, 6}}, {{20, 16, 6}}}
+                        : std::vector<Budget>{{{6, 5, 4}}, {{8, 6, 5}}, {{10, 8, 6}}, {{14, 12, 6}}, {{20, 16, 6}}};
+      if (variants.empty())
+        variants = {{"local both", "", "criterion: both"},
+                    {"local influence_policy", "", "criterion: influence_policy"},
+                    {"conforming both", "refinement: conforming", "criterion: both"},
+                    {"conforming influence_policy", "refinement: conforming", "criterion: influence_policy"}};
+      std::printf("\n%-44s %8s %8s %8s %10s %9s %9s %10s %8s\n", "grid", "vertices", "free", "tied", "table B", "RMSE",
                   "agree", "regret", "train s");
       auto row = [&](const Solution& x) {
         const Error e = compare(x, truth, model, points);
-        std::printf("%-34s %8zu %8zu %8zu %10zu %9.5f %8.2f%% %10.6f %8.2f\n", x.name.c_str(), x.grid->vertexCount(),
+        std::printf("%-44s %8zu %8zu %8zu %10zu %9.5f %8.2f%% %10.6f %8.2f\n", x.name.c_str(), x.grid->vertexCount(),
                     x.grid->vertexCount() - x.hanging, x.hanging, x.table.bytes(), e.rmse, 100 * e.agreement,
                     e.regret, x.seconds);
         std::fflush(stdout);
@@ -182,15 +236,17 @@ int main(int argc, char** argv) {
         const auto [a, d, h] = b.uniform;
         const std::size_t vertices = static_cast<std::size_t>(a * d * h);
         row(solve(fmt::format("uniform {}x{}x{}", a, d, h), model, *reward, uniform(a, d, h), vi, threads));
-        // Large budgets start from a finer tree (fewer rounds).
-        const std::string cells = vertices >= 1500 ? "angle_cells: 8, distance_cells: 8, height_cells: 4"
-                                                   : "angle_cells: 4, distance_cells: 4, height_cells: 2";
-        const std::string grid = "{" + kdBase + ", " + cells + "}";
-        for (const char* criterion : {"both", "influence_policy"})
-          row(solve(fmt::format("adaptive {} {}", vertices, criterion), model, *reward, grid,
-                    fmt::format("{{type: adaptive_value_iteration, max_vertices: {}, criterion: {}}}", vertices,
-                                criterion),
+        for (const Variant& v : variants) {
+          // Unless the variant says, the tree starts as the largest power-of-two cells of the
+          // uniform grids' proportions (angle d or 2d, height d/2 or d cells for d distance
+          // cells) whose vertices are at most `startShare` of the budget.
+          const std::string cells = v.grid.find("_cells") != std::string::npos ? "" : startCells(vertices, startShare);
+          const std::string grid = "{" + kdBase + cells + (v.grid.empty() ? "" : ", " + v.grid) + "}";
+          row(solve(fmt::format("adaptive {} {}", vertices, v.name), model, *reward, grid,
+                    fmt::format("{{type: adaptive_value_iteration, max_vertices: {}{}}}", vertices,
+                                v.learner.empty() ? "" : ", " + v.learner),
                     threads));
+        }
       }
     }
 
@@ -230,10 +286,10 @@ int main(int argc, char** argv) {
                     });
       for (const char* budget : {"480", "1920"})
         controllerFor({approach, "behaviors.hit.discretizer.type=kd_tree", "behaviors.hit.discretizer.bounds=hits",
-                       "behaviors.hit.discretizer.split_axes=longest",
+                       "behaviors.hit.discretizer.split_axes=longest", "behaviors.hit.discretizer.refinement=conforming",
                        "behaviors.hit.learner.type=adaptive_value_iteration",
                        std::string("behaviors.hit.learner.max_vertices=") + budget,
-                       "behaviors.hit.learner.criterion=influence_policy"},
+                       "behaviors.hit.learner.criterion=both"},
                       [&](const mgrl::StateActionModel& m, mgrl::Controller& c) {
                         std::printf("  %-44s %8.3f us\n", fmt::format("hit kd_tree, {} vertices", budget).c_str(),
                                     1e6 * time(m, c));

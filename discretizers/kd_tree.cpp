@@ -71,6 +71,7 @@ class KdTree final : public Discretizer {
       while ((1LL << remaining[i]) < cells[i]) ++remaining[i];
     initialDepth_ = remaining[0] + remaining[1] + remaining[2];
     maxDepth_ = static_cast<int>(p.integer("max_depth"));
+    conforming_ = p.choice("refinement") == "conforming";
     if (maxDepth_ < initialDepth_)
       p.fail("max_depth", fmt::format("expected at least the {} splits of the initial cells, found {}", initialDepth_,
                                       maxDepth_));
@@ -187,9 +188,23 @@ class KdTree final : public Discretizer {
     std::vector<std::uint32_t> sorted(cells);
     std::sort(sorted.begin(), sorted.end());
     sorted.erase(std::unique(sorted.begin(), sorted.end()), sorted.end());
-    for (std::uint32_t cell : sorted)
-      if (splittable(cell)) copy->split(static_cast<std::size_t>(leafNode_[cell]));
+    std::vector<Key> faceCorners;  // the corners of the new faces
+    for (std::uint32_t cell : sorted) {
+      if (!splittable(cell)) continue;
+      const auto node = static_cast<std::size_t>(leafNode_[cell]);
+      const int axis = sequence_[static_cast<std::size_t>(nodeDepth(node))];
+      for (std::size_t k = 0; k < (std::size_t{1} << dimension_); ++k) {
+        if (k >> axis & 1) continue;
+        Key key{0, 0, 0};
+        for (int i = 0; i < dimension_; ++i)
+          key[i] = i == axis ? (leafLoKey_[cell][i] + leafHiKey_[cell][i]) / 2
+                             : (k >> i & 1) ? leafHiKey_[cell][i] : leafLoKey_[cell][i];
+        faceCorners.push_back(key);
+      }
+      copy->split(node);
+    }
     copy->rebuild("kd_tree");
+    if (conforming_) copy->freeCorners(faceCorners);
     return copy;
   }
 
@@ -268,7 +283,13 @@ class KdTree final : public Discretizer {
   // Leaves whose closed box holds integer point k, with their depth, into `out`.
   void containing(const Key& k, std::vector<std::int32_t>& out) const;
 
+  // Splits, level by level, every leaf that holds one of `keys` inside its box without
+  // having it as a corner, until each key is a corner of every leaf around it (or those
+  // leaves are at max_depth): the keys become free vertices. See `refinement`.
+  void freeCorners(const std::vector<Key>& keys);
+
   int dimension_ = 0, coordinates_ = 0, initialDepth_ = 0, maxDepth_ = 0;
+  bool conforming_ = false;  // refinement: conforming
   double height_ = 0;
   std::array<double, 3> lo_{0, 0, 0}, span_{1, 1, 1};
   std::array<bool, 3> wraps_{false, false, false};
@@ -465,6 +486,51 @@ void KdTree::containing(const Key& k, std::vector<std::int32_t>& out) const {
   }
 }
 
+void KdTree::freeCorners(const std::vector<Key>& keys) {
+  // Every image of each key (on a wrapping axis the start is also the end).
+  Key full{0, 0, 0};
+  for (int i = 0; i < dimension_; ++i) full[i] = std::uint64_t{1} << levels_[i];
+  std::vector<Key> images;
+  for (const Key& key : keys) {
+    const std::size_t first = images.size();
+    images.push_back(key);
+    for (int i = 0; i < dimension_; ++i)
+      if (wraps_[i] && (key[i] == 0 || key[i] == full[i])) {
+        const std::size_t count = images.size();
+        for (std::size_t j = first; j < count; ++j) {
+          Key image = images[j];
+          image[i] = key[i] == 0 ? full[i] : 0;
+          images.push_back(image);
+        }
+      }
+  }
+  std::sort(images.begin(), images.end());
+  images.erase(std::unique(images.begin(), images.end()), images.end());
+  std::vector<std::int32_t> found;
+  std::vector<std::size_t> nodes;
+  // Each pass splits a leaf once, at its own depth's axis; a leaf coarser than the key's
+  // level needs several passes. max_depth bounds the passes.
+  for (int pass = 0; pass <= maxDepth_; ++pass) {
+    nodes.clear();
+    for (const Key& image : images) {
+      found.clear();
+      containing(image, found);
+      for (std::int32_t leaf : found) {
+        bool corner = true;
+        for (int i = 0; i < dimension_; ++i)
+          corner = corner && (image[i] == leafLoKey_[leaf][i] || image[i] == leafHiKey_[leaf][i]);
+        const auto node = static_cast<std::size_t>(leafNode_[leaf]);
+        if (!corner && nodeDepth(node) < maxDepth_) nodes.push_back(node);
+      }
+    }
+    std::sort(nodes.begin(), nodes.end());
+    nodes.erase(std::unique(nodes.begin(), nodes.end()), nodes.end());
+    if (nodes.empty()) return;
+    for (std::size_t n : nodes) split(n);
+    rebuild("kd_tree");
+  }
+}
+
 std::unique_ptr<Discretizer> KdTree::restored(const std::vector<StructureArray>& arrays) const {
   auto get = [&](std::string_view name, bool integer) -> const StructureArray& {
     for (const StructureArray& a : arrays)
@@ -561,6 +627,10 @@ void registerKdTree(DiscretizerRegistry& registry) {
                           "the axis each depth past the initial cells halves: round_robin: every axis in turn; "
                           "longest: the axis whose cells are then longest in metres (angles as the arc at the middle "
                           "distance)"),
+        ParamSpec::choice("refinement", "local", {"local", "conforming"},
+                          "how a leaf is split when refined: local: that leaf only (the corners of its new face hang "
+                          "on its coarser neighbours and add no free value); conforming: also the neighbours around "
+                          "the new face's corners, down to the leaf's new depth, so that those corners are free"),
         ParamSpec::number("height", 0.0, -10, 10, "m", "distance, polar: the height of the target's position"),
         ParamSpec::choice("bounds", "given", {"hits", "given"},
                           "hits: the bounding volume of the graph's effective hitting points; given: the *_min/*_max "

@@ -5,8 +5,10 @@
 // criteria this implements the local ones (the section "splitting methods based on local
 // considerations"): value non-linearity (the backup at a cell's centre against the value
 // interpolated there from its corners), policy disagreement (the corners' greedy actions
-// differ) and the combination of the two. Their non-local influence x variance criterion is
-// not implemented. Interpolation is multilinear in the kd_tree's boxes, not their Kuhn
+// differ) and the combination of the two; and their non-local influence x standard
+// deviation criterion (influenceField below). On a kd_tree with refinement: conforming a
+// split also splits neighbours, so a round's vertex count is checked after refining (see
+// train()). Interpolation is multilinear in the kd_tree's boxes, not their Kuhn
 // triangulation, so that the runtime controller interpolates as it does on the fixed grids.
 //
 // Each solve is value_iteration's (the same framework sweep and backup), warm-started from
@@ -393,17 +395,39 @@ TrainResult AdaptiveValueIteration::train(const TrainContext& context) const {
     record["largest_policy_disagreement"] = *std::max_element(scores.policy.begin(), scores.policy.end());
     if (!scores.influence.empty())
       record["largest_influence_deviation"] = *std::max_element(scores.influence.begin(), scores.influence.end());
-    const std::vector<std::uint32_t> splits = choose(*grid, scores);
+    std::vector<std::uint32_t> splits = choose(*grid, scores);
+    // A conforming kd_tree splits neighbours too, so a split may add more vertices than
+    // choose() assumed: keep the longest prefix of the ranking that fits the budget.
+    std::shared_ptr<const Discretizer> refined;
+    bool budgetSpent = false;
+    if (!splits.empty()) refined = grid->refined(splits);
+    if (refined && counted(*refined) > maxVertices_) {
+      std::size_t fits = 0, over = splits.size();
+      std::shared_ptr<const Discretizer> best;
+      while (over - fits > 1) {
+        const std::size_t mid = (fits + over) / 2;
+        std::shared_ptr<const Discretizer> trial = grid->refined({splits.begin(), splits.begin() + mid});
+        if (counted(*trial) <= maxVertices_) {
+          fits = mid;
+          best = std::move(trial);
+        } else {
+          over = mid;
+        }
+      }
+      splits.resize(fits);
+      refined = std::move(best);
+      budgetSpent = splits.empty();
+    }
     record["splits"] = splits.size();
     rounds.push_back(record);
     if (splits.empty()) {
       // Every leaf is within the tolerance, at the depth limit, or the budget is spent.
-      stopped = counted(*grid) + (std::size_t{1} << (grid->dimension() - 1)) > maxVertices_ ? "max_vertices"
-                                                                                             : "tolerance";
+      stopped = budgetSpent || counted(*grid) + (std::size_t{1} << (grid->dimension() - 1)) > maxVertices_
+                    ? "max_vertices"
+                    : "tolerance";
       result.finalResidual = bellmanResidual(q, g, threads).max;
       break;
     }
-    std::shared_ptr<const Discretizer> refined = grid->refined(splits);
     q = interpolated(q, *grid, *refined, problem.model, threads);
     owned = std::move(refined);
     grid = owned.get();

@@ -53,6 +53,19 @@ CONFIGS = {
     "adaptive 1920 longest influence_policy": adaptive(
         (8, 8, 4), "behaviors.hit.discretizer.split_axes=longest behaviors.hit.learner.max_vertices=1920 "
                    "behaviors.hit.learner.criterion=influence_policy"),
+    # Conforming splits: the neighbours around a split leaf's new corners split too, so that
+    # those corners are free (discretizers/README.md).
+    "adaptive 480 conforming influence_policy": adaptive(
+        (4, 4, 2), "behaviors.hit.discretizer.split_axes=longest behaviors.hit.discretizer.refinement=conforming "
+                   "behaviors.hit.learner.max_vertices=480 behaviors.hit.learner.criterion=influence_policy"),
+    # From the largest power-of-two cells of the uniform grids' proportions within 85 % of the
+    # budget (mgrl_bench_adaptive's start): 8 x 8 x 4 cells, 405 vertices.
+    "adaptive 480 conforming both 8x8x4": adaptive(
+        (8, 8, 4), "behaviors.hit.discretizer.split_axes=longest behaviors.hit.discretizer.refinement=conforming "
+                   "behaviors.hit.learner.max_vertices=480 behaviors.hit.learner.criterion=both"),
+    "adaptive 480 conforming both": adaptive(
+        (4, 4, 2), "behaviors.hit.discretizer.split_axes=longest behaviors.hit.discretizer.refinement=conforming "
+                   "behaviors.hit.learner.max_vertices=480 behaviors.hit.learner.criterion=both"),
 }
 
 

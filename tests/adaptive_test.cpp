@@ -151,13 +151,17 @@ constexpr const char* k3dLongest =
 constexpr const char* k2d =
     "{type: kd_tree, coordinates: polar, angle_cells: 2, distance_cells: 2, angle_min: -90, angle_max: 90, "
     "distance_min: 0.5, distance_max: 2.5}";
+constexpr const char* k3dConforming =
+    "{type: kd_tree, coordinates: cylindrical, angle_cells: 2, distance_cells: 2, height_cells: 1, angle_min: -90, "
+    "angle_max: 90, distance_min: 0.5, distance_max: 2.5, height_min: 0.5, height_max: 1.5, split_axes: longest, "
+    "refinement: conforming}";
 
 }  // namespace
 
 TEST_CASE("kd_tree weights are non-negative, sum to 1 and reproduce linear functions across hanging vertices",
           "[kd_tree]") {
   const StateActionModel m = punchModel();
-  for (const char* yaml : {k2d, k3d, k3dLongest}) {
+  for (const char* yaml : {k2d, k3d, k3dLongest, k3dConforming}) {
     CAPTURE(yaml);
     const auto grid = randomlyRefined(yaml, m, 5, 7);
     REQUIRE(!grid->hanging().empty());
@@ -192,7 +196,7 @@ TEST_CASE("kd_tree weights are non-negative, sum to 1 and reproduce linear funct
 
 TEST_CASE("kd_tree interpolation does not jump across a face with hanging vertices", "[kd_tree]") {
   const StateActionModel m = punchModel();
-  for (const char* yaml : {k2d, k3d, k3dLongest}) {
+  for (const char* yaml : {k2d, k3d, k3dLongest, k3dConforming}) {
     CAPTURE(yaml);
     const auto grid = randomlyRefined(yaml, m, 6, 11);
     const int d = grid->dimension();
@@ -227,6 +231,51 @@ TEST_CASE("kd_tree interpolation does not jump across a face with hanging vertic
     REQUIRE(largestTied < 1e-4);
     // The same samples do see the jump when the hanging vertices keep arbitrary values.
     REQUIRE(largestFree > 1e-2);
+  }
+}
+
+// A split leaf's new face has its corners on the leaf's edges; a coarser neighbour across
+// such an edge ties them to its own interpolation, which is the unsplit function: a local
+// split adds rows but no free value. refinement: conforming splits those neighbours too.
+TEST_CASE("kd_tree conforming refinement makes the corners of a split leaf's new face free", "[kd_tree]") {
+  const StateActionModel m = punchModel();
+  const std::string cells =
+      "type: kd_tree, coordinates: cylindrical, angle_cells: 4, distance_cells: 4, height_cells: 2, angle_min: -90, "
+      "angle_max: 90, distance_min: 0.5, distance_max: 2.5, height_min: 0.5, height_max: 1.5";
+  for (const char* refinement : {"local", "conforming"}) {
+    CAPTURE(refinement);
+    const auto grid = makeGrid(fmt::format("{{{}, refinement: {}}}", cells, refinement), m);
+    REQUIRE(grid->hanging().empty());
+    // An interior leaf: angle cell 1, distance cell 1, lower height cell.
+    GridCell cell;
+    REQUIRE(grid->locate(grid->position({-M_PI / 4 + 0.1, 1.2, 0.7}), cell));
+    const auto before = vertexCoordinates(*grid);
+    const auto [lo, hi] = leafBox(*grid, cell.cell, before);
+    const auto split = grid->refined({cell.cell});
+    const auto coords = vertexCoordinates(*split);
+    std::vector<std::uint8_t> tied(split->vertexCount(), 0);
+    for (std::uint32_t v : split->hanging().vertex) tied[v] = 1;
+    // The new vertices: in the leaf's closed box, not among the old ones. The split axis is
+    // the one on which they all lie at the box's middle.
+    std::size_t added = 0, addedFree = 0;
+    for (std::size_t v = 0; v < coords.size(); ++v) {
+      bool inside = true, old = false;
+      for (int i = 0; i < 3; ++i) inside = inside && coords[v][i] >= lo[i] - 1e-9 && coords[v][i] <= hi[i] + 1e-9;
+      for (const auto& c : before) old = old || (std::fabs(c[0] - coords[v][0]) < 1e-9 &&
+                                                 std::fabs(c[1] - coords[v][1]) < 1e-9 &&
+                                                 std::fabs(c[2] - coords[v][2]) < 1e-9);
+      if (!inside || old) continue;
+      ++added;
+      addedFree += tied[v] ? 0 : 1;
+    }
+    REQUIRE(added == 4);
+    if (std::string(refinement) == "local") {
+      REQUIRE(addedFree == 0);
+      REQUIRE(split->cellCount() == grid->cellCount() + 1);
+    } else {
+      REQUIRE(addedFree == 4);
+      REQUIRE(split->cellCount() > grid->cellCount() + 1);  // the neighbours around the new edges
+    }
   }
 }
 
@@ -308,6 +357,27 @@ TEST_CASE("adaptive_value_iteration concentrates a 2-D tree at the rim of the di
   }
   REQUIRE(rimLeaves > 0);
   REQUIRE(rim < 0.25 * farSmallest);
+}
+
+TEST_CASE("adaptive_value_iteration on a conforming kd_tree keeps every row within the budget", "[adaptive]") {
+  const std::string grid =
+      "{type: kd_tree, coordinates: polar, height: 1, angle_cells: 4, distance_cells: 4, distance_max: 2, "
+      "refinement: conforming}";
+  const Solved local("{type: kd_tree, coordinates: polar, height: 1, angle_cells: 4, distance_cells: 4, "
+                     "distance_max: 2}",
+                     "{type: adaptive_value_iteration, max_vertices: 300, split_fraction: 0.2, tolerance: 1e-7}");
+  const Solved conforming(grid, "{type: adaptive_value_iteration, max_vertices: 300, split_fraction: 0.2, "
+                                "tolerance: 1e-7}");
+  const Discretizer& tree = conforming.tree();
+  REQUIRE(tree.vertexCount() <= 300);
+  REQUIRE(tree.vertexCount() > 250);
+  // Fewer of the rows are tied than with local splits.
+  const double tiedLocal = static_cast<double>(local.tree().hanging().size()) / local.tree().vertexCount();
+  const double tiedConforming = static_cast<double>(tree.hanging().size()) / tree.vertexCount();
+  CAPTURE(tiedLocal, tiedConforming);
+  REQUIRE(tiedConforming < tiedLocal);
+  REQUIRE(conforming.value({0, 1, 0.5}) == Approx(kInside).epsilon(1e-3));
+  REQUIRE(conforming.value({0, 1, -1.0}) == Approx(0).margin(1e-6));
 }
 
 TEST_CASE("adaptive_value_iteration is deterministic whatever the thread count", "[adaptive]") {
