@@ -3,9 +3,12 @@
 // online search, or at random), collisions at effective punches, reactions. Reports speed
 // and hits; writes one BVH per avatar and the hits as JSON lines, atomically.
 #include <algorithm>
+#include <chrono>
 #include <cmath>
+#include <ctime>
 #include <fstream>
 #include <map>
+#include <set>
 #include <sstream>
 
 #include <signal.h>
@@ -22,7 +25,11 @@
 #include "mgrl/motion/bvh.hpp"
 #include "mgrl/runtime/controller.hpp"
 #include "mgrl/motion/motion_io.hpp"
+#include "mgrl/core/bundle.hpp"
+#include "mgrl/core/files.hpp"
+#include "mgrl/core/hash.hpp"
 #include "mgrl/core/parallel.hpp"
+#include "mgrl/core/version.hpp"
 #include "mgrl/learning/policy_bundle.hpp"
 #include "mgrl/runtime/world.hpp"
 #include "plugins.hpp"
@@ -110,6 +117,87 @@ std::unique_ptr<ScratchDirectory> prepareFolder(const fs::path& dir, std::string
   return guard;
 }
 
+// Issue 19, defect 6: --bvh-out's folder is one unit (a bundle, mgrl/core/bundle.hpp):
+// written beside it and swapped in whole, with a manifest naming the run. Only simulate's
+// own output is replaced: an empty folder, an earlier run's (its manifest and the files it
+// lists), or what simulate wrote before folders had manifests (avatar_NNN.bvh, *.jsonl);
+// besides killed runs' .mgrl-simulate-PID scratch folders. Anything else is the user's.
+constexpr std::string_view kOutputFormat = "mgrl-simulate-output";
+constexpr int kOutputVersion = 1;
+
+bool earlierSimulateOutput(const fs::path& dir) {
+  std::set<std::string> listed;
+  std::error_code ec;
+  const bool hasManifest = fs::is_regular_file(dir / "manifest.json", ec);
+  if (hasManifest) {
+    std::string text;
+    try {
+      text = readFile(dir / "manifest.json");
+    } catch (const Error&) {
+      return false;
+    }
+    const json manifest = json::parse(text, nullptr, false);
+    if (!manifest.is_object() || manifest.value("format", "") != kOutputFormat || !manifest["files"].is_array())
+      return false;
+    listed.insert("manifest.json");
+    for (const json& file : manifest["files"])
+      if (file.is_object() && file["file"].is_string()) listed.insert(file["file"].get<std::string>());
+  }
+  for (fs::directory_iterator it(dir, ec), end; !ec && it != end; it.increment(ec)) {
+    const std::string name = it->path().filename().string();
+    if (name.rfind(".mgrl-simulate-", 0) == 0 && it->is_directory(ec)) continue;
+    if (!it->is_regular_file(ec)) return false;
+    if (hasManifest) {
+      if (!listed.count(name)) return false;
+      continue;
+    }
+    const bool avatar = name.size() > 11 && name.rfind("avatar_", 0) == 0 && name.ends_with(".bvh") &&
+                        name.find_first_not_of("0123456789", 7) == name.size() - 4;
+    if (!avatar && !name.ends_with(".jsonl")) return false;
+  }
+  return !ec;
+}
+
+// Creates --bvh-out's parent folders and the bundle's temporary beside the folder; throws
+// if either fails (and then leaves nothing created).
+std::unique_ptr<BundleWriter> prepareBundle(const fs::path& dirArgument, std::unique_ptr<ScratchDirectory>& created) {
+  const fs::path dir = dirArgument.has_filename() ? dirArgument : dirArgument.parent_path();
+  std::error_code ec;
+  const fs::file_status status = fs::status(dir, ec);
+  if (fs::exists(status) && !fs::is_directory(status))
+    throw Error(fmt::format("--bvh-out {}: expected a folder, found another kind of file", dir.string()));
+  // The outermost missing folder on the way to `dir`'s parent, to remove if the run fails.
+  fs::path outermost;
+  for (fs::path p = fs::absolute(dir, ec).parent_path(); !p.empty() && !fs::exists(p, ec); p = p.parent_path()) {
+    outermost = p;
+    if (p == p.parent_path()) break;
+  }
+  if (dir.has_parent_path()) {
+    fs::create_directories(dir.parent_path(), ec);
+    if (ec || !fs::is_directory(dir.parent_path())) {
+      if (!outermost.empty()) fs::remove_all(outermost, ec);
+      throw Error(fmt::format("--bvh-out {}: expected a folder that can be created, found: {}", dir.string(),
+                              ec ? ec.message() : std::string("not a folder")));
+    }
+  }
+  created = std::make_unique<ScratchDirectory>(fs::path(), outermost);
+  if (fs::is_directory(dir)) removeStaleScratch(dir);
+  try {
+    return std::make_unique<BundleWriter>(dir, "simulate output", "manifest.json", earlierSimulateOutput);
+  } catch (const Error& e) {
+    throw Error(fmt::format("--bvh-out {}", e.what()));
+  }
+}
+
+std::string utcNow() {
+  const std::time_t now = std::chrono::system_clock::to_time_t(std::chrono::system_clock::now());
+  std::tm tm{};
+  ::gmtime_r(&now, &tm);
+  char text[32];
+  std::strftime(text, sizeof text, "%Y-%m-%dT%H:%M:%SZ", &tm);
+  return text;
+}
+
 // Memory to record `avatarFrames` poses of `joints` joints for BVH export (bytes).
 double recordingBytes(double avatarFrames, double joints) {
   return avatarFrames * (joints * (sizeof(Eigen::Quaterniond) + sizeof(Eigen::Vector3d)) + 64);
@@ -168,7 +256,7 @@ json runSimulate(const SimulateOptions& options) {
   if (!options.eventsOut.empty()) {
     if (fs::is_directory(options.eventsOut))
       throw Error(fmt::format("--events-out {}: expected a file name, found a folder", options.eventsOut.string()));
-    // A missing folder is made, as for --bvh-out (prepareFolder below).
+    // A missing folder is made, as for --bvh-out (prepareFolder and prepareBundle below).
   }
   if (!options.bvhOut.empty()) {
     // A first estimate with a small skeleton (20 joints), exact once the skeleton is known.
@@ -179,12 +267,28 @@ json runSimulate(const SimulateOptions& options) {
                               options.avatars, options.seconds, recordingBytes(avatarFrames, 20) / 1e9,
                               kMaxRecordingBytes / 1e9));
   }
-  std::unique_ptr<ScratchDirectory> bvhScratch, eventsScratch;
-  if (!options.eventsOut.empty()) {
+  // An events file directly inside --bvh-out's folder is one of that folder's files, so
+  // it is replaced with the BVH files as one unit.
+  auto folderOf = [](const fs::path& p) {
+    fs::path absolute = fs::absolute(p).lexically_normal();
+    return absolute.has_filename() ? absolute : absolute.parent_path();
+  };
+  const bool eventsInBundle = !options.bvhOut.empty() && !options.eventsOut.empty() &&
+                              folderOf(options.eventsOut).parent_path() == folderOf(options.bvhOut);
+  if (eventsInBundle) {
+    const std::string name = options.eventsOut.filename().string();
+    if (name == "manifest.json" || (name.rfind("avatar_", 0) == 0 && name.ends_with(".bvh")))
+      throw Error(fmt::format("--events-out {}: expected a name other than the BVH folder's own files "
+                              "(manifest.json, avatar_NNN.bvh), found {}",
+                              options.eventsOut.string(), quoteToken(name)));
+  }
+  std::unique_ptr<ScratchDirectory> bvhCreated, eventsScratch;
+  std::unique_ptr<BundleWriter> bvhBundle;
+  if (!options.eventsOut.empty() && !eventsInBundle) {
     const fs::path parent = options.eventsOut.parent_path().empty() ? fs::path(".") : options.eventsOut.parent_path();
     eventsScratch = prepareFolder(parent, "--events-out");
   }
-  if (!options.bvhOut.empty()) bvhScratch = prepareFolder(options.bvhOut, "--bvh-out");
+  if (!options.bvhOut.empty()) bvhBundle = prepareBundle(options.bvhOut, bvhCreated);
 
   Loaded loaded = load(options, std::move(scenario));
   const StateActionModel& model = loaded.graph.model;
@@ -247,41 +351,67 @@ json runSimulate(const SimulateOptions& options) {
   }
   const double wall = since(start);
 
-  // Outputs: written into the scratch folders, then renamed into place.
+  // Outputs: written into the bundle's temporary and the scratch folder, then put in
+  // place: the BVH folder whole (with the events if they belong to it), then the events.
+  std::string eventsText;
+  for (const HitEvent& e : world.events()) eventsText += eventLine(e) + '\n';
+  fs::path eventsTemporary;
+  if (eventsScratch) {
+    eventsTemporary = eventsScratch->path() / "events.jsonl";
+    writeWholeFile(eventsTemporary, eventsText);
+  }
   std::vector<std::string> bvhFiles;
-  if (bvhScratch) {
+  if (bvhBundle) {
     const int width = static_cast<int>(std::to_string(avatars - 1).size());
     BvhWriteOptions bvhOptions;
     bvhOptions.lengthScale = 100;  // centimetres, as most tools expect
     bvhOptions.continuousAngles = true;
-    std::vector<std::pair<fs::path, fs::path>> moves;
+    json files = json::array();
+    auto add = [&](const std::string& name, const std::string& bytes) {
+      writeWholeFile(bvhBundle->path() / name, bytes);
+      files.push_back({{"file", name}, {"bytes", bytes.size()}, {"hash", hexDigest(hashBytes(bytes))}});
+    };
     for (std::size_t i = 0; i < avatars; ++i) {
       const std::string name = fmt::format("avatar_{:0{}}.bvh", i, std::max(width, 3));
-      std::ofstream out(bvhScratch->path() / name, std::ios::binary);
-      writeBvh(out, motionFromPoses(loaded.graph.db.skeleton, world.recorded(i), model.frameTime), bvhOptions);
-      out.flush();
-      if (!out) throw Error(fmt::format("--bvh-out {}: could not write {}", options.bvhOut.string(), name));
-      moves.emplace_back(bvhScratch->path() / name, options.bvhOut / name);
+      std::ostringstream text;
+      writeBvh(text, motionFromPoses(loaded.graph.db.skeleton, world.recorded(i), model.frameTime), bvhOptions);
+      add(name, std::move(text).str());
       bvhFiles.push_back((options.bvhOut / name).string());
     }
-    for (const auto& [from, to] : moves) {
-      std::error_code ec;
-      fs::rename(from, to, ec);
-      if (ec) throw Error(fmt::format("--bvh-out {}: could not move {} into place: {}", options.bvhOut.string(),
-                                      to.filename().string(), ec.message()));
+    if (eventsInBundle) add(options.eventsOut.filename().string(), eventsText);
+    json manifest = {
+        {"format", kOutputFormat},
+        {"version", kOutputVersion},
+        {"run",
+         {{"scenario", loaded.scenario.path.string()},
+          {"graph_key", loaded.graph.key},
+          {"controller", options.controller},
+          {"policy", policyDir.string()},
+          {"avatars", avatars},
+          {"frames", frames},
+          {"seconds", static_cast<double>(frames) * model.frameTime},
+          {"seed", options.seed},
+          {"world", worldParamsJson(params)},
+          {"time_utc", utcNow()},
+          {"pid", ::getpid()},
+          {"tool_version", kVersion}}},
+        {"files", files}};
+    // Events kept elsewhere: their hash says whether the file there is this run's.
+    if (eventsScratch)
+      manifest["events_out"] = {{"path", fs::absolute(options.eventsOut).lexically_normal().string()},
+                                {"bytes", eventsText.size()},
+                                {"hash", hexDigest(hashBytes(eventsText))}};
+    manifest["hash"] = manifestHash(manifest);
+    try {
+      bvhBundle->commit(manifest.dump(2) + "\n");
+    } catch (const Error& e) {
+      throw Error(fmt::format("--bvh-out {}", e.what()));
     }
-    bvhScratch->keep();
+    bvhCreated->keep();
   }
   if (eventsScratch) {
-    const fs::path temporary = eventsScratch->path() / "events.jsonl";
-    {
-      std::ofstream out(temporary, std::ios::binary);
-      for (const HitEvent& e : world.events()) out << eventLine(e) << '\n';
-      out.flush();
-      if (!out) throw Error(fmt::format("--events-out {}: could not write the events", options.eventsOut.string()));
-    }
     std::error_code ec;
-    fs::rename(temporary, options.eventsOut, ec);
+    fs::rename(eventsTemporary, options.eventsOut, ec);
     if (ec) throw Error(fmt::format("--events-out {}: could not move the events into place: {}",
                                     options.eventsOut.string(), ec.message()));
     eventsScratch->keep();
@@ -317,6 +447,7 @@ json runSimulate(const SimulateOptions& options) {
   if (!bvhFiles.empty()) {
     report["bvh_files"] = bvhFiles;
     report["bvh_folder"] = options.bvhOut.string();
+    report["bvh_manifest"] = (options.bvhOut / "manifest.json").string();
   }
   if (!options.eventsOut.empty()) report["events_file"] = options.eventsOut.string();
   return report;

@@ -4,6 +4,7 @@
 // output left behind, no simulation started) and the trained policy against random
 // actions. Each test trains the boxing scenario with small budgets (a second or two) in a
 // cache folder of its own.
+#include <signal.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -12,7 +13,11 @@
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <chrono>
 #include <map>
+#include <random>
+#include <set>
+#include <thread>
 #include <sstream>
 #include <string>
 #include <vector>
@@ -21,6 +26,8 @@
 #include <nlohmann/json.hpp>
 
 #include "cli_support.hpp"
+#include "mgrl/core/bundle.hpp"
+#include "mgrl/core/hash.hpp"
 #include "test_support.hpp"
 
 namespace fs = std::filesystem;
@@ -70,11 +77,16 @@ class Sandbox : public mgrl::test::CliSandbox {
   fs::path streams_ = streamsDir_.path;
 };
 
-// Every file or folder under `dir` whose name starts with the scratch prefix.
+// Every file or folder under `dir` whose name starts with the scratch prefix, or that is
+// a bundle's temporary or replaced copy (`<folder>.tmp-PID-N`, `<folder>.old-PID-N`).
 std::vector<std::string> scratchLeft(const fs::path& dir) {
   std::vector<std::string> found;
-  for (const auto& item : fs::recursive_directory_iterator(dir))
-    if (item.path().filename().string().rfind(kScratchPrefix, 0) == 0) found.push_back(item.path().string());
+  for (const auto& item : fs::recursive_directory_iterator(dir)) {
+    const std::string name = item.path().filename().string();
+    if (name.rfind(kScratchPrefix, 0) == 0 || name.find(".tmp-") != std::string::npos ||
+        name.find(".old-") != std::string::npos)
+      found.push_back(item.path().string());
+  }
   return found;
 }
 
@@ -276,8 +288,11 @@ TEST_CASE("mgrl simulate --bvh-out writes one readable BVH per avatar", "[cli][d
   }
   CHECK(r["poses"] == true);  // implied by --bvh-out
   const std::vector<std::string> names = {"avatar_000.bvh", "avatar_001.bvh", "avatar_002.bvh"};
-  // Exactly these files: nothing else, no scratch folder.
-  CHECK(entries(dir) == names);
+  // Exactly these files and the manifest: nothing else, no scratch folder.
+  std::vector<std::string> withManifest = names;
+  withManifest.push_back("manifest.json");
+  CHECK(entries(dir) == withManifest);
+  CHECK(r["bvh_manifest"] == (dir / "manifest.json").string());
   REQUIRE(r["bvh_files"].is_array());
   REQUIRE(r["bvh_files"].size() == names.size());
   for (std::size_t i = 0; i < names.size(); ++i) CHECK(r["bvh_files"][i] == (dir / names[i]).string());
@@ -464,5 +479,178 @@ TEST_CASE("mgrl simulate makes missing output folders and says where it wrote", 
   CHECK_THAT(summary[0], !Contains("in 0.00 s"));
   CHECK(summary[2] == "wrote 1 BVH file to " + bvh.string());
   CHECK(summary[3] == "wrote the hits to " + events.string());
+  CHECK(scratchLeft(box.dir()).empty());
+}
+
+// ---------------------------------------------------------------------------------------
+// Issue 19, defect 6: --bvh-out's folder is one unit, all from one run, with a manifest
+// naming the run; a killed run leaves the old folder or the new one, never a mix.
+
+namespace {
+
+// A pid that no longer exists (a child that has exited and been reaped).
+pid_t deadPid() {
+  const pid_t child = ::fork();
+  if (child == 0) ::_exit(0);
+  int status = 0;
+  ::waitpid(child, &status, 0);
+  return child;
+}
+
+// Checks that `dir` is one whole simulate output: a sealed manifest, exactly the files it
+// lists (and nothing else), each with its listed size and hash. Returns the manifest.
+json requireWholeOutput(const fs::path& dir) {
+  INFO("folder: " << dir);
+  REQUIRE(fs::is_regular_file(dir / "manifest.json"));
+  const json manifest = json::parse(readText(dir / "manifest.json"));
+  CHECK(manifest["format"] == "mgrl-simulate-output");
+  CHECK(manifest["version"] == 1);
+  REQUIRE_NOTHROW(mgrl::checkManifestHash(manifest, mgrl::ManifestReader((dir / "manifest.json").string())));
+  std::vector<std::string> listed = {"manifest.json"};
+  for (const json& file : manifest["files"]) {
+    const std::string name = file["file"].get<std::string>();
+    CAPTURE(name);
+    listed.push_back(name);
+    const std::string bytes = readText(dir / name);
+    CHECK(bytes.size() == file["bytes"].get<std::size_t>());
+    CHECK(mgrl::hexDigest(mgrl::hashBytes(bytes)) == file["hash"].get<std::string>());
+  }
+  std::sort(listed.begin(), listed.end());
+  CHECK(entries(dir) == listed);
+  return manifest;
+}
+
+}  // namespace
+
+TEST_CASE("mgrl simulate --bvh-out replaces its folder whole, with a manifest naming the run",
+          "[cli][data][simulate-cli][robustness]") {
+  Sandbox box("unit");
+  const fs::path dir = box.path("out");
+  const std::string common = "--json --controller random --seconds 2 --bvh-out " + shellWord(dir);
+
+  // Three avatars, the events inside the folder: they belong to it.
+  const json first = box.simulate(common + " --avatars 3 --seed 4 --events-out " + shellWord(dir / "hits.jsonl")).report();
+  json manifest = requireWholeOutput(dir);
+  CHECK(manifest["run"]["seed"] == 4);
+  CHECK(manifest["run"]["avatars"] == 3);
+  CHECK(manifest["run"]["controller"] == "random");
+  CHECK(manifest["run"]["scenario"] == first["scenario"]);
+  CHECK(manifest["run"]["time_utc"].is_string());
+  CHECK(manifest["files"].size() == 4);  // three avatars and hits.jsonl
+  CHECK_FALSE(manifest.contains("events_out"));
+
+  // Two avatars now: the old code moved two files over the old ones and left avatar_002.bvh
+  // and the old hits.jsonl, a mix of two runs with nothing to tell.
+  box.simulate(common + " --avatars 2 --seed 5").report();
+  manifest = requireWholeOutput(dir);
+  CHECK(manifest["run"]["seed"] == 5);
+  CHECK(entries(dir) == std::vector<std::string>{"avatar_000.bvh", "avatar_001.bvh", "manifest.json"});
+
+  // Events elsewhere: the manifest has their hash, so a stale events file can be told.
+  const fs::path events = box.path("events.jsonl");
+  box.simulate(common + " --avatars 2 --seed 6 --events-out " + shellWord(events)).report();
+  manifest = requireWholeOutput(dir);
+  REQUIRE(manifest.contains("events_out"));
+  CHECK(manifest["events_out"]["path"] == fs::absolute(events).lexically_normal().string());
+  CHECK(manifest["events_out"]["hash"] == mgrl::hexDigest(mgrl::hashBytes(readText(events))));
+  CHECK(scratchLeft(box.dir()).empty());
+
+  SECTION("what killed runs left beside the folder goes; a live run's stays") {
+    const pid_t dead = deadPid();
+    const fs::path halfWritten = box.path("out.tmp-" + std::to_string(dead) + "-0");
+    const fs::path replaced = box.path("out.old-" + std::to_string(dead) + "-1");
+    const fs::path live = box.path("out.tmp-" + std::to_string(::getpid()) + "-7");
+    for (const fs::path& p : {halfWritten, replaced, live}) {
+      fs::create_directories(p);
+      std::ofstream(p / "avatar_000.bvh") << "half";
+    }
+    fs::copy_file(dir / "manifest.json", replaced / "manifest.json");
+    box.simulate(common + " --avatars 1 --seed 7").report();
+    CHECK(requireWholeOutput(dir)["run"]["seed"] == 7);
+    requireAbsent(halfWritten);
+    requireAbsent(replaced);
+    CHECK(fs::exists(live));
+    fs::remove_all(live);
+  }
+  SECTION("a complete folder a killed run left beside a missing one is put back, then replaced") {
+    const fs::path complete = box.path("out.tmp-" + std::to_string(deadPid()) + "-0");
+    fs::rename(dir, complete);
+    box.simulate(common + " --avatars 1 --seed 8").report();
+    CHECK(requireWholeOutput(dir)["run"]["seed"] == 8);
+    requireAbsent(complete);
+  }
+  SECTION("a folder written before manifests existed is replaced") {
+    fs::remove_all(dir);
+    fs::create_directories(dir / ".mgrl-simulate-1");
+    for (const char* name : {"avatar_000.bvh", "avatar_001.bvh", "hits.jsonl"}) std::ofstream(dir / name) << "old";
+    box.simulate(common + " --avatars 1 --seed 9").report();
+    CHECK(requireWholeOutput(dir)["run"]["seed"] == 9);
+  }
+  SECTION("a folder holding anything else is refused before simulating, untouched") {
+    std::ofstream(dir / "notes.txt") << "mine\n";
+    requireRefusal(box.simulate(common + " --avatars 1 --seed 10"), "--bvh-out " + dir.string(),
+                   "expected a simulate output (with manifest.json) or an empty directory to replace, found a "
+                   "directory with other files; not deleting it");
+    CHECK(readText(dir / "notes.txt") == "mine\n");
+    CHECK(manifest == json::parse(readText(dir / "manifest.json")));
+  }
+  SECTION("the events file may not take the name of one of the folder's own files") {
+    requireRefusal(box.simulate(common + " --avatars 1 --events-out " + shellWord(dir / "manifest.json")),
+                   "--events-out " + (dir / "manifest.json").string(), "expected a name other than");
+    CHECK(manifest == json::parse(readText(dir / "manifest.json")));
+  }
+  CHECK(scratchLeft(box.dir()).empty());
+}
+
+// SIGKILL at random moments of runs that each replace the folder: whatever the moment, the
+// folder is one whole run's (the old or the new), and the next run cleans what was left.
+TEST_CASE("mgrl simulate killed at any moment leaves --bvh-out whole, old or new", "[cli][data][simulate-cli][robustness]") {
+  Sandbox box("kill");
+  const fs::path dir = box.path("out");
+  const std::string arguments = "simulate " + shellWord(kBoxing) + box.where() + " " + kFast +
+                                " --json --controller random --seconds 20 --bvh-out " + shellWord(dir);
+  // The first run builds the graph and gives the folder something to replace.
+  const auto start = std::chrono::steady_clock::now();
+  REQUIRE(box.run(arguments + " --avatars 3 --seed 1").status == 0);
+  const auto timed = std::chrono::steady_clock::now();
+  REQUIRE(box.run(arguments + " --avatars 3 --seed 1").status == 0);
+  const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - timed).count();
+  (void)start;
+  requireWholeOutput(dir);
+
+  std::mt19937 random(19);
+  std::set<std::uint64_t> seen = {1};
+  int killedMidway = 0;
+  for (int round = 0; round < 12; ++round) {
+    const std::uint64_t seed = 100 + static_cast<std::uint64_t>(round);
+    const int avatars = 1 + round % 4;
+    const double delay = std::uniform_real_distribution<double>(0.3, 1.05)(random) * seconds;
+    CAPTURE(round, seed, avatars, delay);
+    const std::string command = std::string(MGRL_BINARY) + " " + arguments + " --avatars " + std::to_string(avatars) +
+                                " --seed " + std::to_string(seed) + " >/dev/null 2>&1";
+    const pid_t child = ::fork();
+    if (child == 0) {
+      ::execl("/bin/sh", "sh", "-c", ("exec " + command).c_str(), static_cast<char*>(nullptr));
+      ::_exit(127);
+    }
+    std::this_thread::sleep_for(std::chrono::duration<double>(delay));
+    ::kill(child, SIGKILL);
+    int status = 0;
+    ::waitpid(child, &status, 0);
+    const bool killed = WIFSIGNALED(status);
+    const json manifest = requireWholeOutput(dir);
+    const auto made = manifest["run"]["seed"].get<std::uint64_t>();
+    // The new run's, or one that ran to the end before.
+    CHECK((made == seed || seen.count(made) == 1));
+    if (made == seed) CHECK(manifest["files"].size() == static_cast<std::size_t>(avatars));
+    if (!killed) seen.insert(seed);
+    if (killed && made != seed) ++killedMidway;
+    if (made == seed) seen.insert(seed);
+  }
+  INFO("runs killed before their folder was in place: " << killedMidway);
+  CHECK(killedMidway > 0);
+  // The next run cleans what the killed ones left.
+  REQUIRE(box.run(arguments + " --avatars 2 --seed 2").status == 0);
+  CHECK(requireWholeOutput(dir)["run"]["seed"] == 2);
   CHECK(scratchLeft(box.dir()).empty());
 }

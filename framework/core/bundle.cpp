@@ -133,68 +133,79 @@ bool isPlainFileName(std::string_view name) {
   return !name.empty() && name != "." && name != ".." && name.find_first_of(std::string_view("/\\\0", 3)) == name.npos;
 }
 
-void writeBundleDirectory(const fs::path& dirArgument, const std::vector<BundleFile>& files,
-                          std::string_view manifestText, std::string_view kind, std::string_view manifestName) {
-  // "cache/graph/" names the same bundle as "cache/graph".
-  const fs::path dir = dirArgument.has_filename() ? dirArgument : dirArgument.parent_path();
-  const std::string source = dir.string();
-  for (const BundleFile& file : files)
-    if (!isPlainFileName(file.name) || file.name == manifestName)
-      throw Error(fmt::format("{}: expected plain file names in a {} other than {}, found {}", source, kind,
-                              manifestName, quoteToken(file.name)));
+bool BundleWriter::replaceable(const fs::path& dir) const {
+  if (replaceable_) return replaceable_(dir);
+  std::error_code ec;
+  return fs::exists(dir / manifestName_, ec) || fs::is_empty(dir, ec);
+}
 
-  recoverBundleDirectory(dir, manifestName);
+BundleWriter::BundleWriter(const fs::path& dirArgument, std::string_view kind, std::string_view manifestName,
+                           Replaceable replaceable)
+    // "cache/graph/" names the same bundle as "cache/graph".
+    : dir_(dirArgument.has_filename() ? dirArgument : dirArgument.parent_path()),
+      kind_(kind),
+      manifestName_(manifestName),
+      replaceable_(std::move(replaceable)) {
+  const std::string source = dir_.string();
+  recoverBundleDirectory(dir_, manifestName_);
   // Never delete something that is not ours to replace.
   std::error_code ec;
-  const fs::file_status existing = fs::symlink_status(dir, ec);
-  const bool replacing = fs::exists(existing);
-  if (replacing) {
+  const fs::file_status existing = fs::symlink_status(dir_, ec);
+  if (fs::exists(existing)) {
     if (!fs::is_directory(existing))
-      throw Error(fmt::format("{}: expected a {} directory or nothing, found another kind of file", source, kind));
-    if (!fs::exists(dir / manifestName, ec) && !fs::is_empty(dir, ec))
+      throw Error(fmt::format("{}: expected a {} directory or nothing, found another kind of file", source, kind_));
+    if (!this->replaceable(dir_))
       throw Error(fmt::format("{}: expected a {} (with {}) or an empty directory to replace, "
                               "found a directory with other files; not deleting it",
-                              source, kind, manifestName));
+                              source, kind_, manifestName_));
   }
-  if (dir.has_parent_path()) {
-    fs::create_directories(dir.parent_path(), ec);
-    if (ec) throw Error(fmt::format("{}: cannot create {}: {}", source, dir.parent_path().string(), ec.message()));
+  if (dir_.has_parent_path()) {
+    fs::create_directories(dir_.parent_path(), ec);
+    if (ec) throw Error(fmt::format("{}: cannot create {}: {}", source, dir_.parent_path().string(), ec.message()));
   }
+  temporary_ = freshSibling(dir_, "tmp", true);
+}
 
-  const fs::path temporary = freshSibling(dir, "tmp", true);
+BundleWriter::~BundleWriter() {
+  if (committed_) return;
+  std::error_code ignored;
+  fs::remove_all(temporary_, ignored);
+}
+
+void BundleWriter::commit(std::string_view manifestText) {
+  const std::string source = dir_.string();
+  committed_ = true;  // whatever happens below, the temporary is dealt with here
   try {
-    for (const BundleFile& file : files) writeWholeFile(temporary / file.name, file.bytes);
     // Last, so a directory with a manifest has all its files.
-    writeWholeFile(temporary / manifestName, manifestText);
+    writeWholeFile(temporary_ / manifestName_, manifestText);
     // Issue 19, defects 5 and 8: the destination is never missing (an existing bundle is
     // swapped with the new one in one step), and another process writing the same bundle
     // at the same time makes neither fail: the last swap wins, each is complete.
     for (int attempt = 0;; ++attempt) {
-      std::error_code renamed;
-      fs::rename(temporary, dir, renamed);  // onto nothing or an empty directory
+      std::error_code renamed, ec;
+      fs::rename(temporary_, dir_, renamed);  // onto nothing or an empty directory
       if (!renamed) return;
       if (renamed != std::errc::directory_not_empty && renamed != std::errc::file_exists)
-        throw Error(fmt::format("{}: cannot rename {} to {}: {}", source, temporary.string(), dir.string(),
+        throw Error(fmt::format("{}: cannot rename {} to {}: {}", source, temporary_.string(), dir_.string(),
                                 renamed.message()));
-      const fs::file_status now = fs::symlink_status(dir, ec);
-      if (!fs::is_directory(now) || (!fs::exists(dir / manifestName, ec) && !fs::is_empty(dir, ec)))
+      if (!fs::is_directory(fs::symlink_status(dir_, ec)) || !replaceable(dir_))
         throw Error(fmt::format("{}: expected a {} (with {}) or an empty directory to replace, "
                                 "found a directory with other files; not deleting it",
-                                source, kind, manifestName));
+                                source, kind_, manifestName_));
       std::error_code swapped;
-      if (exchange(temporary, dir, swapped)) break;  // `temporary` now holds the old bundle
+      if (exchange(temporary_, dir_, swapped)) break;  // `temporary_` now holds the old bundle
       if (swapped == std::errc::no_such_file_or_directory && attempt < 100) continue;  // it went meanwhile
       if (swapped != std::errc::invalid_argument && swapped != std::errc::operation_not_supported)
-        throw Error(fmt::format("{}: cannot swap {} with {}: {}", source, temporary.string(), dir.string(),
+        throw Error(fmt::format("{}: cannot swap {} with {}: {}", source, temporary_.string(), dir_.string(),
                                 swapped.message()));
       // A file system without atomic exchange: rename the old one aside first.
-      const fs::path old = freshSibling(dir, "old", false);
-      renameOrThrow(dir, old, source);
+      const fs::path old = freshSibling(dir_, "old", false);
+      renameOrThrow(dir_, old, source);
       try {
-        renameOrThrow(temporary, dir, source);
+        renameOrThrow(temporary_, dir_, source);
       } catch (const Error&) {
         std::error_code ignored;
-        fs::rename(old, dir, ignored);  // put the previous bundle back
+        fs::rename(old, dir_, ignored);  // put the previous bundle back
         throw;
       }
       std::error_code ignored;
@@ -203,12 +214,24 @@ void writeBundleDirectory(const fs::path& dirArgument, const std::vector<BundleF
     }
     // The new bundle is in place; an old copy that cannot be removed only wastes space.
     std::error_code ignored;
-    fs::remove_all(temporary, ignored);
+    fs::remove_all(temporary_, ignored);
   } catch (...) {
     std::error_code ignored;
-    fs::remove_all(temporary, ignored);
+    fs::remove_all(temporary_, ignored);
     throw;
   }
+}
+
+void writeBundleDirectory(const fs::path& dirArgument, const std::vector<BundleFile>& files,
+                          std::string_view manifestText, std::string_view kind, std::string_view manifestName) {
+  const fs::path dir = dirArgument.has_filename() ? dirArgument : dirArgument.parent_path();
+  for (const BundleFile& file : files)
+    if (!isPlainFileName(file.name) || file.name == manifestName)
+      throw Error(fmt::format("{}: expected plain file names in a {} other than {}, found {}", dir.string(), kind,
+                              manifestName, quoteToken(file.name)));
+  BundleWriter writer(dir, kind, manifestName);
+  for (const BundleFile& file : files) writeWholeFile(writer.path() / file.name, file.bytes);
+  writer.commit(manifestText);
 }
 
 std::string quoteKey(std::string_view key) { return quoteToken(key.substr(0, 16)); }

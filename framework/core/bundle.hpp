@@ -14,6 +14,7 @@
 #include <cstddef>
 #include <cstdint>
 #include <filesystem>
+#include <functional>
 #include <initializer_list>
 #include <span>
 #include <string>
@@ -48,6 +49,51 @@ struct BundleFile {
 void writeBundleDirectory(const std::filesystem::path& dir, const std::vector<BundleFile>& files,
                           std::string_view manifestText, std::string_view kind,
                           std::string_view manifestName = "manifest.json");
+
+/// A bundle written in steps, for files too large to hold in memory at once (writeBundleDirectory()
+/// is this class with files given as strings). The constructor does everything that can
+/// fail before the work that fills the bundle: it cleans the leftovers of killed writers
+/// (recoverBundleDirectory()), checks that `dir` may be replaced, creates `dir`'s parent
+/// and a fresh temporary directory beside `dir` (freshSibling()); the caller writes files
+/// into path(); commit() writes the manifest last and swaps the temporary onto `dir` as
+/// writeBundleDirectory() says, so `dir` always holds a whole bundle, old or new, and is
+/// never missing once it existed. Destroyed uncommitted, it removes the temporary.
+class BundleWriter {
+ public:
+  /// Which existing directories may be replaced; by default (none given) an empty one or
+  /// one holding `manifestName`.
+  using Replaceable = std::function<bool(const std::filesystem::path&)>;
+
+  /// Throws mgrl::Error, leaving no temporary, if `dir` is something other than a
+  /// directory that may be replaced (it is never deleted then), or if the parent or the
+  /// temporary cannot be created.
+  BundleWriter(const std::filesystem::path& dir, std::string_view kind, std::string_view manifestName = "manifest.json",
+               Replaceable replaceable = {});
+  ~BundleWriter();
+  BundleWriter(const BundleWriter&) = delete;
+  BundleWriter& operator=(const BundleWriter&) = delete;
+
+  /// The temporary directory to write the bundle's files into (plain names, not the
+  /// manifest's).
+  const std::filesystem::path& path() const { return temporary_; }
+  /// The destination.
+  const std::filesystem::path& destination() const { return dir_; }
+
+  /// Writes `manifestText` as the manifest and puts the bundle in place. Throws
+  /// mgrl::Error (removing the temporary) if `dir` meanwhile became something it may not
+  /// replace, or on any I/O failure. Call at most once.
+  void commit(std::string_view manifestText);
+
+ private:
+  bool replaceable(const std::filesystem::path& dir) const;
+
+  std::filesystem::path dir_;
+  std::string kind_;
+  std::string manifestName_;
+  Replaceable replaceable_;
+  std::filesystem::path temporary_;
+  bool committed_ = false;
+};
 
 /// What a killed writer left beside `dir`: `<dir>.tmp-PID-N` (a bundle being written; a
 /// complete one when it holds its manifest) or `<dir>.old-PID-N` (a replaced bundle), of a
