@@ -196,12 +196,16 @@ struct Summary {
   std::size_t min = 0, max = 0;  // action frames
   double mean = 0;
   std::size_t hitFrames = 0;     // effective hitting points in the data
+  std::size_t kickFrames = 0;    // effective kick frames in the data
 };
 
 Summary summarise(const GraphResult& g) {
   const StateActionModel& m = g.model;
   Summary s;
-  for (const Clip& c : g.db.clips) s.hitFrames += c.annotation.hits.size();
+  for (const Clip& c : g.db.clips) {
+    s.hitFrames += c.annotation.hits.size();
+    s.kickFrames += c.annotation.kicks.size();
+  }
   if (m.actionCount() == 0) return s;
   s.min = SIZE_MAX;
   double sum = 0;
@@ -246,6 +250,8 @@ nlohmann::json graphJson(const GraphResult& g) {
           {"max_action_frames", l.max},
           {"effective_hits", l.hitFrames},
           {"action_hits", m.hits.size()},
+          {"effective_kicks", l.kickFrames},
+          {"action_kicks", m.kicks.size()},
           {"fps", round3(1.0 / m.frameTime)},
           {"build_seconds", round3(g.buildSeconds)},
           {"playback",
@@ -278,6 +284,8 @@ std::string graphText(const GraphResult& g) {
   out += fmt::format("action frames   min {}, mean {:.1f}, max {} ({:.2f} s mean)\n", l.min, l.mean, l.max,
                      l.mean * m.frameTime);
   out += fmt::format("effective hits  {} in the data, {} inside actions\n", l.hitFrames, m.hits.size());
+  if (l.kickFrames > 0)
+    out += fmt::format("effective kicks {} in the data, {} inside actions\n", l.kickFrames, m.kicks.size());
   const CaptureTravel& t = g.travel;
   std::string reaches;
   for (const auto& r : t.reaches) reaches += fmt::format("{}{} {:.2f} m", reaches.empty() ? "; grids reach " : ", ", r.behavior, r.reach_m);

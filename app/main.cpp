@@ -173,7 +173,7 @@ int main(int argc, char** argv) {
   long long seed = static_cast<long long>(eval.seed);
   CLI::App* evalCommand = app.add_subcommand(
       "eval", "Evaluate a trained policy: random starts, a static target in the approach region, up to --seconds of "
-              "motion each; success = an effective hit on the target.");
+              "motion each; success is what the behaviours' success: keys say (default: an effective hit on the target).");
   evalCommand->add_option("SCENARIO", scenarioPath, "Scenario YAML file")->required();
   evalCommand->add_option("--policy", eval.policy, "Policy bundle folder (default: the one mgrl train writes)");
   evalCommand->add_option("--controller", eval.controller,
@@ -188,7 +188,7 @@ int main(int argc, char** argv) {
   evalCommand->add_option("--seed", seed, "Random seed (the same seed, the same numbers)")->default_val(1);
   evalCommand->add_option("--seconds", eval.seconds, "Seconds of motion per trial")->default_val(10);
   evalCommand->add_option("--target-height", eval.targetHeight,
-                          "Height of the target (m; default: that of the effective hitting points' centroid)");
+                          "Height of the target (m; default: the scenario's world.target_height, else that of the effective hitting points' centroid)");
   evalCommand->add_option("--set", eval.sets, "Override a scenario key (repeatable)");
   evalCommand->add_flag("--json", json, "Print one JSON object on stdout");
   evalCommand->add_option("--data", dataDir, "Motion capture folder (default: MGRL_DATA, else ../shared/mocap)");

@@ -205,8 +205,11 @@ Annotation annotate(const Motion& motion, const SkeletonRoles& roles, const Anno
     }
   }
 
-  // Effective kicks, by analogy with the punches: the toe tip driven along the shin (knee
-  // to ankle), high enough off the floor not to be a step, by a fighter on his feet.
+  // Effective kicks, by analogy with the punches: a fast toe tip, high enough off the floor
+  // not to be a step, by a fighter on his feet, moving along the shin (knee to ankle) by at
+  // least kick_min_alignment of its speed. Unlike a punch's fist, a kicking foot swings
+  // (a roundhouse moves it across the shin), so the speed threshold is on the toe's whole
+  // speed and the alignment can be relaxed to 0.
   std::array<bool, 2> kicking{false, false};
   for (std::size_t f = 0; f < frames; ++f) {
     const bool down = headAbove[f] < knockdownBelow;
@@ -223,7 +226,7 @@ Annotation annotate(const Motion& motion, const SkeletonRoles& roles, const Anno
           tip.y() - result.groundY >= params.kickMinHeight_m) {
         axis.normalize();
         const double along = v.dot(axis);
-        if (along >= params.kickMinSpeed_mps && along >= params.kickMinAlignment * speed) {
+        if (speed >= params.kickMinSpeed_mps && along >= params.kickMinAlignment * speed) {
           effective = true;
           EffectiveHit kick;
           kick.frame = static_cast<std::uint32_t>(f);

@@ -16,7 +16,7 @@ namespace {
 
 // Bump when the graph construction changes what it computes, so old caches go stale.
 // 2: no effective punch while knocked down; the fist falls back to the wrist's end site.
-constexpr int kGraphAlgorithmVersion = 3;  // 3: effective kicks
+constexpr int kGraphAlgorithmVersion = 4;  // 3: effective kicks; 4: kicks by the toe's whole speed
 
 bool wildcardMatch(std::string_view pattern, std::string_view text) {
   // Iterative '*' / '?' matching with backtracking to the last star.
