@@ -30,6 +30,17 @@ Trials::Trials(const StateActionModel& model, const std::vector<Behavior>& behav
   // The target's height: given, else that of the effective hitting points' centroid (a
   // target at punching height, as the user's target in the paper's demo).
   targetHeight_ = std::isnan(targetHeight) ? model.centroid[1] : targetHeight;
+  // Targets are drawn by rejection: refuse a region no target at this height falls in
+  // (a 3-D grid whose heights miss it) instead of searching forever.
+  Rng probe(1);
+  std::size_t inside = 0;
+  for (int i = 0; i < 100000 && inside == 0; ++i)
+    inside += region_->inside({(2 * probe.uniform() - 1) * reach_, targetHeight_, (2 * probe.uniform() - 1) * reach_});
+  if (inside == 0)
+    throw Error(fmt::format("{}: expected targets at height {:.2f} m to fall inside the grid of the behaviour that "
+                            "places them, found none in 100000 draws (set --target-height or world.target_height "
+                            "inside its heights)",
+                            source, targetHeight_));
   // Success: what the behaviours declare, else what the first contact reward implies, else
   // a punch (what trials counted before success criteria). Returns are discounted with the
   // first behaviour's gamma.
@@ -51,6 +62,15 @@ Trials::Trials(const StateActionModel& model, const std::vector<Behavior>& behav
   gamma_ = behaviors.front().reward->gamma();
 }
 
+// A target uniform by area in the approach region's square of side 2 reach, at the target
+// height, rejected until the region holds it. The constructor has checked that some do.
+Eigen::Vector3d Trials::placeTarget(Rng& starts) const {
+  for (;;) {
+    const Eigen::Vector3d e((2 * starts.uniform() - 1) * reach_, targetHeight_, (2 * starts.uniform() - 1) * reach_);
+    if (region_->inside(e)) return e;
+  }
+}
+
 TrialStats Trials::run(const ChooseAction& choose, std::size_t count, double seconds, std::uint64_t seed,
                        std::vector<std::pair<std::uint32_t, Eigen::Vector3d>>* decisions) const {
   const StateActionModel& model = model_;
@@ -61,10 +81,7 @@ TrialStats Trials::run(const ChooseAction& choose, std::size_t count, double sec
   const double limit = seconds / model.frameTime;
   for (std::size_t trial = 0; trial < count; ++trial) {
     auto s = static_cast<std::uint32_t>(starts.below(model.stateCount()));
-    Eigen::Vector3d e;
-    do e = {(2 * starts.uniform() - 1) * reach_, 0, (2 * starts.uniform() - 1) * reach_};
-    while (!region_->inside(e));
-    e.y() = targetHeight_;
+    Eigen::Vector3d e = placeTarget(starts);
     double elapsed = 0, discount = 1, trialReturn = 0;
     bool hit = false;
     std::vector<SuccessCriterion::Tracker> trackers;

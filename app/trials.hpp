@@ -17,6 +17,7 @@
 #include <Eigen/Core>
 #include <nlohmann/json.hpp>
 
+#include "mgrl/core/random.hpp"
 #include "mgrl/graph/state_action_model.hpp"
 #include "mgrl/learning/behavior.hpp"
 
@@ -56,6 +57,7 @@ class Trials {
   nlohmann::json successJson() const;
 
  private:
+  Eigen::Vector3d placeTarget(Rng& starts) const;
   const StateActionModel& model_;
   const std::vector<Behavior>& behaviors_;
   const Discretizer* region_ = nullptr;

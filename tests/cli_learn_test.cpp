@@ -104,7 +104,12 @@ TEST_CASE("mgrl list names every plugin, as text and as JSON", "[cli]") {
       {"rewards", {"approach", "hit"}},
       {"environments", {"static_target"}},
       {"learners", {"q_learning", "value_iteration"}}};
-  CHECK(list.size() == seams.size() + 2);  // plus the controllers and the world section
+  CHECK(list.size() == seams.size() + 3);  // plus the reward terms, the controllers and the world section
+  REQUIRE(list["reward_terms"].is_array());
+  std::vector<std::string> terms;
+  for (const json& term : list["reward_terms"]) terms.push_back(term["name"]);
+  CHECK(terms == std::vector<std::string>{"distance", "facing", "contact", "travel", "effort"});
+  CHECK_THAT(text.out, Contains("  term: contact  ") && Contains("success (behaviors.NAME.success"));
   CHECK(list["controllers"] == json::array({"policy", "online_search", "random"}));
   REQUIRE(list["world"].is_array());
   CHECK(list["world"].size() == 19);

@@ -344,7 +344,7 @@ TEST_CASE("a graph bundle round-trips every field of the model", "[graph_cache]"
   REQUIRE(manifest["arrays"]["frame_enters_transition"]["dtype"] == "|u1");
 
   // One .npy per array plus the manifest, each a plain NumPy file.
-  REQUIRE(namesIn(bundle).size() == 18);
+  REQUIRE(namesIn(bundle).size() == 21);
   std::vector<std::size_t> shape;
   const auto frames = mgrl::npyDecode<std::uint32_t>(mgrl::readFile(bundle / "action_frames.npy"), "f", &shape);
   REQUIRE(frames == model.actionFrames);
