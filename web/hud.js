@@ -6,6 +6,12 @@ const kHitLines = 5;
 
 const fixed = (v, digits) => (Number.isFinite(v) ? v.toFixed(digits) : '–');
 
+/** What eval counts as success, behaviour by behaviour ("hit: an effective strike ..."). */
+const successText = (behaviors) => {
+  const declared = (behaviors ?? []).filter((b) => typeof b.success === 'string');
+  return declared.length ? declared.map((b) => `${b.name}: ${b.success}`).join('; ') : '–';
+};
+
 export class Hud {
   constructor() {
     this.scene = null;
@@ -59,6 +65,7 @@ export class Hud {
       ['frames dropped', s.frames_dropped ?? '–'],
       ['hits', s.hits ?? '–'],
       ['hits per minute', fixed(s.hits_per_minute, 1)],
+      ['success', successText(c.behaviors)],
       ['bytes per avatar-frame', s.bytes_per_avatar_frame ?? '–'],
     ];
     const table = $('hud-table');

@@ -331,6 +331,8 @@ std::string ViewerSession::scene() const {
     if (const Retrained* r = s.retrained[i].get())
       for (const auto& [key, value] : r->set.items()) parameters[key] = value;
     b["parameters"] = parameters;
+    // What eval counts as this behaviour's success (scenarios/README.md, "success:").
+    b["success"] = a.behaviors[i].success ? json(a.behaviors[i].success->describe()) : json(nullptr);
     behaviors.push_back(std::move(b));
   }
   json controllers = json::array();
@@ -668,8 +670,10 @@ void ViewerSession::retrain(const Retrain& message) {
         result->vertices.insert(result->vertices.end(), {p.x(), p.y(), p.z()});
       }
       // Success as the scenario defines it (its contact radius), on the same starts.
-      const app::Trials trials(model, assets->behaviors, std::numeric_limits<double>::quiet_NaN(),
-                               assets->loaded->scenario.path.string());
+      // Targets at the scenario's world.target_height when it gives one, as eval's.
+      const double height = assets->params.targetHeight >= 0 ? assets->params.targetHeight
+                                                             : std::numeric_limits<double>::quiet_NaN();
+      const app::Trials trials(model, assets->behaviors, height, assets->loaded->scenario.path.string());
       std::vector<PolicyPart> after = before;
       after[index].grid = &g;
       after[index].table = &result->table;

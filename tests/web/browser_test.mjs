@@ -355,6 +355,12 @@ async function teachViews(page) {
   check(scene.behaviors.every((b) => typeof b.learner === 'string' && Number.isInteger(b.vertices) && Array.isArray(b.curve)),
         'the scene carries each behaviour\'s learner, vertex count and training curve',
         JSON.stringify(scene.behaviors.map((b) => ({name: b.name, learner: b.learner, vertices: b.vertices, curve: b.curve?.length}))));
+  const hit = scene.behaviors.find((b) => b.name === 'hit');
+  check(hit?.success === 'an effective strike of the fists within 0.15 m' && scene.behaviors.find((b) => b.name === 'approach')?.success === null,
+        'the scene says what success is: hit\'s contact, nothing for approach', JSON.stringify(scene.behaviors.map((b) => b.success)));
+  const hudSuccess = await page.evaluate(() => [...document.querySelectorAll('#hud-table tr')]
+    .map((tr) => [...tr.children].map((c) => c.textContent)).find(([name]) => name === 'success')?.[1] ?? '');
+  check(hudSuccess === 'hit: an effective strike of the fists within 0.15 m', 'the HUD shows the success criterion', hudSuccess);
 
   await page.click('#look-down');
   await showValues(page, 'hit', 'teach-values-hit.png');
