@@ -437,8 +437,128 @@ TEST_CASE("world settings are checked where they are written", "[world][data]") 
   REQUIRE_THAT(problem("world.speed=3"), Contains("world.speed") && Contains("unknown key"));
   REQUIRE_THAT(problem("world.target_height=0.01"), Contains("world.target_height"));
   REQUIRE_THAT(problem("world.fist_radius=-1"), Contains("world.fist_radius"));
+  REQUIRE_THAT(problem("world.body_radius=2"), Contains("world.body_radius") && Contains("[0, 1]"));
+  REQUIRE_THAT(problem("world.avoid_seconds=0"), Contains("world.avoid_seconds"));
+  REQUIRE_THAT(problem("world.separation_speed=-1"), Contains("world.separation_speed"));
   // A mistake made with --set names the flag, not the file's line (which holds another value).
   REQUIRE_THAT(problem("world.mode=chaos"), StartsWith("--set world.mode=chaos: world.mode: "));
+}
+
+namespace {
+
+// The smallest distance on the floor between the pelvises of any two avatars (the worst
+// pair), over a run of `frames` frames, and the frames under `limit` (issue 18).
+struct Closest {
+  double metres = 1e9;
+  std::size_t under = 0;
+};
+Closest closestPelvises(World& world, std::size_t frames, double limit) {
+  Closest c;
+  for (std::size_t f = 0; f < frames; ++f) {
+    world.run(1);
+    bool under = false;
+    for (std::size_t i = 0; i < world.avatarCount(); ++i)
+      for (std::size_t j = i + 1; j < world.avatarCount(); ++j) {
+        const Eigen::Vector3d d = world.pelvis(i) - world.pelvis(j);
+        const double m = std::hypot(d.x(), d.z());
+        c.metres = std::min(c.metres, m);
+        under = under || m < limit;
+      }
+    c.under += under ? 1 : 0;
+  }
+  return c;
+}
+
+}  // namespace
+
+TEST_CASE("sparring bodies do not pass through each other, and the boxers still land hits", "[world][data]") {
+  const Boxing& b = boxing();
+  const std::size_t frames = framesFor(b, 60);
+  for (std::uint64_t seed : {1, 2, 3}) {
+    WorldSetup s = b.setup(2);
+    s.seed = seed;
+    World world(s);
+    const Closest c = closestPelvises(world, frames, 0.35);
+    INFO("seed " << seed << ": closest pelvises " << c.metres << " m");
+    REQUIRE(c.under == 0);
+    std::array<int, 2> hits{0, 0};
+    for (const HitEvent& e : world.events()) ++hits[e.attacker];
+    REQUIRE(hits[0] > 5);
+    REQUIRE(hits[1] > 5);
+    REQUIRE(world.bodyStats().restricted > 0);  // the avoidance had work to do
+  }
+  // Without bodies (the paper's world) the same bout walks the boxers into each other:
+  // what the test above rules out does happen.
+  WorldSetup loose = b.setup(2);
+  loose.seed = 1;
+  loose.params.bodyRadius = 0;
+  World through(loose);
+  const Closest c = closestPelvises(through, frames, 0.35);
+  REQUIRE(c.under > 0);
+  REQUIRE(through.bodyStats().restricted == 0);
+  REQUIRE(through.bodyStats().pushes == 0);
+}
+
+TEST_CASE("a crowd keeps its bodies apart, neighbouring pairs included, the same for any thread count",
+          "[world][data]") {
+  const Boxing& b = boxing();
+  const std::size_t frames = framesFor(b, 20);
+  auto run = [&](unsigned threads) {
+    WorldSetup s = b.setup(64);
+    s.params.spacing = 2.5;  // pairs crowded (0.9 m between neighbours at the start), so that neighbours meet too
+    s.threads = threads;
+    s.seed = 5;
+    auto world = std::make_unique<World>(s);
+    const Closest c = closestPelvises(*world, frames, 0.35);
+    INFO("closest pelvises in the crowd " << c.metres << " m");
+    REQUIRE(c.under == 0);
+    return world;
+  };
+  const auto one = run(1);
+  const auto two = run(2);
+  REQUIRE(sameEvents(one->events(), two->events()));
+  for (std::size_t i = 0; i < one->avatarCount(); ++i) {
+    REQUIRE(one->pelvis(i).x() == two->pelvis(i).x());
+    REQUIRE(one->pelvis(i).z() == two->pelvis(i).z());
+  }
+  REQUIRE(one->bodyStats().restricted == two->bodyStats().restricted);
+  REQUIRE(one->bodyStats().pushes == two->bodyStats().pushes);
+}
+
+TEST_CASE("controllers choose among the allowed actions only", "[world][data]") {
+  const Boxing& b = boxing();
+  PolicyController greedy(b.model(), b.parts);
+  PolicyController three(b.model(), b.parts, {3, 0});
+  RandomController random(b.model());
+  OnlineSearchController search(b.model(), b.environment, b.searchParts, 1, 0.97);
+  Rng rng(3);
+  std::size_t checked = 0;
+  for (std::uint32_t s = 0; s < b.model().stateCount(); ++s) {
+    const std::uint32_t begin = b.model().stateActionBegin[s], n = b.model().stateActionBegin[s + 1] - begin;
+    if (n < 3) continue;
+    const Eigen::Vector3d e(0.2, 1.2, 0.7);
+    const std::size_t best = greedy.choose(s, e);
+    std::vector<std::uint8_t> allowed(n, 1);
+    allowed[best - begin] = 0;  // rule out the favourite
+    const std::size_t second = greedy.choose(s, e, rng, allowed);
+    REQUIRE(second != best);
+    const auto scores = greedy.scores();
+    for (std::uint32_t j = 0; j < n; ++j)
+      if (allowed[j]) REQUIRE(scores[second - begin] >= scores[j]);  // the best of the rest
+    std::vector<std::uint8_t> only(n, 0);
+    only[n - 1] = 1;
+    for (int k = 0; k < 5; ++k) {
+      REQUIRE(three.choose(s, e, rng, only) == begin + n - 1);
+      REQUIRE(random.choose(s, e, rng, only) == begin + n - 1);
+    }
+    REQUIRE(search.choose(s, e, rng, only) == begin + n - 1);
+    const std::vector<std::uint8_t> none(n, 0);
+    REQUIRE_THROWS_WITH(greedy.choose(s, e, rng, none), Catch::Contains("expected an allowed action"));
+    REQUIRE_THROWS_WITH(random.choose(s, e, rng, none), Catch::Contains("expected an allowed action"));
+    REQUIRE_THROWS_WITH(search.choose(s, e, rng, none), Catch::Contains("expected an allowed action"));
+    ++checked;
+  }
+  REQUIRE(checked > 10);
 }
 
 }  // namespace mgrl

@@ -79,6 +79,13 @@ class TimedController final : public Controller {
     ++clock_.count;
     return a;
   }
+  std::size_t choose(std::uint32_t s, const Eigen::Vector3d& e, Rng& rng, std::span<const std::uint8_t> allowed) override {
+    const auto start = Clock::now();
+    const std::size_t a = inner_->choose(s, e, rng, allowed);
+    clock_.seconds += std::chrono::duration<double>(Clock::now() - start).count();
+    ++clock_.count;
+    return a;
+  }
 
  private:
   std::unique_ptr<Controller> inner_;

@@ -52,6 +52,9 @@ class ActionPlayback {
   std::span<const Eigen::Quaterniond> globalRotations() const { return fkRotations_; }
 
   std::uint32_t state() const { return state_; }
+  /// Moves the avatar by (dx, dz) on the floor (world, m) from the next pose on; the shift
+  /// stays with it (the world pushes overlapping bodies apart this way).
+  void nudge(double dx, double dz) { correction_ += Eigen::Vector2d(dx, dz); }
   /// The avatar frame at the current state, in world coordinates.
   const GroundMotion& world() const { return world_; }
   /// The source frame shown by the last pose.

@@ -4,6 +4,9 @@
 #include <cmath>
 #include <limits>
 
+#include <fmt/format.h>
+
+#include "mgrl/core/error.hpp"
 #include "mgrl/learning/problem.hpp"
 
 namespace mgrl {
@@ -11,6 +14,15 @@ namespace mgrl {
 std::size_t RandomController::choose(std::uint32_t s, const Eigen::Vector3d&, Rng& rng) {
   const std::uint32_t begin = model_.stateActionBegin[s];
   return begin + rng.below(model_.stateActionBegin[s + 1] - begin);
+}
+
+std::size_t RandomController::choose(std::uint32_t s, const Eigen::Vector3d&, Rng& rng, std::span<const std::uint8_t> allowed) {
+  const std::uint32_t begin = model_.stateActionBegin[s];
+  const auto count = static_cast<std::uint32_t>(std::count_if(allowed.begin(), allowed.end(), [](std::uint8_t x) { return x != 0; }));
+  if (count == 0) throw Error(fmt::format("controller: expected an allowed action at state {}, found none", s));
+  std::uint32_t draw = static_cast<std::uint32_t>(rng.below(count));
+  for (std::uint32_t j = 0;; ++j)
+    if (allowed[j] != 0 && draw-- == 0) return begin + j;
 }
 
 PolicyController::PolicyController(const StateActionModel& model, std::vector<PolicyPart> parts, Variety variety)
@@ -47,12 +59,25 @@ std::size_t PolicyController::choose(std::uint32_t s, const Eigen::Vector3d& e) 
 std::size_t PolicyController::choose(std::uint32_t s, const Eigen::Vector3d& e, Rng& rng) {
   if (variety_.topK == 1) return choose(s, e);
   score(s, e);
+  return pick(s, rng, {});
+}
+
+std::size_t PolicyController::choose(std::uint32_t s, const Eigen::Vector3d& e, Rng& rng,
+                                     std::span<const std::uint8_t> allowed) {
+  score(s, e);
+  return pick(s, rng, allowed);
+}
+
+// The top k of the scored actions (all of them when `allowed` is empty), ties by index
+// (a stable, seed-independent order), less those below the margin; one drawn with rng.
+std::size_t PolicyController::pick(std::uint32_t s, Rng& rng, std::span<const std::uint8_t> allowed) {
   const std::uint32_t begin = model_.stateActionBegin[s];
   const auto n = static_cast<std::uint32_t>(count_);
-  // The top k by score, ties by index (a stable, seed-independent order).
-  ranked_.resize(n);
-  for (std::uint32_t j = 0; j < n; ++j) ranked_[j] = j;
-  const std::uint32_t k = std::min<std::uint32_t>(n, static_cast<std::uint32_t>(variety_.topK));
+  ranked_.clear();
+  for (std::uint32_t j = 0; j < n; ++j)
+    if (allowed.empty() || allowed[j] != 0) ranked_.push_back(j);
+  if (ranked_.empty()) throw Error(fmt::format("controller: expected an allowed action at state {}, found none", s));
+  const auto k = std::min<std::uint32_t>(static_cast<std::uint32_t>(ranked_.size()), static_cast<std::uint32_t>(variety_.topK));
   std::partial_sort(ranked_.begin(), ranked_.begin() + k, ranked_.end(), [&](std::uint32_t a, std::uint32_t b) {
     return buffer_[a] > buffer_[b] || (buffer_[a] == buffer_[b] && a < b);
   });
@@ -121,6 +146,31 @@ std::size_t OnlineSearchController::choose(std::uint32_t s, const Eigen::Vector3
       bestAction = a;
     }
   }
+  return bestAction;
+}
+
+}  // namespace mgrl
+
+namespace mgrl {
+
+std::size_t OnlineSearchController::choose(std::uint32_t s, const Eigen::Vector3d& e, Rng&,
+                                           std::span<const std::uint8_t> allowed) {
+  expanded_ = 0;
+  const std::uint32_t begin = model_.stateActionBegin[s];
+  std::size_t bestAction = model_.actionCount();
+  double best = -std::numeric_limits<double>::infinity();
+  for (std::uint32_t a = begin; a < model_.stateActionBegin[s + 1]; ++a) {
+    if (allowed[a - begin] == 0) continue;
+    ++expanded_;
+    const double q = reward(a, e) + discount_[a] * value(model_.actionTo[a], environment_.next(model_, a, e), horizon_ - 1,
+                                                         horizonFrames_ - static_cast<double>(model_.actionLength(a)));
+    if (bestAction == model_.actionCount() || q > best) {
+      best = q;
+      bestAction = a;
+    }
+  }
+  if (bestAction == model_.actionCount())
+    throw Error(fmt::format("controller: expected an allowed action at state {}, found none", s));
   return bestAction;
 }
 

@@ -31,6 +31,48 @@ double segmentDistance(const Eigen::Vector3d& p, const Eigen::Vector3d& a, const
   return (p - (a + t * ab)).norm();
 }
 
+// Distance between the segments [p0, p1] and [q0, q1] (closest points by the clamped
+// parameters of the two lines, then each re-clamped against the other's end).
+double segmentsDistance(const Eigen::Vector3d& p0, const Eigen::Vector3d& p1, const Eigen::Vector3d& q0,
+                        const Eigen::Vector3d& q1) {
+  const Eigen::Vector3d u = p1 - p0, v = q1 - q0, w = p0 - q0;
+  const double a = u.squaredNorm(), b = u.dot(v), c = v.squaredNorm(), d = u.dot(w), e = v.dot(w);
+  const double det = a * c - b * b;
+  double s = 0, t = 0;
+  if (a < 1e-12 && c < 1e-12) return w.norm();
+  if (a < 1e-12) {
+    t = std::clamp(e / c, 0.0, 1.0);
+  } else if (c < 1e-12) {
+    s = std::clamp(-d / a, 0.0, 1.0);
+  } else {
+    s = det > 1e-12 * a * c ? std::clamp((b * e - c * d) / det, 0.0, 1.0) : 0.0;
+    t = (b * s + e) / c;
+    if (t < 0) {
+      t = 0;
+      s = std::clamp(-d / a, 0.0, 1.0);
+    } else if (t > 1) {
+      t = 1;
+      s = std::clamp((b - d) / a, 0.0, 1.0);
+    }
+  }
+  return (w + s * u - t * v).norm();
+}
+
+// How far apart two torsos are: the distance between their capsules' axes, and never
+// more than their pelvises' distance on the floor (a torso leaning away must not let the
+// hips meet).
+double torsoDistance(const Eigen::Vector3d& p0, const Eigen::Vector3d& h0, const Eigen::Vector3d& p1,
+                     const Eigen::Vector3d& h1) {
+  return std::min(segmentsDistance(p0, h0, p1, h1), std::hypot(p0.x() - p1.x(), p0.z() - p1.z()));
+}
+
+// A grid cell (x, z) packed in one integer, and its bucket in a hashed table.
+std::int64_t packCell(std::int64_t x, std::int64_t z) { return (x << 32) ^ (z & 0xffffffff); }
+std::size_t cellBucket(std::int64_t cell, std::size_t mask) {
+  auto h = static_cast<std::uint64_t>(cell) * 0x9e3779b97f4a7c15ULL;
+  return static_cast<std::size_t>(h >> 32) & mask;
+}
+
 // Splits a seed into independent per-avatar seeds (splitmix64).
 std::uint64_t mix(std::uint64_t seed, std::uint64_t i) {
   std::uint64_t z = seed + 0x9e3779b97f4a7c15ULL * (i + 1);
@@ -63,6 +105,13 @@ struct World::Avatar {
   std::vector<Pose> recorded;
 };
 
+// What the other avatars may read of avatar i while it moves: where the last frame left it.
+struct World::Track {
+  GroundMotion decision;
+  std::uint32_t action = 0, step = 0, length = 0;
+  Segment now;
+};
+
 World::World(WorldSetup setup)
     : setup_(std::move(setup)), model_(*setup_.model), body_(*setup_.body) {
   if (setup_.record) setup_.poses = true;
@@ -76,6 +125,29 @@ World::World(WorldSetup setup)
   heads_.resize(setup_.avatars);
   for (std::size_t i = 0; i < avatars_.size(); ++i) startAvatar(i);
   for (std::size_t i = 0; i < avatars_.size(); ++i) heads_[i] = bodyPoint(i, BodyTable::Head);
+  tracks_.resize(avatars_.size());
+  pending_.assign(avatars_.size(), Eigen::Vector2d::Zero());
+  bodyCounts_.assign(avatars_.size(), {0, 0});
+  const WorldParams& p = setup_.params;
+  if (p.bodyRadius > 0) {
+    // How far a pelvis can get from its avatar origin within the look-ahead: two bodies
+    // farther apart than twice that plus their radii cannot meet before the next check.
+    aheadFrames_ = std::max<std::uint32_t>(1, static_cast<std::uint32_t>(std::ceil(p.avoidSeconds / model_.frameTime)));
+    double travel = 0;
+    for (std::size_t a = 0; a < model_.actionCount(); ++a) {
+      const std::size_t length = std::min<std::size_t>(model_.actionLength(a), aheadFrames_);
+      for (std::size_t t = 0; t < length; ++t) {
+        const std::size_t k = model_.actionFrameBegin[a] + t;
+        const GroundMotion at{model_.frameRoot[3 * k], model_.frameRoot[3 * k + 1], model_.frameRoot[3 * k + 2]};
+        for (int which : {BodyTable::Pelvis, BodyTable::Head}) {
+          const Eigen::Vector3d q = transformPoint(at, body_.point(model_.actionFrames[k], which));
+          travel = std::max(travel, std::hypot(q.x(), q.z()));
+        }
+      }
+    }
+    reach_ = 2 * travel + 2 * p.bodyRadius + 0.05;
+  }
+  snapshot();
 }
 
 World::~World() = default;
@@ -137,7 +209,14 @@ Eigen::Vector3d World::aim(std::size_t i) const {
 void World::decide(std::size_t i, Controller& controller) {
   Avatar& a = avatars_[i];
   const Eigen::Vector3d e = inverseTransformPoint(a.decision, aim(i));
-  a.action = static_cast<std::uint32_t>(controller.choose(a.state, e, a.rng));
+  if (setup_.params.bodyRadius > 0) {
+    thread_local std::vector<std::uint8_t> allowed;
+    restrictActions(i, allowed);
+    a.action = static_cast<std::uint32_t>(allowed.empty() ? controller.choose(a.state, e, a.rng)
+                                                          : controller.choose(a.state, e, a.rng, allowed));
+  } else {
+    a.action = static_cast<std::uint32_t>(controller.choose(a.state, e, a.rng));
+  }
   a.length = static_cast<std::uint32_t>(model_.actionLength(a.action));
   a.step = 0;
   a.hitCursor = model_.actionHitBegin[a.action];
@@ -164,6 +243,12 @@ void World::advance(std::size_t begin, std::size_t end, Controller& controller) 
       t.bendVelocity += dt * acceleration;
       t.bend += dt * t.bendVelocity;
       if (t.bend.norm() > p.bendMax) t.bend *= p.bendMax / t.bend.norm();
+    }
+    if (pending_[i].x() != 0 || pending_[i].y() != 0) {  // pushed away from another body
+      a.decision.dx += pending_[i].x();
+      a.decision.dz += pending_[i].y();
+      if (a.playback) a.playback->nudge(pending_[i].x(), pending_[i].y());
+      pending_[i].setZero();
     }
     if (a.step == a.length) {
       if (a.length > 0) {  // the last action is over: decide where it ended
@@ -325,6 +410,8 @@ void World::run(std::size_t frames) {
       list.clear();
     }
     for (std::size_t i = 0; i < n; ++i) heads_[i] = bodyPoint(i, BodyTable::Head);
+    snapshot();
+    if (setup_.params.bodyRadius > 0) separate();
   };
   if (threads == 1) {
     for (std::size_t f = 0; f < frames; ++f) {
@@ -375,6 +462,160 @@ void World::moveTarget(std::size_t i, const Eigen::Vector3d& base) {
   targets_[i].nextMove = std::numeric_limits<double>::infinity();
 }
 
+
+// ---------------------------------------------------------------------------------------
+// Body collisions (issue 18): a torso capsule per avatar, from the pelvis to the head.
+// Decisions rule out actions whose root path would run into another body within the
+// look-ahead, assuming the others finish the actions they are playing and then stand;
+// what still overlaps is pushed apart over the next frames. Neighbours come from a hashed
+// grid of cells `reach_` wide, so the cost stays linear in the number of avatars.
+
+void World::snapshot() {
+  for (std::size_t i = 0; i < avatars_.size(); ++i) {
+    const Avatar& a = avatars_[i];
+    tracks_[i] = {a.decision, a.action, a.step, a.length, {bodyPoint(i, BodyTable::Pelvis), bodyPoint(i, BodyTable::Head)}};
+  }
+  if (setup_.params.bodyRadius > 0) buildGrid();
+}
+
+void World::buildGrid() {
+  const std::size_t n = avatars_.size();
+  std::size_t buckets = 1;
+  while (buckets < 2 * n) buckets <<= 1;
+  gridStart_.assign(buckets + 1, 0);
+  gridItems_.resize(n);
+  gridCell_.resize(n);
+  for (std::size_t i = 0; i < n; ++i) {
+    const Eigen::Vector3d& q = tracks_[i].now.pelvis;
+    gridCell_[i] = packCell(static_cast<std::int64_t>(std::floor(q.x() / reach_)),
+                            static_cast<std::int64_t>(std::floor(q.z() / reach_)));
+    ++gridStart_[cellBucket(gridCell_[i], buckets - 1) + 1];
+  }
+  for (std::size_t b = 0; b < buckets; ++b) gridStart_[b + 1] += gridStart_[b];
+  std::vector<std::uint32_t>& fill = gridItems_;  // counting sort, avatars in index order per bucket
+  thread_local std::vector<std::uint32_t> cursor;
+  cursor.assign(gridStart_.begin(), gridStart_.end() - 1);
+  for (std::size_t i = 0; i < n; ++i) fill[cursor[cellBucket(gridCell_[i], buckets - 1)]++] = static_cast<std::uint32_t>(i);
+}
+
+// Calls visit(j) for every avatar j whose pelvis is in the 3 x 3 cells around `at` (and a
+// few others sharing their buckets), in a fixed order.
+template <class F>
+void World::forNeighbours(const Eigen::Vector3d& at, F&& visit) const {
+  const std::size_t mask = gridStart_.size() - 2;
+  const auto cx = static_cast<std::int64_t>(std::floor(at.x() / reach_));
+  const auto cz = static_cast<std::int64_t>(std::floor(at.z() / reach_));
+  std::array<std::size_t, 9> seen{};
+  int count = 0;
+  for (std::int64_t dx = -1; dx <= 1; ++dx)
+    for (std::int64_t dz = -1; dz <= 1; ++dz) {
+      const std::size_t b = cellBucket(packCell(cx + dx, cz + dz), mask);
+      if (std::find(seen.begin(), seen.begin() + count, b) != seen.begin() + count) continue;
+      seen[static_cast<std::size_t>(count++)] = b;
+      for (std::uint32_t k = gridStart_[b]; k < gridStart_[b + 1]; ++k) visit(static_cast<std::size_t>(gridItems_[k]));
+    }
+}
+
+World::Segment World::predict(std::size_t j, std::uint32_t ahead) const {
+  const Track& t = tracks_[j];
+  if (t.length == 0) return t.now;
+  const std::uint32_t shown = std::min(t.step + ahead, t.length);  // then it stands
+  const std::size_t k = model_.actionFrameBegin[t.action] + shown - 1;
+  const GroundMotion at = compose(t.decision, {model_.frameRoot[3 * k], model_.frameRoot[3 * k + 1], model_.frameRoot[3 * k + 2]});
+  const std::uint32_t source = model_.actionFrames[k];
+  return {transformPoint(at, body_.point(source, BodyTable::Pelvis)), transformPoint(at, body_.point(source, BodyTable::Head))};
+}
+
+// allowed[j] for the j-th action leaving avatar i's state: its torso keeps clear of every
+// other torso at each checked frame of the look-ahead, or at least does not get closer
+// than it is now. When no action qualifies, only the one keeping the most room. Left empty
+// when no other body is within reach (every action allowed).
+void World::restrictActions(std::size_t i, std::vector<std::uint8_t>& allowed) {
+  allowed.clear();
+  const Avatar& a = avatars_[i];
+  const double gap = 2 * setup_.params.bodyRadius;
+  thread_local std::vector<std::uint32_t> near;
+  near.clear();
+  const Eigen::Vector3d& me = tracks_[i].now.pelvis;
+  double room = std::numeric_limits<double>::infinity();  // clearance now
+  forNeighbours(me, [&](std::size_t j) {
+    if (j == i) return;
+    const Segment& other = tracks_[j].now;
+    if (std::hypot(other.pelvis.x() - me.x(), other.pelvis.z() - me.z()) > reach_) return;
+    near.push_back(static_cast<std::uint32_t>(j));
+    room = std::min(room, torsoDistance(me, tracks_[i].now.head, other.pelvis, other.head) - gap);
+  });
+  if (near.empty()) return;
+  const std::uint32_t begin = model_.stateActionBegin[a.state], end = model_.stateActionBegin[a.state + 1];
+  allowed.assign(end - begin, 0);
+  thread_local std::vector<double> clearance;
+  clearance.assign(end - begin, std::numeric_limits<double>::infinity());
+  thread_local std::vector<Segment> others;
+  bool any = false;
+  for (std::uint32_t act = begin; act < end; ++act) {
+    const std::uint32_t checked = std::min<std::uint32_t>(static_cast<std::uint32_t>(model_.actionLength(act)), aheadFrames_);
+    double worst = std::numeric_limits<double>::infinity();
+    for (std::uint32_t t = 0; t < checked; t = (t + 2 < checked || t + 1 == checked) ? t + 2 : checked - 1) {
+      const std::size_t k = model_.actionFrameBegin[act] + t;
+      const GroundMotion at =
+          compose(a.decision, {model_.frameRoot[3 * k], model_.frameRoot[3 * k + 1], model_.frameRoot[3 * k + 2]});
+      const std::uint32_t source = model_.actionFrames[k];
+      const Eigen::Vector3d pelvis = transformPoint(at, body_.point(source, BodyTable::Pelvis));
+      const Eigen::Vector3d head = transformPoint(at, body_.point(source, BodyTable::Head));
+      for (std::uint32_t j : near) {
+        const Segment other = predict(j, t + 1);
+        worst = std::min(worst, torsoDistance(pelvis, head, other.pelvis, other.head) - gap);
+      }
+      if (worst < std::min(0.0, room - 1e-3)) break;  // ruled out already
+    }
+    clearance[act - begin] = worst;
+    if (worst >= std::min(0.0, room - 1e-3)) {
+      allowed[act - begin] = 1;
+      any = true;
+    }
+  }
+  auto& counts = bodyCounts_[i];
+  if (!any) {
+    ++counts[1];
+    allowed[static_cast<std::size_t>(std::max_element(clearance.begin(), clearance.end()) - clearance.begin())] = 1;
+  } else if (std::find(allowed.begin(), allowed.end(), std::uint8_t{0}) != allowed.end()) {
+    ++counts[0];
+  }
+}
+
+// Pushes overlapping torsos apart along the floor, each pair by at most separation_speed
+// per second, half each (run once per frame, in avatar order).
+void World::separate() {
+  const WorldParams& p = setup_.params;
+  const double gap = 2 * p.bodyRadius, step = p.separationSpeed * model_.frameTime;
+  for (std::size_t i = 0; i < avatars_.size(); ++i) {
+    const Segment& mine = tracks_[i].now;
+    forNeighbours(mine.pelvis, [&](std::size_t j) {
+      if (j <= i) return;
+      const Segment& other = tracks_[j].now;
+      const double overlap = gap - torsoDistance(mine.pelvis, mine.head, other.pelvis, other.head);
+      if (overlap <= 0) return;
+      Eigen::Vector2d away(mine.pelvis.x() - other.pelvis.x(), mine.pelvis.z() - other.pelvis.z());
+      if (away.norm() < 1e-6) away = Eigen::Vector2d(std::sin(tracks_[i].decision.dyaw + M_PI / 2), std::cos(tracks_[i].decision.dyaw + M_PI / 2));
+      away.normalize();
+      const double move = 0.5 * std::min(overlap, step);
+      pending_[i] += move * away;
+      pending_[j] -= move * away;
+      ++pushes_;
+    });
+  }
+}
+
+World::BodyStats World::bodyStats() const {
+  BodyStats stats;
+  for (const auto& c : bodyCounts_) {
+    stats.restricted += c[0];
+    stats.cornered += c[1];
+  }
+  stats.pushes = pushes_;
+  return stats;
+}
+
 std::size_t World::avatarCount() const { return avatars_.size(); }
 GroundMotion World::avatarFrame(std::size_t i) const { return avatars_[i].now; }
 World::Decision World::lastDecision(std::size_t i) const {
@@ -388,7 +629,8 @@ std::span<const Eigen::Vector3d> World::jointPositions(std::size_t i) const { re
 const std::vector<Pose>& World::recorded(std::size_t i) const { return avatars_[i].recorded; }
 
 std::size_t World::bytesPerAvatar() const {
-  std::size_t bytes = sizeof(Avatar) + sizeof(Target) + sizeof(Eigen::Vector3d);
+  std::size_t bytes = sizeof(Avatar) + sizeof(Target) + sizeof(Eigen::Vector3d) + sizeof(Track) + sizeof(Eigen::Vector2d) +
+                      sizeof(std::array<std::size_t, 2>) + sizeof(std::int64_t) + 3 * sizeof(std::uint32_t);
   if (setup_.poses) {
     const std::size_t joints = setup_.db->skeleton->jointCount();
     // The playback's buffers (5 rotation arrays, 1 position array, the blend offsets' half

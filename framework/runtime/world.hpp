@@ -10,6 +10,7 @@
 /// from per-frame tables. Poses (blending, forward kinematics of every joint, reactions)
 /// are computed only when asked for, from the same avatar states, so asking for them never
 /// changes what happens.
+#include <array>
 #include <cstdint>
 #include <functional>
 #include <memory>
@@ -43,6 +44,13 @@ struct WorldParams {
   double targetRadius = 0.12;     ///< m, target sphere
   double fistRadius = 0.05;       ///< m, fist sphere
   double headRadius = 0.11, chestRadius = 0.16, spineRadius = 0.14;  ///< m, body capsules
+  /// Bodies collide: each avatar's torso is a capsule from the pelvis to the head of this
+  /// radius; a decision rules out actions whose root path would bring it into another's
+  /// within `avoidSeconds`, and overlaps left are pushed apart at `separationSpeed`.
+  /// 0: bodies pass through each other (the paper's world).
+  double bodyRadius = 0.2;        ///< m
+  double avoidSeconds = 1.0;      ///< s
+  double separationSpeed = 1.5;   ///< m/s
   double bendPerSpeed = 0.03;     ///< m of target bend per m/s of fist speed
   double bendMax = 0.35;          ///< m
   double bendFrequency = 1.5;     ///< Hz, the target's spring
@@ -168,6 +176,16 @@ class World {
   const std::vector<Pose>& recorded(std::size_t i) const;
   /// Bytes of per-avatar state (excluding recordings), for the memory report.
   std::size_t bytesPerAvatar() const;
+  /// Avatar i's pelvis and head (world) now: the ends of its torso capsule.
+  Eigen::Vector3d pelvis(std::size_t i) const { return bodyPoint(i, BodyTable::Pelvis); }
+  Eigen::Vector3d head(std::size_t i) const { return bodyPoint(i, BodyTable::Head); }
+  /// Body collisions so far: decisions at which some actions were ruled out, decisions at
+  /// which every action ran into a body (the one keeping the most room was taken), and
+  /// frames at which an overlap was pushed apart (one per pair).
+  struct BodyStats {
+    std::size_t restricted = 0, cornered = 0, pushes = 0;
+  };
+  BodyStats bodyStats() const;
 
  private:
   struct Avatar;
@@ -179,6 +197,18 @@ class World {
   void react(const HitEvent& event);
   void updatePoses(std::size_t begin, std::size_t end);
   Eigen::Vector3d bodyPoint(std::size_t i, int which) const;
+  // Body collisions (WorldParams::bodyRadius).
+  struct Track;
+  struct Segment {
+    Eigen::Vector3d pelvis, head;
+  };
+  Segment predict(std::size_t j, std::uint32_t ahead) const;
+  void snapshot();
+  void buildGrid();
+  template <class F>
+  void forNeighbours(const Eigen::Vector3d& at, F&& visit) const;
+  void separate();
+  void restrictActions(std::size_t i, std::vector<std::uint8_t>& allowed);
 
   WorldSetup setup_;
   const StateActionModel& model_;
@@ -190,6 +220,16 @@ class World {
   std::vector<std::unique_ptr<Controller>> controllers_;
   std::size_t frame_ = 0;
   double centroidHeight_ = 0;
+  // Body collisions: every avatar as the last frame left it (read while avatars move), a
+  // hashed grid of their pelvises, pushes to apply at their next frame.
+  std::vector<Track> tracks_;
+  double reach_ = 0;              ///< m: bodies farther apart cannot meet within the look-ahead
+  std::uint32_t aheadFrames_ = 0;
+  std::vector<std::uint32_t> gridStart_, gridItems_;
+  std::vector<std::int64_t> gridCell_;  ///< per avatar: its cell (x, z) packed
+  std::vector<Eigen::Vector2d> pending_;
+  std::vector<std::array<std::size_t, 2>> bodyCounts_;  ///< per avatar: restricted, cornered
+  std::size_t pushes_ = 0;
 };
 
 }  // namespace mgrl

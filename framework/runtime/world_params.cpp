@@ -21,6 +21,12 @@ const ParamSpecs& worldParamSpecs() {
       ParamSpec::number("head_radius", 0.11, 0.01, 1, "m", "radius of the head capsule (head to head top)"),
       ParamSpec::number("chest_radius", 0.16, 0.01, 1, "m", "radius of the chest capsule (chest to neck)"),
       ParamSpec::number("spine_radius", 0.14, 0.01, 1, "m", "radius of the spine capsule (pelvis to chest)"),
+      ParamSpec::number("body_radius", 0.2, 0, 1, "m",
+                        "radius of the torso capsule (pelvis to head) that keeps bodies apart: actions whose root path "
+                        "runs into another body are ruled out and overlaps are pushed apart (0: bodies pass through "
+                        "each other, as in the paper)"),
+      ParamSpec::number("avoid_seconds", 1.0, 0.1, 10, "s", "how far ahead an action's root path is checked against other bodies"),
+      ParamSpec::number("separation_speed", 1.5, 0.1, 20, "m/s", "how fast overlapping bodies are pushed apart"),
       ParamSpec::number("bend_per_speed", 0.03, 0, 1, "m per m/s", "target bend per unit of fist speed"),
       ParamSpec::number("bend_max", 0.35, 0, 2, "m", "largest target bend"),
       ParamSpec::number("bend_frequency", 1.5, 0.1, 20, "Hz", "natural frequency of the target's spring"),
@@ -46,6 +52,9 @@ WorldParams readWorldParams(const ConfigNode& node) {
   w.headRadius = p.number("head_radius");
   w.chestRadius = p.number("chest_radius");
   w.spineRadius = p.number("spine_radius");
+  w.bodyRadius = p.number("body_radius");
+  w.avoidSeconds = p.number("avoid_seconds");
+  w.separationSpeed = p.number("separation_speed");
   w.bendPerSpeed = p.number("bend_per_speed");
   w.bendMax = p.number("bend_max");
   w.bendFrequency = p.number("bend_frequency");
@@ -70,6 +79,9 @@ nlohmann::json worldParamsJson(const WorldParams& w) {
           {"head_radius", w.headRadius},
           {"chest_radius", w.chestRadius},
           {"spine_radius", w.spineRadius},
+          {"body_radius", w.bodyRadius},
+          {"avoid_seconds", w.avoidSeconds},
+          {"separation_speed", w.separationSpeed},
           {"bend_per_speed", w.bendPerSpeed},
           {"bend_max", w.bendMax},
           {"bend_frequency", w.bendFrequency},
