@@ -108,6 +108,7 @@ struct World::Avatar {
 // What the other avatars may read of avatar i while it moves: where the last frame left it.
 struct World::Track {
   GroundMotion decision;
+  double c = 1, s = 0;  ///< cosine and sine of decision.dyaw
   std::uint32_t action = 0, step = 0, length = 0;
   Segment now;
 };
@@ -133,16 +134,21 @@ World::World(WorldSetup setup)
     // How far a pelvis can get from its avatar origin within the look-ahead: two bodies
     // farther apart than twice that plus their radii cannot meet before the next check.
     aheadFrames_ = std::max<std::uint32_t>(1, static_cast<std::uint32_t>(std::ceil(p.avoidSeconds / model_.frameTime)));
+    actionBody_.resize(model_.actionFrames.size() * 6);
     double travel = 0;
     for (std::size_t a = 0; a < model_.actionCount(); ++a) {
-      const std::size_t length = std::min<std::size_t>(model_.actionLength(a), aheadFrames_);
-      for (std::size_t t = 0; t < length; ++t) {
+      for (std::size_t t = 0; t < model_.actionLength(a); ++t) {
         const std::size_t k = model_.actionFrameBegin[a] + t;
         const GroundMotion at{model_.frameRoot[3 * k], model_.frameRoot[3 * k + 1], model_.frameRoot[3 * k + 2]};
-        for (int which : {BodyTable::Pelvis, BodyTable::Head}) {
-          const Eigen::Vector3d q = transformPoint(at, body_.point(model_.actionFrames[k], which));
-          travel = std::max(travel, std::hypot(q.x(), q.z()));
+        const Eigen::Vector3d pelvis = transformPoint(at, body_.point(model_.actionFrames[k], BodyTable::Pelvis));
+        const Eigen::Vector3d head = transformPoint(at, body_.point(model_.actionFrames[k], BodyTable::Head));
+        for (int d = 0; d < 3; ++d) {
+          actionBody_[6 * k + static_cast<std::size_t>(d)] = static_cast<float>(pelvis[d]);
+          actionBody_[6 * k + 3 + static_cast<std::size_t>(d)] = static_cast<float>(head[d]);
         }
+        lean_ = std::max(lean_, std::hypot(head.x() - pelvis.x(), head.z() - pelvis.z()));
+        if (t < aheadFrames_)
+          travel = std::max({travel, std::hypot(pelvis.x(), pelvis.z()), std::hypot(head.x(), head.z())});
       }
     }
     reach_ = 2 * travel + 2 * p.bodyRadius + 0.05;
@@ -471,11 +477,32 @@ void World::moveTarget(std::size_t i, const Eigen::Vector3d& base) {
 // grid of cells `reach_` wide, so the cost stays linear in the number of avatars.
 
 void World::snapshot() {
+  const bool bodies = setup_.params.bodyRadius > 0;
   for (std::size_t i = 0; i < avatars_.size(); ++i) {
     const Avatar& a = avatars_[i];
-    tracks_[i] = {a.decision, a.action, a.step, a.length, {bodyPoint(i, BodyTable::Pelvis), bodyPoint(i, BodyTable::Head)}};
+    Track& t = tracks_[i];
+    if (t.decision.dyaw != a.decision.dyaw || t.length == 0) {  // a sine and cosine per decision, not per frame
+      t.c = std::cos(a.decision.dyaw);
+      t.s = std::sin(a.decision.dyaw);
+    }
+    t.decision = a.decision;
+    t.action = a.action;
+    t.step = a.step;
+    t.length = a.length;
+    if (bodies && a.length > 0)
+      t.now = place(a.decision, t.c, t.s, model_.actionFrameBegin[a.action] + a.step - 1);
+    else
+      t.now = {bodyPoint(i, BodyTable::Pelvis), bodyPoint(i, BodyTable::Head)};
   }
-  if (setup_.params.bodyRadius > 0) buildGrid();
+  if (bodies) buildGrid();
+}
+
+// The torso at action frame k of an action started in avatar frame `at` (c, s: its yaw's
+// cosine and sine), as transformPoint() would place it.
+World::Segment World::place(const GroundMotion& at, double c, double s, std::size_t k) const {
+  const float* b = actionBody_.data() + 6 * k;
+  return {{at.dx + c * b[0] + s * b[2], b[1], at.dz - s * b[0] + c * b[2]},
+          {at.dx + c * b[3] + s * b[5], b[4], at.dz - s * b[3] + c * b[5]}};
 }
 
 void World::buildGrid() {
@@ -520,10 +547,7 @@ World::Segment World::predict(std::size_t j, std::uint32_t ahead) const {
   const Track& t = tracks_[j];
   if (t.length == 0) return t.now;
   const std::uint32_t shown = std::min(t.step + ahead, t.length);  // then it stands
-  const std::size_t k = model_.actionFrameBegin[t.action] + shown - 1;
-  const GroundMotion at = compose(t.decision, {model_.frameRoot[3 * k], model_.frameRoot[3 * k + 1], model_.frameRoot[3 * k + 2]});
-  const std::uint32_t source = model_.actionFrames[k];
-  return {transformPoint(at, body_.point(source, BodyTable::Pelvis)), transformPoint(at, body_.point(source, BodyTable::Head))};
+  return place(t.decision, t.c, t.s, model_.actionFrameBegin[t.action] + shown - 1);
 }
 
 // allowed[j] for the j-th action leaving avatar i's state: its torso keeps clear of every
@@ -550,26 +574,27 @@ void World::restrictActions(std::size_t i, std::vector<std::uint8_t>& allowed) {
   allowed.assign(end - begin, 0);
   thread_local std::vector<double> clearance;
   clearance.assign(end - begin, std::numeric_limits<double>::infinity());
-  thread_local std::vector<Segment> others;
+  // The others' torsos at each frame of the look-ahead, once for all candidate actions.
+  thread_local std::vector<Segment> future;
+  future.resize(near.size() * aheadFrames_);
+  for (std::size_t n = 0; n < near.size(); ++n)
+    for (std::uint32_t t = 0; t < aheadFrames_; ++t) future[n * aheadFrames_ + t] = predict(near[n], t + 1);
+  const double c = std::cos(a.decision.dyaw), sn = std::sin(a.decision.dyaw);
+  const double floor = std::min(0.0, room - 1e-3);
   bool any = false;
   for (std::uint32_t act = begin; act < end; ++act) {
     const std::uint32_t checked = std::min<std::uint32_t>(static_cast<std::uint32_t>(model_.actionLength(act)), aheadFrames_);
     double worst = std::numeric_limits<double>::infinity();
-    for (std::uint32_t t = 0; t < checked; t = (t + 2 < checked || t + 1 == checked) ? t + 2 : checked - 1) {
-      const std::size_t k = model_.actionFrameBegin[act] + t;
-      const GroundMotion at =
-          compose(a.decision, {model_.frameRoot[3 * k], model_.frameRoot[3 * k + 1], model_.frameRoot[3 * k + 2]});
-      const std::uint32_t source = model_.actionFrames[k];
-      const Eigen::Vector3d pelvis = transformPoint(at, body_.point(source, BodyTable::Pelvis));
-      const Eigen::Vector3d head = transformPoint(at, body_.point(source, BodyTable::Head));
-      for (std::uint32_t j : near) {
-        const Segment other = predict(j, t + 1);
-        worst = std::min(worst, torsoDistance(pelvis, head, other.pelvis, other.head) - gap);
+    // Every other frame, and the last one checked.
+    for (std::uint32_t t = 0; t < checked && worst >= floor; t = (t + 2 < checked || t + 1 == checked) ? t + 2 : checked - 1) {
+      const Segment mine = place(a.decision, c, sn, model_.actionFrameBegin[act] + t);
+      for (std::size_t n = 0; n < near.size(); ++n) {
+        const Segment& other = future[n * aheadFrames_ + t];
+        worst = std::min(worst, torsoDistance(mine.pelvis, mine.head, other.pelvis, other.head) - gap);
       }
-      if (worst < std::min(0.0, room - 1e-3)) break;  // ruled out already
     }
     clearance[act - begin] = worst;
-    if (worst >= std::min(0.0, room - 1e-3)) {
+    if (worst >= floor) {
       allowed[act - begin] = 1;
       any = true;
     }
@@ -593,6 +618,7 @@ void World::separate() {
     forNeighbours(mine.pelvis, [&](std::size_t j) {
       if (j <= i) return;
       const Segment& other = tracks_[j].now;
+      if (std::hypot(mine.pelvis.x() - other.pelvis.x(), mine.pelvis.z() - other.pelvis.z()) > gap + 2 * lean_) return;
       const double overlap = gap - torsoDistance(mine.pelvis, mine.head, other.pelvis, other.head);
       if (overlap <= 0) return;
       Eigen::Vector2d away(mine.pelvis.x() - other.pelvis.x(), mine.pelvis.z() - other.pelvis.z());

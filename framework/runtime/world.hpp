@@ -203,6 +203,7 @@ class World {
     Eigen::Vector3d pelvis, head;
   };
   Segment predict(std::size_t j, std::uint32_t ahead) const;
+  Segment place(const GroundMotion& at, double c, double s, std::size_t k) const;
   void snapshot();
   void buildGrid();
   template <class F>
@@ -224,6 +225,8 @@ class World {
   // hashed grid of their pelvises, pushes to apply at their next frame.
   std::vector<Track> tracks_;
   double reach_ = 0;              ///< m: bodies farther apart cannot meet within the look-ahead
+  double lean_ = 0;               ///< m: the farthest a head gets from its pelvis on the floor
+  std::vector<float> actionBody_;  ///< per action frame: pelvis and head in the action's starting avatar frame
   std::uint32_t aheadFrames_ = 0;
   std::vector<std::uint32_t> gridStart_, gridItems_;
   std::vector<std::int64_t> gridCell_;  ///< per avatar: its cell (x, z) packed
