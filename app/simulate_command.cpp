@@ -440,6 +440,10 @@ json runSimulate(const SimulateOptions& options) {
                  {"hits_by_part", byPart},
                  {"decisions", world.decisions()},
                  {"bytes_per_avatar", world.bytesPerAvatar()},
+                 {"bodies",
+                  {{"restricted_decisions", world.bodyStats().restricted},
+                   {"cornered_decisions", world.bodyStats().cornered},
+                   {"pushes", world.bodyStats().pushes}}},
                  {"seed", options.seed},
                  {"world", worldParamsJson(params)}};
   if (avatars <= 1000) report["hits_by_avatar"] = byAvatar;
