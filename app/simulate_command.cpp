@@ -212,6 +212,7 @@ std::string eventLine(const HitEvent& e) {
                      {"target", e.target},
                      {"part", struckName(e)},
                      {"hand", e.hand == 0 ? "left" : "right"},
+                     {"limb", e.kick ? "foot" : "fist"},
                      {"speed", e.speed},
                      {"point", {e.point.x(), e.point.y(), e.point.z()}}};
   return line.dump();

@@ -41,7 +41,7 @@ export class Hud {
   /** A `hit` message: one line "hit 4.1 m/s" with who hit what. */
   addHit(hit) {
     const who = hit.target === -1 ? 'target' : `avatar ${hit.target} ${hit.part ?? ''}`;
-    const line = `hit ${fixed(hit.speed, 1)} m/s — ${hit.hand ?? '?'} hand of ${hit.attacker} on ${who} (t ${fixed(hit.time, 1)} s)`;
+    const line = `hit ${fixed(hit.speed, 1)} m/s — ${hit.hand ?? '?'} ${hit.limb === 'foot' ? 'foot' : 'hand'} of ${hit.attacker} on ${who} (t ${fixed(hit.time, 1)} s)`;
     this.hitLines.unshift({line, at: performance.now()});
     this.hitLines.length = Math.min(this.hitLines.length, kHitLines);
   }

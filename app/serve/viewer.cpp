@@ -771,6 +771,7 @@ bool ViewerSession::advance(double frames) {
                            {"target", e.target},
                            {"part", struckName(e)},
                            {"hand", e.hand == 0 ? "left" : "right"},
+                           {"limb", e.kick ? "foot" : "fist"},
                            {"speed", e.speed},
                            {"point", {e.point.x(), e.point.y(), e.point.z()}}}
                           .dump());

@@ -90,8 +90,10 @@ struct World::Avatar {
   std::uint32_t state = 0, action = 0, step = 0, length = 0;
   std::uint32_t sourceFrame = 0;
   std::uint32_t hitCursor = 0;  ///< next hit of the action to check
+  std::uint32_t kickCursor = 0;  ///< next kick of the action to check
   std::int32_t partner = -1;
-  std::array<std::size_t, 2> landedFrame{kNever, kNever};  ///< last frame of a landed punch, per hand
+  /// Last frame of a landed strike, per limb: left and right fist, left and right foot.
+  std::array<std::size_t, 4> landedFrame{kNever, kNever, kNever, kNever};
   std::size_t decisions = 0;
   // Reaction to the last hit taken: displacement `push` of `part`, starting at `reactionStart`.
   BodyPart part = BodyPart::Head;
@@ -120,12 +122,13 @@ World::World(WorldSetup setup)
   if (model_.stateCount() == 0) throw Error("world: expected a model with states, found none");
   if (setup_.poses && setup_.db == nullptr) throw Error("world: poses need the motion database");
   if (!setup_.makeController) throw Error("world: expected a controller factory");
+  aimPoint_ = setup_.params.aim == "chest" ? BodyTable::Chest : BodyTable::Head;
   centroidHeight_ = setup_.params.targetHeight >= 0 ? setup_.params.targetHeight : model_.centroid[1];
   avatars_.resize(setup_.avatars);
   targets_.resize(setup_.avatars);
   heads_.resize(setup_.avatars);
   for (std::size_t i = 0; i < avatars_.size(); ++i) startAvatar(i);
-  for (std::size_t i = 0; i < avatars_.size(); ++i) heads_[i] = bodyPoint(i, BodyTable::Head);
+  for (std::size_t i = 0; i < avatars_.size(); ++i) heads_[i] = bodyPoint(i, aimPoint_);
   tracks_.resize(avatars_.size());
   pending_.assign(avatars_.size(), Eigen::Vector2d::Zero());
   bodyCounts_.assign(avatars_.size(), {0, 0});
@@ -226,6 +229,7 @@ void World::decide(std::size_t i, Controller& controller) {
   a.length = static_cast<std::uint32_t>(model_.actionLength(a.action));
   a.step = 0;
   a.hitCursor = model_.actionHitBegin[a.action];
+  a.kickCursor = model_.actionKickBegin.empty() ? 0 : model_.actionKickBegin[a.action];
   ++a.decisions;
   if (a.playback) a.playback->begin(a.action);
 }
@@ -250,12 +254,6 @@ void World::advance(std::size_t begin, std::size_t end, Controller& controller) 
       t.bend += dt * t.bendVelocity;
       if (t.bend.norm() > p.bendMax) t.bend *= p.bendMax / t.bend.norm();
     }
-    if (pending_[i].x() != 0 || pending_[i].y() != 0) {  // pushed away from another body
-      a.decision.dx += pending_[i].x();
-      a.decision.dz += pending_[i].y();
-      if (a.playback) a.playback->nudge(pending_[i].x(), pending_[i].y());
-      pending_[i].setZero();
-    }
     if (a.step == a.length) {
       if (a.length > 0) {  // the last action is over: decide where it ended
         a.decision = compose(a.decision, model_.displacement(a.action));
@@ -268,7 +266,6 @@ void World::advance(std::size_t begin, std::size_t end, Controller& controller) 
     a.sourceFrame = model_.actionFrames[k];
     a.now = compose(a.decision, {model_.frameRoot[3 * k], model_.frameRoot[3 * k + 1], model_.frameRoot[3 * k + 2]});
   }
-  if (setup_.poses) updatePoses(begin, end);
 }
 
 void World::collide(std::size_t begin, std::size_t end, std::vector<HitEvent>& out) {
@@ -276,53 +273,59 @@ void World::collide(std::size_t begin, std::size_t end, std::vector<HitEvent>& o
   const double time = static_cast<double>(frame_) * model_.frameTime;
   for (std::size_t i = begin; i < end; ++i) {
     Avatar& a = avatars_[i];
-    // Effective hits of the action at this frame (paper sec. 6.6: collisions are checked
-    // only there).
-    const std::uint32_t hitEnd = model_.actionHitBegin[a.action + 1];
-    while (a.hitCursor < hitEnd && model_.hits[a.hitCursor].offset < a.step) ++a.hitCursor;
-    for (std::uint32_t h = a.hitCursor; h < hitEnd && model_.hits[h].offset == a.step; ++h) {
-      const ActionHit& hit = model_.hits[h];
-      std::size_t& landed = a.landedFrame[hit.hand];
-      if (landed != kNever && landed + 1 == frame_) {  // the same punch, already landed
-        landed = frame_;
-        continue;
-      }
-      // The fist tip in the world (hits are stored in the decision's avatar frame).
-      const Eigen::Vector3d fist = transformPoint(a.decision, {hit.x, hit.y, hit.z});
-      HitEvent event;
-      bool struck = false;
-      if (a.partner < 0) {
-        struck = (fist - targets_[i].centre()).norm() <= p.targetRadius + p.fistRadius;
-      } else {
-        const auto j = static_cast<std::size_t>(a.partner);
-        struct Capsule {
-          BodyPart part;
-          int from, to;
-          double radius;
-        };
-        const Capsule capsules[] = {{BodyPart::Head, BodyTable::Head, BodyTable::HeadTop, p.headRadius},
-                                    {BodyPart::Chest, BodyTable::Chest, BodyTable::Neck, p.chestRadius},
-                                    {BodyPart::Spine, BodyTable::Pelvis, BodyTable::Chest, p.spineRadius}};
-        double deepest = 0;
-        for (const Capsule& c : capsules) {
-          const double depth =
-              c.radius + p.fistRadius - segmentDistance(fist, bodyPoint(j, c.from), bodyPoint(j, c.to));
-          if (depth >= 0 && (!struck || depth > deepest)) {
-            struck = true;
-            deepest = depth;
-            event.part = c.part;
+    // Effective punches and kicks of the action at this frame (paper sec. 6.6: collisions
+    // are checked only there).
+    for (const bool kick : {false, true}) {
+      if (kick && model_.actionKickBegin.empty()) continue;
+      const std::vector<ActionHit>& list = kick ? model_.kicks : model_.hits;
+      std::uint32_t& cursor = kick ? a.kickCursor : a.hitCursor;
+      const std::uint32_t stop = kick ? model_.actionKickBegin[a.action + 1] : model_.actionHitBegin[a.action + 1];
+      const double radius = kick ? p.footRadius : p.fistRadius;
+      while (cursor < stop && list[cursor].offset < a.step) ++cursor;
+      for (std::uint32_t h = cursor; h < stop && list[h].offset == a.step; ++h) {
+        const ActionHit& hit = list[h];
+        std::size_t& landed = a.landedFrame[hit.hand + (kick ? 2 : 0)];
+        if (landed != kNever && landed + 1 == frame_) {  // the same strike, already landed
+          landed = frame_;
+          continue;
+        }
+        // The fist or toe tip in the world (strikes are stored in the decision's avatar frame).
+        const Eigen::Vector3d tip = transformPoint(a.decision, {hit.x, hit.y, hit.z});
+        HitEvent event;
+        bool struck = false;
+        if (a.partner < 0) {
+          struck = (tip - targets_[i].centre()).norm() <= p.targetRadius + radius;
+        } else {
+          const auto j = static_cast<std::size_t>(a.partner);
+          struct Capsule {
+            BodyPart part;
+            int from, to;
+            double radius;
+          };
+          const Capsule capsules[] = {{BodyPart::Head, BodyTable::Head, BodyTable::HeadTop, p.headRadius},
+                                      {BodyPart::Chest, BodyTable::Chest, BodyTable::Neck, p.chestRadius},
+                                      {BodyPart::Spine, BodyTable::Pelvis, BodyTable::Chest, p.spineRadius}};
+          double deepest = 0;
+          for (const Capsule& c : capsules) {
+            const double depth = c.radius + radius - segmentDistance(tip, bodyPoint(j, c.from), bodyPoint(j, c.to));
+            if (depth >= 0 && (!struck || depth > deepest)) {
+              struck = true;
+              deepest = depth;
+              event.part = c.part;
+            }
           }
         }
+        if (!struck) continue;
+        landed = frame_;
+        event.time = time;
+        event.attacker = static_cast<std::uint32_t>(i);
+        event.target = a.partner;
+        event.hand = hit.hand;
+        event.kick = kick;
+        event.speed = hit.weight * (kick ? model_.maxKickSpeed_mps : model_.maxHitSpeed_mps);
+        event.point = tip;
+        out.push_back(event);
       }
-      if (!struck) continue;
-      landed = frame_;
-      event.time = time;
-      event.attacker = static_cast<std::uint32_t>(i);
-      event.target = a.partner;
-      event.hand = hit.hand;
-      event.speed = hit.weight * model_.maxHitSpeed_mps;
-      event.point = fist;
-      out.push_back(event);
     }
   }
 }
@@ -415,7 +418,11 @@ void World::run(std::size_t frames) {
       }
       list.clear();
     }
-    for (std::size_t i = 0; i < n; ++i) heads_[i] = bodyPoint(i, BodyTable::Head);
+    for (std::size_t i = 0; i < n; ++i) heads_[i] = bodyPoint(i, aimPoint_);
+  };
+  // Where the avatars now are, for the next decisions; bodies that overlap are pushed apart
+  // before anything is posed or collides.
+  auto placeBodies = [&] {
     snapshot();
     if (setup_.params.bodyRadius > 0) separate();
   };
@@ -423,6 +430,8 @@ void World::run(std::size_t frames) {
     for (std::size_t f = 0; f < frames; ++f) {
       ++frame_;
       advance(0, n, *controllers_[0]);
+      placeBodies();
+      if (setup_.poses) updatePoses(0, n);
       collide(0, n, found[0]);
       finishFrame();
     }
@@ -443,6 +452,9 @@ void World::run(std::size_t frames) {
         if (!failure) failure = std::current_exception();
       }
       sync.arrive_and_wait();
+      if (w == 0) placeBodies();
+      sync.arrive_and_wait();
+      if (setup_.poses) updatePoses(begin, end);
       collide(begin, end, found[w]);
       sync.arrive_and_wait();
       if (w == 0) finishFrame();
@@ -608,11 +620,15 @@ void World::restrictActions(std::size_t i, std::vector<std::uint8_t>& allowed) {
   }
 }
 
-// Pushes overlapping torsos apart along the floor, each pair by at most separation_speed
-// per second, half each (run once per frame, in avatar order).
+// Pushes overlapping torsos apart along the floor, half each: by separation_speed per
+// second, and at once by whatever brings them under 2 * body_radius - 0.04 m (never closer
+// than that, whatever they do). Pushes are found from where every avatar is, then applied
+// together (to the avatar frames, the poses about to be made, and the snapshot), in avatar
+// order.
 void World::separate() {
   const WorldParams& p = setup_.params;
   const double gap = 2 * p.bodyRadius, step = p.separationSpeed * model_.frameTime;
+  const double slack = std::min(0.04, 0.5 * gap);
   for (std::size_t i = 0; i < avatars_.size(); ++i) {
     const Segment& mine = tracks_[i].now;
     forNeighbours(mine.pelvis, [&](std::size_t j) {
@@ -622,14 +638,34 @@ void World::separate() {
       const double overlap = gap - torsoDistance(mine.pelvis, mine.head, other.pelvis, other.head);
       if (overlap <= 0) return;
       Eigen::Vector2d away(mine.pelvis.x() - other.pelvis.x(), mine.pelvis.z() - other.pelvis.z());
-      if (away.norm() < 1e-6) away = Eigen::Vector2d(std::sin(tracks_[i].decision.dyaw + M_PI / 2), std::cos(tracks_[i].decision.dyaw + M_PI / 2));
+      if (away.norm() < 1e-6) away = Eigen::Vector2d(std::cos(tracks_[i].decision.dyaw), -std::sin(tracks_[i].decision.dyaw));
       away.normalize();
-      const double move = 0.5 * std::min(overlap, step);
+      const double move = 0.5 * std::max(std::min(overlap, step), overlap - slack);
       pending_[i] += move * away;
       pending_[j] -= move * away;
       ++pushes_;
     });
   }
+  bool moved = false;
+  for (std::size_t i = 0; i < avatars_.size(); ++i) {
+    Eigen::Vector2d& push = pending_[i];
+    if (push.x() == 0 && push.y() == 0) continue;
+    moved = true;
+    Avatar& a = avatars_[i];
+    a.decision.dx += push.x();
+    a.decision.dz += push.y();
+    a.now.dx += push.x();
+    a.now.dz += push.y();
+    if (a.playback) a.playback->nudge(push.x(), push.y());
+    Track& t = tracks_[i];
+    t.decision = a.decision;
+    for (Eigen::Vector3d* q : {&t.now.pelvis, &t.now.head}) {
+      q->x() += push.x();
+      q->z() += push.y();
+    }
+    push.setZero();
+  }
+  if (moved) buildGrid();  // the next decisions look for neighbours where they now are
 }
 
 World::BodyStats World::bodyStats() const {

@@ -43,6 +43,9 @@ struct WorldParams {
   double targetHeight = -1;       ///< m; < 0: the effective hitting points' centroid height
   double targetRadius = 0.12;     ///< m, target sphere
   double fistRadius = 0.05;       ///< m, fist sphere
+  double footRadius = 0.06;       ///< m, toe sphere (kicks)
+  /// sparring: the point of the partner each avatar aims at, "head" or "chest".
+  std::string aim = "head";
   double headRadius = 0.11, chestRadius = 0.16, spineRadius = 0.14;  ///< m, body capsules
   /// Bodies collide: each avatar's torso is a capsule from the pelvis to the head of this
   /// radius; a decision rules out actions whose root path would bring it into another's
@@ -91,12 +94,13 @@ struct BodyTable {
 /// points. Throws mgrl::Error if the head is not below the pelvis in the hierarchy.
 BodyTable makeBodyTable(const MotionDatabase& db);
 
-/// One landed punch.
+/// One landed punch or kick.
 struct HitEvent {
   double time = 0;              ///< s since the start
   std::uint32_t attacker = 0;   ///< avatar index
   std::int32_t target = -1;     ///< avatar index, or -1 for the attacker's own target
-  std::uint8_t hand = 0;        ///< 0 left, 1 right
+  std::uint8_t hand = 0;        ///< 0 left, 1 right (the foot, for a kick)
+  bool kick = false;            ///< a toe's effective kick, not a fist's punch
   BodyPart part = BodyPart::Head;  ///< what was struck (Head for a target)
   double speed = 0;             ///< fist speed, m/s
   Eigen::Vector3d point = Eigen::Vector3d::Zero();  ///< fist tip, world (m)
@@ -216,11 +220,12 @@ class World {
   const BodyTable& body_;
   std::vector<Avatar> avatars_;
   std::vector<Target> targets_;
-  std::vector<Eigen::Vector3d> heads_;  ///< every avatar's head at the end of the last frame
+  std::vector<Eigen::Vector3d> heads_;  ///< every avatar's aim point (head or chest) at the end of the last frame
   std::vector<HitEvent> events_;
   std::vector<std::unique_ptr<Controller>> controllers_;
   std::size_t frame_ = 0;
   double centroidHeight_ = 0;
+  int aimPoint_ = BodyTable::Head;
   // Body collisions: every avatar as the last frame left it (read while avatars move), a
   // hashed grid of their pelvises, pushes to apply at their next frame.
   std::vector<Track> tracks_;

@@ -10,6 +10,7 @@ const ParamSpecs& worldParamSpecs() {
       ParamSpec::choice("mode", "sparring", {"sparring", "targets"},
                         "sparring: pairs, each avatar aims at its partner's head; targets: each avatar has its own "
                         "target, moved every target_hold seconds"),
+      ParamSpec::choice("aim", "head", {"head", "chest"}, "sparring: the point of the partner an avatar aims at"),
       ParamSpec::integer("top_k", 3, 1, 64, "actions", "variety: draw among this many best actions (1: greedy)"),
       ParamSpec::number("margin", 0.1, 0, 1, "", "variety: drop candidates scoring below best - margin * |best| (0: keep all k)"),
       ParamSpec::number("spacing", 4.0, 0.5, 100, "m", "distance between neighbouring pairs on the floor"),
@@ -18,6 +19,7 @@ const ParamSpecs& worldParamSpecs() {
       ParamSpec::number("target_height", -1, -1, 5, "m", "targets mode: target height (-1: the hitting points' centroid)"),
       ParamSpec::number("target_radius", 0.12, 0.01, 2, "m", "radius of a target sphere"),
       ParamSpec::number("fist_radius", 0.05, 0.005, 0.5, "m", "radius of the fist sphere"),
+      ParamSpec::number("foot_radius", 0.06, 0.005, 0.5, "m", "radius of the toe sphere (kicks)"),
       ParamSpec::number("head_radius", 0.11, 0.01, 1, "m", "radius of the head capsule (head to head top)"),
       ParamSpec::number("chest_radius", 0.16, 0.01, 1, "m", "radius of the chest capsule (chest to neck)"),
       ParamSpec::number("spine_radius", 0.14, 0.01, 1, "m", "radius of the spine capsule (pelvis to chest)"),
@@ -49,6 +51,8 @@ WorldParams readWorldParams(const ConfigNode& node) {
   w.targetHeight = p.number("target_height");
   w.targetRadius = p.number("target_radius");
   w.fistRadius = p.number("fist_radius");
+  w.footRadius = p.number("foot_radius");
+  w.aim = p.choice("aim");
   w.headRadius = p.number("head_radius");
   w.chestRadius = p.number("chest_radius");
   w.spineRadius = p.number("spine_radius");
@@ -76,6 +80,8 @@ nlohmann::json worldParamsJson(const WorldParams& w) {
           {"target_height", w.targetHeight},
           {"target_radius", w.targetRadius},
           {"fist_radius", w.fistRadius},
+          {"foot_radius", w.footRadius},
+          {"aim", w.aim},
           {"head_radius", w.headRadius},
           {"chest_radius", w.chestRadius},
           {"spine_radius", w.spineRadius},
