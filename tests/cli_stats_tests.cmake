@@ -30,3 +30,5 @@ mgrl_cli_test(stats_no_bout ARGS stats EXIT 1
   MESSAGE "stats: expected a BOUT (a folder or a quoted file pattern) or --snu, found none")
 mgrl_cli_test(stats_option_after_dash ARGS stats --compare stats/stand -- stats/walk --json EXIT 1
   MESSAGE "--compare: expected options before '--', found '--json' after it")
+mgrl_cli_test(stats_negative_land_radius ARGS stats stats/stand --land-radius=-1 EXIT 1
+  MESSAGE "--land-radius: expected a distance >= 0 (m), found -1")
