@@ -275,7 +275,11 @@ BoutStats measureBout(const Bout& bout, const StatsParams& params) {
     }
     // 6: joint steps.
     for (std::size_t f = 0; f + 1 < me.frames; ++f)
-      for (std::size_t j = 0; j < me.joints; ++j) s.jointStep_m.push_back((me.joint(f + 1, j) - me.joint(f, j)).norm());
+      for (std::size_t j = 0; j < me.joints; ++j) {
+        const double step = (me.joint(f + 1, j) - me.joint(f, j)).norm();
+        s.jointStep_m.push_back(step);
+        s.jointSpeed_mps.push_back(step / dt);
+      }
   }
   return s;
 }
@@ -295,6 +299,7 @@ BoutStats pool(const std::vector<BoutStats>& bouts, const std::string& name) {
     p.plantedFootSpeed_mps.insert(p.plantedFootSpeed_mps.end(), b.plantedFootSpeed_mps.begin(),
                                   b.plantedFootSpeed_mps.end());
     p.jointStep_m.insert(p.jointStep_m.end(), b.jointStep_m.begin(), b.jointStep_m.end());
+    p.jointSpeed_mps.insert(p.jointSpeed_mps.end(), b.jointSpeed_mps.begin(), b.jointSpeed_mps.end());
     p.rootSteps += b.rootSteps;
     p.reversals += b.reversals;
     p.stepSeconds += b.stepSeconds;

@@ -98,8 +98,9 @@ struct BoutStats {
   std::vector<double> distance_m, facing_deg;
   /// Per foot and contact frame: the slower of ankle and toe on the ground plane (m/s).
   std::vector<double> plantedFootSpeed_mps;
-  /// Per joint and frame-to-frame step: the joint's displacement (m).
-  std::vector<double> jointStep_m;
+  /// Per joint and frame-to-frame step: the joint's displacement (m), and that over the
+  /// frame time (m/s: comparable across frame rates).
+  std::vector<double> jointStep_m, jointSpeed_mps;
   /// Per fighter and frame-to-frame step: root ground speed (m/s); reversals among them.
   std::size_t rootSteps = 0, reversals = 0;
   std::size_t punches = 0, kicks = 0, landed = 0;

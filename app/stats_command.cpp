@@ -124,6 +124,9 @@ std::vector<Row> rows() {
       {"joint step, max (m)", [](const json& g) { return number(g["joint_step_m"]["max"], "{:.3f}"); }},
       {"joint step, 99th pct (m)", [](const json& g) { return number(g["joint_step_m"]["p99"], "{:.3f}"); },
        "joint_step_m"},
+      {"joint speed, max (m/s)", [](const json& g) { return number(g["joint_speed_mps"]["max"], "{:.2f}"); }},
+      {"joint speed, 99th pct (m/s)", [](const json& g) { return number(g["joint_speed_mps"]["p99"], "{:.2f}"); },
+       "joint_speed_mps"},
       {"pelvises closer than limit", [](const json& g) { return percent(g["pelvis_close_share"]); }},
       {"body capsules overlapping", [](const json& g) { return percent(g["capsule_overlap_share"]); }},
   };
@@ -249,8 +252,9 @@ json statsJson(const BoutStats& s) {
   const std::size_t strikes = s.punches + s.kicks;
   json fps = json::array();
   for (double f : s.fps) fps.push_back(rounded(f, 4));
-  double stepMax = std::numeric_limits<double>::quiet_NaN();
-  if (!s.jointStep_m.empty()) stepMax = *std::max_element(s.jointStep_m.begin(), s.jointStep_m.end());
+  auto largest = [](const std::vector<double>& v) {
+    return v.empty() ? std::numeric_limits<double>::quiet_NaN() : *std::max_element(v.begin(), v.end());
+  };
   return {
       {"name", s.name},
       {"bouts", s.bouts},
@@ -274,7 +278,9 @@ json statsJson(const BoutStats& s) {
       {"reversals", s.reversals},
       {"reversals_per_frame", rounded(ratio(static_cast<double>(s.reversals), static_cast<double>(s.rootSteps)), 5)},
       {"reversals_per_second", rounded(ratio(static_cast<double>(s.reversals), s.stepSeconds), 4)},
-      {"joint_step_m", {{"max", rounded(stepMax, 4)}, {"p99", rounded(quantile(s.jointStep_m, 0.99), 4)}}},
+      {"joint_step_m", {{"max", rounded(largest(s.jointStep_m), 4)}, {"p99", rounded(quantile(s.jointStep_m, 0.99), 4)}}},
+      {"joint_speed_mps",
+       {{"max", rounded(largest(s.jointSpeed_mps), 3)}, {"p99", rounded(quantile(s.jointSpeed_mps, 0.99), 3)}}},
       {"pair_frames", s.pairFrames},
       {"pelvis_close_share",
        rounded(ratio(static_cast<double>(s.closeFrames), static_cast<double>(s.pairFrames)), 5)},
@@ -318,6 +324,7 @@ json runStats(const StatsOptions& options) {
       {"facing_deg", rounded(wasserstein1(a.facing_deg, b.facing_deg), 3)},
       {"planted_foot_speed_mps", rounded(wasserstein1(a.plantedFootSpeed_mps, b.plantedFootSpeed_mps), 4)},
       {"joint_step_m", rounded(wasserstein1(a.jointStep_m, b.jointStep_m), 5)},
+      {"joint_speed_mps", rounded(wasserstein1(a.jointSpeed_mps, b.jointSpeed_mps), 4)},
   };
   return report;
 }

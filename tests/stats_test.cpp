@@ -61,6 +61,7 @@ TEST_CASE("stats: a fighter walking back and forth reverses three times", "[stat
   CHECK(s.rootSteps == 2 * 39);
   // The largest joint step is the walker's 5 cm per frame.
   CHECK_THAT(mgrl::app::quantile(s.jointStep_m, 1.0), WithinAbs(0.05, 1e-6));
+  CHECK_THAT(mgrl::app::quantile(s.jointSpeed_mps, 1.0), WithinAbs(1.5, 1e-4));  // at 30 fps
   // Below the jitter threshold, nothing counts.
   StatsParams slowOnly;
   slowOnly.reversalMinSpeed_mps = 2.0;
