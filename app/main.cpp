@@ -19,6 +19,7 @@
 #include "learn_commands.hpp"
 #include "plugins.hpp"
 #include "serve/serve_command.hpp"
+#include "stats_command.hpp"
 #include "mgrl/learning/behavior.hpp"
 #include "mgrl/scenario/behaviors.hpp"
 #include "mgrl/core/data_paths.hpp"
@@ -112,6 +113,18 @@ std::string unknownOption(const CLI::App& command, const std::vector<std::string
 }  // namespace
 
 int main(int argc, char** argv) {
+  // `mgrl stats --compare REAL... -- SYNTH...`: what follows `--` is the second group.
+  // CLI11 would fold it into the positionals, so it is cut off before parsing.
+  std::vector<std::string> statsAfterDash;
+  bool statsDash = false;
+  if (argc > 1 && std::string(argv[1]) == "stats")
+    for (int i = 2; i < argc; ++i)
+      if (std::string(argv[i]) == "--") {
+        statsAfterDash.assign(argv + i + 1, argv + argc);
+        statsDash = true;
+        argc = i;
+        break;
+      }
   CLI::App app{"mgrl: train avatar behaviours from unlabelled motion capture with reinforcement learning on a "
                "motion graph (after Lee & Lee, SCA 2004)."};
   app.set_version_flag("--version", std::string("mgrl ") + mgrl::kVersion);
@@ -272,6 +285,31 @@ int main(int argc, char** argv) {
   serveCommand->add_option("--data", dataDir, "Motion capture folder (default: MGRL_DATA, else ../shared/mocap)");
   serveCommand->add_option("--cache", cacheDir, "Cache folder (default: MGRL_CACHE, else ~/.cache/mgrl)");
 
+  mgrl::app::StatsOptions stats;
+  CLI::App* statsCommand = app.add_subcommand(
+      "stats", "Report on bouts, real or synthesized (issue 18, docs/stats.md): pelvis distance and facing "
+               "distributions, effective and landed strikes per fighter-minute, planted-foot speed, root direction "
+               "reversals, joint steps, interpenetration. BOUT: a folder of BVH files (one per fighter, one world "
+               "frame; e.g. simulate --bvh-out's) or a quoted pattern such as "
+               "'snu_martial_arts/motion/s_005_1_*.bvh'.");
+  statsCommand->add_option("BOUT", stats.bouts, "Bouts: folders or quoted file patterns (relative: the working "
+                                                "folder, else the data folder)");
+  statsCommand->add_flag("--snu", stats.snu, "Add every real SNU sparring bout (s_TTT_K_*.bvh grouped by TTT_K)");
+  statsCommand->add_flag("--compare", stats.compare,
+                         "Compare two groups: mgrl stats --compare REAL... -- SYNTH... (W1: Wasserstein-1 "
+                         "distance between the pooled distributions)");
+  statsCommand->add_option("--land-radius", stats.params.landRadius_m,
+                           "A strike lands within this distance of the opponent's body capsules (m)")
+      ->default_val(stats.params.landRadius_m);
+  statsCommand->add_option("--close-distance", stats.params.closeDistance_m,
+                           "Pelvises closer than this count as interpenetrating (m)")
+      ->default_val(stats.params.closeDistance_m);
+  statsCommand->add_option("--reversal-min-speed", stats.params.reversalMinSpeed_mps,
+                           "Root steps slower than this are ignored by the reversal count (m/s)")
+      ->default_val(stats.params.reversalMinSpeed_mps);
+  statsCommand->add_flag("--json", json, "Print one JSON object on stdout");
+  statsCommand->add_option("--data", dataDir, "Motion capture folder (default: MGRL_DATA, else ../shared/mocap)");
+
   CLI::App* listCommand =
       app.add_subcommand("list", "List every registered discretizer, reward, environment model and learner with its "
                                  "parameters, defaults and units.");
@@ -427,6 +465,24 @@ int main(int argc, char** argv) {
         std::cout << fmt::format("serving {} at {} (Ctrl-C stops)", scenarioPath, url) << std::endl;
       };
       mgrl::serve::runServe(serve);
+    }
+    if (statsCommand->parsed()) {
+      if (statsDash && !stats.compare)
+        throw mgrl::Error("stats: expected --compare before a '--' (mgrl stats --compare REAL... -- SYNTH...)");
+      if (stats.compare && !statsDash)
+        throw mgrl::Error("--compare: expected REAL... -- SYNTH..., found no '--'");
+      for (const std::string& word : statsAfterDash)
+        if (word.size() > 1 && word[0] == '-')
+          throw mgrl::Error(fmt::format("--compare: expected options before '--', found '{}' after it", word));
+      stats.synthetic = statsAfterDash;
+      stats.dataDir = mgrl::dataDirectory(dataDir);
+      stats.warn = [](const std::string& message) { std::cerr << "mgrl: warning: " << message << '\n'; };
+      if (::isatty(2)) stats.log = log;  // progress only on a terminal
+      const nlohmann::json report = mgrl::app::runStats(stats);
+      if (json)
+        std::cout << report.dump(2) << '\n';
+      else
+        std::cout << mgrl::app::statsText(report);
     }
     if (listCommand->parsed()) {
       if (json)
