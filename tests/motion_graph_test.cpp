@@ -3,11 +3,13 @@
 #include <cmath>
 #include <filesystem>
 #include <queue>
+#include <tuple>
 
 #include <catch2/catch.hpp>
 #include <fmt/format.h>
 
 #include "mgrl/core/data_paths.hpp"
+#include "mgrl/core/random.hpp"
 #include "mgrl/graph/graph_cache.hpp"
 #include "mgrl/motion/kinematics.hpp"
 #include "mgrl/graph/motion_graph.hpp"
@@ -251,6 +253,61 @@ TEST_CASE("blended playback never jumps further than the capture and keeps feet 
   // Without blending, transitions jump: the playback's worst step relative to the data grows.
   const PlaybackCheck raw = checkPlayback(b.db, b.model, 0, 300, 7);
   CHECK(raw.worstJointStepRatio > check.worstJointStepRatio);
+}
+
+TEST_CASE("locked feet stay where they landed while planted, with bones of constant length", "[graph][data]") {
+  const Boxing& b = boxing();
+  const Skeleton& skeleton = *b.db.skeleton;
+  // Horizontal ankle speeds over frame pairs with the foot planted in both, and the largest
+  // change of any bone's length, for a seeded random walk of 300 actions.
+  auto walk = [&](bool lock) {
+    ActionPlayback playback(b.db, b.model, b.scenario.graph.blendFrames, false);
+    playback.setFootLock(lock);
+    playback.reset(0);
+    Rng rng(11);
+    Pose pose;
+    std::vector<double> speeds;
+    double bone = 0;
+    std::vector<double> rest(skeleton.jointCount(), -1);
+    std::array<Eigen::Vector3d, 2> before;
+    std::array<bool, 2> wasDown{false, false};
+    for (int n = 0; n < 300; ++n) {
+      const std::uint32_t s = playback.state();
+      const std::uint32_t begin = b.model.stateActionBegin[s];
+      playback.begin(begin + static_cast<std::uint32_t>(rng.below(b.model.stateActionBegin[s + 1] - begin)));
+      while (playback.next(pose)) {
+        const auto positions = playback.positions();
+        const std::uint32_t v = playback.frame();
+        const std::size_t c = b.db.clipOf(v);
+        for (std::size_t side = 0; side < 2; ++side) {
+          const bool down = b.db.clips[c].annotation.contact[side][v - b.db.offsets[c]] != 0;
+          const Eigen::Vector3d ankle = positions[static_cast<std::size_t>(b.db.roles.ankle[side])];
+          if (down && wasDown[side])
+            speeds.push_back(std::hypot(ankle.x() - before[side].x(), ankle.z() - before[side].z()) / b.model.frameTime);
+          before[side] = ankle;
+          wasDown[side] = down;
+        }
+        for (std::size_t j = 1; j < skeleton.jointCount(); ++j) {
+          const double length = (positions[j] - positions[static_cast<std::size_t>(skeleton.joint(j).parent)]).norm();
+          if (rest[j] < 0) rest[j] = length;
+          bone = std::max(bone, std::abs(length - rest[j]));
+        }
+      }
+    }
+    std::sort(speeds.begin(), speeds.end());
+    return std::tuple{speeds[speeds.size() / 2], speeds[speeds.size() * 9 / 10], bone, speeds.size()};
+  };
+  const auto [freeMedian, freeP90, freeBone, freePairs] = walk(false);
+  const auto [lockedMedian, lockedP90, lockedBone, lockedPairs] = walk(true);
+  INFO("planted ankle speed, median and 90th percentile: free " << freeMedian << ", " << freeP90 << " m/s; locked "
+                                                                  << lockedMedian << ", " << lockedP90 << " m/s");
+  REQUIRE(freePairs == lockedPairs);  // the same walk
+  REQUIRE(freePairs > 1000);
+  CHECK(lockedMedian < 0.01);
+  CHECK(lockedP90 < 0.5 * freeP90);
+  CHECK(freeMedian > 0.05);  // what the lock removes is there without it
+  CHECK(lockedBone < 1e-6);
+  CHECK(freeBone < 1e-6);
 }
 
 TEST_CASE("playback refuses an action that does not leave the current state", "[graph][data]") {

@@ -20,6 +20,9 @@ double fade(int b, int frames) {
   return 0.5 * (1 + std::cos(M_PI * (b - 1) / frames));
 }
 
+// Frames over which a lifted foot goes from where it was held back to the motion's.
+constexpr int kRelease = 4;
+
 }  // namespace
 
 ActionPlayback::ActionPlayback(const MotionDatabase& db, const StateActionModel& model, int blendFrames, bool lockFeet)
@@ -33,6 +36,12 @@ ActionPlayback::ActionPlayback(const MotionDatabase& db, const StateActionModel&
   offsetAxis_.assign(joints, Eigen::Vector3d::UnitX());
   fkRotations_.resize(joints);
   fkPositions_.resize(joints);
+  for (int side = 0; side < 2; ++side) {  // the leg chain above each ankle
+    const int ankle = db.roles.ankle[static_cast<std::size_t>(side)];
+    knee_[static_cast<std::size_t>(side)] = ankle > 0 ? db.skeleton->joint(static_cast<std::size_t>(ankle)).parent : -1;
+    const int knee = knee_[static_cast<std::size_t>(side)];
+    hip_[static_cast<std::size_t>(side)] = knee > 0 ? db.skeleton->joint(static_cast<std::size_t>(knee)).parent : -1;
+  }
 }
 
 void ActionPlayback::sourceLocal(std::uint32_t frame, Local& out) const {
@@ -62,6 +71,8 @@ void ActionPlayback::reset(std::uint32_t state, const GroundMotion& world) {
   sinceTransition_ = 1 << 30;
   correction_.setZero();
   havePrevious_ = false;
+  held_ = {false, false};
+  releasing_ = {1 << 30, 1 << 30};
 }
 
 void ActionPlayback::play(std::uint32_t action, std::vector<Pose>& out) {
@@ -153,6 +164,12 @@ bool ActionPlayback::next(Pose& pose) {
         }
       }
     }
+    if (footLock_) {
+      const bool before = held_[0] || held_[1] || releasing_[0] < kRelease || releasing_[1] < kRelease;
+      for (int side = 0; side < 2; ++side) lockFoot(side, down[static_cast<std::size_t>(side)], pose);
+      const bool after = held_[0] || held_[1] || releasing_[0] < kRelease || releasing_[1] < kRelease;
+      if (before || after) forwardKinematics(skeleton, pose.rotations, pose.translations, fkRotations_, fkPositions_);
+    }
     for (int side = 0; side < 2; ++side) previousAnkle_[side] = fkPositions_[static_cast<std::size_t>(db_.roles.ankle[side])];
     previousDown_ = down;
     havePrevious_ = true;
@@ -166,6 +183,64 @@ bool ActionPlayback::next(Pose& pose) {
     state_ = model_.actionTo[action_];
   }
   return true;
+}
+
+// Holds foot `side` (issue 18). A foot that comes down is anchored where its ankle is (on
+// the floor plane: x and z; the height stays the motion's, which rolls heel to toe); while
+// down, hip and knee turn so the ankle reaches the anchor (two-bone IK: the knee's angle by
+// the law of cosines, about the leg's bending axis, then the hip turns the leg onto the
+// anchor); once lifted, the anchor fades into the motion's ankle over kRelease frames. The
+// ankle's world orientation is kept, so the foot stays as flat as it was. Uses and updates
+// fkRotations_ / fkPositions_ of the leg only; the caller redoes forward kinematics.
+void ActionPlayback::lockFoot(int side, bool down, Pose& pose) {
+  const auto s = static_cast<std::size_t>(side);
+  const int ankleJoint = db_.roles.ankle[s], kneeJoint = knee_[s], hipJoint = hip_[s];
+  if (ankleJoint <= 0 || kneeJoint <= 0 || hipJoint <= 0) return;
+  const auto a = static_cast<std::size_t>(ankleJoint), k = static_cast<std::size_t>(kneeJoint),
+             h = static_cast<std::size_t>(hipJoint);
+  const Eigen::Vector3d ankle = fkPositions_[a];
+  double weight = 1;
+  if (down) {
+    if (!held_[s]) anchor_[s] = ankle;
+    held_[s] = true;
+    releasing_[s] = 1 << 30;
+  } else {
+    if (held_[s]) releasing_[s] = 0;
+    held_[s] = false;
+    if (releasing_[s] >= kRelease) return;
+    ++releasing_[s];
+    weight = 0.5 * (1 + std::cos(M_PI * releasing_[s] / (kRelease + 1)));
+  }
+  const Eigen::Vector3d hip = fkPositions_[h], knee = fkPositions_[k];
+  const double upper = (knee - hip).norm(), lower = (ankle - knee).norm();
+  Eigen::Vector3d target(anchor_[s].x(), ankle.y(), anchor_[s].z());
+  target = ankle + weight * (target - ankle);
+  if ((target - ankle).squaredNorm() < 1e-10 || upper < 1e-6 || lower < 1e-6) return;
+  if ((target - hip).norm() > 0.995 * (upper + lower)) {  // out of reach: plant it again here
+    if (held_[s]) anchor_[s] = ankle;
+    return;
+  }
+  const double reach = std::clamp((target - hip).norm(), std::abs(upper - lower) + 1e-6, upper + lower - 1e-6);
+  // The knee: from its current angle to the one that puts the ankle `reach` from the hip.
+  const Eigen::Vector3d toHip = (hip - knee) / upper, toAnkle = (ankle - knee) / lower;
+  Eigen::Vector3d axis = toHip.cross(toAnkle);
+  if (axis.norm() < 1e-6) axis = fkRotations_[k] * Eigen::Vector3d::UnitX();  // a straight leg bends about the knee's x
+  axis.normalize();
+  const double now = std::acos(std::clamp(toHip.dot(toAnkle), -1.0, 1.0));
+  const double wanted = std::acos(std::clamp((upper * upper + lower * lower - reach * reach) / (2 * upper * lower), -1.0, 1.0));
+  const Eigen::Quaterniond bend(Eigen::AngleAxisd(wanted - now, axis));
+  const Eigen::Vector3d bentAnkle = knee + bend * (ankle - knee);
+  // The hip: turn the leg so the ankle lies on the target.
+  const Eigen::Quaterniond swing = Eigen::Quaterniond::FromTwoVectors(bentAnkle - hip, target - hip);
+  const Skeleton& skeleton = *db_.skeleton;
+  const int hipParent = skeleton.joint(h).parent;
+  const Eigen::Quaterniond parentGlobal =
+      hipParent >= 0 ? fkRotations_[static_cast<std::size_t>(hipParent)] : Eigen::Quaterniond::Identity();
+  const Eigen::Quaterniond hipGlobal = swing * fkRotations_[h];
+  const Eigen::Quaterniond kneeGlobal = swing * bend * fkRotations_[k];
+  pose.rotations[h] = (parentGlobal.conjugate() * hipGlobal).normalized();
+  pose.rotations[k] = (hipGlobal.conjugate() * kneeGlobal).normalized();
+  pose.rotations[a] = (kneeGlobal.conjugate() * fkRotations_[a]).normalized();  // the foot as it was
 }
 
 Motion motionFromPoses(std::shared_ptr<const Skeleton> skeleton, const std::vector<Pose>& poses, double frameTime) {

@@ -52,6 +52,11 @@ class ActionPlayback {
   std::span<const Eigen::Quaterniond> globalRotations() const { return fkRotations_; }
 
   std::uint32_t state() const { return state_; }
+  /// Planted feet (issue 18): while the annotation has a foot on the ground, its ankle is
+  /// held where it landed (its height follows the motion) by two-bone inverse kinematics
+  /// of hip, knee and ankle, and let go over a few frames when it lifts. Rotations only,
+  /// so bone lengths never change; the foot keeps its animated orientation. Off by default.
+  void setFootLock(bool on) { footLock_ = on; }
   /// Moves the avatar by (dx, dz) on the floor (world, m) from the next pose on; the shift
   /// stays with it (the world pushes overlapping bodies apart this way).
   void nudge(double dx, double dz) { correction_ += Eigen::Vector2d(dx, dz); }
@@ -90,6 +95,13 @@ class ActionPlayback {
   std::array<Eigen::Vector3d, 2> previousAnkle_;
   std::array<bool, 2> previousDown_{false, false};
   bool havePrevious_ = false;
+  // Foot locking by IK: per foot, whether it is held, where, and the release's progress.
+  void lockFoot(int side, bool down, Pose& pose);
+  bool footLock_ = false;
+  std::array<bool, 2> held_{false, false};
+  std::array<Eigen::Vector3d, 2> anchor_;
+  std::array<int, 2> releasing_{1 << 30, 1 << 30};
+  std::array<int, 2> knee_{-1, -1}, hip_{-1, -1};
 };
 
 /// Poses as a motion clip on `skeleton` (for export): every joint's rotation, and the

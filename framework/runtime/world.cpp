@@ -196,6 +196,7 @@ void World::startAvatar(std::size_t i) {
   }
   if (setup_.poses) {
     a.playback = std::make_unique<ActionPlayback>(*setup_.db, model_, setup_.blendFrames, false);
+    a.playback->setFootLock(p.plantFeet);
     a.playback->reset(a.state, a.decision);
     const std::size_t joints = setup_.db->skeleton->jointCount();
     a.globals.resize(joints);

@@ -54,6 +54,7 @@ struct WorldParams {
   double bodyRadius = 0.2;        ///< m
   double avoidSeconds = 1.0;      ///< s
   double separationSpeed = 1.5;   ///< m/s
+  bool plantFeet = true;          ///< poses: planted feet held by IK (ActionPlayback::setFootLock)
   double bendPerSpeed = 0.03;     ///< m of target bend per m/s of fist speed
   double bendMax = 0.35;          ///< m
   double bendFrequency = 1.5;     ///< Hz, the target's spring

@@ -29,6 +29,9 @@ const ParamSpecs& worldParamSpecs() {
                         "each other, as in the paper)"),
       ParamSpec::number("avoid_seconds", 1.0, 0.1, 10, "s", "how far ahead an action's root path is checked against other bodies"),
       ParamSpec::number("separation_speed", 1.5, 0.1, 20, "m/s", "how fast overlapping bodies are pushed apart"),
+      ParamSpec::boolean("plant_feet", true,
+                         "poses: hold a foot where it landed while the capture has it on the ground (two-bone IK of "
+                         "hip and knee), so feet do not slide through transitions and pushes"),
       ParamSpec::number("bend_per_speed", 0.03, 0, 1, "m per m/s", "target bend per unit of fist speed"),
       ParamSpec::number("bend_max", 0.35, 0, 2, "m", "largest target bend"),
       ParamSpec::number("bend_frequency", 1.5, 0.1, 20, "Hz", "natural frequency of the target's spring"),
@@ -59,6 +62,7 @@ WorldParams readWorldParams(const ConfigNode& node) {
   w.bodyRadius = p.number("body_radius");
   w.avoidSeconds = p.number("avoid_seconds");
   w.separationSpeed = p.number("separation_speed");
+  w.plantFeet = p.boolean("plant_feet");
   w.bendPerSpeed = p.number("bend_per_speed");
   w.bendMax = p.number("bend_max");
   w.bendFrequency = p.number("bend_frequency");
@@ -88,6 +92,7 @@ nlohmann::json worldParamsJson(const WorldParams& w) {
           {"body_radius", w.bodyRadius},
           {"avoid_seconds", w.avoidSeconds},
           {"separation_speed", w.separationSpeed},
+          {"plant_feet", w.plantFeet},
           {"bend_per_speed", w.bendPerSpeed},
           {"bend_max", w.bendMax},
           {"bend_frequency", w.bendFrequency},
