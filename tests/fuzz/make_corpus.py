@@ -1,11 +1,14 @@
 #!/usr/bin/env python3
-"""Writes the fuzz seed corpora (tests/fuzz/corpus/<reader>/) from cut-down real files.
+"""Writes the fuzz seed corpora.
 
-Motion seeds keep a file's header and its first few frames only (a few KB; the mocap
-itself stays in ../shared/mocap). The bundle seeds (graph_cache, policy_bundle,
-checkpoint) are written by the harnesses themselves with the project's writers:
-    MGRL_FUZZ_WRITE_SEED=FILE build-fuzz/tests/fuzz/<reader>_fuzz
-Usage: tests/fuzz/make_corpus.py [DATA_DIR] [FUZZ_BUILD_DIR]
+Seeds cut from the motion capture (BVH, ASF, AMC, and the AMC harness's skeleton) go to
+FUZZ_BUILD_DIR/seeds/ and are never committed: the capture stays in ../shared/mocap.
+They keep a file's header and its first few frames only (a few KB). scripts/fuzz.sh
+writes them before every run. The project's own seeds (scenarios, .npy, viewer messages,
+and bundles written by the harnesses themselves with the project's writers,
+    MGRL_FUZZ_WRITE_SEED=FILE build-fuzz/tests/fuzz/<reader>_fuzz)
+go to tests/fuzz/corpus/<reader>/.
+Usage: tests/fuzz/make_corpus.py [DATA_DIR] [FUZZ_BUILD_DIR] [--capture-only]
 """
 import os
 import re
@@ -15,16 +18,23 @@ import sys
 
 here = os.path.dirname(os.path.abspath(__file__))
 root = os.path.dirname(os.path.dirname(here))
-data = sys.argv[1] if len(sys.argv) > 1 else os.path.join(root, "..", "shared", "mocap")
-build = sys.argv[2] if len(sys.argv) > 2 else os.path.join(root, "build-fuzz")
+arguments = [a for a in sys.argv[1:] if a != "--capture-only"]
+capture_only = "--capture-only" in sys.argv[1:]
+data = arguments[0] if len(arguments) > 0 else os.path.join(root, "..", "shared", "mocap")
+build = arguments[1] if len(arguments) > 1 else os.path.join(root, "build-fuzz")
 corpus = os.path.join(here, "corpus")
+seeds = os.path.join(build, "seeds")
 
 
-def put(reader, name, content):
-    os.makedirs(os.path.join(corpus, reader), exist_ok=True)
+def put(reader, name, content, folder=corpus):
+    os.makedirs(os.path.join(folder, reader), exist_ok=True)
     mode = "wb" if isinstance(content, bytes) else "w"
-    with open(os.path.join(corpus, reader, name), mode) as f:
+    with open(os.path.join(folder, reader, name), mode) as f:
         f.write(content)
+
+
+def put_capture(reader, name, content):
+    put(reader, name, content, seeds)
 
 
 def cut_bvh(path, frames):
@@ -39,11 +49,37 @@ def cut_bvh(path, frames):
 # BVH: CMU and SNU skeletons, a few frames each.
 for name, frames in [("cmu/bvh/13_17_boxing.bvh", 4), ("cmu/bvh/02_02_walk.bvh", 2),
                      ("snu_martial_arts/motion/16_08_1.bvh", 3), ("snu_martial_arts/t_pose_ue2.bvh", 1)]:
-    put("bvh", os.path.basename(name), cut_bvh(os.path.join(data, name), frames))
+    put_capture("bvh", os.path.basename(name), cut_bvh(os.path.join(data, name), frames))
 
-# ASF: the cut-down skeleton of the AMC harness, and 07.asf's header and first bones.
-skeleton = open(os.path.join(here, "amc_skeleton.asf")).read()
-put("asf", "skeleton.asf", skeleton)
+
+def cut_asf(path, bones):
+    """The ASF's header, the bones named, and the hierarchy lines among them."""
+    text = open(path).read()
+    head, rest = text.split(":bonedata", 1)
+    bonedata, hierarchy = rest.split(":hierarchy", 1)
+    kept = [b for b in re.findall(r"begin\n(.*?)end", bonedata, re.S)
+            if re.search(r"name (\S+)", b).group(1) in bones]
+    lines = ["  begin"]
+    for line in hierarchy.split("\n"):
+        words = line.split()
+        if words and words[0] in bones | {"root"} and words[0] not in ("begin", "end"):
+            children = [w for w in words[1:] if w in bones]
+            if children:
+                lines.append("  " + " ".join([words[0]] + children))
+    lines.append("  end")
+    return ("# Cut down from CMU 02.asf (root, spine to head, left leg) for the AMC harness.\n" + head +
+            ":bonedata\n" + "".join("  begin\n" + b + "end\n" for b in kept) + ":hierarchy\n" +
+            "\n".join(lines) + "\n")
+
+
+# ASF: the AMC harness's skeleton (root, spine to head, left leg of CMU 02.asf).
+skeleton = cut_asf(os.path.join(data, "cmu/asfamc/02.asf"),
+                   {"lhipjoint", "lfemur", "ltibia", "lfoot", "lowerback", "upperback", "thorax",
+                    "lowerneck", "upperneck", "head"})
+os.makedirs(seeds, exist_ok=True)
+with open(os.path.join(seeds, "amc_skeleton.asf"), "w") as f:
+    f.write(skeleton)
+put_capture("asf", "skeleton.asf", skeleton)
 
 
 def cut_amc(path, frames, bones):
@@ -61,10 +97,12 @@ def cut_amc(path, frames, bones):
 
 bones = {"root"} | set(re.findall(r"name (\S+)", skeleton))
 amc = cut_amc(os.path.join(data, "cmu/asfamc/02_02.amc"), 4, bones)
-put("amc", "02_02_cut.amc", amc)
-put("amc", "07_05_cut.amc", cut_amc(os.path.join(data, "cmu/asfamc/07_05.amc"), 2, bones))
+put_capture("amc", "02_02_cut.amc", amc)
+put_capture("amc", "07_05_cut.amc", cut_amc(os.path.join(data, "cmu/asfamc/07_05.amc"), 2, bones))
 # The ASF harness also takes an AMC after the ASF.
-put("asf", "skeleton_with_amc.asf", skeleton + "\n@@file x.amc\n" + amc)
+put_capture("asf", "skeleton_with_amc.asf", skeleton + "\n@@file x.amc\n" + amc)
+if capture_only:
+    sys.exit(0)
 
 # Scenarios: the project's own.
 for name in ("boxing.yaml", "sparring.yaml"):
@@ -111,7 +149,8 @@ for reader in ("graph_cache", "policy_bundle", "checkpoint"):
     seed = os.path.join(corpus, reader, "saved")
     subprocess.run([program], env=dict(os.environ, MGRL_FUZZ_WRITE_SEED=seed), check=True)
 
-for reader in sorted(os.listdir(corpus)):
-    files = os.listdir(os.path.join(corpus, reader))
-    sizes = [os.path.getsize(os.path.join(corpus, reader, f)) for f in files]
-    print("%-14s %2d files, largest %5d bytes" % (reader, len(files), max(sizes)))
+for folder in (seeds, corpus):
+    for reader in sorted(r for r in os.listdir(folder) if os.path.isdir(os.path.join(folder, r))):
+        files = os.listdir(os.path.join(folder, reader))
+        sizes = [os.path.getsize(os.path.join(folder, reader, f)) for f in files]
+        print("%-14s %2d files, largest %5d bytes (%s)" % (reader, len(files), max(sizes), folder))
