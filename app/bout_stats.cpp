@@ -76,7 +76,7 @@ double capsuleGap(const Fighter& target, std::size_t f, const Eigen::Vector3d& t
   double gap = std::numeric_limits<double>::infinity();
   const Eigen::Vector3d* body = target.body.data() + f * kBodyPoints;
   for (const Capsule& c : capsules(params))
-    gap = std::min(gap, segmentDistance(tip, tip, body[c.from], body[c.to]) - c.radius);
+    gap = std::min(gap, segmentsDistance(tip, tip, body[c.from], body[c.to]) - c.radius);
   return gap;
 }
 
@@ -85,7 +85,7 @@ bool capsulesOverlap(const Fighter& a, const Fighter& b, std::size_t f, const St
   const Eigen::Vector3d* pb = b.body.data() + f * kBodyPoints;
   for (const Capsule& ca : capsules(params))
     for (const Capsule& cb : capsules(params))
-      if (segmentDistance(pa[ca.from], pa[ca.to], pb[cb.from], pb[cb.to]) < ca.radius + cb.radius) return true;
+      if (segmentsDistance(pa[ca.from], pa[ca.to], pb[cb.from], pb[cb.to]) < ca.radius + cb.radius) return true;
   return false;
 }
 
@@ -342,37 +342,6 @@ double wasserstein1(std::vector<double> a, std::vector<double> b) {
     while (k < b.size() && b[k] == x) ++k;
   }
   return total;
-}
-
-double segmentDistance(const Eigen::Vector3d& p1, const Eigen::Vector3d& q1, const Eigen::Vector3d& p2,
-                       const Eigen::Vector3d& q2) {
-  // Closest points of two segments: minimise |p1 + s d1 - (p2 + t d2)| over s, t in [0, 1],
-  // clamping one parameter and re-solving the other when the free optimum lies outside.
-  const Eigen::Vector3d d1 = q1 - p1, d2 = q2 - p2, r = p1 - p2;
-  const double a = d1.squaredNorm(), e = d2.squaredNorm(), f = d2.dot(r);
-  constexpr double kTiny = 1e-14;
-  double s = 0, t = 0;
-  if (a <= kTiny && e <= kTiny) return r.norm();
-  if (a <= kTiny) {
-    t = std::clamp(f / e, 0.0, 1.0);
-  } else {
-    const double c = d1.dot(r);
-    if (e <= kTiny) {
-      s = std::clamp(-c / a, 0.0, 1.0);
-    } else {
-      const double b = d1.dot(d2), denominator = a * e - b * b;
-      s = denominator > kTiny ? std::clamp((b * f - c * e) / denominator, 0.0, 1.0) : 0.0;
-      t = (b * s + f) / e;
-      if (t < 0) {
-        t = 0;
-        s = std::clamp(-c / a, 0.0, 1.0);
-      } else if (t > 1) {
-        t = 1;
-        s = std::clamp((b - c) / a, 0.0, 1.0);
-      }
-    }
-  }
-  return ((p1 + s * d1) - (p2 + t * d2)).norm();
 }
 
 }  // namespace mgrl::app

@@ -121,8 +121,5 @@ double quantile(std::vector<double> values, double q);
 /// Wasserstein-1 (earth mover's) distance between the empirical distributions of two
 /// samples: the integral of |F_a - F_b|. NaN if either is empty.
 double wasserstein1(std::vector<double> a, std::vector<double> b);
-/// Distance between segments [p1, q1] and [p2, q2] (a point is a segment of zero length).
-double segmentDistance(const Eigen::Vector3d& p1, const Eigen::Vector3d& q1, const Eigen::Vector3d& p2,
-                       const Eigen::Vector3d& q2);
 
 }  // namespace mgrl::app

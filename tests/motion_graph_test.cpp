@@ -269,7 +269,7 @@ TEST_CASE("locked feet stay where they landed while planted, with bones of const
     std::vector<double> speeds;
     double bone = 0;
     std::vector<double> rest(skeleton.jointCount(), -1);
-    std::array<Eigen::Vector3d, 2> before;
+    std::array<Eigen::Vector3d, 2> before{Eigen::Vector3d::Zero(), Eigen::Vector3d::Zero()};
     std::array<bool, 2> wasDown{false, false};
     for (int n = 0; n < 300; ++n) {
       const std::uint32_t s = playback.state();

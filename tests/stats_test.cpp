@@ -8,6 +8,7 @@
 #include <catch2/catch.hpp>
 
 #include "bout_stats.hpp"
+#include "mgrl/motion/kinematics.hpp"
 #include "stats_command.hpp"
 #include "test_support.hpp"
 
@@ -144,10 +145,10 @@ TEST_CASE("stats: Wasserstein-1 of known samples", "[stats]") {
 
 TEST_CASE("stats: segment distances", "[stats]") {
   using V = Eigen::Vector3d;
-  CHECK_THAT(mgrl::app::segmentDistance(V(0, 0, 0), V(1, 0, 0), V(0, 1, 0), V(1, 1, 0)), WithinAbs(1.0, 1e-12));
-  CHECK_THAT(mgrl::app::segmentDistance(V(0, 0, 0), V(1, 0, 0), V(0.5, -1, 1), V(0.5, 1, 1)), WithinAbs(1.0, 1e-12));
-  CHECK_THAT(mgrl::app::segmentDistance(V(0, 0, 0), V(1, 0, 0), V(3, 0, 0), V(4, 0, 0)), WithinAbs(2.0, 1e-12));
-  CHECK_THAT(mgrl::app::segmentDistance(V(2, 2, 0), V(2, 2, 0), V(0, 0, 0), V(1, 0, 0)), WithinAbs(std::sqrt(5.0), 1e-12));
+  CHECK_THAT(mgrl::segmentsDistance(V(0, 0, 0), V(1, 0, 0), V(0, 1, 0), V(1, 1, 0)), WithinAbs(1.0, 1e-12));
+  CHECK_THAT(mgrl::segmentsDistance(V(0, 0, 0), V(1, 0, 0), V(0.5, -1, 1), V(0.5, 1, 1)), WithinAbs(1.0, 1e-12));
+  CHECK_THAT(mgrl::segmentsDistance(V(0, 0, 0), V(1, 0, 0), V(3, 0, 0), V(4, 0, 0)), WithinAbs(2.0, 1e-12));
+  CHECK_THAT(mgrl::segmentsDistance(V(2, 2, 0), V(2, 2, 0), V(0, 0, 0), V(1, 0, 0)), WithinAbs(std::sqrt(5.0), 1e-12));
 }
 
 TEST_CASE("stats: bouts of different lengths are cut to the shortest with a warning", "[stats]") {

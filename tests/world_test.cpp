@@ -441,6 +441,9 @@ TEST_CASE("world settings are checked where they are written", "[world][data]") 
   REQUIRE_THAT(problem("world.body_radius=2"), Contains("world.body_radius") && Contains("[0, 1]"));
   REQUIRE_THAT(problem("world.avoid_seconds=0"), Contains("world.avoid_seconds"));
   REQUIRE_THAT(problem("world.separation_speed=-1"), Contains("world.separation_speed"));
+  REQUIRE_THAT(problem("world.aim=feet"), Contains("world.aim") && Contains("head, chest") && Contains("'feet'"));
+  REQUIRE_THAT(problem("world.plant_feet=maybe"), Contains("world.plant_feet") && Contains("'maybe'"));
+  REQUIRE_THAT(problem("world.foot_radius=0"), Contains("world.foot_radius") && Contains("[0.005, 0.5]"));
   // A mistake made with --set names the flag, not the file's line (which holds another value).
   REQUIRE_THAT(problem("world.mode=chaos"), StartsWith("--set world.mode=chaos: world.mode: "));
 }

@@ -165,10 +165,8 @@ bool ActionPlayback::next(Pose& pose) {
       }
     }
     if (footLock_) {
-      const bool before = held_[0] || held_[1] || releasing_[0] < kRelease || releasing_[1] < kRelease;
-      for (int side = 0; side < 2; ++side) lockFoot(side, down[static_cast<std::size_t>(side)], pose);
-      const bool after = held_[0] || held_[1] || releasing_[0] < kRelease || releasing_[1] < kRelease;
-      if (before || after) forwardKinematics(skeleton, pose.rotations, pose.translations, fkRotations_, fkPositions_);
+      const bool left = lockFoot(0, down[0], pose), right = lockFoot(1, down[1], pose);
+      if (left || right) forwardKinematics(skeleton, pose.rotations, pose.translations, fkRotations_, fkPositions_);
     }
     for (int side = 0; side < 2; ++side) previousAnkle_[side] = fkPositions_[static_cast<std::size_t>(db_.roles.ankle[side])];
     previousDown_ = down;
@@ -191,11 +189,12 @@ bool ActionPlayback::next(Pose& pose) {
 // the law of cosines, about the leg's bending axis, then the hip turns the leg onto the
 // anchor); once lifted, the anchor fades into the motion's ankle over kRelease frames. The
 // ankle's world orientation is kept, so the foot stays as flat as it was. Uses and updates
-// fkRotations_ / fkPositions_ of the leg only; the caller redoes forward kinematics.
-void ActionPlayback::lockFoot(int side, bool down, Pose& pose) {
+// fkRotations_ / fkPositions_ of the leg only; returns whether it turned the leg, and then
+// the caller redoes forward kinematics.
+bool ActionPlayback::lockFoot(int side, bool down, Pose& pose) {
   const auto s = static_cast<std::size_t>(side);
   const int ankleJoint = db_.roles.ankle[s], kneeJoint = knee_[s], hipJoint = hip_[s];
-  if (ankleJoint <= 0 || kneeJoint <= 0 || hipJoint <= 0) return;
+  if (ankleJoint <= 0 || kneeJoint <= 0 || hipJoint <= 0) return false;
   const auto a = static_cast<std::size_t>(ankleJoint), k = static_cast<std::size_t>(kneeJoint),
              h = static_cast<std::size_t>(hipJoint);
   const Eigen::Vector3d ankle = fkPositions_[a];
@@ -207,7 +206,7 @@ void ActionPlayback::lockFoot(int side, bool down, Pose& pose) {
   } else {
     if (held_[s]) releasing_[s] = 0;
     held_[s] = false;
-    if (releasing_[s] >= kRelease) return;
+    if (releasing_[s] >= kRelease) return false;
     ++releasing_[s];
     weight = 0.5 * (1 + std::cos(M_PI * releasing_[s] / (kRelease + 1)));
   }
@@ -215,10 +214,10 @@ void ActionPlayback::lockFoot(int side, bool down, Pose& pose) {
   const double upper = (knee - hip).norm(), lower = (ankle - knee).norm();
   Eigen::Vector3d target(anchor_[s].x(), ankle.y(), anchor_[s].z());
   target = ankle + weight * (target - ankle);
-  if ((target - ankle).squaredNorm() < 1e-10 || upper < 1e-6 || lower < 1e-6) return;
+  if ((target - ankle).squaredNorm() < 1e-10 || upper < 1e-6 || lower < 1e-6) return false;
   if ((target - hip).norm() > 0.995 * (upper + lower)) {  // out of reach: plant it again here
     if (held_[s]) anchor_[s] = ankle;
-    return;
+    return false;
   }
   const double reach = std::clamp((target - hip).norm(), std::abs(upper - lower) + 1e-6, upper + lower - 1e-6);
   // The knee: from its current angle to the one that puts the ankle `reach` from the hip.
@@ -241,6 +240,7 @@ void ActionPlayback::lockFoot(int side, bool down, Pose& pose) {
   pose.rotations[h] = (parentGlobal.conjugate() * hipGlobal).normalized();
   pose.rotations[k] = (hipGlobal.conjugate() * kneeGlobal).normalized();
   pose.rotations[a] = (kneeGlobal.conjugate() * fkRotations_[a]).normalized();  // the foot as it was
+  return true;
 }
 
 Motion motionFromPoses(std::shared_ptr<const Skeleton> skeleton, const std::vector<Pose>& poses, double frameTime) {

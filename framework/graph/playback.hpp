@@ -96,7 +96,7 @@ class ActionPlayback {
   std::array<bool, 2> previousDown_{false, false};
   bool havePrevious_ = false;
   // Foot locking by IK: per foot, whether it is held, where, and the release's progress.
-  void lockFoot(int side, bool down, Pose& pose);
+  bool lockFoot(int side, bool down, Pose& pose);
   bool footLock_ = false;
   std::array<bool, 2> held_{false, false};
   std::array<Eigen::Vector3d, 2> anchor_;

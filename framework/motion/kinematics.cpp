@@ -78,4 +78,31 @@ std::vector<Eigen::Vector3d> velocities(std::span<const Eigen::Vector3d> positio
   return result;
 }
 
+// Closest points by the clamped parameters of the two lines, then each re-clamped against
+// the other's end.
+double segmentsDistance(const Eigen::Vector3d& p0, const Eigen::Vector3d& p1, const Eigen::Vector3d& q0,
+                        const Eigen::Vector3d& q1) {
+  const Eigen::Vector3d u = p1 - p0, v = q1 - q0, w = p0 - q0;
+  const double a = u.squaredNorm(), b = u.dot(v), c = v.squaredNorm(), d = u.dot(w), e = v.dot(w);
+  const double det = a * c - b * b;
+  double s = 0, t = 0;
+  if (a < 1e-12 && c < 1e-12) return w.norm();
+  if (a < 1e-12) {
+    t = std::clamp(e / c, 0.0, 1.0);
+  } else if (c < 1e-12) {
+    s = std::clamp(-d / a, 0.0, 1.0);
+  } else {
+    s = det > 1e-12 * a * c ? std::clamp((b * e - c * d) / det, 0.0, 1.0) : 0.0;
+    t = (b * s + e) / c;
+    if (t < 0) {
+      t = 0;
+      s = std::clamp(-d / a, 0.0, 1.0);
+    } else if (t > 1) {
+      t = 1;
+      s = std::clamp((b - d) / a, 0.0, 1.0);
+    }
+  }
+  return (w + s * u - t * v).norm();
+}
+
 }  // namespace mgrl

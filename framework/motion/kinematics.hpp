@@ -41,4 +41,9 @@ inline Eigen::Vector3d pointOnJoint(std::span<const Eigen::Quaterniond> rotation
   return positions[joint] + rotations[joint] * local;
 }
 
+/// Distance between the segments [p0, p1] and [q0, q1] (a point is a segment of zero
+/// length): the body capsules' test, in the world and in bout statistics.
+double segmentsDistance(const Eigen::Vector3d& p0, const Eigen::Vector3d& p1, const Eigen::Vector3d& q0,
+                        const Eigen::Vector3d& q1);
+
 }  // namespace mgrl

@@ -23,41 +23,6 @@ namespace {
 
 constexpr std::size_t kNever = std::numeric_limits<std::size_t>::max();
 
-// Distance from p to the segment [a, b].
-double segmentDistance(const Eigen::Vector3d& p, const Eigen::Vector3d& a, const Eigen::Vector3d& b) {
-  const Eigen::Vector3d ab = b - a;
-  const double len2 = ab.squaredNorm();
-  const double t = len2 > 0 ? std::clamp((p - a).dot(ab) / len2, 0.0, 1.0) : 0.0;
-  return (p - (a + t * ab)).norm();
-}
-
-// Distance between the segments [p0, p1] and [q0, q1] (closest points by the clamped
-// parameters of the two lines, then each re-clamped against the other's end).
-double segmentsDistance(const Eigen::Vector3d& p0, const Eigen::Vector3d& p1, const Eigen::Vector3d& q0,
-                        const Eigen::Vector3d& q1) {
-  const Eigen::Vector3d u = p1 - p0, v = q1 - q0, w = p0 - q0;
-  const double a = u.squaredNorm(), b = u.dot(v), c = v.squaredNorm(), d = u.dot(w), e = v.dot(w);
-  const double det = a * c - b * b;
-  double s = 0, t = 0;
-  if (a < 1e-12 && c < 1e-12) return w.norm();
-  if (a < 1e-12) {
-    t = std::clamp(e / c, 0.0, 1.0);
-  } else if (c < 1e-12) {
-    s = std::clamp(-d / a, 0.0, 1.0);
-  } else {
-    s = det > 1e-12 * a * c ? std::clamp((b * e - c * d) / det, 0.0, 1.0) : 0.0;
-    t = (b * s + e) / c;
-    if (t < 0) {
-      t = 0;
-      s = std::clamp(-d / a, 0.0, 1.0);
-    } else if (t > 1) {
-      t = 1;
-      s = std::clamp((b - d) / a, 0.0, 1.0);
-    }
-  }
-  return (w + s * u - t * v).norm();
-}
-
 // How far apart two torsos are: the distance between their capsules' axes, and never
 // more than their pelvises' distance on the floor (a torso leaning away must not let the
 // hips meet).
@@ -308,7 +273,7 @@ void World::collide(std::size_t begin, std::size_t end, std::vector<HitEvent>& o
                                       {BodyPart::Spine, BodyTable::Pelvis, BodyTable::Chest, p.spineRadius}};
           double deepest = 0;
           for (const Capsule& c : capsules) {
-            const double depth = c.radius + radius - segmentDistance(tip, bodyPoint(j, c.from), bodyPoint(j, c.to));
+            const double depth = c.radius + radius - segmentsDistance(tip, tip, bodyPoint(j, c.from), bodyPoint(j, c.to));
             if (depth >= 0 && (!struck || depth > deepest)) {
               struck = true;
               deepest = depth;
@@ -598,13 +563,14 @@ void World::restrictActions(std::size_t i, std::vector<std::uint8_t>& allowed) {
   for (std::uint32_t act = begin; act < end; ++act) {
     const std::uint32_t checked = std::min<std::uint32_t>(static_cast<std::uint32_t>(model_.actionLength(act)), aheadFrames_);
     double worst = std::numeric_limits<double>::infinity();
-    // Every other frame, and the last one checked.
-    for (std::uint32_t t = 0; t < checked && worst >= floor; t = (t + 2 < checked || t + 1 == checked) ? t + 2 : checked - 1) {
+    // Every other frame, and the last one checked (checked >= 1: actions have a frame).
+    for (std::uint32_t t = 0; worst >= floor; t = std::min(t + 2, checked - 1)) {
       const Segment mine = place(a.decision, c, sn, model_.actionFrameBegin[act] + t);
       for (std::size_t n = 0; n < near.size(); ++n) {
         const Segment& other = future[n * aheadFrames_ + t];
         worst = std::min(worst, torsoDistance(mine.pelvis, mine.head, other.pelvis, other.head) - gap);
       }
+      if (t == checked - 1) break;
     }
     clearance[act - begin] = worst;
     if (worst >= floor) {
