@@ -226,7 +226,7 @@ json runCompare(const CompareOptions& options) {
   // The graph first (cached after the first time): every learner is checked against its
   // grid before anything is trained.
   const fs::path base = compareCache / fmt::format("{}-shared", defaultPolicyDirectory(compareCache, scenario).filename().string());
-  Loaded loaded = load(options, std::move(scenario));
+  Loaded loaded = load(options, std::move(scenario), false);  // the model is enough: no poses
   const StateActionModel& model = loaded.graph.model;
   // The reference's grid stays: tables on other grids are measured by interpolating on it.
   const std::vector<Behavior> referenceBehaviors = buildBehaviors(*reference.scenario, plugins(), model, loaded.graph.key);

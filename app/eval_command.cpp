@@ -46,7 +46,7 @@ json runEval(const EvalOptions& options) {
     throw Error(fmt::format("--seconds: expected seconds of motion per trial in (0, 3600], found {}", options.seconds));
   Scenario scenario = checkedScenario(options);
   const fs::path dir = options.controller == "policy" ? resolvePolicy(options.policy, scenario, options) : fs::path();
-  Loaded loaded = load(options, std::move(scenario));
+  Loaded loaded = load(options, std::move(scenario), false);  // trials need no poses
   const StateActionModel& model = loaded.graph.model;
   std::vector<Behavior> behaviors = buildBehaviors(loaded.scenario, plugins(), model, loaded.graph.key);
 
@@ -84,6 +84,7 @@ json runEval(const EvalOptions& options) {
   };
 
   std::vector<std::pair<std::uint32_t, Eigen::Vector3d>> decisions;
+  const double startup = secondsSinceStart();
   TrialStats stats = run(options.controller, options.controller != "random" ? &decisions : nullptr);
   json report = Trials::summary(stats);
   if (options.controller == "online_search") {
@@ -118,6 +119,7 @@ json runEval(const EvalOptions& options) {
     keepResult(sink);
   }
   report["decisions_per_second"] = perSecond;
+  report["startup_seconds"] = startup;
   report["controller"] = options.controller;
   report["trials"] = options.trials;
   report["seed"] = options.seed;

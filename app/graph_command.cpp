@@ -4,6 +4,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstdlib>
+#include <optional>
 
 #include <fmt/format.h>
 
@@ -39,7 +40,10 @@ nlohmann::json paramsJson(const Scenario& s) {
 
 }  // namespace
 
-CaptureTravel measureTravel(const Scenario& scenario, const MotionDatabase& db, const StateActionModel& model) {
+namespace {
+
+// The clips' part of CaptureTravel: how far each clip carries the root.
+CaptureTravel clipTravel(const MotionDatabase& db) {
   CaptureTravel t;
   for (const Clip& clip : db.clips) {
     const auto& frames = clip.annotation.frames;
@@ -58,6 +62,39 @@ CaptureTravel measureTravel(const Scenario& scenario, const MotionDatabase& db, 
     }
     t.rootExtent_m = std::max(t.rootExtent_m, (hi - lo).norm());
   }
+  return t;
+}
+
+nlohmann::json clipTravelJson(const CaptureTravel& t) {
+  return {{"clip_travel_m", t.clipTravel_m}, {"clip", t.clip}, {"root_extent_m", t.rootExtent_m}};
+}
+
+// The clips' part kept in a graph bundle's provenance; nullopt if absent or malformed (a
+// bundle from before it was kept: the capture is parsed instead).
+std::optional<CaptureTravel> clipTravelFrom(const nlohmann::json& manifest) {
+  if (!manifest.is_object() || !manifest.contains("provenance") || !manifest["provenance"].is_object()) return std::nullopt;
+  const nlohmann::json& p = manifest["provenance"];
+  if (!p.contains("capture_travel") || !p["capture_travel"].is_object()) return std::nullopt;
+  const nlohmann::json& c = p["capture_travel"];
+  if (!c.contains("clip_travel_m") || !c["clip_travel_m"].is_number() || !c.contains("root_extent_m") ||
+      !c["root_extent_m"].is_number() || !c.contains("clip") || !c["clip"].is_string())
+    return std::nullopt;
+  CaptureTravel t;
+  t.clipTravel_m = c["clip_travel_m"].get<double>();
+  t.rootExtent_m = c["root_extent_m"].get<double>();
+  t.clip = c["clip"].get<std::string>();
+  if (!std::isfinite(t.clipTravel_m) || !std::isfinite(t.rootExtent_m)) return std::nullopt;
+  return t;
+}
+
+}  // namespace
+
+CaptureTravel measureTravel(const Scenario& scenario, const MotionDatabase& db, const StateActionModel& model) {
+  return measureTravel(scenario, clipTravel(db), model);
+}
+
+CaptureTravel measureTravel(const Scenario& scenario, CaptureTravel clips, const StateActionModel& model) {
+  CaptureTravel t = std::move(clips);
   for (std::size_t a = 0; a < model.actionCount(); ++a)
     t.actionTravel_m = std::max(t.actionTravel_m, std::hypot(model.actionDisplacement[3 * a], model.actionDisplacement[3 * a + 1]));
   // Chained actions carry the avatar farther than one clip: from every state, walk the
@@ -130,7 +167,6 @@ GraphResult obtainGraph(const Scenario& scenario, const GraphOptions& options) {
   // Loader warnings are warnings; the log also carries plain progress.
   WarningSink warn;
   if (options.log) warn = [&](const std::string& message) { log(fmt::format("warning: {}", message)); };
-  result.db = loadMotionDatabase(scenario.motion, warn);
   result.key = graphCacheKey(scenario);
   const std::filesystem::path cacheDir = options.cacheDir.empty() ? defaultCacheDirectory() : options.cacheDir;
   // One bundle per scenario file: a changed scenario replaces its bundle instead of piling up.
@@ -145,9 +181,14 @@ GraphResult obtainGraph(const Scenario& scenario, const GraphOptions& options) {
       result.model = std::move(cached.model);
       result.fromCache = true;
       result.buildSeconds = cached.manifest["provenance"].value("build_seconds", 0.0);
-      result.seconds = since(start);
       log(fmt::format("graph: reused {}", result.bundle.string()));
-      result.travel = measureTravel(scenario, result.db, result.model);
+      // The key covers the capture's bytes, so what was measured on it when the bundle was
+      // made still holds; parse it only where poses are wanted.
+      const std::optional<CaptureTravel> clips = clipTravelFrom(cached.manifest);
+      if (options.motion || !clips) result.db = loadMotionDatabase(scenario.motion, warn);
+      result.travel = clips && !options.motion ? measureTravel(scenario, *clips, result.model)
+                                               : measureTravel(scenario, result.db, result.model);
+      result.seconds = since(start);
       for (const std::string& w : result.travel.warnings) log(fmt::format("graph: warning: {}", w));
       return result;
     }
@@ -155,6 +196,7 @@ GraphResult obtainGraph(const Scenario& scenario, const GraphOptions& options) {
     if (cached.status == GraphBundleLoad::Damaged)
       log(fmt::format("graph: cache is damaged, rebuilding ({})", cached.reason));
   }
+  result.db = loadMotionDatabase(scenario.motion, warn);
   log(fmt::format("graph: building from {} frames in {}", result.db.frameCount(), counted(result.db.clips.size(), "file")));
   const auto buildStart = std::chrono::steady_clock::now();
   result.model = buildStateActionModel(result.db, scenario.graph, &result.report);
@@ -169,7 +211,8 @@ GraphResult obtainGraph(const Scenario& scenario, const GraphOptions& options) {
                                {"frames_total", result.model.framesTotal},
                                {"frames_in_scc", result.model.componentFrames.size()},
                                {"states", result.model.stateCount()},
-                               {"actions", result.model.actionCount()}};
+                               {"actions", result.model.actionCount()},
+                               {"capture_travel", clipTravelJson(clipTravel(result.db))}};
   try {
     std::filesystem::create_directories(result.bundle.parent_path());
     saveGraphBundle(result.bundle, result.model, provenance);

@@ -26,6 +26,10 @@ struct GraphOptions {
   std::filesystem::path cacheDir;  ///< empty: defaultCacheDirectory()
   bool noCache = false;            ///< rebuild even when a matching bundle exists
   WarningSink log;                 ///< progress and cache messages (stderr)
+  /// Parse the capture into GraphResult::db even when the graph comes from the cache: what
+  /// posing avatars needs (simulate, the viewer, graph's report). Training and eval need
+  /// only the model, and a cached graph then costs no parsing (issue 20, command start).
+  bool motion = true;
 };
 
 /// How far the capture carries the avatar, against how far the behaviours' grids reach
@@ -56,6 +60,8 @@ inline constexpr double kTravelWalkSeconds = 10.0;
 
 /// A built or cached graph with the capture it indexes.
 struct GraphResult {
+  /// The parsed capture; empty (no skeleton, no clips) when GraphOptions::motion was false
+  /// and the graph came from the cache.
   MotionDatabase db;
   StateActionModel model;
   GraphBuildReport report;     ///< zeros when loaded from the cache
@@ -85,6 +91,9 @@ std::filesystem::path defaultCacheDirectory();
 /// How far the capture travels and how far each behaviour's grid reaches (behaviours whose
 /// discretizer cannot be built are left out: training reports those).
 CaptureTravel measureTravel(const Scenario& scenario, const MotionDatabase& db, const StateActionModel& model);
+/// The same from the clips' part (clipTravel_m, clip, rootExtent_m) measured before, as
+/// the graph bundle keeps it, so that a cached graph needs no capture for it.
+CaptureTravel measureTravel(const Scenario& scenario, CaptureTravel clips, const StateActionModel& model);
 
 /// Loads the scenario's capture and returns its graph: from the cache bundle when its key
 /// matches, else built and saved there atomically. A stale or damaged bundle is reported

@@ -1,5 +1,6 @@
 #include "learn_common.hpp"
 
+#include <chrono>
 #include <exception>
 #include <optional>
 
@@ -53,10 +54,19 @@ Scenario checkedScenario(const LearnOptions& options) {
 }
 
 
-Loaded load(const LearnOptions& options, Scenario scenario) {
+namespace {
+const std::chrono::steady_clock::time_point programStart = std::chrono::steady_clock::now();
+}  // namespace
+
+double secondsSinceStart() {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - programStart).count();
+}
+
+Loaded load(const LearnOptions& options, Scenario scenario, bool motion) {
   GraphOptions graphOptions;
   graphOptions.cacheDir = options.cacheDir;
   graphOptions.log = options.log;
+  graphOptions.motion = motion;
   GraphResult graph = obtainGraph(scenario, graphOptions);
   return {std::move(scenario), std::move(graph)};
 }

@@ -32,6 +32,11 @@ std::string setFlags(const std::vector<std::string>& sets);
 /// before the graph is built or loaded.
 Scenario checkedScenario(const LearnOptions& options);
 
+/// Seconds since the program started (its static initialisation): eval and simulate
+/// report it at their first decision as "startup_seconds" (issue 20: <= 0.05 s with a
+/// cached graph).
+double secondsSinceStart();
+
 struct Loaded {
   Scenario scenario;
   GraphResult graph;
@@ -41,8 +46,10 @@ struct Loaded {
 /// ...") unless `name` names one of `scenario`'s behaviours.
 void requireBehavior(const Scenario& scenario, const std::string& name);
 
-/// The scenario's graph, from the cache or built (options.log hears about it).
-Loaded load(const LearnOptions& options, Scenario scenario);
+/// The scenario's graph, from the cache or built (options.log hears about it). `motion`:
+/// parse the capture even if the graph is cached (GraphOptions::motion); without it
+/// Loaded::graph.db may be empty.
+Loaded load(const LearnOptions& options, Scenario scenario, bool motion = true);
 
 /// The refusals a policy bundle gets from its manifest alone (missing, another graph, a
 /// behaviour missing or trained with other settings), made before the graph is loaded so

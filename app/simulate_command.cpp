@@ -334,6 +334,7 @@ json runSimulate(const SimulateOptions& options) {
     return std::make_unique<RandomController>(model);
   };
   World world(setup);
+  const double startup = secondsSinceStart();
 
   // Run in slices so that long runs report progress (stderr, every 5 s).
   const auto start = Clock::now();
@@ -433,6 +434,7 @@ json runSimulate(const SimulateOptions& options) {
                  {"seconds", simulated},
                  {"fps", 1.0 / model.frameTime},
                  {"wall_seconds", wall},
+                 {"startup_seconds", startup},
                  {"avatar_frames_per_second", static_cast<double>(frames * avatars) / std::max(wall, 1e-9)},
                  {"poses", poses},
                  {"hits", world.events().size()},

@@ -259,7 +259,7 @@ json runTrain(const TrainOptions& options) {
     }
     fs::remove(probe, ec);
   }
-  Loaded loaded = load(options, std::move(scenario));
+  Loaded loaded = load(options, std::move(scenario), false);  // the model is enough: no poses
   const StateActionModel& model = loaded.graph.model;
   std::vector<Behavior> all = buildBehaviors(loaded.scenario, plugins(), model, loaded.graph.key);
 

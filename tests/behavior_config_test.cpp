@@ -232,7 +232,7 @@ TEST_CASE("behaviour mistakes name the file, line, column and key", "[behaviors]
     REQUIRE_CONFIG_ERROR(build(approachWith(22, "      sead: 1")),
                          at(22, 13,
                             "behaviors.approach.learner.sead: unknown key (expected one of: type, budget, "
-                            "seed, alpha_final, curve_points, checkpoint_every, max_episode_actions, threads)"));
+                            "seed, alpha_final, curve_points, curve_sample, checkpoint_every, max_episode_actions, threads)"));
     REQUIRE_CONFIG_ERROR(build(approachInserting(19, "    environment: {type: static_target, speed: 1}")),
                          at(19, 47,
                             "behaviors.approach.environment.speed: unknown key (this plugin takes no parameters; "
@@ -429,7 +429,7 @@ TEST_CASE("scenario overrides (--set) replace, create and reset keys", "[behavio
     REQUIRE_CONFIG_ERROR(build(both, {"behaviors.approach.learner.bugdet=5"}),
                          std::string("--set behaviors.approach.learner.bugdet=5") +
                              ": behaviors.approach.learner.bugdet: unknown key (expected one of: type, "
-                             "budget, seed, alpha_final, curve_points, checkpoint_every, max_episode_actions, threads)");
+                             "budget, seed, alpha_final, curve_points, curve_sample, checkpoint_every, max_episode_actions, threads)");
     REQUIRE_CONFIG_ERROR(build(both, {"behaviors.approach.learner.type=sarsa"}),
                          std::string("--set behaviors.approach.learner.type=sarsa") +
                              ": behaviors.approach.learner.type: unknown learner 'sarsa' (known: "

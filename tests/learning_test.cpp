@@ -908,4 +908,37 @@ TEST_CASE("success criteria take what they leave out from the reward and hold fo
   }
 }
 
+
+TEST_CASE("a sampled Bellman residual measures one pair in k, below the whole table's, and leaves the table alone",
+          "[learning]") {
+  const CorridorSetup parts(2);
+  const Problem& problem = parts.problem;
+  const GridModel& g = parts.tabulated;
+  // A table part of the way: residuals well above zero.
+  const TrainResult q = trainWith("{type: q_learning, budget: 300, seed: 3, curve_points: 1}", problem, g);
+  const Residual whole = bellmanResidual(q.table, g, 2);
+  REQUIRE(whole.max > 0.01);
+  // Stride 1 is the whole table; the sample's max is a lower bound, its mean nearby.
+  const Residual one = bellmanResidual(q.table, g, 1, 1);
+  CHECK(one.max == whole.max);
+  CHECK(one.mean == Approx(whole.mean).epsilon(1e-12));
+  for (std::size_t k : {2, 3, 8, 1000}) {
+    CAPTURE(k);
+    const Residual sampled = bellmanResidual(q.table, g, 2, k);
+    CHECK(sampled.max <= whole.max);
+    if (k <= 8) CHECK(sampled.max > 0);  // 1000: a vertex per action, maybe all settled
+    // Deterministic whatever the thread count.
+    const Residual single = bellmanResidual(q.table, g, 1, k);
+    CHECK(single.max == sampled.max);
+    CHECK(single.mean == Approx(sampled.mean).epsilon(1e-12));
+  }
+  // q_learning's curve_sample changes the curve only: the same table, and an exact final residual.
+  const TrainResult exact = trainWith("{type: q_learning, budget: 3000, seed: 3, curve_points: 3, curve_sample: 1}", problem, g);
+  const TrainResult sampled = trainWith("{type: q_learning, budget: 3000, seed: 3, curve_points: 3, curve_sample: 4}", problem, g);
+  CHECK(std::equal(exact.table.values().begin(), exact.table.values().end(), sampled.table.values().begin()));
+  CHECK(sampled.finalResidual == exact.finalResidual);
+  REQUIRE(sampled.curve.size() == 3);
+  for (std::size_t i = 0; i < 3; ++i) CHECK(sampled.curve[i].residual <= exact.curve[i].residual);
+}
+
 }  // namespace mgrl

@@ -10,6 +10,8 @@
 #include <cstring>
 #include <fstream>
 #include <limits>
+#include <memory>
+#include <optional>
 #include <system_error>
 
 #include <fmt/format.h>
@@ -337,9 +339,8 @@ void checkManifestHash(const json& manifest, const ManifestReader& reader) {
 }
 
 template <NpyElement T>
-std::vector<T> loadBundleArray(const fs::path& dir, const ManifestReader& reader, const json& parent,
-                               std::string_view parentPath, std::string_view key, std::string_view expectedFile,
-                               std::vector<std::size_t>* shapeOut) {
+MappedBundleArray<T> mapBundleArray(const fs::path& dir, const ManifestReader& reader, const json& parent,
+                                    std::string_view parentPath, std::string_view key, std::string_view expectedFile) {
   const json& entry = reader.object(parent, parentPath, key, {"file", "dtype", "shape", "bytes", "hash"});
   const std::string path = ManifestReader::join(parentPath, key);
   const std::string file = reader.string(entry, path, "file");
@@ -371,7 +372,9 @@ std::vector<T> loadBundleArray(const fs::path& dir, const ManifestReader& reader
   // Before reading, so a huge stray file is refused without loading it.
   if (size != bytes)
     throw Error(fmt::format("{}: expected {} bytes as in {}, found {}", source, bytes, manifestName, size));
-  const std::string text = readFile(filePath);
+  MappedBundleArray<T> array;
+  array.file = std::make_unique<MappedFile>(filePath);
+  const std::string_view text = array.file->bytes();
   if (text.size() != bytes)
     throw Error(fmt::format("{}: expected {} bytes as in {}, found {}", source, bytes, manifestName, text.size()));
   const std::string actualHash = hexDigest(hashBytes(text));
@@ -379,18 +382,35 @@ std::vector<T> loadBundleArray(const fs::path& dir, const ManifestReader& reader
     throw Error(fmt::format("{}: expected hash {} as in {}, found {} (the file was altered)", source,
                             quoteToken(hash), manifestName, quoteToken(actualHash)));
   std::vector<std::size_t> fileShape;
-  std::vector<T> data = npyDecode<T>(text, source, &fileShape);
+  if (const std::optional<std::span<const T>> view = npyView<T>(text, source, &fileShape)) {
+    array.data = *view;
+  } else {
+    array.copy = npyDecode<T>(text, source, &fileShape);
+    array.data = array.copy;
+  }
   if (fileShape != shape)
     throw Error(fmt::format("{}: expected shape {} as in {}, found {}", source, formatShape(shape), manifestName,
                             formatShape(fileShape)));
-  if (shapeOut) *shapeOut = std::move(fileShape);
+  array.shape = std::move(fileShape);
+  return array;
+}
+
+template <NpyElement T>
+std::vector<T> loadBundleArray(const fs::path& dir, const ManifestReader& reader, const json& parent,
+                               std::string_view parentPath, std::string_view key, std::string_view expectedFile,
+                               std::vector<std::size_t>* shapeOut) {
+  MappedBundleArray<T> array = mapBundleArray<T>(dir, reader, parent, parentPath, key, expectedFile);
+  std::vector<T> data = array.copy.empty() ? std::vector<T>(array.data.begin(), array.data.end()) : std::move(array.copy);
+  if (shapeOut) *shapeOut = std::move(array.shape);
   return data;
 }
 
 #define MGRL_BUNDLE_INSTANTIATE(T)                                                                             \
   template std::vector<T> loadBundleArray<T>(const fs::path&, const ManifestReader&, const json&,               \
                                              std::string_view, std::string_view, std::string_view,              \
-                                             std::vector<std::size_t>*);
+                                             std::vector<std::size_t>*);                                        \
+  template MappedBundleArray<T> mapBundleArray<T>(const fs::path&, const ManifestReader&, const json&,          \
+                                                  std::string_view, std::string_view, std::string_view);
 MGRL_BUNDLE_INSTANTIATE(std::uint8_t)
 MGRL_BUNDLE_INSTANTIATE(std::uint32_t)
 MGRL_BUNDLE_INSTANTIATE(std::int32_t)

@@ -16,6 +16,7 @@
 #include <filesystem>
 #include <functional>
 #include <initializer_list>
+#include <memory>
 #include <span>
 #include <string>
 #include <string_view>
@@ -25,6 +26,7 @@
 #include <nlohmann/json.hpp>
 
 #include "mgrl/core/error.hpp"
+#include "mgrl/core/files.hpp"
 #include "mgrl/core/npy.hpp"
 
 namespace mgrl {
@@ -215,6 +217,23 @@ nlohmann::json readManifestObject(const std::filesystem::path& path);
 /// Throws mgrl::Error (or mgrl::ParseError from npyDecode()) whose message starts with the
 /// manifest's or the array file's path, e.g. `policy/hit.q.npy: expected 4168 bytes as in
 /// manifest.json, found 4000`.
+/// An array of a bundle as mapBundleArray() found it: `data` views the mapped file in
+/// place (or `copy`, where the file's data cannot be viewed), valid while this lives.
+template <NpyElement T>
+struct MappedBundleArray {
+  std::unique_ptr<MappedFile> file;
+  std::vector<T> copy;
+  std::span<const T> data;
+  std::vector<std::size_t> shape;
+};
+
+/// loadBundleArray() without copying the data out of the file: what the big arrays (Q
+/// tables) use, so that loading one touches no fresh memory besides its destination.
+template <NpyElement T>
+MappedBundleArray<T> mapBundleArray(const std::filesystem::path& dir, const ManifestReader& manifest,
+                                    const nlohmann::json& parent, std::string_view path, std::string_view key,
+                                    std::string_view expectedFile);
+
 template <NpyElement T>
 std::vector<T> loadBundleArray(const std::filesystem::path& dir, const ManifestReader& manifest,
                                const nlohmann::json& parent, std::string_view path, std::string_view key,

@@ -3,12 +3,19 @@
 #include <cerrno>
 #include <cstdio>
 #include <cstring>
+#include <filesystem>
 #include <fstream>
 #include <random>
+
+#include <fcntl.h>
+#include <sys/mman.h>
+#include <sys/stat.h>
+#include <unistd.h>
 
 #include <fmt/format.h>
 
 #include "mgrl/core/error.hpp"
+#include "mgrl/core/hash.hpp"
 
 namespace mgrl {
 
@@ -18,7 +25,16 @@ std::string readFile(const std::filesystem::path& path) {
     throw Error(fmt::format("{}: expected a file, found a directory", path.string()));
   std::FILE* file = std::fopen(path.c_str(), "rb");
   if (!file) throw Error(fmt::format("{}: cannot open: {}", path.string(), std::strerror(errno)));
+  // Sized once from the file's length (a file that grows meanwhile is read to its end in
+  // chunks): growing the string chunk by chunk copied a 10 MB table about twice over and
+  // touched every page of each discarded buffer (issue 20, command start).
   std::string text;
+  std::error_code sizeError;
+  const std::uintmax_t expected = std::filesystem::file_size(path, sizeError);
+  if (!sizeError && expected > 0 && expected < (std::uintmax_t{1} << 40)) {
+    text.resize(static_cast<std::size_t>(expected));
+    text.resize(std::fread(text.data(), 1, text.size(), file));
+  }
   char chunk[1 << 16];
   std::size_t got = 0;
   while ((got = std::fread(chunk, 1, sizeof chunk, file)) > 0) text.append(chunk, got);
@@ -26,6 +42,63 @@ std::string readFile(const std::filesystem::path& path) {
   std::fclose(file);
   if (failed) throw Error(fmt::format("{}: cannot read", path.string()));
   return text;
+}
+
+void hashFileContents(Hasher& hasher, const std::filesystem::path& path) {
+  std::error_code ec;
+  const std::uintmax_t size = std::filesystem::file_size(path, ec);
+  if (ec || std::filesystem::is_directory(path, ec)) {
+    hasher.update(std::string_view(readFile(path)));  // says why, or copes with a special file
+    return;
+  }
+  std::FILE* file = std::fopen(path.c_str(), "rb");
+  if (!file) throw Error(fmt::format("{}: cannot open: {}", path.string(), std::strerror(errno)));
+  // The length goes first, so a file that changes size while it is read is hashed again whole.
+  Hasher streamed = hasher;
+  streamed.update(static_cast<std::int64_t>(size));
+  std::string block(std::size_t{1} << 20, '\0');
+  std::uintmax_t total = 0;
+  std::size_t got = 0;
+  while ((got = std::fread(block.data(), 1, block.size(), file)) > 0) {
+    streamed.updateBytes(std::string_view(block.data(), got));
+    total += got;
+  }
+  const bool failed = std::ferror(file) != 0;
+  std::fclose(file);
+  if (failed) throw Error(fmt::format("{}: cannot read", path.string()));
+  if (total != size) {
+    hasher.update(std::string_view(readFile(path)));
+    return;
+  }
+  hasher = streamed;
+}
+
+MappedFile::MappedFile(const std::filesystem::path& path) {
+  const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
+  if (fd < 0) throw Error(fmt::format("{}: cannot open: {}", path.string(), std::strerror(errno)));
+  struct stat info {};
+  if (::fstat(fd, &info) != 0 || !S_ISREG(info.st_mode)) {
+    const int error = errno;
+    ::close(fd);
+    throw Error(fmt::format("{}: expected a regular file{}", path.string(),
+                            S_ISDIR(info.st_mode) ? ", found a directory" : fmt::format(" ({})", std::strerror(error))));
+  }
+  size_ = static_cast<std::size_t>(info.st_size);
+  if (size_ > 0) {
+    // Populated at once: one call faults the whole file in from the page cache.
+    data_ = ::mmap(nullptr, size_, PROT_READ, MAP_PRIVATE | MAP_POPULATE, fd, 0);
+    if (data_ == MAP_FAILED) {
+      const int error = errno;
+      ::close(fd);
+      data_ = nullptr;
+      throw Error(fmt::format("{}: cannot map: {}", path.string(), std::strerror(error)));
+    }
+  }
+  ::close(fd);
+}
+
+MappedFile::~MappedFile() {
+  if (data_) ::munmap(data_, size_);
 }
 
 void writeFileAtomically(const std::filesystem::path& path, std::string_view text) {

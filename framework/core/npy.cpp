@@ -249,8 +249,11 @@ std::string npyEncode(std::span<const T> data, const std::vector<std::size_t>& s
   return out;
 }
 
+namespace {
+
+// The data bytes of a checked .npy file (every check npyDecode() promises), and its shape.
 template <NpyElement T>
-std::vector<T> npyDecode(std::string_view bytes, std::string_view source, std::vector<std::size_t>* shape) {
+std::string_view npyPayload(std::string_view bytes, std::string_view source, std::vector<std::size_t>& shapeOut) {
   // A prefix of the magic is a truncated file; anything else is not a .npy file at all.
   const bool truncatedMagic = !bytes.empty() && bytes.size() < kMagic.size() && kMagic.starts_with(bytes);
   if (!bytes.starts_with(kMagic) && !truncatedMagic)
@@ -295,15 +298,37 @@ std::vector<T> npyDecode(std::string_view bytes, std::string_view source, std::v
                      fmt::format("{} data bytes for shape {} of '{}'", *count * sizeof(T), shapeText(*header.shape),
                                  npyDescr<T>()),
                      fmt::format("{} bytes", payload.size()));
-  std::vector<T> data(*count);
+  shapeOut = *header.shape;
+  return payload;
+}
+
+}  // namespace
+
+template <NpyElement T>
+std::vector<T> npyDecode(std::string_view bytes, std::string_view source, std::vector<std::size_t>* shape) {
+  std::vector<std::size_t> dims;
+  const std::string_view payload = npyPayload<T>(bytes, source, dims);
+  std::vector<T> data(payload.size() / sizeof(T));
   readLittleEndian(payload, data);
-  if (shape) *shape = *header.shape;
+  if (shape) *shape = std::move(dims);
   return data;
+}
+
+template <NpyElement T>
+std::optional<std::span<const T>> npyView(std::string_view bytes, std::string_view source,
+                                          std::vector<std::size_t>* shape) {
+  std::vector<std::size_t> dims;
+  const std::string_view payload = npyPayload<T>(bytes, source, dims);
+  if (shape) *shape = std::move(dims);
+  if constexpr (std::endian::native != std::endian::little) return std::nullopt;
+  if (reinterpret_cast<std::uintptr_t>(payload.data()) % alignof(T) != 0) return std::nullopt;
+  return std::span<const T>(reinterpret_cast<const T*>(payload.data()), payload.size() / sizeof(T));
 }
 
 #define MGRL_NPY_INSTANTIATE(T)                                                             \
   template std::string npyEncode<T>(std::span<const T>, const std::vector<std::size_t>&); \
-  template std::vector<T> npyDecode<T>(std::string_view, std::string_view, std::vector<std::size_t>*);
+  template std::vector<T> npyDecode<T>(std::string_view, std::string_view, std::vector<std::size_t>*); \
+  template std::optional<std::span<const T>> npyView<T>(std::string_view, std::string_view, std::vector<std::size_t>*);
 MGRL_NPY_INSTANTIATE(std::uint8_t)
 MGRL_NPY_INSTANTIATE(std::uint32_t)
 MGRL_NPY_INSTANTIATE(std::int32_t)

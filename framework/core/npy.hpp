@@ -8,6 +8,7 @@
 #include <concepts>
 #include <cstddef>
 #include <cstdint>
+#include <optional>
 #include <span>
 #include <string>
 #include <string_view>
@@ -51,5 +52,12 @@ std::string npyEncode(std::span<const T> data, const std::vector<std::size_t>& s
 template <NpyElement T>
 std::vector<T> npyDecode(std::string_view bytes, std::string_view source,
                          std::vector<std::size_t>* shape = nullptr);
+
+/// The same checks as npyDecode(), but the array is read in place: a view into `bytes`
+/// (which must outlive it), or nullopt where it cannot be (a big-endian host, or data not
+/// aligned for T: then use npyDecode()).
+template <NpyElement T>
+std::optional<std::span<const T>> npyView(std::string_view bytes, std::string_view source,
+                                          std::vector<std::size_t>* shape = nullptr);
 
 }  // namespace mgrl

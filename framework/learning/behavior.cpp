@@ -26,7 +26,7 @@ std::pair<nlohmann::json, std::string> behaviorConfigAndKey(const BehaviorSpec& 
                            {"environment", blockJson(plugins.environments, spec.environment, "static_target")},
                            {"learner", blockJson(plugins.learners, spec.learner, "")}};
   nlohmann::json keyed = config;
-  for (const char* irrelevant : {"threads", "curve_points", "checkpoint_every"}) keyed["learner"].erase(irrelevant);
+  for (const char* irrelevant : {"threads", "curve_points", "curve_sample", "checkpoint_every"}) keyed["learner"].erase(irrelevant);
   // A parameter added after tables were trained keeps their keys while it holds the value
   // that reproduces them bit for bit (q_learning's max_episode_actions: 0, the paper's rule).
   if (keyed["learner"].value("max_episode_actions", std::int64_t{0}) == 0) keyed["learner"].erase("max_episode_actions");

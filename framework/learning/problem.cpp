@@ -256,30 +256,36 @@ double sweep(const QTable& in, QTable& out, const GridModel& g, unsigned threads
   return largest;
 }
 
-Residual bellmanResidual(const QTable& q, const GridModel& g, unsigned threads) {
+Residual bellmanResidual(const QTable& q, const GridModel& g, unsigned threads, std::size_t stride) {
+  stride = std::max<std::size_t>(1, stride);
   const std::size_t states = g.incomingBegin.size() - 1;
   std::vector<double> largest(states, 0.0), sum(states, 0.0);
+  std::vector<std::size_t> pairs(states, 0);
   // A hanging vertex's value is an interpolation, not a fixed point of the backup.
   std::vector<std::uint8_t> tied(g.hanging.empty() ? 0 : g.vertexCount, 0);
   for (std::uint32_t v : g.hanging.vertex) tied[v] = 1;
   parallelFor(states, threads, [&](std::size_t s, unsigned) {
     for (std::uint32_t i = g.incomingBegin[s]; i < g.incomingBegin[s + 1]; ++i) {
       const std::size_t a = g.incoming[i];
-      for (std::size_t v = 0; v < g.vertexCount; ++v) {
+      const std::size_t block = (g.vertexCount + stride - 1) / stride;
+      const std::size_t first = (a % stride) * block, last = std::min(g.vertexCount, first + block);
+      for (std::size_t v = first; v < last; ++v) {
         if (!tied.empty() && tied[v]) continue;
         const double r = std::fabs(static_cast<double>(backup(q, g, a, v)) - q.at(a, v));
         largest[s] = std::max(largest[s], r);
         sum[s] += r;
+        ++pairs[s];
       }
     }
   });
   Residual result;
+  std::size_t measured = 0;
   for (std::size_t s = 0; s < states; ++s) {
     result.max = std::max(result.max, largest[s]);
     result.mean += sum[s];
+    measured += pairs[s];
   }
-  const std::size_t pairs = (g.vertexCount - g.hanging.size()) * g.actionCount;
-  if (pairs > 0) result.mean /= static_cast<double>(pairs);
+  if (measured > 0) result.mean /= static_cast<double>(measured);
   return result;
 }
 

@@ -10,6 +10,7 @@
 #include <cstdint>
 #include <vector>
 
+#include "mgrl/core/huge_pages.hpp"
 #include "mgrl/learning/discretizer.hpp"
 #include "mgrl/learning/q_table.hpp"
 #include "mgrl/learning/reward.hpp"
@@ -40,7 +41,7 @@ struct GridModel {
   /// The grid's hanging vertices (Discretizer::hanging()): sweep() sets their values from
   /// their sources' after every backup, and bellmanResidual() skips them.
   HangingVertices hanging;
-  std::vector<GridTransition> transition;  ///< per (a, v)
+  std::vector<GridTransition, HugePageAllocator<GridTransition>> transition;  ///< per (a, v)
   std::vector<float> discount;            ///< per action: gamma^(frames of a)
   /// Per action, if the environment model moves the target rigidly (EnvironmentModel::
   /// rigidMotion): (cos, sin, dx, dz) of the motion e' = R^T (e - d); else empty.
@@ -109,6 +110,11 @@ double sweep(const QTable& in, QTable& out, const GridModel& g, unsigned threads
 struct Residual {
   double max = 0, mean = 0;
 };
-Residual bellmanResidual(const QTable& q, const GridModel& g, unsigned threads);
+/// With `stride` k > 1, over a fixed sample of one pair in k instead of every pair (for
+/// action a, the (a mod k)-th of k runs of consecutive vertices: every action, and the
+/// runs cover the grid; consecutive, so the sample reads k times less memory too), for
+/// k times less work: the max is then a lower bound of the whole table's, the mean an
+/// estimate of its mean. Deterministic whatever the thread count.
+Residual bellmanResidual(const QTable& q, const GridModel& g, unsigned threads, std::size_t stride = 1);
 
 }  // namespace mgrl

@@ -11,6 +11,8 @@
 #include <span>
 #include <vector>
 
+#include "mgrl/core/huge_pages.hpp"
+
 #include "mgrl/graph/state_action_model.hpp"
 
 namespace mgrl {
@@ -59,7 +61,7 @@ class QTable {
   std::vector<std::uint64_t> actionBase_;  ///< index of (action, vertex 0)
   std::vector<std::uint32_t> actionStride_;  ///< n_s of the action's state
   std::size_t size_ = 0;          ///< actions x vertices
-  std::vector<float> values_;     ///< size_ + kPadding
+  std::vector<float, HugePageAllocator<float>> values_;  ///< size_ + kPadding
 };
 
 }  // namespace mgrl

@@ -6,6 +6,7 @@
 #include <fmt/format.h>
 #include <fmt/ranges.h>
 
+#include "mgrl/core/files.hpp"
 #include "mgrl/core/hash.hpp"
 #include "mgrl/motion/motion_io.hpp"
 #include "mgrl/runtime/world.hpp"
@@ -288,13 +289,13 @@ std::string graphCacheKey(const Scenario& s) {
   h.update(std::int64_t(m.files.size()));
   for (const auto& file : m.files) {
     h.update(std::string_view(file.filename().string()));
-    h.update(std::string_view(readFile(file)));
+    hashFileContents(h, file);
   }
-  if (!m.asf.empty()) h.update(std::string_view(readFile(m.asf)));
+  if (!m.asf.empty()) hashFileContents(h, m.asf);
   else {
     // AMC files take <subject>.asf from beside them: hash those too.
     for (const auto& file : m.files)
-      if (file.extension() == ".amc" || file.extension() == ".AMC") h.update(std::string_view(readFile(defaultAsfFor(file))));
+      if (file.extension() == ".amc" || file.extension() == ".AMC") hashFileContents(h, defaultAsfFor(file));
   }
   h.update(m.fps);
   h.update(std::int64_t(m.units));
