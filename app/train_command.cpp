@@ -17,6 +17,7 @@
 #include "mgrl/learning/behavior.hpp"
 #include "mgrl/scenario/behaviors.hpp"
 #include "mgrl/learning/checkpoint_store.hpp"
+#include "mgrl/core/bundle.hpp"
 #include "mgrl/core/hash.hpp"
 #include "mgrl/core/parallel.hpp"
 #include "mgrl/learning/policy_bundle.hpp"
@@ -178,6 +179,15 @@ fs::path checkpointDirectory(const fs::path& out, const std::string& behavior) {
   return out.parent_path() / (out.filename().string() + ".checkpoints") / behavior;
 }
 
+// After a finished run: a behaviour's checkpoint, what killed writers left beside it
+// (issue 19), and the checkpoints folder once nothing else is in it.
+void removeCheckpoint(const fs::path& dir) {
+  std::error_code ec;
+  for (const StaleSibling& stale : staleSiblings(dir)) fs::remove_all(stale.path, ec);
+  fs::remove_all(dir, ec);
+  fs::remove(dir.parent_path(), ec);  // only if empty
+}
+
 }  // namespace
 
 fs::path defaultPolicyDirectory(const fs::path& cacheDir, const Scenario& scenario) {
@@ -324,6 +334,8 @@ json runTrain(const TrainOptions& options) {
     if (finished.count(behavior.name) != 0) {
       log(fmt::format("resume: {}: already trained in {}, kept", behavior.name, out.string()));
       report["kept"].push_back(behavior.name);
+      // A run killed after its bundle was in place may have left its checkpoints.
+      checkpoints.push_back(checkpointDirectory(out, behavior.name));
       continue;
     }
     const Problem problem = behavior.problem(model);
@@ -390,11 +402,7 @@ json runTrain(const TrainOptions& options) {
   }
   if (bundle.provenance.contains("unfinished")) bundle.provenance.erase("unfinished");
   savePolicyBundle(out, bundle);
-  for (const fs::path& dir : checkpoints) {
-    std::error_code ec;
-    fs::remove_all(dir, ec);
-    fs::remove(dir.parent_path(), ec);  // only if empty
-  }
+  for (const fs::path& dir : checkpoints) removeCheckpoint(dir);
   log(fmt::format("policy: {}", out.string()));
   return report;
 }
