@@ -286,6 +286,27 @@ TEST_CASE("mgrl train --resume that keeps every behaviour removes the checkpoint
   CHECK_FALSE(fs::exists(checkpoints));
 }
 
+// Issue 19's kill tests: train checks that --out's folder takes a file by writing
+// `.<out>.probe-PID` and removing it; killed in between, it left the probe for good. The
+// next run removes those of processes that are gone (a live one may be training now).
+TEST_CASE("mgrl train removes the writability probe a killed run left beside --out", "[cli][data]") {
+  Sandbox box("probe");
+  const fs::path out = box.path("bundle");
+  const pid_t gone = ::fork();
+  if (gone == 0) ::_exit(0);
+  int status = 0;
+  ::waitpid(gone, &status, 0);
+  const fs::path dead = box.path(".bundle.probe-" + std::to_string(gone));
+  const fs::path live = box.path(".bundle.probe-" + std::to_string(::getpid()));
+  const fs::path other = box.path(".other.probe-" + std::to_string(gone));
+  for (const fs::path& p : {dead, live, other}) std::ofstream(p) << "x";
+
+  REQUIRE(box.train(kFast + " --out " + shellWord(out)).status == 0);
+  CHECK_FALSE(fs::exists(dead));
+  CHECK(fs::exists(live));
+  CHECK(fs::exists(other));  // another bundle's
+}
+
 TEST_CASE("settings left out of the behaviour key do not change the trained table", "[cli][data]") {
   // checkpoint_every, curve_points and threads are not hashed into the key (mgrl/learning/behavior.hpp),
   // so a bundle trained with other values is taken as current: its table must be the same.
