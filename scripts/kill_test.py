@@ -555,6 +555,10 @@ class KillTest:
                 self.kills[(job.name, label)] += 1
             elif rc == 0:
                 self.not_killed[(job.name, label)] += 1
+                if link == 0 and point == "random":
+                    # The run ended before the kill: its duration, measured again (the
+                    # machine's load changes), scales the next delays.
+                    job.duration[prior] = seconds
             else:
                 # A clear refusal is allowed, but nothing here should refuse: say it.
                 self.finding(job, where, f"the killed command failed on its own (exit {rc}): {last_line(err)}")
@@ -617,11 +621,14 @@ class KillTest:
                       ", ".join(f"{p} {job.renames[p]} ({job.duration[p]:.1f} s)" for p in job.priors()), flush=True)
 
             plan = self.plan(jobs)
-            print(f"kill_test: {len(plan)} kill rounds planned", flush=True)
-            for i, (job, prior, point, delay, chain, resume_next) in enumerate(plan):
+            target = args.runs
+            print(f"kill_test: {len(plan)} kill rounds at renames and probes, then " +
+                  ("one random kill per job" if args.quick else f"random kills until {target} SIGKILLs in all"),
+                  flush=True)
+            for i, (job, prior, point, delay, chain, resume_next) in enumerate(self.rounds(jobs, plan, target)):
                 if args.verbose or (i + 1) % 10 == 0:
-                    print(f"  [{time.monotonic() - start:6.0f} s] round {i + 1}/{len(plan)}: {job.name}, prior {prior}, "
-                          f"{point}{f' {delay:.2f} s' if delay is not None else ''}" +
+                    print(f"  [{time.monotonic() - start:6.0f} s] round {i + 1}, {sum(self.kills.values())} kills: "
+                          f"{job.name}, prior {prior}, {point}{f' {delay:.2f} s' if delay is not None else ''}" +
                           (f", {chain} kills" if chain > 1 else "") + (", then --resume" if resume_next else ""),
                           flush=True)
                 self.round(job, prior, point, delay, chain, resume_next)
@@ -658,22 +665,24 @@ class KillTest:
                 options = [r for r in rename_rounds if r[0] is job and r[1] == "old"]
                 picked.append(self.random.choice(options))
             rename_rounds = picked
-        total = max(self.args.runs, len(rename_rounds)) if not self.args.quick else len(rename_rounds) + len(jobs)
-        plan = []
-        for job, prior, point, delay in rename_rounds:
-            plan.append((job, prior, point, delay, 1, job.name == "train" and self.random.random() < 0.5))
+        return [(job, prior, point, delay, 1, job.name == "train" and self.random.random() < 0.5)
+                for job, prior, point, delay in rename_rounds]
+
+    def rounds(self, jobs, plan, target):
+        """The planned rounds, then random-time kills until `target` SIGKILLs in all (quick
+        mode: one random round per job), drawn over each job's latest measured duration."""
+        yield from plan
         weights = {"graph": 1, "train": 3, "simulate-events-inside": 1, "simulate-events-outside": 1}
-        cycle = [job for job in jobs for _ in range(weights.get(job.name, 1))]
-        i = 0
-        while len(plan) < total:
-            job = cycle[i % len(cycle)] if not self.args.quick else jobs[i % len(jobs)]
-            i += 1
+        cycle = jobs if self.args.quick else [job for job in jobs for _ in range(weights.get(job.name, 1))]
+        for i in range(len(jobs) if self.args.quick else 10 * max(target, 1)):
+            if not self.args.quick and sum(self.kills.values()) >= target:
+                return
+            job = cycle[i % len(cycle)]
             prior = self.random.choice(job.priors())
-            delay = self.random.uniform(0.02, 1.1) * job.duration[prior]
+            delay = self.random.uniform(0.02, 1.0) * job.duration[prior]
             chain = 2 if job.name == "train" and not self.args.quick and self.random.random() < 0.3 else 1
             resume_next = job.name == "train" and self.random.random() < 0.5
-            plan.append((job, prior, "random", delay, chain, resume_next))
-        return plan
+            yield (job, prior, "random", delay, chain, resume_next)
 
     def summary(self, seconds):
         print()
@@ -723,7 +732,8 @@ def main():
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0],
                                      formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("mgrl", help="the mgrl binary (build/app/mgrl)")
-    parser.add_argument("--runs", type=int, default=220, help="kills in all, at least (default 220)")
+    parser.add_argument("--runs", type=int, default=220,
+                        help="SIGKILLs in all, at least: every rename first, then random kills (default 220)")
     parser.add_argument("--seed", type=int, default=1, help="seed of the kill moments (default 1)")
     parser.add_argument("--quick", action="store_true", help="one kill at a rename and one random kill per job")
     parser.add_argument("--scenario", default=str(Path(__file__).resolve().parents[1] / "scenarios" / "boxing.yaml"))
