@@ -17,6 +17,7 @@
 #include "mgrl/learning/behavior.hpp"
 #include "mgrl/scenario/behaviors.hpp"
 #include "mgrl/learning/checkpoint_store.hpp"
+#include "mgrl/core/bundle.hpp"
 #include "mgrl/core/hash.hpp"
 #include "mgrl/core/parallel.hpp"
 #include "mgrl/learning/policy_bundle.hpp"
@@ -178,6 +179,34 @@ fs::path checkpointDirectory(const fs::path& out, const std::string& behavior) {
   return out.parent_path() / (out.filename().string() + ".checkpoints") / behavior;
 }
 
+// The writability probe of --out's folder is `.<name>.probe-PID`.
+std::string probePrefix(const std::string& name) { return fmt::format(".{}.probe-", name); }
+
+// Issue 19's kill tests: a train killed between making its probe and removing it (a few
+// microseconds, but forever after) left the file; those of processes that are gone go.
+void removeDeadProbes(const fs::path& parent, const std::string& name) {
+  const std::string prefix = probePrefix(name);
+  std::error_code ec;
+  for (fs::directory_iterator it(parent, ec), end; !ec && it != end; it.increment(ec)) {
+    const std::string file = it->path().filename().string();
+    if (file.size() <= prefix.size() || file.size() > prefix.size() + 10 || file.compare(0, prefix.size(), prefix) != 0 ||
+        file.find_first_not_of("0123456789", prefix.size()) != std::string::npos)
+      continue;
+    if (processAlive(std::stol(file.substr(prefix.size())))) continue;
+    std::error_code ignored;
+    fs::remove(it->path(), ignored);
+  }
+}
+
+// After a finished run: a behaviour's checkpoint, what killed writers left beside it
+// (issue 19), and the checkpoints folder once nothing else is in it.
+void removeCheckpoint(const fs::path& dir) {
+  std::error_code ec;
+  for (const StaleSibling& stale : staleSiblings(dir)) fs::remove_all(stale.path, ec);
+  fs::remove_all(dir, ec);
+  fs::remove(dir.parent_path(), ec);  // only if empty
+}
+
 }  // namespace
 
 fs::path defaultPolicyDirectory(const fs::path& cacheDir, const Scenario& scenario) {
@@ -250,7 +279,8 @@ json runTrain(const TrainOptions& options) {
     // The bundle is written beside `out` and renamed into place: that folder must take a
     // new file now, not after training (issue 19).
     const fs::path parent = out.has_parent_path() ? out.parent_path() : fs::path(".");
-    const fs::path probe = parent / fmt::format(".{}.probe-{}", out.filename().string(), ::getpid());
+    removeDeadProbes(parent, out.filename().string());
+    const fs::path probe = parent / fmt::format("{}{}", probePrefix(out.filename().string()), ::getpid());
     {
       std::ofstream file(probe);
       if (!(file << "x") || !file.flush())
@@ -324,6 +354,8 @@ json runTrain(const TrainOptions& options) {
     if (finished.count(behavior.name) != 0) {
       log(fmt::format("resume: {}: already trained in {}, kept", behavior.name, out.string()));
       report["kept"].push_back(behavior.name);
+      // A run killed after its bundle was in place may have left its checkpoints.
+      checkpoints.push_back(checkpointDirectory(out, behavior.name));
       continue;
     }
     const Problem problem = behavior.problem(model);
@@ -390,11 +422,7 @@ json runTrain(const TrainOptions& options) {
   }
   if (bundle.provenance.contains("unfinished")) bundle.provenance.erase("unfinished");
   savePolicyBundle(out, bundle);
-  for (const fs::path& dir : checkpoints) {
-    std::error_code ec;
-    fs::remove_all(dir, ec);
-    fs::remove(dir.parent_path(), ec);  // only if empty
-  }
+  for (const fs::path& dir : checkpoints) removeCheckpoint(dir);
   log(fmt::format("policy: {}", out.string()));
   return report;
 }

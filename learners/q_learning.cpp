@@ -72,23 +72,40 @@ nlohmann::json toJson(const Walk& w, bool capped) {
   return j;
 }
 
+// The grid cells the walk has been in, for the coverage report, as hex digits: digit i
+// holds cells 4i to 4i + 3, the lowest bit first. A checkpoint keeps them so a resumed run
+// reports the coverage of the whole walk, as an uninterrupted one does (issue 19's kill
+// tests found a resumed run reporting only the cells walked after the resume).
+std::string encodeCells(const std::vector<std::uint8_t>& seen) {
+  static constexpr char kDigits[] = "0123456789abcdef";
+  std::string text((seen.size() + 3) / 4, '0');
+  for (std::size_t i = 0; i < text.size(); ++i) {
+    unsigned digit = 0;
+    for (std::size_t bit = 0; bit < 4 && 4 * i + bit < seen.size(); ++bit) digit |= (seen[4 * i + bit] ? 1u : 0u) << bit;
+    text[i] = kDigits[digit];
+  }
+  return text;
+}
+
 // What a checkpoint holds beside the table. A resumed run trusts all of it, so every
 // member is read strictly: a bad one rejects the checkpoint (see StateCheck).
 struct Saved {
   Walk walk;
   double seconds = 0;
   std::vector<CurvePoint> curve;
+  std::vector<std::uint8_t> cellSeen;
 };
 
 // The inverse of the state train() saves, read through `r` (which names the file) at path
 // "state". Throws mgrl::Error naming the member, what was expected and what was found.
-Saved readSaved(const nlohmann::json& state, const ManifestReader& r, std::size_t states, std::uint64_t budget,
-                std::uint64_t curvePoints, std::uint64_t maxEpisode) {
+Saved readSaved(const nlohmann::json& state, const ManifestReader& r, std::size_t states, std::size_t cells,
+                std::uint64_t budget, std::uint64_t curvePoints, std::uint64_t maxEpisode) {
   using nlohmann::json;
   if (!state.is_object()) r.fail("state", "an object", state);
   for (const auto& item : state.items())
-    if (item.key() != "updates" && item.key() != "walk" && item.key() != "seconds" && item.key() != "curve")
-      r.fail("state", "only the keys updates, walk, seconds, curve", json(item.key()));
+    if (item.key() != "updates" && item.key() != "walk" && item.key() != "seconds" && item.key() != "curve" &&
+        item.key() != "cells_seen")
+      r.fail("state", "only the keys updates, walk, seconds, curve, cells_seen", json(item.key()));
   Saved saved;
   Walk& w = saved.walk;
   const json& walk =
@@ -136,6 +153,17 @@ Saved readSaved(const nlohmann::json& state, const ManifestReader& r, std::size_
              p[0]);
     saved.curve.push_back({updates, p[1].get<double>(), p[2].get<double>(), p[3].get<double>()});
   }
+  const std::string seen = r.string(state, "state", "cells_seen");
+  const std::size_t digits = (cells + 3) / 4;
+  // The last digit holds only the cells there are: its unused bits must be 0.
+  const unsigned lastMask = cells % 4 == 0 ? 0xfu : (1u << (cells % 4)) - 1;
+  auto value = [](char c) { return c >= '0' && c <= '9' ? c - '0' : c >= 'a' && c <= 'f' ? c - 'a' + 10 : -1; };
+  if (seen.size() != digits || !std::all_of(seen.begin(), seen.end(), [&](char c) { return value(c) >= 0; }) ||
+      (digits > 0 && (static_cast<unsigned>(value(seen.back())) & ~lastMask) != 0))
+    r.fail("state.cells_seen", fmt::format("{} lowercase hex digits, one bit per grid cell of {}", digits, cells),
+           json(seen.substr(0, 32)));
+  saved.cellSeen.assign(cells, 0);
+  for (std::size_t c = 0; c < cells; ++c) saved.cellSeen[c] = (value(seen[c / 4]) >> (c % 4)) & 1;
   return saved;
 }
 
@@ -166,17 +194,21 @@ TrainResult QLearning::train(const TrainContext& context) const {
     w.episodeActions = 0;
   };
 
+  // Cells the walk has been in (those of the run it resumes included), for the coverage
+  // report: the paper's rule can keep a walk in a few cells for its whole budget.
+  std::vector<std::uint8_t> cellSeen(grid.cellCount(), 0);
   bool resumed = false;
   if (context.checkpointer) {
     // The checkpointer runs this before trusting the checkpoint: a state that fails it is
     // reported and ignored there, and the table left as it is (all zeros).
     Saved saved;
     const StateCheck check = [&](const nlohmann::json& state, const ManifestReader& reader) {
-      saved = readSaved(state, reader, m.stateCount(), total, curvePoints_, maxEpisode_);
+      saved = readSaved(state, reader, m.stateCount(), grid.cellCount(), total, curvePoints_, maxEpisode_);
     };
     if (context.checkpointer->loadChecked(q, check)) {
       walk = saved.walk;
       secondsBefore = saved.seconds;
+      cellSeen = std::move(saved.cellSeen);
       result.curve = std::move(saved.curve);
       resumed = true;
     }
@@ -215,9 +247,6 @@ TrainResult QLearning::train(const TrainContext& context) const {
   // the caches and random actions defeat the hardware's own prefetching), and with two
   // threads the next chunk is walked while this one is updated. Chunks end at progress,
   // curve and checkpoint points, so the same seed gives the same table either way.
-  // Cells the walk has been in (since this process started the run), for the coverage
-  // report: the paper's rule can keep a walk in a few cells for its whole budget.
-  std::vector<std::uint8_t> cellSeen(grid.cellCount(), 0);
   auto walkChunk = [&](Walk& w, std::uint64_t stop, std::vector<Step>& steps) {
     steps.clear();
     GridCell cell;
@@ -362,7 +391,12 @@ TrainResult QLearning::train(const TrainContext& context) const {
       nlohmann::json curve = nlohmann::json::array();
       for (const CurvePoint& p : result.curve) curve.push_back({p.updates, p.seconds, p.residual, p.meanResidual});
       context.checkpointer->save(
-          {{"updates", walk.updates}, {"walk", toJson(walk, maxEpisode_ > 0)}, {"seconds", elapsed()}, {"curve", curve}}, q);
+          {{"updates", walk.updates},
+           {"walk", toJson(walk, maxEpisode_ > 0)},
+           {"seconds", elapsed()},
+           {"curve", curve},
+           {"cells_seen", encodeCells(cellSeen)}},
+          q);
     }
     if (context.observer) context.observer->progress({walk.updates, total, elapsed(), lastResidual});
     if (stopping) throw TrainInterrupted(walk.updates, total, context.checkpointer != nullptr);

@@ -256,6 +256,57 @@ TEST_CASE("mgrl train starts over without --resume or from a checkpoint of other
   }
 }
 
+// Issue 19's kill tests (scripts/kill_test.py): a run killed after its bundle was in place
+// but before it removed its checkpoints left `<out>.checkpoints/` (22 MB per behaviour at
+// the scenario's budgets), and a killed checkpoint save left `<behaviour>.tmp-PID-N` beside
+// it. The next `--resume` found every behaviour trained, kept them, and never touched the
+// checkpoints: they stayed for good. A finished run removes the checkpoints of every
+// behaviour it was asked for, kept ones included, and what killed writers left there.
+TEST_CASE("mgrl train --resume that keeps every behaviour removes the checkpoints a killed run left", "[cli][data]") {
+  Sandbox box("kept-checkpoints");
+  const fs::path out = box.path("bundle"), checkpoints = box.path("bundle.checkpoints");
+  const std::string train = kCheckpointed + " --out " + shellWord(out);
+  REQUIRE(box.train(train, "MGRL_EXIT_AFTER_CHECKPOINTS=1").status == 75);
+  REQUIRE(fs::exists(checkpoints / "approach" / "state.json"));
+  fs::copy(checkpoints, box.path("saved"), fs::copy_options::recursive);
+  REQUIRE(box.train(train).status == 0);
+  REQUIRE_FALSE(fs::exists(checkpoints));
+  // What a run killed between putting its bundle in place and removing its checkpoints
+  // leaves, with a checkpoint save of a process that is gone.
+  fs::copy(box.path("saved"), checkpoints, fs::copy_options::recursive);
+  const pid_t gone = ::fork();
+  if (gone == 0) ::_exit(0);
+  int status = 0;
+  ::waitpid(gone, &status, 0);
+  fs::copy(checkpoints / "approach", checkpoints / ("approach.tmp-" + std::to_string(gone) + "-0"));
+
+  const Run resume = box.train(train + " --resume");
+  const json report = resume.report();
+  CHECK(report["kept"] == json::array({"approach", "hit"}));
+  CHECK_FALSE(fs::exists(checkpoints));
+}
+
+// Issue 19's kill tests: train checks that --out's folder takes a file by writing
+// `.<out>.probe-PID` and removing it; killed in between, it left the probe for good. The
+// next run removes those of processes that are gone (a live one may be training now).
+TEST_CASE("mgrl train removes the writability probe a killed run left beside --out", "[cli][data]") {
+  Sandbox box("probe");
+  const fs::path out = box.path("bundle");
+  const pid_t gone = ::fork();
+  if (gone == 0) ::_exit(0);
+  int status = 0;
+  ::waitpid(gone, &status, 0);
+  const fs::path dead = box.path(".bundle.probe-" + std::to_string(gone));
+  const fs::path live = box.path(".bundle.probe-" + std::to_string(::getpid()));
+  const fs::path other = box.path(".other.probe-" + std::to_string(gone));
+  for (const fs::path& p : {dead, live, other}) std::ofstream(p) << "x";
+
+  REQUIRE(box.train(kFast + " --out " + shellWord(out)).status == 0);
+  CHECK_FALSE(fs::exists(dead));
+  CHECK(fs::exists(live));
+  CHECK(fs::exists(other));  // another bundle's
+}
+
 TEST_CASE("settings left out of the behaviour key do not change the trained table", "[cli][data]") {
   // checkpoint_every, curve_points and threads are not hashed into the key (mgrl/learning/behavior.hpp),
   // so a bundle trained with other values is taken as current: its table must be the same.

@@ -1,9 +1,14 @@
 // The learning framework on problems whose answers are known by hand: interpolation,
 // rewards, the static-target environment, value iteration and Q-learning (paper sec. 4).
+#include <sys/wait.h>
+#include <unistd.h>
+
 #include <catch2/catch.hpp>
 
 #include <cmath>
 #include <filesystem>
+
+#include <fmt/format.h>
 
 #include "app/plugins.hpp"
 #include "mgrl/core/bundle.hpp"
@@ -420,6 +425,41 @@ TEST_CASE("Q-learning is deterministic and a resumed run ends with the uninterru
   REQUIRE(finished.curve.back().residual == whole.curve.back().residual);
 }
 
+// Issue 19's kill tests (scripts/kill_test.py): a run resumed after a kill ended with the
+// uninterrupted table but reported the coverage of the walk after the resume only (boxing's
+// hit: 1422 cells visited of 1425 against 1425), as if the cells walked before the kill had
+// never been. The checkpoint keeps the cells seen; every statistic but `resumed` is the
+// uninterrupted run's.
+TEST_CASE("a resumed Q-learning run reports the whole walk's coverage, as an uninterrupted one does",
+          "[learning][checkpoint]") {
+  // An avatar that stands still: each 400-action episode stays in its target's cell, so
+  // the cells walked before a checkpoint are not walked again after it.
+  const ActionHit punch{0, 3, 1, 0.0f, 1.0f, 0.5f, 1.0f};
+  const StateActionModel standing =
+      handModel(2, {{0, 1, 5, 0, 0, 0, {punch}}, {0, 0, 5, 0, 0, 0, {}}, {1, 0, 5, 0, 0, 0, {}}, {1, 1, 5, 0, 0, 0, {punch}}});
+  const auto grid = makeGrid(kCorridorGrid, standing);
+  const auto reward = app::plugins().rewards.create(yaml("{type: hit, contact_radius: 0.1}"));
+  const StaticTarget environment;
+  const Problem problem{standing, *grid, *reward, environment};
+  const GridModel g = GridModel::build(problem, 2);
+  const std::string learner =
+      "{type: q_learning, budget: 2000, seed: 4, checkpoint_every: 600, curve_points: 4, max_episode_actions: 400}";
+  const TrainResult whole = trainWith(learner, problem, g);
+  REQUIRE(whole.stats["cells_visited"].get<std::size_t>() > 2);
+  for (const int crashAfter : {1, 2, 3}) {
+    CAPTURE(crashAfter);
+    MemoryCheckpointer store(crashAfter);
+    REQUIRE_THROWS_WITH(trainWith(learner, problem, g, &store), "simulated crash");
+    const TrainResult finished = trainWith(learner, problem, g, &store);
+    REQUIRE(finished.stats["resumed"] == true);
+    REQUIRE(finished.table == whole.table);
+    nlohmann::json stats = finished.stats, expected = whole.stats;
+    stats.erase("resumed");
+    expected.erase("resumed");
+    CHECK(stats == expected);
+  }
+}
+
 // Issue 15: the viewer's learn panel steps Q-learning one action at a time. It must be the
 // paper's algorithm, not a look-alike: the same seed and budget end with q_learning's
 // table bit for bit, and every step reports the update rule's own numbers.
@@ -640,6 +680,20 @@ TEST_CASE("Q-learning reports a damaged or invalid checkpoint, ignores it and tr
     damaged = sealed(j);
     message = "state.json: state.curve[0][0]: expected an update count in [1, 1800]";
   }
+  SECTION("cells seen that do not fit the grid") {
+    json j = saved;
+    j["state"]["cells_seen"] = "ff";
+    damaged = sealed(j);
+    message = "state.json: state.cells_seen: expected 13 lowercase hex digits, one bit per grid cell of 52, found '\"ff\"'";
+  }
+  SECTION("cells seen in other than lowercase hex digits") {
+    json j = saved;
+    std::string seen = j["state"]["cells_seen"];
+    seen[0] = 'F';
+    j["state"]["cells_seen"] = seen;
+    damaged = sealed(j);
+    message = "state.json: state.cells_seen: expected 13 lowercase hex digits, one bit per grid cell of 52";
+  }
   SECTION("a state that is not an object") {
     json j = saved;
     j["state"] = 5;
@@ -678,6 +732,39 @@ TEST_CASE("Q-learning resumes an intact directory checkpoint to the uninterrupte
   CHECK(resumed.stats["resumed"] == true);
   CHECK(resumed.table == clean.table);
   CHECK(resumed.curve.size() == clean.curve.size());
+}
+
+// Issue 19's kill tests (scripts/kill_test.py): `train` killed while replacing a checkpoint
+// leaves the new one in `<dir>.tmp-PID-N` beside the old. The next run without --resume
+// removed the checkpoint to start over, and the learner's load then put the killed run's
+// temporary back in its place (recovery of a missing bundle) and continued from it:
+// "resume: approach: continuing from the checkpoint" in a run that asked to start over.
+// remove() now removes what killed writers left beside the checkpoint too.
+TEST_CASE("a removed checkpoint stays removed, whatever a killed writer left beside it", "[learning][checkpoint]") {
+  const RingSetup setup;
+  const StateActionModel& m = setup.model;
+  const GridModel& g = setup.tabulated;
+  test::TempDir tmp("learning-checkpoint-remove");
+  const std::filesystem::path dir = tmp.path / "checkpoint";
+  std::vector<std::string> log;
+  DirectoryCheckpointer store(dir, "run-key", m, g.vertexCount, [&](const std::string& line) { log.push_back(line); });
+  trainWith(kRingLearner, setup.problem, g, &store);  // leaves its last checkpoint
+  REQUIRE(std::filesystem::exists(dir / "state.json"));
+  // A process that is gone, killed with a whole checkpoint in its temporary.
+  const pid_t gone = ::fork();
+  if (gone == 0) ::_exit(0);
+  int status = 0;
+  ::waitpid(gone, &status, 0);
+  const std::filesystem::path leftover = tmp.path / fmt::format("checkpoint.tmp-{}-0", gone);
+  std::filesystem::copy(dir, leftover);
+
+  store.remove();
+  CHECK_FALSE(std::filesystem::exists(dir));
+  CHECK_FALSE(std::filesystem::exists(leftover));
+  QTable table(m, g.vertexCount);
+  CHECK_FALSE(store.load(table).has_value());
+  CHECK(std::filesystem::is_empty(tmp.path));
+  CHECK(log.empty());
 }
 
 TEST_CASE("a checkpointer that cannot report refuses a state the learner rejects", "[learning][checkpoint]") {

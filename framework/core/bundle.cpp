@@ -42,17 +42,17 @@ bool exchange(const fs::path& from, const fs::path& to, std::error_code& ec) {
   return false;
 }
 
-// True while process `pid` exists (EPERM: it exists, owned by someone else).
-bool processAlive(long pid) {
-  if (pid <= 0 || pid > std::numeric_limits<pid_t>::max()) return false;
-  return pid == ::getpid() || ::kill(static_cast<pid_t>(pid), 0) == 0 || errno == EPERM;
-}
-
 std::string dumpForMessage(const json& value) {
   return value.dump(-1, ' ', false, json::error_handler_t::replace);
 }
 
 }  // namespace
+
+bool processAlive(long pid) {
+  if (pid <= 0 || pid > std::numeric_limits<pid_t>::max()) return false;
+  // EPERM: it exists, owned by someone else.
+  return pid == ::getpid() || ::kill(static_cast<pid_t>(pid), 0) == 0 || errno == EPERM;
+}
 
 // ---------------------------------------------------------------------------------------
 // Writing

@@ -116,6 +116,10 @@ std::optional<json> DirectoryCheckpointer::loadChecked(QTable& table, const Stat
 
 void DirectoryCheckpointer::remove() {
   std::error_code ec;
+  // What killed writers left beside it goes too (only a dead process's): a whole checkpoint
+  // in a temporary would otherwise be put back by the next load's recovery, and a run that
+  // starts over would continue from it (issue 19's kill tests).
+  for (const StaleSibling& stale : staleSiblings(dir_)) fs::remove_all(stale.path, ec);
   if (!fs::is_directory(fs::symlink_status(dir_, ec))) return;
   // Never delete a directory that is not a checkpoint (a mistyped path).
   if (!fs::exists(dir_ / kStateFile, ec) && !fs::is_empty(dir_, ec)) return;

@@ -63,7 +63,8 @@ class DirectoryCheckpointer final : public Checkpointer {
   /// An empty `check` accepts any state.
   std::optional<nlohmann::json> loadChecked(QTable& table, const StateCheck& check) override;
 
-  /// Deletes the checkpoint directory (after a finished run), ignoring errors. A
+  /// Deletes the checkpoint directory (after a finished run, or before a run that starts
+  /// over), and what killed writers left beside it (staleSiblings()), ignoring errors. A
   /// directory that holds no state.json and is not empty is not a checkpoint and is left
   /// alone.
   void remove();
