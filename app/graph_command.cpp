@@ -202,6 +202,7 @@ GraphResult obtainGraph(const Scenario& scenario, const GraphOptions& options) {
   result.model = buildStateActionModel(result.db, scenario.graph, &result.report);
   result.buildSeconds = since(buildStart);
 
+  const CaptureTravel clips = clipTravel(result.db);
   nlohmann::json provenance = {{"key", result.key},
                                {"scenario", scenario.name},
                                {"scenario_path", canonical.string()},
@@ -212,7 +213,7 @@ GraphResult obtainGraph(const Scenario& scenario, const GraphOptions& options) {
                                {"frames_in_scc", result.model.componentFrames.size()},
                                {"states", result.model.stateCount()},
                                {"actions", result.model.actionCount()},
-                               {"capture_travel", clipTravelJson(clipTravel(result.db))}};
+                               {"capture_travel", clipTravelJson(clips)}};
   try {
     std::filesystem::create_directories(result.bundle.parent_path());
     saveGraphBundle(result.bundle, result.model, provenance);
@@ -221,7 +222,7 @@ GraphResult obtainGraph(const Scenario& scenario, const GraphOptions& options) {
     // The graph is good; only reuse is lost. Say so and go on.
     log(fmt::format("graph: warning: could not write the cache ({})", e.what()));
   }
-  result.travel = measureTravel(scenario, result.db, result.model);
+  result.travel = measureTravel(scenario, clips, result.model);
   for (const std::string& w : result.travel.warnings) log(fmt::format("graph: warning: {}", w));
   result.seconds = since(start);
   return result;

@@ -91,6 +91,19 @@ TEST_CASE("eval refuses a target height no target of the placing grid can have, 
   CHECK(std::count_if(lines.begin(), lines.end(), [](const std::string& l) { return l.find("expected") != std::string::npos; }) == 1);
 }
 
+namespace {
+
+// A 120 s two-fighter bout of `scenario` with the policy trained into box's "policy",
+// exported to `folder`; simulate's report.
+json bout(Sandbox& box, const std::string& scenario, int seed, const std::string& folder) {
+  return box
+      .run("simulate " + shellWord(scenario) + " --seconds 120 --seed " + std::to_string(seed) + " --json --policy " +
+           shellWord(box.path("policy")) + " --bvh-out " + shellWord(folder))
+      .report();
+}
+
+}  // namespace
+
 TEST_CASE("boxing_spar.yaml keeps a fighting distance and punches from it: pelvises about a metre apart, never "
           "under 0.35 m, strikes at over half the capture's rate, both land hits",
           "[cli][data]") {
@@ -102,9 +115,7 @@ TEST_CASE("boxing_spar.yaml keeps a fighting distance and punches from it: pelvi
   std::string bouts;
   for (int seed : {1, 2, 3}) {
     const std::string folder = box.path("bout" + std::to_string(seed)).string();
-    const json report = box.run("simulate " + shellWord(scenario) + " --seconds 120 --seed " + std::to_string(seed) +
-                                " --json --policy " + shellWord(box.path("policy")) + " --bvh-out " + shellWord(folder))
-                            .report();
+    const json report = bout(box, scenario, seed, folder);
     CAPTURE(seed);
     REQUIRE(report["hits_by_avatar"].size() == 2);
     CHECK(report["hits_by_avatar"][0].get<int>() > 10);
@@ -149,9 +160,7 @@ TEST_CASE("sparring.yaml spars like the SNU capture: distance, strike rate, bodi
   std::string bouts;
   for (int seed : {1, 2, 3}) {
     const std::string folder = box.path("bout" + std::to_string(seed)).string();
-    const json report = box.run("simulate " + shellWord(scenario) + " --seconds 120 --seed " + std::to_string(seed) +
-                                " --json --policy " + shellWord(box.path("policy")) + " --bvh-out " + shellWord(folder))
-                            .report();
+    const json report = bout(box, scenario, seed, folder);
     CAPTURE(seed);
     CHECK(report["hits_by_avatar"][0].get<int>() > 0);
     CHECK(report["hits_by_avatar"][1].get<int>() > 0);

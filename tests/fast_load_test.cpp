@@ -81,6 +81,7 @@ TEST_CASE("hashFileContents and MappedFile say which file is missing or not a fi
   CHECK_THROWS_WITH(mgrl::hashFileContents(h, tmp.path), Contains("expected a file, found a directory"));
   CHECK_THROWS_WITH(mgrl::MappedFile(tmp.path / "none.npy"), Contains("none.npy: cannot open"));
   CHECK_THROWS_WITH(mgrl::MappedFile(tmp.path), Contains("expected a regular file, found a directory"));
+  CHECK_THROWS_WITH(mgrl::MappedFile("/dev/null"), Contains("/dev/null: expected a regular file, found a device"));
 }
 
 TEST_CASE("MappedFile gives a file's bytes, and none for an empty file", "[fast_load]") {

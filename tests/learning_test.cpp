@@ -357,20 +357,42 @@ struct RingSetup {
 constexpr const char* kRingLearner =
     "{type: q_learning, budget: 2000, seed: 9, checkpoint_every: 600, curve_points: 4}";
 
+namespace {
+
+// An avatar that stands still, punching in place: two states, four actions, no ground
+// motion, so the target never leaves the grid (issues 15 and 19).
+struct StandingSetup {
+  StandingSetup()
+      : model(handModel(2, {{0, 1, 5, 0, 0, 0, {punch()}},
+                            {0, 0, 5, 0, 0, 0, {}},
+                            {1, 0, 5, 0, 0, 0, {}},
+                            {1, 1, 5, 0, 0, 0, {punch()}}})),
+        grid(makeGrid(kCorridorGrid, model)),
+        reward(app::plugins().rewards.create(yaml("{type: hit, contact_radius: 0.1}"))),
+        problem{model, *grid, *reward, environment},
+        tabulated(GridModel::build(problem, 2)) {}
+  static ActionHit punch() { return {0, 3, 1, 0.0f, 1.0f, 0.5f, 1.0f}; }
+  StateActionModel model;
+  std::unique_ptr<Discretizer> grid;
+  std::unique_ptr<Reward> reward;
+  StaticTarget environment;
+  Problem problem;
+  GridModel tabulated;
+  StandingSetup(const StandingSetup&) = delete;  // problem refers to the members
+  StandingSetup& operator=(const StandingSetup&) = delete;
+};
+
+}  // namespace
+
 // Issue 15: the paper restarts Q-learning's walk only when the target leaves the grid. On a
 // capture whose avatar hardly travels the target never leaves, one episode takes the whole
 // budget and the walk stays in the first target's cell. max_episode_actions restarts it
 // anyway; left at 0 it changes nothing (and no behaviour key: tables trained before it
 // keep theirs).
 TEST_CASE("Q-learning's episode cap restores coverage where the avatar stands still", "[learning]") {
-  const ActionHit punch{0, 3, 1, 0.0f, 1.0f, 0.5f, 1.0f};
-  const StateActionModel standing =
-      handModel(2, {{0, 1, 5, 0, 0, 0, {punch}}, {0, 0, 5, 0, 0, 0, {}}, {1, 0, 5, 0, 0, 0, {}}, {1, 1, 5, 0, 0, 0, {punch}}});
-  const auto grid = makeGrid(kCorridorGrid, standing);
-  const auto reward = app::plugins().rewards.create(yaml("{type: hit, contact_radius: 0.1}"));
-  const StaticTarget environment;
-  const Problem problem{standing, *grid, *reward, environment};
-  const GridModel g = GridModel::build(problem, 2);
+  const StandingSetup parts;
+  const Problem& problem = parts.problem;
+  const GridModel& g = parts.tabulated;
 
   const TrainResult paper = trainWith("{type: q_learning, budget: 20000, seed: 4, curve_points: 2}", problem, g);
   CHECK(paper.stats["restarts"] == 1);  // one episode for the whole budget
@@ -434,14 +456,9 @@ TEST_CASE("a resumed Q-learning run reports the whole walk's coverage, as an uni
           "[learning][checkpoint]") {
   // An avatar that stands still: each 400-action episode stays in its target's cell, so
   // the cells walked before a checkpoint are not walked again after it.
-  const ActionHit punch{0, 3, 1, 0.0f, 1.0f, 0.5f, 1.0f};
-  const StateActionModel standing =
-      handModel(2, {{0, 1, 5, 0, 0, 0, {punch}}, {0, 0, 5, 0, 0, 0, {}}, {1, 0, 5, 0, 0, 0, {}}, {1, 1, 5, 0, 0, 0, {punch}}});
-  const auto grid = makeGrid(kCorridorGrid, standing);
-  const auto reward = app::plugins().rewards.create(yaml("{type: hit, contact_radius: 0.1}"));
-  const StaticTarget environment;
-  const Problem problem{standing, *grid, *reward, environment};
-  const GridModel g = GridModel::build(problem, 2);
+  const StandingSetup parts;
+  const Problem& problem = parts.problem;
+  const GridModel& g = parts.tabulated;
   const std::string learner =
       "{type: q_learning, budget: 2000, seed: 4, checkpoint_every: 600, curve_points: 4, max_episode_actions: 400}";
   const TrainResult whole = trainWith(learner, problem, g);

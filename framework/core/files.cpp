@@ -77,11 +77,15 @@ MappedFile::MappedFile(const std::filesystem::path& path) {
   const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
   if (fd < 0) throw Error(fmt::format("{}: cannot open: {}", path.string(), std::strerror(errno)));
   struct stat info {};
-  if (::fstat(fd, &info) != 0 || !S_ISREG(info.st_mode)) {
+  if (::fstat(fd, &info) != 0) {
     const int error = errno;
     ::close(fd);
-    throw Error(fmt::format("{}: expected a regular file{}", path.string(),
-                            S_ISDIR(info.st_mode) ? ", found a directory" : fmt::format(" ({})", std::strerror(error))));
+    throw Error(fmt::format("{}: cannot read: {}", path.string(), std::strerror(error)));
+  }
+  if (!S_ISREG(info.st_mode)) {
+    ::close(fd);
+    throw Error(fmt::format("{}: expected a regular file, found {}", path.string(),
+                            S_ISDIR(info.st_mode) ? "a directory" : "a device, pipe or socket"));
   }
   size_ = static_cast<std::size_t>(info.st_size);
   if (size_ > 0) {
