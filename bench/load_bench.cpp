@@ -15,6 +15,7 @@
 #include "mgrl/motion/asf_amc.hpp"
 #include "mgrl/motion/bvh.hpp"
 #include "mgrl/core/data_paths.hpp"
+#include "mgrl/core/hash.hpp"
 #include "mgrl/motion/kinematics.hpp"
 #include "mgrl/motion/motion_io.hpp"
 
@@ -56,7 +57,9 @@ int main(int argc, char** argv) {
     if (f.extension() == ".amc") bytes += static_cast<double>(std::filesystem::file_size(defaultAsfFor(f)));
   }
 
-  std::vector<double> loadTimes, parseTimes, fkTimes, annotateTimes;
+  std::vector<double> loadTimes, parseTimes, fkTimes, annotateTimes, hashTimes;
+  // Hashing from memory (every cache key and bundle check, issue 20): a 64 MB buffer.
+  const std::string hashInput(std::size_t{64} << 20, 'x');
   std::size_t frames = 0, jointFrames = 0;
   for (int run = 0; run < runs; ++run) {
     // Whole load from disk, as `mgrl inspect` does it (read, parse, convert units).
@@ -97,6 +100,11 @@ int main(int argc, char** argv) {
     fkTimes.push_back(seconds(f0, Clock::now()));
     if (sink == 12345.678) std::puts("");  // keep the loop
 
+    const auto h0 = Clock::now();
+    const std::uint64_t digest = hashBytes(hashInput);
+    hashTimes.push_back(seconds(h0, Clock::now()));
+    if (digest == 12345) std::puts("");
+
     const auto a0 = Clock::now();
     for (const Motion& m : motions) (void)annotate(m, findRoles(m.skeleton()));
     annotateTimes.push_back(seconds(a0, Clock::now()));
@@ -110,5 +118,6 @@ int main(int argc, char** argv) {
   std::printf("forward kinematics    %.4f s median  (%.1f M joints/s, %.2f M frames/s)\n", fk,
               static_cast<double>(jointFrames) / fk / 1e6, static_cast<double>(frames) / fk / 1e6);
   std::printf("annotate all          %.3f s median\n", ann);
+  std::printf("hash (xxh64, memory)  %.1f GB/s median\n", static_cast<double>(hashInput.size()) / bench::median(hashTimes) / 1e9);
   return 0;
 }

@@ -49,9 +49,9 @@ std::string pattern(std::size_t n) {
 
 TEST_CASE("hashFileContents hashes a file as update(readFile(path)) does, whatever its size", "[fast_load][hash]") {
   mgrl::test::TempDir tmp("fast-load-test");
-  // Empty, smaller than a stripe, and across the 1 MB read blocks.
-  for (std::size_t n : {std::size_t{0}, std::size_t{5}, std::size_t{1} << 20, (std::size_t{1} << 20) + 33,
-                        std::size_t{3} << 20}) {
+  // Empty, smaller than a stripe, and on and across the 64 KB read blocks.
+  for (std::size_t n : {std::size_t{0}, std::size_t{5}, std::size_t{1} << 16, (std::size_t{1} << 16) + 7,
+                        std::size_t{1} << 20, (std::size_t{1} << 20) + 33, std::size_t{3} << 20}) {
     CAPTURE(n);
     const fs::path file = tmp.path / "data.bin";
     writeBytes(file, pattern(n));

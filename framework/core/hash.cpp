@@ -43,7 +43,7 @@ std::uint64_t mergeRound(std::uint64_t acc, std::uint64_t lane) {
   return acc * kPrime1 + kPrime4;
 }
 
-void consumeStripe(std::uint64_t* acc, const unsigned char* p) {
+inline __attribute__((always_inline)) void consumeStripe(std::uint64_t* acc, const unsigned char* p) {
   acc[0] = round(acc[0], read64(p));
   acc[1] = round(acc[1], read64(p + 8));
   acc[2] = round(acc[2], read64(p + 16));
