@@ -1,3 +1,5 @@
+#include <algorithm>
+
 #include <catch2/catch.hpp>
 
 #include "mgrl/motion/kinematics.hpp"
@@ -58,4 +60,46 @@ TEST_CASE("velocities are central differences, one-sided at the ends", "[kinemat
   CHECK(v[0].x() == Approx(0.1));  // (0.01 - 0) / 0.1
   CHECK(v[4].x() == Approx((0.16 - 0.09) / 0.1));
   CHECK(velocities(std::vector<Eigen::Vector3d>(1, Eigen::Vector3d::Ones()), 1, 0.1)[0].norm() == 0);
+}
+
+TEST_CASE("redoing one subtree's kinematics gives what the full pass gives", "[kinematics][data]") {
+  const Motion m = test::loadMocap("cmu/bvh/13_17_boxing.bvh").motion;
+  const Skeleton& skeleton = m.skeleton();
+  const std::size_t n = skeleton.jointCount();
+  const int hip = skeleton.find("LeftUpLeg");
+  REQUIRE(hip > 0);
+  const std::vector<int> leg = subtreeJoints(skeleton, hip);
+  // Exactly the hip and the joints whose parent chain reaches it.
+  for (std::size_t j = 0; j < n; ++j) {
+    bool below = false;
+    for (int k = static_cast<int>(j); k >= 0; k = skeleton.joint(static_cast<std::size_t>(k)).parent)
+      below = below || k == hip;
+    CHECK((std::find(leg.begin(), leg.end(), static_cast<int>(j)) != leg.end()) == below);
+  }
+  CHECK(std::is_sorted(leg.begin(), leg.end()));
+  CHECK(leg.size() >= 3);
+  CHECK(subtreeJoints(skeleton, -1).empty());
+  CHECK(subtreeJoints(skeleton, static_cast<int>(n)).empty());
+
+  std::vector<Eigen::Quaterniond> local(n), rotations(n), fullRotations(n);
+  std::vector<Eigen::Vector3d> translations(n), positions(n), fullPositions(n);
+  for (std::size_t j = 0; j < n; ++j) {
+    local[j] = m.rotation(40, j);
+    translations[j] = m.localTranslation(40, j);
+  }
+  forwardKinematics(skeleton, local, translations, rotations, positions);
+  // Turn the hip and the knee, then redo the leg alone.
+  local[static_cast<std::size_t>(hip)] =
+      Eigen::Quaterniond(Eigen::AngleAxisd(0.4, Eigen::Vector3d::UnitX())) * local[static_cast<std::size_t>(hip)];
+  local[static_cast<std::size_t>(leg[1])] =
+      Eigen::Quaterniond(Eigen::AngleAxisd(-0.3, Eigen::Vector3d::UnitZ())) * local[static_cast<std::size_t>(leg[1])];
+  const std::vector<Eigen::Vector3d> before = positions;
+  forwardKinematicsOf(skeleton, leg, local, translations, rotations, positions);
+  forwardKinematics(skeleton, local, translations, fullRotations, fullPositions);
+  for (std::size_t j = 0; j < n; ++j) {
+    CAPTURE(j);
+    CHECK(positions[j] == fullPositions[j]);
+    CHECK(rotations[j].coeffs() == fullRotations[j].coeffs());
+  }
+  CHECK((positions[static_cast<std::size_t>(leg.back())] - before[static_cast<std::size_t>(leg.back())]).norm() > 0.05);
 }

@@ -41,6 +41,7 @@ ActionPlayback::ActionPlayback(const MotionDatabase& db, const StateActionModel&
     knee_[static_cast<std::size_t>(side)] = ankle > 0 ? db.skeleton->joint(static_cast<std::size_t>(ankle)).parent : -1;
     const int knee = knee_[static_cast<std::size_t>(side)];
     hip_[static_cast<std::size_t>(side)] = knee > 0 ? db.skeleton->joint(static_cast<std::size_t>(knee)).parent : -1;
+    leg_[static_cast<std::size_t>(side)] = subtreeJoints(*db.skeleton, hip_[static_cast<std::size_t>(side)]);
   }
 }
 
@@ -165,8 +166,12 @@ bool ActionPlayback::next(Pose& pose) {
       }
     }
     if (footLock_) {
-      const bool left = lockFoot(0, down[0], pose), right = lockFoot(1, down[1], pose);
-      if (left || right) forwardKinematics(skeleton, pose.rotations, pose.translations, fkRotations_, fkPositions_);
+      // Each lock turns one leg only: redo the kinematics of that leg, not of the body.
+      const std::array<bool, 2> locked = {lockFoot(0, down[0], pose), lockFoot(1, down[1], pose)};
+      for (int side = 0; side < 2; ++side)
+        if (locked[side])
+          forwardKinematicsOf(skeleton, leg_[static_cast<std::size_t>(side)], pose.rotations, pose.translations,
+                              fkRotations_, fkPositions_);
     }
     for (int side = 0; side < 2; ++side) previousAnkle_[side] = fkPositions_[static_cast<std::size_t>(db_.roles.ankle[side])];
     previousDown_ = down;

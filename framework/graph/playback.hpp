@@ -102,6 +102,8 @@ class ActionPlayback {
   std::array<Eigen::Vector3d, 2> anchor_;
   std::array<int, 2> releasing_{1 << 30, 1 << 30};
   std::array<int, 2> knee_{-1, -1}, hip_{-1, -1};
+  /// Per leg, the hip and every joint below it: what a foot lock changes.
+  std::array<std::vector<int>, 2> leg_;
 };
 
 /// Poses as a motion clip on `skeleton` (for export): every joint's rotation, and the

@@ -45,6 +45,41 @@ void forwardKinematics(const Skeleton& skeleton, std::span<const Eigen::Quaterni
   }
 }
 
+std::vector<int> subtreeJoints(const Skeleton& skeleton, int top) {
+  const std::size_t n = skeleton.jointCount();
+  if (top < 0 || static_cast<std::size_t>(top) >= n) return {};
+  // Parents come before their children, so one pass in index order finds every descendant.
+  std::vector<char> below(n, 0);
+  std::vector<int> joints{top};
+  below[static_cast<std::size_t>(top)] = 1;
+  for (std::size_t j = static_cast<std::size_t>(top) + 1; j < n; ++j) {
+    const int parent = skeleton.joint(j).parent;
+    if (parent >= 0 && below[static_cast<std::size_t>(parent)]) {
+      below[j] = 1;
+      joints.push_back(static_cast<int>(j));
+    }
+  }
+  return joints;
+}
+
+void forwardKinematicsOf(const Skeleton& skeleton, std::span<const int> joints,
+                         std::span<const Eigen::Quaterniond> localRotations,
+                         std::span<const Eigen::Vector3d> localTranslations, std::span<Eigen::Quaterniond> rotations,
+                         std::span<Eigen::Vector3d> positions) {
+  for (const int joint : joints) {
+    const auto j = static_cast<std::size_t>(joint);
+    const int parent = skeleton.joint(j).parent;
+    if (parent < 0) {
+      rotations[j] = localRotations[j];
+      positions[j] = localTranslations[j];
+    } else {
+      const auto p = static_cast<std::size_t>(parent);
+      rotations[j] = rotations[p] * localRotations[j];
+      positions[j] = positions[p] + rotations[p] * localTranslations[j];
+    }
+  }
+}
+
 std::vector<Eigen::Vector3d> jointPositions(const Motion& motion) {
   const std::size_t n = motion.skeleton().jointCount();
   std::vector<Eigen::Vector3d> positions(motion.frameCount() * n);

@@ -23,6 +23,18 @@ void forwardKinematics(const Skeleton& skeleton, std::span<const Eigen::Quaterni
                        std::span<const Eigen::Vector3d> localTranslations,
                        std::span<Eigen::Quaterniond> rotations, std::span<Eigen::Vector3d> positions);
 
+/// Joint `top` and every joint below it, in ascending order: what forwardKinematicsOf()
+/// must redo after the local rotations of that subtree changed.
+std::vector<int> subtreeJoints(const Skeleton& skeleton, int top);
+
+/// The pass of forwardKinematics() for the listed joints only (ascending, as subtreeJoints()
+/// gives them), whose parents outside the list are already up to date in `rotations` and
+/// `positions`: after a change of a leg's local rotations, the leg alone is redone.
+void forwardKinematicsOf(const Skeleton& skeleton, std::span<const int> joints,
+                         std::span<const Eigen::Quaterniond> localRotations,
+                         std::span<const Eigen::Vector3d> localTranslations, std::span<Eigen::Quaterniond> rotations,
+                         std::span<Eigen::Vector3d> positions);
+
 /// Joint positions for every frame, frame-major: result[f * jointCount + j].
 std::vector<Eigen::Vector3d> jointPositions(const Motion& motion);
 
