@@ -50,6 +50,10 @@ struct TrainOptions : LearnOptions {
   std::filesystem::path out;   ///< policy bundle ("" the default in the cache)
   bool resume = false;         ///< continue from checkpoints left by a killed run
   double maxMemoryBytes = 1e18;  ///< refuse a behaviour whose training would need more
+  /// The learning problem's model: "tabulated" (every transition stored, the fastest),
+  /// "compact" (rewards only, a fifth of the memory, landings found per backup; same
+  /// tables), or "auto": tabulated when it fits in maxMemoryBytes, else compact.
+  std::string model = "auto";
   ListenerFactory listen;        ///< null: no listener
 };
 

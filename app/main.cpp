@@ -177,6 +177,12 @@ int main(int argc, char** argv) {
                            "Refuse a behaviour whose training needs more memory than this (GB; default: 80 % of "
                            "this machine's)")
       ->default_str(fmt::format("{:.1f}", maxMemoryGb));
+  trainCommand
+      ->add_option("--model", train.model,
+                   "The learning problem in memory: tabulated (every transition stored, fastest), compact (rewards "
+                   "only, about a fifth of the memory, a grid lookup per backup; the same tables), or auto "
+                   "(tabulated when it fits in --max-memory, else compact)")
+      ->default_str("auto");
   trainCommand->add_flag("--json", json, "Print one JSON object on stdout");
   trainCommand->add_option("--data", dataDir, "Motion capture folder (default: MGRL_DATA, else ../shared/mocap)");
   trainCommand->add_option("--cache", cacheDir, "Cache folder (default: MGRL_CACHE, else ~/.cache/mgrl)");
@@ -393,6 +399,8 @@ int main(int argc, char** argv) {
       if (!(maxMemoryGb > 0 && maxMemoryGb <= 1e6))
         throw mgrl::Error(fmt::format("--max-memory: expected gigabytes in (0, 1000000], found {}", maxMemoryGb));
       train.maxMemoryBytes = maxMemoryGb * 1e9;
+      if (train.model != "auto" && train.model != "tabulated" && train.model != "compact")
+        throw mgrl::Error(fmt::format("--model: expected auto, tabulated or compact, found '{}'", train.model));
       const nlohmann::json report = mgrl::app::runTrain(train);
       if (json)
         std::cout << report.dump(2) << '\n';

@@ -4,6 +4,7 @@
 #include <fstream>
 #include <cstdlib>
 #include <iostream>
+#include <map>
 
 #include <unistd.h>
 
@@ -332,6 +333,7 @@ json runTrain(const TrainOptions& options) {
     if (options.behavior.empty() || behavior.name == options.behavior) wanted.push_back(behavior.name);
   // Issue 19: every behaviour's size is checked before anything is allocated or trained,
   // not found by bad_alloc, nor after training the others.
+  std::map<std::string, bool> compactModel;
   for (const Behavior& behavior : all) {
     if (std::find(wanted.begin(), wanted.end(), behavior.name) == wanted.end()) continue;
     try {
@@ -339,13 +341,33 @@ json runTrain(const TrainOptions& options) {
     } catch (const Error& e) {
       throw Error(fmt::format("behaviors.{}: {}", behavior.name, e.what()));
     }
-    const double needed = GridModel::trainingBytes(model.actionCount(), behavior.discretizer->vertexCount());
+    // Issue 20: the tabulated model when it fits (or is asked for), else the compact one.
+    const std::size_t vertices = behavior.discretizer->vertexCount();
+    const double tabulatedBytes = GridModel::trainingBytes(model.actionCount(), vertices, false);
+    const double compactBytes = GridModel::trainingBytes(model.actionCount(), vertices, true);
+    const bool canCompact = behavior.learner->takesCompactModel();
+    if (options.model == "compact" && !canCompact)
+      throw Error(fmt::format("behaviors.{}: --model compact: expected a learner that takes a compact model "
+                              "(q_learning, value_iteration), found {}; use --model tabulated or auto",
+                              behavior.name, behavior.learner->type()));
+    const bool compact = options.model == "compact" ||
+                         (options.model == "auto" && tabulatedBytes > options.maxMemoryBytes && canCompact);
+    const double needed = compact ? compactBytes : tabulatedBytes;
     if (needed > options.maxMemoryBytes)
       throw Error(fmt::format("behaviors.{}: training on a {} grid of {} vertices x {} actions needs about {} "
-                              "(tabulated model and Q tables); expected at most {} (--max-memory): use a coarser "
-                              "grid, or raise --max-memory",
-                              behavior.name, behavior.discretizer->type(), behavior.discretizer->vertexCount(),
-                              model.actionCount(), humanBytes(needed), humanBytes(options.maxMemoryBytes)));
+                              "({} model and Q tables); expected at most {} (--max-memory): use a coarser grid{}, or "
+                              "raise --max-memory",
+                              behavior.name, behavior.discretizer->type(), vertices, model.actionCount(),
+                              humanBytes(needed), compact ? "compact" : "tabulated", humanBytes(options.maxMemoryBytes),
+                              !compact && canCompact && compactBytes <= options.maxMemoryBytes
+                                  ? fmt::format(", --model compact (about {})", humanBytes(compactBytes))
+                                  : ""));
+    compactModel[behavior.name] = compact;
+    if (compact && options.model == "auto")
+      log(fmt::format("train {}: the tabulated model and tables would need about {}, over --max-memory {}: using "
+                      "the compact model (about {}; same tables, slower backups)",
+                      behavior.name, humanBytes(tabulatedBytes), humanBytes(options.maxMemoryBytes),
+                      humanBytes(compactBytes)));
   }
   std::vector<fs::path> checkpoints;
   const StopSignals signals;
@@ -360,12 +382,13 @@ json runTrain(const TrainOptions& options) {
     }
     const Problem problem = behavior.problem(model);
     const auto tabulateStart = Clock::now();
-    const GridModel grid = GridModel::build(problem, threads);
+    const bool compact = compactModel.at(behavior.name);
+    const GridModel grid = compact ? GridModel::buildCompact(problem, threads) : GridModel::build(problem, threads);
     const double tabulateSeconds = since(tabulateStart);
-    log(fmt::format("train {}: {} on a {} grid ({} vertices) x {} actions, problem tabulated in {:.2f} s ({} MB)",
+    log(fmt::format("train {}: {} on a {} grid ({} vertices) x {} actions, {} tabulated in {:.2f} s ({} MB)",
                     behavior.name, behavior.learner->type(), behavior.discretizer->type(),
-                    behavior.discretizer->vertexCount(), model.actionCount(), tabulateSeconds,
-                    grid.bytes() / 1000000));
+                    behavior.discretizer->vertexCount(), model.actionCount(),
+                    compact ? "rewards (compact model)" : "problem", tabulateSeconds, grid.bytes() / 1000000));
 
     DirectoryCheckpointer directory(checkpointDirectory(out, behavior.name), behavior.key, model,
                                     behavior.discretizer->vertexCount(), options.log);
@@ -402,6 +425,8 @@ json runTrain(const TrainOptions& options) {
                     {"tabulate_seconds", tabulateSeconds},
                     {"stats", result.stats}};
     report["behaviors"][behavior.name] = summary;
+    report["behaviors"][behavior.name]["model"] = compact ? "compact" : "tabulated";
+    report["behaviors"][behavior.name]["model_bytes"] = grid.bytes();
     json record = summary;
     record["config"] = behavior.config;
     record["weight"] = behavior.weight;

@@ -58,21 +58,23 @@ std::unique_ptr<Setup> setup(const mgrl::StateActionModel& m, const std::string&
   return s;
 }
 
-mgrl::TrainResult qLearning(const mgrl::StateActionModel& m, const Setup& s, std::uint64_t actions) {
+mgrl::TrainResult qLearning(const mgrl::StateActionModel& m, const Setup& s, std::uint64_t actions,
+                            const mgrl::GridModel* model = nullptr) {
   const auto learner = mgrl::app::plugins().learners.create(
       yaml("{type: q_learning, curve_points: 1, checkpoint_every: 0, budget: " + std::to_string(actions) + "}"));
-  return learner->train({{m, *s.grid, *s.reward, s.environment}, s.tabulated, nullptr, nullptr,
+  return learner->train({{m, *s.grid, *s.reward, s.environment}, model ? *model : s.tabulated, nullptr, nullptr,
                          mgrl::defaultThreadCount()});
 }
 
-double sweepSeconds(const mgrl::StateActionModel& m, const Setup& s, int runs) {
-  mgrl::QTable a(m, s.tabulated.vertexCount), b = a;
+double sweepSeconds(const mgrl::StateActionModel& m, const Setup& s, int runs, const mgrl::GridModel* model = nullptr) {
+  const mgrl::GridModel& g = model ? *model : s.tabulated;
+  mgrl::QTable a(m, g.vertexCount), b = a;
   std::vector<float> stage;
-  mgrl::sweep(a, b, s.tabulated, mgrl::defaultThreadCount(), stage);  // values that are not all 0
+  mgrl::sweep(a, b, g, mgrl::defaultThreadCount(), stage);  // values that are not all 0
   std::vector<double> samples;
   for (int r = 0; r < runs; ++r) {
     const auto start = Clock::now();
-    mgrl::sweep(b, a, s.tabulated, mgrl::defaultThreadCount(), stage);
+    mgrl::sweep(b, a, g, mgrl::defaultThreadCount(), stage);
     samples.push_back(since(start));
     std::swap(a, b);
   }
@@ -139,6 +141,24 @@ int main(int argc, char** argv) {
 
   std::printf("value iteration sweep, hit problem (%zu vertex-action pairs): %.3f s median of %d (target <= 0.15 s)\n",
               hit->tabulated.vertexCount * m.actionCount(), sweepSeconds(m, *hit, runs), runs);
+
+  // The compact model (issue 20, train --model compact): rewards only, landings found per
+  // backup. The same tables (tests/learning_test.cpp); here its memory and speed.
+  {
+    auto start = Clock::now();
+    const mgrl::GridModel compact =
+        mgrl::GridModel::buildCompact({m, *hit->grid, *hit->reward, hit->environment}, mgrl::defaultThreadCount());
+    const double built = since(start);
+    const double qMB = hit->grid->vertexCount() * m.actionCount() * 4 / 1e6;
+    std::printf("compact model, hit problem: %.0f MB (%.2fx its Q table; tabulated %.0f MB, %.2fx) built in %.2f s\n",
+                compact.bytes() / 1e6, compact.bytes() / 1e6 / qMB, hit->tabulated.bytes() / 1e6,
+                hit->tabulated.bytes() / 1e6 / qMB, built);
+    const std::uint64_t actions = std::min<std::uint64_t>(hitActions, 20'000'000);
+    const mgrl::TrainResult r = qLearning(m, *hit, actions, &compact);
+    std::printf("  q_learning hit %llu actions in %.2f s: %.2f M actions/s; value iteration sweep %.3f s median of %d\n",
+                static_cast<unsigned long long>(r.updates), r.seconds, static_cast<double>(r.updates) / r.seconds / 1e6,
+                sweepSeconds(m, *hit, runs, &compact), runs);
+  }
 
   // A runtime decision: both behaviours, random states and targets in the approach region.
   {

@@ -40,6 +40,7 @@ class QLearning final : public Learner {
         threads_(static_cast<unsigned>(p.integer("threads"))) {}
 
   std::string type() const override { return "q_learning"; }
+  bool takesCompactModel() const override { return true; }
 
   TrainResult train(const TrainContext& context) const override;
 
@@ -247,8 +248,14 @@ TrainResult QLearning::train(const TrainContext& context) const {
   // the caches and random actions defeat the hardware's own prefetching), and with two
   // threads the next chunk is walked while this one is updated. Chunks end at progress,
   // curve and checkpoint points, so the same seed gives the same table either way.
-  auto walkChunk = [&](Walk& w, std::uint64_t stop, std::vector<Step>& steps) {
+  // A compact model (GridModel::buildCompact) stores no transitions: the walk finds where
+  // each step's corners land as it records the step, on its own thread when there are two,
+  // and the updates read them in order instead of from a table (and the rewards, like Q,
+  // from the model's table, prefetched).
+  const bool compact = g.compact();
+  auto walkChunk = [&](Walk& w, std::uint64_t stop, std::vector<Step>& steps, std::vector<GridTransition>& landed) {
     steps.clear();
+    landed.clear();
     GridCell cell;
     if (!grid.locate(w.target, cell)) {  // only on the boundary's round-off
       restart(w);
@@ -259,6 +266,10 @@ TrainResult QLearning::train(const TrainContext& context) const {
       const std::size_t a = stateBegin[s] + static_cast<std::uint32_t>(w.rng.below(stateBegin[s + 1] - stateBegin[s]));
       steps.push_back({static_cast<std::uint32_t>(a), cell.cell});
       cellSeen[cell.cell] = 1;
+      if (compact) {
+        const std::uint32_t* c = &g.corners[static_cast<std::size_t>(cell.cell) << d];
+        for (int j = 0; j < corners; ++j) landed.push_back(g.moved(a, c[j]));
+      }
       w.target = rigid ? g.rigidNext(a, w.target) : environment.next(m, a, w.target);
       w.state = m.actionTo[a];
       ++w.episodeActions;
@@ -272,14 +283,29 @@ TrainResult QLearning::train(const TrainContext& context) const {
     }
     w.updates = stop;
   };
-  auto update = [&](const std::vector<Step>& steps, std::uint64_t from) {
+  // Compiled once per kind of model (a std::bool_constant), so the tabulated loop carries
+  // no test of the model's kind.
+  auto update = [&](auto compactModel, const std::vector<Step>& steps, const std::vector<GridTransition>& landed,
+                    std::uint64_t from) {
+    constexpr bool kCompact = decltype(compactModel)::value;
     constexpr std::size_t kTransitionAhead = 6, kRowsAhead = 3;
+    // Step i's corner j: from the table, or as the walk found it (compact models; the
+    // reward is not needed there).
+    auto transition = [&](std::size_t i, const std::uint32_t* c, int j) -> const GridTransition& {
+      if constexpr (kCompact)
+        return landed[i * static_cast<std::size_t>(corners) + static_cast<std::size_t>(j)];
+      else
+        return g.transition[steps[i].action * g.vertexCount + c[j]];
+    };
     for (std::size_t i = 0; i < steps.size(); ++i) {
       if (i + kTransitionAhead < steps.size()) {
         const Step& ahead = steps[i + kTransitionAhead];
         const std::uint32_t* c = &g.corners[static_cast<std::size_t>(ahead.cell) << d];
         for (int j = 0; j < corners; ++j) {
-          __builtin_prefetch(&g.transition[ahead.action * g.vertexCount + c[j]]);
+          if constexpr (kCompact)
+            __builtin_prefetch(&g.reward[ahead.action * g.vertexCount + c[j]]);
+          else
+            __builtin_prefetch(&g.transition[ahead.action * g.vertexCount + c[j]]);
           __builtin_prefetch(&q.at(ahead.action, c[j]), 1);
         }
       }
@@ -292,7 +318,7 @@ TrainResult QLearning::train(const TrainContext& context) const {
         const std::size_t n = q.actionsOf(to);
         ++stamp;
         for (int j = 0; j < corners; ++j) {
-          const GridTransition& t = g.transition[ahead.action * g.vertexCount + c[j]];
+          const GridTransition& t = transition(i + kRowsAhead, c, j);
           if (t.cell < 0) continue;
           const std::uint32_t* u = &g.corners[static_cast<std::size_t>(t.cell) << d];
           for (int l = 0; l < corners; ++l) {
@@ -309,7 +335,14 @@ TrainResult QLearning::train(const TrainContext& context) const {
       const std::uint32_t* corner = &g.corners[static_cast<std::size_t>(steps[i].cell) << d];
       for (int j = 0; j < corners; ++j) {
         const std::size_t v = corner[j];
-        const float target = backup(q, g, a, v);
+        float target;
+        if constexpr (kCompact) {
+          GridTransition t = transition(i, corner, j);
+          t.reward = g.reward[a * g.vertexCount + v];
+          target = backup(q, g, a, t);
+        } else {
+          target = backup(q, g, a, transition(i, corner, j));
+        }
         float& value = q.at(a, v);
         value += alpha * (target - value);
       }
@@ -335,9 +368,10 @@ TrainResult QLearning::train(const TrainContext& context) const {
 
   Walk ahead = walk;
   std::vector<Step> current, next;
+  std::vector<GridTransition> currentLanded, nextLanded;
   current.reserve(kProgressEvery);
   next.reserve(kProgressEvery);
-  if (walk.updates < total) walkChunk(ahead, chunkEnd(walk.updates), current);
+  if (walk.updates < total) walkChunk(ahead, chunkEnd(walk.updates), current, currentLanded);
   while (walk.updates < total) {
     const std::uint64_t from = walk.updates;
     const Walk atStop = ahead;  // the walk as it stands when this chunk's updates are done
@@ -346,18 +380,22 @@ TrainResult QLearning::train(const TrainContext& context) const {
     if (stop < total) {
       const std::uint64_t nextStop = chunkEnd(stop);
       if (threads > 1)
-        walker = std::thread([&, nextStop] { walkChunk(ahead, nextStop, next); });
+        walker = std::thread([&, nextStop] { walkChunk(ahead, nextStop, next, nextLanded); });
       else
-        walkChunk(ahead, nextStop, next);
+        walkChunk(ahead, nextStop, next, nextLanded);
     }
     try {
-      update(current, from);
+      if (compact)
+        update(std::true_type{}, current, currentLanded, from);
+      else
+        update(std::false_type{}, current, currentLanded, from);
     } catch (...) {
       if (walker.joinable()) walker.join();
       throw;
     }
     if (walker.joinable()) walker.join();
     std::swap(current, next);
+    std::swap(currentLanded, nextLanded);
     walk = atStop;
 
     while (nextCurveIndex <= curvePoints_ && curveAt(nextCurveIndex) < walk.updates) ++nextCurveIndex;

@@ -21,6 +21,7 @@ class ValueIteration final : public Learner {
         threads_(static_cast<unsigned>(p.integer("threads"))) {}
 
   std::string type() const override { return "value_iteration"; }
+  bool takesCompactModel() const override { return true; }
 
   // Jacobi sweeps of the same backup as q_learning over every (vertex, action) pair, from
   // Q = 0, until the largest change falls below the tolerance (DESIGN.md sec. 4: the

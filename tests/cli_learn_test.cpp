@@ -556,12 +556,47 @@ TEST_CASE("mgrl train refuses a grid or a problem too large before training anyt
                  "cylindrical3d: expected a grid of at most 20000000 vertices, found 27000000 (300 angle x 300 "
                  "distance x 300 height)");
   CHECK_FALSE(fs::exists(out));
-  const Run refused = box.train(kFast + " --max-memory 0.05 --out " + shellWord(out));
+  // Not even the compact model (issue 20) fits in 30 MB.
+  const Run refused = box.train(kFast + " --max-memory 0.03 --out " + shellWord(out));
   requireRefusal(refused, "behaviors.hit: training on a cylindrical3d grid of 1920 vertices x ");
-  CHECK_THAT(refused.lastErrorLine(), Contains("expected at most 50.0 MB (--max-memory)"));
+  CHECK_THAT(refused.lastErrorLine(), Contains("(compact model and Q tables); expected at most 30.0 MB (--max-memory)"));
   CHECK_THAT(refused.err, !Contains("train approach:"));  // nothing was trained first
   CHECK_FALSE(fs::exists(out));
   requireOneLineRefusal(box.train(kFast + " --max-memory 0"), "--max-memory: expected gigabytes in (0, 1000000], found 0");
+}
+
+// Issue 20: when the tabulated problem does not fit in --max-memory, train falls back to
+// the compact model (rewards only), which gives the same tables; --model chooses.
+TEST_CASE("mgrl train trains on the compact model when the tabulated one does not fit", "[cli][data][compact]") {
+  Sandbox box("compact");
+  const fs::path tabulated = box.path("tabulated"), compact = box.path("compact"), forced = box.path("forced");
+  REQUIRE(box.train(kFast + " --out " + shellWord(tabulated)).status == 0);
+  // boxing's hit problem: about 88 MB tabulated, 44 MB compact.
+  const Run fallback = box.train(kFast + " --max-memory 0.05 --out " + shellWord(compact));
+  INFO("stderr: " << fallback.err);
+  REQUIRE(fallback.status == 0);
+  const json report = fallback.report();
+  CHECK(report["behaviors"]["hit"]["model"] == "compact");
+  CHECK(report["behaviors"]["approach"]["model"] == "tabulated");
+  // The compact model is about the size of the hit Q table (11 MB), not five times it.
+  CHECK(report["behaviors"]["hit"]["model_bytes"].get<double>() < 1.3 * report["behaviors"]["hit"]["table_bytes"].get<double>());
+  CHECK_THAT(fallback.err, Contains("train hit: the tabulated model and tables would need about") &&
+                               Contains("over --max-memory 50.0 MB: using the compact model"));
+  CHECK_THAT(fallback.err, Contains("rewards (compact model) tabulated"));
+  CHECK_THAT(fallback.err, !Contains("train approach: the tabulated model"));  // approach fits
+  CHECK(readText(tabulated / "hit.q.npy") == readText(compact / "hit.q.npy"));
+  REQUIRE(box.train(kFast + " --behavior approach --model compact --out " + shellWord(forced)).status == 0);
+  CHECK(readText(tabulated / "approach.q.npy") == readText(forced / "approach.q.npy"));
+
+  const Run refused = box.train(kFast + " --model tabulated --max-memory 0.05 --out " + shellWord(box.path("no")));
+  requireRefusal(refused, "behaviors.hit: training on a cylindrical3d grid of 1920 vertices x ");
+  CHECK_THAT(refused.lastErrorLine(), Contains("(tabulated model and Q tables); expected at most 50.0 MB "
+                                               "(--max-memory): use a coarser grid, --model compact (about 44."));
+  requireOneLineRefusal(box.train(kFast + " --model cheap"), "--model: expected auto, tabulated or compact, found 'cheap'");
+  requireRefusal(box.train("--behavior approach --model compact --set behaviors.approach.learner.type=adaptive_value_iteration "
+                           "--set behaviors.approach.discretizer.type=kd_tree"),
+                 "behaviors.approach: --model compact: expected a learner that takes a compact model (q_learning, "
+                 "value_iteration), found adaptive_value_iteration");
 }
 
 // Issue 19: an --out folder that cannot take files is refused before training, not after.

@@ -6,6 +6,7 @@
 #include <catch2/catch.hpp>
 
 #include <cmath>
+#include <cstring>
 #include <filesystem>
 
 #include <fmt/format.h>
@@ -17,6 +18,7 @@
 #include "mgrl/learning/behavior.hpp"
 #include "mgrl/runtime/controller.hpp"
 #include "mgrl/graph/motion_graph.hpp"
+#include "synthetic_model.hpp"
 #include "mgrl/learning/problem.hpp"
 #include "mgrl/learning/success.hpp"
 #include "mgrl/core/random.hpp"
@@ -1043,6 +1045,51 @@ TEST_CASE("a sampled Bellman residual measures one pair in k, below the whole ta
   CHECK(sampled.finalResidual == exact.finalResidual);
   REQUIRE(sampled.curve.size() == 3);
   for (std::size_t i = 0; i < 3; ++i) CHECK(sampled.curve[i].residual <= exact.curve[i].residual);
+}
+
+
+TEST_CASE("a compact model trains the same tables as the tabulated one in a fifth of the memory", "[learning][compact]") {
+  // Issue 20: rewards only, each backup finding where its vertex lands; q_learning (whose
+  // walk finds the landings of its steps' corners) and value iteration, 2-D and 3-D grids.
+  SyntheticModelSpec spec;
+  spec.states = 40;
+  spec.actions = 1500;
+  const StateActionModel m = makeSyntheticModel(spec);
+  const auto polar = makeGrid("{type: polar2d, radius: 2, rings: 5, sectors: 13}", m);
+  const auto cylinder = makeGrid("{type: cylindrical3d, bounds: hits, angles: 6, distances: 5, heights: 3}", m);
+  const auto hit = app::plugins().rewards.create(yaml("{type: hit, contact_radius: 0.15}"));
+  const auto approach = app::plugins().rewards.create(yaml("{type: approach, sigma: 0.1}"));
+  const StaticTarget environment;
+  for (const auto& [grid, reward] : {std::pair{polar.get(), approach.get()}, std::pair{cylinder.get(), hit.get()}}) {
+    CAPTURE(grid->type());
+    const Problem problem{m, *grid, *reward, environment};
+    const GridModel tabulated = GridModel::build(problem, 2);
+    const GridModel compact = GridModel::buildCompact(problem, 2);
+    REQUIRE(compact.compact());
+    REQUIRE_FALSE(tabulated.compact());
+    CHECK(compact.transition.empty());
+    // Every record the same bytes, found now instead of stored.
+    for (std::size_t a = 0; a < m.actionCount(); a += 7)
+      for (std::size_t v = 0; v < grid->vertexCount(); ++v) {
+        const GridTransition x = tabulated.transition[a * tabulated.vertexCount + v], y = compact.at(a, v);
+        REQUIRE(std::memcmp(&x, &y, sizeof x) == 0);
+      }
+    const double qBytes = static_cast<double>(m.actionCount() * grid->vertexCount() * sizeof(float));
+    CHECK(static_cast<double>(compact.bytes()) < 1.3 * qBytes);
+    CHECK(static_cast<double>(tabulated.bytes()) > 4.5 * qBytes);
+    // With value iteration's two tables and its staging buffer: 16 bytes a pair against 32.
+    CHECK(GridModel::trainingBytes(m.actionCount(), grid->vertexCount(), true) <
+          0.55 * GridModel::trainingBytes(m.actionCount(), grid->vertexCount(), false));
+    for (const char* learner : {"{type: q_learning, budget: 300000, seed: 4, curve_points: 3, checkpoint_every: 0}",
+                                "{type: value_iteration, tolerance: 1e-4}"}) {
+      CAPTURE(learner);
+      const TrainResult a = trainWith(learner, problem, tabulated), b = trainWith(learner, problem, compact);
+      REQUIRE(a.table.values().size() == b.table.values().size());
+      CHECK(std::memcmp(a.table.values().data(), b.table.values().data(), a.table.values().size() * sizeof(float)) == 0);
+      CHECK(a.finalResidual == b.finalResidual);
+      CHECK(a.updates == b.updates);
+    }
+  }
 }
 
 }  // namespace mgrl

@@ -148,6 +148,9 @@ class Learner {
   /// Throws mgrl::Error (what was expected, what was found) if this learner cannot train on
   /// `grid`, so that commands refuse a mismatch before training anything.
   virtual void checkGrid(const Discretizer& grid) const { (void)grid; }
+  /// True if train() takes a compact GridModel (GridModel::buildCompact: rewards only, the
+  /// landings found per backup) as well as a tabulated one, with the same result.
+  virtual bool takesCompactModel() const { return false; }
 };
 
 using LearnerRegistry = Registry<Learner>;

@@ -8,14 +8,17 @@
 namespace mgrl {
 
 std::size_t GridModel::bytes() const {
-  return corners.size() * 4 + transition.size() * sizeof(GridTransition) + discount.size() * 4 + rigid.size() * 8 +
+  return corners.size() * 4 + transition.size() * sizeof(GridTransition) + reward.size() * sizeof(float) +
+         vertexPosition.size() * sizeof(Eigen::Vector3d) + discount.size() * 4 + rigid.size() * 8 +
          actionTo.size() * 4 + incomingBegin.size() * 4 + incoming.size() * 4;
 }
 
-double GridModel::trainingBytes(std::size_t actions, std::size_t vertices) {
+double GridModel::trainingBytes(std::size_t actions, std::size_t vertices, bool compact) {
   const double pairs = static_cast<double>(actions) * static_cast<double>(vertices);
-  return pairs * (sizeof(GridTransition) + sizeof(std::uint32_t) + 2 * sizeof(float)) +
-         static_cast<double>(vertices) * 8 * sizeof(std::uint32_t) + static_cast<double>(actions) * 16;
+  const double model = compact ? sizeof(float) : sizeof(GridTransition);
+  return pairs * (model + sizeof(std::uint32_t) + 2 * sizeof(float)) +
+         static_cast<double>(vertices) * (8 * sizeof(std::uint32_t) + sizeof(Eigen::Vector3d)) +
+         static_cast<double>(actions) * 16;
 }
 
 GridModel GridModel::frame(const Problem& problem) {
@@ -58,22 +61,10 @@ GridTransition tabulate(const Problem& problem, std::size_t a, const Eigen::Vect
   return t;
 }
 
-GridModel GridModel::build(const Problem& problem, unsigned threads) {
-  const StateActionModel& m = problem.model;
-  const Discretizer& grid = problem.grid;
-  GridModel g = frame(problem);
-  const std::size_t pairs = g.vertexCount * g.actionCount;
-  g.transition.assign(pairs, GridTransition{});
+namespace {
 
-  std::vector<Eigen::Vector3d> vertex(g.vertexCount);
-  for (std::size_t v = 0; v < g.vertexCount; ++v) vertex[v] = grid.vertexPosition(v);
-  constexpr std::size_t kChunk = 64;
-  parallelFor((g.actionCount + kChunk - 1) / kChunk, threads, [&](std::size_t chunk, unsigned) {
-    const std::size_t end = std::min(g.actionCount, (chunk + 1) * kChunk);
-    for (std::size_t a = chunk * kChunk; a < end; ++a)
-      for (std::size_t v = 0; v < g.vertexCount; ++v) g.transition[a * g.vertexCount + v] = tabulate(problem, a, vertex[v]);
-  });
-
+// The lists of actions by end state, which sweeps go by.
+void addIncoming(GridModel& g, const StateActionModel& m) {
   const std::size_t states = m.stateCount();
   g.incomingBegin.assign(states + 1, 0);
   for (std::uint32_t to : m.actionTo) ++g.incomingBegin[to + 1];
@@ -81,7 +72,58 @@ GridModel GridModel::build(const Problem& problem, unsigned threads) {
   g.incoming.resize(g.actionCount);
   std::vector<std::uint32_t> fill(g.incomingBegin.begin(), g.incomingBegin.end() - 1);
   for (std::size_t a = 0; a < g.actionCount; ++a) g.incoming[fill[m.actionTo[a]]++] = static_cast<std::uint32_t>(a);
+}
+
+// f(a) for every action, in chunks over `threads` threads.
+template <class F>
+void forEachPair(std::size_t actions, unsigned threads, F f) {
+  constexpr std::size_t kChunk = 64;
+  parallelFor((actions + kChunk - 1) / kChunk, threads, [&](std::size_t chunk, unsigned) {
+    const std::size_t end = std::min(actions, (chunk + 1) * kChunk);
+    for (std::size_t a = chunk * kChunk; a < end; ++a) f(a);
+  });
+}
+
+}  // namespace
+
+GridModel GridModel::build(const Problem& problem, unsigned threads) {
+  GridModel g = frame(problem);
+  g.transition.assign(g.vertexCount * g.actionCount, GridTransition{});
+  std::vector<Eigen::Vector3d> vertex(g.vertexCount);
+  for (std::size_t v = 0; v < g.vertexCount; ++v) vertex[v] = problem.grid.vertexPosition(v);
+  forEachPair(g.actionCount, threads, [&](std::size_t a) {
+    for (std::size_t v = 0; v < g.vertexCount; ++v) g.transition[a * g.vertexCount + v] = tabulate(problem, a, vertex[v]);
+  });
+  addIncoming(g, problem.model);
   return g;
+}
+
+GridModel GridModel::buildCompact(const Problem& problem, unsigned threads) {
+  GridModel g = frame(problem);
+  g.vertexPosition.resize(g.vertexCount);
+  for (std::size_t v = 0; v < g.vertexCount; ++v) g.vertexPosition[v] = problem.grid.vertexPosition(v);
+  g.reward.assign(g.vertexCount * g.actionCount, 0.0f);
+  forEachPair(g.actionCount, threads, [&](std::size_t a) {
+    for (std::size_t v = 0; v < g.vertexCount; ++v)
+      g.reward[a * g.vertexCount + v] = static_cast<float>(problem.reward.evaluate(problem.model, a, g.vertexPosition[v]));
+  });
+  g.landingGrid = &problem.grid;
+  g.landingEnvironment = &problem.environment;
+  g.landingModel = &problem.model;
+  addIncoming(g, problem.model);
+  return g;
+}
+
+GridTransition GridModel::moved(std::size_t a, std::size_t v) const {
+  // tabulate() without the reward.
+  GridTransition t;
+  GridCell cell;
+  const Eigen::Vector3d& e = vertexPosition[v];
+  if (landingGrid->locate(rigid.empty() ? landingEnvironment->next(*landingModel, a, e) : rigidNext(a, e), cell)) {
+    t.cell = static_cast<std::int32_t>(cell.cell);
+    for (int k = 0; k < 3; ++k) t.frac[k] = cell.frac[k];
+  }
+  return t;
 }
 
 namespace {

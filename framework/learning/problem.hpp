@@ -41,7 +41,13 @@ struct GridModel {
   /// The grid's hanging vertices (Discretizer::hanging()): sweep() sets their values from
   /// their sources' after every backup, and bellmanResidual() skips them.
   HangingVertices hanging;
-  std::vector<GridTransition, HugePageAllocator<GridTransition>> transition;  ///< per (a, v)
+  std::vector<GridTransition, HugePageAllocator<GridTransition>> transition;  ///< per (a, v); empty if compact
+  /// A compact model (buildCompact(), issue 20: training at the memory limit) keeps only
+  /// the rewards per (a, v), 4 bytes like Q itself instead of the 20 of a transition, and
+  /// finds where a vertex lands when a backup asks (at()): the same arithmetic as
+  /// tabulate(), so the same backups and the same tables, for a grid locate per backup.
+  std::vector<float, HugePageAllocator<float>> reward;  ///< per (a, v), compact models only
+  std::vector<Eigen::Vector3d> vertexPosition;          ///< per vertex, compact models only
   std::vector<float> discount;            ///< per action: gamma^(frames of a)
   /// Per action, if the environment model moves the target rigidly (EnvironmentModel::
   /// rigidMotion): (cos, sin, dx, dz) of the motion e' = R^T (e - d); else empty.
@@ -53,9 +59,24 @@ struct GridModel {
 
   std::size_t bytes() const;
   /// What training on `actions` x `vertices` needs at most (bytes), before anything is
-  /// allocated: the tabulated model (transitions, incoming lists) and two Q tables (value
-  /// iteration's Jacobi pair; Q-learning uses one).
-  static double trainingBytes(std::size_t actions, std::size_t vertices);
+  /// allocated: the model (tabulated: transitions; compact: rewards), the incoming lists
+  /// and two Q tables (value iteration's Jacobi pair; Q-learning uses one).
+  static double trainingBytes(std::size_t actions, std::size_t vertices, bool compact = false);
+
+  bool compact() const { return transition.empty() && !reward.empty(); }
+  /// What a backup of (action a, vertex v) needs besides Q: the stored record, or for a
+  /// compact model the same record computed now.
+  GridTransition at(std::size_t a, std::size_t v) const {
+    return compact() ? landing(a, v) : transition[a * vertexCount + v];
+  }
+  /// A compact model's record of (a, v): its reward, and where v lands after a.
+  GridTransition landing(std::size_t a, std::size_t v) const {
+    GridTransition t = moved(a, v);
+    t.reward = reward[a * vertexCount + v];
+    return t;
+  }
+  /// Where vertex v lands after action a (cell, fractions) in a compact model; reward 0.
+  GridTransition moved(std::size_t a, std::size_t v) const;
 
   /// The target after action a under a rigid environment model (`rigid` not empty): the
   /// same arithmetic as inverseTransformPoint(), from the precomputed sine and cosine.
@@ -67,11 +88,19 @@ struct GridModel {
 
   /// Tabulates `problem` on `threads` threads. The same inputs give the same bytes.
   static GridModel build(const Problem& problem, unsigned threads);
+  /// The compact model of `problem` (see `reward`): tabulates the rewards only. It refers
+  /// to the problem's grid, environment and state-action model, which must outlive it.
+  static GridModel buildCompact(const Problem& problem, unsigned threads);
   /// Everything build() makes except the per-(action, vertex) transitions and the incoming
   /// lists: enough for maxInterpolated() and for stepping a walk (rigidNext) when the
   /// transitions a step needs are computed one by one with tabulate() (the viewer's learn
   /// panel, which takes a few steps of Q-learning where build() would tabulate them all).
   static GridModel frame(const Problem& problem);
+
+  // A compact model's problem, for landing().
+  const Discretizer* landingGrid = nullptr;
+  const EnvironmentModel* landingEnvironment = nullptr;
+  const StateActionModel* landingModel = nullptr;
 };
 
 /// The transition record of action a from the grid vertex at `vertex`: what build() stores
@@ -94,7 +123,7 @@ inline float backup(const QTable& q, const GridModel& g, std::size_t a, const Gr
   return t.reward + g.discount[a] * maxInterpolated(q, g, g.actionTo[a], static_cast<std::uint32_t>(t.cell), t.frac);
 }
 inline float backup(const QTable& q, const GridModel& g, std::size_t a, std::size_t v) {
-  return backup(q, g, a, g.transition[a * g.vertexCount + v]);
+  return backup(q, g, a, g.at(a, v));
 }
 
 /// One Jacobi sweep: out(v, a) = backup of `in` for every pair, in parallel over end
