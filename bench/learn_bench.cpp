@@ -12,6 +12,7 @@
 //   build/bench/mgrl_bench_learn [--approach-actions N] [--hit-actions N] [--runs N] [--quick] [--no-growth]
 // --quick measures 10 M approach and 20 M hit actions and extrapolates to the paper's budgets.
 #include <chrono>
+#include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
@@ -142,13 +143,29 @@ int main(int argc, char** argv) {
   std::printf("value iteration sweep, hit problem (%zu vertex-action pairs): %.3f s median of %d (target <= 0.15 s)\n",
               hit->tabulated.vertexCount * m.actionCount(), sweepSeconds(m, *hit, runs), runs);
 
+  // What bounds the sweep (docs/performance.md): each backup that lands on the grid reads
+  // 8 rows of its end state's Q values (padded to 16 floats, the vector width), from the
+  // second-level cache, since one end state's block of rows is about 100 KB.
+  {
+    double rowBytes = 0;
+    const mgrl::GridModel& g = hit->tabulated;
+    for (std::size_t a = 0; a < g.actionCount; ++a) {
+      const double n = static_cast<double>(m.stateActionBegin[g.actionTo[a] + 1] - m.stateActionBegin[g.actionTo[a]]);
+      const double padded = 16 * std::ceil(n / 16);
+      for (std::size_t v = 0; v < g.vertexCount; ++v)
+        if (g.transition[a * g.vertexCount + v].cell >= 0) rowBytes += 8 * padded * sizeof(float);
+    }
+    std::printf("  a sweep reads %.1f GB of Q rows (8 per backup that lands on the grid) and %.0f MB of transitions\n",
+                rowBytes / 1e9, static_cast<double>(g.transition.size() * sizeof(mgrl::GridTransition)) / 1e6);
+  }
+
   // The compact model (issue 20, train --model compact): rewards only, landings found per
   // backup. The same tables (tests/learning_test.cpp); here its memory and speed.
   {
-    auto start = Clock::now();
+    const auto compactStart = Clock::now();
     const mgrl::GridModel compact =
         mgrl::GridModel::buildCompact({m, *hit->grid, *hit->reward, hit->environment}, mgrl::defaultThreadCount());
-    const double built = since(start);
+    const double built = since(compactStart);
     const double qMB = hit->grid->vertexCount() * m.actionCount() * 4 / 1e6;
     std::printf("compact model, hit problem: %.0f MB (%.2fx its Q table; tabulated %.0f MB, %.2fx) built in %.2f s\n",
                 compact.bytes() / 1e6, compact.bytes() / 1e6 / qMB, hit->tabulated.bytes() / 1e6,

@@ -263,6 +263,7 @@ double sweep(const QTable& in, QTable& out, const GridModel& g, unsigned threads
 double sweep(const QTable& in, QTable& out, const GridModel& g, unsigned threads, std::vector<float>& stage) {
   const std::size_t states = g.incomingBegin.size() - 1;
   const std::size_t V = g.vertexCount;
+  const bool compact = g.compact();
   stage.resize(g.actionCount * V);
   // Backups grouped by end state: each group reads one block of `in` (its rows), which
   // stays in cache, and writes its actions' values contiguously into `stage` (a, v).
@@ -270,7 +271,12 @@ double sweep(const QTable& in, QTable& out, const GridModel& g, unsigned threads
     for (std::uint32_t i = g.incomingBegin[s]; i < g.incomingBegin[s + 1]; ++i) {
       const std::size_t a = g.incoming[i];
       float* values = &stage[a * V];
-      for (std::size_t v = 0; v < V; ++v) values[v] = backup(in, g, a, v);
+      // The kind of model tested once per action, not per backup (a sweep of a tabulated
+      // model is a stream over its transitions).
+      if (compact)
+        for (std::size_t v = 0; v < V; ++v) values[v] = backup(in, g, a, g.landing(a, v));
+      else
+        for (std::size_t v = 0; v < V; ++v) values[v] = backup(in, g, a, g.transition[a * V + v]);
       // Hanging vertices keep to their coarse face (continuity across it), whatever their backup.
       g.hanging.apply(values);
     }
