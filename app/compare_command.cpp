@@ -9,14 +9,11 @@
 
 #include <algorithm>
 #include <cmath>
-#include <fstream>
 #include <limits>
 #include <map>
 #include <memory>
 #include <optional>
 #include <set>
-
-#include <unistd.h>
 
 #include <fmt/format.h>
 #include <fmt/ranges.h>
@@ -211,13 +208,10 @@ json runCompare(const CompareOptions& options) {
   if (!options.report.empty()) {
     std::error_code ec;
     fs::create_directories(options.report, ec);
-    const fs::path probe = options.report / fmt::format(".mgrl-probe-{}", ::getpid());
-    std::ofstream out(probe);
-    if (ec || !(out << "x") || !out.flush())
+    // The probe is `.mgrl-probe-PID`; a killed compare's is removed by the next one.
+    if (ec || !folderTakesNewFiles(options.report, ".mgrl-probe-"))
       throw Error(fmt::format("--report {}: expected a folder where files can be written, found {}",
                               options.report.string(), ec ? ec.message() : std::string("it cannot be written")));
-    out.close();
-    fs::remove(probe, ec);
   }
 
   auto log = [&](const std::string& line) {

@@ -1,12 +1,9 @@
 // `mgrl train` (DESIGN.md sec. 5): trains a scenario's behaviours and saves a policy bundle.
 #include <atomic>
 #include <csignal>
-#include <fstream>
 #include <cstdlib>
 #include <iostream>
 #include <map>
-
-#include <unistd.h>
 
 #include <fmt/format.h>
 #include <fmt/ranges.h>
@@ -19,6 +16,7 @@
 #include "mgrl/scenario/behaviors.hpp"
 #include "mgrl/learning/checkpoint_store.hpp"
 #include "mgrl/core/bundle.hpp"
+#include "mgrl/core/files.hpp"
 #include "mgrl/core/hash.hpp"
 #include "mgrl/core/parallel.hpp"
 #include "mgrl/learning/policy_bundle.hpp"
@@ -180,25 +178,6 @@ fs::path checkpointDirectory(const fs::path& out, const std::string& behavior) {
   return out.parent_path() / (out.filename().string() + ".checkpoints") / behavior;
 }
 
-// The writability probe of --out's folder is `.<name>.probe-PID`.
-std::string probePrefix(const std::string& name) { return fmt::format(".{}.probe-", name); }
-
-// Issue 19's kill tests: a train killed between making its probe and removing it (a few
-// microseconds, but forever after) left the file; those of processes that are gone go.
-void removeDeadProbes(const fs::path& parent, const std::string& name) {
-  const std::string prefix = probePrefix(name);
-  std::error_code ec;
-  for (fs::directory_iterator it(parent, ec), end; !ec && it != end; it.increment(ec)) {
-    const std::string file = it->path().filename().string();
-    if (file.size() <= prefix.size() || file.size() > prefix.size() + 10 || file.compare(0, prefix.size(), prefix) != 0 ||
-        file.find_first_not_of("0123456789", prefix.size()) != std::string::npos)
-      continue;
-    if (processAlive(std::stol(file.substr(prefix.size())))) continue;
-    std::error_code ignored;
-    fs::remove(it->path(), ignored);
-  }
-}
-
 // After a finished run: a behaviour's checkpoint, what killed writers left beside it
 // (issue 19), and the checkpoints folder once nothing else is in it.
 void removeCheckpoint(const fs::path& dir) {
@@ -278,17 +257,11 @@ json runTrain(const TrainOptions& options) {
     if (fs::exists(out, ec) && !fs::is_directory(out, ec))
       throw Error(fmt::format("--out {}: expected a policy bundle directory or nothing, found a file", out.string()));
     // The bundle is written beside `out` and renamed into place: that folder must take a
-    // new file now, not after training (issue 19).
+    // new file now, not after training (issue 19). The probe is `.<name>.probe-PID`.
     const fs::path parent = out.has_parent_path() ? out.parent_path() : fs::path(".");
-    removeDeadProbes(parent, out.filename().string());
-    const fs::path probe = parent / fmt::format("{}{}", probePrefix(out.filename().string()), ::getpid());
-    {
-      std::ofstream file(probe);
-      if (!(file << "x") || !file.flush())
-        throw Error(fmt::format("--out {}: expected a folder where files can be written, found {} is not writable",
-                                out.string(), parent.string()));
-    }
-    fs::remove(probe, ec);
+    if (!folderTakesNewFiles(parent, fmt::format(".{}.probe-", out.filename().string())))
+      throw Error(fmt::format("--out {}: expected a folder where files can be written, found {} is not writable",
+                              out.string(), parent.string()));
   }
   Loaded loaded = load(options, std::move(scenario), false);  // the model is enough: no poses
   const StateActionModel& model = loaded.graph.model;

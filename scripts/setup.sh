@@ -2,7 +2,8 @@
 # Installs what mgrl needs to build and test, from Debian 12 packages, if missing, and the
 # viewer's three.js (web/, from npm, exactly as web/package-lock.json says).
 #   scripts/setup.sh          what building, the demo and `mgrl serve` need
-#   scripts/setup.sh --test   also Chromium, for the browser test (tests/web/)
+#   scripts/setup.sh --test   also Chromium, for the browser test (tests/web/), and clang
+#                             with its runtime libraries, for the fuzz smoke (libFuzzer)
 set -euo pipefail
 root="$(cd "$(dirname "$0")/.." && pwd)"
 
@@ -10,7 +11,9 @@ packages=(g++ cmake ninja-build pkg-config git python3 libeigen3-dev libfmt-dev 
           libyaml-cpp-dev catch2 libboost-dev)
 command -v node >/dev/null 2>&1 || packages+=(nodejs)
 command -v npm >/dev/null 2>&1 || packages+=(npm)
-[ "${1:-}" = "--test" ] && packages+=(chromium)
+# libclang-rt-dev holds libFuzzer and clang's sanitizer runtimes; clang only recommends
+# it, and recommends are not installed below.
+[ "${1:-}" = "--test" ] && packages+=(chromium clang libclang-rt-dev)
 
 missing=()
 for p in "${packages[@]}"; do

@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # Sets up, builds and runs every test: the full suite in a Release build, the main job
 # (scripts/demo.sh --quick) from a fresh clone of this repository's HEAD with an empty
-# cache, then the full suite again under AddressSanitizer and UndefinedBehaviorSanitizer.
+# cache, a 30 s fuzz smoke of each libFuzzer harness (clang, build-fuzz-smoke/), then the
+# full suite again under AddressSanitizer and UndefinedBehaviorSanitizer.
 set -euo pipefail
 root="$(cd "$(dirname "$0")/.." && pwd)"
 jobs="$(nproc)"
@@ -45,6 +46,15 @@ MGRL_DATA="${MGRL_DATA:-$root/../shared/mocap}" MGRL_CACHE="$fresh/cache" \
   --set behaviors.approach.learner.budget=200000 --set behaviors.hit.learner.budget=400000
 rm -rf "$fresh"
 trap - EXIT
+
+# Issue 19: each reader's harness for 30 s, one per core at a time (CI: two), from the
+# seeds only, so that every run does the same work: a corpus left by earlier runs is read
+# whole first, which for the slow readers can outlast the 30 s. -timeout is one
+# input's wall time at nice 19, generous so that a busy machine is not taken for a hang.
+say "fuzz smoke: each libFuzzer harness 30 s (scripts/fuzz.sh, clang, build-fuzz-smoke/)"
+rm -rf "$root/build-fuzz-smoke/corpus" "$root/build-fuzz-smoke/findings"
+FUZZ_BUILD="$root/build-fuzz-smoke" FUZZ_BUILD_JOBS="$jobs" FUZZ_JOBS="$jobs" FUZZ_TIMEOUT=30 CXX=clang++ \
+  MGRL_DATA="${MGRL_DATA:-$root/../shared/mocap}" "$root/scripts/fuzz.sh" 30
 
 say "ASan/UBSan build and full test suite"
 "$root/scripts/build.sh" "$root/build-asan" -DMGRL_SANITIZE=ON -DMGRL_BUILD_BENCH=OFF -DCMAKE_BUILD_TYPE=RelWithDebInfo

@@ -187,5 +187,26 @@ TEST_CASE("what a killed writer left is recovered or removed, a live writer's is
   }
 }
 
+// Issue 19's kill tests: train and compare check a folder by writing a probe named after
+// their pid and removing it; a process killed in between left its probe for good.
+TEST_CASE("a writability probe a dead process left is removed, a live process's is kept", "[files][harden]") {
+  test::TempDir temp("probes");
+  const pid_t dead = deadPid();
+  const fs::path stale = temp.path / fmt::format(".mgrl-probe-{}", dead);
+  // Not this process's own pid: its probe is the one the call writes and removes.
+  const fs::path live = temp.path / fmt::format(".mgrl-probe-{}", ::getppid());
+  const fs::path other = temp.path / fmt::format(".other.probe-{}", dead);  // another prefix's
+  const fs::path odd = temp.path / ".mgrl-probe-12x";
+  for (const fs::path& p : {stale, live, other, odd}) std::ofstream(p) << "x";
+
+  CHECK(folderTakesNewFiles(temp.path, ".mgrl-probe-"));
+  CHECK_FALSE(fs::exists(stale));
+  CHECK(fs::exists(live));  // it may be probing now
+  CHECK(fs::exists(other));
+  CHECK(fs::exists(odd));
+  CHECK(entriesIn(temp.path) == 3);  // and its own probe is gone
+  CHECK_FALSE(folderTakesNewFiles(temp.path / "missing", ".mgrl-probe-"));
+}
+
 }  // namespace
 }  // namespace mgrl

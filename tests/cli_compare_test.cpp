@@ -6,6 +6,9 @@
 #include <fstream>
 #include <string>
 
+#include <sys/wait.h>
+#include <unistd.h>
+
 #include <catch2/catch.hpp>
 #include <nlohmann/json.hpp>
 
@@ -172,6 +175,26 @@ TEST_CASE("mgrl compare measures tables against value iteration on a finer grid"
   CHECK(run["value_rmse"].get<double>() < 0.5);
   CHECK(run["greedy_agreement"].get<double>() > 0.3);
   CHECK(run["greedy_agreement"].get<double>() < 1.0);
+}
+
+// Issue 19: compare checks --report by writing `.mgrl-probe-PID` there and removing it; a
+// compare killed in between left the probe for good. The next run removes those of
+// processes that are gone (a live one may be comparing now), as train does beside --out.
+TEST_CASE("mgrl compare removes the writability probe a killed run left in --report", "[cli][data]") {
+  Sandbox box;
+  const fs::path report = box.path("report");
+  fs::create_directories(report);
+  const pid_t gone = ::fork();
+  if (gone == 0) ::_exit(0);
+  int status = 0;
+  ::waitpid(gone, &status, 0);
+  const fs::path dead = report / (".mgrl-probe-" + std::to_string(gone));
+  const fs::path live = report / (".mgrl-probe-" + std::to_string(::getpid()));
+  for (const fs::path& p : {dead, live}) std::ofstream(p) << "x";
+
+  REQUIRE(box.run(kCompare + " --seeds 1 --report " + shellWord(report)).status == 0);
+  CHECK_FALSE(fs::exists(dead));
+  CHECK(fs::exists(live));
 }
 
 TEST_CASE("mgrl compare refuses mistakes in one line before training anything", "[cli][data]") {

@@ -1,6 +1,5 @@
 #include "mgrl/core/bundle.hpp"
 
-#include <signal.h>
 #include <stdio.h>  // renameat2
 #include <fcntl.h>  // AT_FDCWD
 #include <unistd.h>
@@ -47,12 +46,6 @@ std::string dumpForMessage(const json& value) {
 }
 
 }  // namespace
-
-bool processAlive(long pid) {
-  if (pid <= 0 || pid > std::numeric_limits<pid_t>::max()) return false;
-  // EPERM: it exists, owned by someone else.
-  return pid == ::getpid() || ::kill(static_cast<pid_t>(pid), 0) == 0 || errno == EPERM;
-}
 
 // ---------------------------------------------------------------------------------------
 // Writing

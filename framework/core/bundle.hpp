@@ -106,11 +106,6 @@ struct StaleSibling {
 };
 std::vector<StaleSibling> staleSiblings(const std::filesystem::path& dir);
 
-/// True while process `pid` exists (this one included, and one owned by another user);
-/// false for a pid out of range. What a writer names after its pid is stale once this is
-/// false.
-bool processAlive(long pid);
-
 /// Issue 19, defect 5: removes the stale siblings of `dir`; if `dir` is missing, first
 /// puts back the newest complete one (a temporary holding `manifestName`, else an old
 /// bundle). Those of live processes (this one included) are left alone. `log` hears what

@@ -1,14 +1,17 @@
 #include "mgrl/core/files.hpp"
 
+#include <algorithm>
 #include <cerrno>
 #include <cstdio>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <limits>
 #include <memory>
 #include <random>
 
 #include <fcntl.h>
+#include <signal.h>
 #include <sys/mman.h>
 #include <sys/stat.h>
 #include <unistd.h>
@@ -132,6 +135,37 @@ void writeFileAtomically(const std::filesystem::path& path, std::string_view tex
     std::filesystem::remove(temporary, ignored);
     throw Error(fmt::format("{}: cannot write: {}", path.string(), ec.message()));
   }
+}
+
+bool processAlive(long pid) {
+  if (pid <= 0 || pid > std::numeric_limits<pid_t>::max()) return false;
+  // EPERM: it exists, owned by someone else.
+  return pid == ::getpid() || ::kill(static_cast<pid_t>(pid), 0) == 0 || errno == EPERM;
+}
+
+bool folderTakesNewFiles(const std::filesystem::path& folder, std::string_view probePrefix) {
+  namespace fs = std::filesystem;
+  // Issue 19's kill tests: a process killed between writing its probe and removing it (a
+  // few microseconds, but forever after) left the file behind.
+  std::error_code ec;
+  for (fs::directory_iterator it(folder, ec), end; !ec && it != end; it.increment(ec)) {
+    const std::string name = it->path().filename().string();
+    const std::size_t digits = name.size() - std::min(name.size(), probePrefix.size());
+    if (digits == 0 || digits > 10 || name.compare(0, probePrefix.size(), probePrefix) != 0 ||
+        name.find_first_not_of("0123456789", probePrefix.size()) != std::string::npos)
+      continue;
+    if (processAlive(std::stol(name.substr(probePrefix.size())))) continue;
+    std::error_code ignored;
+    fs::remove(it->path(), ignored);
+  }
+  const fs::path probe = folder / fmt::format("{}{}", probePrefix, ::getpid());
+  bool written = false;
+  {
+    std::ofstream file(probe);
+    written = file && (file << "x") && file.flush();
+  }
+  fs::remove(probe, ec);
+  return written;
 }
 
 }  // namespace mgrl

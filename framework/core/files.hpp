@@ -1,6 +1,7 @@
 #pragma once
 /// \file
-/// Whole files in and out: read at once with a clear error, written atomically.
+/// Whole files in and out: read at once with a clear error, written atomically; whether a
+/// folder takes new files, and which processes still own what they named after their pid.
 #include <filesystem>
 #include <string>
 #include <string_view>
@@ -39,5 +40,17 @@ class MappedFile {
 /// Writes `text` to `path` through a temporary file in the same folder and a rename, so a
 /// failure never leaves a partial file. Throws mgrl::Error on failure.
 void writeFileAtomically(const std::filesystem::path& path, std::string_view text);
+
+/// True while process `pid` exists (this one included, and one owned by another user);
+/// false for a pid out of range. What a writer names after its pid is stale once this is
+/// false.
+bool processAlive(long pid);
+
+/// Whether `folder` takes a new file now: writes `<folder>/<probePrefix><pid>` (this
+/// process's pid) and removes it again. A process killed between the two leaves its probe
+/// for good, so first the probes `<probePrefix><digits>` of processes that are gone are
+/// removed; those of live processes (which may be probing now) stay. False, never a throw,
+/// for a folder that is missing or cannot be written: callers say what they needed it for.
+bool folderTakesNewFiles(const std::filesystem::path& folder, std::string_view probePrefix);
 
 }  // namespace mgrl
