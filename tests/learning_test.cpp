@@ -8,6 +8,7 @@
 #include <cmath>
 #include <cstring>
 #include <filesystem>
+#include <utility>
 
 #include <fmt/format.h>
 
@@ -114,8 +115,9 @@ struct Built {
 
 // The corridor's parts, its problem and the problem on the grid, built once per test.
 struct CorridorSetup {
-  explicit CorridorSetup(unsigned threads)
-      : model(corridor()),
+  // The corridor's model, or another one on the same grid and reward.
+  explicit CorridorSetup(unsigned threads, StateActionModel m = corridor())
+      : model(std::move(m)),
         grid(makeGrid(kCorridorGrid, model)),
         reward(app::plugins().rewards.create(yaml("{type: hit, contact_radius: 0.1}"))),
         problem{model, *grid, *reward, environment},
@@ -363,26 +365,10 @@ namespace {
 
 // An avatar that stands still, punching in place: two states, four actions, no ground
 // motion, so the target never leaves the grid (issues 15 and 19).
-struct StandingSetup {
-  StandingSetup()
-      : model(handModel(2, {{0, 1, 5, 0, 0, 0, {punch()}},
-                            {0, 0, 5, 0, 0, 0, {}},
-                            {1, 0, 5, 0, 0, 0, {}},
-                            {1, 1, 5, 0, 0, 0, {punch()}}})),
-        grid(makeGrid(kCorridorGrid, model)),
-        reward(app::plugins().rewards.create(yaml("{type: hit, contact_radius: 0.1}"))),
-        problem{model, *grid, *reward, environment},
-        tabulated(GridModel::build(problem, 2)) {}
-  static ActionHit punch() { return {0, 3, 1, 0.0f, 1.0f, 0.5f, 1.0f}; }
-  StateActionModel model;
-  std::unique_ptr<Discretizer> grid;
-  std::unique_ptr<Reward> reward;
-  StaticTarget environment;
-  Problem problem;
-  GridModel tabulated;
-  StandingSetup(const StandingSetup&) = delete;  // problem refers to the members
-  StandingSetup& operator=(const StandingSetup&) = delete;
-};
+StateActionModel standing() {
+  const ActionHit punch{0, 3, 1, 0.0f, 1.0f, 0.5f, 1.0f};
+  return handModel(2, {{0, 1, 5, 0, 0, 0, {punch}}, {0, 0, 5, 0, 0, 0, {}}, {1, 0, 5, 0, 0, 0, {}}, {1, 1, 5, 0, 0, 0, {punch}}});
+}
 
 }  // namespace
 
@@ -392,7 +378,7 @@ struct StandingSetup {
 // anyway; left at 0 it changes nothing (and no behaviour key: tables trained before it
 // keep theirs).
 TEST_CASE("Q-learning's episode cap restores coverage where the avatar stands still", "[learning]") {
-  const StandingSetup parts;
+  const CorridorSetup parts(2, standing());
   const Problem& problem = parts.problem;
   const GridModel& g = parts.tabulated;
 
@@ -458,7 +444,7 @@ TEST_CASE("a resumed Q-learning run reports the whole walk's coverage, as an uni
           "[learning][checkpoint]") {
   // An avatar that stands still: each 400-action episode stays in its target's cell, so
   // the cells walked before a checkpoint are not walked again after it.
-  const StandingSetup parts;
+  const CorridorSetup parts(2, standing());
   const Problem& problem = parts.problem;
   const GridModel& g = parts.tabulated;
   const std::string learner =

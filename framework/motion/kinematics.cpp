@@ -27,22 +27,34 @@ void forwardKinematics(const Motion& motion, std::size_t frame, std::span<Eigen:
   }
 }
 
+namespace {
+
+// Joint j's global rotation and position from its parent's (already computed) and its own
+// local rotation and translation.
+inline __attribute__((always_inline)) void jointKinematics(const Skeleton& skeleton, std::size_t j,
+                                                           std::span<const Eigen::Quaterniond> localRotations,
+                                                           std::span<const Eigen::Vector3d> localTranslations,
+                                                           std::span<Eigen::Quaterniond> rotations,
+                                                           std::span<Eigen::Vector3d> positions) {
+  const int parent = skeleton.joint(j).parent;
+  if (parent < 0) {
+    rotations[j] = localRotations[j];
+    positions[j] = localTranslations[j];
+  } else {
+    const auto p = static_cast<std::size_t>(parent);
+    rotations[j] = rotations[p] * localRotations[j];
+    positions[j] = positions[p] + rotations[p] * localTranslations[j];
+  }
+}
+
+}  // namespace
+
 void forwardKinematics(const Skeleton& skeleton, std::span<const Eigen::Quaterniond> localRotations,
                        std::span<const Eigen::Vector3d> localTranslations,
                        std::span<Eigen::Quaterniond> rotations, std::span<Eigen::Vector3d> positions) {
   const std::size_t n = skeleton.jointCount();
   assert(localRotations.size() >= n && localTranslations.size() >= n);
-  for (std::size_t j = 0; j < n; ++j) {
-    const int parent = skeleton.joint(j).parent;
-    if (parent < 0) {
-      rotations[j] = localRotations[j];
-      positions[j] = localTranslations[j];
-    } else {
-      const auto p = static_cast<std::size_t>(parent);
-      rotations[j] = rotations[p] * localRotations[j];
-      positions[j] = positions[p] + rotations[p] * localTranslations[j];
-    }
-  }
+  for (std::size_t j = 0; j < n; ++j) jointKinematics(skeleton, j, localRotations, localTranslations, rotations, positions);
 }
 
 std::vector<int> subtreeJoints(const Skeleton& skeleton, int top) {
@@ -66,18 +78,8 @@ void forwardKinematicsOf(const Skeleton& skeleton, std::span<const int> joints,
                          std::span<const Eigen::Quaterniond> localRotations,
                          std::span<const Eigen::Vector3d> localTranslations, std::span<Eigen::Quaterniond> rotations,
                          std::span<Eigen::Vector3d> positions) {
-  for (const int joint : joints) {
-    const auto j = static_cast<std::size_t>(joint);
-    const int parent = skeleton.joint(j).parent;
-    if (parent < 0) {
-      rotations[j] = localRotations[j];
-      positions[j] = localTranslations[j];
-    } else {
-      const auto p = static_cast<std::size_t>(parent);
-      rotations[j] = rotations[p] * localRotations[j];
-      positions[j] = positions[p] + rotations[p] * localTranslations[j];
-    }
-  }
+  for (const int joint : joints)
+    jointKinematics(skeleton, static_cast<std::size_t>(joint), localRotations, localTranslations, rotations, positions);
 }
 
 std::vector<Eigen::Vector3d> jointPositions(const Motion& motion) {
