@@ -87,6 +87,15 @@ std::optional<CaptureTravel> clipTravelFrom(const nlohmann::json& manifest) {
   return t;
 }
 
+// True if a bundle's clips are the scenario's files, in order: always so for a bundle
+// whose key matched, unless it was saved without them (then the capture is parsed).
+bool bundledMotionFits(const std::vector<std::pair<std::string, Motion>>& motions, const MotionSpec& spec) {
+  if (motions.empty() || motions.size() != spec.files.size()) return false;
+  for (std::size_t c = 0; c < motions.size(); ++c)
+    if (motions[c].first != spec.files[c].filename().string()) return false;
+  return true;
+}
+
 }  // namespace
 
 CaptureTravel measureTravel(const Scenario& scenario, const MotionDatabase& db, const StateActionModel& model) {
@@ -176,7 +185,7 @@ GraphResult obtainGraph(const Scenario& scenario, const GraphOptions& options) {
                   fmt::format("{}-{}", scenario.name, hexDigest(hashBytes(canonical.string())).substr(0, 8));
 
   if (!options.noCache) {
-    GraphBundleLoad cached = loadGraphBundle(result.bundle, result.key);
+    GraphBundleLoad cached = loadGraphBundle(result.bundle, result.key, options.motion);
     if (cached.status == GraphBundleLoad::Ok) {
       result.model = std::move(cached.model);
       result.fromCache = true;
@@ -185,7 +194,14 @@ GraphResult obtainGraph(const Scenario& scenario, const GraphOptions& options) {
       // The key covers the capture's bytes, so what was measured on it when the bundle was
       // made still holds; parse it only where poses are wanted.
       const std::optional<CaptureTravel> clips = clipTravelFrom(cached.manifest);
-      if (options.motion || !clips) result.db = loadMotionDatabase(scenario.motion, warn);
+      if (options.motion && bundledMotionFits(cached.motions, scenario.motion)) {
+        // The capture as it was parsed when the bundle was made (the key covers its bytes);
+        // annotated again here, as loadMotionDatabase() would.
+        result.db = makeMotionDatabase(std::move(cached.motions), scenario.motion.roles, scenario.motion.annotation, warn);
+        for (std::size_t c = 0; c < result.db.clips.size(); ++c) result.db.clips[c].path = scenario.motion.files[c];
+      } else if (options.motion || !clips) {
+        result.db = loadMotionDatabase(scenario.motion, warn);
+      }
       result.travel = clips && !options.motion ? measureTravel(scenario, *clips, result.model)
                                                : measureTravel(scenario, result.db, result.model);
       result.seconds = since(start);
@@ -216,7 +232,7 @@ GraphResult obtainGraph(const Scenario& scenario, const GraphOptions& options) {
                                {"capture_travel", clipTravelJson(clips)}};
   try {
     std::filesystem::create_directories(result.bundle.parent_path());
-    saveGraphBundle(result.bundle, result.model, provenance);
+    saveGraphBundle(result.bundle, result.model, provenance, result.db.clips);
     log(fmt::format("graph: saved {}", result.bundle.string()));
   } catch (const std::exception& e) {
     // The graph is good; only reuse is lost. Say so and go on.

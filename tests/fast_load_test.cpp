@@ -184,3 +184,112 @@ TEST_CASE("a cached graph needs no capture parsed unless poses are wanted, and m
   CHECK(older.travel.clipTravel_m == built.travel.clipTravel_m);
   CHECK(older.travel.clip == built.travel.clip);
 }
+
+namespace {
+
+// Every value a posed avatar is made from: the skeletons, the motions bit for bit, and the
+// annotations computed on them.
+void requireSameDatabase(const mgrl::MotionDatabase& a, const mgrl::MotionDatabase& b) {
+  REQUIRE(a.skeleton);
+  REQUIRE(b.skeleton);
+  CHECK(a.frameTime == b.frameTime);
+  CHECK(a.offsets == b.offsets);
+  CHECK(a.roles.fist == b.roles.fist);
+  CHECK(a.roles.fistTipOffset == b.roles.fistTipOffset);
+  CHECK(a.roles.restHeight == b.roles.restHeight);
+  REQUIRE(a.clips.size() == b.clips.size());
+  for (std::size_t c = 0; c < a.clips.size(); ++c) {
+    CAPTURE(c);
+    const mgrl::Clip& x = a.clips[c];
+    const mgrl::Clip& y = b.clips[c];
+    CHECK(x.name == y.name);
+    CHECK(x.path == y.path);
+    const mgrl::Skeleton& sx = x.motion.skeleton();
+    const mgrl::Skeleton& sy = y.motion.skeleton();
+    REQUIRE(sx.jointCount() == sy.jointCount());
+    for (std::size_t j = 0; j < sx.jointCount(); ++j) {
+      CAPTURE(j);
+      CHECK(sx.joint(j).name == sy.joint(j).name);
+      CHECK(sx.joint(j).parent == sy.joint(j).parent);
+      CHECK(sx.joint(j).offset == sy.joint(j).offset);
+      CHECK(sx.joint(j).channels == sy.joint(j).channels);
+      CHECK(sx.joint(j).endSite == sy.joint(j).endSite);
+    }
+    REQUIRE(x.motion.frameCount() == y.motion.frameCount());
+    CHECK(x.motion.frameTime() == y.motion.frameTime());
+    std::size_t differing = 0;
+    for (std::size_t f = 0; f < x.motion.frameCount(); ++f) {
+      for (std::size_t j = 0; j < sx.jointCount(); ++j)
+        differing += x.motion.rotation(f, j).coeffs() != y.motion.rotation(f, j).coeffs();
+      const auto tx = x.motion.translations(f), ty = y.motion.translations(f);
+      REQUIRE(tx.size() == ty.size());
+      for (std::size_t t = 0; t < tx.size(); ++t) differing += tx[t] != ty[t];
+    }
+    CHECK(differing == 0);
+    const mgrl::Annotation& p = x.annotation;
+    const mgrl::Annotation& q = y.annotation;
+    CHECK(p.groundY == q.groundY);
+    CHECK(p.contact == q.contact);
+    CHECK(p.punches == q.punches);
+    CHECK(p.kickCount == q.kickCount);
+    CHECK(p.standingHeight == q.standingHeight);
+    REQUIRE(p.hits.size() == q.hits.size());
+    for (std::size_t h = 0; h < p.hits.size(); ++h) {
+      CHECK(p.hits[h].frame == q.hits[h].frame);
+      CHECK(p.hits[h].tipWorld == q.hits[h].tipWorld);
+      CHECK(p.hits[h].speed_mps == q.hits[h].speed_mps);
+    }
+    REQUIRE(p.frames.size() == q.frames.size());
+    for (std::size_t f = 0; f < p.frames.size(); ++f) differing += p.frames[f].origin != q.frames[f].origin || p.frames[f].yaw != q.frames[f].yaw;
+    CHECK(differing == 0);
+  }
+}
+
+}  // namespace
+
+TEST_CASE("a cached graph poses avatars from the capture it keeps, exactly as parsing it again would",
+          "[fast_load][graph_cache][data]") {
+  mgrl::test::TempDir tmp("fast-load-test");
+  const mgrl::Scenario scenario = mgrl::parseScenario(
+      "name: mini\nmotion:\n  files: [cmu/bvh/13_17_boxing.bvh, cmu/bvh/13_18_boxing.bvh]\n  fps: 30\n"
+      "graph:\n  threshold: 0.4\nbehaviors:\n  approach:\n    discretizer: {type: polar2d, radius: 3, rings: 4, "
+      "sectors: 8}\n    reward: {type: approach}\n    learner: {type: value_iteration}\n",
+      fs::path(MGRL_SOURCE_DIR) / "scenarios" / "test.yaml", mgrl::test::mocap());
+  mgrl::app::GraphOptions options;
+  options.cacheDir = tmp.path;
+  const mgrl::app::GraphResult built = mgrl::app::obtainGraph(scenario, options);
+  REQUIRE_FALSE(built.fromCache);
+  const nlohmann::json manifest = nlohmann::json::parse(mgrl::readFile(built.bundle / "manifest.json"));
+  REQUIRE(manifest.contains("motion"));
+  CHECK(manifest["motion"]["clips"].size() == 2);
+  CHECK(manifest["arrays"].contains("motion_rotations"));
+
+  const mgrl::app::GraphResult cached = mgrl::app::obtainGraph(scenario, options);
+  REQUIRE(cached.fromCache);
+  requireSameDatabase(cached.db, built.db);
+
+  SECTION("a bundle saved without the motion: the capture is parsed, as before") {
+    nlohmann::json edited = manifest;
+    edited.erase("motion");
+    edited["arrays"].erase("motion_rotations");
+    edited["arrays"].erase("motion_translations");
+    edited["hash"] = mgrl::manifestHash(edited);
+    writeBytes(built.bundle / "manifest.json", edited.dump(2));
+    const mgrl::app::GraphResult parsed = mgrl::app::obtainGraph(scenario, options);
+    REQUIRE(parsed.fromCache);
+    requireSameDatabase(parsed.db, built.db);
+  }
+  SECTION("a damaged motion array: the bundle is rebuilt, not trusted") {
+    std::string bytes = mgrl::readFile(built.bundle / "motion_rotations.npy");
+    bytes[bytes.size() / 2] ^= 0x10;
+    writeBytes(built.bundle / "motion_rotations.npy", bytes);
+    std::vector<std::string> log;
+    options.log = [&](const std::string& m) { log.push_back(m); };
+    const mgrl::app::GraphResult rebuilt = mgrl::app::obtainGraph(scenario, options);
+    CHECK_FALSE(rebuilt.fromCache);
+    REQUIRE_FALSE(log.empty());
+    CHECK_THAT(log.front(), Contains("graph: cache is damaged, rebuilding") && Contains("motion_rotations.npy") &&
+                                Contains("the file was altered"));
+    requireSameDatabase(rebuilt.db, built.db);
+  }
+}

@@ -673,3 +673,167 @@ TEST_CASE("a bundle whose arrays break the model is damaged even with correct ha
     requireDamaged(bundle, "action_frames.npy: expected descr '<u4', found '<f4'");
   }
 }
+
+// --- the capture's motions (version 4) --------------------------------------------------
+
+namespace {
+
+// tinyModel()'s two clips of 10 frames, cut from a real BVH (an end site, position
+// channels on the root only) and given the model's frame time.
+std::vector<mgrl::Clip> tinyClips() {
+  const mgrl::Motion source = mgrl::loadMotion(mgrl::test::testData() / "boxer21.bvh").motion;
+  std::vector<mgrl::Clip> clips;
+  for (std::size_t first : {0, 40}) {
+    std::vector<Eigen::Quaterniond> rotations;
+    std::vector<Eigen::Vector3d> translations;
+    for (std::size_t f = first; f < first + 10; ++f) {
+      for (const auto& q : source.rotations(f)) rotations.push_back(q);
+      for (const auto& t : source.translations(f)) translations.push_back(t);
+    }
+    clips.push_back(mgrl::Clip{fmt::format("clip{}.bvh", first), {},
+                               mgrl::Motion(source.sharedSkeleton(), 1.0 / 30, rotations, translations), {}});
+  }
+  return clips;
+}
+
+GraphBundleLoad loadWithMotion(const fs::path& bundle) { return mgrl::loadGraphBundle(bundle, "k1", true); }
+
+}  // namespace
+
+TEST_CASE("a graph bundle keeps the capture's motions bit for bit, and reads them only when asked",
+          "[graph_cache][motion]") {
+  mgrl::test::TempDir tmp("graph-cache-test");
+  const std::vector<mgrl::Clip> clips = tinyClips();
+  mgrl::saveGraphBundle(tmp.path / "graph", tinyModel(), provenance("k1"), clips);
+
+  const GraphBundleLoad load = loadWithMotion(tmp.path / "graph");
+  CAPTURE(load.reason);
+  REQUIRE(load.status == GraphBundleLoad::Ok);
+  requireSameModel(load.model, tinyModel());
+  REQUIRE(load.motions.size() == 2);
+  for (std::size_t c = 0; c < 2; ++c) {
+    CAPTURE(c);
+    const mgrl::Motion& a = clips[c].motion;
+    const mgrl::Motion& b = load.motions[c].second;
+    CHECK(load.motions[c].first == clips[c].name);
+    CHECK(b.frameTime() == a.frameTime());
+    REQUIRE(b.frameCount() == a.frameCount());
+    REQUIRE(b.skeleton().jointCount() == a.skeleton().jointCount());
+    for (std::size_t j = 0; j < a.skeleton().jointCount(); ++j) {
+      CHECK(b.skeleton().joint(j).name == a.skeleton().joint(j).name);
+      CHECK(b.skeleton().joint(j).parent == a.skeleton().joint(j).parent);
+      CHECK(b.skeleton().joint(j).offset == a.skeleton().joint(j).offset);
+      CHECK(b.skeleton().joint(j).channels == a.skeleton().joint(j).channels);
+      CHECK(b.skeleton().joint(j).endSite == a.skeleton().joint(j).endSite);
+    }
+    for (std::size_t f = 0; f < a.frameCount(); ++f) {
+      for (std::size_t j = 0; j < a.skeleton().jointCount(); ++j)
+        REQUIRE(b.rotation(f, j).coeffs() == a.rotation(f, j).coeffs());
+      REQUIRE(b.translations(f).size() == 1);
+      REQUIRE(b.translations(f)[0] == a.translations(f)[0]);
+    }
+  }
+
+  // Not asked for: not read (eval and train need only the model).
+  const GraphBundleLoad modelOnly = mgrl::loadGraphBundle(tmp.path / "graph", "k1");
+  REQUIRE(modelOnly.status == GraphBundleLoad::Ok);
+  CHECK(modelOnly.motions.empty());
+  // Saved without: none, and the bundle is still good.
+  mgrl::saveGraphBundle(tmp.path / "bare", tinyModel(), provenance("k1"));
+  const GraphBundleLoad bare = loadWithMotion(tmp.path / "bare");
+  REQUIRE(bare.status == GraphBundleLoad::Ok);
+  CHECK(bare.motions.empty());
+  CHECK(namesIn(tmp.path / "bare").size() + 2 == namesIn(tmp.path / "graph").size());
+}
+
+TEST_CASE("saveGraphBundle refuses clips that are not the model's and writes nothing", "[graph_cache][motion]") {
+  mgrl::test::TempDir tmp("graph-cache-test");
+  std::vector<mgrl::Clip> clips = tinyClips();
+  clips.pop_back();
+  REQUIRE_THROWS_WITH(mgrl::saveGraphBundle(tmp.path / "graph", tinyModel(), provenance("k1"), clips),
+                      Contains("graph: expected the 2 clips of 20 frames the model was built from, found 1 of 10"));
+  CHECK_FALSE(fs::exists(tmp.path / "graph"));
+}
+
+TEST_CASE("a bundle whose kept motion is inconsistent is damaged, with the member or row named",
+          "[graph_cache][motion]") {
+  mgrl::test::TempDir tmp("graph-cache-test");
+  const fs::path bundle = tmp.path / "graph";
+  const std::vector<mgrl::Clip> clips = tinyClips();
+  mgrl::saveGraphBundle(bundle, tinyModel(), provenance("k1"), clips);
+  json manifest = json::parse(mgrl::readFile(bundle / "manifest.json"));
+  json& clip0 = manifest["motion"]["clips"][0];
+  std::string reason;
+  // Each edit is sealed with a fresh hash (a careful hand edit), so the checks behind it run.
+  auto rewrite = [&](const std::string& name, const std::string& bytes) {
+    writeBytes(bundle / (name + ".npy"), bytes);
+    manifest["arrays"][name]["bytes"] = bytes.size();
+    manifest["arrays"][name]["hash"] = mgrl::hexDigest(mgrl::hashBytes(bytes));
+  };
+  std::vector<double> rotations;
+  for (const mgrl::Clip& c : clips)
+    for (std::size_t f = 0; f < 10; ++f)
+      for (const auto& q : c.motion.rotations(f)) rotations.insert(rotations.end(), {q.x(), q.y(), q.z(), q.w()});
+  const std::size_t rows = rotations.size() / 4;
+
+  SECTION("frames that disagree with clip_offset") {
+    clip0["frames"] = 11;
+    reason = "motion.clips[0].frames: expected 10 as clip_offset.npy says, found '11'";
+  }
+  SECTION("another frame time") {
+    clip0["frame_time"] = 0.04;
+    reason = "motion.clips[0].frame_time: expected scalars.frame_time, found '0.04'";
+  }
+  SECTION("a clip missing") {
+    manifest["motion"]["clips"].erase(1);
+    reason = "motion.clips: expected 2 clips as clip_offset.npy says, found 1";
+  }
+  SECTION("an unknown channel") {
+    clip0["joints"][0]["channels"][0] = "Wrotation";
+    reason = "motion.clips[0].joints[0].channels: expected channel names such as 'Zrotation' or 'Xposition', "
+             "found '\"Wrotation\"'";
+  }
+  SECTION("a joint listed before its parent") {
+    clip0["joints"][1]["parent"] = 3;
+    reason = "motion.clips[0].joints: skeleton: joint";
+  }
+  SECTION("a parent far out of range") {
+    clip0["joints"][1]["parent"] = 1e9;
+    reason = "motion.clips[0].joints[1].parent: expected an integer in [-1, 1000)";
+  }
+  SECTION("a non-finite offset") {
+    clip0["joints"][2]["offset"] = json::array({0.0, "nan", 1.0});
+    reason = "motion.clips[0].joints[2].offset: expected 3 finite numbers";
+  }
+  SECTION("no joints") {
+    clip0["joints"] = json::array();
+    reason = "motion.clips[0].joints: expected an array of 1 to 1000 joints";
+  }
+  SECTION("an unknown key") {
+    clip0["scale"] = 2;
+    reason = "motion.clips[0]: expected only the keys name, frames, frame_time, joints, found '\"scale\"'";
+  }
+  SECTION("a rotation that is not a unit quaternion") {
+    rotations[4 * 13 + 3] *= 2;
+    rewrite("motion_rotations", mgrl::npyEncode<double>(rotations, {rows, 4}));
+    reason = "motion_rotations.npy: row 13: expected a unit quaternion";
+  }
+  SECTION("fewer rotation rows than the clips need") {
+    rotations.resize(rotations.size() - 4);
+    rewrite("motion_rotations", mgrl::npyEncode<double>(rotations, {rows - 1, 4}));
+    manifest["arrays"]["motion_rotations"]["shape"] = json::array({rows - 1, 4});
+    reason = fmt::format("motion_rotations.npy: expected shape ({}, 4) as motion.clips says, found ({}, 4)", rows,
+                         rows - 1);
+  }
+  SECTION("the rotations' array not listed") {
+    manifest["arrays"].erase("motion_rotations");
+    reason = "arrays: expected the key 'motion_rotations', found none";
+  }
+  manifest["hash"] = mgrl::manifestHash(manifest);
+  writeBytes(bundle / "manifest.json", manifest.dump());
+  const GraphBundleLoad load = loadWithMotion(bundle);
+  CAPTURE(load.reason);
+  REQUIRE(load.status == GraphBundleLoad::Damaged);
+  REQUIRE_THAT(load.reason, Contains(reason));
+  CHECK(load.motions.empty());
+}

@@ -1,6 +1,7 @@
 #include "mgrl/graph/graph_cache.hpp"
 
 #include <algorithm>
+#include <cmath>
 #include <cstdint>
 #include <limits>
 #include <set>
@@ -68,6 +69,168 @@ std::vector<T> loadArray(const fs::path& dir, const ManifestReader& reader, cons
   return data;
 }
 
+// ---------------------------------------------------------------------------------------
+// The capture's motions (version 4, "motion")
+
+json vectorJson(const Eigen::Vector3d& v) { return json::array({v.x(), v.y(), v.z()}); }
+
+json jointJson(const Joint& joint) {
+  json channels = json::array();
+  for (const Channel& c : joint.channels) channels.push_back(channelName(c));
+  json j = {{"name", joint.name}, {"parent", joint.parent}, {"offset", vectorJson(joint.offset)}, {"channels", channels}};
+  if (joint.endSite) j["end_site"] = vectorJson(*joint.endSite);
+  return j;
+}
+
+// The "motion" member and the two arrays' values, in the order of the file comment.
+json motionJson(std::span<const Clip> clips, std::vector<double>& rotations, std::vector<double>& translations) {
+  json list = json::array();
+  for (const Clip& clip : clips) {
+    const Motion& motion = clip.motion;
+    json joints = json::array();
+    for (const Joint& joint : motion.skeleton().joints()) joints.push_back(jointJson(joint));
+    list.push_back({{"name", clip.name},
+                    {"frames", motion.frameCount()},
+                    {"frame_time", motion.frameTime()},
+                    {"joints", std::move(joints)}});
+    for (std::size_t f = 0; f < motion.frameCount(); ++f) {
+      for (const Eigen::Quaterniond& q : motion.rotations(f)) rotations.insert(rotations.end(), {q.x(), q.y(), q.z(), q.w()});
+      for (const Eigen::Vector3d& t : motion.translations(f)) translations.insert(translations.end(), {t.x(), t.y(), t.z()});
+    }
+  }
+  return {{"clips", std::move(list)}};
+}
+
+Eigen::Vector3d readVector(const ManifestReader& reader, const json& parent, const std::string& path,
+                           std::string_view key) {
+  const json& v = reader.member(parent, path, key);
+  if (!v.is_array() || v.size() != 3 ||
+      !std::all_of(v.begin(), v.end(), [](const json& x) { return x.is_number() && std::isfinite(x.get<double>()); }))
+    reader.fail(ManifestReader::join(path, key), "3 finite numbers", v);
+  return {v[0].get<double>(), v[1].get<double>(), v[2].get<double>()};
+}
+
+Joint readJoint(const ManifestReader& reader, const json& j, const std::string& path) {
+  if (!j.is_object()) reader.fail(path, "an object", j);
+  for (const auto& item : j.items())
+    if (item.key() != "name" && item.key() != "parent" && item.key() != "offset" && item.key() != "channels" &&
+        item.key() != "end_site")
+      reader.fail(path, "only the keys name, parent, offset, channels, end_site", json(item.key()));
+  Joint joint;
+  joint.name = reader.string(j, path, "name");
+  const json& parent = reader.member(j, path, "parent");
+  if (!parent.is_number_integer() || parent.get<std::int64_t>() < -1 ||
+      parent.get<std::int64_t>() >= static_cast<std::int64_t>(kMaxBundledJoints))
+    reader.fail(ManifestReader::join(path, "parent"), fmt::format("an integer in [-1, {})", kMaxBundledJoints), parent);
+  joint.parent = static_cast<int>(parent.get<std::int64_t>());
+  joint.offset = readVector(reader, j, path, "offset");
+  const json& channels = reader.member(j, path, "channels");
+  if (!channels.is_array() || channels.size() > 6)
+    reader.fail(ManifestReader::join(path, "channels"), "an array of at most 6 channel names", channels);
+  for (const json& c : channels) {
+    const std::optional<Channel> channel = c.is_string() ? channelFromName(c.get<std::string>()) : std::nullopt;
+    if (!channel)
+      reader.fail(ManifestReader::join(path, "channels"), "channel names such as 'Zrotation' or 'Xposition'", c);
+    joint.channels.push_back(*channel);
+  }
+  if (j.contains("end_site")) joint.endSite = readVector(reader, j, path, "end_site");
+  return joint;
+}
+
+// The clips of a version 4 bundle. Sizes are checked against each other and the model
+// before the arrays are read, and the arrays against the sizes before a motion is built.
+std::vector<std::pair<std::string, Motion>> loadMotions(const fs::path& dir, const ManifestReader& reader,
+                                                        const json& manifest, const json& arrays,
+                                                        const StateActionModel& m) {
+  struct ClipHeader {
+    std::string name;
+    std::size_t frames = 0;
+    double frameTime = 0;
+    std::shared_ptr<const Skeleton> skeleton;
+  };
+  const json& motion = reader.object(manifest, "", "motion", {"clips"});
+  const json& clips = reader.member(motion, "motion", "clips");
+  if (!clips.is_array() || clips.empty() || clips.size() > kMaxBundledClips)
+    reader.fail("motion.clips", fmt::format("an array of 1 to {} clips", kMaxBundledClips), clips);
+  if (m.clipOffset.size() != clips.size() + 1)
+    throw Error(fmt::format("{}: motion.clips: expected {} clips as clip_offset.npy says, found {}", reader.source(),
+                            m.clipOffset.size() - 1, clips.size()));
+  std::vector<ClipHeader> headers;
+  std::uint64_t rotationRows = 0, translationRows = 0;
+  for (std::size_t c = 0; c < clips.size(); ++c) {
+    const std::string path = fmt::format("motion.clips[{}]", c);
+    const json& clip = clips[c];
+    if (!clip.is_object()) reader.fail(path, "an object", clip);
+    for (const auto& item : clip.items())
+      if (item.key() != "name" && item.key() != "frames" && item.key() != "frame_time" && item.key() != "joints")
+        reader.fail(path, "only the keys name, frames, frame_time, joints", json(item.key()));
+    ClipHeader h;
+    h.name = reader.string(clip, path, "name");
+    h.frames = reader.unsignedInteger(clip, path, "frames", kMaxResampledFrames);
+    if (h.frames != m.clipOffset[c + 1] - m.clipOffset[c])
+      reader.fail(ManifestReader::join(path, "frames"),
+                  fmt::format("{} as clip_offset.npy says", m.clipOffset[c + 1] - m.clipOffset[c]), clip["frames"]);
+    h.frameTime = reader.number(clip, path, "frame_time");
+    if (h.frameTime != m.frameTime) reader.fail(ManifestReader::join(path, "frame_time"), "scalars.frame_time", clip["frame_time"]);
+    const json& joints = reader.member(clip, path, "joints");
+    if (!joints.is_array() || joints.empty() || joints.size() > kMaxBundledJoints)
+      reader.fail(ManifestReader::join(path, "joints"), fmt::format("an array of 1 to {} joints", kMaxBundledJoints),
+                  json(fmt::format("{} of {}", joints.is_array() ? "an array" : "a value", joints.size())));
+    std::vector<Joint> list;
+    for (std::size_t j = 0; j < joints.size(); ++j)
+      list.push_back(readJoint(reader, joints[j], fmt::format("{}.joints[{}]", path, j)));
+    try {
+      h.skeleton = std::make_shared<const Skeleton>(std::move(list));
+    } catch (const Error& e) {
+      throw Error(fmt::format("{}: {}.joints: {}", reader.source(), path, e.what()));
+    }
+    rotationRows += std::uint64_t{h.frames} * h.skeleton->jointCount();
+    translationRows += std::uint64_t{h.frames} * h.skeleton->translatedJoints().size();
+    headers.push_back(std::move(h));
+  }
+
+  const MappedBundleArray<double> rotations =
+      mapBundleArray<double>(dir, reader, arrays, "arrays", "motion_rotations", "motion_rotations.npy");
+  const MappedBundleArray<double> translations =
+      mapBundleArray<double>(dir, reader, arrays, "arrays", "motion_translations", "motion_translations.npy");
+  auto requireShape = [&](const MappedBundleArray<double>& a, std::string_view name, std::uint64_t rows,
+                          std::size_t columns) {
+    if (a.shape != std::vector<std::size_t>{rows, columns})
+      throw Error(fmt::format("{}: expected shape ({}, {}) as motion.clips says, found {}",
+                              (dir / fmt::format("{}.npy", name)).string(), rows, columns, formatShape(a.shape)));
+  };
+  requireShape(rotations, "motion_rotations", rotationRows, 4);
+  requireShape(translations, "motion_translations", translationRows, 3);
+
+  std::vector<std::pair<std::string, Motion>> motions;
+  motions.reserve(headers.size());
+  const double* r = rotations.data.data();
+  const double* t = translations.data.data();
+  for (ClipHeader& h : headers) {
+    std::vector<Eigen::Quaterniond> q(h.frames * h.skeleton->jointCount());
+    for (Eigen::Quaterniond& x : q) {
+      x = Eigen::Quaterniond(r[3], r[0], r[1], r[2]);
+      // The hash vouches for the bytes, not that a writer put rotations there.
+      if (!(std::abs(x.squaredNorm() - 1) < 1e-6))
+        throw Error(fmt::format("{}: row {}: expected a unit quaternion, found ({}, {}, {}, {})",
+                                (dir / "motion_rotations.npy").string(), (r - rotations.data.data()) / 4, r[0], r[1],
+                                r[2], r[3]));
+      r += 4;
+    }
+    std::vector<Eigen::Vector3d> v(h.frames * h.skeleton->translatedJoints().size());
+    for (Eigen::Vector3d& x : v) {
+      x = Eigen::Vector3d(t[0], t[1], t[2]);
+      if (!x.allFinite())
+        throw Error(fmt::format("{}: row {}: expected finite numbers, found ({}, {}, {})",
+                                (dir / "motion_translations.npy").string(), (t - translations.data.data()) / 3, t[0],
+                                t[1], t[2]));
+      t += 3;
+    }
+    motions.emplace_back(std::move(h.name), Motion(h.skeleton, h.frameTime, std::move(q), std::move(v)));
+  }
+  return motions;
+}
+
 GraphBundleLoad damaged(std::string reason) {
   GraphBundleLoad result;
   result.status = GraphBundleLoad::Damaged;
@@ -77,7 +240,8 @@ GraphBundleLoad damaged(std::string reason) {
 
 }  // namespace
 
-void saveGraphBundle(const std::filesystem::path& dirArgument, const StateActionModel& m, const json& provenance) {
+void saveGraphBundle(const std::filesystem::path& dirArgument, const StateActionModel& m, const json& provenance,
+                     std::span<const Clip> clips) {
   // "cache/graph/" names the same bundle as "cache/graph".
   const fs::path dir = dirArgument.has_filename() ? dirArgument : dirArgument.parent_path();
   const std::string source = dir.string();
@@ -107,6 +271,18 @@ void saveGraphBundle(const std::filesystem::path& dirArgument, const StateAction
     encode(fmt::format("{}_index", name), index, kHitIndexColumns);
     encode(fmt::format("{}_value", name), value, kHitValueColumns);
   }
+  json motion;
+  if (!clips.empty()) {
+    std::size_t frames = 0;
+    for (const Clip& clip : clips) frames += clip.motion.frameCount();
+    if (clips.size() + 1 != m.clipOffset.size() || frames != m.framesTotal)
+      throw Error(fmt::format("{}: expected the {} clips of {} frames the model was built from, found {} of {}", source,
+                              m.clipOffset.size() - 1, m.framesTotal, clips.size(), frames));
+    std::vector<double> rotations, translations;
+    motion = motionJson(clips, rotations, translations);
+    encode("motion_rotations", rotations, 4);
+    encode("motion_translations", translations, 3);
+  }
 
   json manifest = {
       {"format", std::string(kGraphFormatName)},
@@ -120,6 +296,7 @@ void saveGraphBundle(const std::filesystem::path& dirArgument, const StateAction
         {"max_kick_speed_mps", m.maxKickSpeed_mps}}},
       {"arrays", std::move(arrays)},
   };
+  if (!motion.is_null()) manifest["motion"] = std::move(motion);
   std::string manifestText;
   try {
     // The scalars are the model's too: sealed like the arrays, so a flipped bit is noticed.
@@ -132,7 +309,8 @@ void saveGraphBundle(const std::filesystem::path& dirArgument, const StateAction
   writeBundleDirectory(dir, files, manifestText, "graph bundle");
 }
 
-GraphBundleLoad loadGraphBundle(const std::filesystem::path& dirArgument, std::string_view expectedKey) {
+GraphBundleLoad loadGraphBundle(const std::filesystem::path& dirArgument, std::string_view expectedKey,
+                                bool withMotion) {
   const fs::path dir = dirArgument.has_filename() ? dirArgument : dirArgument.parent_path();
   recoverBundleDirectory(dir, "manifest.json");  // what a killed writer left (issue 19)
   std::error_code ec;
@@ -177,8 +355,9 @@ GraphBundleLoad loadGraphBundle(const std::filesystem::path& dirArgument, std::s
     }
     for (const auto& item : manifest.items())
       if (item.key() != "format" && item.key() != "version" && item.key() != "provenance" && item.key() != "scalars" &&
-          item.key() != "arrays" && item.key() != "hash")
-        throw Error(fmt::format("{}: expected only the keys format, version, provenance, scalars, arrays, hash, found '{}'",
+          item.key() != "arrays" && item.key() != "hash" && item.key() != "motion")
+        throw Error(fmt::format("{}: expected only the keys format, version, provenance, scalars, arrays, motion, hash, "
+                                "found '{}'",
                                 reader.source(), item.key()));
 
     GraphBundleLoad result;
@@ -211,6 +390,8 @@ GraphBundleLoad loadGraphBundle(const std::filesystem::path& dirArgument, std::s
     load("hits_value", hitsValue, kHitValueColumns);
     load("kicks_index", kicksIndex, kHitIndexColumns);
     load("kicks_value", kicksValue, kHitValueColumns);
+    const bool hasMotion = manifest.contains("motion");
+    if (hasMotion) known.insert({"motion_rotations", "motion_translations"});
     for (const auto& item : arrays.items())
       if (!known.contains(item.key()))
         throw Error(fmt::format("{}: arrays: expected only the arrays of a state-action model, found '{}'",
@@ -240,6 +421,7 @@ GraphBundleLoad loadGraphBundle(const std::filesystem::path& dirArgument, std::s
     strikes("kicks", kicksIndex, kicksValue, m.kicks);
 
     checkModel(m, dir.string());
+    if (withMotion && hasMotion) result.motions = loadMotions(dir, reader, manifest, arrays, m);
     result.status = GraphBundleLoad::Ok;
     result.manifest = std::move(manifest);
     return result;

@@ -26,6 +26,23 @@
 /// Version 2 added that hash: a version 1 bundle trusted its scalars unchecked. Version 3
 /// added the effective kicks: kicks_index (K, 3) (action, offset, foot), kicks_value (K, 4),
 /// action_kick_begin and the scalar max_kick_speed_mps.
+///
+/// Version 4 may keep the capture the graph was built from, resampled and in metres, so
+/// that posing avatars from a cached graph (simulate, the viewer, `mgrl graph`) does not
+/// parse it again (issue 20, command start): a top-level "motion" member
+///
+///     "motion": {"clips": [{"name": "13_17_boxing.bvh", "frames": F, "frame_time": s,
+///                           "joints": [{"name": "Hips", "parent": -1, "offset": [x, y, z],
+///                                       "channels": ["Xposition", ..., "Zrotation"],
+///                                       "end_site": [x, y, z]}, ...]}, ...]}
+///
+/// ("end_site" only where the joint has one) and the arrays motion_rotations (R, 4)
+/// float64, every clip's local joint rotations frame after frame as quaternions (x, y, z,
+/// w), R the sum of frames x joints over the clips, and motion_translations (S, 3)
+/// float64, the local translations of the joints with position channels, S the sum of
+/// frames x such joints. The annotations (contacts, effective hits) are not kept: they are
+/// recomputed from these (makeMotionDatabase(), a few milliseconds), so they always follow
+/// the annotation code and parameters of the reader.
 
 #include <filesystem>
 #include <string>
@@ -34,15 +51,21 @@
 #include <nlohmann/json.hpp>
 
 #include "mgrl/graph/state_action_model.hpp"
+#include "mgrl/motion/motion_database.hpp"
 
 namespace mgrl {
 
 /// The manifest's "format" and "version"; a bundle with others is Stale.
 inline constexpr std::string_view kGraphFormatName = "mgrl.graph";
-inline constexpr int kGraphFormatVersion = 3;
+inline constexpr int kGraphFormatVersion = 4;
+
+/// Limits on a bundle's "motion" member, checked before anything is allocated for it.
+inline constexpr std::size_t kMaxBundledClips = 100'000;
+inline constexpr std::size_t kMaxBundledJoints = 1'000;
 
 
 /// Writes `m` as a bundle at `dir` (see the file comment), replacing a bundle already there.
+/// With `clips` (the capture `m` was built from), their motions go in too ("motion").
 /// `provenance` must be a JSON object with a string "key", the cache key loadGraphBundle()
 /// compares; the rest is recorded as is. The files go to a sibling temporary directory
 /// that is then renamed onto `dir` (an old bundle is first renamed aside, then removed),
@@ -54,7 +77,7 @@ inline constexpr int kGraphFormatVersion = 3;
 /// provenance has no string "key", if `dir` is something other than a bundle or an empty
 /// directory (it is never deleted then), or on any I/O failure.
 void saveGraphBundle(const std::filesystem::path& dir, const StateActionModel& m,
-                     const nlohmann::json& provenance);
+                     const nlohmann::json& provenance, std::span<const Clip> clips = {});
 
 /// What loadGraphBundle() found.
 struct GraphBundleLoad {
@@ -69,6 +92,8 @@ struct GraphBundleLoad {
   /// `graph/action_to.npy: expected 48 bytes as in manifest.json, found 44`; empty if Ok.
   std::string reason;
   StateActionModel model;   ///< filled only if Ok
+  /// The bundle's clips (name and motion), filled only if Ok, asked for, and kept.
+  std::vector<std::pair<std::string, Motion>> motions;
   nlohmann::json manifest;  ///< the parsed manifest if Stale or Ok, else null
 };
 
@@ -76,8 +101,11 @@ struct GraphBundleLoad {
 /// (provenance.key). Checks the format and version, the manifest's hash (so every scalar
 /// and provenance value is as saved), every array's file name, dtype, shape,
 /// byte size and hash against the manifest, decodes the arrays strictly (mgrl/core/npy.hpp) and
-/// runs checkModel() on the result. Never throws for a bad bundle: the status and reason
-/// say what is wrong, and the caller rebuilds.
-GraphBundleLoad loadGraphBundle(const std::filesystem::path& dir, std::string_view expectedKey);
+/// runs checkModel() on the result. With `withMotion`, also reads the clips the bundle keeps
+/// (none for a bundle saved without them), checking their arrays the same way, each
+/// skeleton (Skeleton's own checks) and that the frames add up to the model's. Never throws
+/// for a bad bundle: the status and reason say what is wrong, and the caller rebuilds.
+GraphBundleLoad loadGraphBundle(const std::filesystem::path& dir, std::string_view expectedKey,
+                                bool withMotion = false);
 
 }  // namespace mgrl

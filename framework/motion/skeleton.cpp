@@ -13,6 +13,14 @@ std::string channelName(const Channel& channel) {
                      channel.kind == Channel::Kind::Position ? "position" : "rotation");
 }
 
+std::optional<Channel> channelFromName(std::string_view name) {
+  if (name.size() != 9 || name[0] < 'X' || name[0] > 'Z') return std::nullopt;
+  const Axis axis = static_cast<Axis>(name[0] - 'X');
+  if (name.substr(1) == "position") return Channel{Channel::Kind::Position, axis};
+  if (name.substr(1) == "rotation") return Channel{Channel::Kind::Rotation, axis};
+  return std::nullopt;
+}
+
 bool hasPositionChannel(const Joint& joint) {
   for (const Channel& c : joint.channels)
     if (c.kind == Channel::Kind::Position) return true;

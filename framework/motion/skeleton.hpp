@@ -26,6 +26,8 @@ struct Channel {
 
 /// Name of a channel in BVH spelling, e.g. "Zrotation".
 std::string channelName(const Channel& channel);
+/// The channel channelName() spells `name` (exactly, e.g. "Zrotation"), or nullopt.
+std::optional<Channel> channelFromName(std::string_view name);
 
 struct Joint {
   std::string name;

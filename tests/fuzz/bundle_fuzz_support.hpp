@@ -5,7 +5,11 @@
 #include <algorithm>
 #include <fstream>
 
+#include <memory>
+#include <string>
+
 #include "mgrl/core/files.hpp"
+#include "mgrl/motion/motion_database.hpp"
 
 #include "fuzz_support.hpp"
 #include "synthetic_model.hpp"
@@ -20,6 +24,32 @@ inline const StateActionModel& smallModel() {
     return makeSyntheticModel(spec);
   }();
   return model;
+}
+
+/// Clips for smallModel()'s frames, on a one-joint skeleton (position and rotation
+/// channels, an end site: a seed under the fuzzer's 64 KB), so the graph seed carries a
+/// "motion" member to mutate.
+inline std::vector<Clip> smallClips() {
+  std::vector<Joint> joints(1);
+  joints[0].name = "Hips";
+  joints[0].channels = {{Channel::Kind::Position, Axis::X}, {Channel::Kind::Position, Axis::Y},
+                        {Channel::Kind::Position, Axis::Z}, {Channel::Kind::Rotation, Axis::Z},
+                        {Channel::Kind::Rotation, Axis::X}, {Channel::Kind::Rotation, Axis::Y}};
+  joints[0].endSite = Eigen::Vector3d(0, 0.5, 0);
+  const auto skeleton = std::make_shared<const Skeleton>(std::move(joints));
+  const StateActionModel& m = smallModel();
+  std::vector<Clip> clips;
+  for (std::size_t c = 0; c + 1 < m.clipOffset.size(); ++c) {
+    const std::size_t frames = m.clipOffset[c + 1] - m.clipOffset[c];
+    std::vector<Eigen::Quaterniond> rotations;
+    std::vector<Eigen::Vector3d> translations;
+    for (std::size_t f = 0; f < frames; ++f) {
+      rotations.emplace_back(Eigen::AngleAxisd(0.1 * static_cast<double>(f + c), Eigen::Vector3d::UnitY()));
+      translations.emplace_back(0.01 * static_cast<double>(f), 0.9, 0);
+    }
+    clips.push_back(Clip{"clip" + std::to_string(c) + ".bvh", {}, Motion(skeleton, m.frameTime, rotations, translations), {}});
+  }
+  return clips;
 }
 
 /// The files of the bundle at `dir`, `first` first, as one input (joinFiles()).

@@ -1,7 +1,8 @@
 // libFuzzer harness: the graph cache reader (loadGraphBundle(), framework/graph/graph_cache.hpp).
 // The input is a bundle's files (manifest.json first, see splitFiles()); each is loaded as
 // it is and resealed (fuzz_support.hpp: reseal()), so the checks behind the hashes run too.
-// loadGraphBundle() reports a bad bundle in its status and never throws.
+// loadGraphBundle() reports a bad bundle in its status and never throws. The motion the
+// bundle may keep (version 4) is read too.
 #include "bundle_fuzz_support.hpp"
 #include "mgrl/graph/graph_cache.hpp"
 
@@ -13,13 +14,13 @@ const mgrl::fuzz::Scratch& scratch() {
 void load(const std::vector<mgrl::fuzz::File>& files) {
   const std::filesystem::path dir = scratch().fresh("graph");
   mgrl::fuzz::writeFiles(dir, files);
-  mgrl::fuzz::guarded("graph cache", [&] { (void)mgrl::loadGraphBundle(dir, "fuzz"); });
+  mgrl::fuzz::guarded("graph cache", [&] { (void)mgrl::loadGraphBundle(dir, "fuzz", true); });
 }
 }  // namespace
 
 extern "C" int LLVMFuzzerInitialize(int*, char***) {
   mgrl::fuzz::maybeWriteSeed(scratch(), "manifest.json", [](const std::filesystem::path& dir) {
-    mgrl::saveGraphBundle(dir, mgrl::fuzz::smallModel(), {{"key", "fuzz"}});
+    mgrl::saveGraphBundle(dir, mgrl::fuzz::smallModel(), {{"key", "fuzz"}}, mgrl::fuzz::smallClips());
   });
   return 0;
 }
