@@ -66,7 +66,8 @@ CaptureTravel clipTravel(const MotionDatabase& db) {
 }
 
 nlohmann::json clipTravelJson(const CaptureTravel& t) {
-  return {{"clip_travel_m", t.clipTravel_m}, {"clip", t.clip}, {"root_extent_m", t.rootExtent_m}};
+  return {{"clip_travel_m", t.clipTravel_m}, {"clip", t.clip},           {"root_extent_m", t.rootExtent_m},
+          {"action_travel_m", t.actionTravel_m}, {"walk_travel_m", t.walkTravel_m}};
 }
 
 // The clips' part kept in a graph bundle's provenance; nullopt if absent or malformed (a
@@ -84,6 +85,14 @@ std::optional<CaptureTravel> clipTravelFrom(const nlohmann::json& manifest) {
   t.rootExtent_m = c["root_extent_m"].get<double>();
   t.clip = c["clip"].get<std::string>();
   if (!std::isfinite(t.clipTravel_m) || !std::isfinite(t.rootExtent_m)) return std::nullopt;
+  // The graph walk's part, kept since version 4 (the model's own, so a cached graph need
+  // not walk again: a few milliseconds of every command's start).
+  if (c.contains("action_travel_m") && c["action_travel_m"].is_number() && c.contains("walk_travel_m") &&
+      c["walk_travel_m"].is_number()) {
+    t.actionTravel_m = c["action_travel_m"].get<double>();
+    t.walkTravel_m = c["walk_travel_m"].get<double>();
+    t.walked = std::isfinite(t.actionTravel_m) && std::isfinite(t.walkTravel_m);
+  }
   return t;
 }
 
@@ -102,8 +111,9 @@ CaptureTravel measureTravel(const Scenario& scenario, const MotionDatabase& db, 
   return measureTravel(scenario, clipTravel(db), model);
 }
 
-CaptureTravel measureTravel(const Scenario& scenario, CaptureTravel clips, const StateActionModel& model) {
+CaptureTravel walkTravel(CaptureTravel clips, const StateActionModel& model) {
   CaptureTravel t = std::move(clips);
+  t.actionTravel_m = t.walkTravel_m = 0;
   for (std::size_t a = 0; a < model.actionCount(); ++a)
     t.actionTravel_m = std::max(t.actionTravel_m, std::hypot(model.actionDisplacement[3 * a], model.actionDisplacement[3 * a + 1]));
   // Chained actions carry the avatar farther than one clip: from every state, walk the
@@ -136,6 +146,12 @@ CaptureTravel measureTravel(const Scenario& scenario, CaptureTravel clips, const
       t.walkTravel_m = std::max(t.walkTravel_m, bestDistance);
     }
   }
+  t.walked = true;
+  return t;
+}
+
+CaptureTravel measureTravel(const Scenario& scenario, CaptureTravel clips, const StateActionModel& model) {
+  CaptureTravel t = clips.walked ? std::move(clips) : walkTravel(std::move(clips), model);
   const double travel = std::max(t.clipTravel_m, t.walkTravel_m);
   for (const BehaviorSpec& spec : scenario.behaviors) {
     std::unique_ptr<Discretizer> grid;
@@ -202,8 +218,7 @@ GraphResult obtainGraph(const Scenario& scenario, const GraphOptions& options) {
       } else if (options.motion || !clips) {
         result.db = loadMotionDatabase(scenario.motion, warn);
       }
-      result.travel = clips && !options.motion ? measureTravel(scenario, *clips, result.model)
-                                               : measureTravel(scenario, result.db, result.model);
+      result.travel = clips ? measureTravel(scenario, *clips, result.model) : measureTravel(scenario, result.db, result.model);
       result.seconds = since(start);
       for (const std::string& w : result.travel.warnings) log(fmt::format("graph: warning: {}", w));
       return result;
@@ -218,7 +233,7 @@ GraphResult obtainGraph(const Scenario& scenario, const GraphOptions& options) {
   result.model = buildStateActionModel(result.db, scenario.graph, &result.report);
   result.buildSeconds = since(buildStart);
 
-  const CaptureTravel clips = clipTravel(result.db);
+  const CaptureTravel clips = walkTravel(clipTravel(result.db), result.model);
   nlohmann::json provenance = {{"key", result.key},
                                {"scenario", scenario.name},
                                {"scenario_path", canonical.string()},

@@ -42,6 +42,8 @@ struct CaptureTravel {
   /// Farthest a greedy walk through the graph (each decision the action ending farthest
   /// from the start) gets in kTravelWalkSeconds, over every starting state.
   double walkTravel_m = 0;
+  /// True once actionTravel_m and walkTravel_m are measured (walkTravel()).
+  bool walked = false;
   struct Reach {
     std::string behavior;
     double reach_m = 0;       ///< largest ground distance of its grid's vertices from the avatar
@@ -92,8 +94,11 @@ std::filesystem::path defaultCacheDirectory();
 /// discretizer cannot be built are left out: training reports those).
 CaptureTravel measureTravel(const Scenario& scenario, const MotionDatabase& db, const StateActionModel& model);
 /// The same from the clips' part (clipTravel_m, clip, rootExtent_m) measured before, as
-/// the graph bundle keeps it, so that a cached graph needs no capture for it.
+/// the graph bundle keeps it, so that a cached graph needs no capture for it; the graph
+/// walk's part too if `clips.walked` (else it is measured here by walkTravel()).
 CaptureTravel measureTravel(const Scenario& scenario, CaptureTravel clips, const StateActionModel& model);
+/// `clips` with the model's part measured: actionTravel_m and walkTravel_m (walked = true).
+CaptureTravel walkTravel(CaptureTravel clips, const StateActionModel& model);
 
 /// Loads the scenario's capture and returns its graph: from the cache bundle when its key
 /// matches, else built and saved there atomically. A stale or damaged bundle is reported

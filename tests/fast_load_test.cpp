@@ -263,10 +263,16 @@ TEST_CASE("a cached graph poses avatars from the capture it keeps, exactly as pa
   REQUIRE(manifest.contains("motion"));
   CHECK(manifest["motion"]["clips"].size() == 2);
   CHECK(manifest["arrays"].contains("motion_rotations"));
+  // The graph walk of the travel check is the model's own: kept, not walked again.
+  CHECK(manifest["provenance"]["capture_travel"]["walk_travel_m"] == built.travel.walkTravel_m);
+  CHECK(manifest["provenance"]["capture_travel"]["action_travel_m"] == built.travel.actionTravel_m);
 
   const mgrl::app::GraphResult cached = mgrl::app::obtainGraph(scenario, options);
   REQUIRE(cached.fromCache);
   requireSameDatabase(cached.db, built.db);
+  CHECK(cached.travel.walkTravel_m == built.travel.walkTravel_m);
+  CHECK(cached.travel.actionTravel_m == built.travel.actionTravel_m);
+  CHECK(cached.travel.reaches.size() == built.travel.reaches.size());
 
   SECTION("a bundle saved without the motion: the capture is parsed, as before") {
     nlohmann::json edited = manifest;

@@ -11,12 +11,15 @@
 namespace mgrl {
 namespace {
 
-double percentile(std::vector<double> values, double q) {
+// Reorders `values`.
+double percentileInPlace(std::vector<double>& values, double q) {
   if (values.empty()) return 0;
   const auto k = static_cast<std::size_t>(q * static_cast<double>(values.size() - 1));
   std::nth_element(values.begin(), values.begin() + static_cast<std::ptrdiff_t>(k), values.end());
   return values[k];
 }
+
+double percentile(std::vector<double> values, double q) { return percentileInPlace(values, q); }
 
 }  // namespace
 
@@ -115,7 +118,7 @@ Annotation annotate(const Motion& motion, const SkeletonRoles& roles, const Anno
     for (std::size_t f = 0; f < frames; ++f) {
       const std::size_t lo = f > window ? f - window : 0, hi = std::min(frames, f + window + 1);
       span.assign(heights.begin() + static_cast<std::ptrdiff_t>(lo), heights.begin() + static_cast<std::ptrdiff_t>(hi));
-      planted[k][f] = percentile(span, 0.10);
+      planted[k][f] = percentileInPlace(span, 0.10);
     }
   }
   for (std::size_t f = 0; f < frames; ++f) {
