@@ -45,8 +45,10 @@ json runEval(const EvalOptions& options) {
   if (!(options.seconds > 0 && options.seconds <= 3600))
     throw Error(fmt::format("--seconds: expected seconds of motion per trial in (0, 3600], found {}", options.seconds));
   Scenario scenario = checkedScenario(options);
-  const fs::path dir = options.controller == "policy" ? resolvePolicy(options.policy, scenario, options) : fs::path();
-  Loaded loaded = load(options, std::move(scenario), false);  // trials need no poses
+  std::string graphKey;
+  const fs::path dir =
+      options.controller == "policy" ? resolvePolicy(options.policy, scenario, options, &graphKey) : fs::path();
+  Loaded loaded = load(options, std::move(scenario), false, std::move(graphKey));  // trials need no poses
   const StateActionModel& model = loaded.graph.model;
   std::vector<Behavior> behaviors = buildBehaviors(loaded.scenario, plugins(), model, loaded.graph.key);
 

@@ -192,7 +192,7 @@ GraphResult obtainGraph(const Scenario& scenario, const GraphOptions& options) {
   // Loader warnings are warnings; the log also carries plain progress.
   WarningSink warn;
   if (options.log) warn = [&](const std::string& message) { log(fmt::format("warning: {}", message)); };
-  result.key = graphCacheKey(scenario);
+  result.key = options.key.empty() ? graphCacheKey(scenario) : options.key;
   const std::filesystem::path cacheDir = options.cacheDir.empty() ? defaultCacheDirectory() : options.cacheDir;
   // One bundle per scenario file: a changed scenario replaces its bundle instead of piling up.
   std::error_code ec;

@@ -30,6 +30,9 @@ struct GraphOptions {
   /// posing avatars needs (simulate, the viewer, graph's report). Training and eval need
   /// only the model, and a cached graph then costs no parsing (issue 20, command start).
   bool motion = true;
+  /// The scenario's graphCacheKey() if the caller has it (it hashes every capture file:
+  /// computed once per command); empty: computed here.
+  std::string key;
 };
 
 /// How far the capture carries the avatar, against how far the behaviours' grids reach

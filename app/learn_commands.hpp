@@ -100,7 +100,9 @@ std::string simulateText(const nlohmann::json& report);
 
 /// Where `mgrl train` puts a scenario's policy bundle by default:
 /// <cache>/policies/<name>-<hash of the scenario's path, graph and behaviour settings>.
-std::filesystem::path defaultPolicyDirectory(const std::filesystem::path& cacheDir, const Scenario& scenario);
+/// `graphKey`: the scenario's graphCacheKey() if the caller has it (else computed here).
+std::filesystem::path defaultPolicyDirectory(const std::filesystem::path& cacheDir, const Scenario& scenario,
+                                             std::string_view graphKey = {});
 
 /// A run stopped by Ctrl-C or SIGTERM after saving what it could; the message says how to
 /// continue. The command line exits with 130 for it.

@@ -62,8 +62,9 @@ double secondsSinceStart() {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - programStart).count();
 }
 
-Loaded load(const LearnOptions& options, Scenario scenario, bool motion) {
+Loaded load(const LearnOptions& options, Scenario scenario, bool motion, std::string graphKey) {
   GraphOptions graphOptions;
+  graphOptions.key = std::move(graphKey);
   graphOptions.cacheDir = options.cacheDir;
   graphOptions.log = options.log;
   graphOptions.motion = motion;
@@ -73,7 +74,8 @@ Loaded load(const LearnOptions& options, Scenario scenario, bool motion) {
 
 // The refusals eval and simulate can make from the manifest alone, made before the graph is loaded so
 // that they are the only line on stderr. loadPolicyBundle() checks everything afterwards.
-void precheckPolicy(const fs::path& dir, const Scenario& scenario, const LearnOptions& options) {
+void precheckPolicy(const fs::path& dir, const Scenario& scenario, const LearnOptions& options,
+                    std::string_view knownKey) {
   std::error_code ec;
   if (!fs::is_directory(dir, ec))
     throw Error(fmt::format("{}: no policy bundle here: run `mgrl train {}{}` first (or pass --policy DIR)",
@@ -87,7 +89,7 @@ void precheckPolicy(const fs::path& dir, const Scenario& scenario, const LearnOp
   if (!manifest.is_object() || !manifest.contains("graph_key") || !manifest["graph_key"].is_string() ||
       !manifest.contains("behaviors") || !manifest["behaviors"].is_object())
     return;
-  const std::string graphKey = graphCacheKey(scenario);
+  const std::string graphKey = knownKey.empty() ? graphCacheKey(scenario) : std::string(knownKey);
   const std::string found = manifest["graph_key"].get<std::string>();
   if (found != graphKey)
     throw Error(fmt::format("{}: expected graph key '{}', found '{}': the policy was made for another graph; "
@@ -189,15 +191,19 @@ void requireBehavior(const Scenario& scenario, const std::string& name) {
                             fmt::join(names, ", "), quoteToken(name)));
 }
 
-fs::path resolvePolicy(const fs::path& policy, Scenario& scenario, const LearnOptions& options) {
+fs::path resolvePolicy(const fs::path& policy, Scenario& scenario, const LearnOptions& options,
+                       std::string* graphKey) {
   const fs::path cacheDir = options.cacheDir.empty() ? defaultCacheDirectory() : options.cacheDir;
+  std::string key = graphCacheKey(scenario);
   if (policy.empty()) {
-    const fs::path dir = defaultPolicyDirectory(cacheDir, scenario);
-    precheckPolicy(dir, scenario, options);
+    const fs::path dir = defaultPolicyDirectory(cacheDir, scenario, key);
+    precheckPolicy(dir, scenario, options, key);
+    if (graphKey) *graphKey = std::move(key);
     return dir;
   }
   try {
-    precheckPolicy(policy, scenario, options);
+    precheckPolicy(policy, scenario, options, key);
+    if (graphKey) *graphKey = std::move(key);
     return policy;
   } catch (const Error&) {
     const std::exception_ptr refusal = std::current_exception();
@@ -224,6 +230,7 @@ fs::path resolvePolicy(const fs::path& policy, Scenario& scenario, const LearnOp
                               "scenario's",
                               policy.string(), fmt::join(adopted.differences, ", ")));
     scenario = std::move(*adjusted);
+    if (graphKey) *graphKey = graphCacheKey(scenario);
     return policy;
   }
 }

@@ -49,19 +49,24 @@ void requireBehavior(const Scenario& scenario, const std::string& name);
 /// The scenario's graph, from the cache or built (options.log hears about it). `motion`:
 /// parse the capture even if the graph is cached (GraphOptions::motion); without it
 /// Loaded::graph.db may be empty.
-Loaded load(const LearnOptions& options, Scenario scenario, bool motion = true);
+/// `graphKey`: the scenario's graphCacheKey() if the caller has it (resolvePolicy()).
+Loaded load(const LearnOptions& options, Scenario scenario, bool motion = true, std::string graphKey = {});
 
 /// The refusals a policy bundle gets from its manifest alone (missing, another graph, a
 /// behaviour missing or trained with other settings), made before the graph is loaded so
 /// that the message is the only line on stderr. Throws mgrl::Error naming what to retrain.
-void precheckPolicy(const std::filesystem::path& dir, const Scenario& scenario, const LearnOptions& options);
+/// `graphKey` as for defaultPolicyDirectory().
+void precheckPolicy(const std::filesystem::path& dir, const Scenario& scenario, const LearnOptions& options,
+                    std::string_view graphKey = {});
 
 /// The policy bundle of eval and simulate, checked with precheckPolicy(): `policy`, else
 /// the scenario's default bundle. An explicit `policy` made for the same graph whose
 /// behaviours were trained with other settings (another learner, grid or budget) is used
-/// with those settings: `scenario` is reloaded with them and the log says which.
+/// with those settings: `scenario` is reloaded with them and the log says which. If
+/// `graphKey` is given it receives the (final) scenario's graphCacheKey(), for load(): the
+/// key hashes every capture file, so a command computes it once.
 std::filesystem::path resolvePolicy(const std::filesystem::path& policy, Scenario& scenario,
-                                    const LearnOptions& options);
+                                    const LearnOptions& options, std::string* graphKey = nullptr);
 
 /// Loads the bundle into `bundle` and returns one part per behaviour (pointing into
 /// `bundle` and `behaviors`), in order, leaving out the behaviour named `skip` (compare

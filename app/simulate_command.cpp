@@ -249,8 +249,9 @@ json runSimulate(const SimulateOptions& options) {
   WorldParams params =
       readWorldParams(scenario.root.has("world") ? scenario.root.child("world") : ConfigNode::parse("", "world"));
   if (options.topK > 0) params.variety.topK = static_cast<int>(options.topK);
+  std::string graphKey;
   const fs::path policyDir =
-      options.controller == "policy" ? resolvePolicy(options.policy, scenario, options) : fs::path();
+      options.controller == "policy" ? resolvePolicy(options.policy, scenario, options, &graphKey) : fs::path();
 
   // Output places are checked (and scratch folders made) before any simulation: first
   // what can be checked without creating anything.
@@ -291,7 +292,7 @@ json runSimulate(const SimulateOptions& options) {
   }
   if (!options.bvhOut.empty()) bvhBundle = prepareBundle(options.bvhOut, bvhCreated);
 
-  Loaded loaded = load(options, std::move(scenario));
+  Loaded loaded = load(options, std::move(scenario), true, std::move(graphKey));
   const StateActionModel& model = loaded.graph.model;
   const auto frames = static_cast<std::size_t>(std::max(1.0, std::round(options.seconds / model.frameTime)));
   const auto avatars = static_cast<std::size_t>(options.avatars);
