@@ -228,3 +228,31 @@ TEST_CASE("no boxing punch is lost to the knockdown rule; SNU's take-downs are",
   CHECK(a.knockdownFrames >= 100);
   CHECK(std::none_of(a.hits.begin(), a.hits.end(), [](const EffectiveHit& h) { return h.frame >= 340 && h.frame <= 460; }));
 }
+
+TEST_CASE("windowQuantiles gives each window's quantile exactly as a selection over the window would",
+          "[annotation]") {
+  std::uint32_t x = 7;
+  auto next = [&] {
+    x = x * 1664525u + 1013904223u;
+    return static_cast<double>(x >> 26) * 0.25;  // 64 levels: many ties
+  };
+  for (std::size_t n : {0, 1, 2, 5, 61, 200}) {
+    std::vector<double> values(n);
+    for (double& v : values) v = next();
+    for (std::size_t window : {0, 1, 3, 30, 500}) {
+      for (double q : {0.0, 0.1, 0.5, 0.99, 1.0}) {
+        CAPTURE(n, window, q);
+        const std::vector<double> fast = mgrl::windowQuantiles(values, window, q);
+        REQUIRE(fast.size() == n);
+        for (std::size_t f = 0; f < n; ++f) {
+          const std::size_t lo = f > window ? f - window : 0, hi = std::min(n, f + window + 1);
+          std::vector<double> span(values.begin() + static_cast<std::ptrdiff_t>(lo),
+                                   values.begin() + static_cast<std::ptrdiff_t>(hi));
+          const auto k = static_cast<std::size_t>(q * static_cast<double>(span.size() - 1));
+          std::nth_element(span.begin(), span.begin() + static_cast<std::ptrdiff_t>(k), span.end());
+          REQUIRE(fast[f] == span[k]);
+        }
+      }
+    }
+  }
+}

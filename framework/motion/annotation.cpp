@@ -11,15 +11,15 @@
 namespace mgrl {
 namespace {
 
-// Reorders `values`.
-double percentileInPlace(std::vector<double>& values, double q) {
+// Index of the q-quantile among n sorted values.
+std::size_t quantileIndex(std::size_t n, double q) { return static_cast<std::size_t>(q * static_cast<double>(n - 1)); }
+
+double percentile(std::vector<double> values, double q) {
   if (values.empty()) return 0;
-  const auto k = static_cast<std::size_t>(q * static_cast<double>(values.size() - 1));
+  const std::size_t k = quantileIndex(values.size(), q);
   std::nth_element(values.begin(), values.begin() + static_cast<std::ptrdiff_t>(k), values.end());
   return values[k];
 }
-
-double percentile(std::vector<double> values, double q) { return percentileInPlace(values, q); }
 
 }  // namespace
 
@@ -111,15 +111,10 @@ Annotation annotate(const Motion& motion, const SkeletonRoles& roles, const Anno
   // through the floor (SNU s_019_2_1).
   const std::size_t window = std::max<std::size_t>(1, static_cast<std::size_t>(std::lround(1.0 / motion.frameTime())));
   std::array<std::vector<double>, 4> planted;
-  std::vector<double> heights(frames), lowest(frames), span;
+  std::vector<double> heights(frames), lowest(frames);
   for (std::size_t k = 0; k < 4; ++k) {
     for (std::size_t f = 0; f < frames; ++f) heights[f] = points[f * kPoints + k].y();
-    planted[k].resize(frames);
-    for (std::size_t f = 0; f < frames; ++f) {
-      const std::size_t lo = f > window ? f - window : 0, hi = std::min(frames, f + window + 1);
-      span.assign(heights.begin() + static_cast<std::ptrdiff_t>(lo), heights.begin() + static_cast<std::ptrdiff_t>(hi));
-      planted[k][f] = percentileInPlace(span, 0.10);
-    }
+    planted[k] = windowQuantiles(heights, window, 0.10);
   }
   for (std::size_t f = 0; f < frames; ++f) {
     double low = 1e300;
@@ -244,6 +239,20 @@ Annotation annotate(const Motion& motion, const SkeletonRoles& roles, const Anno
       if (effective && !kicking[s]) ++result.kickCount[s];
       kicking[s] = effective;
     }
+  }
+  return result;
+}
+
+std::vector<double> windowQuantiles(std::span<const double> values, std::size_t window, double q) {
+  const std::size_t n = values.size();
+  std::vector<double> result(n), sorted;
+  sorted.reserve(std::min(n, 2 * window + 1));
+  std::size_t lo = 0, hi = 0;  // values[lo, hi) are in `sorted`
+  for (std::size_t f = 0; f < n; ++f) {
+    const std::size_t first = f > window ? f - window : 0, end = std::min(n, f + window + 1);
+    for (; hi < end; ++hi) sorted.insert(std::upper_bound(sorted.begin(), sorted.end(), values[hi]), values[hi]);
+    for (; lo < first; ++lo) sorted.erase(std::lower_bound(sorted.begin(), sorted.end(), values[lo]));
+    result[f] = sorted[quantileIndex(sorted.size(), q)];
   }
   return result;
 }

@@ -5,6 +5,7 @@
 
 #include <array>
 #include <cstdint>
+#include <span>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -117,5 +118,12 @@ inline constexpr double kUsualHeightMin_m = 1.2, kUsualHeightMax_m = 2.2;
 /// A warning text when `annotation.standingHeight` is outside the usual range, e.g.
 /// `x.bvh: standing height 0.95 m, expected 1.2 to 2.2 m for an adult: ...`; empty otherwise.
 std::string unusualHeightWarning(const Annotation& annotation, std::string_view source);
+
+/// For every f, the q-quantile of values[f - window .. f + window] (clipped to the ends):
+/// the element at index floor(q (n - 1)) of the n window values in ascending order. What
+/// annotate() takes for a foot's planted level (q = 0.1, one second each side). Keeps the
+/// window sorted as it slides, so each frame costs a binary search and a short move
+/// instead of a selection over the whole window. Values must not be NaN.
+std::vector<double> windowQuantiles(std::span<const double> values, std::size_t window, double q);
 
 }  // namespace mgrl
