@@ -818,6 +818,15 @@ TEST_CASE("a bundle whose kept motion is inconsistent is damaged, with the membe
     rewrite("motion_rotations", mgrl::npyEncode<double>(rotations, {rows, 4}));
     reason = "motion_rotations.npy: row 13: expected a unit quaternion";
   }
+  SECTION("a translation that is not finite") {
+    std::vector<double> translations;
+    for (const mgrl::Clip& c : clips)
+      for (std::size_t f = 0; f < 10; ++f)
+        for (const auto& t : c.motion.translations(f)) translations.insert(translations.end(), {t.x(), t.y(), t.z()});
+    translations[3 * 12 + 1] = std::nan("");
+    rewrite("motion_translations", mgrl::npyEncode<double>(translations, {translations.size() / 3, 3}));
+    reason = "motion_translations.npy: row 12: expected finite numbers, found (";
+  }
   SECTION("fewer rotation rows than the clips need") {
     rotations.resize(rotations.size() - 4);
     rewrite("motion_rotations", mgrl::npyEncode<double>(rotations, {rows - 1, 4}));
