@@ -213,8 +213,7 @@ GraphResult obtainGraph(const Scenario& scenario, const GraphOptions& options) {
       if (options.motion && bundledMotionFits(cached.motions, scenario.motion)) {
         // The capture as it was parsed when the bundle was made (the key covers its bytes);
         // annotated again here, as loadMotionDatabase() would.
-        result.db = makeMotionDatabase(std::move(cached.motions), scenario.motion.roles, scenario.motion.annotation, warn);
-        for (std::size_t c = 0; c < result.db.clips.size(); ++c) result.db.clips[c].path = scenario.motion.files[c];
+        result.db = makeMotionDatabase(std::move(cached.motions), scenario.motion, warn);
       } else if (options.motion || !clips) {
         result.db = loadMotionDatabase(scenario.motion, warn);
       }

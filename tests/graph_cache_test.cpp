@@ -807,7 +807,32 @@ TEST_CASE("a bundle whose kept motion is inconsistent is damaged, with the membe
   }
   SECTION("no joints") {
     clip0["joints"] = json::array();
-    reason = "motion.clips[0].joints: expected an array of 1 to 1000 joints";
+    reason = "motion.clips[0].joints: expected an array of 1 to 1000 joints, found 0";
+  }
+  SECTION("joints that are not an array") {
+    clip0["joints"] = 1;
+    reason = "motion.clips[0].joints: expected an array of 1 to 1000 joints, found '1'";
+  }
+  SECTION("clips that are not an array") {
+    manifest["motion"]["clips"] = "all";
+    reason = "motion.clips: expected an array of 1 to 100000 clips, found '\"all\"'";
+  }
+  SECTION("no clips") {
+    manifest["motion"]["clips"] = json::array();
+    reason = "motion.clips: expected an array of 1 to 100000 clips, found '[]'";
+  }
+  SECTION("a clip that is not an object") {
+    manifest["motion"]["clips"][1] = 7;
+    reason = "motion.clips[1]: expected an object, found '7'";
+  }
+  SECTION("an end site of two numbers") {
+    clip0["joints"][2]["end_site"] = json::array({0.0, 1.0});
+    reason = "motion.clips[0].joints[2].end_site: expected 3 finite numbers, found '[0.0,1.0]'";
+  }
+  SECTION("seven channels") {
+    clip0["joints"][0]["channels"] =
+        json::array({"Xposition", "Yposition", "Zposition", "Zrotation", "Xrotation", "Yrotation", "Zrotation"});
+    reason = "motion.clips[0].joints[0].channels: expected an array of at most 6 channel names, found '[";
   }
   SECTION("an unknown key") {
     clip0["scale"] = 2;
@@ -833,6 +858,18 @@ TEST_CASE("a bundle whose kept motion is inconsistent is damaged, with the membe
     manifest["arrays"]["motion_rotations"]["shape"] = json::array({rows - 1, 4});
     reason = fmt::format("motion_rotations.npy: expected shape ({}, 4) as motion.clips says, found ({}, 4)", rows,
                          rows - 1);
+  }
+  SECTION("more translation rows than the clips need") {
+    std::vector<double> translations;
+    for (const mgrl::Clip& c : clips)
+      for (std::size_t f = 0; f < 10; ++f)
+        for (const auto& t : c.motion.translations(f)) translations.insert(translations.end(), {t.x(), t.y(), t.z()});
+    const std::size_t translationRows = translations.size() / 3;
+    translations.insert(translations.end(), {0.0, 0.0, 0.0});
+    rewrite("motion_translations", mgrl::npyEncode<double>(translations, {translationRows + 1, 3}));
+    manifest["arrays"]["motion_translations"]["shape"] = json::array({translationRows + 1, 3});
+    reason = fmt::format("motion_translations.npy: expected shape ({}, 3) as motion.clips says, found ({}, 3)",
+                         translationRows, translationRows + 1);
   }
   SECTION("the rotations' array not listed") {
     manifest["arrays"].erase("motion_rotations");

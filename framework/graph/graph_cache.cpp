@@ -173,9 +173,11 @@ std::vector<std::pair<std::string, Motion>> loadMotions(const fs::path& dir, con
     h.frameTime = reader.number(clip, path, "frame_time");
     if (h.frameTime != m.frameTime) reader.fail(ManifestReader::join(path, "frame_time"), "scalars.frame_time", clip["frame_time"]);
     const json& joints = reader.member(clip, path, "joints");
-    if (!joints.is_array() || joints.empty() || joints.size() > kMaxBundledJoints)
-      reader.fail(ManifestReader::join(path, "joints"), fmt::format("an array of 1 to {} joints", kMaxBundledJoints),
-                  json(fmt::format("{} of {}", joints.is_array() ? "an array" : "a value", joints.size())));
+    const std::string expectedJoints = fmt::format("an array of 1 to {} joints", kMaxBundledJoints);
+    if (!joints.is_array()) reader.fail(ManifestReader::join(path, "joints"), expectedJoints, joints);
+    if (joints.empty() || joints.size() > kMaxBundledJoints)
+      throw Error(fmt::format("{}: {}.joints: expected {}, found {}", reader.source(), path, expectedJoints,
+                              joints.size()));
     std::vector<Joint> list;
     for (std::size_t j = 0; j < joints.size(); ++j)
       list.push_back(readJoint(reader, joints[j], fmt::format("{}.joints[{}]", path, j)));

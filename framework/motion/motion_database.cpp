@@ -78,6 +78,14 @@ MotionDatabase loadMotionDatabase(const MotionSpec& spec, const WarningSink& war
     LoadedMotion loaded = loadMotion(file, options);
     motions.emplace_back(file.filename().string(), std::move(loaded.motion));
   }
+  return makeMotionDatabase(std::move(motions), spec, warn);
+}
+
+MotionDatabase makeMotionDatabase(std::vector<std::pair<std::string, Motion>> motions, const MotionSpec& spec,
+                                  const WarningSink& warn) {
+  if (motions.size() != spec.files.size())
+    throw Error(fmt::format("motion.files: expected one motion per file ({}), found {}", spec.files.size(),
+                            motions.size()));
   MotionDatabase db = makeMotionDatabase(std::move(motions), spec.roles, spec.annotation, warn);
   for (std::size_t c = 0; c < db.clips.size(); ++c) db.clips[c].path = spec.files[c];
   return db;

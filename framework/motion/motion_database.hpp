@@ -59,4 +59,9 @@ MotionDatabase loadMotionDatabase(const MotionSpec& spec, const WarningSink& war
 MotionDatabase makeMotionDatabase(std::vector<std::pair<std::string, Motion>> motions, const RoleOverrides& roles = {},
                                   const AnnotationParams& annotation = {}, const WarningSink& warn = {});
 
+/// The same for `spec`'s files, parsed already (one motion per file, in its order): the
+/// roles and annotation come from `spec`, and each clip's path is its file's.
+MotionDatabase makeMotionDatabase(std::vector<std::pair<std::string, Motion>> motions, const MotionSpec& spec,
+                                  const WarningSink& warn = {});
+
 }  // namespace mgrl
