@@ -310,6 +310,76 @@ TEST_CASE("locked feet stay where they landed while planted, with bones of const
   CHECK(freeBone < 1e-6);
 }
 
+TEST_CASE("frames posed from the source poses are forward kinematics' poses", "[graph][data]") {
+  const Boxing& b = boxing();
+  const SourcePoses source = makeSourcePoses(b.db);
+  REQUIRE(source.frameCount() == b.db.frameCount());
+  // The same seeded walk (with transitions, blends, root shifts and foot locks) played twice:
+  // forward kinematics on every frame, and the source poses outside blends.
+  for (const bool lockFeet : {false, true}) {
+    ActionPlayback plain(b.db, b.model, b.scenario.graph.blendFrames, lockFeet),
+        fast(b.db, b.model, b.scenario.graph.blendFrames, lockFeet);
+    for (ActionPlayback* p : {&plain, &fast}) {
+      p->setFootLock(true);
+      p->reset(3, GroundMotion{1.5, -2.0, 0.7});
+    }
+    fast.setSourcePoses(&source);
+    Rng rng(5);
+    Pose a, c;
+    std::size_t frames = 0;
+    double worst = 0, worstRotation = 0;
+    for (int n = 0; n < 200; ++n) {
+      const std::uint32_t s = plain.state();
+      REQUIRE(fast.state() == s);
+      const std::uint32_t begin = b.model.stateActionBegin[s];
+      const auto action = begin + static_cast<std::uint32_t>(rng.below(b.model.stateActionBegin[s + 1] - begin));
+      plain.begin(action);
+      fast.begin(action);
+      while (plain.next(a)) {
+        REQUIRE(fast.next(c));
+        ++frames;
+        // The pose itself (what is exported and streamed) is the same to the bit, unless a
+        // foot lock turned a leg from positions that differ by rounding.
+        for (std::size_t j = 0; j < a.rotations.size(); ++j) {
+          worstRotation = std::max(worstRotation, (a.rotations[j].coeffs() - c.rotations[j].coeffs()).norm());
+          worst = std::max(worst, (a.translations[j] - c.translations[j]).norm());
+        }
+        for (std::size_t j = 0; j < a.rotations.size(); ++j) {
+          worst = std::max(worst, (plain.positions()[j] - fast.positions()[j]).norm());
+          worstRotation = std::max(worstRotation,
+                                   (plain.globalRotations()[j].coeffs() - fast.globalRotations()[j].coeffs()).norm());
+        }
+      }
+      REQUIRE_FALSE(fast.next(c));
+    }
+    INFO("lockFeet " << lockFeet << ": " << frames << " frames; largest difference " << worst << " m, "
+                     << worstRotation << " in a quaternion");
+    CHECK(frames > 2000);
+    CHECK(worst < 1e-9);
+    CHECK(worstRotation < 1e-9);
+    CHECK(plain.world().dx == Approx(fast.world().dx).margin(1e-9));
+    CHECK(plain.world().dyaw == Approx(fast.world().dyaw).margin(1e-9));
+  }
+  // A pose's constant offsets are written once, and again when its owner says they changed.
+  ActionPlayback playback(b.db, b.model, 4);
+  playback.reset(0);
+  playback.begin(b.model.stateActionBegin[0]);
+  Pose pose;
+  REQUIRE(playback.next(pose));
+  REQUIRE(pose.offsetsOf == b.db.skeleton.get());
+  const std::size_t last = b.db.skeleton->jointCount() - 1;
+  REQUIRE(b.db.skeleton->translationSlot(last) < 0);
+  CHECK(pose.translations[last] == b.db.skeleton->joint(last).offset);
+  pose.translations[last] = Eigen::Vector3d(9, 9, 9);
+  pose.offsetsOf = nullptr;
+  REQUIRE(playback.next(pose));
+  CHECK(pose.translations[last] == b.db.skeleton->joint(last).offset);
+  SourcePoses wrong = source;
+  wrong.height.pop_back();
+  REQUIRE_THROWS_WITH(playback.setSourcePoses(&wrong),
+                      Catch::Contains(fmt::format("playback: expected source poses of {} frames", b.db.frameCount())));
+}
+
 TEST_CASE("playback refuses an action that does not leave the current state", "[graph][data]") {
   const Boxing& b = boxing();
   ActionPlayback playback(b.db, b.model, 4);

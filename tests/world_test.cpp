@@ -157,6 +157,34 @@ TEST_CASE("the world repeats itself for a seed, whatever the threads, and with p
     REQUIRE((one[i - 1].time < one[i].time || (one[i - 1].time == one[i].time && one[i - 1].attacker <= one[i].attacker)));
 }
 
+TEST_CASE("a posed crowd's joint positions are its poses' forward kinematics, through blends and hit reactions",
+          "[world][data]") {
+  // 128 avatars: enough for the world to pose frames outside blends from the source poses.
+  const Boxing& b = boxing();
+  WorldSetup s = b.setup(128);
+  s.record = true;
+  World world(s);
+  const Skeleton& skeleton = *b.db().skeleton;
+  const std::size_t joints = skeleton.jointCount();
+  std::vector<Eigen::Quaterniond> rotations(joints);
+  std::vector<Eigen::Vector3d> positions(joints);
+  double worst = 0;
+  const std::size_t frames = framesFor(b, 6);
+  for (std::size_t f = 0; f < frames; ++f) {
+    world.run(1);
+    for (std::size_t i = 0; i < world.avatarCount(); ++i) {
+      const Pose& pose = world.recorded(i).back();
+      forwardKinematics(skeleton, pose.rotations, pose.translations, rotations, positions);
+      const auto shown = world.jointPositions(i);
+      REQUIRE(shown.size() == joints);
+      for (std::size_t j = 0; j < joints; ++j) worst = std::max(worst, (shown[j] - positions[j]).norm());
+    }
+  }
+  INFO(world.events().size() << " hits; largest difference " << worst << " m");
+  CHECK(world.events().size() > 20);  // reactions were played
+  CHECK(worst < 1e-9);
+}
+
 TEST_CASE("in a two-avatar bout both boxers land hits, far more than random controllers", "[world][data]") {
   const Boxing& b = boxing();
   const std::size_t frames = framesFor(b, 120);

@@ -59,6 +59,50 @@ void ActionPlayback::sourceLocal(std::uint32_t frame, Local& out) const {
   out.rootOffset = {local.x(), local.z()};
 }
 
+SourcePoses makeSourcePoses(const MotionDatabase& db) {
+  const Skeleton& skeleton = *db.skeleton;
+  const std::size_t joints = skeleton.jointCount();
+  const std::size_t frames = db.frameCount();
+  SourcePoses out;
+  out.joints = joints;
+  out.globals.resize(frames * joints);
+  out.positions.resize(frames * joints);
+  out.rootTilt.resize(frames);
+  out.height.resize(frames);
+  out.rootOffset.resize(frames);
+  std::vector<Eigen::Quaterniond> rotations(joints);
+  std::vector<Eigen::Vector3d> translations(joints);
+  std::size_t v = 0;
+  for (const Clip& clip : db.clips) {
+    for (std::size_t k = 0; k < clip.motion.frameCount(); ++k, ++v) {
+      // As sourceLocal() puts it: the root's yaw removed, its position apart.
+      const AvatarFrame& avatar = clip.annotation.frames[k];
+      const auto local = clip.motion.rotations(k);
+      std::copy(local.begin(), local.end(), rotations.begin());
+      rotations[0] = axisRotation(Axis::Y, -avatar.yaw) * rotations[0];
+      const Eigen::Vector3d root = clip.motion.localTranslation(k, 0);
+      const Eigen::Vector3d offset = avatar.toAvatar(root);
+      out.rootTilt[v] = rotations[0];
+      out.height[v] = root.y() - clip.annotation.groundY;
+      out.rootOffset[v] = {offset.x(), offset.z()};
+      translations[0].setZero();
+      for (std::size_t j = 1; j < joints; ++j) translations[j] = clip.motion.localTranslation(k, j);
+      forwardKinematics(skeleton, rotations, translations, std::span(out.globals).subspan(v * joints, joints),
+                        std::span(out.positions).subspan(v * joints, joints));
+    }
+  }
+  return out;
+}
+
+void ActionPlayback::setSourcePoses(const SourcePoses* poses) {
+  if (poses && (poses->joints != db_.skeleton->jointCount() || poses->frameCount() != db_.frameCount()))
+    throw Error(fmt::format("playback: expected source poses of {} frames x {} joints, found {} x {}",
+                            db_.frameCount(), db_.skeleton->jointCount(), poses->frameCount(), poses->joints));
+  if (currentIsSource_) sourceLocal(frame_, current_);
+  currentIsSource_ = false;
+  sourcePoses_ = poses;
+}
+
 void ActionPlayback::reset(std::uint32_t state, const GroundMotion& world) {
   if (state >= model_.stateCount())
     throw Error(fmt::format("playback: expected a state below {}, found {}", model_.stateCount(), state));
@@ -66,6 +110,7 @@ void ActionPlayback::reset(std::uint32_t state, const GroundMotion& world) {
   world_ = world;
   frame_ = model_.stateFrame[state];
   sourceLocal(frame_, current_);
+  currentIsSource_ = false;
   std::fill(offset_.begin(), offset_.end(), Eigen::Quaterniond::Identity());
   std::fill(offsetHalfAngle_.begin(), offsetHalfAngle_.end(), 0.0);
   heightOffset_ = 0;
@@ -100,6 +145,8 @@ bool ActionPlayback::next(Pose& pose) {
     if (model_.frameEntersTransition[i]) {
       // The new clip expected frame v - 1 before v; the avatar shows `current_` instead.
       // Carry the difference as an offset that fades out (blending without a jump).
+      if (currentIsSource_) sourceLocal(frame_, current_);
+      currentIsSource_ = false;
       sourceLocal(v - 1, previous_);
       for (std::size_t j = 0; j < joints; ++j) {
         offset_[j] = current_.rotations[j] * previous_.rotations[j].conjugate();
@@ -112,37 +159,71 @@ bool ActionPlayback::next(Pose& pose) {
       sinceTransition_ = 0;
     }
     ++sinceTransition_;
-    sourceLocal(v, source_);
     const double alpha = fade(sinceTransition_, blendFrames_);
-    // slerp(identity, offset, alpha) = (cos(alpha h), sin(alpha h) axis) for the offset's
-    // half angle h and axis, both found at the transition.
-    for (std::size_t j = 0; j < joints; ++j) {
-      if (alpha > 0) {
-        const double h = alpha * offsetHalfAngle_[j];
-        const Eigen::Vector3d axis = std::sin(h) * offsetAxis_[j];
-        current_.rotations[j] = Eigen::Quaterniond(std::cos(h), axis.x(), axis.y(), axis.z()) * source_.rotations[j];
-      } else {
-        current_.rotations[j] = source_.rotations[j];
-      }
-    }
-    current_.height = source_.height + alpha * heightOffset_;
-    current_.rootOffset = source_.rootOffset;
-
     const GroundMotion at = compose(world_, {model_.frameRoot[3 * i], model_.frameRoot[3 * i + 1], model_.frameRoot[3 * i + 2]});
-    pose.rotations.assign(current_.rotations.begin(), current_.rotations.end());
-    pose.rotations[0] = axisRotation(Axis::Y, at.dyaw) * current_.rotations[0];
-    pose.translations.resize(joints);
+    const Eigen::Quaterniond yaw = axisRotation(Axis::Y, at.dyaw);
     const std::size_t c = db_.clipOf(v);
     const std::size_t k = v - db_.offsets[c];
-    for (std::size_t j = 1; j < joints; ++j) pose.translations[j] = db_.clips[c].motion.localTranslation(k, j);
-    pose.translations[0] = transformPoint(at, {current_.rootOffset.x(), current_.height, current_.rootOffset.y()});
-    pose.translations[0].x() += correction_.x();
-    pose.translations[0].z() += correction_.y();
+    const Motion& motion = db_.clips[c].motion;
+    pose.rotations.resize(joints);
+    // The skeleton's offsets unless the pose has them, then the joints with position
+    // channels (the root's is set below).
+    if (pose.translations.size() != joints || pose.offsetsOf != &skeleton) {
+      pose.translations.resize(joints);
+      std::copy(skeleton.offsets().begin(), skeleton.offsets().end(), pose.translations.begin());
+      pose.offsetsOf = &skeleton;
+    }
+    const auto translated = skeleton.translatedJoints();
+    const auto moved = motion.translations(k);
+    for (std::size_t t = 0; t < translated.size(); ++t) pose.translations[static_cast<std::size_t>(translated[t])] = moved[t];
+    if (alpha == 0 && sourcePoses_) {
+      // Outside a blend the pose is the source frame's: its kinematics were done once, and
+      // only turn about the vertical and move with the avatar (the same as forward
+      // kinematics below up to rounding). current_ would be sourceLocal(v): left for a
+      // transition to fetch.
+      const auto local = motion.rotations(k);
+      std::copy(local.begin(), local.end(), pose.rotations.begin());
+      pose.rotations[0] = yaw * sourcePoses_->rootTilt[v];
+      const Eigen::Vector2d& offset = sourcePoses_->rootOffset[v];
+      const Eigen::Vector3d root = transformPoint(at, {offset.x(), sourcePoses_->height[v], offset.y()}) +
+                                   Eigen::Vector3d(correction_.x(), 0, correction_.y());
+      pose.translations[0] = root;
+      const Eigen::Matrix3d turn = yaw.toRotationMatrix();
+      const Eigen::Quaterniond* globals = sourcePoses_->globals.data() + std::size_t{v} * joints;
+      const Eigen::Vector3d* positions = sourcePoses_->positions.data() + std::size_t{v} * joints;
+      for (std::size_t j = 0; j < joints; ++j) {
+        fkRotations_[j] = yaw * globals[j];
+        fkPositions_[j] = root + turn * positions[j];
+      }
+      currentIsSource_ = true;
+    } else {
+      sourceLocal(v, source_);
+      // slerp(identity, offset, alpha) = (cos(alpha h), sin(alpha h) axis) for the offset's
+      // half angle h and axis, both found at the transition.
+      for (std::size_t j = 0; j < joints; ++j) {
+        if (alpha > 0) {
+          const double h = alpha * offsetHalfAngle_[j];
+          const Eigen::Vector3d axis = std::sin(h) * offsetAxis_[j];
+          current_.rotations[j] = Eigen::Quaterniond(std::cos(h), axis.x(), axis.y(), axis.z()) * source_.rotations[j];
+        } else {
+          current_.rotations[j] = source_.rotations[j];
+        }
+      }
+      current_.height = source_.height + alpha * heightOffset_;
+      current_.rootOffset = source_.rootOffset;
+      currentIsSource_ = false;
+
+      std::copy(current_.rotations.begin(), current_.rotations.end(), pose.rotations.begin());
+      pose.rotations[0] = yaw * current_.rotations[0];
+      pose.translations[0] = transformPoint(at, {current_.rootOffset.x(), current_.height, current_.rootOffset.y()});
+      pose.translations[0].x() += correction_.x();
+      pose.translations[0].z() += correction_.y();
+      forwardKinematics(skeleton, pose.rotations, pose.translations, fkRotations_, fkPositions_);
+    }
 
     // While the offsets fade, the legs move against the root and a planted foot would
     // slide: shift the root so that feet planted in both this frame and the last stay put
     // (their mean drift is removed). The shift stays with the avatar.
-    forwardKinematics(skeleton, pose.rotations, pose.translations, fkRotations_, fkPositions_);
     const std::array<bool, 2> down = {db_.clips[c].annotation.contact[0][k] != 0,
                                       db_.clips[c].annotation.contact[1][k] != 0};
     if (lockFeet_ && sinceTransition_ <= blendFrames_ && havePrevious_) {

@@ -24,7 +24,32 @@ namespace mgrl {
 struct Pose {
   std::vector<Eigen::Quaterniond> rotations;
   std::vector<Eigen::Vector3d> translations;
+  /// The skeleton whose offsets `translations` holds for the joints without position
+  /// channels, as ActionPlayback::next() wrote them (it then rewrites only the others:
+  /// storing 10,000 poses' constant offsets every frame was a tenth of a posed crowd's
+  /// time, issue 20). Whoever changes those translations otherwise resets it to nullptr.
+  const Skeleton* offsetsOf = nullptr;
 };
+
+/// Every frame of the capture posed once, as playback shows a frame outside a transition's
+/// blend: per frame, each joint's global rotation and its position relative to the root,
+/// with the avatar's yaw removed (the root at the origin, turned by its tilt only), and the
+/// root's tilt, height and offset from the avatar origin. With it, ActionPlayback poses such
+/// a frame by turning these about the vertical and moving them to the root, instead of
+/// forward kinematics (issue 20). frames x joints x 56 bytes; shared by any number of
+/// playbacks, read only.
+struct SourcePoses {
+  std::size_t joints = 0;
+  std::vector<Eigen::Quaterniond> globals;   ///< frame-major, frame * joints + joint
+  std::vector<Eigen::Vector3d> positions;    ///< frame-major, relative to the root
+  std::vector<Eigen::Quaterniond> rootTilt;  ///< the root's local rotation, yaw removed
+  std::vector<double> height;                ///< the root above the clip's ground (m)
+  std::vector<Eigen::Vector2d> rootOffset;   ///< the root from the avatar origin (x, z)
+  std::uint32_t frameCount() const { return static_cast<std::uint32_t>(height.size()); }
+};
+
+/// Poses every frame of `db` as above (one forward-kinematics pass per frame).
+SourcePoses makeSourcePoses(const MotionDatabase& db);
 
 class ActionPlayback {
  public:
@@ -50,6 +75,10 @@ class ActionPlayback {
   /// World joint positions and rotations of the last pose next() wrote.
   std::span<const Eigen::Vector3d> positions() const { return fkPositions_; }
   std::span<const Eigen::Quaterniond> globalRotations() const { return fkRotations_; }
+  /// The same, writable, for a caller that deforms the pose next() wrote (the world's hit
+  /// reaction) without copying it: next() overwrites both and never reads them back.
+  std::span<Eigen::Vector3d> positions() { return fkPositions_; }
+  std::span<Eigen::Quaterniond> globalRotations() { return fkRotations_; }
 
   std::uint32_t state() const { return state_; }
   /// Planted feet (issue 18): while the annotation has a foot on the ground, its ankle is
@@ -57,6 +86,11 @@ class ActionPlayback {
   /// of hip, knee and ankle, and let go over a few frames when it lifts. Rotations only,
   /// so bone lengths never change; the foot keeps its animated orientation. Off by default.
   void setFootLock(bool on) { footLock_ = on; }
+  /// Poses frames outside a blend from `poses` (made by makeSourcePoses() from this
+  /// playback's database; it must outlive the playback), which gives the same poses as
+  /// forward kinematics up to rounding. nullptr: forward kinematics for every frame.
+  /// Throws mgrl::Error if `poses` is not the database's size.
+  void setSourcePoses(const SourcePoses* poses);
   /// Moves the avatar by (dx, dz) on the floor (world, m) from the next pose on; the shift
   /// stays with it (the world pushes overlapping bodies apart this way).
   void nudge(double dx, double dz) { correction_ += Eigen::Vector2d(dx, dz); }
@@ -82,6 +116,10 @@ class ActionPlayback {
   std::size_t cursor_ = 0, end_ = 0;  ///< action frames still to play: [cursor_, end_)
   GroundMotion world_;
   Local current_, source_, previous_;
+  /// Whether current_ is stale and is in fact sourceLocal(frame_): an unblended frame posed
+  /// from sourcePoses_ leaves it so, and a transition refreshes it before using it.
+  bool currentIsSource_ = false;
+  const SourcePoses* sourcePoses_ = nullptr;
   std::vector<Eigen::Quaterniond> offset_;
   /// Per joint, the offset as an angle and axis, found once per transition: the blended
   /// rotation of each frame is then one sine and cosine (issue 20), not a full slerp.

@@ -44,6 +44,7 @@ Skeleton::Skeleton(std::vector<Joint> joints) : joints_(std::move(joints)) {
       translated_.push_back(static_cast<int>(i));
     }
     channelCount_ += joint.channels.size();
+    offsets_.push_back(joint.offset);
   }
 }
 

@@ -61,6 +61,9 @@ class Skeleton {
   std::span<const int> translatedJoints() const { return translated_; }
   /// Slot of joint `index` among translatedJoints(), or -1 if it uses its offset.
   int translationSlot(std::size_t index) const { return slot_[index]; }
+  /// Every joint's offset, contiguous (the local translations of a pose before the
+  /// joints with position channels take theirs from the motion).
+  std::span<const Eigen::Vector3d> offsets() const { return offsets_; }
   /// Number of channel values per frame.
   std::size_t channelCount() const { return channelCount_; }
 
@@ -74,6 +77,7 @@ class Skeleton {
   std::vector<Joint> joints_;
   std::vector<int> translated_;
   std::vector<int> slot_;
+  std::vector<Eigen::Vector3d> offsets_;
   std::size_t channelCount_ = 0;
 };
 

@@ -7,6 +7,7 @@
 #include <limits>
 #include <mutex>
 #include <thread>
+#include <utility>
 
 #include <fmt/format.h>
 
@@ -67,8 +68,6 @@ struct World::Avatar {
   // Poses (only when asked for).
   std::unique_ptr<ActionPlayback> playback;
   Pose pose;
-  std::vector<Eigen::Quaterniond> globals;
-  std::vector<Eigen::Vector3d> positions;
   std::vector<Pose> recorded;
 };
 
@@ -80,6 +79,10 @@ struct World::Track {
   Segment now;
 };
 
+namespace {
+constexpr std::size_t kSourcePosesMinAvatars = 64;
+}  // namespace
+
 World::World(WorldSetup setup)
     : setup_(std::move(setup)), model_(*setup_.model), body_(*setup_.body) {
   if (setup_.record) setup_.poses = true;
@@ -89,6 +92,25 @@ World::World(WorldSetup setup)
   if (!setup_.makeController) throw Error("world: expected a controller factory");
   aimPoint_ = setup_.params.aim == "chest" ? BodyTable::Chest : BodyTable::Head;
   centroidHeight_ = setup_.params.targetHeight >= 0 ? setup_.params.targetHeight : model_.centroid[1];
+  if (setup_.poses) {
+    // For a crowd, frames outside a blend are posed from the capture's kinematics done once
+    // here: the table (boxing: 26,457 frames, 46 MB) takes 10 to 40 ms to fill, which 64
+    // avatars win back in about half a minute; fewer avatars do without it.
+    if (setup_.avatars >= kSourcePosesMinAvatars)
+      sourcePoses_ = std::make_unique<const SourcePoses>(makeSourcePoses(*setup_.db));
+    // Each struck part's reaction chain: up to 3 joints below the struck one and above the
+    // pelvis, lowest first, and the joints each one's turn moves.
+    const Skeleton& skeleton = *setup_.db->skeleton;
+    for (const BodyPart part : {BodyPart::Spine, BodyPart::Chest, BodyPart::Head}) {
+      ReactionChain& chain = reactionChains_[static_cast<std::size_t>(part)];
+      chain.struck = part == BodyPart::Head ? body_.headJoint : part == BodyPart::Chest ? body_.neckJoint : body_.chestJoint;
+      for (int j = skeleton.joint(static_cast<std::size_t>(chain.struck)).parent;
+           j > 0 && j != body_.pelvisJoint && chain.joints.size() < 3; j = skeleton.joint(static_cast<std::size_t>(j)).parent)
+        chain.joints.push_back(j);
+      std::reverse(chain.joints.begin(), chain.joints.end());
+      for (const int j : chain.joints) chain.below.push_back(subtreeJoints(skeleton, j));
+    }
+  }
   avatars_.resize(setup_.avatars);
   targets_.resize(setup_.avatars);
   heads_.resize(setup_.avatars);
@@ -162,10 +184,9 @@ void World::startAvatar(std::size_t i) {
   if (setup_.poses) {
     a.playback = std::make_unique<ActionPlayback>(*setup_.db, model_, setup_.blendFrames, false);
     a.playback->setFootLock(p.plantFeet);
+    a.playback->setSourcePoses(sourcePoses_.get());
     a.playback->reset(a.state, a.decision);
     const std::size_t joints = setup_.db->skeleton->jointCount();
-    a.globals.resize(joints);
-    a.positions.resize(joints);
     a.pose.rotations.resize(joints);
     a.pose.translations.resize(joints);
   }
@@ -323,10 +344,6 @@ void World::updatePoses(std::size_t begin, std::size_t end) {
   for (std::size_t i = begin; i < end; ++i) {
     Avatar& a = avatars_[i];
     a.playback->next(a.pose);
-    const auto fk = a.playback->positions();
-    std::copy(fk.begin(), fk.end(), a.positions.begin());
-    const auto rot = a.playback->globalRotations();
-    std::copy(rot.begin(), rot.end(), a.globals.begin());
     const double t = time - a.reactionStart;
     if (t > 0 && t < 10 * tau) {
       // Hit reaction (paper sec. 6.6): move the struck point by d(t) = push (t/tau) e^(1 - t/tau),
@@ -334,26 +351,24 @@ void World::updatePoses(std::size_t begin, std::size_t end) {
       // spine chain (rotations only, so bone lengths never change).
       const double shape = (t / tau) * std::exp(1 - t / tau);
       const Eigen::Vector3d d = shape * a.push;
-      const int struck = a.part == BodyPart::Head    ? body_.headJoint
-                         : a.part == BodyPart::Chest ? body_.neckJoint
-                                                     : body_.chestJoint;
-      std::vector<int> chain;  // up to 3 joints below the struck one, above the pelvis
-      for (int j = skeleton.joint(static_cast<std::size_t>(struck)).parent;
-           j > 0 && j != body_.pelvisJoint && chain.size() < 3; j = skeleton.joint(static_cast<std::size_t>(j)).parent)
-        chain.push_back(j);
-      const double share = chain.empty() ? 0 : 1.0 / static_cast<double>(chain.size());
-      for (auto it = chain.rbegin(); it != chain.rend(); ++it) {  // from the lowest joint up
-        const auto joint = static_cast<std::size_t>(*it);
-        const auto target = static_cast<std::size_t>(struck);
-        const Eigen::Vector3d from = a.positions[target] - a.positions[joint];
+      const ReactionChain& chain = reactionChains_[static_cast<std::size_t>(a.part)];
+      const double share = chain.joints.empty() ? 0 : 1.0 / static_cast<double>(chain.joints.size());
+      // The playback's kinematics of this frame, deformed in place.
+      const std::span<Eigen::Vector3d> positions = a.playback->positions();
+      const std::span<Eigen::Quaterniond> globals = a.playback->globalRotations();
+      const auto target = static_cast<std::size_t>(chain.struck);
+      for (std::size_t c = 0; c < chain.joints.size(); ++c) {  // from the lowest joint up
+        const auto joint = static_cast<std::size_t>(chain.joints[c]);
+        const Eigen::Vector3d from = positions[target] - positions[joint];
         const Eigen::Vector3d to = from + share * d;
         if (from.norm() < 1e-6) continue;
         const Eigen::Quaterniond turn = Eigen::Quaterniond::FromTwoVectors(from, to);
         const int parent = skeleton.joint(joint).parent;
         const Eigen::Quaterniond parentGlobal =
-            parent >= 0 ? a.globals[static_cast<std::size_t>(parent)] : Eigen::Quaterniond::Identity();
-        a.pose.rotations[joint] = (parentGlobal.conjugate() * turn * a.globals[joint]).normalized();
-        forwardKinematics(skeleton, a.pose.rotations, a.pose.translations, a.globals, a.positions);
+            parent >= 0 ? globals[static_cast<std::size_t>(parent)] : Eigen::Quaterniond::Identity();
+        a.pose.rotations[joint] = (parentGlobal.conjugate() * turn * globals[joint]).normalized();
+        // Only the turned joint and those below it move: their pass of the kinematics.
+        forwardKinematicsOf(skeleton, chain.below[c], a.pose.rotations, a.pose.translations, globals, positions);
       }
     }
     if (setup_.record) a.recorded.push_back(a.pose);
@@ -654,7 +669,10 @@ World::Decision World::lastDecision(std::size_t i) const {
 int World::partner(std::size_t i) const { return avatars_[i].partner; }
 const Target& World::target(std::size_t i) const { return targets_[i]; }
 const Pose& World::pose(std::size_t i) const { return avatars_[i].pose; }
-std::span<const Eigen::Vector3d> World::jointPositions(std::size_t i) const { return avatars_[i].positions; }
+std::span<const Eigen::Vector3d> World::jointPositions(std::size_t i) const {
+  const Avatar& a = avatars_[i];
+  return a.playback ? std::as_const(*a.playback).positions() : std::span<const Eigen::Vector3d>();
+}
 const std::vector<Pose>& World::recorded(std::size_t i) const { return avatars_[i].recorded; }
 
 std::size_t World::bytesPerAvatar() const {
@@ -662,11 +680,11 @@ std::size_t World::bytesPerAvatar() const {
                       sizeof(std::array<std::size_t, 2>) + sizeof(std::int64_t) + 3 * sizeof(std::uint32_t);
   if (setup_.poses) {
     const std::size_t joints = setup_.db->skeleton->jointCount();
-    // The playback's buffers (5 rotation arrays, 1 position array, the blend offsets' half
-    // angles and axes) and the avatar's pose, globals and positions.
+    // The playback's buffers (5 rotation arrays, the positions, the blend offsets' half
+    // angles and axes) and the avatar's pose. The source poses are shared by all avatars.
     bytes += sizeof(ActionPlayback) +
              joints * (5 * sizeof(Eigen::Quaterniond) + 2 * sizeof(Eigen::Vector3d) + sizeof(double));
-    bytes += joints * (2 * sizeof(Eigen::Quaterniond) + 2 * sizeof(Eigen::Vector3d));
+    bytes += joints * (sizeof(Eigen::Quaterniond) + sizeof(Eigen::Vector3d));
   }
   return bytes;
 }

@@ -219,6 +219,15 @@ class World {
   WorldSetup setup_;
   const StateActionModel& model_;
   const BodyTable& body_;
+  std::unique_ptr<const SourcePoses> sourcePoses_;  ///< with poses: shared by every avatar's playback
+  /// Per struck BodyPart, the joints a hit reaction turns (lowest first) and, for each, the
+  /// joints its turn moves (subtreeJoints()).
+  struct ReactionChain {
+    int struck = 0;
+    std::vector<int> joints;
+    std::vector<std::vector<int>> below;
+  };
+  std::array<ReactionChain, 3> reactionChains_;
   std::vector<Avatar> avatars_;
   std::vector<Target> targets_;
   std::vector<Eigen::Vector3d> heads_;  ///< every avatar's aim point (head or chest) at the end of the last frame
