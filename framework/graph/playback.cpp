@@ -29,7 +29,6 @@ ActionPlayback::ActionPlayback(const MotionDatabase& db, const StateActionModel&
     : db_(db), model_(model), blendFrames_(std::max(0, blendFrames)), lockFeet_(lockFeet) {
   const std::size_t joints = db.skeleton->jointCount();
   current_.rotations.resize(joints);
-  source_.rotations.resize(joints);
   previous_.rotations.resize(joints);
   offset_.assign(joints, Eigen::Quaterniond::Identity());
   offsetHalfAngle_.assign(joints, 0.0);
@@ -98,9 +97,25 @@ void ActionPlayback::setSourcePoses(const SourcePoses* poses) {
   if (poses && (poses->joints != db_.skeleton->jointCount() || poses->frameCount() != db_.frameCount()))
     throw Error(fmt::format("playback: expected source poses of {} frames x {} joints, found {} x {}",
                             db_.frameCount(), db_.skeleton->jointCount(), poses->frameCount(), poses->joints));
-  if (currentIsSource_) sourceLocal(frame_, current_);
-  currentIsSource_ = false;
   sourcePoses_ = poses;
+}
+
+// slerp(identity, offset, alpha) = (cos(alpha h), sin(alpha h) axis) for each joint's
+// offset half angle h and axis, both found at the transition, applied to `rotations`.
+void ActionPlayback::blend(double alpha, std::span<Eigen::Quaterniond> rotations) const {
+  for (std::size_t j = 0; j < rotations.size(); ++j) {
+    const double h = alpha * offsetHalfAngle_[j];
+    const Eigen::Vector3d axis = std::sin(h) * offsetAxis_[j];
+    rotations[j] = Eigen::Quaterniond(std::cos(h), axis.x(), axis.y(), axis.z()) * rotations[j];
+  }
+}
+
+void ActionPlayback::refreshCurrent() {
+  if (!currentStale_) return;
+  currentStale_ = false;
+  sourceLocal(frame_, current_);
+  if (shownAlpha_ > 0) blend(shownAlpha_, current_.rotations);
+  current_.height += shownAlpha_ * heightOffset_;
 }
 
 void ActionPlayback::reset(std::uint32_t state, const GroundMotion& world) {
@@ -110,7 +125,7 @@ void ActionPlayback::reset(std::uint32_t state, const GroundMotion& world) {
   world_ = world;
   frame_ = model_.stateFrame[state];
   sourceLocal(frame_, current_);
-  currentIsSource_ = false;
+  currentStale_ = false;
   std::fill(offset_.begin(), offset_.end(), Eigen::Quaterniond::Identity());
   std::fill(offsetHalfAngle_.begin(), offsetHalfAngle_.end(), 0.0);
   heightOffset_ = 0;
@@ -145,8 +160,7 @@ bool ActionPlayback::next(Pose& pose) {
     if (model_.frameEntersTransition[i]) {
       // The new clip expected frame v - 1 before v; the avatar shows `current_` instead.
       // Carry the difference as an offset that fades out (blending without a jump).
-      if (currentIsSource_) sourceLocal(frame_, current_);
-      currentIsSource_ = false;
+      refreshCurrent();
       sourceLocal(v - 1, previous_);
       for (std::size_t j = 0; j < joints; ++j) {
         offset_[j] = current_.rotations[j] * previous_.rotations[j].conjugate();
@@ -179,8 +193,7 @@ bool ActionPlayback::next(Pose& pose) {
     if (alpha == 0 && sourcePoses_) {
       // Outside a blend the pose is the source frame's: its kinematics were done once, and
       // only turn about the vertical and move with the avatar (the same as forward
-      // kinematics below up to rounding). current_ would be sourceLocal(v): left for a
-      // transition to fetch.
+      // kinematics below up to rounding).
       const auto local = motion.rotations(k);
       std::copy(local.begin(), local.end(), pose.rotations.begin());
       pose.rotations[0] = yaw * sourcePoses_->rootTilt[v];
@@ -195,27 +208,18 @@ bool ActionPlayback::next(Pose& pose) {
         fkRotations_[j] = yaw * globals[j];
         fkPositions_[j] = root + turn * positions[j];
       }
-      currentIsSource_ = true;
     } else {
-      sourceLocal(v, source_);
-      // slerp(identity, offset, alpha) = (cos(alpha h), sin(alpha h) axis) for the offset's
-      // half angle h and axis, both found at the transition.
-      for (std::size_t j = 0; j < joints; ++j) {
-        if (alpha > 0) {
-          const double h = alpha * offsetHalfAngle_[j];
-          const Eigen::Vector3d axis = std::sin(h) * offsetAxis_[j];
-          current_.rotations[j] = Eigen::Quaterniond(std::cos(h), axis.x(), axis.y(), axis.z()) * source_.rotations[j];
-        } else {
-          current_.rotations[j] = source_.rotations[j];
-        }
-      }
-      current_.height = source_.height + alpha * heightOffset_;
-      current_.rootOffset = source_.rootOffset;
-      currentIsSource_ = false;
-
-      std::copy(current_.rotations.begin(), current_.rotations.end(), pose.rotations.begin());
-      pose.rotations[0] = yaw * current_.rotations[0];
-      pose.translations[0] = transformPoint(at, {current_.rootOffset.x(), current_.height, current_.rootOffset.y()});
+      // The source frame as sourceLocal() gives it, blended straight into the pose.
+      const AvatarFrame& avatar = db_.clips[c].annotation.frames[k];
+      const auto local = motion.rotations(k);
+      const Eigen::Vector3d root = motion.localTranslation(k, 0);
+      const Eigen::Vector3d offset = avatar.toAvatar(root);
+      const double height = root.y() - db_.clips[c].annotation.groundY;
+      pose.rotations[0] = axisRotation(Axis::Y, -avatar.yaw) * local[0];
+      std::copy(local.begin() + 1, local.end(), pose.rotations.begin() + 1);
+      if (alpha > 0) blend(alpha, pose.rotations);
+      pose.rotations[0] = yaw * pose.rotations[0];
+      pose.translations[0] = transformPoint(at, {offset.x(), height + alpha * heightOffset_, offset.z()});
       pose.translations[0].x() += correction_.x();
       pose.translations[0].z() += correction_.y();
       forwardKinematics(skeleton, pose.rotations, pose.translations, fkRotations_, fkPositions_);
@@ -258,6 +262,9 @@ bool ActionPlayback::next(Pose& pose) {
     previousDown_ = down;
     havePrevious_ = true;
     frame_ = v;
+    // current_ is the blend at alpha of sourceLocal(v): computed when a transition needs it.
+    currentStale_ = true;
+    shownAlpha_ = alpha;
   }
   if (cursor_ == end_) {  // the action's last frame: the avatar stands at its end state
     world_ = compose(world_, model_.displacement(action_));

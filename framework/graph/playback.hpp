@@ -115,10 +115,14 @@ class ActionPlayback {
   std::uint32_t action_ = 0;
   std::size_t cursor_ = 0, end_ = 0;  ///< action frames still to play: [cursor_, end_)
   GroundMotion world_;
-  Local current_, source_, previous_;
-  /// Whether current_ is stale and is in fact sourceLocal(frame_): an unblended frame posed
-  /// from sourcePoses_ leaves it so, and a transition refreshes it before using it.
-  bool currentIsSource_ = false;
+  /// current_: the pose shown last, as Local. Each frame leaves it stale (it is then
+  /// sourceLocal(frame_) blended at shownAlpha_); only a transition needs it, and
+  /// refreshCurrent() computes it then, with the same arithmetic.
+  Local current_, previous_;
+  bool currentStale_ = false;
+  double shownAlpha_ = 0;
+  void refreshCurrent();
+  void blend(double alpha, std::span<Eigen::Quaterniond> rotations) const;
   const SourcePoses* sourcePoses_ = nullptr;
   std::vector<Eigen::Quaterniond> offset_;
   /// Per joint, the offset as an angle and axis, found once per transition: the blended
