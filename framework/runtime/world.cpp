@@ -681,10 +681,11 @@ std::size_t World::bytesPerAvatar() const {
                       sizeof(std::array<std::size_t, 2>) + sizeof(std::int64_t) + 3 * sizeof(std::uint32_t);
   if (setup_.poses) {
     const std::size_t joints = setup_.db->skeleton->jointCount();
-    // The playback's buffers (5 rotation arrays, the positions, the blend offsets' half
-    // angles and axes) and the avatar's pose. The source poses are shared by all avatars.
+    // The playback's buffers (4 rotation arrays: the shown and expected poses, the blend
+    // offsets, the global rotations; the positions; the offsets' half angles and axes) and
+    // the avatar's pose. The source poses are shared by all avatars.
     bytes += sizeof(ActionPlayback) +
-             joints * (5 * sizeof(Eigen::Quaterniond) + 2 * sizeof(Eigen::Vector3d) + sizeof(double));
+             joints * (4 * sizeof(Eigen::Quaterniond) + 2 * sizeof(Eigen::Vector3d) + sizeof(double));
     bytes += joints * (sizeof(Eigen::Quaterniond) + sizeof(Eigen::Vector3d));
   }
   return bytes;
