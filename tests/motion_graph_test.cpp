@@ -316,11 +316,11 @@ TEST_CASE("frames posed from the source poses are forward kinematics' poses", "[
   REQUIRE(source.frameCount() == b.db.frameCount());
   // The same seeded walk (with transitions, blends, root shifts and foot locks) played twice:
   // forward kinematics on every frame, and the source poses outside blends.
-  for (const bool lockFeet : {false, true}) {
+  for (const auto& [lockFeet, footLock] : {std::pair{false, false}, std::pair{true, false}, std::pair{true, true}}) {
     ActionPlayback plain(b.db, b.model, b.scenario.graph.blendFrames, lockFeet),
         fast(b.db, b.model, b.scenario.graph.blendFrames, lockFeet);
     for (ActionPlayback* p : {&plain, &fast}) {
-      p->setFootLock(true);
+      p->setFootLock(footLock);
       p->reset(3, GroundMotion{1.5, -2.0, 0.7});
     }
     fast.setSourcePoses(&source);
@@ -338,8 +338,15 @@ TEST_CASE("frames posed from the source poses are forward kinematics' poses", "[
       while (plain.next(a)) {
         REQUIRE(fast.next(c));
         ++frames;
-        // The pose itself (what is exported and streamed) is the same to the bit, unless a
-        // foot lock turned a leg from positions that differ by rounding.
+        // The pose itself (what is exported and streamed) is the same to the bit, unless the
+        // root shift or a foot lock used positions that differ by rounding.
+        if (!lockFeet && !footLock) {
+          REQUIRE(a.rotations.size() == c.rotations.size());
+          for (std::size_t j = 0; j < a.rotations.size(); ++j) {
+            REQUIRE(a.rotations[j].coeffs() == c.rotations[j].coeffs());
+            REQUIRE(a.translations[j] == c.translations[j]);
+          }
+        }
         for (std::size_t j = 0; j < a.rotations.size(); ++j) {
           worstRotation = std::max(worstRotation, (a.rotations[j].coeffs() - c.rotations[j].coeffs()).norm());
           worst = std::max(worst, (a.translations[j] - c.translations[j]).norm());
@@ -352,7 +359,7 @@ TEST_CASE("frames posed from the source poses are forward kinematics' poses", "[
       }
       REQUIRE_FALSE(fast.next(c));
     }
-    INFO("lockFeet " << lockFeet << ": " << frames << " frames; largest difference " << worst << " m, "
+    INFO("lockFeet " << lockFeet << ", footLock " << footLock << ": " << frames << " frames; largest difference " << worst << " m, "
                      << worstRotation << " in a quaternion");
     CHECK(frames > 2000);
     CHECK(worst < 1e-9);
@@ -378,6 +385,10 @@ TEST_CASE("frames posed from the source poses are forward kinematics' poses", "[
   wrong.height.pop_back();
   REQUIRE_THROWS_WITH(playback.setSourcePoses(&wrong),
                       Catch::Contains(fmt::format("playback: expected source poses of {} frames", b.db.frameCount())));
+  wrong = source;
+  wrong.positions.pop_back();  // the frame count right, one array short
+  REQUIRE_THROWS_WITH(playback.setSourcePoses(&wrong),
+                      Catch::Contains(fmt::format("{} positions", source.positions.size() - 1)));
 }
 
 TEST_CASE("playback refuses an action that does not leave the current state", "[graph][data]") {
@@ -471,6 +482,13 @@ TEST_CASE("clips of one graph need one frame rate and one body", "[graph][data]"
   const Motion at60 = resample(at30, 60);
   REQUIRE_THROWS_WITH(makeMotionDatabase({{"a.bvh", at30}, {"b.bvh", at60}}),
                       Catch::Contains("b.bvh: expected 30 fps like a.bvh, found 60 fps"));
+  // Motions for a scenario's files: one per file, each clip then named by its file.
+  MotionSpec spec;
+  spec.files = {"x/a.bvh", "x/b.bvh"};
+  REQUIRE_THROWS_WITH(makeMotionDatabase({{"a.bvh", at30}}, spec),
+                      Catch::Contains("motion.files: expected one motion per file (2), found 1"));
+  const MotionDatabase two = makeMotionDatabase({{"a.bvh", at30}, {"b.bvh", at30}}, spec);
+  CHECK(two.clips[1].path == std::filesystem::path("x/b.bvh"));
   REQUIRE_THROWS_WITH(makeMotionDatabase({{"a.bvh", at30}, {"big.bvh", at30.scaled(1.2)}}),
                       Catch::Contains("a.bvh and big.bvh have different skeletons: bone") &&
                           Catch::Contains("(more than 5 % apart)"));

@@ -94,9 +94,17 @@ SourcePoses makeSourcePoses(const MotionDatabase& db) {
 }
 
 void ActionPlayback::setSourcePoses(const SourcePoses* poses) {
-  if (poses && (poses->joints != db_.skeleton->jointCount() || poses->frameCount() != db_.frameCount()))
-    throw Error(fmt::format("playback: expected source poses of {} frames x {} joints, found {} x {}",
-                            db_.frameCount(), db_.skeleton->jointCount(), poses->frameCount(), poses->joints));
+  if (poses) {
+    const std::size_t frames = db_.frameCount(), joints = db_.skeleton->jointCount();
+    const bool fits = poses->joints == joints && poses->height.size() == frames && poses->rootTilt.size() == frames &&
+                      poses->rootOffset.size() == frames && poses->globals.size() == frames * joints &&
+                      poses->positions.size() == frames * joints;
+    if (!fits)
+      throw Error(fmt::format("playback: expected source poses of {} frames x {} joints, found {} x {} "
+                              "({} global rotations, {} positions, {} root tilts, {} root offsets)",
+                              frames, joints, poses->frameCount(), poses->joints, poses->globals.size(),
+                              poses->positions.size(), poses->rootTilt.size(), poses->rootOffset.size()));
+  }
   sourcePoses_ = poses;
 }
 

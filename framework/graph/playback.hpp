@@ -27,7 +27,8 @@ struct Pose {
   /// The skeleton whose offsets `translations` holds for the joints without position
   /// channels, as ActionPlayback::next() wrote them (it then rewrites only the others:
   /// storing 10,000 poses' constant offsets every frame was a tenth of a posed crowd's
-  /// time, issue 20). Whoever changes those translations otherwise resets it to nullptr.
+  /// time, issue 20). Whoever changes those translations otherwise, or clears and resizes
+  /// `translations` to the same size, resets it to nullptr.
   const Skeleton* offsetsOf = nullptr;
 };
 
