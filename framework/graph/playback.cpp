@@ -23,6 +23,24 @@ double fade(int b, int frames) {
 // Frames over which a lifted foot goes from where it was held back to the motion's.
 constexpr int kRelease = 4;
 
+// Frame k of `clip` with the avatar factored out of its root (paper sec. 3: the avatar
+// frame is the root's ground projection and yaw): the root's rotation without the yaw,
+// its height above the ground and its ground offset from the avatar origin (x, z). The
+// one place this is computed, so that the table (makeSourcePoses), the shown pose
+// (sourceLocal) and a blended frame (next) agree bit for bit.
+struct RootLocal {
+  Eigen::Quaterniond tilt;
+  double height;
+  Eigen::Vector2d offset;
+};
+RootLocal rootLocal(const Clip& clip, std::size_t k) {
+  const AvatarFrame& avatar = clip.annotation.frames[k];
+  const Eigen::Vector3d root = clip.motion.localTranslation(k, 0);
+  const Eigen::Vector3d local = avatar.toAvatar(root);
+  return {axisRotation(Axis::Y, -avatar.yaw) * clip.motion.rotations(k)[0], root.y() - clip.annotation.groundY,
+          {local.x(), local.z()}};
+}
+
 }  // namespace
 
 ActionPlayback::ActionPlayback(const MotionDatabase& db, const StateActionModel& model, int blendFrames, bool lockFeet)
@@ -48,14 +66,12 @@ void ActionPlayback::sourceLocal(std::uint32_t frame, Local& out) const {
   const std::size_t c = db_.clipOf(frame);
   const Clip& clip = db_.clips[c];
   const std::size_t k = frame - db_.offsets[c];
-  const AvatarFrame& avatar = clip.annotation.frames[k];
   const auto rotations = clip.motion.rotations(k);
   std::copy(rotations.begin(), rotations.end(), out.rotations.begin());
-  out.rotations[0] = axisRotation(Axis::Y, -avatar.yaw) * out.rotations[0];
-  const Eigen::Vector3d root = clip.motion.localTranslation(k, 0);
-  const Eigen::Vector3d local = avatar.toAvatar(root);
-  out.height = root.y() - clip.annotation.groundY;
-  out.rootOffset = {local.x(), local.z()};
+  const RootLocal root = rootLocal(clip, k);
+  out.rotations[0] = root.tilt;
+  out.height = root.height;
+  out.rootOffset = root.offset;
 }
 
 SourcePoses makeSourcePoses(const MotionDatabase& db) {
@@ -75,15 +91,13 @@ SourcePoses makeSourcePoses(const MotionDatabase& db) {
   for (const Clip& clip : db.clips) {
     for (std::size_t k = 0; k < clip.motion.frameCount(); ++k, ++v) {
       // As sourceLocal() puts it: the root's yaw removed, its position apart.
-      const AvatarFrame& avatar = clip.annotation.frames[k];
       const auto local = clip.motion.rotations(k);
       std::copy(local.begin(), local.end(), rotations.begin());
-      rotations[0] = axisRotation(Axis::Y, -avatar.yaw) * rotations[0];
-      const Eigen::Vector3d root = clip.motion.localTranslation(k, 0);
-      const Eigen::Vector3d offset = avatar.toAvatar(root);
-      out.rootTilt[v] = rotations[0];
-      out.height[v] = root.y() - clip.annotation.groundY;
-      out.rootOffset[v] = {offset.x(), offset.z()};
+      const RootLocal root = rootLocal(clip, k);
+      rotations[0] = root.tilt;
+      out.rootTilt[v] = root.tilt;
+      out.height[v] = root.height;
+      out.rootOffset[v] = root.offset;
       translations[0].setZero();
       for (std::size_t j = 1; j < joints; ++j) translations[j] = clip.motion.localTranslation(k, j);
       forwardKinematics(skeleton, rotations, translations, std::span(out.globals).subspan(v * joints, joints),
@@ -218,16 +232,13 @@ bool ActionPlayback::next(Pose& pose) {
       }
     } else {
       // The source frame as sourceLocal() gives it, blended straight into the pose.
-      const AvatarFrame& avatar = db_.clips[c].annotation.frames[k];
+      const RootLocal root = rootLocal(db_.clips[c], k);
       const auto local = motion.rotations(k);
-      const Eigen::Vector3d root = motion.localTranslation(k, 0);
-      const Eigen::Vector3d offset = avatar.toAvatar(root);
-      const double height = root.y() - db_.clips[c].annotation.groundY;
-      pose.rotations[0] = axisRotation(Axis::Y, -avatar.yaw) * local[0];
+      pose.rotations[0] = root.tilt;
       std::copy(local.begin() + 1, local.end(), pose.rotations.begin() + 1);
       if (alpha > 0) blend(alpha, pose.rotations);
       pose.rotations[0] = yaw * pose.rotations[0];
-      pose.translations[0] = transformPoint(at, {offset.x(), height + alpha * heightOffset_, offset.z()});
+      pose.translations[0] = transformPoint(at, {root.offset.x(), root.height + alpha * heightOffset_, root.offset.y()});
       pose.translations[0].x() += correction_.x();
       pose.translations[0].z() += correction_.y();
       forwardKinematics(skeleton, pose.rotations, pose.translations, fkRotations_, fkPositions_);
