@@ -2,6 +2,7 @@
 #include <algorithm>
 #include <cmath>
 #include <filesystem>
+#include <optional>
 #include <queue>
 #include <tuple>
 
@@ -373,14 +374,33 @@ TEST_CASE("frames posed from the source poses are forward kinematics' poses", "[
   playback.begin(b.model.stateActionBegin[0]);
   Pose pose;
   REQUIRE(playback.next(pose));
-  REQUIRE(pose.offsetsOf == b.db.skeleton.get());
+  REQUIRE(pose.offsetsOf == b.db.skeleton->id());
   const std::size_t last = b.db.skeleton->jointCount() - 1;
   REQUIRE(b.db.skeleton->translationSlot(last) < 0);
   CHECK(pose.translations[last] == b.db.skeleton->joint(last).offset);
   pose.translations[last] = Eigen::Vector3d(9, 9, 9);
-  pose.offsetsOf = nullptr;
+  pose.offsetsOf = 0;
   REQUIRE(playback.next(pose));
   CHECK(pose.translations[last] == b.db.skeleton->joint(last).offset);
+  // The same pose played by a skeleton of as many joints but other offsets takes them.
+  MotionDatabase larger = b.db;
+  larger.skeleton = std::make_shared<const Skeleton>(b.db.skeleton->scaled(2));
+  ActionPlayback other(larger, b.model, 4);
+  other.reset(0);
+  other.begin(b.model.stateActionBegin[0]);
+  REQUIRE(other.next(pose));
+  CHECK(pose.offsetsOf == larger.skeleton->id());
+  CHECK(pose.translations[last] == 2 * b.db.skeleton->joint(last).offset);
+  // Ids name contents, not addresses: a copy keeps its original's, a skeleton built in the
+  // storage of another gets a new one.
+  CHECK(Skeleton(*b.db.skeleton).id() == b.db.skeleton->id());
+  std::optional<Skeleton> slot(std::in_place, b.db.skeleton->scaled(1));
+  const Skeleton* address = &*slot;
+  const std::uint64_t first = slot->id();
+  slot.emplace(b.db.skeleton->scaled(3));
+  REQUIRE(&*slot == address);
+  CHECK(slot->id() != first);
+  CHECK(slot->id() != b.db.skeleton->id());
   SourcePoses wrong = source;
   wrong.height.pop_back();
   REQUIRE_THROWS_WITH(playback.setSourcePoses(&wrong),

@@ -204,10 +204,10 @@ bool ActionPlayback::next(Pose& pose) {
     pose.rotations.resize(joints);
     // The skeleton's offsets unless the pose has them, then the joints with position
     // channels (the root's is set below).
-    if (pose.translations.size() != joints || pose.offsetsOf != &skeleton) {
+    if (pose.translations.size() != joints || pose.offsetsOf != skeleton.id()) {
       pose.translations.resize(joints);
       std::copy(skeleton.offsets().begin(), skeleton.offsets().end(), pose.translations.begin());
-      pose.offsetsOf = &skeleton;
+      pose.offsetsOf = skeleton.id();
     }
     const auto translated = skeleton.translatedJoints();
     const auto moved = motion.translations(k);

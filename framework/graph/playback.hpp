@@ -24,12 +24,13 @@ namespace mgrl {
 struct Pose {
   std::vector<Eigen::Quaterniond> rotations;
   std::vector<Eigen::Vector3d> translations;
-  /// The skeleton whose offsets `translations` holds for the joints without position
-  /// channels, as ActionPlayback::next() wrote them (it then rewrites only the others:
-  /// storing 10,000 poses' constant offsets every frame was a tenth of a posed crowd's
-  /// time, issue 20). Whoever changes those translations otherwise, or clears and resizes
-  /// `translations` to the same size, resets it to nullptr.
-  const Skeleton* offsetsOf = nullptr;
+  /// The Skeleton::id() whose offsets `translations` holds for the joints without
+  /// position channels, as ActionPlayback::next() wrote them (it then rewrites only the
+  /// others: storing 10,000 poses' constant offsets every frame was a tenth of a posed
+  /// crowd's time, issue 20); 0 for none. An id, not an address, so that a skeleton built
+  /// where another was freed is not taken for it. Whoever changes those translations
+  /// otherwise, or clears and resizes `translations` to the same size, resets it to 0.
+  std::uint64_t offsetsOf = 0;
 };
 
 /// Every frame of the capture posed once, as playback shows a frame outside a transition's

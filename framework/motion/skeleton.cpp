@@ -1,5 +1,6 @@
 #include "mgrl/motion/skeleton.hpp"
 
+#include <atomic>
 #include <unordered_map>
 
 #include <fmt/format.h>
@@ -46,6 +47,8 @@ Skeleton::Skeleton(std::vector<Joint> joints) : joints_(std::move(joints)) {
     channelCount_ += joint.channels.size();
     offsets_.push_back(joint.offset);
   }
+  static std::atomic<std::uint64_t> built{0};
+  id_ = built.fetch_add(1, std::memory_order_relaxed) + 1;  // 0 names no skeleton
 }
 
 int Skeleton::find(std::string_view name) const {

@@ -3,6 +3,7 @@
 /// A skeleton: joints ordered parent before child, each with a rest offset from its parent
 /// and the channels a file animates it with. Immutable once built.
 
+#include <cstdint>
 #include <optional>
 #include <span>
 #include <string>
@@ -70,6 +71,11 @@ class Skeleton {
   /// A copy with every length (offsets, end sites) multiplied by `factor`.
   Skeleton scaled(double factor) const;
 
+  /// Names these contents: every constructed skeleton gets a new one, and copies keep it
+  /// (a skeleton never changes once built), so equal ids mean equal joints and offsets,
+  /// whatever the address. Pose::offsetsOf holds one.
+  std::uint64_t id() const { return id_; }
+
   /// Comma-separated joint names, for error messages.
   std::string jointList() const;
 
@@ -79,6 +85,7 @@ class Skeleton {
   std::vector<int> slot_;
   std::vector<Eigen::Vector3d> offsets_;
   std::size_t channelCount_ = 0;
+  std::uint64_t id_ = 0;
 };
 
 /// True if the joint has at least one position channel.
