@@ -9,12 +9,15 @@
 //     one's (the runtime target: <= 0.5 us).
 //
 // Usage: mgrl_bench_adaptive [--quick] [--runs N] [--reference A,D,H] [--points N] [--budget A,D,H]...
-//                            [--variant NAME;GRID;LEARNER]... [--start SHARE] [--no-error] [--no-decision]
+//                            [--variant NAME;GRID;LEARNER]... [--start SHARE] [--pow2-start] [--no-error]
+//                            [--no-decision]
 // --quick uses a 30 x 24 x 9 reference and fewer budgets. --budget replaces the budgets (the
 // uniform grid's vertex counts); --variant replaces the adaptive configurations (extra
-// kd_tree keys; extra adaptive_value_iteration keys, YAML flow style). A tree starts from
-// power-of-two cells with at most SHARE (0.85) of the budget's vertices unless its variant
-// sets *_cells.
+// kd_tree keys; extra adaptive_value_iteration keys, YAML flow style). Unless its variant
+// sets *_cells, a tree starts from the uniform grid's cells scaled down until its vertices
+// are at most SHARE (0.85) of the budget (a forest of root boxes, kd_tree's any-count
+// cells); --pow2-start makes it the largest power-of-two cells within SHARE instead, the
+// start before kd_tree had roots.
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -117,6 +120,19 @@ struct Variant {
   std::string name, grid, learner;
 };
 
+// The uniform grid's cells (vertices - 1 per axis) scaled by the largest s in (0, 1] that
+// brings the tree's vertices within `share` of the budget.
+std::string scaledStartCells(const std::array<int, 3>& uniform, double share) {
+  const double budget = static_cast<double>(uniform[0]) * uniform[1] * uniform[2];
+  std::array<long, 3> cells{1, 1, 1};
+  for (int step = 100; step > 0; --step) {
+    for (int i = 0; i < 3; ++i)
+      cells[i] = std::max(1L, std::lround(step / 100.0 * std::max(1, uniform[i] - 1)));
+    if (static_cast<double>((cells[0] + 1) * (cells[1] + 1) * (cells[2] + 1)) <= share * budget) break;
+  }
+  return fmt::format(", angle_cells: {}, distance_cells: {}, height_cells: {}", cells[0], cells[1], cells[2]);
+}
+
 std::string startCells(std::size_t budget, double share) {
   std::array<std::size_t, 3> best{1, 1, 1};
   std::size_t bestVertices = 0;
@@ -137,6 +153,7 @@ int main(int argc, char** argv) {
   std::vector<Budget> budgets;
   std::vector<Variant> variants;
   double startShare = 0.85;
+  bool pow2Start = false;
   bool quick = false, error = true, decision = true;
   std::array<int, 3> reference{40, 32, 12};
   std::size_t pointCount = 3000;
@@ -172,6 +189,8 @@ int main(int argc, char** argv) {
       variants.push_back({text.substr(0, a), text.substr(a + 1, b - a - 1), text.substr(b + 1)});
     } else if (!std::strcmp(argv[i], "--start") && i + 1 < argc) {
       startShare = std::atof(argv[++i]);
+    } else if (!std::strcmp(argv[i], "--pow2-start")) {
+      pow2Start = true;
     } else if (!std::strcmp(argv[i], "--no-error")) {
       error = false;
     } else if (!std::strcmp(argv[i], "--no-decision")) {
@@ -179,7 +198,7 @@ int main(int argc, char** argv) {
     } else {
       std::fprintf(stderr,
                    "usage: mgrl_bench_adaptive [--quick] [--runs N] [--reference A,D,H] [--points N] [--budget A,D,H]... "
-                   "[--variant NAME;GRID;LEARNER]... [--start SHARE] [--no-error] [--no-decision]\n");
+                   "[--variant NAME;GRID;LEARNER]... [--start SHARE] [--pow2-start] [--no-error] [--no-decision]\n");
       return 2;
     }
   }
@@ -237,10 +256,13 @@ int main(int argc, char** argv) {
         const std::size_t vertices = static_cast<std::size_t>(a * d * h);
         row(solve(fmt::format("uniform {}x{}x{}", a, d, h), model, *reward, uniform(a, d, h), vi, threads));
         for (const Variant& v : variants) {
-          // Unless the variant says, the tree starts as the largest power-of-two cells of the
-          // uniform grids' proportions (angle d or 2d, height d/2 or d cells for d distance
-          // cells) whose vertices are at most `startShare` of the budget.
-          const std::string cells = v.grid.find("_cells") != std::string::npos ? "" : startCells(vertices, startShare);
+          // Unless the variant says, the tree starts as the uniform grid's cells scaled down to
+          // `startShare` of the budget; with --pow2-start as the largest power-of-two cells of
+          // the uniform grids' proportions (angle d or 2d, height d/2 or d cells for d distance
+          // cells) within it.
+          const std::string cells = v.grid.find("_cells") != std::string::npos ? ""
+                                    : pow2Start ? startCells(vertices, startShare)
+                                                : scaledStartCells(b.uniform, startShare);
           const std::string grid = "{" + kdBase + cells + (v.grid.empty() ? "" : ", " + v.grid) + "}";
           row(solve(fmt::format("adaptive {} {}", vertices, v.name), model, *reward, grid,
                     fmt::format("{{type: adaptive_value_iteration, max_vertices: {}{}}}", vertices,

@@ -12,6 +12,13 @@
 // guarantees it: the leaves at depth k are cells of one uniform grid G_k, and G_k refines
 // every G_j, j < k. (With a free choice of axis per cell two leaves can meet on a rectangle
 // whose corners belong to neither, and no vertex equation makes them agree.)
+//
+// Any number of initial cells. n cells along an axis are r = n / 2^p root boxes (r odd)
+// split p times: the tree is a forest whose roots are the cells of a uniform r_0 x r_1 x r_2
+// grid G_0, each root split by the same depth sequence. The leaves at depth k are still
+// cells of one uniform grid (r_i 2^(halvings of axis i by depth k) cells along axis i), and
+// G_k still refines every G_j, so the argument above holds unchanged. Power-of-two counts
+// give one root: the tree and its bundle arrays are what they were before roots existed.
 #include <algorithm>
 #include <cmath>
 #include <map>
@@ -42,16 +49,17 @@ class KdTree final : public Discretizer {
     const Bounds b = p.choice("bounds") == "hits" ? boundsOfHits(p, m) : givenBounds(p);
     // Axes in the order of polar2d / cylindrical3d; the 1-D tree is the distance straight ahead.
     std::vector<GridAxis> axes;
-    std::array<long long, 3> cells{1, 1, 1};
+    std::array<long long, 3> cells{1, 1, 1};  // the power-of-two part of each axis's cells
     const long long angleCells = p.integer("angle_cells"), distanceCells = p.integer("distance_cells"),
                     heightCells = p.integer("height_cells");
     auto add = [&](std::string name, double lo, double hi, bool wraps, long long n, std::string_view key) {
-      if (n <= 0 || (n & (n - 1)) != 0) p.fail(key, fmt::format("expected a power of two, found {}", n));
+      if (n <= 0) p.fail(key, fmt::format("expected at least 1 cell, found {}", n));
       const int i = static_cast<int>(axes.size());
       lo_[i] = lo;
       span_[i] = wraps ? kTwoPi : hi - lo;
       wraps_[i] = wraps;
-      cells[i] = n;
+      cells[i] = n & -n;  // the largest power of two dividing n
+      roots_[i] = static_cast<std::uint64_t>(n / cells[i]);
       // A wrapping axis is shown by its start and half a turn (setAxes needs a span < 2 pi).
       axes.push_back(GridAxis{std::move(name), i == 0 && dimension_ > 1 ? "rad" : "m",
                               {lo, wraps ? lo + M_PI : hi}, wraps});
@@ -64,6 +72,14 @@ class KdTree final : public Discretizer {
       add("distance", b.distance[0], b.distance[1], false, distanceCells, "distance_cells");
       if (dimension_ == 3) add("height", b.height[0], b.height[1], false, heightCells, "height_cells");
     }
+    // Issue 19: the size is checked before any node is made (the initial tree has at least
+    // as many vertices as cells).
+    const double initialCells = static_cast<double>(angleCells) * static_cast<double>(distanceCells) *
+                                (dimension_ == 3 ? static_cast<double>(heightCells) : 1.0);
+    if (dimension_ > 1 && initialCells > static_cast<double>(kMaxGridVertices))
+      p.fail("angle_cells", fmt::format("expected initial cells (angle x distance{}) of at most {}, found {}",
+                                        dimension_ == 3 ? " x height" : "", kMaxGridVertices, initialCells));
+    rootCount_ = static_cast<std::size_t>(roots_[0] * roots_[1] * roots_[2]);
     // The split sequence: first the initial cells, round robin over the axes that still
     // need splits, then round robin over every axis.
     std::array<int, 3> remaining{0, 0, 0};
@@ -91,7 +107,8 @@ class KdTree final : public Discretizer {
       for (int i = 0; i < dimension_; ++i) {
         int halvings = 0;
         for (int axis : sequence_) halvings += axis == i ? 1 : 0;
-        length[i] = std::ldexp(span_[i] * (i == 0 && dimension_ > 1 ? radius : 1.0), -halvings);
+        length[i] = std::ldexp(span_[i] * (i == 0 && dimension_ > 1 ? radius : 1.0), -halvings) /
+                    static_cast<double>(roots_[i]);
       }
       while (static_cast<int>(sequence_.size()) < maxDepth_) {
         int longest = 0;
@@ -108,9 +125,10 @@ class KdTree final : public Discretizer {
         p.fail("max_depth", fmt::format("expected at most {} halvings of the {} axis, found {}; lower max_depth",
                                         kMaxAxisSplits, axes[i].name, levels_[i]));
     setAxes(std::move(axes));
-    // The initial tree: every leaf split down to the initial depth.
-    axis_ = {-1};
-    children_ = {-1, -1};
+    // The initial tree: the roots, every leaf split down to the initial depth.
+    axis_.assign(rootCount_, -1);
+    children_.assign(2 * rootCount_, -1);
+    depth_.assign(rootCount_, 0);
     for (int depth = 0; depth < initialDepth_; ++depth) {
       const std::size_t nodes = axis_.size();
       for (std::size_t n = 0; n < nodes; ++n)
@@ -169,6 +187,7 @@ class KdTree final : public Discretizer {
     d["hanging_vertex_count"] = hanging().size();
     d["deepest_leaf"] = deepest;
     d["initial_depth"] = initialDepth_;
+    d["root_cells"] = std::vector<std::uint64_t>(roots_.begin(), roots_.begin() + dimension_);
     d["max_depth"] = maxDepth_;
     return d;
   }
@@ -228,6 +247,12 @@ class KdTree final : public Discretizer {
     out.push_back(std::move(leafCorners));
     out.push_back(std::move(bounds));
     out.push_back(std::move(coordinates));
+    if (rootCount_ > 1) {
+      // Written only for a forest, so that one-root trees keep the arrays they always had.
+      StructureArray roots{"roots", {static_cast<std::size_t>(dimension_)}, {}, {}, true, {}};
+      for (int i = 0; i < dimension_; ++i) roots.ints.push_back(static_cast<std::int32_t>(roots_[i]));
+      out.push_back(std::move(roots));
+    }
     return out;
   }
 
@@ -244,9 +269,39 @@ class KdTree final : public Discretizer {
     }
     return c;
   }
-  // The coordinate of integer position k on axis i (units of span / 2^levels).
+  // The coordinate of integer position k on axis i (units of span / (roots 2^levels)).
   double coordinate(int i, std::uint64_t k) const {
-    return lo_[i] + span_[i] * std::ldexp(static_cast<double>(k), -levels_[i]);
+    return lo_[i] + span_[i] * (std::ldexp(static_cast<double>(k), -levels_[i]) / static_cast<double>(roots_[i]));
+  }
+  // Integer positions per root box along axis i.
+  std::uint64_t rootKeys(int i) const { return std::uint64_t{1} << levels_[i]; }
+  // The root whose box holds grid coordinates c (the upper one on a shared face, as a split does).
+  std::size_t rootOf(const std::array<double, 3>& c) const {
+    std::size_t root = 0, stride = 1;
+    for (int i = 0; i < dimension_; ++i) {
+      std::uint64_t j = 0;
+      if (roots_[i] > 1) {
+        j = static_cast<std::uint64_t>(std::clamp((c[i] - lo_[i]) / span_[i] * static_cast<double>(roots_[i]), 0.0,
+                                                  static_cast<double>(roots_[i] - 1)));
+        // The exact boundary coordinates settle round-off, as for a split.
+        while (j > 0 && c[i] < coordinate(i, j * rootKeys(i))) --j;
+        while (j + 1 < roots_[i] && c[i] >= coordinate(i, (j + 1) * rootKeys(i))) ++j;
+      }
+      root += static_cast<std::size_t>(j) * stride;
+      stride *= static_cast<std::size_t>(roots_[i]);
+    }
+    return root;
+  }
+  // The box of root r in integer positions.
+  void rootBox(std::size_t r, Key& lo, Key& hi) const {
+    lo = {0, 0, 0};
+    hi = {0, 0, 0};
+    for (int i = 0; i < dimension_; ++i) {
+      const std::uint64_t j = r % roots_[i];
+      r /= roots_[i];
+      lo[i] = j * rootKeys(i);
+      hi[i] = (j + 1) * rootKeys(i);
+    }
   }
   double splitValue(std::size_t n) const { return coordinate(axis_[n], splitKey_[n]); }
 
@@ -263,7 +318,7 @@ class KdTree final : public Discretizer {
   }
 
   GridCell find(const std::array<double, 3>& c) const {
-    std::size_t n = 0;
+    std::size_t n = rootCount_ > 1 ? rootOf(c) : 0;
     while (axis_[n] >= 0) n = static_cast<std::size_t>(children_[2 * n + (c[axis_[n]] >= splitCoordinate_[n] ? 1 : 0)]);
     GridCell out;
     const std::int32_t leaf = nodeLeaf_[n];
@@ -289,6 +344,10 @@ class KdTree final : public Discretizer {
   void freeCorners(const std::vector<Key>& keys);
 
   int dimension_ = 0, coordinates_ = 0, initialDepth_ = 0, maxDepth_ = 0;
+  // Root boxes along each axis (the odd part of its initial cells) and their product; nodes
+  // 0 .. rootCount_ - 1 are the roots, the first axis varying fastest.
+  std::array<std::uint64_t, 3> roots_{1, 1, 1};
+  std::size_t rootCount_ = 1;
   bool conforming_ = false;  // refinement: conforming
   double height_ = 0;
   std::array<double, 3> lo_{0, 0, 0}, span_{1, 1, 1};
@@ -317,16 +376,23 @@ void KdTree::rebuild(const std::string& source) {
   leafLoKey_.clear();
   leafHiKey_.clear();
   Key full{0, 0, 0};
-  for (int i = 0; i < d; ++i) full[i] = std::uint64_t{1} << levels_[i];
-  // Depth-first, low child first: the leaf order. A node reached twice is a cycle or a
-  // shared child.
+  for (int i = 0; i < d; ++i) full[i] = roots_[i] << levels_[i];
+  if (nodes < rootCount_)
+    throw Error(fmt::format("{}: expected at least the {} roots as nodes, found {} nodes", source, rootCount_, nodes));
+  // Depth-first, root by root, low child first: the leaf order. A node reached twice is a
+  // cycle, a shared child or a root made a child.
   std::vector<std::uint8_t> seen(nodes, 0);
   struct Item {
     std::size_t node;
     Key lo, hi;
     int depth;
   };
-  std::vector<Item> stack{{0, {0, 0, 0}, full, 0}};
+  std::vector<Item> stack;
+  for (std::size_t r = rootCount_; r-- > 0;) {
+    Item root{r, {}, {}, 0};
+    rootBox(r, root.lo, root.hi);
+    stack.push_back(root);
+  }
   while (!stack.empty()) {
     const Item item = stack.back();
     stack.pop_back();
@@ -361,7 +427,7 @@ void KdTree::rebuild(const std::string& source) {
     stack.push_back(low);
   }
   for (std::size_t n = 0; n < nodes; ++n)
-    if (!seen[n]) throw Error(fmt::format("{}: node {} is not reachable from the root", source, n));
+    if (!seen[n]) throw Error(fmt::format("{}: node {} is not reachable from a root", source, n));
 
   // Vertices: leaf corners, numbered by first appearance; a wrapping axis's end is its start.
   const std::size_t leaves = leafNode_.size(), cornerCount = std::size_t{1} << d;
@@ -472,7 +538,26 @@ void KdTree::rebuild(const std::string& source) {
 }
 
 void KdTree::containing(const Key& k, std::vector<std::int32_t>& out) const {
+  // The roots whose closed box holds k: on each axis the one it is inside, or both around a
+  // shared face.
   std::vector<std::size_t> stack{0};
+  if (rootCount_ > 1) {
+    stack.clear();
+    std::array<std::array<std::uint64_t, 2>, 3> along{};
+    std::array<int, 3> count{1, 1, 1};
+    for (int i = 0; i < dimension_; ++i) {
+      const std::uint64_t j = std::min(k[i] / rootKeys(i), roots_[i] - 1);
+      along[i] = {j, 0};
+      if (k[i] == j * rootKeys(i) && j > 0) {
+        along[i][1] = j - 1;
+        count[i] = 2;
+      }
+    }
+    for (int a = 0; a < count[0]; ++a)
+      for (int b = 0; b < count[1]; ++b)
+        for (int c = 0; c < count[2]; ++c)
+          stack.push_back(static_cast<std::size_t>(along[0][a] + roots_[0] * (along[1][b] + roots_[1] * along[2][c])));
+  }
   while (!stack.empty()) {
     const std::size_t n = stack.back();
     stack.pop_back();
@@ -489,7 +574,7 @@ void KdTree::containing(const Key& k, std::vector<std::int32_t>& out) const {
 void KdTree::freeCorners(const std::vector<Key>& keys) {
   // Every image of each key (on a wrapping axis the start is also the end).
   Key full{0, 0, 0};
-  for (int i = 0; i < dimension_; ++i) full[i] = std::uint64_t{1} << levels_[i];
+  for (int i = 0; i < dimension_; ++i) full[i] = roots_[i] << levels_[i];
   std::vector<Key> images;
   for (const Key& key : keys) {
     const std::size_t first = images.size();
@@ -556,14 +641,29 @@ std::unique_ptr<Discretizer> KdTree::restored(const std::vector<StructureArray>&
       throw Error(fmt::format("{}: expected the bounds of the scenario's tree on axis {} ([{}, {}]), found [{}, {}]",
                               where(bounds), i, lo_[i], lo_[i] + span_[i], bounds.reals[2 * i],
                               bounds.reals[2 * i + 1]));
+  // The roots: written for forests only, so a bundle without them has one root.
+  std::vector<std::int32_t> roots(d, 1);
+  const StructureArray* rootArray = nullptr;
+  for (const StructureArray& a : arrays)
+    if (a.name == "roots") rootArray = &get("roots", true);
+  if (rootArray) {
+    if (rootArray->shape != std::vector<std::size_t>{d})
+      throw Error(fmt::format("{}: expected shape ({},) (root boxes per axis), found {}", where(*rootArray), d,
+                              formatShape(rootArray->shape)));
+    roots = rootArray->ints;
+  }
+  for (std::size_t i = 0; i < d; ++i)
+    if (roots[i] != static_cast<std::int32_t>(roots_[i]))
+      throw Error(fmt::format("{}: expected {} root boxes on axis {} as the scenario's initial cells make, found {}",
+                              rootArray ? where(*rootArray) : where(bounds), roots_[i], i, roots[i]));
   const StructureArray& axis = get("split_axis", true);
   const StructureArray& value = get("split_value", false);
   const StructureArray& children = get("children", true);
   const StructureArray& leafCorners = get("leaf_corners", true);
   const std::size_t nodes = axis.ints.size();
-  if (axis.shape.size() != 1 || nodes == 0 || nodes > 2 * kMaxGridVertices)
-    throw Error(fmt::format("{}: expected shape (N,) with N >= 1 nodes, found {}", where(axis),
-                            formatShape(axis.shape)));
+  if (axis.shape.size() != 1 || nodes < rootCount_ || nodes > 2 * kMaxGridVertices)
+    throw Error(fmt::format("{}: expected shape (N,) with N >= {} nodes (the roots), found {}", where(axis),
+                            rootCount_, formatShape(axis.shape)));
   if (value.shape != std::vector<std::size_t>{nodes})
     throw Error(fmt::format("{}: expected shape ({},) like split_axis, found {}", where(value), nodes,
                             formatShape(value.shape)));
@@ -579,10 +679,11 @@ std::unique_ptr<Discretizer> KdTree::restored(const std::vector<StructureArray>&
     if (leaf && (low != -1 || high != -1))
       throw Error(fmt::format("{}: node {} is a leaf (split axis -1), expected children -1 -1, found {} {}",
                               where(children), n, low, high));
-    if (!leaf && (low <= 0 || high <= 0 || static_cast<std::size_t>(low) >= nodes ||
+    const auto first = static_cast<std::int32_t>(rootCount_);  // roots are nobody's children
+    if (!leaf && (low < first || high < first || static_cast<std::size_t>(low) >= nodes ||
                   static_cast<std::size_t>(high) >= nodes || low == high))
-      throw Error(fmt::format("{}: node {}: expected two distinct children in [1, {}), found {} {} (out of range)",
-                              where(children), n, nodes, low, high));
+      throw Error(fmt::format("{}: node {}: expected two distinct children in [{}, {}), found {} {} (out of range)",
+                              where(children), n, first, nodes, low, high));
   }
   auto copy = std::make_unique<KdTree>(*this);
   copy->axis_ = axis.ints;
@@ -618,11 +719,12 @@ void registerKdTree(DiscretizerRegistry& registry) {
        {ParamSpec::choice("coordinates", "cylindrical", {"distance", "polar", "cylindrical"},
                           "distance: ground distance straight ahead (1-D); polar: angle x distance as polar2d; "
                           "cylindrical: angle x distance x height as cylindrical3d"),
-        ParamSpec::integer("angle_cells", 4, 1, 1024, "cells", "initial cells along the angle (a power of two)"),
-        ParamSpec::integer("distance_cells", 4, 1, 1024, "cells", "initial cells along the distance (a power of two)"),
-        ParamSpec::integer("height_cells", 2, 1, 1024, "cells", "initial cells along the height (a power of two)"),
-        ParamSpec::integer("max_depth", 24, 0, 90, "splits", "no leaf is split more often than this (initial splits "
-                                                              "included)"),
+        ParamSpec::integer("angle_cells", 4, 1, 1024, "cells",
+                           "initial cells along the angle (n = r x 2^p, r odd: r root boxes split p times)"),
+        ParamSpec::integer("distance_cells", 4, 1, 1024, "cells", "initial cells along the distance (as angle_cells)"),
+        ParamSpec::integer("height_cells", 2, 1, 1024, "cells", "initial cells along the height (as angle_cells)"),
+        ParamSpec::integer("max_depth", 24, 0, 90, "splits", "no leaf is split more often than this below its root "
+                                                              "box (initial splits included)"),
         ParamSpec::choice("split_axes", "round_robin", {"round_robin", "longest"},
                           "the axis each depth past the initial cells halves: round_robin: every axis in turn; "
                           "longest: the axis whose cells are then longest in metres (angles as the arc at the middle "

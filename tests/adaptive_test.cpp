@@ -155,13 +155,21 @@ constexpr const char* k3dConforming =
     "{type: kd_tree, coordinates: cylindrical, angle_cells: 2, distance_cells: 2, height_cells: 1, angle_min: -90, "
     "angle_max: 90, distance_min: 0.5, distance_max: 2.5, height_min: 0.5, height_max: 1.5, split_axes: longest, "
     "refinement: conforming}";
+// Forests: initial cells that are not powers of two (3 = 3 roots, 6 = 3 roots split once).
+constexpr const char* k2dForest =
+    "{type: kd_tree, coordinates: polar, angle_cells: 3, distance_cells: 6, angle_min: -90, angle_max: 90, "
+    "distance_min: 0.5, distance_max: 2.5}";
+constexpr const char* k3dForestConforming =
+    "{type: kd_tree, coordinates: cylindrical, angle_cells: 5, distance_cells: 3, height_cells: 6, angle_min: -90, "
+    "angle_max: 90, distance_min: 0.5, distance_max: 2.5, height_min: 0.5, height_max: 1.5, split_axes: longest, "
+    "refinement: conforming}";
 
 }  // namespace
 
 TEST_CASE("kd_tree weights are non-negative, sum to 1 and reproduce linear functions across hanging vertices",
           "[kd_tree]") {
   const StateActionModel m = punchModel();
-  for (const char* yaml : {k2d, k3d, k3dLongest, k3dConforming}) {
+  for (const char* yaml : {k2d, k3d, k3dLongest, k3dConforming, k2dForest, k3dForestConforming}) {
     CAPTURE(yaml);
     const auto grid = randomlyRefined(yaml, m, 5, 7);
     REQUIRE(!grid->hanging().empty());
@@ -196,7 +204,7 @@ TEST_CASE("kd_tree weights are non-negative, sum to 1 and reproduce linear funct
 
 TEST_CASE("kd_tree interpolation does not jump across a face with hanging vertices", "[kd_tree]") {
   const StateActionModel m = punchModel();
-  for (const char* yaml : {k2d, k3d, k3dLongest, k3dConforming}) {
+  for (const char* yaml : {k2d, k3d, k3dLongest, k3dConforming, k2dForest, k3dForestConforming}) {
     CAPTURE(yaml);
     const auto grid = randomlyRefined(yaml, m, 6, 11);
     const int d = grid->dimension();
@@ -612,7 +620,10 @@ TEST_CASE("adaptive_value_iteration and kd_tree refuse bad parameters with one l
   const StateActionModel m = punchModel();
   REQUIRE_THROWS_WITH(app::plugins().learners.create(yamlNode("{type: adaptive_value_iteration, max_vertices: 0}")),
                       Contains("max_vertices"));
-  REQUIRE_THROWS_WITH(makeGrid("{type: kd_tree, angle_cells: 3}", m), Contains("angle_cells") && Contains("power of two"));
+  REQUIRE_THROWS_WITH(makeGrid("{type: kd_tree, angle_cells: 0}", m), Contains("angle_cells"));
+  // Issue 19: refused before a node is made (a billion roots).
+  REQUIRE_THROWS_WITH(makeGrid("{type: kd_tree, angle_cells: 1023, distance_cells: 1023, height_cells: 1023}", m),
+                      Contains("angle_cells") && Contains("initial cells") && Contains("1070599167"));
   REQUIRE_THROWS_WITH(makeGrid("{type: kd_tree, max_depth: 2}", m), Contains("max_depth"));
   REQUIRE_THROWS_WITH(makeGrid("{type: kd_tree, colour: red}", m), Contains("colour"));
   REQUIRE_THROWS_WITH(makeGrid("{type: kd_tree, split_axes: widest}", m),
@@ -638,6 +649,116 @@ TEST_CASE("adaptive_value_iteration and kd_tree refuse bad parameters with one l
   const GridModel g = GridModel::build(problem, 1);
   const auto q = app::plugins().learners.create(yamlNode("{type: q_learning, budget: 10}"));
   REQUIRE_THROWS_WITH(q->train({problem, g, nullptr, nullptr, 1}), Contains("hanging"));
+}
+
+}  // namespace mgrl
+
+namespace mgrl {
+
+// Issue 16: initial cells of any count, so that a tree can start from the shape of the uniform
+// grid it is compared with. n cells are n's odd part as root boxes, split down by its
+// power-of-two part.
+TEST_CASE("kd_tree starts from any number of initial cells: a forest of root boxes", "[kd_tree]") {
+  const StateActionModel m = punchModel();
+  const auto grid = makeGrid(k2dForest, m);
+  const nlohmann::json d = grid->describe();
+  REQUIRE(d["root_cells"] == nlohmann::json::array({3, 3}));
+  REQUIRE(d["initial_depth"] == 1);
+  REQUIRE(grid->cellCount() == 18);
+  REQUIRE(grid->vertexCount() == 4 * 7);
+  REQUIRE(grid->hanging().empty());
+  // The leaves are the cells of the uniform 3 x 6 grid: every vertex on its lines.
+  for (const auto& c : vertexCoordinates(*grid)) {
+    const double i = (c[0] + M_PI / 2) / (M_PI / 3), j = (c[1] - 0.5) / (2.0 / 6);
+    REQUIRE(std::fabs(i - std::round(i)) < 1e-9);
+    REQUIRE(std::fabs(j - std::round(j)) < 1e-9);
+  }
+  // A point is found in the leaf whose box holds it, across root faces too.
+  const auto coords = vertexCoordinates(*grid);
+  std::mt19937 rng(4);
+  std::uniform_real_distribution<double> u(0, 1);
+  for (int t = 0; t < 500; ++t) {
+    const std::array<double, 3> c{-M_PI / 2 + M_PI * u(rng), 0.5 + 2 * u(rng), 0};
+    GridCell cell;
+    REQUIRE(grid->locate(grid->position(c), cell));
+    const auto [lo, hi] = leafBox(*grid, cell.cell, coords);
+    const std::array<double, 3> back = grid->coordinates(grid->position(c));
+    for (int i = 0; i < 2; ++i) {
+      REQUIRE(back[i] >= lo[i] - 1e-9);
+      REQUIRE(back[i] <= hi[i] + 1e-9);
+    }
+  }
+  // Power-of-two cells stay one root, with the arrays such trees always had.
+  const auto single = makeGrid(k2d, m);
+  REQUIRE(single->describe()["root_cells"] == nlohmann::json::array({1, 1}));
+  for (const StructureArray& a : single->structure()) REQUIRE(a.name != "roots");
+  // Refinement and split sequences work per root: a refined forest is still continuous
+  // (the two tests above) and refines only the leaves asked for.
+  const auto refined = grid->refined({0});
+  REQUIRE(refined->cellCount() == 19);
+}
+
+TEST_CASE("a refined forest kd_tree round-trips through a policy bundle; bad roots are refused",
+          "[adaptive][kd_tree]") {
+  const std::string forest = "{type: kd_tree, coordinates: polar, height: 1, angle_cells: 6, distance_cells: 12}";
+  const Solved solved(forest, "{type: adaptive_value_iteration, max_vertices: 200}");
+  const Discretizer& tree = solved.tree();
+  REQUIRE(tree.cellCount() > 72);
+  test::TempDir dir("adaptive-forest-bundle");
+  auto save = [&](std::vector<StructureArray> structure) {
+    PolicyBundle bundle;
+    bundle.graphKey = "k";
+    std::vector<double> vertices;
+    for (std::size_t v = 0; v < tree.vertexCount(); ++v) {
+      const Eigen::Vector3d p = tree.vertexPosition(v);
+      vertices.insert(vertices.end(), {p.x(), p.y(), p.z()});
+    }
+    bundle.behaviors["hit"] = PolicyBehavior{"key", nlohmann::json::object(), solved.result.table, vertices, "kd_tree", std::move(structure), nullptr};
+    savePolicyBundle(dir.path / "policy", bundle);
+    return loadPolicyBundle(dir.path / "policy", solved.model, "k");
+  };
+  const PolicyBundle loaded = save(tree.structure());
+  const auto restored = solved.grid->restored(loaded.behaviors.at("hit").grid);
+  REQUIRE(restored->cellCorners() == tree.cellCorners());
+  REQUIRE(restored->hanging().vertex == tree.hanging().vertex);
+  REQUIRE(restored->hanging().weight == tree.hanging().weight);
+  std::mt19937 rng(2);
+  for (int t = 0; t < 300; ++t) {
+    const Eigen::Vector3d e(std::uniform_real_distribution<double>(-2.5, 2.5)(rng), 1,
+                            std::uniform_real_distribution<double>(-2.5, 2.5)(rng));
+    GridCell a, b;
+    REQUIRE(tree.locate(e, a) == restored->locate(e, b));
+    REQUIRE(a.cell == b.cell);
+  }
+  auto array = [](std::vector<StructureArray>& arrays, const std::string& name) -> StructureArray& {
+    for (StructureArray& a : arrays)
+      if (a.name == name) return a;
+    FAIL("no array " << name);
+    return arrays[0];
+  };
+  SECTION("roots that the scenario's cells do not make") {
+    std::vector<StructureArray> bad = tree.structure();
+    array(bad, "roots").ints = {3, 1};
+    REQUIRE_THROWS_WITH(solved.grid->restored(save(bad).behaviors.at("hit").grid),
+                        Contains("hit.grid.roots.npy") && Contains("expected 3 root boxes on axis 1") &&
+                            Contains("found 1"));
+  }
+  SECTION("no roots array") {
+    std::vector<StructureArray> bad = tree.structure();
+    bad.erase(std::remove_if(bad.begin(), bad.end(), [](const StructureArray& a) { return a.name == "roots"; }),
+              bad.end());
+    REQUIRE_THROWS_WITH(solved.grid->restored(save(bad).behaviors.at("hit").grid), Contains("root boxes"));
+  }
+  SECTION("a root made a child") {
+    std::vector<StructureArray> bad = tree.structure();
+    StructureArray& axis = array(bad, "split_axis");
+    StructureArray& children = array(bad, "children");
+    std::size_t split = 0;
+    while (axis.ints[split] < 0) ++split;
+    children.ints[2 * split] = 1;  // root 1
+    REQUIRE_THROWS_WITH(solved.grid->restored(save(bad).behaviors.at("hit").grid),
+                        Contains("hit.grid.children.npy") && Contains("out of range"));
+  }
 }
 
 }  // namespace mgrl
