@@ -15,7 +15,7 @@
 // uniform grid's vertex counts); --variant replaces the adaptive configurations (extra
 // kd_tree keys; extra adaptive_value_iteration keys, YAML flow style). Unless its variant
 // sets *_cells, a tree starts from the uniform grid's cells scaled down until its vertices
-// are at most SHARE (0.85) of the budget (a forest of root boxes, kd_tree's any-count
+// are at most SHARE (0.75) of the budget (a forest of root boxes, kd_tree's any-count
 // cells); --pow2-start makes it the largest power-of-two cells within SHARE instead, the
 // start before kd_tree had roots.
 #include <chrono>
@@ -152,7 +152,7 @@ int main(int argc, char** argv) {
   int runs = 5;
   std::vector<Budget> budgets;
   std::vector<Variant> variants;
-  double startShare = 0.85;
+  double startShare = 0.75;
   bool pow2Start = false;
   bool quick = false, error = true, decision = true;
   std::array<int, 3> reference{40, 32, 12};
@@ -238,7 +238,8 @@ int main(int argc, char** argv) {
         budgets = quick ? std::vector<Budget>{{{8, 6, 5}}, {{10, 8, 6}}, {{20, 16, 6}}}
                         : std::vector<Budget>{{{6, 5, 4}}, {{8, 6, 5}}, {{10, 8, 6}}, {{14, 12, 6}}, {{20, 16, 6}}};
       if (variants.empty())
-        variants = {{"local both", "", "criterion: both"},
+        variants = {{"conforming value", "refinement: conforming", "criterion: value"},
+                    {"local both", "", "criterion: both"},
                     {"local influence_policy", "", "criterion: influence_policy"},
                     {"conforming both", "refinement: conforming", "criterion: both"},
                     {"conforming influence_policy", "refinement: conforming", "criterion: influence_policy"}};
@@ -264,7 +265,12 @@ int main(int argc, char** argv) {
                                     : pow2Start ? startCells(vertices, startShare)
                                                 : scaledStartCells(b.uniform, startShare);
           const std::string grid = "{" + kdBase + cells + (v.grid.empty() ? "" : ", " + v.grid) + "}";
-          row(solve(fmt::format("adaptive {} {}", vertices, v.name), model, *reward, grid,
+          // The start cells in the name ("8x6x4"), so that a row can be trained again by hand.
+          std::string shape;
+          for (const char* key : {"angle_cells: ", "distance_cells: ", "height_cells: "})
+            if (const std::size_t at = grid.find(key); at != std::string::npos)
+              shape += fmt::format("{}{}", shape.empty() ? "" : "x", std::atoi(grid.c_str() + at + std::strlen(key)));
+          row(solve(fmt::format("adaptive {} {} {}", vertices, v.name, shape), model, *reward, grid,
                     fmt::format("{{type: adaptive_value_iteration, max_vertices: {}{}}}", vertices,
                                 v.learner.empty() ? "" : ", " + v.learner),
                     threads));
@@ -306,14 +312,24 @@ int main(int argc, char** argv) {
                     [&](const mgrl::StateActionModel& m, mgrl::Controller& c) {
                       std::printf("  %-44s %8.3f us\n", "hit uniform 20x16x6 (1,920 vertices)", 1e6 * time(m, c));
                     });
-      for (const char* budget : {"480", "1920"})
+      // The trees of the error table's default start (the uniform grid's cells scaled to 75 %
+      // of the budget: forests of root boxes) and criterion.
+      struct Tree {
+        int budget, a, d, h;
+      };
+      for (const Tree& t : {Tree{480, 8, 6, 4}, Tree{1920, 17, 13, 4}})
         controllerFor({approach, "behaviors.hit.discretizer.type=kd_tree", "behaviors.hit.discretizer.bounds=hits",
                        "behaviors.hit.discretizer.split_axes=longest", "behaviors.hit.discretizer.refinement=conforming",
+                       fmt::format("behaviors.hit.discretizer.angle_cells={}", t.a),
+                       fmt::format("behaviors.hit.discretizer.distance_cells={}", t.d),
+                       fmt::format("behaviors.hit.discretizer.height_cells={}", t.h),
                        "behaviors.hit.learner.type=adaptive_value_iteration",
-                       std::string("behaviors.hit.learner.max_vertices=") + budget,
-                       "behaviors.hit.learner.criterion=both"},
+                       fmt::format("behaviors.hit.learner.max_vertices={}", t.budget),
+                       "behaviors.hit.learner.criterion=value"},
                       [&](const mgrl::StateActionModel& m, mgrl::Controller& c) {
-                        std::printf("  %-44s %8.3f us\n", fmt::format("hit kd_tree, {} vertices", budget).c_str(),
+                        std::printf("  %-44s %8.3f us\n",
+                                    fmt::format("hit kd_tree {}x{}x{} start, {} vertices", t.a, t.d, t.h, t.budget)
+                                        .c_str(),
                                     1e6 * time(m, c));
                       });
       fs::remove_all(scratch);

@@ -63,6 +63,26 @@ CONFIGS = {
     "adaptive 480 conforming both 8x8x4": adaptive(
         (8, 8, 4), "behaviors.hit.discretizer.split_axes=longest behaviors.hit.discretizer.refinement=conforming "
                    "behaviors.hit.learner.max_vertices=480 behaviors.hit.learner.criterion=both"),
+    # A forest start (kd_tree cells of any count): the uniform grid's cells scaled down to 75 %
+    # of the budget (mgrl_bench_adaptive's start since kd_tree has root boxes), refined by
+    # the value criterion. The cells are what the bench prints for each budget.
+    "uniform 6x5x4": uniform(6, 5, 4),
+    "uniform 8x6x5": uniform(8, 6, 5),
+    "adaptive 120 forest value 4x3x3": adaptive(
+        (4, 3, 3), "behaviors.hit.discretizer.split_axes=longest behaviors.hit.discretizer.refinement=conforming "
+                   "behaviors.hit.learner.max_vertices=120 behaviors.hit.learner.criterion=value"),
+    "adaptive 240 forest value 6x4x4": adaptive(
+        (6, 4, 4), "behaviors.hit.discretizer.split_axes=longest behaviors.hit.discretizer.refinement=conforming "
+                   "behaviors.hit.learner.max_vertices=240 behaviors.hit.learner.criterion=value"),
+    "adaptive 480 forest value 8x6x4": adaptive(
+        (8, 6, 4), "behaviors.hit.discretizer.split_axes=longest behaviors.hit.discretizer.refinement=conforming "
+                   "behaviors.hit.learner.max_vertices=480 behaviors.hit.learner.criterion=value"),
+    "adaptive 480 forest both 8x6x4": adaptive(
+        (8, 6, 4), "behaviors.hit.discretizer.split_axes=longest behaviors.hit.discretizer.refinement=conforming "
+                   "behaviors.hit.learner.max_vertices=480 behaviors.hit.learner.criterion=both"),
+    "adaptive 1920 forest value 17x13x4": adaptive(
+        (17, 13, 4), "behaviors.hit.discretizer.split_axes=longest behaviors.hit.discretizer.refinement=conforming "
+                     "behaviors.hit.learner.max_vertices=1920 behaviors.hit.learner.criterion=value"),
     "adaptive 480 conforming both": adaptive(
         (4, 4, 2), "behaviors.hit.discretizer.split_axes=longest behaviors.hit.discretizer.refinement=conforming "
                    "behaviors.hit.learner.max_vertices=480 behaviors.hit.learner.criterion=both"),
