@@ -72,13 +72,15 @@ class KdTree final : public Discretizer {
       add("distance", b.distance[0], b.distance[1], false, distanceCells, "distance_cells");
       if (dimension_ == 3) add("height", b.height[0], b.height[1], false, heightCells, "height_cells");
     }
-    // Issue 19: the size is checked before any node is made (the initial tree has at least
-    // as many vertices as cells).
-    const double initialCells = static_cast<double>(angleCells) * static_cast<double>(distanceCells) *
-                                (dimension_ == 3 ? static_cast<double>(heightCells) : 1.0);
-    if (dimension_ > 1 && initialCells > static_cast<double>(kMaxGridVertices))
-      p.fail("angle_cells", fmt::format("expected initial cells (angle x distance{}) of at most {}, found {}",
-                                        dimension_ == 3 ? " x height" : "", kMaxGridVertices, initialCells));
+    // Issue 19: the initial tree's vertices are checked before any node is made.
+    double initialVertices = 1;
+    for (int i = 0; i < dimension_; ++i)
+      initialVertices *= static_cast<double>(roots_[i] * cells[i]) + (wraps_[i] ? 0 : 1);
+    if (initialVertices > static_cast<double>(kMaxGridVertices))
+      p.fail(dimension_ == 1 ? "distance_cells" : "angle_cells",
+             fmt::format("expected initial cells ({}) with at most {} vertices, found {} vertices",
+                         dimension_ == 1 ? "distance" : dimension_ == 2 ? "angle x distance" : "angle x distance x height",
+                         kMaxGridVertices, initialVertices));
     rootCount_ = static_cast<std::size_t>(roots_[0] * roots_[1] * roots_[2]);
     // The split sequence: first the initial cells, round robin over the axes that still
     // need splits, then round robin over every axis.

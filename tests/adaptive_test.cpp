@@ -623,7 +623,9 @@ TEST_CASE("adaptive_value_iteration and kd_tree refuse bad parameters with one l
   REQUIRE_THROWS_WITH(makeGrid("{type: kd_tree, angle_cells: 0}", m), Contains("angle_cells"));
   // Issue 19: refused before a node is made (a billion roots).
   REQUIRE_THROWS_WITH(makeGrid("{type: kd_tree, angle_cells: 1023, distance_cells: 1023, height_cells: 1023}", m),
-                      Contains("angle_cells") && Contains("initial cells") && Contains("1070599167"));
+                      Contains("angle_cells") && Contains("initial cells") && Contains("1072693248 vertices"));  // 1023 x 1024 x 1024: the angle wraps
+  REQUIRE_THROWS_WITH(makeGrid("{type: kd_tree, angle_cells: 1000, distance_cells: 1000, height_cells: 20}", m),
+                      Contains("at most 20000000 vertices") && Contains("21021000 vertices"));
   REQUIRE_THROWS_WITH(makeGrid("{type: kd_tree, max_depth: 2}", m), Contains("max_depth"));
   REQUIRE_THROWS_WITH(makeGrid("{type: kd_tree, colour: red}", m), Contains("colour"));
   REQUIRE_THROWS_WITH(makeGrid("{type: kd_tree, split_axes: widest}", m),
