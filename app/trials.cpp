@@ -3,6 +3,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <tuple>
 
 #include <fmt/format.h>
 #include <fmt/ranges.h>
@@ -44,22 +45,18 @@ Trials::Trials(const StateActionModel& model, const std::vector<Behavior>& behav
   // Success: what the behaviours declare, else what the first contact reward implies, else
   // a punch (what trials counted before success criteria). Returns are discounted with the
   // first behaviour's gamma.
-  for (const Behavior& b : behaviors)
-    if (b.successDeclared && b.success) criteria_.push_back(*b.success);
-  criteriaFrom_ = "declared";
-  if (criteria_.empty()) {
-    criteriaFrom_ = "implied";
-    for (const Behavior& b : behaviors)
-      if (b.success) {
-        criteria_.push_back(*b.success);
-        break;
-      }
-  }
-  if (criteria_.empty()) {
-    criteriaFrom_ = "fallback";
-    criteria_.push_back(SuccessCriterion::punch(0.15));
-  }
+  std::tie(criteria_, criteriaFrom_) = trialCriteria(behaviors);
   gamma_ = behaviors.front().reward->gamma();
+}
+
+std::pair<std::vector<SuccessCriterion>, std::string> trialCriteria(const std::vector<Behavior>& behaviors) {
+  std::vector<SuccessCriterion> criteria;
+  for (const Behavior& b : behaviors)
+    if (b.successDeclared && b.success) criteria.push_back(*b.success);
+  if (!criteria.empty()) return {std::move(criteria), "declared"};
+  for (const Behavior& b : behaviors)
+    if (b.success) return {{*b.success}, "implied"};
+  return {{SuccessCriterion::punch(0.15)}, "fallback"};
 }
 
 // A target uniform by area in the approach region's square of side 2 reach, at the target

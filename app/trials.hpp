@@ -23,6 +23,12 @@
 
 namespace mgrl::app {
 
+/// The criteria a trial succeeds by (any of them): the behaviours' declared `success:`,
+/// else the first one a reward's contact term implies, else an effective punch within
+/// 0.15 m; and where they came from: "declared", "implied" or "fallback". The viewer
+/// counts its avatars' successes by the same criteria.
+std::pair<std::vector<SuccessCriterion>, std::string> trialCriteria(const std::vector<Behavior>& behaviors);
+
 struct TrialStats {
   std::size_t trials = 0, successes = 0, decisions = 0;
   std::vector<double> hitTimes;  ///< seconds to success, one per success

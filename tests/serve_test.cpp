@@ -167,13 +167,15 @@ struct BoxingAssets {
   test::TempDir temp{"serve"};
   std::shared_ptr<const serve::ViewerAssets> assets;
 
-  explicit BoxingAssets(bool withPolicy = true) {
+  explicit BoxingAssets(bool withPolicy = true, const std::string& scenario = "boxing.yaml",
+                        std::vector<std::string> sets = {"behaviors.approach.learner.type=value_iteration",
+                                                         "behaviors.hit.learner.type=value_iteration"}) {
     app::TrainOptions train;
-    train.scenario = fs::path(MGRL_SOURCE_DIR) / "scenarios" / "boxing.yaml";
+    train.scenario = fs::path(MGRL_SOURCE_DIR) / "scenarios" / scenario;
     train.dataDir = test::mocap();
     train.cacheDir = temp.path / "cache";
     train.out = temp.path / "policy";
-    train.sets = {"behaviors.approach.learner.type=value_iteration", "behaviors.hit.learner.type=value_iteration"};
+    train.sets = std::move(sets);
     if (withPolicy) app::runTrain(train);
     serve::ServeOptions options;
     static_cast<app::LearnOptions&>(options) = train;
@@ -257,6 +259,22 @@ TEST_CASE("a page's world: the boxer punches the target where it is dragged; wei
   CHECK(stats["hits"].get<int>() >= 1);
   CHECK(stats["frames_sent"] == 5);
   CHECK(stats["decision_us"].get<double>() > 0);
+  // Successes as eval counts them (hit's contact within 0.15 m, from the target each
+  // decision saw): the boxer that punched the dragged target has some, at most one a decision.
+  const int successes = stats["successes"].get<int>();
+  CHECK(successes >= 1);
+  CHECK(successes <= stats["decisions"].get<int>());
+  CHECK(stats["successes_per_minute"].get<double>() > 0);
+  // A target 50 m away cannot be struck: 5 s on, no more successes.
+  session.handle(json{{"type", "move_target"}, {"position", {root.x() + 50, 1.3, root.z()}}}.dump());
+  REQUIRE(textMessages(session).empty());
+  for (int f = 0; f < static_cast<int>(5 / session.frameTime()); ++f) session.advance(1.0);
+  textMessages(session);
+  stats = json::parse(session.stats(0, 0));
+  CHECK(stats["successes"].get<int>() == successes);
+  CHECK(stats["decisions"].get<int>() > 0);
+  session.handle(json{{"type", "move_target"}, {"position", {spot.x(), spot.y(), spot.z()}}}.dump());
+  REQUIRE(textMessages(session).empty());
 
   session.handle(R"({"type": "weights", "weights": {"hit": 0}})");
   out = textMessages(session);
@@ -297,6 +315,24 @@ TEST_CASE("a page's world: the boxer punches the target where it is dragged; wei
   session.handle(R"({"type": "step"})");
   CHECK(session.advance(1.0));
   CHECK(serve::decodeFrame(session.frame()).header.frame == frame + 1);
+}
+
+// Issue 17: the HUD counts success by the scenario's criterion, for behaviours that land no
+// punches too. out_boxing's keeper holds 1.2-1.6 m from the target, facing it, for 1 s.
+TEST_CASE("a page counts successes by the scenario's criterion: out_boxing's keeper keeps its distance",
+          "[serve][data]") {
+  const BoxingAssets outBoxing(true, "out_boxing.yaml", {});
+  serve::ViewerSession session(outBoxing.assets);
+  const std::vector<json> out = textMessages(session);
+  REQUIRE(out.size() == 1);
+  CHECK(out[0]["behaviors"][0]["success"].get<std::string>().find("pelvis within 0.2 m of 1.4 m") !=
+        std::string::npos);
+  for (int f = 0; f < static_cast<int>(20 / session.frameTime()); ++f) session.advance(1.0);
+  textMessages(session);
+  const json stats = json::parse(session.stats(0, 0));
+  INFO(stats.dump());
+  CHECK(stats["successes"].get<int>() >= 2);
+  CHECK(stats["successes"].get<int>() <= stats["decisions"].get<int>());
 }
 
 TEST_CASE("with no policy bundle, the page is told and the online search runs", "[serve][data]") {

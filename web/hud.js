@@ -66,6 +66,7 @@ export class Hud {
       ['hits', s.hits ?? '–'],
       ['hits per minute', fixed(s.hits_per_minute, 1)],
       ['success', successText(c.behaviors)],
+      ['successes', s.successes === undefined ? '–' : `${s.successes} (${fixed(s.successes_per_minute, 1)} /min)`],
       ['bytes per avatar-frame', s.bytes_per_avatar_frame ?? '–'],
     ];
     const table = $('hud-table');

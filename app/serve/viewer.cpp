@@ -8,6 +8,7 @@
 #include <thread>
 
 #include <fmt/format.h>
+#include <fmt/ranges.h>
 #include <nlohmann/json.hpp>
 
 #include "learn_common.hpp"
@@ -41,6 +42,10 @@ struct ViewerAssets {
   double meanOutDegree = 1;  ///< actions per state, for the online search's cost
   std::string note;          ///< shown on the page (no policy bundle, ...)
   ServeOptions options;      ///< what the server was started with (live retraining adds --set's)
+  /// What eval counts as success (app::trialCriteria), which the page counts live, and
+  /// its text ("contact of the fists within 0.15 m").
+  std::vector<SuccessCriterion> criteria;
+  std::string criteriaText;
 
   const StateActionModel& model() const { return loaded->graph.model; }
 };
@@ -131,6 +136,10 @@ std::shared_ptr<const ViewerAssets> loadViewerAssets(const ServeOptions& options
   for (const Behavior& b : assets->behaviors)
     assets->search.push_back({b.discretizer.get(), b.reward.get(), b.weight, b.activation});
   assets->gamma = assets->behaviors.front().reward->gamma();
+  assets->criteria = app::trialCriteria(assets->behaviors).first;
+  std::vector<std::string> texts;
+  for (const SuccessCriterion& c : assets->criteria) texts.push_back(c.describe());
+  assets->criteriaText = fmt::format("{}", fmt::join(texts, ", or "));
   assets->body = makeBodyTable(loaded.graph.db);
   const StateActionModel& model = loaded.graph.model;
   assets->meanOutDegree =
@@ -182,6 +191,14 @@ struct ViewerSession::State {
   DecisionClock decisions;
   std::size_t eventsSeen = 0;
   std::deque<double> hitTimes;  ///< simulated times of the hits of the last 30 s
+  // Successes as eval counts them (issue 17): each avatar's actions are followed by the
+  // scenario's criteria from the target it decided on, as one trial that restarts at
+  // each success. What the model says the action does, like eval's trials: the world's
+  // pushes and foot locks are not seen.
+  std::vector<std::vector<SuccessCriterion::Tracker>> trackers;  ///< per avatar, one per criterion
+  std::vector<std::size_t> decisionsFollowed;                   ///< per avatar
+  std::size_t successes = 0;
+  std::deque<double> successTimes;  ///< simulated times of the successes of the last 30 s
   FrameWriter writer;
   double busySeconds = 0;       ///< simulating and encoding, since the last stats
   std::size_t busyFrames = 0;
@@ -297,6 +314,12 @@ void ViewerSession::rebuild(Mode mode, int avatars) {
   s.carry = 0;
   s.eventsSeen = 0;
   s.hitTimes.clear();
+  s.trackers.assign(s.world->avatarCount(), {});
+  for (auto& list : s.trackers)
+    for (const SuccessCriterion& c : a.criteria) list.emplace_back(c, a.model().frameTime);
+  s.decisionsFollowed.assign(s.world->avatarCount(), 0);
+  s.successes = 0;
+  s.successTimes.clear();
   s.decisions = {};
   s.valuesFrame = 0;  // the new world counts frames from 0
   s.world->run(1);  // poses exist from the first frame on
@@ -737,6 +760,26 @@ void ViewerSession::collectRetraining() {
                         .dump());
 }
 
+void ViewerSession::followSuccess() {
+  State& s = *state_;
+  const World& world = *s.world;
+  const StateActionModel& model = assets_->model();
+  for (std::size_t i = 0; i < world.avatarCount(); ++i) {
+    const World::Decision d = world.lastDecision(i);
+    if (d.count == s.decisionsFollowed[i]) continue;
+    s.decisionsFollowed[i] = d.count;
+    std::uint32_t first = 0;  // the earliest offset any criterion is met at, as in eval's trials
+    for (SuccessCriterion::Tracker& tracker : s.trackers[i])
+      if (const std::uint32_t t = tracker.play(model, d.action, d.target); t > 0 && (first == 0 || t < first))
+        first = t;
+    if (first == 0) continue;
+    ++s.successes;
+    // The decision was made this frame: the success lands `first` frames on.
+    s.successTimes.push_back(world.time() + static_cast<double>(first - 1) * model.frameTime);
+    for (auto& tracker : s.trackers[i]) tracker = SuccessCriterion::Tracker(*tracker.criterion(), model.frameTime);
+  }
+}
+
 bool ViewerSession::advance(double frames) {
   State& s = *state_;
   advanceLesson(frames);
@@ -756,7 +799,10 @@ bool ViewerSession::advance(double frames) {
   }
   if (n == 0) return false;
   const auto start = Clock::now();
-  s.world->run(n);
+  for (std::size_t k = 0; k < n; ++k) {  // frame by frame, so that no decision goes unseen
+    s.world->run(1);
+    followSuccess();
+  }
   s.busySeconds += std::chrono::duration<double>(Clock::now() - start).count();
   s.busyFrames += n;
   const auto& events = s.world->events();
@@ -777,6 +823,7 @@ bool ViewerSession::advance(double frames) {
                           .dump());
   }
   while (!s.hitTimes.empty() && s.hitTimes.front() < s.world->time() - 30) s.hitTimes.pop_front();
+  while (!s.successTimes.empty() && s.successTimes.front() < s.world->time() - 30) s.successTimes.pop_front();
   // The teaching view follows avatar 0 five times a second of simulated time.
   if (s.shown >= 0 && s.world->frame() >= s.valuesFrame + 6) {
     outbox_.push_back(values());
@@ -875,6 +922,8 @@ std::string ViewerSession::stats(std::size_t framesSent, std::size_t framesDropp
             {"speed", s.speed},
             {"hits", world.events().size()},
             {"hits_per_minute", static_cast<double>(s.hitTimes.size()) / window * 60.0},
+            {"successes", s.successes},
+            {"successes_per_minute", static_cast<double>(s.successTimes.size()) / window * 60.0},
             {"decisions", world.decisions()},
             {"decision_us", s.decisions.count ? s.decisions.seconds / static_cast<double>(s.decisions.count) * 1e6 : 0.0},
             {"server_ms_per_frame", s.busyFrames ? s.busySeconds / static_cast<double>(s.busyFrames) * 1e3 : 0.0},

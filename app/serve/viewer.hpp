@@ -60,6 +60,9 @@ class ViewerSession {
   struct State;
   void rebuild(Mode mode, int avatars);
   void applyController();
+  /// After each frame: plays every decision the frame made through the avatar's success
+  /// trackers and counts the successes (the `stats` message's `successes`).
+  void followSuccess();
   std::string scene() const;
   /// The index of the behaviour called `name`, or -1; the names, comma-separated.
   int behaviorIndex(std::string_view name) const;

@@ -67,6 +67,7 @@ class SuccessCriterion {
     /// Plays action a from a decision with the target at e: the offset (1 = the action's
     /// first frame) at which the criterion is first met, 0 if it is not met in this action.
     std::uint32_t play(const StateActionModel& m, std::size_t a, const Eigen::Vector3d& e);
+    const SuccessCriterion* criterion() const { return criterion_; }
 
    private:
     const SuccessCriterion* criterion_;

@@ -61,6 +61,7 @@ struct World::Avatar {
   /// Last frame of a landed strike, per limb: left and right fist, left and right foot.
   std::array<std::size_t, 4> landedFrame{kNever, kNever, kNever, kNever};
   std::size_t decisions = 0;
+  Eigen::Vector3d decisionTarget = Eigen::Vector3d::Zero();  ///< e at the last decision
   // Reaction to the last hit taken: displacement `push` of `part`, starting at `reactionStart`.
   BodyPart part = BodyPart::Head;
   Eigen::Vector3d push = Eigen::Vector3d::Zero();
@@ -219,6 +220,7 @@ void World::decide(std::size_t i, Controller& controller) {
   a.hitCursor = model_.actionHitBegin[a.action];
   a.kickCursor = model_.actionKickBegin.empty() ? 0 : model_.actionKickBegin[a.action];
   ++a.decisions;
+  a.decisionTarget = e;
   if (a.playback) a.playback->begin(a.action);
 }
 
@@ -665,7 +667,7 @@ std::size_t World::avatarCount() const { return avatars_.size(); }
 GroundMotion World::avatarFrame(std::size_t i) const { return avatars_[i].now; }
 World::Decision World::lastDecision(std::size_t i) const {
   const Avatar& a = avatars_[i];
-  return {a.state, a.action, a.decision};
+  return {a.state, a.action, a.decision, a.decisionTarget, a.decisions};
 }
 int World::partner(std::size_t i) const { return avatars_[i].partner; }
 const Target& World::target(std::size_t i) const { return targets_[i]; }

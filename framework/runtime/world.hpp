@@ -163,6 +163,8 @@ class World {
   struct Decision {
     std::uint32_t state = 0, action = 0;
     GroundMotion frame;
+    Eigen::Vector3d target = Eigen::Vector3d::Zero();  ///< the aim point in that frame, as the controller saw it
+    std::size_t count = 0;                             ///< avatar i's decisions so far (this one included)
   };
   Decision lastDecision(std::size_t i) const;
   /// The point avatar i aims at now (its partner's head or its target's centre).

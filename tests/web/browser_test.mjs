@@ -361,6 +361,12 @@ async function teachViews(page) {
   const hudSuccess = await page.evaluate(() => [...document.querySelectorAll('#hud-table tr')]
     .map((tr) => [...tr.children].map((c) => c.textContent)).find(([name]) => name === 'success')?.[1] ?? '');
   check(hudSuccess === 'hit: an effective strike of the fists within 0.15 m', 'the HUD shows the success criterion', hudSuccess);
+  // And counts successes live, as eval counts them (stats.successes, twice a second).
+  const successesRow = () => [...document.querySelectorAll('#hud-table tr')]
+    .map((tr) => [...tr.children].map((c) => c.textContent)).find(([name]) => name === 'successes')?.[1] ?? '';
+  await waitInPage(page, `(${successesRow.toString()})() !== '–'`, undefined, 5000, 'a stats message in the HUD');
+  const hudSuccesses = await page.evaluate(successesRow);
+  check(/^\d+ \(\d+\.\d \/min\)$/.test(hudSuccesses), 'the HUD counts successes (count and rate per minute)', hudSuccesses);
 
   await page.click('#look-down');
   await showValues(page, 'hit', 'teach-values-hit.png');
