@@ -40,6 +40,12 @@ def adaptive(cells, extra):
            f"behaviors.hit.discretizer.height_cells={h} {AVI} {extra}"
 
 
+def forest(budget, cells, criterion):
+    """A conforming, longest-axis tree from `cells` (any counts: a forest of root boxes)."""
+    return adaptive(cells, "behaviors.hit.discretizer.split_axes=longest behaviors.hit.discretizer.refinement=conforming "
+                           f"behaviors.hit.learner.max_vertices={budget} behaviors.hit.learner.criterion={criterion}")
+
+
 # name -> --set flags (space separated). Equal table rows: 480 and 1,920 vertices.
 CONFIGS = {
     "uniform 10x8x6": uniform(10, 8, 6),
@@ -68,21 +74,11 @@ CONFIGS = {
     # the value criterion. The cells are what the bench prints for each budget.
     "uniform 6x5x4": uniform(6, 5, 4),
     "uniform 8x6x5": uniform(8, 6, 5),
-    "adaptive 120 forest value 4x3x3": adaptive(
-        (4, 3, 3), "behaviors.hit.discretizer.split_axes=longest behaviors.hit.discretizer.refinement=conforming "
-                   "behaviors.hit.learner.max_vertices=120 behaviors.hit.learner.criterion=value"),
-    "adaptive 240 forest value 6x4x4": adaptive(
-        (6, 4, 4), "behaviors.hit.discretizer.split_axes=longest behaviors.hit.discretizer.refinement=conforming "
-                   "behaviors.hit.learner.max_vertices=240 behaviors.hit.learner.criterion=value"),
-    "adaptive 480 forest value 8x6x4": adaptive(
-        (8, 6, 4), "behaviors.hit.discretizer.split_axes=longest behaviors.hit.discretizer.refinement=conforming "
-                   "behaviors.hit.learner.max_vertices=480 behaviors.hit.learner.criterion=value"),
-    "adaptive 480 forest both 8x6x4": adaptive(
-        (8, 6, 4), "behaviors.hit.discretizer.split_axes=longest behaviors.hit.discretizer.refinement=conforming "
-                   "behaviors.hit.learner.max_vertices=480 behaviors.hit.learner.criterion=both"),
-    "adaptive 1920 forest value 17x13x4": adaptive(
-        (17, 13, 4), "behaviors.hit.discretizer.split_axes=longest behaviors.hit.discretizer.refinement=conforming "
-                     "behaviors.hit.learner.max_vertices=1920 behaviors.hit.learner.criterion=value"),
+    "adaptive 120 forest value 4x3x3": forest(120, (4, 3, 3), "value"),
+    "adaptive 240 forest value 6x4x4": forest(240, (6, 4, 4), "value"),
+    "adaptive 480 forest value 8x6x4": forest(480, (8, 6, 4), "value"),
+    "adaptive 480 forest both 8x6x4": forest(480, (8, 6, 4), "both"),
+    "adaptive 1920 forest value 17x13x4": forest(1920, (17, 13, 4), "value"),
     "adaptive 480 conforming both": adaptive(
         (4, 4, 2), "behaviors.hit.discretizer.split_axes=longest behaviors.hit.discretizer.refinement=conforming "
                    "behaviors.hit.learner.max_vertices=480 behaviors.hit.learner.criterion=both"),

@@ -96,6 +96,30 @@ struct Solved {
   TrainResult result;
 };
 
+// The solved tree's table saved in a policy bundle as behaviour "hit" with the tree arrays
+// `structure` (maybe corrupted), and the bundle read back.
+PolicyBundle savedTree(const Solved& solved, const test::TempDir& dir, std::vector<StructureArray> structure) {
+  const Discretizer& tree = solved.tree();
+  PolicyBundle bundle;
+  bundle.graphKey = "k";
+  std::vector<double> vertices;
+  for (std::size_t v = 0; v < tree.vertexCount(); ++v) {
+    const Eigen::Vector3d p = tree.vertexPosition(v);
+    vertices.insert(vertices.end(), {p.x(), p.y(), p.z()});
+  }
+  bundle.behaviors["hit"] = PolicyBehavior{"key", nlohmann::json::object(), solved.result.table, vertices, "kd_tree",
+                                           std::move(structure), nullptr};
+  savePolicyBundle(dir.path / "policy", bundle);
+  return loadPolicyBundle(dir.path / "policy", solved.model, "k");
+}
+
+StructureArray& arrayNamed(std::vector<StructureArray>& arrays, const std::string& name) {
+  for (StructureArray& a : arrays)
+    if (a.name == name) return a;
+  FAIL("no array " << name);
+  return arrays[0];
+}
+
 // A leaf's box in grid coordinates, from its first and last corners.
 std::pair<std::array<double, 3>, std::array<double, 3>> leafBox(const Discretizer& grid, std::uint32_t leaf,
                                                                 const std::vector<std::array<double, 3>>& coords) {
@@ -556,16 +580,7 @@ TEST_CASE("a refined kd_tree round-trips through a policy bundle and a corrupt t
   const Discretizer& tree = solved.tree();
   test::TempDir dir("adaptive-bundle");
   auto save = [&](std::vector<StructureArray> structure) {
-    PolicyBundle bundle;
-    bundle.graphKey = "k";
-    std::vector<double> vertices;
-    for (std::size_t v = 0; v < tree.vertexCount(); ++v) {
-      const Eigen::Vector3d p = tree.vertexPosition(v);
-      vertices.insert(vertices.end(), {p.x(), p.y(), p.z()});
-    }
-    bundle.behaviors["hit"] = PolicyBehavior{"key", nlohmann::json::object(), solved.result.table, vertices, "kd_tree", std::move(structure), nullptr};
-    savePolicyBundle(dir.path / "policy", bundle);
-    return loadPolicyBundle(dir.path / "policy", solved.model, "k");
+    return savedTree(solved, dir, std::move(structure));
   };
   const PolicyBundle loaded = save(tree.structure());
   const PolicyBehavior& hit = loaded.behaviors.at("hit");
@@ -584,15 +599,9 @@ TEST_CASE("a refined kd_tree round-trips through a policy bundle and a corrupt t
     REQUIRE(a.cell == b.cell);
   }
 
-  auto array = [](std::vector<StructureArray>& arrays, const std::string& name) -> StructureArray& {
-    for (StructureArray& a : arrays)
-      if (a.name == name) return a;
-    FAIL("no array " << name);
-    return arrays[0];
-  };
   SECTION("a cycle") {
     std::vector<StructureArray> bad = tree.structure();
-    StructureArray& children = array(bad, "children");
+    StructureArray& children = arrayNamed(bad, "children");
     // The root's high child (node 2) takes the low child's subtree (node 1) as its own.
     REQUIRE(children.ints[0] == 1);
     REQUIRE(children.ints[1] == 2);
@@ -603,7 +612,7 @@ TEST_CASE("a refined kd_tree round-trips through a policy bundle and a corrupt t
   }
   SECTION("an out-of-range child") {
     std::vector<StructureArray> bad = tree.structure();
-    array(bad, "children").ints[0] = 100000;
+    arrayNamed(bad, "children").ints[0] = 100000;
     const PolicyBundle corrupt = save(bad);
     REQUIRE_THROWS_WITH(solved.grid->restored(corrupt.behaviors.at("hit").grid),
                         Contains("hit.grid.children.npy") && Contains("out of range"));
@@ -708,16 +717,7 @@ TEST_CASE("a refined forest kd_tree round-trips through a policy bundle; bad roo
   REQUIRE(tree.cellCount() > 72);
   test::TempDir dir("adaptive-forest-bundle");
   auto save = [&](std::vector<StructureArray> structure) {
-    PolicyBundle bundle;
-    bundle.graphKey = "k";
-    std::vector<double> vertices;
-    for (std::size_t v = 0; v < tree.vertexCount(); ++v) {
-      const Eigen::Vector3d p = tree.vertexPosition(v);
-      vertices.insert(vertices.end(), {p.x(), p.y(), p.z()});
-    }
-    bundle.behaviors["hit"] = PolicyBehavior{"key", nlohmann::json::object(), solved.result.table, vertices, "kd_tree", std::move(structure), nullptr};
-    savePolicyBundle(dir.path / "policy", bundle);
-    return loadPolicyBundle(dir.path / "policy", solved.model, "k");
+    return savedTree(solved, dir, std::move(structure));
   };
   const PolicyBundle loaded = save(tree.structure());
   const auto restored = solved.grid->restored(loaded.behaviors.at("hit").grid);
@@ -732,15 +732,9 @@ TEST_CASE("a refined forest kd_tree round-trips through a policy bundle; bad roo
     REQUIRE(tree.locate(e, a) == restored->locate(e, b));
     REQUIRE(a.cell == b.cell);
   }
-  auto array = [](std::vector<StructureArray>& arrays, const std::string& name) -> StructureArray& {
-    for (StructureArray& a : arrays)
-      if (a.name == name) return a;
-    FAIL("no array " << name);
-    return arrays[0];
-  };
   SECTION("roots that the scenario's cells do not make") {
     std::vector<StructureArray> bad = tree.structure();
-    array(bad, "roots").ints = {3, 1};
+    arrayNamed(bad, "roots").ints = {3, 1};
     REQUIRE_THROWS_WITH(solved.grid->restored(save(bad).behaviors.at("hit").grid),
                         Contains("hit.grid.roots.npy") && Contains("expected 3 root boxes on axis 1") &&
                             Contains("found 1"));
@@ -753,8 +747,8 @@ TEST_CASE("a refined forest kd_tree round-trips through a policy bundle; bad roo
   }
   SECTION("a root made a child") {
     std::vector<StructureArray> bad = tree.structure();
-    StructureArray& axis = array(bad, "split_axis");
-    StructureArray& children = array(bad, "children");
+    StructureArray& axis = arrayNamed(bad, "split_axis");
+    StructureArray& children = arrayNamed(bad, "children");
     std::size_t split = 0;
     while (axis.ints[split] < 0) ++split;
     children.ints[2 * split] = 1;  // root 1
