@@ -2,8 +2,10 @@
 # Installs what mgrl needs to build and test, from Debian 12 packages, if missing, and the
 # viewer's three.js (web/, from npm, exactly as web/package-lock.json says).
 #   scripts/setup.sh          what building, the demo and `mgrl serve` need
-#   scripts/setup.sh --test   also Chromium, for the browser test (tests/web/), and clang
-#                             with its runtime libraries, for the fuzz smoke (libFuzzer)
+#   scripts/setup.sh --test   also Chromium, for the browser test (tests/web/), clang
+#                             with its runtime libraries, for the fuzz smoke (libFuzzer),
+#                             and NumPy, for the test that rebuilds a kd_tree from its
+#                             arrays with scripts/tree_value.py
 set -euo pipefail
 root="$(cd "$(dirname "$0")/.." && pwd)"
 
@@ -13,7 +15,7 @@ command -v node >/dev/null 2>&1 || packages+=(nodejs)
 command -v npm >/dev/null 2>&1 || packages+=(npm)
 # libclang-rt-dev holds libFuzzer and clang's sanitizer runtimes; clang only recommends
 # it, and recommends are not installed below.
-[ "${1:-}" = "--test" ] && packages+=(chromium clang libclang-rt-dev)
+[ "${1:-}" = "--test" ] && packages+=(chromium clang libclang-rt-dev python3-numpy)
 
 missing=()
 for p in "${packages[@]}"; do

@@ -4,6 +4,9 @@
 #include <catch2/catch.hpp>
 
 #include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <sstream>
 #include <random>
 
 #include <fmt/format.h>
@@ -755,6 +758,69 @@ TEST_CASE("a refined forest kd_tree round-trips through a policy bundle; bad roo
     REQUIRE_THROWS_WITH(solved.grid->restored(save(bad).behaviors.at("hit").grid),
                         Contains("hit.grid.children.npy") && Contains("out of range"));
   }
+}
+
+}  // namespace mgrl
+
+namespace mgrl {
+
+// Issue 16: "the policy bundle stores the tree as .npy arrays ... so that NumPy can rebuild
+// it". scripts/tree_value.py does, from the arrays alone; here it must find the leaf and the
+// value mgrl finds, at points all over a refined forest (hanging vertices included).
+TEST_CASE("NumPy rebuilds a saved kd_tree forest: scripts/tree_value.py finds mgrl's leaves and values",
+          "[kd_tree][python]") {
+  // `wait` steps 0.1 m forward: the value spreads ahead of the fist, and the two actions'
+  // values differ there.
+  const Solved solved("{type: kd_tree, coordinates: polar, height: 1, angle_cells: 6, distance_cells: 12}",
+                      "{type: adaptive_value_iteration, max_vertices: 200}", 2, 0.1);
+  const Discretizer& tree = solved.tree();
+  REQUIRE(!tree.hanging().empty());
+  test::TempDir dir("tree-value");
+  savedTree(solved, dir, tree.structure());
+  std::mt19937 rng(12);
+  std::uniform_real_distribution<double> u(-2.2, 2.2);
+  std::vector<Eigen::Vector3d> points;
+  std::string args;
+  for (int t = 0; t < 300; ++t) {
+    points.emplace_back(u(rng), 1, u(rng));
+    args += fmt::format(" {:.17g} {:.17g} {:.17g}", points.back().x(), points.back().y(), points.back().z());
+  }
+  // Debian's python3 is where python3-numpy is (scripts/setup.sh --test installs it).
+  const std::string python = std::filesystem::exists("/usr/bin/python3") ? "/usr/bin/python3" : "python3";
+  const std::string command = fmt::format("{} {}/scripts/tree_value.py {} hit{} 2>&1", python, MGRL_SOURCE_DIR,
+                                          (dir.path / "policy").string(), args);
+  FILE* pipe = ::popen(command.c_str(), "r");
+  REQUIRE(pipe);
+  std::string output;
+  char buffer[4096];
+  while (const std::size_t n = std::fread(buffer, 1, sizeof buffer, pipe)) output.append(buffer, n);
+  const int status = ::pclose(pipe);
+  INFO(command.substr(0, 200) << "...\n" << output.substr(0, 2000));
+  REQUIRE(status == 0);
+  std::istringstream lines(output);
+  std::size_t inside = 0, valued = 0;
+  for (const Eigen::Vector3d& e : points) {
+    std::string line;
+    REQUIRE(std::getline(lines, line));
+    CAPTURE(e.transpose(), line);
+    GridCell cell;
+    if (!tree.locate(e, cell)) {
+      REQUIRE(line == "outside");
+      continue;
+    }
+    ++inside;
+    std::istringstream fields(line);
+    std::uint32_t leaf = 0;
+    double value = 0;
+    REQUIRE(fields >> leaf >> value);
+    CHECK(leaf == cell.cell);
+    CHECK(value == Approx(solved.value(e)).margin(1e-5));
+    valued += solved.value(e) > 0.05;
+  }
+  CHECK(inside > 150);
+  CHECK(valued > 30);
+  std::string extra;
+  CHECK(!std::getline(lines, extra));
 }
 
 }  // namespace mgrl
