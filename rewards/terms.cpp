@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cmath>
 #include <numbers>
+#include <optional>
 #include <vector>
 
 #include <fmt/format.h>
@@ -19,6 +20,7 @@ namespace {
 using nlohmann::json;
 
 constexpr double kDegree = std::numbers::pi / 180;
+const BodyPoint kPelvis = BodyPoint::pelvis();
 
 ParamSpec weightSpec() {
   return ParamSpec::number("weight", 1, 0, 1000, "", "w_k: the term's share of the frame's signal");
@@ -50,6 +52,11 @@ std::vector<json> readTerms(const ConfigNode& block) {
     const TermKind* kind = findKind(name);
     if (!kind) termNode.fail(fmt::format("unknown term {} (known: {})", quoteToken(name), fmt::join(names, ", ")));
     const Params params = Params::read(element, kind->params, {"term"});
+    if (name == "effort" && params.given("point") && params.choice("point") == "centroid")
+      params.fail("point", "expected pelvis (root speed), body (every joint's mean speed), a role or a joint, found "
+                           "centroid (the centroid is carried along rigidly; its speed is the root's)");
+    if (name == "distance" && params.choice("point") == "body")
+      params.fail("point", "expected centroid, pelvis, a role or a joint, found body (body is for effort only)");
     if (name == "distance" && params.choice("point") == "pelvis" && params.integer("dims") == 3)
       params.fail("dims", "expected 2 with point: pelvis (a ground point has no height), found 3");
     json term = params.toJson();
@@ -63,6 +70,7 @@ class Terms final : public Reward {
  public:
   Terms(const Params& p, const std::vector<json>& terms)
       : gamma_(p.number("gamma")), sum_(p.choice("combine") == "sum") {
+    if (p.block()) block_ = *p.block();
     for (const json& t : terms) {
       Term term;
       const std::string name = t["term"];
@@ -89,12 +97,22 @@ class Terms final : public Reward {
       } else {
         term.kind = Kind::Effort;
         term.scale = t["speed_mps"];
+        term.point = parseBodyPoint(t["point"].get<std::string>());
       }
       terms_.push_back(term);
     }
   }
   std::string type() const override { return "terms"; }
   double gamma() const override { return gamma_; }
+
+  void bind(const StateActionModel& m) override {
+    for (std::size_t i = 0; i < terms_.size(); ++i) {
+      std::string why;
+      if (bindBodyPoint(m, terms_[i].point, &why)) continue;
+      if (!block_) throw Error(fmt::format("reward term {}: point: {}", i, why));
+      block_->child("terms").elements()[i].child("point").fail(why);
+    }
+  }
 
   double evaluate(const StateActionModel& m, std::size_t a, const Eigen::Vector3d& e) const override {
     const std::size_t begin = m.actionFrameBegin[a], frames = m.actionLength(a);
@@ -117,12 +135,13 @@ class Terms final : public Reward {
             s = strikeAt(m, a, static_cast<std::uint32_t>(t), term.effectors, term.scale, term.useSpeed, e);
             break;
           case Kind::Travel: {
-            const double progress = term.sign * (start - bodyDistance(m, frame, BodyPoint::Pelvis, 2, e));
+            const double progress = term.sign * (start - bodyDistance(m, frame, kPelvis, 2, e));
             s = std::clamp(progress / term.scale, 0.0, 1.0);
             break;
           }
           case Kind::Effort:
-            s = std::exp(-rootSpeed(m, a, t) / term.scale);
+            s = std::exp(-(term.point.kind == BodyPoint::Kind::Pelvis ? rootSpeed(m, a, t) : bodySpeed(m, frame, term.point)) /
+                         term.scale);
             break;
         }
         signal += term.weight * s;
@@ -137,7 +156,7 @@ class Terms final : public Reward {
   struct Term {
     Kind kind = Kind::Distance;
     double weight = 1, target = 0, scale = 1;
-    BodyPoint point = BodyPoint::Centroid;
+    BodyPoint point;
     int dims = 2, sign = 1;
     std::uint8_t effectors = kFists;
     bool useSpeed = true;
@@ -145,6 +164,7 @@ class Terms final : public Reward {
   double gamma_;
   bool sum_;
   std::vector<Term> terms_;
+  std::optional<ConfigNode> block_;  ///< the reward's YAML block, for bind()'s messages
 };
 
 }  // namespace
@@ -152,10 +172,11 @@ class Terms final : public Reward {
 const std::vector<TermKind>& termKinds() {
   static const std::vector<TermKind> kinds = {
       {"distance", "exp(-|d - d0| / sigma), d the distance from a body point to the target",
-       {ParamSpec::choice("point", "centroid", {"centroid", "pelvis"},
-                          "centroid: the effective hitting points' centroid (the paper's); pelvis: the ground point "
-                          "below the root"),
-        ParamSpec::integer("dims", 2, 2, 3, "", "2: distance on the ground; 3: in space (centroid only)"),
+       {ParamSpec::choiceOrName("point", "centroid", {"centroid", "pelvis"}, "a skeleton role or joint",
+                                "centroid: the effective hitting points' centroid (the paper's); pelvis: the ground "
+                                "point below the root; a role (left_fist, right_toe, head, ...) or a joint's name "
+                                "(LeftHand): that joint"),
+        ParamSpec::integer("dims", 2, 2, 3, "", "2: distance on the ground; 3: in space (not with pelvis)"),
         ParamSpec::number("d0", 0, 0, 100, "m", "preferred distance"),
         ParamSpec::number("sigma", 0.1, 1e-4, 100, "m", "distance scale of the exponential"), weightSpec()}},
       {"facing", "exp(-|angle - angle0| / sigma), angle between the avatar's facing and the target's direction",
@@ -169,8 +190,12 @@ const std::vector<TermKind>& termKinds() {
       {"travel", "clamp(progress / scale_m, 0, 1): ground progress toward (or away from) the target since the decision",
        {ParamSpec::choice("direction", "toward", {"toward", "away"}, "which way counts as progress"),
         ParamSpec::number("scale_m", 1, 1e-3, 100, "m", "progress that earns the full signal"), weightSpec()}},
-      {"effort", "exp(-v / speed_mps), v the avatar's ground speed: economy, standing still earns 1",
-       {ParamSpec::number("speed_mps", 1, 1e-3, 100, "m/s", "speed scale of the exponential"), weightSpec()}},
+      {"effort", "exp(-v / speed_mps), v the avatar's ground speed or a joint's speed: economy, standing still earns 1",
+       {ParamSpec::number("speed_mps", 1, 1e-3, 100, "m/s", "speed scale of the exponential"),
+        ParamSpec::choiceOrName("point", "pelvis", {"pelvis", "body"}, "a skeleton role or joint",
+                                "pelvis: the root's ground speed; body: the mean speed of every joint in the "
+                                "capture; a role or a joint's name: that joint's speed"),
+        weightSpec()}},
   };
   return kinds;
 }

@@ -14,11 +14,13 @@
 #include "mgrl/scenario/behaviors.hpp"
 #include "mgrl/scenario/scenario.hpp"
 #include "mgrl/graph/state_action_model.hpp"
+#include "mgrl/motion/roles.hpp"
 #include "test_support.hpp"
 
 using namespace mgrl;
 using Catch::Contains;
 using Catch::Equals;
+using Catch::StartsWith;
 
 // Both halves of the config error contract: the type and the whole message.
 #define REQUIRE_CONFIG_ERROR(expr, message)              \
@@ -119,6 +121,14 @@ StateActionModel tinyModel(std::size_t hitCount = 3) {
   m.centroid[1] = 1.3;
   m.centroid[2] = 0.5;
   m.maxHitSpeed_mps = 6;
+  // Two joints: the hips (the pelvis role, 1 m up) and a left hand 0.5 m ahead of them,
+  // moving at 2 m/s; every other role is the hand too.
+  m.jointNames = {"Hips", "LeftHand"};
+  for (const std::string& role : roleNames()) m.roleJoint.push_back(role == "pelvis" ? 0 : 1);
+  for (std::uint32_t f = 0; f < m.framesTotal; ++f) {
+    m.sourceJoint.insert(m.sourceJoint.end(), {0.0f, 1.0f, 0.0f, 0.1f, 1.3f, 0.5f});
+    m.sourceJointSpeed.insert(m.sourceJointSpeed.end(), {0.0f, 2.0f});
+  }
   checkModel(m, "tinyModel");
   return m;
 }
@@ -618,4 +628,67 @@ TEST_CASE("mgrl list names every plugin and parameter with its default and unit"
   checkJson(plugins.rewards, "rewards");
   checkJson(plugins.environments, "environments");
   checkJson(plugins.learners, "learners");
+}
+
+// Body points (scenarios/README.md): a distance or effort term, or a success condition, may
+// name a skeleton role or a joint; the model built from the capture records the joints, and
+// one it lacks is refused where it is written, with the roles and joints there are.
+TEST_CASE("a body point names a skeleton role or joint; one the skeleton lacks lists those it has",
+          "[behaviors][terms]") {
+  auto keeper = [](const std::string& terms, const std::string& success = "") {
+    return "  keep:\n"                                  // 6
+           "    discretizer: {type: polar2d}\n"          // 7
+           "    reward:\n"                               // 8
+           "      type: terms\n"                         // 9
+           "      terms:\n"                              // 10
+           "        - " + terms + "\n" +                 // 11
+           "    learner: {type: value_iteration}\n" +    // 12
+           (success.empty() ? "" : "    success: " + success + "\n");  // 13
+  };
+  auto reward = [&](const std::string& terms, std::size_t a, const Eigen::Vector3d& e) {
+    return build(keeper(terms)).front().reward->evaluate(model(), a, e);
+  };
+  const Eigen::Vector3d e(0.3, 0.9, 1.5);
+  SECTION("a role and the joint it names give the same reward; the pelvis role is the pelvis's ground point") {
+    const double byRole = reward("{term: distance, point: left_fist, d0: 0.5, dims: 3}", 0, e);
+    CHECK(byRole > 0);
+    CHECK(byRole == reward("{term: distance, point: LeftHand, d0: 0.5, dims: 3}", 0, e));
+    CHECK(byRole != reward("{term: distance, point: centroid, d0: 0.5, dims: 3}", 0, e));
+    for (std::size_t a = 0; a < model().actionCount(); ++a)
+      CHECK(reward("{term: distance, point: Hips, d0: 1}", a, e) ==
+            Approx(reward("{term: distance, point: pelvis, d0: 1}", a, e)).epsilon(1e-6));
+  }
+  SECTION("the hand's distance follows the avatar: 0.5 m ahead of the pelvis at every frame") {
+    // Action 1 moves 0.6 m straight ahead in 6 frames; gamma 1 and combine max give the
+    // best frame's signal: the hand reaches a target 1.1 m ahead (0.5 + 0.6) at the last.
+    const Eigen::Vector3d ahead(0.1, 1.3, 1.1);
+    CHECK(build(keeper("{term: distance, point: LeftHand, dims: 3, sigma: 0.01}"), {"behaviors.keep.reward.gamma=1"})
+              .front()
+              .reward->evaluate(model(), 1, ahead) == Approx(1.0));
+  }
+  SECTION("effort measures a joint's speed in the capture, or the whole body's") {
+    CHECK(reward("{term: effort, point: LeftHand, speed_mps: 1}", 0, e) == Approx(0.97 * std::exp(-2.0)));
+    CHECK(reward("{term: effort, point: body, speed_mps: 1}", 0, e) == Approx(0.97 * std::exp(-1.0)));
+    CHECK(reward("{term: effort, point: Hips, speed_mps: 1}", 0, e) == Approx(0.97));
+  }
+  SECTION("a joint the skeleton lacks") {
+    const std::string lacks =
+        "behaviors.keep.reward.terms[0].point: expected centroid, pelvis, a role (left_fist, right_fist, left_wrist, "
+        "right_wrist, left_forearm, right_forearm, left_shoulder, right_shoulder, left_ankle, right_ankle, "
+        "left_toe, right_toe, head) or a joint of this skeleton (Hips, LeftHand), found 'LeftHnd'";
+    REQUIRE_CONFIG_ERROR(build(keeper("{term: distance, point: LeftHnd, d0: 0.5}")), at(11, 35, lacks));
+    REQUIRE_CONFIG_ERROR(build(keeper("{term: effort, point: LeftHnd}")), at(11, 33, lacks));
+    CHECK_THROWS_WITH(build(keeper("{term: distance, point: pelvis}", "{term: distance, point: Head, within: 0.1}")),
+                      StartsWith(at(13, 38, "behaviors.keep.success.point: point: expected centroid, pelvis, a role (")) &&
+                          Contains("found 'Head'"));
+  }
+  SECTION("names that are not body points of the term") {
+    CHECK_THROWS_WITH(build(keeper("{term: distance, point: body}")),
+                      Contains("terms[0].point: expected centroid, pelvis, a role or a joint, found body"));
+    CHECK_THROWS_WITH(build(keeper("{term: effort, point: centroid}")),
+                      Contains("terms[0].point: expected pelvis (root speed), body"));
+    CHECK_THROWS_WITH(build(keeper("{term: distance, point: 'Left Hand'}")),
+                      Contains("terms[0].point: expected one of: centroid, pelvis, or a skeleton role or joint (up to "
+                               "200 printable characters, no spaces), found 'Left Hand'"));
+  }
 }

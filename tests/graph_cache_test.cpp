@@ -24,6 +24,7 @@
 #include "mgrl/graph/graph_cache.hpp"
 #include "mgrl/core/hash.hpp"
 #include "mgrl/motion/motion_io.hpp"
+#include "mgrl/motion/roles.hpp"
 #include "mgrl/scenario/scenario.hpp"
 #include "mgrl/core/npy.hpp"
 #include "test_support.hpp"
@@ -76,6 +77,13 @@ StateActionModel tinyModel() {
   m.kicks = {{2, 2, 1, 0.3f, 0.9f, 0.8f, 1.0f}};
   m.actionKickBegin = {0, 0, 0, 1, 1};
   m.maxKickSpeed_mps = 9.5;
+  // Two joints; every role is one of them.
+  m.jointNames = {"Hips", "LeftHand"};
+  for (std::size_t r = 0; r < mgrl::roleNames().size(); ++r) m.roleJoint.push_back(r % 2 == 0 ? 1 : 0);
+  for (std::uint32_t i = 0; i < 2 * m.framesTotal; ++i) {
+    m.sourceJoint.insert(m.sourceJoint.end(), {0.01f * static_cast<float>(i), 1.0f, 0.25f});
+    m.sourceJointSpeed.push_back(0.5f * static_cast<float>(i % 3));
+  }
   return m;
 }
 
@@ -103,6 +111,10 @@ void requireSameModel(const StateActionModel& a, const StateActionModel& b) {
   CHECK(a.actionHitBegin == b.actionHitBegin);
   CHECK(a.actionKickBegin == b.actionKickBegin);
   CHECK(a.maxKickSpeed_mps == b.maxKickSpeed_mps);
+  CHECK(a.jointNames == b.jointNames);
+  CHECK(a.roleJoint == b.roleJoint);
+  CHECK(a.sourceJoint == b.sourceJoint);
+  CHECK(a.sourceJointSpeed == b.sourceJointSpeed);
   REQUIRE(a.kicks.size() == b.kicks.size());
   for (std::size_t k = 0; k < a.kicks.size(); ++k) {
     CAPTURE(k);
@@ -308,6 +320,24 @@ TEST_CASE("checkModel names the array and index that break an invariant", "[grap
     m.frameEntersTransition[3] = 2;
     message = "tiny: frameEntersTransition[3]: expected 0 or 1, found 2";
   }
+  SECTION("joint positions not sized by the joints") {
+    m.sourceJoint.pop_back();
+    message = "tiny: sourceJoint: expected 120 entries (3 per source frame and joint), found 119";
+  }
+  SECTION("a role's joint out of range") {
+    m.roleJoint[3] = 2;
+    message = "tiny: roleJoint[3]: expected a joint in [-1, 2), found 2";
+  }
+  SECTION("roles without joints") {
+    m.jointNames.clear();
+    m.sourceJoint.clear();
+    m.sourceJointSpeed.clear();
+    message = "tiny: roleJoint[0]: expected a joint in [-1, 0), found 1";
+  }
+  SECTION("a negative joint speed") {
+    m.sourceJointSpeed[5] = -1;
+    message = "tiny: sourceJointSpeed[5]: expected a finite speed of at least 0, found -1";
+  }
   SECTION("an empty model") {
     m = StateActionModel{};
     m.frameTime = 0.01;
@@ -337,14 +367,16 @@ TEST_CASE("a graph bundle round-trips every field of the model", "[graph_cache]"
   REQUIRE(manifest["version"] == mgrl::kGraphFormatVersion);
   REQUIRE(manifest["provenance"] == provenance("k1"));
   REQUIRE(manifest["scalars"]["frames_total"] == 20);
-  REQUIRE(manifest["arrays"].size() == 20);
+  REQUIRE(manifest["arrays"].size() == 23);
+  REQUIRE(manifest["scalars"]["joint_names"] == json::array({"Hips", "LeftHand"}));
+  REQUIRE(manifest["arrays"]["source_joint"]["shape"] == json::array({40, 3}));
   REQUIRE(manifest["arrays"]["hits_index"]["shape"] == json::array({4, 3}));
   REQUIRE(manifest["arrays"]["hits_value"]["dtype"] == "<f4");
   REQUIRE(manifest["arrays"]["frame_root"]["shape"] == json::array({18, 3}));
   REQUIRE(manifest["arrays"]["frame_enters_transition"]["dtype"] == "|u1");
 
   // One .npy per array plus the manifest, each a plain NumPy file.
-  REQUIRE(namesIn(bundle).size() == 21);
+  REQUIRE(namesIn(bundle).size() == 24);
   std::vector<std::size_t> shape;
   const auto frames = mgrl::npyDecode<std::uint32_t>(mgrl::readFile(bundle / "action_frames.npy"), "f", &shape);
   REQUIRE(frames == model.actionFrames);
@@ -371,7 +403,7 @@ TEST_CASE("saving the same model twice writes byte-identical files", "[graph_cac
   const auto first = filesIn(tmp.path / "a");
   mgrl::saveGraphBundle(tmp.path / "a", tinyModel(), provenance("k1"));
   mgrl::saveGraphBundle(tmp.path / "b", tinyModel(), provenance("k1"));
-  REQUIRE(first.size() == 21);
+  REQUIRE(first.size() == 24);
   REQUIRE(filesIn(tmp.path / "a") == first);
   REQUIRE(filesIn(tmp.path / "b") == first);
 }
@@ -623,6 +655,14 @@ TEST_CASE("a bundle whose manifest lacks or mistypes a member is damaged", "[gra
   SECTION("a shape that disagrees with the file") {
     manifest["arrays"]["frame_root"]["shape"] = json::array({54});
     reason = "frame_root.npy: expected shape (54,) as in manifest.json, found (18, 3)";
+  }
+  SECTION("joint names that are not strings") {
+    manifest["scalars"]["joint_names"] = json::array({"Hips", 3});
+    reason = "scalars.joint_names: expected an array of at most 1000 joint names";
+  }
+  SECTION("a joint name too many for the joint arrays") {
+    manifest["scalars"]["joint_names"].push_back("RightHand");
+    reason = "sourceJoint: expected 180 entries (3 per source frame and joint), found 120";
   }
   SECTION("a frame time of 0") {
     manifest["scalars"]["frame_time"] = 0.0;

@@ -954,7 +954,7 @@ TEST_CASE("success criteria take what they leave out from the reward and hold fo
   SECTION("a distance held for 0.1 s (3 frames)") {
     const SuccessCriterion c = SuccessCriterion::read(yaml("{term: distance, within: 0.1, hold_s: 0.1}"), keep);
     REQUIRE(c.conditions().size() == 1);
-    CHECK(c.conditions()[0].point == BodyPoint::Pelvis);
+    CHECK(c.conditions()[0].point == BodyPoint::pelvis());
     CHECK(c.conditions()[0].d0 == 1.0);
     SuccessCriterion::Tracker near(c, m.frameTime), far(c, m.frameTime);
     CHECK(near.play(m, 1, {0, 0, 1.05}) == 3);

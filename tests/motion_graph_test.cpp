@@ -15,6 +15,8 @@
 #include "mgrl/motion/kinematics.hpp"
 #include "mgrl/graph/motion_graph.hpp"
 #include "mgrl/graph/playback.hpp"
+#include "mgrl/learning/signals.hpp"
+#include "mgrl/motion/roles.hpp"
 #include "mgrl/scenario/scenario.hpp"
 #include "test_support.hpp"
 
@@ -184,6 +186,51 @@ TEST_CASE("hits inside actions are the data's effective hits carried into the de
   CHECK(m.centroid[2] > 0.2);
   CHECK(m.centroid[1] > 0.8);
   CHECK(m.centroid[1] < 1.8);
+}
+
+TEST_CASE("joints at action frames are the capture's joints carried into the decision frame", "[graph][data]") {
+  const Boxing& b = boxing();
+  const StateActionModel& m = b.model;
+  const Skeleton& skeleton = *b.db.skeleton;
+  REQUIRE(m.jointNames.size() == skeleton.jointCount());
+  for (std::size_t j = 0; j < skeleton.jointCount(); ++j) CHECK(m.jointNames[j] == skeleton.joints()[j].name);
+  const std::vector<int> roles = roleJointIndices(b.db.roles);
+  REQUIRE(m.roleJoint == std::vector<std::int32_t>(roles.begin(), roles.end()));
+  const int pelvis = b.db.roles.pelvis, head = b.db.roles.head;
+  const int leftFist = b.db.roles.fist[0], rightFist = b.db.roles.fist[1];
+  double headHeight = 0;
+  std::size_t sampled = 0;
+  for (std::size_t i = 0; i < m.actionFrames.size(); i += 7, ++sampled) {
+    CAPTURE(i);
+    // The pelvis stands on the avatar frame's origin: its ground point is frameRoot's.
+    const Eigen::Vector3d p = jointAt(m, i, pelvis);
+    CHECK(p.x() == Approx(m.frameRoot[3 * i]).margin(1e-4));
+    CHECK(p.z() == Approx(m.frameRoot[3 * i + 1]).margin(1e-4));
+    headHeight += jointAt(m, i, head).y();
+    // A rigid move: the fists are as far apart as in the capture at the frame played.
+    const std::uint32_t v = m.actionFrames[i];
+    const Clip& clip = b.db.clipAt(v);
+    std::vector<Eigen::Quaterniond> rotations(skeleton.jointCount());
+    std::vector<Eigen::Vector3d> positions(skeleton.jointCount());
+    forwardKinematics(clip.motion, b.db.localFrame(v), rotations, positions);
+    CHECK((jointAt(m, i, leftFist) - jointAt(m, i, rightFist)).norm() ==
+          Approx((positions[leftFist] - positions[rightFist]).norm()).margin(1e-4));
+    CHECK(jointAt(m, i, head).y() == Approx(positions[head].y() - clip.annotation.groundY).margin(1e-4));
+  }
+  // A standing boxer's head is at head height.
+  CHECK(headHeight / static_cast<double>(sampled) > 1.3);
+  CHECK(headHeight / static_cast<double>(sampled) < 1.9);
+  // At an effective punch the fist joint is near the fist tip and moving fast.
+  std::size_t hits = 0;
+  for (std::size_t a = 0; a < m.actionCount(); ++a)
+    for (const ActionHit& h : m.hitsOf(a)) {
+      const std::size_t i = m.actionFrameBegin[a] + h.offset - 1;
+      const int fist = h.hand == 0 ? leftFist : rightFist;
+      CHECK((jointAt(m, i, fist) - Eigen::Vector3d(h.x, h.y, h.z)).norm() < 0.15);
+      CHECK(m.sourceJointSpeed[m.actionFrames[i] * m.jointNames.size() + fist] > 1.0);
+      ++hits;
+    }
+  CHECK(hits > 50);
 }
 
 TEST_CASE("the fast distance kernel agrees with the exact geodesic distance", "[graph][data]") {

@@ -1,5 +1,6 @@
 #include "mgrl/core/params.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <stdexcept>
 
@@ -40,6 +41,14 @@ ParamSpec ParamSpec::choice(std::string name, std::string fallback, std::vector<
   return p;
 }
 
+ParamSpec ParamSpec::choiceOrName(std::string name, std::string fallback, std::vector<std::string> choices,
+                                  std::string openText, std::string help) {
+  ParamSpec p = choice(std::move(name), std::move(fallback), std::move(choices), std::move(help));
+  p.open = true;
+  p.openText = std::move(openText);
+  return p;
+}
+
 ParamSpec ParamSpec::boolean(std::string name, bool fallback, std::string help) {
   ParamSpec p;
   p.name = std::move(name);
@@ -66,7 +75,9 @@ std::string ParamSpec::rangeText() const {
     case Kind::Integer:
       return fmt::format("whole number in [{}, {}]{}", static_cast<long long>(min), static_cast<long long>(max),
                          suffix);
-    case Kind::Choice: return fmt::format("one of: {}", fmt::join(choices, ", "));
+    case Kind::Choice:
+      return open ? fmt::format("one of: {}, or {}", fmt::join(choices, ", "), openText)
+                  : fmt::format("one of: {}", fmt::join(choices, ", "));
     case Kind::Boolean: return "true or false";
   }
   return {};
@@ -111,7 +122,12 @@ Params Params::read(const ConfigNode& node, const ParamSpecs& specs, const std::
       case ParamSpec::Kind::Boolean: e.value = value.asBool(); break;
       case ParamSpec::Kind::Choice: {
         const std::string text = value.asString();
-        if (std::find(e.spec.choices.begin(), e.spec.choices.end(), text) == e.spec.choices.end())
+        const bool printable = !text.empty() && text.size() <= 200 &&
+                               std::all_of(text.begin(), text.end(), [](char c) { return static_cast<unsigned char>(c) > ' ' && c != 0x7f; });
+        if (e.spec.open && !printable)
+          value.fail(fmt::format("expected one of: {}, or {} (up to 200 printable characters, no spaces), found {}",
+                                 fmt::join(e.spec.choices, ", "), e.spec.openText, quoteToken(text)));
+        if (!e.spec.open && std::find(e.spec.choices.begin(), e.spec.choices.end(), text) == e.spec.choices.end())
           value.fail(fmt::format("expected one of: {}, found {}", fmt::join(e.spec.choices, ", "), quoteToken(text)));
         e.value = text;
         break;

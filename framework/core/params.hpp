@@ -24,6 +24,10 @@ struct ParamSpec {
   double min = 0, max = 0;         ///< Number, Integer: inclusive range
   std::string defaultChoice;       ///< Choice
   std::vector<std::string> choices;  ///< Choice: the allowed values
+  /// Choice: besides `choices`, any other name is allowed (`openText` says what kind, e.g.
+  /// "a skeleton role or joint"), for the plugin to check where it knows more.
+  bool open = false;
+  std::string openText;
   std::string unit;                ///< "m", "s", "deg", "actions", ... ("" for plain numbers)
   std::string help;
 
@@ -34,6 +38,9 @@ struct ParamSpec {
   static ParamSpec choice(std::string name, std::string fallback, std::vector<std::string> choices,
                           std::string help);
   static ParamSpec boolean(std::string name, bool fallback, std::string help);
+  /// A choice that also takes any other name of up to 200 printable characters (`open`).
+  static ParamSpec choiceOrName(std::string name, std::string fallback, std::vector<std::string> choices,
+                                std::string openText, std::string help);
 
   /// "0.1", "50000000", "full", "true".
   std::string defaultText() const;

@@ -42,6 +42,9 @@ void forEachArray(Model& m, Visitor&& visit) {
   visit("frame_enters_transition", m.frameEntersTransition, 1);
   visit("action_hit_begin", m.actionHitBegin, 1);
   visit("action_kick_begin", m.actionKickBegin, 1);
+  visit("role_joint", m.roleJoint, 1);
+  visit("source_joint", m.sourceJoint, 3);
+  visit("source_joint_speed", m.sourceJointSpeed, 1);
 }
 
 constexpr std::size_t kHitIndexColumns = 3;  // action, offset, hand
@@ -295,7 +298,8 @@ void saveGraphBundle(const std::filesystem::path& dirArgument, const StateAction
         {"frames_total", m.framesTotal},
         {"centroid", {m.centroid[0], m.centroid[1], m.centroid[2]}},
         {"max_hit_speed_mps", m.maxHitSpeed_mps},
-        {"max_kick_speed_mps", m.maxKickSpeed_mps}}},
+        {"max_kick_speed_mps", m.maxKickSpeed_mps},
+        {"joint_names", m.jointNames}}},
       {"arrays", std::move(arrays)},
   };
   if (!motion.is_null()) manifest["motion"] = std::move(motion);
@@ -366,7 +370,8 @@ GraphBundleLoad loadGraphBundle(const std::filesystem::path& dirArgument, std::s
     StateActionModel& m = result.model;
     const json& scalars =
         reader.object(manifest, "", "scalars",
-                      {"frame_time", "frames_total", "centroid", "max_hit_speed_mps", "max_kick_speed_mps"});
+                      {"frame_time", "frames_total", "centroid", "max_hit_speed_mps", "max_kick_speed_mps",
+                       "joint_names"});
     m.frameTime = reader.number(scalars, "scalars", "frame_time");
     m.framesTotal = static_cast<std::uint32_t>(
         reader.unsignedInteger(scalars, "scalars", "frames_total", std::numeric_limits<std::uint32_t>::max()));
@@ -377,6 +382,12 @@ GraphBundleLoad loadGraphBundle(const std::filesystem::path& dirArgument, std::s
     for (int i = 0; i < 3; ++i) m.centroid[i] = centroid[i].get<double>();
     m.maxHitSpeed_mps = reader.number(scalars, "scalars", "max_hit_speed_mps");
     m.maxKickSpeed_mps = reader.number(scalars, "scalars", "max_kick_speed_mps");
+    const json& jointNames = reader.member(scalars, "scalars", "joint_names");
+    if (!jointNames.is_array() || jointNames.size() > kMaxBundledJoints ||
+        !std::all_of(jointNames.begin(), jointNames.end(), [](const json& v) { return v.is_string(); }))
+      reader.fail("scalars.joint_names", fmt::format("an array of at most {} joint names", kMaxBundledJoints),
+                  jointNames);
+    for (const json& name : jointNames) m.jointNames.push_back(name.get<std::string>());
 
     const json& arrays = reader.object(manifest, "", "arrays", {});
     std::set<std::string, std::less<>> known;

@@ -27,6 +27,10 @@
 /// added the effective kicks: kicks_index (K, 3) (action, offset, foot), kicks_value (K, 4),
 /// action_kick_begin and the scalar max_kick_speed_mps.
 ///
+/// Version 5 added the skeleton's joints for body points (StateActionModel::jointNames):
+/// the scalar joint_names (J strings), role_joint (R,) int32, source_joint (F * J, 3)
+/// float32 and source_joint_speed (F * J,) float32.
+///
 /// Version 4 may keep the capture the graph was built from, resampled and in metres, so
 /// that posing avatars from a cached graph (simulate, the viewer, `mgrl graph`) does not
 /// parse it again (issue 20, command start): a top-level "motion" member
@@ -57,7 +61,7 @@ namespace mgrl {
 
 /// The manifest's "format" and "version"; a bundle with others is Stale.
 inline constexpr std::string_view kGraphFormatName = "mgrl.graph";
-inline constexpr int kGraphFormatVersion = 4;
+inline constexpr int kGraphFormatVersion = 5;
 
 /// Limits on a bundle's "motion" member, checked before anything is allocated for it.
 inline constexpr std::size_t kMaxBundledClips = 100'000;

@@ -6,12 +6,42 @@
 
 #include <fmt/format.h>
 
+#include "mgrl/motion/kinematics.hpp"
+
 namespace mgrl {
 
 const AvatarFrame& avatarFrameAt(const MotionDatabase& db, std::uint32_t frame) {
   const std::size_t c = db.clipOf(frame);
   return db.clips[c].annotation.frames[frame - db.offsets[c]];
 }
+
+namespace {
+
+// The skeleton's joints at every source frame (StateActionModel::sourceJoint): positions in
+// the frame's own avatar frame, speeds in the capture.
+void addSourceJoints(const MotionDatabase& db, StateActionModel& m) {
+  const Skeleton& skeleton = *db.skeleton;
+  const std::size_t joints = skeleton.jointCount();
+  for (const Joint& joint : skeleton.joints()) m.jointNames.push_back(joint.name);
+  for (int j : roleJointIndices(db.roles)) m.roleJoint.push_back(j);
+  m.sourceJoint.reserve(3 * std::size_t{m.framesTotal} * joints);
+  m.sourceJointSpeed.reserve(std::size_t{m.framesTotal} * joints);
+  for (const Clip& clip : db.clips) {
+    const std::vector<Eigen::Vector3d> positions = jointPositions(clip.motion);
+    const std::vector<Eigen::Vector3d> speeds = velocities(positions, joints, clip.motion.frameTime());
+    for (std::size_t f = 0; f < clip.motion.frameCount(); ++f) {
+      const AvatarFrame& frame = clip.annotation.frames[f];
+      for (std::size_t j = 0; j < joints; ++j) {
+        const Eigen::Vector3d p = frame.toAvatar(positions[f * joints + j]);
+        m.sourceJoint.insert(m.sourceJoint.end(),
+                             {static_cast<float>(p.x()), static_cast<float>(p.y()), static_cast<float>(p.z())});
+        m.sourceJointSpeed.push_back(static_cast<float>(speeds[f * joints + j].norm()));
+      }
+    }
+  }
+}
+
+}  // namespace
 
 GroundMotion relativeMotion(const AvatarFrame& from, const AvatarFrame& to) {
   const Eigen::Vector3d d = from.toAvatar(to.origin);
@@ -253,6 +283,7 @@ StateActionModel buildStateActionModel(const MotionDatabase& db, const GraphPara
     }
     m.stateActionBegin.push_back(static_cast<std::uint32_t>(m.actionFrom.size()));
   }
+  addSourceJoints(db, m);
   if (report) *report = local;
   return m;
 }

@@ -9,6 +9,7 @@
 #include <fmt/format.h>
 
 #include "mgrl/core/error.hpp"
+#include "mgrl/motion/roles.hpp"
 
 namespace mgrl {
 namespace {
@@ -144,6 +145,24 @@ void checkModel(const StateActionModel& m, std::string_view source) {
   requireFinite(source, "actionDisplacement", m.actionDisplacement);
   requireFinite(source, "frameRoot", m.frameRoot);
   requireFinite(source, "frameCentroid", m.frameCentroid);
+
+  // The skeleton's joints: none at all, or every array sized by them.
+  const std::size_t joints = m.jointNames.size();
+  requireSize(source, "sourceJoint", m.sourceJoint.size(), 3 * std::size_t{m.framesTotal} * joints,
+              "3 per source frame and joint");
+  requireSize(source, "sourceJointSpeed", m.sourceJointSpeed.size(), std::size_t{m.framesTotal} * joints,
+              "one per source frame and joint");
+  if (joints > 0 || !m.roleJoint.empty())
+    requireSize(source, "roleJoint", m.roleJoint.size(), roleNames().size(), "one per role");
+  for (std::size_t r = 0; r < m.roleJoint.size(); ++r)
+    if (m.roleJoint[r] < -1 || m.roleJoint[r] >= static_cast<std::int64_t>(joints))
+      fail(source, fmt::format("roleJoint[{}]", r), fmt::format("a joint in [-1, {})", joints),
+           fmt::format("{}", m.roleJoint[r]));
+  requireFinite(source, "sourceJoint", m.sourceJoint);
+  for (std::size_t i = 0; i < m.sourceJointSpeed.size(); ++i)
+    if (!(m.sourceJointSpeed[i] >= 0) || !std::isfinite(m.sourceJointSpeed[i]))
+      fail(source, fmt::format("sourceJointSpeed[{}]", i), "a finite speed of at least 0",
+           fmt::format("{}", m.sourceJointSpeed[i]));
   for (std::size_t i = 0; i < frames; ++i)
     if (m.frameEntersTransition[i] > 1)
       fail(source, fmt::format("frameEntersTransition[{}]", i), "0 or 1",

@@ -82,6 +82,17 @@ struct StateActionModel {
   /// The fastest effective kick's toe speed (m/s, 0 if there is none).
   double maxKickSpeed_mps = 0;
 
+  /// The skeleton's joints, for reward terms and success criteria that measure a joint
+  /// (scenarios/README.md, body points): their names (J of them; none in models made by
+  /// hand), each role's joint in roleNames() order (-1 if the role has none; empty when J
+  /// is 0), and per source frame f and joint j, at [f * J + j]: the joint's position in
+  /// that frame's own avatar frame (3 floats, m; carried to a decision's frame by
+  /// frameRoot) and its speed in the capture (m/s, central differences within its clip).
+  std::vector<std::string> jointNames;
+  std::vector<std::int32_t> roleJoint;
+  std::vector<float> sourceJoint;       ///< 3 per (source frame, joint)
+  std::vector<float> sourceJointSpeed;  ///< 1 per (source frame, joint)
+
   std::size_t stateCount() const { return stateFrame.size(); }
   std::size_t actionCount() const { return actionFrom.size(); }
   std::size_t actionLength(std::size_t a) const { return actionFrameBegin[a + 1] - actionFrameBegin[a]; }
@@ -106,7 +117,8 @@ struct StateActionModel {
 /// actions are grouped by the state they leave and end on their end state's frame;
 /// componentFrames and stateFrame strictly ascend; transitions are sorted pairs; hits
 /// belong to their action, sorted by (offset, hand), 1 <= offset <= action length, hand 0
-/// or 1, weight in (0, 1]; frameTime > 0; every floating-point value finite.
+/// or 1, weight in (0, 1]; frameTime > 0; every floating-point value finite; the joint
+/// arrays sized by framesTotal and jointNames, role joints in [-1, J), speeds at least 0.
 /// Throws mgrl::Error with a message starting with `source` and naming the field and index,
 /// e.g. `graph: actionFrames[7]: expected a frame below framesTotal 40, found 40`.
 void checkModel(const StateActionModel& m, std::string_view source);

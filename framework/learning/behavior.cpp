@@ -45,6 +45,7 @@ Behavior buildBehavior(const BehaviorSpec& spec, const Plugins& plugins, const S
   b.activation = spec.activation;
   b.discretizer = plugins.discretizers.create(spec.discretizer, model);
   b.reward = plugins.rewards.create(spec.reward);
+  b.reward->bind(model);
   if (spec.environment.isNull()) {
     const auto* entry = plugins.environments.find("static_target");
     if (!entry) throw Error("no environment model 'static_target' registered");
@@ -57,6 +58,7 @@ Behavior buildBehavior(const BehaviorSpec& spec, const Plugins& plugins, const S
   b.successDeclared = !spec.success.isNull();
   b.success = b.successDeclared ? SuccessCriterion::read(spec.success, b.config["reward"])
                                 : SuccessCriterion::implied(b.config["reward"]);
+  if (b.success) b.success->bind(model);
   return b;
 }
 

@@ -23,6 +23,10 @@ class Reward {
   virtual double gamma() const = 0;
   /// r(e, a) >= 0.
   virtual double evaluate(const StateActionModel& model, std::size_t action, const Eigen::Vector3d& e) const = 0;
+  /// Prepares the reward for `model` before any evaluate() with it: finds the joints its
+  /// terms name (scenarios/README.md, body points). Throws ConfigError at the term's key
+  /// (mgrl::Error without a YAML block) naming the roles and joints the skeleton has.
+  virtual void bind(const StateActionModel&) {}
 };
 
 using RewardRegistry = Registry<Reward>;

@@ -8,16 +8,43 @@
 #include <fmt/ranges.h>
 
 #include "mgrl/core/error.hpp"
+#include "mgrl/motion/roles.hpp"
 
 namespace mgrl {
 
 BodyPoint parseBodyPoint(std::string_view name) {
-  if (name == "centroid") return BodyPoint::Centroid;
-  if (name == "pelvis") return BodyPoint::Pelvis;
-  throw Error(fmt::format("expected a body point (centroid, pelvis), found {}", quoteToken(name)));
+  if (name == "centroid") return BodyPoint::centroid();
+  if (name == "pelvis") return BodyPoint::pelvis();
+  if (name == "body") return {BodyPoint::Kind::Body, "body", -1};
+  if (name.empty()) throw Error("expected a body point (centroid, pelvis, a role or a joint), found an empty name");
+  return {BodyPoint::Kind::Joint, std::string(name), -1};
 }
 
-std::string_view bodyPointName(BodyPoint point) { return point == BodyPoint::Centroid ? "centroid" : "pelvis"; }
+std::string_view bodyPointName(const BodyPoint& point) { return point.name; }
+
+bool bindBodyPoint(const StateActionModel& m, BodyPoint& point, std::string* why) {
+  if (point.kind != BodyPoint::Kind::Joint) return true;
+  const std::vector<std::string> roles = roleNames();
+  point.joint = -1;
+  for (std::size_t r = 0; r < roles.size() && r < m.roleJoint.size(); ++r)
+    if (roles[r] == point.name) point.joint = m.roleJoint[r];
+  for (std::size_t j = 0; point.joint < 0 && j < m.jointNames.size(); ++j)
+    if (m.jointNames[j] == point.name) point.joint = static_cast<int>(j);
+  if (point.joint >= 0) return true;
+  if (why) {
+    if (m.jointNames.empty())
+      *why = fmt::format("no joint {}: this model records no skeleton joints", quoteToken(point.name));
+    else {
+      // "pelvis" is the ground point; its joint goes by its own name.
+      std::vector<std::string> named;
+      for (const std::string& r : roles)
+        if (r != "pelvis") named.push_back(r);
+      *why = fmt::format("expected centroid, pelvis, a role ({}) or a joint of this skeleton ({}), found {}",
+                         fmt::join(named, ", "), fmt::join(m.jointNames, ", "), quoteToken(point.name));
+    }
+  }
+  return false;
+}
 
 std::uint8_t parseEffector(std::string_view name) {
   static constexpr std::uint8_t kBits[] = {kFists, kLeftFist, kRightFist, kFeet, kLeftFoot, kRightFoot, kAnyLimb};
@@ -26,14 +53,39 @@ std::uint8_t parseEffector(std::string_view name) {
   throw Error(fmt::format("expected an effector ({}), found {}", fmt::join(kEffectorNames, ", "), quoteToken(name)));
 }
 
-double bodyDistance(const StateActionModel& m, std::size_t frame, BodyPoint point, int dims, const Eigen::Vector3d& e) {
-  if (point == BodyPoint::Pelvis) {
+double bodyDistance(const StateActionModel& m, std::size_t frame, const BodyPoint& point, int dims,
+                    const Eigen::Vector3d& e) {
+  if (point.kind == BodyPoint::Kind::Pelvis) {
     const double* r = &m.frameRoot[3 * frame];
     return std::hypot(r[0] - e.x(), r[1] - e.z());
   }
-  const float* p = &m.frameCentroid[3 * frame];
+  Eigen::Vector3d p;
+  if (point.kind == BodyPoint::Kind::Joint) {
+    p = jointAt(m, frame, point.joint);
+  } else {
+    const float* c = &m.frameCentroid[3 * frame];
+    p = {c[0], c[1], c[2]};
+  }
   if (dims == 3) return std::sqrt(std::pow(p[0] - e.x(), 2) + std::pow(p[1] - e.y(), 2) + std::pow(p[2] - e.z(), 2));
   return std::hypot(p[0] - e.x(), p[2] - e.z());
+}
+
+Eigen::Vector3d jointAt(const StateActionModel& m, std::size_t frame, int joint) {
+  // The joint in its own frame's avatar frame, carried to the decision's as frameCentroid is.
+  const std::size_t joints = m.jointNames.size();
+  const float* q = &m.sourceJoint[3 * (m.actionFrames[frame] * joints + static_cast<std::size_t>(joint))];
+  const double* r = &m.frameRoot[3 * frame];
+  const double c = std::cos(r[2]), s = std::sin(r[2]);
+  return {r[0] + c * q[0] + s * q[2], q[1], r[1] - s * q[0] + c * q[2]};
+}
+
+double bodySpeed(const StateActionModel& m, std::size_t frame, const BodyPoint& point) {
+  const std::size_t joints = m.jointNames.size();
+  const float* v = &m.sourceJointSpeed[m.actionFrames[frame] * joints];
+  if (point.kind == BodyPoint::Kind::Joint) return v[point.joint];
+  double sum = 0;
+  for (std::size_t j = 0; j < joints; ++j) sum += v[j];
+  return joints > 0 ? sum / static_cast<double>(joints) : 0;
 }
 
 double facingError(const StateActionModel& m, std::size_t frame, const Eigen::Vector3d& e) {

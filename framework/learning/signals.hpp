@@ -17,13 +17,31 @@
 
 namespace mgrl {
 
-/// A point of the body a distance is measured from.
-enum class BodyPoint {
-  Centroid,  ///< the effective hitting points' centroid carried along (the paper's p(t), sec. 6.4)
-  Pelvis,    ///< the ground point below the root (the avatar frame's origin)
+/// A point of the body a distance (or, for effort, a speed) is measured at: the
+/// effective hitting points' centroid, the pelvis's ground point, or a joint of the
+/// skeleton named by a role (left_fist, head, ...: roleNames()) or by its own name.
+struct BodyPoint {
+  enum class Kind {
+    Centroid,  ///< the effective hitting points' centroid carried along (the paper's p(t), sec. 6.4)
+    Pelvis,    ///< the ground point below the root (the avatar frame's origin)
+    Joint,     ///< a joint, `joint` in StateActionModel::jointNames once bound
+    Body,      ///< every joint (effort only: their mean speed)
+  };
+  Kind kind = Kind::Centroid;
+  std::string name = "centroid";  ///< as written: "centroid", "pelvis", "body", a role or a joint
+  int joint = -1;                 ///< Joint: its index, after bindBodyPoint(); -1 before
+
+  static BodyPoint centroid() { return {}; }
+  static BodyPoint pelvis() { return {Kind::Pelvis, "pelvis", -1}; }
+  bool operator==(const BodyPoint&) const = default;
 };
-BodyPoint parseBodyPoint(std::string_view name);  ///< "centroid", "pelvis"; mgrl::Error otherwise
-std::string_view bodyPointName(BodyPoint point);
+/// "centroid", "pelvis", "body"; any other name is a joint, found later by bindBodyPoint().
+BodyPoint parseBodyPoint(std::string_view name);
+std::string_view bodyPointName(const BodyPoint& point);
+
+/// Finds a Joint point's joint in `m` (a role first, then a joint's own name). Returns
+/// false if the model has no such joint; `why` then says which roles and joints it has.
+bool bindBodyPoint(const StateActionModel& m, BodyPoint& point, std::string* why);
 
 /// Which limbs' effective strikes count: a bit set of the four effectors.
 enum Effector : std::uint8_t {
@@ -40,9 +58,18 @@ std::uint8_t parseEffector(std::string_view name);
 inline constexpr const char* kEffectorNames[] = {"fists", "left_fist", "right_fist", "feet",
                                                  "left_foot", "right_foot", "any"};
 
-/// The ground (dims 2) or 3-D (dims 3, centroid only) distance from the body point to the
-/// target at action frame `frame` (a global action-frame index).
-double bodyDistance(const StateActionModel& m, std::size_t frame, BodyPoint point, int dims, const Eigen::Vector3d& e);
+/// The ground (dims 2) or 3-D (dims 3; not the pelvis's ground point) distance from the
+/// body point to the target at action frame `frame` (a global action-frame index). A
+/// joint point must be bound (bindBodyPoint) to `m`.
+double bodyDistance(const StateActionModel& m, std::size_t frame, const BodyPoint& point, int dims,
+                    const Eigen::Vector3d& e);
+
+/// A joint's position at action frame `frame`, in the decision's avatar frame (m).
+Eigen::Vector3d jointAt(const StateActionModel& m, std::size_t frame, int joint);
+
+/// The speed (m/s) of a bound joint point at action frame `frame` in the capture it plays,
+/// or for Body the mean speed of every joint.
+double bodySpeed(const StateActionModel& m, std::size_t frame, const BodyPoint& point);
 
 /// The unsigned angle (radians, [0, pi]) between the avatar's facing at `frame` and the
 /// ground direction from it to the target; 0 when the target is straight ahead.

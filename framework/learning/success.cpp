@@ -59,8 +59,11 @@ SuccessCondition readCondition(const ConfigNode& node, const json& reward, bool 
                               : from.is_null()  ? std::string("centroid")
                                                 : from.value("point", std::string("centroid"));
     c.point = node.withLocation([&] { return parseBodyPoint(point); });
+    if (c.point.kind == BodyPoint::Kind::Body)
+      (node.has("point") ? node.child("point") : node).fail("point: expected centroid, pelvis, a role or a joint, found body");
+    c.pointNode = node.has("point") ? node.child("point") : node;
     c.dims = static_cast<int>(node.integer("dims", from.is_null() ? 2 : from.value("dims", 2), 2, 3));
-    if (c.dims == 3 && c.point == BodyPoint::Pelvis)
+    if (c.dims == 3 && c.point.kind == BodyPoint::Kind::Pelvis)
       node.fail("dims: expected 2 with point: pelvis (a ground point has no height), found 3");
     c.d0 = node.number("d0", from.is_null() ? 0.0 : from.value("d0", 0.0), 0, 100);
     c.within = node.number("within", 0.2, 0, 100);
@@ -136,6 +139,15 @@ SuccessCriterion SuccessCriterion::punch(double radius) {
   c.radius = radius;
   result.conditions_.push_back(c);
   return result;
+}
+
+void SuccessCriterion::bind(const StateActionModel& m) {
+  for (SuccessCondition& c : conditions_) {
+    std::string why;
+    if (c.kind != SuccessCondition::Kind::Distance || bindBodyPoint(m, c.point, &why)) continue;
+    if (c.pointNode) c.pointNode->fail(fmt::format("point: {}", why));
+    throw Error(fmt::format("success: point: {}", why));
+  }
 }
 
 bool SuccessCriterion::holdsAt(const StateActionModel& m, std::size_t a, std::uint32_t t,

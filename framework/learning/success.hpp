@@ -32,7 +32,9 @@ struct SuccessCondition {
   Kind kind = Kind::Contact;
   std::uint8_t effectors = kFists;  ///< contact
   double radius = 0.15;             ///< contact (m)
-  BodyPoint point = BodyPoint::Centroid;  ///< distance
+  BodyPoint point;                        ///< distance
+  /// Where the point was written (distance), for bind()'s message; none if implied.
+  std::optional<ConfigNode> pointNode;
   int dims = 2;                           ///< distance
   double d0 = 0, within = 0.2;            ///< distance: |d - d0| <= within (m)
   double angle = 0, withinAngle = 0.5235987755982988;  ///< facing: |error - angle| <= withinAngle (rad)
@@ -50,6 +52,10 @@ class SuccessCriterion {
   /// An effective punch of either fist within `radius` (what every trial counted before
   /// success criteria existed; the fallback for scenarios that declare none).
   static SuccessCriterion punch(double radius);
+
+  /// Finds the joints the conditions name in `m` (see Reward::bind); throws ConfigError at
+  /// the point's key, or mgrl::Error, naming the roles and joints the skeleton has.
+  void bind(const StateActionModel& m);
 
   const std::vector<SuccessCondition>& conditions() const { return conditions_; }
   double holdSeconds() const { return hold_s_; }

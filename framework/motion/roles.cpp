@@ -138,6 +138,16 @@ std::vector<std::string> roleNames() {
   return names;
 }
 
+std::vector<int> roleJointIndices(const SkeletonRoles& roles) {
+  // The order of roleSpecs(): fist, wrist, forearm, shoulder, ankle, toe, head, pelvis.
+  std::vector<int> joints;
+  for (const std::array<int, 2>* sided : {&roles.fist, &roles.wrist, &roles.forearm, &roles.shoulder, &roles.ankle, &roles.toe})
+    joints.insert(joints.end(), sided->begin(), sided->end());
+  joints.push_back(roles.head);
+  joints.push_back(roles.pelvis);
+  return joints;
+}
+
 SkeletonRoles findRoles(const Skeleton& skeleton, const RoleOverrides& overrides, std::string_view source,
                         const WarningSink& warn) {
   const auto known = roleNames();

@@ -52,6 +52,9 @@ struct SkeletonRoles {
   double restHeight = 0;
 };
 
+/// Each role's joint index in roleNames() order (left before right for sided roles).
+std::vector<int> roleJointIndices(const SkeletonRoles& roles);
+
 /// Finds every role. A skeleton without a fist joint (no finger or fist names) gets its
 /// wrist as the fist, the wrist's end site as the fist tip, and one warning to `warn`
 /// saying so. Throws mgrl::Error for an unknown role or joint in `overrides`, and for any
