@@ -3,6 +3,7 @@
 #include <cmath>
 
 #include <fmt/format.h>
+#include <fmt/ranges.h>
 
 #include "plural.hpp"
 
@@ -29,6 +30,11 @@ FileReport inspectFile(const std::filesystem::path& path, const InspectOptions& 
   FileReport report;
   report.path = path.string();
   report.joints = motion.skeleton().jointCount();
+  for (const Joint& joint : motion.skeleton().joints()) report.jointNames.push_back(joint.name);
+  const std::vector<std::string> roleNameList = roleNames();
+  const std::vector<int> roleJoints = roleJointIndices(roles);
+  for (std::size_t r = 0; r < roleNameList.size(); ++r)
+    report.roles.emplace_back(roleNameList[r], roleJoints[r] >= 0 ? report.jointNames[roleJoints[r]] : "");
   report.frames = motion.frameCount();
   report.fps = motion.fps();
   report.fileFps = loaded.fileFps;
@@ -73,6 +79,12 @@ nlohmann::json toJson(const std::vector<FileReport>& reports) {
     files.push_back({
         {"path", r.path},
         {"joints", r.joints},
+        {"joint_names", r.jointNames},
+        {"roles", [&] {
+           nlohmann::json roles = nlohmann::json::object();
+           for (const auto& [role, joint] : r.roles) roles[role] = joint;
+           return roles;
+         }()},
         {"frames", r.frames},
         {"fps", rounded(r.fps, 6)},
         {"file_fps", rounded(r.fileFps, 6)},
@@ -108,6 +120,10 @@ std::string toText(const std::vector<FileReport>& reports) {
     out += fmt::format("  joints {}, frames {} at {:.4g} fps", r.joints, r.frames, r.fps);
     if (std::abs(r.fps - r.fileFps) > 1e-9) out += fmt::format(" (file: {:.4g} fps)", r.fileFps);
     out += fmt::format(", duration {:.2f} s\n", r.duration_s);
+    std::vector<std::string> roles;
+    for (const auto& [role, joint] : r.roles) roles.push_back(fmt::format("{}={}", role, joint));
+    out += fmt::format("  roles: {}\n", fmt::join(roles, ", "));
+    out += fmt::format("  joint names: {}\n", fmt::join(r.jointNames, " "));
     out += fmt::format("  height {:.3f} m (file units: {}), ground at y = {:.3f} m\n", r.height_m, r.units, r.groundY_m);
     const double n = static_cast<double>(std::max<std::size_t>(1, r.frames));
     out += fmt::format("  foot contact frames: left {} ({:.0f}%), right {} ({:.0f}%)\n", r.contactFrames[0],

@@ -26,6 +26,10 @@ struct InspectOptions {
 struct FileReport {
   std::string path;
   std::size_t joints = 0, frames = 0;
+  /// The names a reward term's body point may use (scenarios/README.md, body points): the
+  /// skeleton's joints, and each role with the joint that plays it.
+  std::vector<std::string> jointNames;
+  std::vector<std::pair<std::string, std::string>> roles;
   double fps = 0, fileFps = 0, duration_s = 0, groundY_m = 0;
   double height_m = 0;      ///< standing height from the motion (Annotation::standingHeight)
   double restHeight_m = 0;  ///< from the rest pose (SkeletonRoles::restHeight)

@@ -37,6 +37,7 @@ TEST_CASE("mgrl inspect --json reports the contract keys for real capture", "[cl
   REQUIRE(report["files"].size() == 2);
   for (const auto& file : report["files"]) {
     CHECK(file["joints"] == 31);
+    CHECK(file["joint_names"].size() == 31);
     CHECK(file["frames"] == 4840);
     CHECK(file["fps"].get<double>() == Approx(120));
     CHECK(file["duration_s"].get<double>() == Approx(40.33).margin(0.01));
@@ -47,6 +48,16 @@ TEST_CASE("mgrl inspect --json reports the contract keys for real capture", "[cl
     CHECK(hits["total"].get<int>() == hits["left"].get<int>() + hits["right"].get<int>());
     CHECK(hits["total"].get<int>() > 200);
   }
+  // The names a body point may use: the joints, and the roles with their joints, in each
+  // file's own naming.
+  const auto& bvhFile = report["files"][0];
+  const auto& amcFile = report["files"][1];
+  CHECK(bvhFile["joint_names"][0] == "Hips");
+  CHECK(bvhFile["roles"]["left_fist"] == "LeftFingerBase");
+  CHECK(bvhFile["roles"]["right_toe"] == "RightToeBase");
+  CHECK(amcFile["joint_names"][0] == "root");
+  CHECK(amcFile["roles"]["left_fist"] == "lhand");
+  CHECK(amcFile["roles"]["right_toe"] == "rtoes");
   // The BVH and its ASF/AMC original are the same capture.
   CHECK(report["files"][0]["effective_hits"] == report["files"][1]["effective_hits"]);
   CHECK(report["files"][0]["contact_frames"] == report["files"][1]["contact_frames"]);
