@@ -21,6 +21,7 @@ using namespace mgrl;
 using Catch::Contains;
 using Catch::Equals;
 using Catch::StartsWith;
+using Catch::EndsWith;
 
 // Both halves of the config error contract: the type and the whole message.
 #define REQUIRE_CONFIG_ERROR(expr, message)              \
@@ -681,6 +682,19 @@ TEST_CASE("a body point names a skeleton role or joint; one the skeleton lacks l
     CHECK_THROWS_WITH(build(keeper("{term: distance, point: pelvis}", "{term: distance, point: Head, within: 0.1}")),
                       StartsWith(at(13, 38, "behaviors.keep.success.point: point: expected centroid, pelvis, a role (")) &&
                           Contains("found 'Head'"));
+  }
+  SECTION("a model that records no joints (made by hand) refuses joints and body") {
+    StateActionModel bare = model();
+    bare.jointNames.clear();
+    bare.roleJoint.clear();
+    bare.sourceJoint.clear();
+    bare.sourceJointSpeed.clear();
+    auto buildOn = [&](const std::string& terms) { return buildBehaviors(parse(keeper(terms)), app::plugins(), bare, kGraphKey); };
+    CHECK_THROWS_WITH(buildOn("{term: effort, point: body}"),
+                      EndsWith("terms[0].point: no joints for body: this model records no skeleton joints"));
+    CHECK_THROWS_WITH(buildOn("{term: distance, point: head}"),
+                      EndsWith("terms[0].point: no joint 'head': this model records no skeleton joints"));
+    CHECK_NOTHROW(buildOn("{term: distance, point: pelvis}"));
   }
   SECTION("names that are not body points of the term") {
     CHECK_THROWS_WITH(build(keeper("{term: distance, point: body}")),

@@ -23,6 +23,10 @@ BodyPoint parseBodyPoint(std::string_view name) {
 std::string_view bodyPointName(const BodyPoint& point) { return point.name; }
 
 bool bindBodyPoint(const StateActionModel& m, BodyPoint& point, std::string* why) {
+  if (point.kind == BodyPoint::Kind::Body && m.jointNames.empty()) {
+    if (why) *why = "no joints for body: this model records no skeleton joints";
+    return false;
+  }
   if (point.kind != BodyPoint::Kind::Joint) return true;
   const std::vector<std::string> roles = roleNames();
   point.joint = -1;
@@ -81,11 +85,12 @@ Eigen::Vector3d jointAt(const StateActionModel& m, std::size_t frame, int joint)
 
 double bodySpeed(const StateActionModel& m, std::size_t frame, const BodyPoint& point) {
   const std::size_t joints = m.jointNames.size();
-  const float* v = &m.sourceJointSpeed[m.actionFrames[frame] * joints];
+  if (joints == 0) return 0;  // bindBodyPoint() refuses this
+  const float* v = m.sourceJointSpeed.data() + m.actionFrames[frame] * joints;
   if (point.kind == BodyPoint::Kind::Joint) return v[point.joint];
   double sum = 0;
   for (std::size_t j = 0; j < joints; ++j) sum += v[j];
-  return joints > 0 ? sum / static_cast<double>(joints) : 0;
+  return sum / static_cast<double>(joints);
 }
 
 double facingError(const StateActionModel& m, std::size_t frame, const Eigen::Vector3d& e) {

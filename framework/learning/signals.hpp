@@ -40,7 +40,8 @@ BodyPoint parseBodyPoint(std::string_view name);
 std::string_view bodyPointName(const BodyPoint& point);
 
 /// Finds a Joint point's joint in `m` (a role first, then a joint's own name). Returns
-/// false if the model has no such joint; `why` then says which roles and joints it has.
+/// false if the model has no such joint (or, for Body, no joints at all); `why` then says
+/// which roles and joints it has.
 bool bindBodyPoint(const StateActionModel& m, BodyPoint& point, std::string* why);
 
 /// Which limbs' effective strikes count: a bit set of the four effectors.

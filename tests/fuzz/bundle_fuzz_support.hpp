@@ -21,7 +21,15 @@ inline const StateActionModel& smallModel() {
     SyntheticModelSpec spec;
     spec.states = 6;
     spec.actions = 14;
-    return makeSyntheticModel(spec);
+    StateActionModel m = makeSyntheticModel(spec);
+    // smallClips()'s one joint, playing every role, so the joint arrays are fuzzed too.
+    m.jointNames = {"Hips"};
+    m.roleJoint.assign(roleNames().size(), 0);
+    for (std::uint32_t f = 0; f < m.framesTotal; ++f) {
+      m.sourceJoint.insert(m.sourceJoint.end(), {0.0f, 0.9f, 0.01f * static_cast<float>(f)});
+      m.sourceJointSpeed.push_back(0.3f);
+    }
+    return m;
   }();
   return model;
 }
