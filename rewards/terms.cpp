@@ -6,6 +6,7 @@
 #include <cmath>
 #include <numbers>
 #include <optional>
+#include <stdexcept>
 #include <vector>
 
 #include <fmt/format.h>
@@ -100,6 +101,7 @@ class Terms final : public Reward {
         term.point = parseBodyPoint(t["point"].get<std::string>());
       }
       terms_.push_back(term);
+      if (term.point.kind == BodyPoint::Kind::Joint || term.point.kind == BodyPoint::Kind::Body) joints_ = -1;
     }
   }
   std::string type() const override { return "terms"; }
@@ -112,9 +114,13 @@ class Terms final : public Reward {
       if (!block_) throw Error(fmt::format("reward term {}: point: {}", i, why));
       block_->child("terms").elements()[i].child("point").fail(why);
     }
+    if (joints_ != 0) joints_ = static_cast<std::int64_t>(m.jointNames.size());
   }
 
   double evaluate(const StateActionModel& m, std::size_t a, const Eigen::Vector3d& e) const override {
+    // Joint indices are the bound model's: another skeleton (or none) would read past its arrays.
+    if (joints_ != 0 && joints_ != static_cast<std::int64_t>(m.jointNames.size()))
+      throw std::logic_error("reward terms naming joints evaluated on a model they were not bound to");
     const std::size_t begin = m.actionFrameBegin[a], frames = m.actionLength(a);
     const double start = std::hypot(e.x(), e.z());  // the pelvis is at the origin at the decision
     double result = 0, discount = 1;
@@ -165,6 +171,8 @@ class Terms final : public Reward {
   bool sum_;
   std::vector<Term> terms_;
   std::optional<ConfigNode> block_;  ///< the reward's YAML block, for bind()'s messages
+  /// 0 if no term names a joint; else the bound model's joint count, -1 before bind().
+  std::int64_t joints_ = 0;
 };
 
 }  // namespace

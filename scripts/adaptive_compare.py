@@ -78,6 +78,8 @@ CONFIGS = {
     "adaptive 240 forest value 6x4x4": forest(240, (6, 4, 4), "value"),
     "adaptive 480 forest value 8x6x4": forest(480, (8, 6, 4), "value"),
     "adaptive 480 forest both 8x6x4": forest(480, (8, 6, 4), "both"),
+    "uniform 14x12x6": uniform(14, 12, 6),
+    "adaptive 1008 forest value 12x10x4": forest(1008, (12, 10, 4), "value"),
     "adaptive 1920 forest value 17x13x4": forest(1920, (17, 13, 4), "value"),
     "adaptive 480 conforming both": adaptive(
         (4, 4, 2), "behaviors.hit.discretizer.split_axes=longest behaviors.hit.discretizer.refinement=conforming "

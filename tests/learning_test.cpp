@@ -13,6 +13,7 @@
 #include <fmt/format.h>
 
 #include "app/plugins.hpp"
+#include "mgrl/motion/roles.hpp"
 #include "mgrl/core/bundle.hpp"
 #include "mgrl/core/files.hpp"
 #include "mgrl/learning/checkpoint_store.hpp"
@@ -846,6 +847,28 @@ double termsReward(const StateActionModel& m, const std::string& block, std::siz
   return app::plugins().rewards.create(yaml(block))->evaluate(m, a, e);
 }
 }  // namespace
+
+TEST_CASE("a reward naming a joint is not evaluated before it is bound to a model with joints", "[learning][terms]") {
+  StateActionModel m = kickingModel();  // made by hand: no joints recorded
+  const Eigen::Vector3d e(0, 1, 0.5);
+  const auto head = app::plugins().rewards.create(yaml("{type: terms, terms: [{term: distance, point: head}]}"));
+  CHECK_THROWS_AS(head->evaluate(m, 0, e), std::logic_error);
+  CHECK_THROWS_WITH(head->bind(m), Catch::Contains("no joint 'head': this model records no skeleton joints"));
+  // Bound to one skeleton, evaluated on a model of another: refused, not read past the arrays.
+  m.jointNames = {"Head"};
+  m.roleJoint.assign(roleNames().size(), 0);
+  m.sourceJoint.assign(3 * m.framesTotal, 0.5f);
+  m.sourceJointSpeed.assign(m.framesTotal, 1.0f);
+  head->bind(m);
+  CHECK(head->evaluate(m, 0, e) > 0);
+  StateActionModel other = m;
+  other.jointNames = {"Head", "Neck"};
+  other.sourceJoint.assign(6 * m.framesTotal, 0.5f);
+  other.sourceJointSpeed.assign(2 * m.framesTotal, 1.0f);
+  CHECK_THROWS_AS(head->evaluate(other, 0, e), std::logic_error);
+  // Terms without joints need no binding.
+  CHECK(termsReward(m, "{type: terms, terms: [{term: distance, point: pelvis}]}", 0, e) > 0);
+}
 
 TEST_CASE("a terms reward of one distance or contact term is the paper's approach or hit", "[learning][terms]") {
   const StateActionModel m = kickingModel();

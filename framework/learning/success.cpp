@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <numbers>
+#include <stdexcept>
 
 #include <fmt/format.h>
 #include <fmt/ranges.h>
@@ -159,6 +160,9 @@ bool SuccessCriterion::holdsAt(const StateActionModel& m, std::size_t a, std::ui
         if (strikeAt(m, a, t, c.effectors, c.radius, false, e) <= 0) return false;
         break;
       case SuccessCondition::Kind::Distance:
+        if (c.point.kind == BodyPoint::Kind::Joint &&
+            (c.point.joint < 0 || static_cast<std::size_t>(c.point.joint) >= m.jointNames.size()))
+          throw std::logic_error("a success condition naming a joint used before bind()");
         if (std::abs(bodyDistance(m, frame, c.point, c.dims, e) - c.d0) > c.within) return false;
         break;
       case SuccessCondition::Kind::Facing:
