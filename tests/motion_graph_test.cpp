@@ -233,6 +233,22 @@ TEST_CASE("joints at action frames are the capture's joints carried into the dec
   CHECK(hits > 50);
 }
 
+TEST_CASE("a role overridden in the scenario is the joint a body point of that role measures", "[graph][data]") {
+  const Boxing& b = boxing();
+  std::vector<std::pair<std::string, Motion>> motions;
+  for (const Clip& clip : b.db.clips) motions.emplace_back(clip.name, clip.motion);
+  const MotionDatabase db = makeMotionDatabase(std::move(motions), RoleOverrides{{"head", "Neck"}});
+  const StateActionModel m = buildStateActionModel(db, b.scenario.graph);
+  BodyPoint head = parseBodyPoint("head"), neck = parseBodyPoint("Neck");
+  REQUIRE(bindBodyPoint(m, head, nullptr));
+  REQUIRE(bindBodyPoint(m, neck, nullptr));
+  CHECK(head.joint == neck.joint);
+  CHECK(m.jointNames[static_cast<std::size_t>(head.joint)] == "Neck");
+  BodyPoint unchanged = parseBodyPoint("head");
+  REQUIRE(bindBodyPoint(b.model, unchanged, nullptr));
+  CHECK(b.model.jointNames[static_cast<std::size_t>(unchanged.joint)] == "Head");
+}
+
 TEST_CASE("the fast distance kernel agrees with the exact geodesic distance", "[graph][data]") {
   const Boxing& b = boxing();
   const FrameFeatures features = computeFrameFeatures(b.db, b.scenario.graph);
