@@ -118,7 +118,8 @@ class Terms final : public Reward {
   }
 
   double evaluate(const StateActionModel& m, std::size_t a, const Eigen::Vector3d& e) const override {
-    // Joint indices are the bound model's: another skeleton (or none) would read past its arrays.
+    // Joint indices are the bound model's: a model with another joint count (or none) would
+    // read past its arrays. (Same count, other names: not detected here; bind to the model used.)
     if (joints_ != 0 && joints_ != static_cast<std::int64_t>(m.jointNames.size()))
       throw std::logic_error("reward terms naming joints evaluated on a model they were not bound to");
     const std::size_t begin = m.actionFrameBegin[a], frames = m.actionLength(a);

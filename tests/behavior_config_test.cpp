@@ -556,6 +556,15 @@ TEST_CASE("the behaviour key changes with what the table depends on, and only th
     CHECK(named(build(both, {"behaviors.hit.learner.threads=2"}), "hit").key == baseHit);
     CHECK(named(build(both, {"behaviors.hit.weight=0.5"}), "hit").key == baseHit);
   }
+  SECTION("effort's default point (pelvis, the root's speed) keeps the key effort terms had before points") {
+    auto keyOf = [&](const std::string& terms) {
+      return build("  keep:\n    discretizer: {type: polar2d}\n    reward: {type: terms, terms: [" + terms +
+                   "]}\n    learner: {type: value_iteration}\n").front().key;
+    };
+    CHECK(keyOf("{term: effort}") == keyOf("{term: effort, point: pelvis}"));
+    CHECK(keyOf("{term: effort}") != keyOf("{term: effort, point: body}"));
+    CHECK(keyOf("{term: effort}") != keyOf("{term: effort, point: LeftHand}"));
+  }
   SECTION("a parameter given at its default is the same as one left out") {
     CHECK(keyWith("behaviors.approach.learner.alpha_final=0") == base);
     CHECK(keyWith("behaviors.approach.discretizer.min_radius=0") == base);
@@ -680,7 +689,7 @@ TEST_CASE("a body point names a skeleton role or joint; one the skeleton lacks l
     REQUIRE_CONFIG_ERROR(build(keeper("{term: distance, point: LeftHnd, d0: 0.5}")), at(11, 35, lacks));
     REQUIRE_CONFIG_ERROR(build(keeper("{term: effort, point: LeftHnd}")), at(11, 33, lacks));
     CHECK_THROWS_WITH(build(keeper("{term: distance, point: pelvis}", "{term: distance, point: Head, within: 0.1}")),
-                      StartsWith(at(13, 38, "behaviors.keep.success.point: point: expected centroid, pelvis, a role (")) &&
+                      StartsWith(at(13, 38, "behaviors.keep.success.point: expected centroid, pelvis, a role (")) &&
                           Contains("found 'Head'"));
   }
   SECTION("a model that records no joints (made by hand) refuses joints and body") {

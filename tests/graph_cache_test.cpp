@@ -660,6 +660,10 @@ TEST_CASE("a bundle whose manifest lacks or mistypes a member is damaged", "[gra
     manifest["scalars"]["joint_names"] = json::array({"Hips", 3});
     reason = "scalars.joint_names: expected an array of at most 1000 joint names";
   }
+  SECTION("a joint name with a control character") {
+    manifest["scalars"]["joint_names"][1] = "Left\x1b[2JHand";
+    reason = "scalars.joint_names: expected joint names of 1 to 200 printable characters";
+  }
   SECTION("a joint name too many for the joint arrays") {
     manifest["scalars"]["joint_names"].push_back("RightHand");
     reason = "sourceJoint: expected 180 entries (3 per source frame and joint), found 120";

@@ -196,6 +196,16 @@ TEST_CASE("joints at action frames are the capture's joints carried into the dec
   for (std::size_t j = 0; j < skeleton.jointCount(); ++j) CHECK(m.jointNames[j] == skeleton.joints()[j].name);
   const std::vector<int> roles = roleJointIndices(b.db.roles);
   REQUIRE(m.roleJoint == std::vector<std::int32_t>(roles.begin(), roles.end()));
+  // Each role binds to the joint the annotation found for it.
+  for (const auto& [role, joint] : std::vector<std::pair<std::string, int>>{
+           {"left_fist", b.db.roles.fist[0]}, {"right_fist", b.db.roles.fist[1]}, {"left_wrist", b.db.roles.wrist[0]},
+           {"right_forearm", b.db.roles.forearm[1]}, {"left_shoulder", b.db.roles.shoulder[0]},
+           {"right_ankle", b.db.roles.ankle[1]}, {"left_toe", b.db.roles.toe[0]}, {"head", b.db.roles.head}}) {
+    CAPTURE(role);
+    BodyPoint point = parseBodyPoint(role);
+    REQUIRE(bindBodyPoint(m, point, nullptr));
+    CHECK(point.joint == joint);
+  }
   const int pelvis = b.db.roles.pelvis, head = b.db.roles.head;
   const int leftFist = b.db.roles.fist[0], rightFist = b.db.roles.fist[1];
   double headHeight = 0;

@@ -387,7 +387,14 @@ GraphBundleLoad loadGraphBundle(const std::filesystem::path& dirArgument, std::s
         !std::all_of(jointNames.begin(), jointNames.end(), [](const json& v) { return v.is_string(); }))
       reader.fail("scalars.joint_names", fmt::format("an array of at most {} joint names", kMaxBundledJoints),
                   jointNames);
-    for (const json& name : jointNames) m.jointNames.push_back(name.get<std::string>());
+    for (const json& name : jointNames) {
+      const std::string& text = name.get_ref<const std::string&>();
+      // Names reach messages (a body point the skeleton lacks lists them): printable, bounded.
+      if (text.empty() || text.size() > 200 ||
+          !std::all_of(text.begin(), text.end(), [](char c) { return static_cast<unsigned char>(c) >= ' ' && c != 0x7f; }))
+        reader.fail("scalars.joint_names", "joint names of 1 to 200 printable characters", name);
+      m.jointNames.push_back(text);
+    }
 
     const json& arrays = reader.object(manifest, "", "arrays", {});
     std::set<std::string, std::less<>> known;

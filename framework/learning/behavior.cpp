@@ -30,6 +30,10 @@ std::pair<nlohmann::json, std::string> behaviorConfigAndKey(const BehaviorSpec& 
   // A parameter added after tables were trained keeps their keys while it holds the value
   // that reproduces them bit for bit (q_learning's max_episode_actions: 0, the paper's rule).
   if (keyed["learner"].value("max_episode_actions", std::int64_t{0}) == 0) keyed["learner"].erase("max_episode_actions");
+  // Likewise effort's point: pelvis (the root's ground speed, all effort measured before).
+  if (keyed["reward"].contains("terms") && keyed["reward"]["terms"].is_array())
+    for (nlohmann::json& term : keyed["reward"]["terms"])
+      if (term.value("term", "") == "effort" && term.value("point", "") == "pelvis") term.erase("point");
   Hasher h;
   h.update(std::string_view("mgrl.behavior.v1"));
   h.update(std::string_view(graphKey));

@@ -60,9 +60,12 @@ SuccessCondition readCondition(const ConfigNode& node, const json& reward, bool 
                               : from.is_null()  ? std::string("centroid")
                                                 : from.value("point", std::string("centroid"));
     c.point = node.withLocation([&] { return parseBodyPoint(point); });
-    if (c.point.kind == BodyPoint::Kind::Body)
-      (node.has("point") ? node.child("point") : node).fail("point: expected centroid, pelvis, a role or a joint, found body");
+    // Where the point is written: its key, or the condition that takes it from the reward.
     c.pointNode = node.has("point") ? node.child("point") : node;
+    c.pointWritten = node.has("point");
+    if (c.point.kind == BodyPoint::Kind::Body)
+      c.pointNode->fail(fmt::format("{}expected centroid, pelvis, a role or a joint, found body",
+                                    c.pointWritten ? "" : "point: "));
     c.dims = static_cast<int>(node.integer("dims", from.is_null() ? 2 : from.value("dims", 2), 2, 3));
     if (c.dims == 3 && c.point.kind == BodyPoint::Kind::Pelvis)
       node.fail("dims: expected 2 with point: pelvis (a ground point has no height), found 3");
@@ -146,7 +149,7 @@ void SuccessCriterion::bind(const StateActionModel& m) {
   for (SuccessCondition& c : conditions_) {
     std::string why;
     if (c.kind != SuccessCondition::Kind::Distance || bindBodyPoint(m, c.point, &why)) continue;
-    if (c.pointNode) c.pointNode->fail(fmt::format("point: {}", why));
+    if (c.pointNode) c.pointNode->fail(c.pointWritten ? why : fmt::format("point: {}", why));
     throw Error(fmt::format("success: point: {}", why));
   }
 }

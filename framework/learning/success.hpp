@@ -35,6 +35,7 @@ struct SuccessCondition {
   BodyPoint point;                        ///< distance
   /// Where the point was written (distance), for bind()'s message; none if implied.
   std::optional<ConfigNode> pointNode;
+  bool pointWritten = false;  ///< pointNode is the `point` key itself (else its condition)
   int dims = 2;                           ///< distance
   double d0 = 0, within = 0.2;            ///< distance: |d - d0| <= within (m)
   double angle = 0, withinAngle = 0.5235987755982988;  ///< facing: |error - angle| <= withinAngle (rad)
