@@ -8,6 +8,7 @@
 #include <fmt/ranges.h>
 
 #include "mgrl/core/error.hpp"
+#include "mgrl/graph/motion_graph.hpp"
 #include "mgrl/motion/roles.hpp"
 
 namespace mgrl {
@@ -79,8 +80,7 @@ Eigen::Vector3d jointAt(const StateActionModel& m, std::size_t frame, int joint)
   const std::size_t joints = m.jointNames.size();
   const float* q = &m.sourceJoint[3 * (m.actionFrames[frame] * joints + static_cast<std::size_t>(joint))];
   const double* r = &m.frameRoot[3 * frame];
-  const double c = std::cos(r[2]), s = std::sin(r[2]);
-  return {r[0] + c * q[0] + s * q[2], q[1], r[1] - s * q[0] + c * q[2]};
+  return transformPoint({r[0], r[1], r[2]}, Eigen::Vector3d(q[0], q[1], q[2]));
 }
 
 double bodySpeed(const StateActionModel& m, std::size_t frame, const BodyPoint& point) {
