@@ -30,8 +30,8 @@ ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 def shape(line):
     line = re.sub(r"-[0-9a-f]{8}\b", "-HASH", line)
     # A rate's prefix follows the machine's speed as its digits do (1.96 Mupdates/s here,
-    # 463.0 kupdates/s on a slower machine).
-    line = re.sub(r"\b[kMG](updates/s)\b", r"\1", line)
+    # 463.0 kupdates/s on a slower machine; 8.66 Mavatar-frames/s, 975.1 kavatar-frames/s).
+    line = re.sub(r"(\d\s?)[kMG](?=[A-Za-z-]+/s\b)", r"\1", line)
     line = re.sub(r"-?\d+(\.\d+)?", "N", line)
     return re.sub(r"\s+", " ", line).strip()  # columns pad numbers to their width
 
