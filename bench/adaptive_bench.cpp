@@ -239,6 +239,7 @@ int main(int argc, char** argv) {
                         : std::vector<Budget>{{{6, 5, 4}}, {{8, 6, 5}}, {{10, 8, 6}}, {{14, 12, 6}}, {{20, 16, 6}}};
       if (variants.empty())
         variants = {{"conforming value", "refinement: conforming", "criterion: value"},
+                    {"conforming value starts 3", "refinement: conforming", "criterion: value, starts: 3"},
                     {"local both", "", "criterion: both"},
                     {"local influence_policy", "", "criterion: influence_policy"},
                     {"conforming both", "refinement: conforming", "criterion: both"},

@@ -24,6 +24,7 @@
 #include <map>
 
 #include <fmt/format.h>
+#include <fmt/ranges.h>
 
 #include "discretizers.hpp"
 #include "mgrl/core/bundle.hpp"
@@ -41,17 +42,22 @@ using Key = std::array<std::uint64_t, 3>;
 
 class KdTree final : public Discretizer {
  public:
-  KdTree(const Params& p, const StateActionModel& m) {
+  KdTree(const Params& p, const StateActionModel& m)
+      : KdTree(p, p.choice("bounds") == "hits" ? boundsOfHits(p, m) : givenBounds(p),
+               {p.integer("angle_cells"), p.integer("distance_cells"), p.integer("height_cells")}) {}
+
+  // The tree over bounds `b` starting from `initial` cells (angle, distance, height; the
+  // parameters' unless adaptive_value_iteration tries other starts).
+  KdTree(const Params& p, const Bounds& b, const std::array<long long, 3>& initial)
+      : params_(p), bounds_(b), initial_(initial) {
     const std::string& kind = p.choice("coordinates");
     dimension_ = kind == "distance" ? 1 : kind == "polar" ? 2 : 3;
     coordinates_ = dimension_;
     height_ = p.number("height");
-    const Bounds b = p.choice("bounds") == "hits" ? boundsOfHits(p, m) : givenBounds(p);
     // Axes in the order of polar2d / cylindrical3d; the 1-D tree is the distance straight ahead.
     std::vector<GridAxis> axes;
     std::array<long long, 3> cells{1, 1, 1};  // the power-of-two part of each axis's cells
-    const long long angleCells = p.integer("angle_cells"), distanceCells = p.integer("distance_cells"),
-                    heightCells = p.integer("height_cells");
+    const long long angleCells = initial[0], distanceCells = initial[1], heightCells = initial[2];
     auto add = [&](std::string name, double lo, double hi, bool wraps, long long n, std::string_view key) {
       if (n <= 0) p.fail(key, fmt::format("expected at least 1 cell, found {}", n));
       const int i = static_cast<int>(axes.size());
@@ -249,6 +255,14 @@ class KdTree final : public Discretizer {
     out.push_back(std::move(leafCorners));
     out.push_back(std::move(bounds));
     out.push_back(std::move(coordinates));
+    const std::array<long long, 3> given{params_.integer("angle_cells"), params_.integer("distance_cells"),
+                                         params_.integer("height_cells")};
+    if (axisOrder(initial_) != axisOrder(given)) {
+      // Written only when adaptive_value_iteration started elsewhere than the parameters say.
+      StructureArray start{"start_cells", {static_cast<std::size_t>(dimension_)}, {}, {}, true, {}};
+      for (long long n : axisOrder(initial_)) start.ints.push_back(static_cast<std::int32_t>(n));
+      out.push_back(std::move(start));
+    }
     if (rootCount_ > 1) {
       // Written only for a forest, so that one-root trees keep the arrays they always had.
       StructureArray roots{"roots", {static_cast<std::size_t>(dimension_)}, {}, {}, true, {}};
@@ -258,9 +272,42 @@ class KdTree final : public Discretizer {
     return out;
   }
 
+  std::vector<long long> initialCells() const override { return axisOrder(initial_); }
+
+  std::unique_ptr<Discretizer> withInitialCells(const std::vector<long long>& cells) const override {
+    const std::string shape = fmt::format("{}", fmt::join(cells, "x"));
+    if (cells.size() != static_cast<std::size_t>(dimension_))
+      throw Error(fmt::format("kd_tree: expected initial cells for {} axes, found {} ({})", dimension_, cells.size(),
+                              shape));
+    for (long long n : cells)
+      if (n < 1 || n > 1024)
+        throw Error(fmt::format("kd_tree: expected initial cells from 1 to 1024 per axis, found {}", shape));
+    try {
+      return std::make_unique<KdTree>(params_, bounds_, paramOrder(cells));
+    } catch (const Error& e) {
+      throw Error(fmt::format("kd_tree: cannot start from {} initial cells: {}", shape, e.what()));
+    }
+  }
+
   std::unique_ptr<Discretizer> restored(const std::vector<StructureArray>& arrays) const override;
 
  private:
+  // Initial cells from (angle, distance, height) to the tree's axes and back.
+  std::vector<long long> axisOrder(const std::array<long long, 3>& c) const {
+    if (dimension_ == 1) return {c[1]};
+    if (dimension_ == 2) return {c[0], c[1]};
+    return {c[0], c[1], c[2]};
+  }
+  std::array<long long, 3> paramOrder(const std::vector<long long>& cells) const {
+    std::array<long long, 3> c = initial_;
+    if (dimension_ == 1) c[1] = cells[0];
+    else
+      for (int i = 0; i < dimension_; ++i) c[i] = cells[i];
+    return c;
+  }
+  // The tree `arrays` describe, grown from this tree's initial cells (restored()).
+  std::unique_ptr<Discretizer> restoredFrom(const std::vector<StructureArray>& arrays) const;
+
   // The axis split at `depth` and the depth of node n (by walking up from the root would
   // need parents; depth is kept per node instead).
   int nodeDepth(std::size_t n) const { return depth_.empty() ? 0 : depth_[n]; }
@@ -345,6 +392,9 @@ class KdTree final : public Discretizer {
   // leaves are at max_depth): the keys become free vertices. See `refinement`.
   void freeCorners(const std::vector<Key>& keys);
 
+  Params params_;
+  Bounds bounds_;
+  std::array<long long, 3> initial_{1, 1, 1};  // initial cells (angle, distance, height)
   int dimension_ = 0, coordinates_ = 0, initialDepth_ = 0, maxDepth_ = 0;
   // Root boxes along each axis (the odd part of its initial cells) and their product; nodes
   // 0 .. rootCount_ - 1 are the roots, the first axis varying fastest.
@@ -619,6 +669,26 @@ void KdTree::freeCorners(const std::vector<Key>& keys) {
 }
 
 std::unique_ptr<Discretizer> KdTree::restored(const std::vector<StructureArray>& arrays) const {
+  // A tree that adaptive_value_iteration grew from other initial cells says which.
+  for (const StructureArray& a : arrays) {
+    if (a.name != "start_cells") continue;
+    const std::string where = a.source.empty() ? a.name : a.source;
+    const auto d = static_cast<std::size_t>(dimension_);
+    if (!a.integer || a.shape != std::vector<std::size_t>{d})
+      throw Error(fmt::format("{}: expected {} int32 initial cells (one per axis), found {} {}", where, d,
+                              a.integer ? "int32" : "float64", formatShape(a.shape)));
+    std::unique_ptr<Discretizer> start;
+    try {
+      start = withInitialCells(std::vector<long long>(a.ints.begin(), a.ints.end()));
+    } catch (const Error& e) {
+      throw Error(fmt::format("{}: {}", where, e.what()));
+    }
+    return static_cast<const KdTree&>(*start).restoredFrom(arrays);
+  }
+  return restoredFrom(arrays);
+}
+
+std::unique_ptr<Discretizer> KdTree::restoredFrom(const std::vector<StructureArray>& arrays) const {
   auto get = [&](std::string_view name, bool integer) -> const StructureArray& {
     for (const StructureArray& a : arrays)
       if (a.name == name) {
@@ -656,7 +726,7 @@ std::unique_ptr<Discretizer> KdTree::restored(const std::vector<StructureArray>&
   }
   for (std::size_t i = 0; i < d; ++i)
     if (roots[i] != static_cast<std::int32_t>(roots_[i]))
-      throw Error(fmt::format("{}: expected {} root boxes on axis {} as the scenario's initial cells make, found {}",
+      throw Error(fmt::format("{}: expected {} root boxes on axis {} as the tree's initial cells make, found {}",
                               rootArray ? where(*rootArray) : where(bounds), roots_[i], i, roots[i]));
   const StructureArray& axis = get("split_axis", true);
   const StructureArray& value = get("split_value", false);

@@ -25,12 +25,18 @@
 #include "learners.hpp"
 #include "mgrl/core/error.hpp"
 #include "mgrl/core/parallel.hpp"
+#include "mgrl/core/random.hpp"
 
 namespace mgrl::learners {
 
 namespace {
 
 using Clock = std::chrono::steady_clock;
+
+// Targets at which backupGap() compares starts: this many uniform in the grid's
+// coordinates (a fixed seed), and at most kGapVertexPoints of the starts' final vertices.
+constexpr std::size_t kGapPoints = 200, kGapVertexPoints = 400;
+constexpr std::uint64_t kGapSeed = 7;
 
 // The influence and variance fixed points stop at this relative change or sweep count.
 constexpr double kInfluenceTolerance = 1e-4;
@@ -50,6 +56,57 @@ struct InfluenceField {
   int sweeps = 0;
 };
 
+// A reference-free error of a solution, to rank starts: the root mean square over motion
+// states and `points` of V_s by one backup at the target against V_s interpolated there
+// (the value criterion's measure, Munos & Moore's value non-linearity, taken at given
+// targets instead of cell centres), and the root mean square of V_s itself there.
+// Deterministic whatever the thread count.
+struct Gap {
+  double gap = 0, value = 0;
+  // The gap relative to the value: +infinity for a solution that is 0 at every target.
+  double relative() const { return value > 0 ? gap / value : std::numeric_limits<double>::infinity(); }
+};
+Gap backupGap(const Problem& problem, const Discretizer& grid, const GridModel& g, const QTable& q,
+              const std::vector<Eigen::Vector3d>& points, unsigned threads) {
+  const StateActionModel& m = problem.model;
+  const std::size_t states = q.stateCount();
+  std::size_t widest = 0;
+  for (std::size_t s = 0; s < states; ++s) widest = std::max(widest, q.actionsOf(s));
+  std::vector<double> squares(states, 0.0), values(states, 0.0), counts(states, 0.0);
+  parallelFor(states, threads, [&](std::size_t s, unsigned) {
+    const std::size_t n = q.actionsOf(s);
+    if (n == 0) return;
+    std::vector<float> sum(widest + QTable::kPadding);
+    for (const Eigen::Vector3d& e : points) {
+      GridCell cell;
+      if (!grid.locate(e, cell)) continue;
+      std::fill(sum.begin(), sum.end(), 0.0f);
+      addInterpolated(sum.data(), q, static_cast<std::uint32_t>(s), grid.stencil(cell), 1.0f);
+      const double here = *std::max_element(sum.begin(), sum.begin() + static_cast<std::ptrdiff_t>(n));
+      double backedUp = -std::numeric_limits<double>::infinity();
+      for (std::size_t j = 0; j < n; ++j) {
+        const std::size_t a = m.stateActionBegin[s] + j;
+        double value = problem.reward.evaluate(m, a, e);
+        GridCell next;
+        if (grid.locate(problem.environment.next(m, a, e), next))
+          value += g.discount[a] * maxInterpolated(q, g, g.actionTo[a], next.cell, next.frac.data());
+        backedUp = std::max(backedUp, value);
+      }
+      squares[s] += (backedUp - here) * (backedUp - here);
+      values[s] += here * here;
+      counts[s] += 1;
+    }
+  });
+  double total = 0, value = 0, count = 0;
+  for (std::size_t s = 0; s < states; ++s) {
+    total += squares[s];
+    value += values[s];
+    count += counts[s];
+  }
+  if (count == 0) return {};
+  return {std::sqrt(total / count), std::sqrt(value / count)};
+}
+
 class AdaptiveValueIteration final : public Learner {
  public:
   explicit AdaptiveValueIteration(const Params& p)
@@ -61,6 +118,8 @@ class AdaptiveValueIteration final : public Learner {
         countFree_(p.choice("count_vertices") == "free"),
         tolerance_(p.number("tolerance")),
         maxSweeps_(static_cast<std::uint64_t>(p.integer("max_sweeps"))),
+        starts_(static_cast<std::size_t>(p.integer("starts"))),
+        startStep_(p.number("start_step")),
         threads_(static_cast<unsigned>(p.integer("threads"))) {}
 
   std::string type() const override { return "adaptive_value_iteration"; }
@@ -82,6 +141,19 @@ class AdaptiveValueIteration final : public Learner {
     return countFree_ ? grid.vertexCount() - grid.hanging().size() : grid.vertexCount();
   }
 
+  // The initial cells of each start: the grid's own, then scaled by 1 - i start_step
+  // (rounded, at least 1; shapes already listed are skipped).
+  std::vector<std::vector<long long>> startShapes(const Discretizer& grid) const {
+    std::vector<std::vector<long long>> out{grid.initialCells()};
+    for (int i = 1; out.size() < starts_ && 1 - i * startStep_ > 0; ++i) {
+      std::vector<long long> cells;
+      for (long long n : out[0])
+        cells.push_back(std::max(1LL, std::llround((1 - i * startStep_) * static_cast<double>(n))));
+      if (std::find(out.begin(), out.end(), cells) == out.end()) out.push_back(std::move(cells));
+    }
+    return out;
+  }
+
   std::size_t maxVertices_;
   int maxRounds_;
   double splitFraction_, splitTolerance_;
@@ -89,6 +161,8 @@ class AdaptiveValueIteration final : public Learner {
   bool countFree_;
   double tolerance_;
   std::uint64_t maxSweeps_;
+  std::size_t starts_;
+  double startStep_;
   unsigned threads_;
 };
 
@@ -346,105 +420,183 @@ TrainResult AdaptiveValueIteration::train(const TrainContext& context) const {
                             "{}vertices, found {}",
                             counted(problem.grid), countFree_ ? "free " : "", maxVertices_));
 
-  TrainResult result;
-  std::shared_ptr<const Discretizer> owned;  // the current tree once refined
-  const Discretizer* grid = &problem.grid;
-  QTable q(problem.model, grid->vertexCount()), next;
-  std::vector<float> stage;
-  std::uint64_t updates = 0, totalSweeps = 0;
-  double change = 0;
-  nlohmann::json rounds = nlohmann::json::array();
-  std::string stopped = "max_rounds";
-  for (int round = 0;; ++round) {
-    GridModel built;
-    if (round > 0) built = GridModel::build({problem.model, *grid, problem.reward, problem.environment}, threads);
-    const GridModel& g = round == 0 ? context.grid : built;
-    // Value iteration on the current tree (value_iteration's Jacobi sweeps).
-    next = q;
-    const std::uint64_t pairs = static_cast<std::uint64_t>(g.vertexCount) * g.actionCount;
+  // One refinement from an initial tree: solve, split, solve again, up to the budget.
+  struct Run {
+    QTable q;
+    std::shared_ptr<const Discretizer> owned;  // the final tree if it is not problem.grid
+    const Discretizer* grid = nullptr;
+    nlohmann::json rounds = nlohmann::json::array();
+    std::string stopped = "max_rounds";
     std::uint64_t sweeps = 0;
-    while (sweeps < maxSweeps_) {
-      change = sweep(q, next, g, threads, stage);
-      std::swap(q, next);
-      ++sweeps;
-      updates += pairs;
-      result.curve.push_back({updates, elapsed(), change, 0});
-      if (context.observer) context.observer->progress({updates, 0, elapsed(), change});
-      if (context.stop && context.stop->load(std::memory_order_relaxed) && change >= tolerance_)
-        throw TrainInterrupted(updates, 0, false);
-      if (change < tolerance_) break;
-    }
-    totalSweeps += sweeps;
-    if (snapshotsWanted(context.observer) > 0)  // one per round: the values converged on this tree
-      paused += takeSnapshot(*context.observer, q, result.curve.back(), grid == &problem.grid ? nullptr : grid);
-    nlohmann::json record = {{"vertices", grid->vertexCount()},
-                             {"free_vertices", grid->vertexCount() - grid->hanging().size()},
-                             {"leaves", grid->cellCount()},
-                             {"hanging_vertices", grid->hanging().size()},
-                             {"sweeps", sweeps},
-                             {"last_change", change}};
-    if (counted(*grid) >= maxVertices_) stopped = "max_vertices";
-    if (round >= maxRounds_) stopped = "max_rounds";
-    if (counted(*grid) >= maxVertices_ || round >= maxRounds_) {
-      rounds.push_back(record);
-      result.finalResidual = bellmanResidual(q, g, threads).max;
-      break;
-    }
-    const LeafScores scores = score(problem, *grid, g, q, threads);
-    record["largest_value_gap"] = *std::max_element(scores.value.begin(), scores.value.end());
-    record["largest_policy_disagreement"] = *std::max_element(scores.policy.begin(), scores.policy.end());
-    if (!scores.influence.empty())
-      record["largest_influence_deviation"] = *std::max_element(scores.influence.begin(), scores.influence.end());
-    std::vector<std::uint32_t> splits = choose(*grid, scores);
-    // A conforming kd_tree splits neighbours too, so a split may add more vertices than
-    // choose() assumed: keep the longest prefix of the ranking that fits the budget.
-    std::shared_ptr<const Discretizer> refined;
-    bool budgetSpent = false;
-    if (!splits.empty()) refined = grid->refined(splits);
-    if (refined && counted(*refined) > maxVertices_) {
-      std::size_t fits = 0, over = splits.size();
-      std::shared_ptr<const Discretizer> best;
-      while (over - fits > 1) {
-        const std::size_t mid = (fits + over) / 2;
-        std::shared_ptr<const Discretizer> trial = grid->refined({splits.begin(), splits.begin() + mid});
-        if (counted(*trial) <= maxVertices_) {
-          fits = mid;
-          best = std::move(trial);
-        } else {
-          over = mid;
-        }
+    double change = 0, residual = 0;
+    Gap gap;
+  };
+  TrainResult result;
+  std::uint64_t updates = 0;
+  std::vector<float> stage;
+  // `initial` is problem.grid (with its tabulated context.grid) or a restarted copy of it.
+  auto refine = [&](std::shared_ptr<const Discretizer> restart) {
+    Run run;
+    run.owned = std::move(restart);
+    run.grid = run.owned ? run.owned.get() : &problem.grid;
+    QTable& q = run.q;
+    q = QTable(problem.model, run.grid->vertexCount());
+    QTable next;
+    for (int round = 0;; ++round) {
+      GridModel built;
+      const bool given = round == 0 && !run.owned;
+      if (!given) built = GridModel::build({problem.model, *run.grid, problem.reward, problem.environment}, threads);
+      const GridModel& g = given ? context.grid : built;
+      // Value iteration on the current tree (value_iteration's Jacobi sweeps).
+      next = q;
+      const std::uint64_t pairs = static_cast<std::uint64_t>(g.vertexCount) * g.actionCount;
+      std::uint64_t sweeps = 0;
+      while (sweeps < maxSweeps_) {
+        run.change = sweep(q, next, g, threads, stage);
+        std::swap(q, next);
+        ++sweeps;
+        updates += pairs;
+        result.curve.push_back({updates, elapsed(), run.change, 0});
+        if (context.observer) context.observer->progress({updates, 0, elapsed(), run.change});
+        if (context.stop && context.stop->load(std::memory_order_relaxed) && run.change >= tolerance_)
+          throw TrainInterrupted(updates, 0, false);
+        if (run.change < tolerance_) break;
       }
-      splits.resize(fits);
-      refined = std::move(best);
-      budgetSpent = splits.empty();
+      run.sweeps += sweeps;
+      if (snapshotsWanted(context.observer) > 0)  // one per round: the values converged on this tree
+        paused += takeSnapshot(*context.observer, q, result.curve.back(), run.grid == &problem.grid ? nullptr : run.grid);
+      nlohmann::json record = {{"vertices", run.grid->vertexCount()},
+                               {"free_vertices", run.grid->vertexCount() - run.grid->hanging().size()},
+                               {"leaves", run.grid->cellCount()},
+                               {"hanging_vertices", run.grid->hanging().size()},
+                               {"sweeps", sweeps},
+                               {"last_change", run.change}};
+      // The end of this run: its residual, and with several starts the error that ranks them.
+      auto finish = [&] { run.residual = bellmanResidual(q, g, threads).max; };
+      if (counted(*run.grid) >= maxVertices_) run.stopped = "max_vertices";
+      if (round >= maxRounds_) run.stopped = "max_rounds";
+      if (counted(*run.grid) >= maxVertices_ || round >= maxRounds_) {
+        run.rounds.push_back(record);
+        finish();
+        break;
+      }
+      const LeafScores scores = score(problem, *run.grid, g, q, threads);
+      record["largest_value_gap"] = *std::max_element(scores.value.begin(), scores.value.end());
+      record["largest_policy_disagreement"] = *std::max_element(scores.policy.begin(), scores.policy.end());
+      if (!scores.influence.empty())
+        record["largest_influence_deviation"] = *std::max_element(scores.influence.begin(), scores.influence.end());
+      std::vector<std::uint32_t> splits = choose(*run.grid, scores);
+      // A conforming kd_tree splits neighbours too, so a split may add more vertices than
+      // choose() assumed: keep the longest prefix of the ranking that fits the budget.
+      std::shared_ptr<const Discretizer> refined;
+      bool budgetSpent = false;
+      if (!splits.empty()) refined = run.grid->refined(splits);
+      if (refined && counted(*refined) > maxVertices_) {
+        std::size_t fits = 0, over = splits.size();
+        std::shared_ptr<const Discretizer> best;
+        while (over - fits > 1) {
+          const std::size_t mid = (fits + over) / 2;
+          std::shared_ptr<const Discretizer> trial = run.grid->refined({splits.begin(), splits.begin() + mid});
+          if (counted(*trial) <= maxVertices_) {
+            fits = mid;
+            best = std::move(trial);
+          } else {
+            over = mid;
+          }
+        }
+        splits.resize(fits);
+        refined = std::move(best);
+        budgetSpent = splits.empty();
+      }
+      record["splits"] = splits.size();
+      run.rounds.push_back(record);
+      if (splits.empty()) {
+        // Every leaf is within the tolerance, at the depth limit, or the budget is spent.
+        run.stopped = budgetSpent || counted(*run.grid) + (std::size_t{1} << (run.grid->dimension() - 1)) > maxVertices_
+                          ? "max_vertices"
+                          : "tolerance";
+        finish();
+        break;
+      }
+      q = interpolated(q, *run.grid, *refined, problem.model, threads);
+      run.owned = std::move(refined);
+      run.grid = run.owned.get();
     }
-    record["splits"] = splits.size();
-    rounds.push_back(record);
-    if (splits.empty()) {
-      // Every leaf is within the tolerance, at the depth limit, or the budget is spent.
-      stopped = budgetSpent || counted(*grid) + (std::size_t{1} << (grid->dimension() - 1)) > maxVertices_
-                    ? "max_vertices"
-                    : "tolerance";
-      result.finalResidual = bellmanResidual(q, g, threads).max;
-      break;
+    return run;
+  };
+
+  // The starts (`starts`): the scenario's initial cells, then each scaled down by
+  // start_step more; each refined to the budget, the lowest backup gap relative to the
+  // value kept (ties: the earlier start). Every start is measured at the same targets:
+  // random ones, and vertices of every start's final tree. Relative, because a start whose
+  // vertices all missed a sparse reward has a flat value of 0 and hence almost no gap; it
+  // has no value either, and ranks last.
+  const std::vector<std::vector<long long>> shapes = startShapes(problem.grid);
+  nlohmann::json tried = nlohmann::json::array();
+  std::vector<Run> runs;
+  std::vector<std::size_t> triedIndex;
+  for (std::size_t i = 0; i < shapes.size(); ++i) {
+    std::shared_ptr<const Discretizer> restart;
+    if (i > 0) {
+      try {
+        restart = problem.grid.withInitialCells(shapes[i]);
+      } catch (const Error& e) {  // e.g. more initial splits than max_depth allows
+        tried.push_back({{"initial_cells", shapes[i]}, {"skipped", e.what()}});
+        continue;
+      }
     }
-    q = interpolated(q, *grid, *refined, problem.model, threads);
-    owned = std::move(refined);
-    grid = owned.get();
+    runs.push_back(refine(std::move(restart)));
+    const Run& run = runs.back();
+    triedIndex.push_back(tried.size());
+    tried.push_back({{"initial_cells", shapes[i]},
+                     {"vertices", run.grid->vertexCount()},
+                     {"rounds", run.rounds.size()},
+                     {"stopped_by", run.stopped}});
   }
-  result.table = std::move(q);
-  result.grid = owned;
+  std::size_t chosen = 0;
+  if (runs.size() > 1) {
+    std::vector<Eigen::Vector3d> points;
+    Rng rng(kGapSeed);
+    for (std::size_t i = 0; i < kGapPoints; ++i) {
+      const std::array<double, 3> u{rng.uniform(), rng.uniform(), rng.uniform()};
+      points.push_back(problem.grid.sample(u));
+    }
+    std::size_t vertices = 0;
+    for (const Run& run : runs) vertices += run.grid->vertexCount();
+    const std::size_t every = (vertices + kGapVertexPoints - 1) / kGapVertexPoints;
+    std::size_t k = 0;
+    for (const Run& run : runs)
+      for (std::size_t v = 0; v < run.grid->vertexCount(); ++v, ++k)
+        if (k % every == 0) points.push_back(run.grid->vertexPosition(v));
+    for (std::size_t i = 0; i < runs.size(); ++i) {
+      const Problem on{problem.model, *runs[i].grid, problem.reward, problem.environment};
+      runs[i].gap = backupGap(on, *runs[i].grid, GridModel::frame(on), runs[i].q, points, threads);
+      nlohmann::json& entry = tried[triedIndex[i]];
+      entry["backup_gap"] = runs[i].gap.gap;
+      entry["value_rms"] = runs[i].gap.value;
+      entry["relative_gap"] = std::isfinite(runs[i].gap.relative()) ? nlohmann::json(runs[i].gap.relative()) : nlohmann::json();
+      if (runs[i].gap.relative() < runs[chosen].gap.relative()) chosen = i;
+    }
+  }
+  Run best = std::move(runs[chosen]);
+  const nlohmann::json chosenCells = tried[triedIndex[chosen]].at("initial_cells");
+  result.finalResidual = best.residual;
+  result.table = std::move(best.q);
+  result.grid = best.owned;
   result.updates = updates;
   result.seconds = elapsed();
-  result.stats = {{"rounds", rounds},
-                  {"stopped_by", stopped},
-                  {"sweeps", totalSweeps},
-                  {"vertices", grid->vertexCount()},
-                  {"free_vertices", grid->vertexCount() - grid->hanging().size()},
+  const Discretizer& grid = *best.grid;
+  result.stats = {{"rounds", best.rounds},
+                  {"stopped_by", best.stopped},
+                  {"sweeps", best.sweeps},
+                  {"vertices", grid.vertexCount()},
+                  {"free_vertices", grid.vertexCount() - grid.hanging().size()},
                   {"table_bytes", result.table.bytes()},
-                  {"leaves", grid->cellCount()},
-                  {"hanging_vertices", grid->hanging().size()},
-                  {"last_change", change}};
+                  {"leaves", grid.cellCount()},
+                  {"hanging_vertices", grid.hanging().size()},
+                  {"last_change", best.change},
+                  {"initial_cells", chosenCells}};
+  if (shapes.size() > 1) result.stats["starts"] = tried;
   return result;
 }
 
@@ -470,6 +622,12 @@ void registerAdaptiveValueIteration(LearnerRegistry& registry) {
                           "tied to a coarser face (the table still holds a row for each tied one)"),
         ParamSpec::number("tolerance", 1e-4, 1e-9, 1, "", "each solve stops when no value changes more than this"),
         ParamSpec::integer("max_sweeps", 1000, 1, 1'000'000, "sweeps", "each solve gives up after this many sweeps"),
+        ParamSpec::integer("starts", 1, 1, 8, "trees",
+                           "refine from this many initial trees (the discretizer's initial cells, then scaled down "
+                           "by start_step each) and keep the one with the lowest backup gap at 200 fixed random "
+                           "targets; training takes about as many times longer"),
+        ParamSpec::number("start_step", 0.1, 0.01, 0.5, "",
+                          "starts: each further start's initial cells are the first's times 1 - i x start_step"),
         threadsSpec()},
        [](const Params& p) { return std::make_unique<AdaptiveValueIteration>(p); }});
 }

@@ -81,6 +81,15 @@ CONFIGS = {
     "uniform 14x12x6": uniform(14, 12, 6),
     "adaptive 1008 forest value 12x10x4": forest(1008, (12, 10, 4), "value"),
     "adaptive 1920 forest value 17x13x4": forest(1920, (17, 13, 4), "value"),
+    # The same with `starts: 3` (the learner also refines from the cells scaled by 0.9 and
+    # 0.8, and keeps the tree with the lowest backup gap).
+    "adaptive 120 forest value 4x3x3 starts 3": forest(120, (4, 3, 3), "value") + " behaviors.hit.learner.starts=3",
+    "adaptive 240 forest value 6x4x4 starts 3": forest(240, (6, 4, 4), "value") + " behaviors.hit.learner.starts=3",
+    "adaptive 480 forest value 8x6x4 starts 3": forest(480, (8, 6, 4), "value") + " behaviors.hit.learner.starts=3",
+    "adaptive 1008 forest value 12x10x4 starts 3": forest(1008, (12, 10, 4), "value") +
+    " behaviors.hit.learner.starts=3",
+    "adaptive 1920 forest value 17x13x4 starts 3": forest(1920, (17, 13, 4), "value") +
+    " behaviors.hit.learner.starts=3",
     "adaptive 480 conforming both": adaptive(
         (4, 4, 2), "behaviors.hit.discretizer.split_axes=longest behaviors.hit.discretizer.refinement=conforming "
                    "behaviors.hit.learner.max_vertices=480 behaviors.hit.learner.criterion=both"),
@@ -135,7 +144,7 @@ def main():
             tied = hit["stats"].get("hanging_vertices", 0)
             row = {"name": name, "flags": flags, "vertices": vertices, "free": vertices - tied, "tied": tied,
                    "table_bytes": hit["table_bytes"], "train_s": hit["seconds"] + hit["tabulate_seconds"],
-                   "seeds": {}}
+                   "start": hit["stats"].get("initial_cells"), "seeds": {}}
             for seed in seeds:
                 result = run(args.mgrl, ["eval", SCENARIO, "--policy", out, "--trials", str(args.trials), "--seed",
                                          str(seed), "--json"] + sets(flags), env)
@@ -152,7 +161,8 @@ def main():
 def print_row(row, seeds):
     cells = "  ".join(f"{100 * row['seeds'][s]['success']:5.1f}% {row['seeds'][s]['time']:.2f}s" for s in seeds)
     times = [row["seeds"][s]["time"] for s in seeds]
-    print(f"{row['name']:<44} {row['vertices']!s:>6} {row['free']!s:>6} {row['tied']!s:>6} "
+    start = "x".join(str(c) for c in row["start"]) if row.get("start") else "-"
+    print(f"{row['name']:<44} {start:>8} {row['vertices']!s:>6} {row['free']!s:>6} {row['tied']!s:>6} "
           f"{row['table_bytes']!s:>9} {row['train_s'] or 0:7.1f}s  {cells}  mean {sum(times) / len(times):.2f}s",
           flush=True)
 

@@ -824,3 +824,147 @@ TEST_CASE("NumPy rebuilds a saved kd_tree forest: scripts/tree_value.py finds mg
 }
 
 }  // namespace mgrl
+
+namespace mgrl {
+
+namespace {
+
+constexpr const char* k2dStarts =
+    "{type: kd_tree, coordinates: polar, height: 1, angle_cells: 6, distance_cells: 5, distance_max: 2}";
+constexpr const char* k2dMissesAhead =
+    "{type: kd_tree, coordinates: polar, height: 1, angle_cells: 5, distance_cells: 4, angle_min: -90, angle_max: 90, "
+    "distance_min: 0.5, distance_max: 2.5}";
+
+}  // namespace
+
+// Issue 16, the start rule: `starts: k` refines from the scenario's initial cells and from
+// k - 1 smaller ones, and keeps the tree with the lowest backup gap relative to its value.
+// Here only the 4 x 3 start has a vertex straight ahead where the fist lands (the angles of
+// 5 and 3 cells over -90..90 degrees miss 0): the others never see a hit, their value is 0
+// everywhere (no gap either), and they must rank last.
+TEST_CASE("adaptive_value_iteration starts: refines from several initial cells and keeps the lowest relative gap",
+          "[adaptive]") {
+  const std::string learner = "{type: adaptive_value_iteration, max_vertices: 150, split_fraction: 0.2, starts: 3}";
+  // `wait` steps 0.1 m ahead, so the value is not 0 along a band ahead of the fist.
+  const Solved solved(k2dMissesAhead, learner, 2, 0.1);
+  const nlohmann::json& starts = solved.result.stats.at("starts");
+  CAPTURE(starts.dump());
+  REQUIRE(starts.size() == 3);
+  // The scenario's cells, then x 0.8 and x 0.6 rounded (x 0.9 and x 0.7 repeat a shape).
+  REQUIRE(starts[0].at("initial_cells") == nlohmann::json({5, 4}));
+  REQUIRE(starts[1].at("initial_cells") == nlohmann::json({4, 3}));
+  REQUIRE(starts[2].at("initial_cells") == nlohmann::json({3, 2}));
+  for (std::size_t i : {0, 2}) {
+    REQUIRE(starts[i].at("value_rms").get<double>() == 0);
+    REQUIRE(starts[i].at("relative_gap").is_null());
+  }
+  REQUIRE(starts[1].at("value_rms").get<double>() > 0);
+  REQUIRE(starts[1].at("relative_gap").get<double>() > 0);
+  REQUIRE(solved.result.stats.at("initial_cells") == nlohmann::json({4, 3}));
+  REQUIRE(solved.tree().initialCells() == std::vector<long long>{4, 3});
+  REQUIRE(solved.value({0, 1, 0.5}) == Approx(kInside).epsilon(1e-3));
+  // The kept tree and table are those of a single start from its cells.
+  const Solved single(
+      "{type: kd_tree, coordinates: polar, height: 1, angle_cells: 4, distance_cells: 3, angle_min: -90, "
+      "angle_max: 90, distance_min: 0.5, distance_max: 2.5}",
+      "{type: adaptive_value_iteration, max_vertices: 150, split_fraction: 0.2}", 2, 0.1);
+  REQUIRE(single.tree().cellCorners() == solved.tree().cellCorners());
+  REQUIRE(single.result.table == solved.result.table);
+  // With one start the flat tree is all there is.
+  const Solved first(k2dMissesAhead, "{type: adaptive_value_iteration, max_vertices: 150, split_fraction: 0.2}", 2,
+                     0.1);
+  REQUIRE(first.value({0, 1, 0.5}) == Approx(0).margin(1e-9));
+
+  SECTION("deterministic whatever the thread count") {
+    const Solved one(k2dMissesAhead, learner, 1, 0.1);
+    REQUIRE(one.result.stats == solved.result.stats);
+    REQUIRE(one.result.table == solved.result.table);
+  }
+  SECTION("one start: the scenario's cells, no ranking") {
+    REQUIRE(!first.result.stats.contains("starts"));
+    REQUIRE(first.result.stats.at("initial_cells") == nlohmann::json({5, 4}));
+  }
+  SECTION("a start with more initial splits than max_depth allows is skipped, and says why") {
+    // 5 x 4 needs two halvings of the distance; max_depth 1 allows one.
+    const Solved shallow(
+        "{type: kd_tree, coordinates: polar, height: 1, angle_cells: 6, distance_cells: 5, distance_max: 2, "
+        "max_depth: 1}",
+        learner);
+    const nlohmann::json& tried = shallow.result.stats.at("starts");
+    REQUIRE(tried.size() == 3);
+    REQUIRE(tried[2].at("initial_cells") == nlohmann::json({5, 4}));
+    REQUIRE_THAT(tried[2].at("skipped").get<std::string>(),
+                 Contains("cannot start from 5x4 initial cells") && Contains("max_depth"));
+    REQUIRE(!tried[0].contains("skipped"));
+  }
+}
+
+TEST_CASE("kd_tree withInitialCells: a tree from other initial cells round-trips through a policy bundle",
+          "[adaptive][kd_tree]") {
+  StateActionModel m = punchModel();
+  const std::unique_ptr<Discretizer> grid = makeGrid(k2dStarts, m);
+  REQUIRE(grid->initialCells() == std::vector<long long>{6, 5});
+  // The scenario's own cells write no start_cells array.
+  for (const StructureArray& a : grid->structure()) REQUIRE(a.name != "start_cells");
+  std::shared_ptr<const Discretizer> tree = grid->withInitialCells({5, 3});
+  REQUIRE(tree->initialCells() == std::vector<long long>{5, 3});
+  REQUIRE(tree->cellCount() == 15);
+  tree = tree->refined({0, 4, 7});
+  const std::vector<StructureArray> structure = tree->structure();
+  REQUIRE(arrayNamed(const_cast<std::vector<StructureArray>&>(structure), "start_cells").ints ==
+          std::vector<std::int32_t>{5, 3});
+
+  // A table over it, saved and read back: the scenario's grid rebuilds the same tree.
+  test::TempDir dir("adaptive-start-cells");
+  PolicyBundle bundle;
+  bundle.graphKey = "k";
+  std::vector<double> vertices;
+  for (std::size_t v = 0; v < tree->vertexCount(); ++v) {
+    const Eigen::Vector3d p = tree->vertexPosition(v);
+    vertices.insert(vertices.end(), {p.x(), p.y(), p.z()});
+  }
+  auto save = [&](std::vector<StructureArray> arrays) {
+    bundle.behaviors["hit"] = PolicyBehavior{"key", nlohmann::json::object(), QTable(m, tree->vertexCount()),
+                                             vertices, "kd_tree", std::move(arrays), nullptr};
+    savePolicyBundle(dir.path / "policy", bundle);
+    return loadPolicyBundle(dir.path / "policy", m, "k").behaviors.at("hit").grid;
+  };
+  const auto restored = grid->restored(save(structure));
+  REQUIRE(restored->initialCells() == std::vector<long long>{5, 3});
+  REQUIRE(restored->cellCorners() == tree->cellCorners());
+  REQUIRE(restored->hanging().vertex == tree->hanging().vertex);
+
+  SECTION("without start_cells the roots give the tree away") {
+    std::vector<StructureArray> bad = structure;
+    bad.erase(std::remove_if(bad.begin(), bad.end(), [](const StructureArray& a) { return a.name == "start_cells"; }),
+              bad.end());
+    REQUIRE_THROWS_WITH(grid->restored(save(bad)), Contains("hit.grid.roots.npy") && Contains("root boxes"));
+  }
+  SECTION("start_cells of the wrong shape") {
+    std::vector<StructureArray> bad = structure;
+    arrayNamed(bad, "start_cells").ints = {5, 3, 2};
+    arrayNamed(bad, "start_cells").shape = {3};
+    REQUIRE_THROWS_WITH(grid->restored(save(bad)),
+                        Contains("hit.grid.start_cells.npy") && Contains("expected 2 int32 initial cells") &&
+                            Contains("(3,)"));
+  }
+  SECTION("start_cells out of range") {
+    std::vector<StructureArray> bad = structure;
+    arrayNamed(bad, "start_cells").ints = {0, 3};
+    REQUIRE_THROWS_WITH(grid->restored(save(bad)),
+                        Contains("hit.grid.start_cells.npy") && Contains("from 1 to 1024") && Contains("0x3"));
+  }
+  SECTION("start_cells that disagree with the tree") {
+    std::vector<StructureArray> bad = structure;
+    arrayNamed(bad, "start_cells").ints = {7, 3};
+    REQUIRE_THROWS_WITH(grid->restored(save(bad)), Contains("hit.grid.roots.npy") && Contains("expected 7 root boxes"));
+  }
+  SECTION("refused by fixed grids and for the wrong number of axes") {
+    REQUIRE_THROWS_WITH(grid->withInitialCells({4, 4, 4}), Contains("expected initial cells for 2 axes, found 3"));
+    const std::unique_ptr<Discretizer> fixed = makeGrid("{type: polar2d}", m);
+    REQUIRE(fixed->initialCells().empty());
+    REQUIRE_THROWS_WITH(fixed->withInitialCells({4, 4}), Contains("use discretizer type kd_tree"));
+  }
+}
+
+}  // namespace mgrl

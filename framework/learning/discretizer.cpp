@@ -135,6 +135,10 @@ std::unique_ptr<Discretizer> Discretizer::refined(const std::vector<std::uint32_
   throw Error(fmt::format("{}: a fixed grid cannot be refined; use discretizer type kd_tree", type()));
 }
 
+std::unique_ptr<Discretizer> Discretizer::withInitialCells(const std::vector<long long>&) const {
+  throw Error(fmt::format("{}: a fixed grid has no initial cells to start from; use discretizer type kd_tree", type()));
+}
+
 std::unique_ptr<Discretizer> Discretizer::restored(const std::vector<StructureArray>& arrays) const {
   throw Error(fmt::format("{}: a fixed {} grid has no saved structure to restore",
                           arrays.empty() || arrays[0].source.empty() ? type() : arrays[0].source, type()));

@@ -134,6 +134,13 @@ class Discretizer {
   /// A copy with each listed cell split in two (cells not splittable() are skipped); its
   /// cells and vertices are numbered afresh. Throws mgrl::Error for fixed grids.
   virtual std::unique_ptr<Discretizer> refined(const std::vector<std::uint32_t>& cells) const;
+  /// The initial cells along each axis that refinement started from (kd_tree); empty for
+  /// fixed grids.
+  virtual std::vector<long long> initialCells() const { return {}; }
+  /// A copy that starts from `cells` initial cells along each axis, with this one's other
+  /// parameters and unrefined (adaptive_value_iteration's `starts`). Throws mgrl::Error for
+  /// fixed grids and for cells this discretizer cannot start from.
+  virtual std::unique_ptr<Discretizer> withInitialCells(const std::vector<long long>& cells) const;
   /// The arrays that describe this discretizer beyond its YAML parameters (empty for fixed
   /// grids, whose parameters say everything).
   virtual std::vector<StructureArray> structure() const { return {}; }
