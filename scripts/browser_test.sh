@@ -18,8 +18,8 @@ mkdir -p "$work"
   --set behaviors.hit.learner.type=value_iteration --out "$work/policy" --cache "$work/cache" --data "$data" \
   >"$work/train.out" 2>"$work/train.err" || { cat "$work/train.err" >&2; exit 1; }
 cd "$root"
-node --test "$root/tests/web/protocol_test.mjs" >"$work/protocol.out" 2>&1 || { cat "$work/protocol.out" >&2; exit 1; }
-echo "browser_test: the page's frame reader passed (tests/web/protocol_test.mjs)" >&2
+node --test "$root/tests/web/protocol_test.mjs" "$root/tests/web/hud_test.mjs" >"$work/protocol.out" 2>&1 || { cat "$work/protocol.out" >&2; exit 1; }
+echo "browser_test: the page's frame reader and HUD count passed (tests/web/protocol_test.mjs, hud_test.mjs)" >&2
 shots="${MGRL_SCREENSHOT_DIR:-$work/img}"
 mkdir -p "$shots"
 "$mgrl" compare "$root/scenarios/boxing.yaml" --behavior hit --learners q_learning,value_iteration --seeds 1,2 \

@@ -19,18 +19,31 @@ export class Hud {
     this.framesPerSecond = 0;
     this.frameTime = null;
     this.hitLines = [];
+    // Hit messages newer than this.stats: stats come twice a second and count every hit up
+    // to their time, a hit message comes at once; the HUD adds the two so that the count
+    // never trails the hit lines it shows.
+    this.hitsAhead = 0;
   }
 
   setConnection(text) { $('connection').textContent = text; }
 
-  setScene(scene) {
+  /** `newWorld`: a mode change or a new crowd size; the old world's hits and stats go. */
+  setScene(scene, newWorld = false) {
     this.scene = scene;
+    if (newWorld) {
+      this.stats = null;
+      this.hitLines = [];
+      this.hitsAhead = 0;
+    }
     const note = $('note');
     note.hidden = !(typeof scene.note === 'string' && scene.note.length > 0);
     note.textContent = note.hidden ? '' : scene.note;
   }
 
-  setStats(stats) { this.stats = stats; }
+  setStats(stats) {
+    this.stats = stats;
+    this.hitsAhead = 0;   // it counts every hit sent before it
+  }
 
   setError(message) {
     const error = $('error');
@@ -38,15 +51,22 @@ export class Hud {
     error.textContent = `last error: ${message}`;
   }
 
+  /** Hits so far in this world: the last stats' count and the hit messages newer than them (null before either). */
+  hitCount() {
+    if (Number.isFinite(this.stats?.hits)) return this.stats.hits + this.hitsAhead;
+    return this.hitsAhead > 0 ? this.hitsAhead : null;
+  }
+
   /** A `hit` message: one line "hit 4.1 m/s" with who hit what. */
   addHit(hit) {
+    // A hit at a time the last stats had not reached is not in their count yet.
+    if (this.stats === null || !(hit.time <= this.stats.time)) this.hitsAhead += 1;
     const who = hit.target === -1 ? 'target' : `avatar ${hit.target} ${hit.part ?? ''}`;
     const line = `hit ${fixed(hit.speed, 1)} m/s — ${hit.hand ?? '?'} ${hit.limb === 'foot' ? 'foot' : 'hand'} of ${hit.attacker} on ${who} (t ${fixed(hit.time, 1)} s)`;
     this.hitLines.unshift({line, at: performance.now()});
     this.hitLines.length = Math.min(this.hitLines.length, kHitLines);
   }
 
-  clearHits() { this.hitLines = []; }
 
   render(framesPerSecond, framesDrawn, frameTime, frameAvatars, draw) {
     const s = this.stats ?? {};
@@ -63,7 +83,7 @@ export class Hud {
       ['decision', `${fixed(s.decision_us, 2)} µs`],
       ['server', `${fixed(s.server_ms_per_frame, 2)} ms/frame`],
       ['frames dropped', s.frames_dropped ?? '–'],
-      ['hits', s.hits ?? '–'],
+      ['hits', this.hitCount() ?? '–'],
       ['hits per minute', fixed(s.hits_per_minute, 1)],
       ['success', successText(c.behaviors)],
       ['successes', s.successes === undefined ? '–' : `${s.successes} (${fixed(s.successes_per_minute, 1)} /min)`],

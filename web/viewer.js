@@ -120,11 +120,12 @@ function onScene(message) {
     fitAfter = state.frames.count;
     flashes.removeAll();
     drag.reset(message.mode === 'target');
+    state.hits.length = 0;   // the old world's hits; its times restart at 0
   }
   panel.setScene(message);
   teach.setScene(message, newWorld && previous !== null);
   learn.setScene(message);
-  hud.setScene(message);
+  hud.setScene(message, newWorld);
   dirty = true;
 }
 
@@ -338,6 +339,8 @@ connection = new Connection(`${location.protocol === 'https:' ? 'wss' : 'ws'}://
 
 window.mgrl = {
   state,
+  /** Redraws the HUD now (it is otherwise redrawn a few times a second). */
+  renderHud: () => renderHud(),
   /** Page pixel coordinates {x, y} of a world point [x, y, z] (m), as the camera is now. */
   project([x, y, z]) {
     camera.updateMatrixWorld();

@@ -674,6 +674,10 @@ async function main() {
   const sparring = await measured(page, 2);
   check(sparring.fps >= kMinFramesPerSecond, `sparring: frames keep arriving (>= ${kMinFramesPerSecond}/s over 3 s)`,
         `${sparring.fps.toFixed(1)}/s`);
+  // A new world: the target mode's hit lines are gone (sparring has no target).
+  const oldLines = await page.evaluate(() => [...document.querySelectorAll('#hits li')]
+    .map((li) => li.textContent).filter((t) => t.includes(' on target ')));
+  check(oldLines.length === 0, 'after the switch to sparring the HUD lists no target-mode hits', oldLines.join(' | '));
   await screenshot(page, 'viewer-sparring.png');
 
   // Follow: the camera keeps looking at avatar 0 (its root, at 1 m) as it moves.

@@ -1,0 +1,48 @@
+// The HUD's hit count (web/hud.js) against the messages a page receives: stats twice a
+// second, each counting every hit up to its time, and a hit message at once.
+// `node --test tests/web/hud_test.mjs` (no browser, no server).
+import {test} from 'node:test';
+import assert from 'node:assert/strict';
+
+// The HUD touches a few elements when a scene arrives; a stand-in for each.
+globalThis.document = {getElementById: () => ({hidden: false, textContent: ''})};
+const {Hud} = await import('../../web/hud.js');
+
+const hit = (time) => ({time, speed: 4, hand: 'right', limb: 'hand', attacker: 0, target: -1});
+
+test('a hit message counts at once, before the stats that include it', () => {
+  const hud = new Hud();
+  assert.equal(hud.hitCount(), null);
+  hud.addHit(hit(0.9));
+  assert.equal(hud.hitCount(), 1);                 // no stats yet
+  hud.setStats({hits: 1, time: 1.0});
+  assert.equal(hud.hitCount(), 1);                 // the stats include it: not counted twice
+  hud.addHit(hit(1.2));
+  hud.addHit(hit(1.4));
+  assert.equal(hud.hitCount(), 3);                 // stats still at t 1.0
+  hud.setStats({hits: 3, time: 1.5});
+  assert.equal(hud.hitCount(), 3);
+});
+
+test('a hit message the stats already count is not counted again', () => {
+  // The server sends a tick's stats before that tick's hit messages, and the stats count them.
+  const hud = new Hud();
+  hud.setStats({hits: 2, time: 2.0});
+  hud.addHit(hit(2.0));
+  hud.addHit(hit(1.97));
+  assert.equal(hud.hitCount(), 2);
+});
+
+test('a new world forgets the old world\'s hits and stats', () => {
+  const hud = new Hud();
+  hud.setStats({hits: 4, time: 8.0});
+  hud.addHit(hit(8.2));
+  assert.equal(hud.hitLines.length, 1);
+  hud.setScene({mode: 'target'}, false);           // the same world: a scene update
+  assert.equal(hud.hitCount(), 5);
+  hud.setScene({mode: 'sparring'}, true);
+  assert.equal(hud.hitCount(), null);
+  assert.equal(hud.hitLines.length, 0);
+  hud.addHit(hit(0.4));                            // the new world's clock starts at 0
+  assert.equal(hud.hitCount(), 1);
+});
