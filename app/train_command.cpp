@@ -315,9 +315,12 @@ json runTrain(const TrainOptions& options) {
       throw Error(fmt::format("behaviors.{}: {}", behavior.name, e.what()));
     }
     // Issue 20: the tabulated model when it fits (or is asked for), else the compact one.
-    const std::size_t vertices = behavior.discretizer->vertexCount();
-    const double tabulatedBytes = GridModel::trainingBytes(model.actionCount(), vertices, false);
-    const double compactBytes = GridModel::trainingBytes(model.actionCount(), vertices, true);
+    // A refining learner's tables grow to its vertex budget (adaptive_value_iteration).
+    const std::size_t vertices = behavior.learner->trainingVertices(*behavior.discretizer);
+    const double extra = static_cast<double>(behavior.learner->extraTables()) * static_cast<double>(vertices) *
+                         static_cast<double>(model.actionCount()) * sizeof(float);
+    const double tabulatedBytes = GridModel::trainingBytes(model.actionCount(), vertices, false) + extra;
+    const double compactBytes = GridModel::trainingBytes(model.actionCount(), vertices, true) + extra;
     const bool canCompact = behavior.learner->takesCompactModel();
     if (options.model == "compact" && !canCompact)
       throw Error(fmt::format("behaviors.{}: --model compact: expected a learner that takes a compact model "
@@ -327,11 +330,14 @@ json runTrain(const TrainOptions& options) {
                          (options.model == "auto" && tabulatedBytes > options.maxMemoryBytes && canCompact);
     const double needed = compact ? compactBytes : tabulatedBytes;
     if (needed > options.maxMemoryBytes)
-      throw Error(fmt::format("behaviors.{}: training on a {} grid of {} vertices x {} actions needs about {} "
-                              "({} model and Q tables); expected at most {} (--max-memory): use a coarser grid{}, or "
+      throw Error(fmt::format("behaviors.{}: training on a {} grid of {}{} vertices x {} actions needs about {} "
+                              "({} model and Q tables{}); expected at most {} (--max-memory): use a coarser grid{}, or "
                               "raise --max-memory",
-                              behavior.name, behavior.discretizer->type(), vertices, model.actionCount(),
-                              humanBytes(needed), compact ? "compact" : "tabulated", humanBytes(options.maxMemoryBytes),
+                              behavior.name, behavior.discretizer->type(),
+                              vertices > behavior.discretizer->vertexCount() ? "up to " : "", vertices,
+                              model.actionCount(), humanBytes(needed), compact ? "compact" : "tabulated",
+                              extra > 0 ? fmt::format(", {} more tables held", behavior.learner->extraTables()) : "",
+                              humanBytes(options.maxMemoryBytes),
                               !compact && canCompact && compactBytes <= options.maxMemoryBytes
                                   ? fmt::format(", --model compact (about {})", humanBytes(compactBytes))
                                   : ""));

@@ -131,6 +131,14 @@ class AdaptiveValueIteration final : public Learner {
   }
 
   TrainResult train(const TrainContext& context) const override;
+  // The last round's tree: max_vertices rows (count_vertices: all). Counting free vertices
+  // only, the tied ones take rows too; up to about as many again was measured (55-65 % tied
+  // with refinement: local), so twice the budget.
+  std::size_t trainingVertices(const Discretizer& grid) const override {
+    return std::max(grid.vertexCount(), countFree_ ? 2 * maxVertices_ : maxVertices_);
+  }
+  // Every start's table is kept until the gaps are measured.
+  std::size_t extraTables() const override { return starts_ - 1; }
 
  private:
   LeafScores score(const Problem& problem, const Discretizer& grid, const GridModel& g, const QTable& q,

@@ -565,6 +565,31 @@ TEST_CASE("mgrl train refuses a grid or a problem too large before training anyt
   requireOneLineRefusal(box.train(kFast + " --max-memory 0"), "--max-memory: expected gigabytes in (0, 1000000], found 0");
 }
 
+// A refining learner's tables grow to its budget, and with `starts` every start's table is
+// held until one is kept: --max-memory counts both before training anything.
+TEST_CASE("mgrl train counts adaptive_value_iteration's vertex budget and starts against --max-memory",
+          "[cli][data][adaptive]") {
+  Sandbox box("adaptive-memory");
+  const std::string adaptive =
+      "--set behaviors.approach.learner.budget=200000 --set behaviors.hit.discretizer.type=kd_tree "
+      "--set behaviors.hit.discretizer.bounds=hits "
+              "--set behaviors.hit.learner.type=adaptive_value_iteration --set behaviors.hit.learner.max_vertices=1920";
+  // The initial tree has 75 vertices (4 x 4 x 2 cells); the last round's 1920 x 1438
+  // actions need about 88 MB tabulated.
+  const Run budget = box.train(adaptive + " --max-memory 0.05 --out " + shellWord(box.path("a")));
+  requireRefusal(budget, "behaviors.hit: training on a kd_tree grid of up to 1920 vertices x ");
+  CHECK_THAT(budget.lastErrorLine(), Contains("(tabulated model and Q tables); expected at most 50.0 MB"));
+  CHECK_THAT(budget.err, !Contains("train approach:"));
+  // Three starts hold two more tables of 1920 x 1438 floats (22 MB): over 100 MB.
+  const Run starts = box.train(adaptive + " --set behaviors.hit.learner.starts=3 --max-memory 0.1 --out " +
+                               shellWord(box.path("b")));
+  requireRefusal(starts, "behaviors.hit: training on a kd_tree grid of up to 1920 vertices x ");
+  CHECK_THAT(starts.lastErrorLine(), Contains("(tabulated model and Q tables, 2 more tables held); expected at most "
+                                              "100.0 MB"));
+  CHECK_FALSE(fs::exists(box.path("a")));
+  CHECK_FALSE(fs::exists(box.path("b")));
+}
+
 // Issue 20: when the tabulated problem does not fit in --max-memory, train falls back to
 // the compact model (rewards only), which gives the same tables; --model chooses.
 TEST_CASE("mgrl train trains on the compact model when the tabulated one does not fit", "[cli][data][compact]") {

@@ -151,6 +151,12 @@ class Learner {
   /// True if train() takes a compact GridModel (GridModel::buildCompact: rewards only, the
   /// landings found per backup) as well as a tabulated one, with the same result.
   virtual bool takesCompactModel() const { return false; }
+  /// The most grid vertices training on `grid` will hold a table for: the grid's own,
+  /// or, for a learner that refines it, its vertex budget.
+  virtual std::size_t trainingVertices(const Discretizer& grid) const { return grid.vertexCount(); }
+  /// Q tables of trainingVertices() rows held beside the model and the two of a solve
+  /// (GridModel::trainingBytes), e.g. the other starts' results until one is kept.
+  virtual std::size_t extraTables() const { return 0; }
 };
 
 using LearnerRegistry = Registry<Learner>;
