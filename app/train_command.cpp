@@ -45,6 +45,14 @@ class ProgressReporter final : public TrainObserver {
     if (listener_) listener_->snapshot(table, point, grid);
   }
 
+  void note(const std::string& text) override {
+    if (drawn_) {
+      std::cerr << '\n';
+      drawn_ = false;
+    }
+    if (log_) log_(fmt::format("{}: {}", name_, text));
+  }
+
   void progress(const TrainProgress& p) override {
     if (listener_) listener_->progress(p);
     const double now = since(start_);

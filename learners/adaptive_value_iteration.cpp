@@ -21,6 +21,7 @@
 #include <numeric>
 
 #include <fmt/format.h>
+#include <fmt/ranges.h>
 
 #include "learners.hpp"
 #include "mgrl/core/error.hpp"
@@ -553,6 +554,9 @@ TrainResult AdaptiveValueIteration::train(const TrainContext& context) const {
         continue;
       }
     }
+    if (context.observer && shapes.size() > 1)
+      context.observer->note(fmt::format("start {} of {}: {} initial cells", i + 1, shapes.size(),
+                                         fmt::join(shapes[i], "x")));
     runs.push_back(refine(std::move(restart)));
     const Run& run = runs.back();
     triedIndex.push_back(tried.size());
@@ -586,6 +590,11 @@ TrainResult AdaptiveValueIteration::train(const TrainContext& context) const {
       if (runs[i].gap.relative() < runs[chosen].gap.relative()) chosen = i;
     }
   }
+  if (context.observer && runs.size() > 1)
+    context.observer->note(fmt::format("kept the start from {} initial cells (relative backup gap {:.4g}, of {} "
+                                       "starts)",
+                                       fmt::join(runs[chosen].grid->initialCells(), "x"), runs[chosen].gap.relative(),
+                                       runs.size()));
   Run best = std::move(runs[chosen]);
   const nlohmann::json chosenCells = tried[triedIndex[chosen]].at("initial_cells");
   result.finalResidual = best.residual;

@@ -875,6 +875,19 @@ TEST_CASE("adaptive_value_iteration starts: refines from several initial cells a
                      0.1);
   REQUIRE(first.value({0, 1, 0.5}) == Approx(0).margin(1e-9));
 
+  SECTION("the user is told which start is trained and which is kept") {
+    struct Notes final : TrainObserver {
+      std::vector<std::string> lines;
+      void note(const std::string& text) override { lines.push_back(text); }
+    } notes;
+    const TrainResult again = solved.learner->train({solved.problem, solved.tabulated, &notes, nullptr, 2});
+    REQUIRE(again.table == solved.result.table);
+    REQUIRE(notes.lines == std::vector<std::string>{"start 1 of 3: 5x4 initial cells", "start 2 of 3: 4x3 initial cells",
+                                                    "start 3 of 3: 3x2 initial cells",
+                                                    fmt::format("kept the start from 4x3 initial cells (relative "
+                                                                "backup gap {:.4g}, of 3 starts)",
+                                                                starts[1].at("relative_gap").get<double>())});
+  }
   SECTION("deterministic whatever the thread count") {
     const Solved one(k2dMissesAhead, learner, 1, 0.1);
     REQUIRE(one.result.stats == solved.result.stats);

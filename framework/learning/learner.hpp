@@ -42,6 +42,8 @@ class TrainObserver {
   virtual ~TrainObserver() = default;
   /// Called often (at most every few milliseconds of work); cheap.
   virtual void progress(const TrainProgress&) {}
+  /// A line worth telling the user now (say, which of several starts is being trained).
+  virtual void note(const std::string&) {}
 
   /// How many snapshots of the table this observer wants along training (0, the default:
   /// none, and learners then do no extra work). Learners take them at about this many
