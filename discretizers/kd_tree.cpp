@@ -195,6 +195,7 @@ class KdTree final : public Discretizer {
     d["hanging_vertex_count"] = hanging().size();
     d["deepest_leaf"] = deepest;
     d["initial_depth"] = initialDepth_;
+    d["initial_cells"] = initialCells();
     d["root_cells"] = std::vector<std::uint64_t>(roots_.begin(), roots_.begin() + dimension_);
     d["max_depth"] = maxDepth_;
     return d;

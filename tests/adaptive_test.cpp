@@ -921,6 +921,7 @@ TEST_CASE("kd_tree withInitialCells: a tree from other initial cells round-trips
   for (const StructureArray& a : grid->structure()) REQUIRE(a.name != "start_cells");
   std::shared_ptr<const Discretizer> tree = grid->withInitialCells({5, 3});
   REQUIRE(tree->initialCells() == std::vector<long long>{5, 3});
+  REQUIRE(tree->describe()["initial_cells"] == nlohmann::json::array({5, 3}));
   REQUIRE(tree->cellCount() == 15);
   tree = tree->refined({0, 4, 7});
   const std::vector<StructureArray> structure = tree->structure();
