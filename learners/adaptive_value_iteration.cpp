@@ -57,6 +57,23 @@ struct InfluenceField {
   int sweeps = 0;
 };
 
+// V_s at target e by one backup: the best over s's out-actions of the reward plus the
+// discounted value interpolated where the target lands (0 outside the grid).
+double backedUpValue(const Problem& problem, const Discretizer& grid, const GridModel& g, const QTable& q,
+                     std::size_t s, const Eigen::Vector3d& e) {
+  const StateActionModel& m = problem.model;
+  double best = -std::numeric_limits<double>::infinity();
+  for (std::size_t j = 0; j < q.actionsOf(s); ++j) {
+    const std::size_t a = m.stateActionBegin[s] + j;
+    double value = problem.reward.evaluate(m, a, e);
+    GridCell next;
+    if (grid.locate(problem.environment.next(m, a, e), next))
+      value += g.discount[a] * maxInterpolated(q, g, g.actionTo[a], next.cell, next.frac.data());
+    best = std::max(best, value);
+  }
+  return best;
+}
+
 // A reference-free error of a solution, to rank starts: the root mean square over motion
 // states and `points` of V_s by one backup at the target against V_s interpolated there
 // (the value criterion's measure, Munos & Moore's value non-linearity, taken at given
@@ -69,7 +86,6 @@ struct Gap {
 };
 Gap backupGap(const Problem& problem, const Discretizer& grid, const GridModel& g, const QTable& q,
               const std::vector<Eigen::Vector3d>& points, unsigned threads) {
-  const StateActionModel& m = problem.model;
   const std::size_t states = q.stateCount();
   std::size_t widest = 0;
   for (std::size_t s = 0; s < states; ++s) widest = std::max(widest, q.actionsOf(s));
@@ -84,15 +100,7 @@ Gap backupGap(const Problem& problem, const Discretizer& grid, const GridModel& 
       std::fill(sum.begin(), sum.end(), 0.0f);
       addInterpolated(sum.data(), q, static_cast<std::uint32_t>(s), grid.stencil(cell), 1.0f);
       const double here = *std::max_element(sum.begin(), sum.begin() + static_cast<std::ptrdiff_t>(n));
-      double backedUp = -std::numeric_limits<double>::infinity();
-      for (std::size_t j = 0; j < n; ++j) {
-        const std::size_t a = m.stateActionBegin[s] + j;
-        double value = problem.reward.evaluate(m, a, e);
-        GridCell next;
-        if (grid.locate(problem.environment.next(m, a, e), next))
-          value += g.discount[a] * maxInterpolated(q, g, g.actionTo[a], next.cell, next.frac.data());
-        backedUp = std::max(backedUp, value);
-      }
+      const double backedUp = backedUpValue(problem, grid, g, q, s, e);
       squares[s] += (backedUp - here) * (backedUp - here);
       values[s] += here * here;
       counts[s] += 1;
@@ -311,7 +319,6 @@ InfluenceField influenceField(const GridModel& g, const QTable& q, double tolera
 
 LeafScores AdaptiveValueIteration::score(const Problem& problem, const Discretizer& grid, const GridModel& g,
                                          const QTable& q, unsigned threads) const {
-  const StateActionModel& m = problem.model;
   const std::size_t leaves = grid.cellCount(), states = q.stateCount();
   const int corners = 1 << grid.dimension();
   std::size_t widest = 0;
@@ -338,15 +345,7 @@ LeafScores AdaptiveValueIteration::score(const Problem& problem, const Discretiz
       if (n == 0) continue;
       // Value non-linearity: V_s at the centre by one backup of each out-action against V_s
       // interpolated from the corners.
-      double backedUp = -std::numeric_limits<double>::infinity();
-      for (std::size_t j = 0; j < n; ++j) {
-        const std::size_t a = m.stateActionBegin[s] + j;
-        double value = problem.reward.evaluate(m, a, centre);
-        GridCell next;
-        if (grid.locate(problem.environment.next(m, a, centre), next))
-          value += g.discount[a] * maxInterpolated(q, g, g.actionTo[a], next.cell, next.frac.data());
-        backedUp = std::max(backedUp, value);
-      }
+      const double backedUp = backedUpValue(problem, grid, g, q, s, centre);
       std::fill(sum.begin(), sum.end(), 0.0f);
       addInterpolated(sum.data(), q, static_cast<std::uint32_t>(s), stencil, 1.0f);
       const double interpolatedValue = *std::max_element(sum.begin(), sum.begin() + static_cast<std::ptrdiff_t>(n));

@@ -962,6 +962,16 @@ TEST_CASE("kd_tree withInitialCells: a tree from other initial cells round-trips
                         Contains("hit.grid.start_cells.npy") && Contains("expected 2 int32 initial cells") &&
                             Contains("(3,)"));
   }
+  SECTION("start_cells of another type") {
+    std::vector<StructureArray> bad = structure;
+    StructureArray& start = arrayNamed(bad, "start_cells");
+    start.integer = false;
+    start.reals = {5, 3};
+    start.ints.clear();
+    REQUIRE_THROWS_WITH(grid->restored(save(bad)), Contains("hit.grid.start_cells.npy") &&
+                                                       Contains("expected 2 int32 initial cells") &&
+                                                       Contains("found float64"));
+  }
   SECTION("start_cells out of range") {
     std::vector<StructureArray> bad = structure;
     arrayNamed(bad, "start_cells").ints = {0, 3};
