@@ -67,7 +67,6 @@ export class Hud {
     this.hitLines.length = Math.min(this.hitLines.length, kHitLines);
   }
 
-
   render(framesPerSecond, framesDrawn, frameTime, frameAvatars, draw) {
     const s = this.stats ?? {};
     const c = this.scene ?? {};
