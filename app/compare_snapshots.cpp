@@ -32,7 +32,7 @@ void SnapshotEvaluator::snapshot(const QTable& table, const CurvePoint& point, c
                                            : shared_[next++]);
   PolicyController controller(graph_.model, std::move(parts));
   const json result = Trials::summary(trials_.run(
-      [&](std::uint32_t s, const Eigen::Vector3d& e) { return controller.choose(s, e); }, trialCount_, seconds_, 1));
+      [&](std::uint32_t s, const TargetState& e) { return controller.choose(s, e); }, trialCount_, seconds_, 1));
   points_.push_back({point.updates, point.seconds, point.residual, result["success_rate"], result["mean_time_to_hit_s"],
                      result["mean_return"]});
   status_ = fmt::format("success {:.0f} % at snapshot {}", 100 * result["success_rate"].get<double>(), points_.size());

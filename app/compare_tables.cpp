@@ -56,6 +56,12 @@ Comparison compareTables(const QTable& q, const std::vector<double>& positions, 
 }
 
 void requireCovers(const Discretizer& reference, const Discretizer& grid, const std::string& behavior) {
+  // The measures read a table's vertices back from the bundle's positions, which do not
+  // tell a speed layer or a velocity heading apart.
+  if (reference.layerAxis() || grid.layerAxis())
+    throw Error(fmt::format("--reference-set: behaviors.{}: a {} grid has speed layers, which a reference set cannot "
+                            "be compared on yet; compare without --reference-set (against value iteration on the same grid)",
+                            behavior, grid.layerAxis() ? grid.type() : reference.type()));
   for (std::size_t v = 0; v < grid.vertexCount(); ++v) {
     const std::array<double, 3> c = reference.coordinates(grid.vertexPosition(v));
     for (int i = 0; i < reference.dimension(); ++i) {

@@ -65,7 +65,8 @@ json runEval(const EvalOptions& options) {
   }
   const Trials trials(model, behaviors, targetHeight, loaded.scenario.path.string());
   const double gamma = behaviors.front().reward->gamma();
-  const StaticTarget environment;
+  // The online search moves the target as the behaviours' environment model does (as trials do).
+  const EnvironmentModel& environment = *behaviors.front().environment;
   PolicyController controller(model, parts);
   std::vector<SearchPart> searchParts;
   for (const Behavior& b : behaviors)
@@ -73,19 +74,19 @@ json runEval(const EvalOptions& options) {
   OnlineSearchController search(model, environment, searchParts, SearchHorizon{options.horizon, options.horizonSeconds},
                                 gamma);
   std::size_t expanded = 0;
-  auto choose = [&](const std::string& kind, std::uint32_t s, const Eigen::Vector3d& e) -> std::size_t {
+  auto choose = [&](const std::string& kind, std::uint32_t s, const TargetState& e) -> std::size_t {
     if (kind == "policy") return controller.choose(s, e);
     const std::size_t a = search.choose(s, e);
     expanded += search.expanded();
     return a;
   };
-  auto run = [&](const std::string& kind, std::vector<std::pair<std::uint32_t, Eigen::Vector3d>>* decisions) {
+  auto run = [&](const std::string& kind, std::vector<std::pair<std::uint32_t, TargetState>>* decisions) {
     ChooseAction chooser;
-    if (kind != "random") chooser = [&](std::uint32_t s, const Eigen::Vector3d& e) { return choose(kind, s, e); };
+    if (kind != "random") chooser = [&](std::uint32_t s, const TargetState& e) { return choose(kind, s, e); };
     return trials.run(chooser, options.trials, options.seconds, options.seed, decisions);
   };
 
-  std::vector<std::pair<std::uint32_t, Eigen::Vector3d>> decisions;
+  std::vector<std::pair<std::uint32_t, TargetState>> decisions;
   const double startup = secondsSinceStart();
   TrialStats stats = run(options.controller, options.controller != "random" ? &decisions : nullptr);
   json report = Trials::summary(stats);

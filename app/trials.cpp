@@ -46,6 +46,7 @@ Trials::Trials(const StateActionModel& model, const std::vector<Behavior>& behav
   // a punch (what trials counted before success criteria). Returns are discounted with the
   // first behaviour's gamma.
   std::tie(criteria_, criteriaFrom_) = trialCriteria(behaviors);
+  environment_ = behaviors.front().environment.get();
   gamma_ = behaviors.front().reward->gamma();
 }
 
@@ -61,24 +62,26 @@ std::pair<std::vector<SuccessCriterion>, std::string> trialCriteria(const std::v
 
 // A target uniform by area in the approach region's square of side 2 reach, at the target
 // height, rejected until the region holds it. The constructor has checked that some do.
-Eigen::Vector3d Trials::placeTarget(Rng& starts) const {
+// A moving target's motion is drawn after its position (a static target draws nothing, so
+// its trials are those of before moving targets).
+TargetState Trials::placeTarget(Rng& starts) const {
   for (;;) {
     const Eigen::Vector3d e((2 * starts.uniform() - 1) * reach_, targetHeight_, (2 * starts.uniform() - 1) * reach_);
-    if (region_->inside(e)) return e;
+    if (region_->inside(e)) return environment_->draw(e, starts);
   }
 }
 
 TrialStats Trials::run(const ChooseAction& choose, std::size_t count, double seconds, std::uint64_t seed,
-                       std::vector<std::pair<std::uint32_t, Eigen::Vector3d>>* decisions) const {
+                       std::vector<std::pair<std::uint32_t, TargetState>>* decisions) const {
   const StateActionModel& model = model_;
-  const StaticTarget environment;
+  const EnvironmentModel& environment = *environment_;
   Rng starts(seed), choices(seed ^ 0x5eed5eed5eedULL);
   TrialStats stats;
   stats.trials = count;
   const double limit = seconds / model.frameTime;
   for (std::size_t trial = 0; trial < count; ++trial) {
     auto s = static_cast<std::uint32_t>(starts.below(model.stateCount()));
-    Eigen::Vector3d e = placeTarget(starts);
+    TargetState e = placeTarget(starts);
     double elapsed = 0, discount = 1, trialReturn = 0;
     bool hit = false;
     std::vector<SuccessCriterion::Tracker> trackers;

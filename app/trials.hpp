@@ -1,8 +1,9 @@
 #pragma once
 /// \file
 /// The evaluation trials of `mgrl eval` and `mgrl compare` (DESIGN.md sec. 5): from random
-/// starts (a state of the graph, a static target on the floor of the first always-active
-/// behaviour's grid, at the target height) a controller acts until the scenario's success
+/// starts (a state of the graph, a target on the floor of the first always-active
+/// behaviour's grid, at the target height, moving as the first behaviour's environment model
+/// draws it: static, or a moving_target's speed and direction) a controller acts until the scenario's success
 /// criterion is met (mgrl/learning/success.hpp), or the trial's motion runs out. The
 /// criterion: the behaviours' declared `success:` (any of them met), else the first one
 /// implied by a reward's contact term (the paper's hit: an effective punch within
@@ -35,8 +36,8 @@ struct TrialStats {
   double returns = 0;            ///< sum over trials of the discounted weighted reward
 };
 
-/// Picks an action of state s (a global action index) for the target at e (avatar frame).
-using ChooseAction = std::function<std::size_t(std::uint32_t s, const Eigen::Vector3d& e)>;
+/// Picks an action of state s (a global action index) for the environment state e (avatar frame).
+using ChooseAction = std::function<std::size_t(std::uint32_t s, const TargetState& e)>;
 
 class Trials {
  public:
@@ -50,7 +51,7 @@ class Trials {
   /// the first k trials of any count start alike. `choose` null: uniformly random actions.
   /// `decisions`, if given, receives every (state, target) a decision was asked for.
   TrialStats run(const ChooseAction& choose, std::size_t count, double seconds, std::uint64_t seed,
-                 std::vector<std::pair<std::uint32_t, Eigen::Vector3d>>* decisions = nullptr) const;
+                 std::vector<std::pair<std::uint32_t, TargetState>>* decisions = nullptr) const;
 
   /// {"success_rate", "successes", "mean_time_to_hit_s" (seconds to success; null without
   ///  one), "median_time_to_hit_s", "mean_return", "decisions"}.
@@ -63,7 +64,10 @@ class Trials {
   nlohmann::json successJson() const;
 
  private:
-  Eigen::Vector3d placeTarget(Rng& starts) const;
+  TargetState placeTarget(Rng& starts) const;
+  /// The first behaviour's environment model: how trial targets move (all behaviours see
+  /// the same target).
+  const EnvironmentModel* environment_ = nullptr;
   const StateActionModel& model_;
   const std::vector<Behavior>& behaviors_;
   const Discretizer* region_ = nullptr;

@@ -232,7 +232,7 @@ int main(int argc, char** argv) {
       mgrl::Rng rng(7);
       std::vector<Eigen::Vector3d> points;
       for (std::size_t i = 0; i < pointCount; ++i)
-        points.push_back(truth.grid->sample({rng.uniform(), rng.uniform(), rng.uniform()}));
+        points.push_back(truth.grid->sample({rng.uniform(), rng.uniform(), rng.uniform(), 0}).position);
 
       if (budgets.empty())
         budgets = quick ? std::vector<Budget>{{{8, 6, 5}}, {{10, 8, 6}}, {{20, 16, 6}}}

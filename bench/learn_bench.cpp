@@ -189,7 +189,7 @@ int main(int argc, char** argv) {
     std::size_t inside = 0;
     for (auto& [s, e] : queries) {
       s = static_cast<std::uint32_t>(rng.below(m.stateCount()));
-      e = (rng.uniform() < 0.5 ? approach : hit)->grid->sample({rng.uniform(), rng.uniform(), rng.uniform()});
+      e = (rng.uniform() < 0.5 ? approach : hit)->grid->sample({rng.uniform(), rng.uniform(), rng.uniform(), 0}).position;
       e.y() = m.centroid[1];
       inside += hit->grid->inside(e);
     }
@@ -214,7 +214,7 @@ int main(int argc, char** argv) {
       for (std::size_t i = 0; i < queries.size(); ++i) {
         if (i % 30 == 0) e = queries[i].second;
         const std::size_t a = controller.choose(s, e);
-        e = approach->environment.next(m, a, e);
+        e = approach->environment.next(m, a, e).position;
         s = m.actionTo[a];
         sink += a;
       }

@@ -78,7 +78,8 @@ class Cylindrical3d final : public Discretizer {
                       false}});
   }
   std::string type() const override { return "cylindrical3d"; }
-  std::array<double, 3> coordinates(const Eigen::Vector3d& e) const override {
+  std::array<double, 3> coordinates(const TargetState& state) const override {
+    const Eigen::Vector3d& e = state.position;
     return {std::atan2(e.x(), e.z()), std::hypot(e.x(), e.z()), e.y()};
   }
   Eigen::Vector3d position(const std::array<double, 3>& c) const override {
@@ -114,6 +115,7 @@ void registerAll(DiscretizerRegistry& registry) {
   registerPolar2d(registry);
   registerCylindrical3d(registry);
   registerKdTree(registry);
+  registerPolarVelocity(registry);
 }
 
 }  // namespace mgrl::discretizers

@@ -7,7 +7,7 @@
 
 namespace mgrl::discretizers {
 
-/// Adds polar2d, cylindrical3d and kd_tree.
+/// Adds polar2d, cylindrical3d, kd_tree and polar_velocity.
 void registerAll(DiscretizerRegistry& registry);
 
 /// Evenly spaced vertices from `from` to `to`; with `wrap`, the last one stops a step
@@ -31,4 +31,5 @@ namespace mgrl::discretizers {
 void registerPolar2d(DiscretizerRegistry& registry);
 void registerCylindrical3d(DiscretizerRegistry& registry);
 void registerKdTree(DiscretizerRegistry& registry);
+void registerPolarVelocity(DiscretizerRegistry& registry);
 }  // namespace mgrl::discretizers

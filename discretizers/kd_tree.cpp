@@ -147,7 +147,8 @@ class KdTree final : public Discretizer {
 
   std::string type() const override { return "kd_tree"; }
 
-  std::array<double, 3> coordinates(const Eigen::Vector3d& e) const override {
+  std::array<double, 3> coordinates(const TargetState& state) const override {
+    const Eigen::Vector3d& e = state.position;
     const double angle = std::atan2(e.x(), e.z()), distance = std::hypot(e.x(), e.z());
     if (coordinates_ == 1) return {std::copysign(distance, e.z()), 0, 0};
     return {angle, distance, coordinates_ == 3 ? e.y() : 0.0};
@@ -157,7 +158,7 @@ class KdTree final : public Discretizer {
     return {c[1] * std::sin(c[0]), coordinates_ == 3 ? c[2] : height_, c[1] * std::cos(c[0])};
   }
 
-  bool locate(const Eigen::Vector3d& e, GridCell& out) const override {
+  bool locate(const TargetState& e, GridCell& out) const override {
     std::array<double, 3> c = coordinates(e);
     for (int i = 0; i < dimension_; ++i) {
       if (!std::isfinite(c[i])) return false;
@@ -168,7 +169,7 @@ class KdTree final : public Discretizer {
     return true;
   }
 
-  GridCell locateClamped(const Eigen::Vector3d& e) const override {
+  GridCell locateClamped(const TargetState& e) const override {
     std::array<double, 3> c = coordinates(e);
     for (int i = 0; i < dimension_; ++i) {
       if (std::isnan(c[i])) c[i] = lo_[i];
@@ -177,7 +178,7 @@ class KdTree final : public Discretizer {
     return find(c);
   }
 
-  Eigen::Vector3d vertexPosition(std::size_t v) const override {
+  TargetState vertexState(std::size_t v) const override {
     std::array<double, 3> c{0, 0, 0};
     for (int i = 0; i < dimension_; ++i) c[i] = vertexCoordinates_[v * dimension_ + i];
     return position(c);

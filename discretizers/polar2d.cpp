@@ -37,7 +37,8 @@ class Polar2d final : public Discretizer {
              GridAxis{"distance", "m", evenVertices(minRadius, radius, rings, false), false}});
   }
   std::string type() const override { return "polar2d"; }
-  std::array<double, 3> coordinates(const Eigen::Vector3d& e) const override {
+  std::array<double, 3> coordinates(const TargetState& state) const override {
+    const Eigen::Vector3d& e = state.position;
     return {std::atan2(e.x(), e.z()), std::hypot(e.x(), e.z()), 0};
   }
   Eigen::Vector3d position(const std::array<double, 3>& c) const override {

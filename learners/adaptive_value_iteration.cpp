@@ -569,8 +569,8 @@ TrainResult AdaptiveValueIteration::train(const TrainContext& context) const {
     std::vector<Eigen::Vector3d> points;
     Rng rng(kGapSeed);
     for (std::size_t i = 0; i < kGapPoints; ++i) {
-      const std::array<double, 3> u{rng.uniform(), rng.uniform(), rng.uniform()};
-      points.push_back(problem.grid.sample(u));
+      const std::array<double, 4> u{rng.uniform(), rng.uniform(), rng.uniform(), 0};
+      points.push_back(problem.grid.sample(u).position);  // kd_tree grids have no speed layers
     }
     std::size_t vertices = 0;
     for (const Run& run : runs) vertices += run.grid->vertexCount();

@@ -59,7 +59,7 @@ struct Walk {
   std::uint64_t updates = 0, restarts = 0;
   std::uint64_t episodeActions = 0;  ///< actions since the last restart (for max_episode_actions)
   std::uint32_t state = 0;
-  Eigen::Vector3d target{0, 0, 0};
+  TargetState target;
 };
 
 // `capped`: the episode length is limited, so it is part of the state (absent otherwise,
@@ -68,8 +68,10 @@ nlohmann::json toJson(const Walk& w, bool capped) {
   nlohmann::json rng = nlohmann::json::array();
   for (std::uint64_t word : w.rng.state()) rng.push_back(word);
   nlohmann::json j = {{"updates", w.updates}, {"restarts", w.restarts}, {"state", w.state},
-                      {"target", {w.target.x(), w.target.y(), w.target.z()}}, {"rng", rng}};
+                      {"target", {w.target.position.x(), w.target.position.y(), w.target.position.z()}}, {"rng", rng}};
   if (capped) j["episode_actions"] = w.episodeActions;
+  // A moving target's speed and heading; absent for static targets (their format unchanged).
+  if (w.target.moving() || w.target.heading != 0) j["target_motion"] = {w.target.speed, w.target.heading};
   return j;
 }
 
@@ -109,9 +111,15 @@ Saved readSaved(const nlohmann::json& state, const ManifestReader& r, std::size_
       r.fail("state", "only the keys updates, walk, seconds, curve, cells_seen", json(item.key()));
   Saved saved;
   Walk& w = saved.walk;
+  const bool motion =
+      state.contains("walk") && state["walk"].is_object() && state["walk"].contains("target_motion");
   const json& walk =
-      maxEpisode > 0 ? r.object(state, "state", "walk", {"updates", "restarts", "state", "target", "rng", "episode_actions"})
-                     : r.object(state, "state", "walk", {"updates", "restarts", "state", "target", "rng"});
+      maxEpisode > 0
+          ? (motion ? r.object(state, "state", "walk",
+                               {"updates", "restarts", "state", "target", "rng", "episode_actions", "target_motion"})
+                    : r.object(state, "state", "walk", {"updates", "restarts", "state", "target", "rng", "episode_actions"}))
+          : (motion ? r.object(state, "state", "walk", {"updates", "restarts", "state", "target", "rng", "target_motion"})
+                    : r.object(state, "state", "walk", {"updates", "restarts", "state", "target", "rng"}));
   if (maxEpisode > 0)
     w.episodeActions = r.unsignedInteger(walk, "state.walk", "episode_actions", maxEpisode - 1);
   w.updates = r.unsignedInteger(walk, "state.walk", "updates", budget);
@@ -123,7 +131,16 @@ Saved readSaved(const nlohmann::json& state, const ManifestReader& r, std::size_
   if (!target.is_array() || target.size() != 3 ||
       !std::all_of(target.begin(), target.end(), [](const json& v) { return v.is_number() && std::isfinite(v.get<double>()); }))
     r.fail("state.walk.target", "3 finite numbers", target);
-  w.target = {target[0].get<double>(), target[1].get<double>(), target[2].get<double>()};
+  w.target = TargetState(target[0].get<double>(), target[1].get<double>(), target[2].get<double>());
+  if (walk.contains("target_motion")) {
+    const json& motion = walk["target_motion"];
+    if (!motion.is_array() || motion.size() != 2 ||
+        !std::all_of(motion.begin(), motion.end(), [](const json& v) { return v.is_number() && std::isfinite(v.get<double>()); }) ||
+        motion[0].get<double>() < 0)
+      r.fail("state.walk.target_motion", "2 finite numbers: a speed >= 0 (m/s) and a heading (rad)", motion);
+    w.target.speed = motion[0].get<double>();
+    w.target.heading = motion[1].get<double>();
+  }
   const json& rng = r.member(walk, "state.walk", "rng");
   if (!rng.is_array() || rng.size() != 4 ||
       !std::all_of(rng.begin(), rng.end(), [](const json& v) { return v.is_number_unsigned(); }))
@@ -189,8 +206,12 @@ TrainResult QLearning::train(const TrainContext& context) const {
 
   auto restart = [&](Walk& w) {
     w.state = static_cast<std::uint32_t>(w.rng.below(m.stateCount()));
-    do w.target = grid.sample({w.rng.uniform(), w.rng.uniform(), w.rng.uniform()});
-    while (!grid.inside(w.target));
+    do {
+      // A grid with speed layers draws a fourth number for the layer; others keep the
+      // paper's three (and their random streams, so their tables are unchanged).
+      const double u0 = w.rng.uniform(), u1 = w.rng.uniform(), u2 = w.rng.uniform();
+      w.target = grid.sample({u0, u1, u2, grid.layerAxis() ? w.rng.uniform() : 0.0});
+    } while (!grid.inside(w.target));
     ++w.restarts;
     w.episodeActions = 0;
   };

@@ -23,21 +23,23 @@ QLearningSteps::QLearningSteps(const Problem& problem, std::uint64_t budget, std
   table_ = QTable(problem.model, frame_.vertexCount);
   seen_.assign(frame_.vertexCount * frame_.actionCount, 0);
   vertex_.resize(frame_.vertexCount);
-  for (std::size_t v = 0; v < frame_.vertexCount; ++v) vertex_[v] = problem.grid.vertexPosition(v);
+  for (std::size_t v = 0; v < frame_.vertexCount; ++v) vertex_[v] = problem.grid.vertexState(v);
   restart();
 }
 
 double QLearningSteps::tableBytes(const Problem& problem) {
   // The table, the touched flags and the vertex positions.
   const double pairs = static_cast<double>(problem.model.actionCount()) * static_cast<double>(problem.grid.vertexCount());
-  return pairs * (sizeof(float) + 1) + static_cast<double>(problem.grid.vertexCount()) * sizeof(Eigen::Vector3d);
+  return pairs * (sizeof(float) + 1) + static_cast<double>(problem.grid.vertexCount()) * sizeof(TargetState);
 }
 
 // As q_learning.cpp's restart(): a random pose, then a random target inside the grid.
 void QLearningSteps::restart() {
   state_ = static_cast<std::uint32_t>(rng_.below(problem_.model.stateCount()));
-  do target_ = problem_.grid.sample({rng_.uniform(), rng_.uniform(), rng_.uniform()});
-  while (!problem_.grid.inside(target_));
+  do {
+    const double u0 = rng_.uniform(), u1 = rng_.uniform(), u2 = rng_.uniform();
+    target_ = problem_.grid.sample({u0, u1, u2, problem_.grid.layerAxis() ? rng_.uniform() : 0.0});
+  } while (!problem_.grid.inside(target_));
   ++restarts_;
 }
 
@@ -54,7 +56,7 @@ QStep QLearningSteps::step() {
   QStep out;
   out.update = updates_ + 1;
   out.state = state_;
-  out.target = target_;
+  out.target = target_.position;
   const std::uint32_t begin = m.stateActionBegin[state_], end = m.stateActionBegin[state_ + 1];
   const std::size_t a = begin + static_cast<std::uint32_t>(rng_.below(end - begin));
   out.action = static_cast<std::uint32_t>(a);
@@ -71,13 +73,13 @@ QStep QLearningSteps::step() {
     const GridTransition t = tabulate(problem_, a, vertex_[v]);
     QStepVertex row;
     row.vertex = static_cast<std::uint32_t>(v);
-    row.position = vertex_[v];
+    row.position = vertex_[v].position;
     for (int k = 0; k < stencil.size; ++k)
       if (stencil.vertex[k] == v) row.weight += stencil.weight[k];
     row.reward = t.reward;
     row.discount = g.discount[a];
     row.nextInside = t.cell >= 0;
-    row.next = problem_.environment.next(m, a, vertex_[v]);
+    row.next = problem_.environment.next(m, a, vertex_[v]).position;
     row.future = t.cell >= 0 ? maxInterpolated(table_, g, g.actionTo[a], static_cast<std::uint32_t>(t.cell), t.frac) : 0;
     const float target = backup(table_, g, a, t);
     row.backup = target;
@@ -92,7 +94,7 @@ QStep QLearningSteps::step() {
   }
   target_ = g.rigid.empty() ? problem_.environment.next(m, a, target_) : g.rigidNext(a, target_);
   state_ = m.actionTo[a];
-  out.targetNext = target_;
+  out.targetNext = target_.position;
   out.nextState = state_;
   ++updates_;
   // The paper restarts when the target leaves the grid.

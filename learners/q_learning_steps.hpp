@@ -63,7 +63,7 @@ class QLearningSteps {
   /// (action, vertex) entries updated at least once.
   std::size_t touched() const { return touched_; }
   std::uint32_t state() const { return state_; }
-  const Eigen::Vector3d& target() const { return target_; }
+  const Eigen::Vector3d& target() const { return target_.position; }
   const QTable& table() const { return table_; }
   const GridModel& grid() const { return frame_; }
 
@@ -73,14 +73,14 @@ class QLearningSteps {
   Problem problem_;
   GridModel frame_;
   QTable table_;
-  std::vector<Eigen::Vector3d> vertex_;
+  std::vector<TargetState> vertex_;
   std::vector<std::uint8_t> seen_;  ///< per (action, vertex): updated at least once
   std::uint64_t budget_, updates_ = 0, restarts_ = 0;
   std::size_t touched_ = 0;
   double alphaSlope_;
   Rng rng_;
   std::uint32_t state_ = 0;
-  Eigen::Vector3d target_{0, 0, 0};
+  TargetState target_;
 };
 
 }  // namespace mgrl::learners

@@ -14,12 +14,13 @@ class Approach final : public Reward {
   explicit Approach(const Params& p) : sigma_(p.number("sigma")), gamma_(p.number("gamma")) {}
   std::string type() const override { return "approach"; }
   double gamma() const override { return gamma_; }
-  double evaluate(const StateActionModel& m, std::size_t a, const Eigen::Vector3d& e) const override {
+  double evaluate(const StateActionModel& m, std::size_t a, const TargetState& state) const override {
     const std::size_t begin = m.actionFrameBegin[a], frames = m.actionLength(a);
     const float* p = &m.frameCentroid[3 * begin];
     double best = 0, discount = 1;
     for (std::size_t t = 1; t <= frames; ++t, p += 3) {
       discount *= gamma_;
+      const Eigen::Vector3d e = state.at(static_cast<double>(t) * m.frameTime);  // a moving target is where it is then
       const double distance = std::hypot(p[0] - e.x(), p[2] - e.z());
       best = std::max(best, discount * std::exp(-distance / sigma_));
     }
@@ -38,9 +39,10 @@ class Hit final : public Reward {
   double gamma() const override { return gamma_; }
   // r = max_t gamma^t I(t) w(t) (paper sec. 6.4): I(t) = 1 where an effective hit lands
   // within contact_radius of the target, w(t) the fist speed normalised to the fastest hit.
-  double evaluate(const StateActionModel& m, std::size_t a, const Eigen::Vector3d& e) const override {
+  double evaluate(const StateActionModel& m, std::size_t a, const TargetState& state) const override {
     double best = 0;
     for (const ActionHit& h : m.hitsOf(a)) {
+      const Eigen::Vector3d e = state.at(h.offset * m.frameTime);
       const double dx = h.x - e.x(), dy = h.y - e.y(), dz = h.z - e.z();
       if (dx * dx + dy * dy + dz * dz > radius_ * radius_) continue;
       best = std::max(best, std::pow(gamma_, h.offset) * (useSpeed_ ? h.weight : 1.0));

@@ -117,17 +117,18 @@ class Terms final : public Reward {
     if (joints_ != 0) joints_ = static_cast<std::int64_t>(m.jointNames.size());
   }
 
-  double evaluate(const StateActionModel& m, std::size_t a, const Eigen::Vector3d& e) const override {
+  double evaluate(const StateActionModel& m, std::size_t a, const TargetState& state) const override {
     // Joint indices are the bound model's: a model with another joint count (or none) would
     // read past its arrays. (Same count, other names: not detected here; bind to the model used.)
     if (joints_ != 0 && joints_ != static_cast<std::int64_t>(m.jointNames.size()))
       throw std::logic_error("reward terms naming joints evaluated on a model they were not bound to");
     const std::size_t begin = m.actionFrameBegin[a], frames = m.actionLength(a);
-    const double start = std::hypot(e.x(), e.z());  // the pelvis is at the origin at the decision
+    const double start = std::hypot(state.position.x(), state.position.z());  // the pelvis is at the origin at the decision
     double result = 0, discount = 1;
     for (std::size_t t = 1; t <= frames; ++t) {
       discount *= gamma_;
       const std::size_t frame = begin + t - 1;
+      const Eigen::Vector3d e = state.at(static_cast<double>(t) * m.frameTime);  // where a moving target is at frame t
       double signal = 0;
       for (const Term& term : terms_) {
         double s = 0;

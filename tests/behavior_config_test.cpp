@@ -230,10 +230,12 @@ TEST_CASE("behaviour mistakes name the file, line, column and key", "[behaviors]
     REQUIRE_CONFIG_ERROR(
         build(approachWith(20, "      type: sarsa")),
         at(20, 13, "behaviors.approach.learner.type: unknown learner 'sarsa' (known: q_learning, value_iteration, adaptive_value_iteration)"));
-    REQUIRE_CONFIG_ERROR(build(approachInserting(19, "    environment: {type: moving_target}")),
+    REQUIRE_CONFIG_ERROR(build(approachInserting(19, "    environment: {type: orbiting_target}")),
                          at(19, 25,
                             "behaviors.approach.environment.type: unknown environment model "
-                            "'moving_target' (known: static_target)"));
+                            "'orbiting_target' (known: static_target, moving_target)"));
+    REQUIRE_CONFIG_ERROR(build(approachInserting(19, "    environment: {type: moving_target, min_speed: 2, max_speed: 1}")),
+                         at(19, 52, "behaviors.approach.environment.min_speed: expected at most max_speed (1 m/s), found 2 m/s"));
   }
   SECTION("an unknown plugin parameter lists the plugin's parameters") {
     REQUIRE_CONFIG_ERROR(build(approachWith(13, "      rigns: 5")),

@@ -157,9 +157,9 @@ TEST_CASE("interpolation weights sum to 1 and reproduce functions linear in the 
     // f = 0.3 + 0.7 angle - 1.1 distance + 0.4 height, evaluated at the vertices and interpolated.
     auto f = [&](const std::array<double, 3>& c) { return 0.3 + 0.7 * c[0] - 1.1 * c[1] + 0.4 * c[2]; };
     for (int trial = 0; trial < 500; ++trial) {
-      std::array<double, 3> u{rng.uniform(), rng.uniform(), rng.uniform()};
+      std::array<double, 4> u{rng.uniform(), rng.uniform(), rng.uniform(), 0};
       if (grid == polar.get()) u[0] = 0.02 + 0.9 * u[0];  // stay off the seam, where angle jumps by 2 pi
-      const Eigen::Vector3d e = grid->sample(u);
+      const Eigen::Vector3d e = grid->sample(u).position;
       GridCell cell;
       REQUIRE(grid->locate(e, cell));
       const Stencil s = grid->stencil(cell);
@@ -245,7 +245,7 @@ TEST_CASE("static_target sees a fixed world point from the action's end", "[lear
   const StateActionModel m = handModel(1, {{0, 0, 5, 0.3, 0.4, 0.7, {}}, {0, 0, 5, 0, 0, 0, {}}});
   const StaticTarget environment;
   const Eigen::Vector3d e(0.5, 1.2, 1.5);
-  const Eigen::Vector3d next = environment.next(m, 0, e);
+  const Eigen::Vector3d next = environment.next(m, 0, e).position;
   // Back into the decision's frame, it is where it was.
   const Eigen::Vector3d back = transformPoint(m.displacement(0), next);
   REQUIRE((back - e).norm() < 1e-12);
@@ -1102,3 +1102,167 @@ TEST_CASE("a compact model trains the same tables as the tabulated one in a fift
 }
 
 }  // namespace mgrl
+
+// ---- Moving targets (issue 17): moving_target, polar_velocity's speed layers ----
+
+namespace mgrl {
+namespace {
+
+// One state; the action walks 0.5 m forward over 15 frames (0.5 s) turning 0.3 rad left.
+StateActionModel turningWalk() { return handModel(1, {{0, 0, 15, 0, 0.5, 0.3, {}}}); }
+
+constexpr const char* kLayeredGrid =
+    "{type: polar_velocity, distance_max: 2, rings: 3, sectors: 4, headings: 4, speeds: 3, max_speed: 1, "
+    "height_from: given, height: 1}";
+
+// Halves the target's speed: what a grid with speed layers must refuse to learn on.
+class SlowingTarget final : public EnvironmentModel {
+ public:
+  std::string type() const override { return "slowing"; }
+  TargetState next(const StateActionModel& m, std::size_t a, const TargetState& e) const override {
+    return {inverseTransformPoint(m.displacement(a), e.position), e.speed / 2, e.heading};
+  }
+};
+
+}  // namespace
+}  // namespace mgrl
+
+using namespace mgrl;
+
+TEST_CASE("moving_target: the target moves along its velocity, its heading turns with the avatar, its speed is kept",
+          "[learning][moving]") {
+  const StateActionModel m = turningWalk();
+  const MovingTarget environment(0, 1);
+  const TargetState e(Eigen::Vector3d(1.0, 1.2, 2.0), 0.8, 0.4);
+  const TargetState next = environment.next(m, 0, e);
+  // Half a second later the target is at p + v / 2 in the decision's frame ...
+  const Eigen::Vector3d expected = e.position + 0.5 * Eigen::Vector3d(0.8 * std::sin(0.4), 0, 0.8 * std::cos(0.4));
+  const Eigen::Vector3d back = transformPoint(m.displacement(0), next.position);
+  CHECK(back.x() == Approx(expected.x()).margin(1e-12));
+  CHECK(back.y() == Approx(1.2).margin(1e-12));
+  CHECK(back.z() == Approx(expected.z()).margin(1e-12));
+  // ... its velocity is the same in the world, so 0.3 rad less in the turned frame ...
+  CHECK(next.heading == Approx(0.1).margin(1e-12));
+  // ... and its speed is the same number, not a recomputed one (it is a grid layer).
+  CHECK(next.speed == 0.8);
+  // A static state moves rigidly, exactly as static_target moves it.
+  const StaticTarget still;
+  CHECK(environment.next(m, 0, e.position).position == still.next(m, 0, e.position).position);
+  CHECK(TargetState(e.position).at(0.5) == e.position);
+
+  SECTION("draws speeds in [min_speed, max_speed] and headings all round") {
+    const MovingTarget drawn(0.25, 0.75);
+    Rng rng(3);
+    double lowest = 1, highest = 0, left = 0;
+    for (int i = 0; i < 2000; ++i) {
+      const TargetState s = drawn.draw(Eigen::Vector3d(0, 1, 1), rng);
+      CHECK(s.position == Eigen::Vector3d(0, 1, 1));
+      lowest = std::min(lowest, s.speed);
+      highest = std::max(highest, s.speed);
+      left += s.heading > 0;
+      REQUIRE(std::abs(s.heading) <= M_PI);
+    }
+    CHECK(lowest >= 0.25);
+    CHECK(lowest < 0.26);
+    CHECK(highest <= 0.75);
+    CHECK(highest > 0.74);
+    CHECK(left / 2000 == Approx(0.5).margin(0.05));
+  }
+
+  SECTION("rewards and success look where the target is at each frame") {
+    // The centroid starts 0.5 m ahead and walks 0.5 m: a target 1.5 m ahead coming at
+    // 1 m/s meets it at 1 m after 0.5 s; the same target standing still is 0.5 m short.
+    const auto approach = app::plugins().rewards.create(yaml("{type: approach, sigma: 0.1, gamma: 1}"));
+    const StateActionModel straight = handModel(1, {{0, 0, 15, 0, 0.5, 0, {}}});
+    const TargetState coming(Eigen::Vector3d(0, 1, 1.5), 1.0, M_PI);
+    CHECK(approach->evaluate(straight, 0, coming) == Approx(1.0).margin(1e-6));
+    CHECK(approach->evaluate(straight, 0, coming.position) == Approx(std::exp(-0.5 / 0.1)).margin(1e-6));
+    const SuccessCriterion near = SuccessCriterion::read(yaml("{term: distance, point: centroid, within: 0.05}"),
+                                                         nlohmann::json::object());
+    SuccessCriterion::Tracker moving(near, straight.frameTime), still(near, straight.frameTime);
+    CHECK(moving.play(straight, 0, coming) > 0);
+    CHECK(still.play(straight, 0, coming.position) == 0);
+  }
+}
+
+TEST_CASE("polar_velocity: vertices sit on speed layers, backups stay on them, decisions interpolate across two",
+          "[learning][moving]") {
+  const StateActionModel m = turningWalk();
+  const auto grid = makeGrid(kLayeredGrid, m);
+  REQUIRE(grid->dimension() == 3);
+  REQUIRE(grid->layerAxis() != nullptr);
+  CHECK(grid->layerAxis()->vertices == std::vector<double>{0, 0.5, 1});
+  CHECK(grid->layerVertexCount() == 4 * 3 * 4);
+  CHECK(grid->vertexCount() == 4 * 3 * 4 * 3);
+  CHECK(grid->describe()["layers"]["name"] == "speed");
+
+  // Every vertex, the top layer's included, locates on its own layer with weight 1 on itself.
+  for (std::size_t v = 0; v < grid->vertexCount(); ++v) {
+    const TargetState e = grid->vertexState(v);
+    CHECK(e.speed == grid->layerAxis()->vertices[v / grid->layerVertexCount()]);
+    CHECK(e.position.y() == 1.0);
+    GridCell cell;
+    REQUIRE(grid->locate(e, cell));
+    CHECK(cell.layerFrac == 0);
+    const Stencil s = grid->stencil(cell);
+    REQUIRE(s.size == 8);
+    // (At distance 0 the angle is lost: the weight goes to the angle-0 vertex of the same point.)
+    if (e.position.x() == 0 && e.position.z() == 0) continue;
+    double own = 0;
+    for (int k = 0; k < s.size; ++k)
+      if (s.vertex[k] == v) own += s.weight[k];
+    CHECK(own == Approx(1).margin(1e-6));
+  }
+
+  // Between layers: 16 corners, the upper 8 weighted by the fraction, and a function linear
+  // in (distance, speed) reproduced.
+  const TargetState between(Eigen::Vector3d(0.3, 1, 0.9), 0.35, 0.2);
+  GridCell cell;
+  REQUIRE(grid->locate(between, cell));
+  CHECK(cell.layerFrac == Approx(0.7));
+  const Stencil s = grid->stencil(cell);
+  REQUIRE(s.size == 16);
+  double sum = 0, upper = 0, value = 0;
+  for (int k = 0; k < s.size; ++k) {
+    sum += s.weight[k];
+    if (k >= 8) upper += s.weight[k];
+    const TargetState corner = grid->vertexState(s.vertex[k]);
+    value += s.weight[k] * (2 * std::hypot(corner.position.x(), corner.position.z()) - 3 * corner.speed);
+  }
+  CHECK(sum == Approx(1).margin(1e-6));
+  CHECK(upper == Approx(0.7).margin(1e-6));
+  CHECK(value == Approx(2 * std::hypot(0.3, 0.9) - 3 * 0.35).margin(1e-5));
+  // Faster than the top layer: outside (a hit grid is inactive), clamped to the top layer.
+  GridCell ignored;
+  CHECK_FALSE(grid->locate(TargetState(between.position, 1.5, 0), ignored));
+  CHECK(grid->locateClamped(TargetState(between.position, 1.5, 0)).layerFrac == 0);
+  // Restarts draw a fourth number for the layer, and land exactly on one.
+  for (double u : {0.0, 0.4, 0.9999}) {
+    const TargetState drawn = grid->sample({0.5, 0.5, 0.5, u});
+    CHECK(drawn.speed == grid->layerAxis()->vertices[static_cast<std::size_t>(u * 3)]);
+  }
+
+  SECTION("learning on it: a moving_target keeps every backup on its layer; a model that slows the target is refused") {
+    const auto reward = app::plugins().rewards.create(yaml("{type: approach, sigma: 0.3}"));
+    const MovingTarget moving(0, 1);
+    const Problem problem{m, *grid, *reward, moving};
+    const GridModel g = GridModel::build(problem, 2);
+    CHECK(g.dimension == 3);
+    // Landings stay in the source vertex's layer: the cell's layer is v's.
+    const std::size_t cellsPerLayer = grid->cellCount() / 3;
+    for (std::size_t v = 0; v < g.vertexCount; ++v) {
+      const GridTransition& t = g.transition[v];
+      if (t.cell >= 0) CHECK(static_cast<std::size_t>(t.cell) / cellsPerLayer == v / grid->layerVertexCount());
+    }
+    const GridModel compact = GridModel::buildCompact(problem, 2);
+    for (std::size_t v = 0; v < g.vertexCount; ++v) {
+      const GridTransition a = g.at(0, v), b = compact.at(0, v);
+      CHECK(a.cell == b.cell);
+      CHECK(a.reward == b.reward);
+    }
+    const SlowingTarget slowing;
+    const Problem refused{m, *grid, *reward, slowing};
+    REQUIRE_THROWS_WITH(GridModel::build(refused, 1), Catch::Contains("landed between speed layers") &&
+                                                          Catch::Contains("must keep the target's speed"));
+  }
+}

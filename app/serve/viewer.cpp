@@ -77,14 +77,14 @@ struct DecisionClock {
 class TimedController final : public Controller {
  public:
   TimedController(std::unique_ptr<Controller> inner, DecisionClock& clock) : inner_(std::move(inner)), clock_(clock) {}
-  std::size_t choose(std::uint32_t s, const Eigen::Vector3d& e, Rng& rng) override {
+  std::size_t choose(std::uint32_t s, const TargetState& e, Rng& rng) override {
     const auto start = Clock::now();
     const std::size_t a = inner_->choose(s, e, rng);
     clock_.seconds += std::chrono::duration<double>(Clock::now() - start).count();
     ++clock_.count;
     return a;
   }
-  std::size_t choose(std::uint32_t s, const Eigen::Vector3d& e, Rng& rng, std::span<const std::uint8_t> allowed) override {
+  std::size_t choose(std::uint32_t s, const TargetState& e, Rng& rng, std::span<const std::uint8_t> allowed) override {
     const auto start = Clock::now();
     const std::size_t a = inner_->choose(s, e, rng, allowed);
     clock_.seconds += std::chrono::duration<double>(Clock::now() - start).count();
@@ -709,7 +709,7 @@ void ViewerSession::retrain(const Retrain& message) {
       after[index].table = &result->table;
       auto evaluate = [&](const std::vector<PolicyPart>& parts) {
         PolicyController controller(model, parts);
-        return app::Trials::summary(trials.run([&](std::uint32_t node, const Eigen::Vector3d& e) { return controller.choose(node, e); },
+        return app::Trials::summary(trials.run([&](std::uint32_t node, const TargetState& e) { return controller.choose(node, e); },
                                                kRetrainTrials, kRetrainTrialSeconds, 1));
       };
       result->before = evaluate(before);

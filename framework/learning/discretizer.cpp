@@ -91,6 +91,8 @@ void Discretizer::setAxes(std::vector<GridAxis> axes) {
                             vertexCount_, fmt::join(sizes, " x ")));
   }
   axes_ = std::move(axes);
+  layerVertices_ = vertexCount_;
+  layerCells_ = cellCount_;
   const int d = dimension();
   corners_.assign(cellCount_ << d, 0);
   std::array<std::size_t, 3> n{1, 1, 1};
@@ -123,8 +125,45 @@ void Discretizer::setCells(std::size_t vertexCount, std::size_t cellCount, std::
                             vertexCount));
   vertexCount_ = vertexCount;
   cellCount_ = cellCount;
+  layerVertices_ = vertexCount;
+  layerCells_ = cellCount;
   corners_ = std::move(corners);
   hanging_ = std::move(hanging);
+}
+
+void Discretizer::setLayers(GridAxis layer) {
+  if (layer.vertices.empty() || layer.wraps)
+    throw Error(fmt::format("{}: {}: expected at least 1 layer and no wrap", type(), layer.name));
+  for (std::size_t k = 0; k < layer.vertices.size(); ++k) {
+    if (!std::isfinite(layer.vertices[k]) || (k > 0 && !(layer.vertices[k] > layer.vertices[k - 1])))
+      throw Error(fmt::format("{}: {}: expected finite ascending layer coordinates", type(), layer.name));
+  }
+  const std::size_t count = layer.vertices.size();
+  if (!hanging_.empty()) throw Error(fmt::format("{}: a grid with hanging vertices cannot have layers", type()));
+  if (layerVertices_ * count > kMaxGridVertices)
+    throw Error(fmt::format("{}: expected a grid of at most {} vertices, found {} ({} per layer x {} {})", type(),
+                            kMaxGridVertices, layerVertices_ * count, layerVertices_, count, layer.name));
+  const std::size_t perCell = std::size_t{1} << dimension();
+  std::vector<std::uint32_t> corners(layerCells_ * count * perCell);
+  for (std::size_t l = 0; l < count; ++l)
+    for (std::size_t k = 0; k < layerCells_ * perCell; ++k)
+      corners[l * layerCells_ * perCell + k] = static_cast<std::uint32_t>(corners_[k] + l * layerVertices_);
+  corners_ = std::move(corners);
+  vertexCount_ = layerVertices_ * count;
+  cellCount_ = layerCells_ * count;
+  layers_ = std::move(layer);
+}
+
+bool Discretizer::locateLayer(double c, std::uint32_t& layer, float& frac) const {
+  const std::vector<double>& v = layers_.vertices;
+  const std::size_t n = v.size();
+  if (!(c >= v[0] && c <= v[n - 1])) return false;
+  // The last vertex at or below c: a state exactly at a layer (every vertex, and every
+  // state a backup moves one to) is in that layer with fraction 0, the top one included.
+  const std::size_t i = static_cast<std::size_t>(std::upper_bound(v.begin(), v.end(), c) - v.begin()) - 1;
+  layer = static_cast<std::uint32_t>(i);
+  frac = i + 1 < n ? static_cast<float>(std::clamp((c - v[i]) / (v[i + 1] - v[i]), 0.0, 1.0)) : 0.0f;
+  return true;
 }
 
 Eigen::Vector3d Discretizer::cellCentre(std::uint32_t) const {
@@ -144,7 +183,7 @@ std::unique_ptr<Discretizer> Discretizer::restored(const std::vector<StructureAr
                           arrays.empty() || arrays[0].source.empty() ? type() : arrays[0].source, type()));
 }
 
-bool Discretizer::locate(const Eigen::Vector3d& e, GridCell& out) const {
+bool Discretizer::locate(const TargetState& e, GridCell& out) const {
   const std::array<double, 3> c = coordinates(e);
   std::size_t cell = 0, stride = 1;
   for (int i = 0; i < dimension(); ++i) {
@@ -153,11 +192,16 @@ bool Discretizer::locate(const Eigen::Vector3d& e, GridCell& out) const {
     cell += index * stride;
     stride *= cellsPerAxis_[i];
   }
+  if (!layers_.vertices.empty()) {
+    std::uint32_t layer = 0;
+    if (!locateLayer(layerCoordinate(e), layer, out.layerFrac)) return false;
+    cell += layer * layerCells_;
+  }
   out.cell = static_cast<std::uint32_t>(cell);
   return true;
 }
 
-GridCell Discretizer::locateClamped(const Eigen::Vector3d& e) const {
+GridCell Discretizer::locateClamped(const TargetState& e) const {
   std::array<double, 3> c = coordinates(e);
   for (int i = 0; i < dimension(); ++i) {
     const GridAxis& axis = axes_[i];
@@ -173,6 +217,14 @@ GridCell Discretizer::locateClamped(const Eigen::Vector3d& e) const {
     cell += index * stride;
     stride *= cellsPerAxis_[i];
   }
+  if (!layers_.vertices.empty()) {
+    const double l = layerCoordinate(e);
+    std::uint32_t layer = 0;
+    locateLayer(std::clamp(std::isnan(l) ? layers_.vertices.front() : l, layers_.vertices.front(),
+                           layers_.vertices.back()),
+                layer, out.layerFrac);
+    cell += layer * layerCells_;
+  }
   out.cell = static_cast<std::uint32_t>(cell);
   return out;
 }
@@ -180,37 +232,60 @@ GridCell Discretizer::locateClamped(const Eigen::Vector3d& e) const {
 Stencil Discretizer::stencil(const GridCell& cell) const {
   Stencil s;
   const int d = dimension();
-  s.size = 1 << d;
+  const int corners = 1 << d;
   cornerWeights(d, cell.frac, s.weight.data());
-  for (int k = 0; k < s.size; ++k) s.vertex[k] = corners_[(static_cast<std::size_t>(cell.cell) << d) | k];
+  for (int k = 0; k < corners; ++k) s.vertex[k] = corners_[(static_cast<std::size_t>(cell.cell) << d) | k];
+  s.size = corners;
+  if (cell.layerFrac > 0) {
+    // Between two layers: the same corners one layer up, weighted by the layer fraction.
+    const float up = cell.layerFrac, down = 1 - up;
+    for (int k = 0; k < corners; ++k) {
+      s.vertex[corners + k] = s.vertex[k] + static_cast<std::uint32_t>(layerVertices_);
+      s.weight[corners + k] = s.weight[k] * up;
+      s.weight[k] *= down;
+    }
+    s.size = 2 * corners;
+  }
   return s;
 }
 
-Eigen::Vector3d Discretizer::vertexPosition(std::size_t v) const {
+TargetState Discretizer::vertexState(std::size_t v) const {
   std::array<double, 3> c{0, 0, 0};
+  const std::size_t layer = v / layerVertices_;
+  v %= layerVertices_;
   for (int i = 0; i < dimension(); ++i) {
     const std::size_t n = axes_[i].vertices.size();
     c[i] = axes_[i].vertices[v % n];
     v /= n;
   }
-  return position(c);
+  TargetState e = state(c);
+  if (!layers_.vertices.empty()) e.speed = layers_.vertices[layer];
+  return e;
 }
 
-Eigen::Vector3d Discretizer::sample(const std::array<double, 3>& u) const {
+TargetState Discretizer::sample(const std::array<double, 4>& u) const {
   std::array<double, 3> c{0, 0, 0};
   for (int i = 0; i < dimension(); ++i) {
     const GridAxis& axis = axes_[i];
     const double span = axis.wraps ? kTwoPi : axis.vertices.back() - axis.vertices.front();
     c[i] = axis.vertices.front() + u[i] * span;
   }
-  return position(c);
+  TargetState e = state(c);
+  if (!layers_.vertices.empty()) {
+    const std::size_t n = layers_.vertices.size();
+    e.speed = layers_.vertices[std::min(n - 1, static_cast<std::size_t>(u[3] * static_cast<double>(n)))];
+  }
+  return e;
 }
 
 nlohmann::json Discretizer::describe() const {
   nlohmann::json axes = nlohmann::json::array();
   for (const GridAxis& axis : axes_)
     axes.push_back({{"name", axis.name}, {"unit", axis.unit}, {"vertices", axis.vertices}, {"wraps", axis.wraps}});
-  return {{"type", type()}, {"axes", axes}, {"vertex_count", vertexCount_}, {"cell_count", cellCount_}};
+  nlohmann::json out = {{"type", type()}, {"axes", axes}, {"vertex_count", vertexCount_}, {"cell_count", cellCount_}};
+  if (!layers_.vertices.empty())
+    out["layers"] = {{"name", layers_.name}, {"unit", layers_.unit}, {"vertices", layers_.vertices}};
+  return out;
 }
 
 }  // namespace mgrl

@@ -1,10 +1,13 @@
 #pragma once
 /// \file
 /// The Discretizer seam (DESIGN.md sec. 4; paper sec. 4.2): an avatar-centric grid over the
-/// target's position e (avatar frame: +Z facing, +X left, Y up; metres). Q values live on
-/// the grid's vertices and are interpolated multilinearly inside a cell. Grids here are
-/// products of 2 or 3 axes, each a list of vertex coordinates; an axis may wrap (an angle
-/// covering the full circle), so its last vertex neighbours its first.
+/// environment state e (TargetState: the target's position in the avatar frame, +Z facing,
+/// +X left, Y up, metres, and its ground velocity). Q values live on the grid's vertices and
+/// are interpolated multilinearly inside a cell. Grids here are products of 1 to 3 axes, each
+/// a list of vertex coordinates; an axis may wrap (an angle covering the full circle), so its
+/// last vertex neighbours its first. A grid may also have a layer axis (the target's speed):
+/// a coordinate no action changes, so every backup from a vertex stays in its layer and
+/// learners see 3-D cells, while a decision between two layers interpolates across them.
 #include <array>
 #include <cstddef>
 #include <cstdint>
@@ -18,20 +21,25 @@
 #include "mgrl/core/params.hpp"
 #include "mgrl/core/registry.hpp"
 #include "mgrl/graph/state_action_model.hpp"
+#include "mgrl/learning/target_state.hpp"
 
 namespace mgrl {
 
 /// Where a point falls: its cell and the fractional position inside it along each axis,
 /// in [0, 1]. Corner k of a cell is at the upper end of axis i where bit i of k is set.
+/// On a layered grid, `cell` is the cell in the lower of the two layers around e and
+/// `layerFrac` the fraction towards the upper one (0 at a layer).
 struct GridCell {
   std::uint32_t cell = 0;
   std::array<float, 3> frac{0, 0, 0};
+  float layerFrac = 0;
 };
 
-/// Up to 8 grid vertices and their interpolation weights (non-negative, summing to 1).
+/// Up to 16 grid vertices and their interpolation weights (non-negative, summing to 1):
+/// 2^dimension corners, twice that between two layers.
 struct Stencil {
-  std::array<std::uint32_t, 8> vertex{};
-  std::array<float, 8> weight{};
+  std::array<std::uint32_t, 16> vertex;
+  std::array<float, 16> weight;
   int size = 0;
 };
 
@@ -97,25 +105,38 @@ class Discretizer {
   /// cellCount() x 2^dimension() vertex indices: corner k of cell c at [c << dimension() | k].
   const std::vector<std::uint32_t>& cellCorners() const { return corners_; }
 
-  /// The grid coordinates of a target position (one per axis, e.g. angle, distance, height).
-  virtual std::array<double, 3> coordinates(const Eigen::Vector3d& e) const = 0;
+  /// The grid coordinates of a state (one per axis, e.g. angle, distance, height).
+  virtual std::array<double, 3> coordinates(const TargetState& e) const = 0;
   /// A target position with these grid coordinates (height 0 for 2-D grids).
   virtual Eigen::Vector3d position(const std::array<double, 3>& coordinates) const = 0;
+  /// The state with these grid coordinates (layer coordinate aside): position() for grids
+  /// over the position alone.
+  virtual TargetState state(const std::array<double, 3>& coordinates) const { return position(coordinates); }
+
+  /// The layer axis (the target's speed), or null if the grid has none.
+  const GridAxis* layerAxis() const { return layers_.vertices.empty() ? nullptr : &layers_; }
+  /// Vertices per layer (all of them without a layer axis); vertex v is in layer v / this.
+  std::size_t layerVertexCount() const { return layerVertices_; }
+  /// The layer coordinate of a state: its speed (the one coordinate a moving_target keeps).
+  static double layerCoordinate(const TargetState& e) { return e.speed; }
 
   /// Locates e: false if it lies outside the grid (future value 0 there, paper sec. 4.2).
-  virtual bool locate(const Eigen::Vector3d& e, GridCell& out) const;
+  virtual bool locate(const TargetState& e, GridCell& out) const;
   /// The cell of the nearest grid point to e (e itself if inside).
-  virtual GridCell locateClamped(const Eigen::Vector3d& e) const;
-  bool inside(const Eigen::Vector3d& e) const {
+  virtual GridCell locateClamped(const TargetState& e) const;
+  bool inside(const TargetState& e) const {
     GridCell ignored;
     return locate(e, ignored);
   }
   /// Vertices and multilinear weights of a located point.
   Stencil stencil(const GridCell& cell) const;
-  /// The position of vertex v.
-  virtual Eigen::Vector3d vertexPosition(std::size_t v) const;
-  /// A point uniform in grid coordinates, from u uniform in [0, 1)^3.
-  Eigen::Vector3d sample(const std::array<double, 3>& u) const;
+  /// The state at vertex v.
+  virtual TargetState vertexState(std::size_t v) const;
+  /// The target position at vertex v.
+  Eigen::Vector3d vertexPosition(std::size_t v) const { return vertexState(v).position; }
+  /// A state uniform in grid coordinates, from u uniform in [0, 1)^4; on a layered grid
+  /// u[3] picks a layer (exactly at a layer vertex: what learners restart from).
+  TargetState sample(const std::array<double, 4>& u) const;
 
   /// {"type", "axes": [{"name", "unit", "vertices": [...], "wraps"}], "vertex_count", "cell_count"}.
   virtual nlohmann::json describe() const;
@@ -157,6 +178,9 @@ class Discretizer {
   /// and the hanging vertices.
   void setCells(std::size_t vertexCount, std::size_t cellCount, std::vector<std::uint32_t> corners,
                 HangingVertices hanging);
+  /// After setAxes(): repeats the grid once per vertex of `layer` (ascending, not
+  /// wrapping); vertex v3 of layer l becomes v3 + l * (vertices per layer), and likewise cells.
+  void setLayers(GridAxis layer);
 
  private:
   std::vector<GridAxis> axes_;
@@ -166,6 +190,11 @@ class Discretizer {
   std::array<std::size_t, 3> cellsPerAxis_{1, 1, 1};
   /// Evenly spaced axes are located by arithmetic instead of a search: 1 / spacing, or 0.
   std::array<double, 3> inverseStep_{0, 0, 0};
+  GridAxis layers_;
+  std::size_t layerVertices_ = 0, layerCells_ = 0;
+  /// The layer below coordinate c and the fraction towards the next (0 at a layer, and at the
+  /// last layer itself); false outside (or NaN).
+  bool locateLayer(double c, std::uint32_t& layer, float& frac) const;
 };
 
 /// Multilinear weights of the 2^dimension corners for fractions `frac`.

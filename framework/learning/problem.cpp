@@ -3,13 +3,16 @@
 #include <cmath>
 #include <limits>
 
+#include <fmt/format.h>
+
+#include "mgrl/core/error.hpp"
 #include "mgrl/core/parallel.hpp"
 
 namespace mgrl {
 
 std::size_t GridModel::bytes() const {
   return corners.size() * 4 + transition.size() * sizeof(GridTransition) + reward.size() * sizeof(float) +
-         vertexPosition.size() * sizeof(Eigen::Vector3d) + discount.size() * 4 + rigid.size() * 8 +
+         vertexState.size() * sizeof(TargetState) + discount.size() * 4 + rigid.size() * 8 +
          actionTo.size() * 4 + incomingBegin.size() * 4 + incoming.size() * 4;
 }
 
@@ -17,7 +20,7 @@ double GridModel::trainingBytes(std::size_t actions, std::size_t vertices, bool 
   const double pairs = static_cast<double>(actions) * static_cast<double>(vertices);
   const double model = compact ? sizeof(float) : sizeof(GridTransition);
   return pairs * (model + sizeof(std::uint32_t) + 2 * sizeof(float)) +
-         static_cast<double>(vertices) * (8 * sizeof(std::uint32_t) + sizeof(Eigen::Vector3d)) +
+         static_cast<double>(vertices) * (8 * sizeof(std::uint32_t) + sizeof(TargetState)) +
          static_cast<double>(actions) * 16;
 }
 
@@ -50,14 +53,20 @@ GridModel GridModel::frame(const Problem& problem) {
   return g;
 }
 
-GridTransition tabulate(const Problem& problem, std::size_t a, const Eigen::Vector3d& vertex) {
+void setLanding(GridTransition& t, const GridCell& cell) {
+  if (cell.layerFrac != 0)
+    throw Error(fmt::format("a backup's target landed between speed layers (fraction {}): the environment model must "
+                            "keep the target's speed on a grid with speed layers",
+                            cell.layerFrac));
+  t.cell = static_cast<std::int32_t>(cell.cell);
+  for (int k = 0; k < 3; ++k) t.frac[k] = cell.frac[k];
+}
+
+GridTransition tabulate(const Problem& problem, std::size_t a, const TargetState& vertex) {
   GridTransition t;
   t.reward = static_cast<float>(problem.reward.evaluate(problem.model, a, vertex));
   GridCell cell;
-  if (problem.grid.locate(problem.environment.next(problem.model, a, vertex), cell)) {
-    t.cell = static_cast<std::int32_t>(cell.cell);
-    for (int k = 0; k < 3; ++k) t.frac[k] = cell.frac[k];
-  }
+  if (problem.grid.locate(problem.environment.next(problem.model, a, vertex), cell)) setLanding(t, cell);
   return t;
 }
 
@@ -89,8 +98,8 @@ void forEachPair(std::size_t actions, unsigned threads, F f) {
 GridModel GridModel::build(const Problem& problem, unsigned threads) {
   GridModel g = frame(problem);
   g.transition.assign(g.vertexCount * g.actionCount, GridTransition{});
-  std::vector<Eigen::Vector3d> vertex(g.vertexCount);
-  for (std::size_t v = 0; v < g.vertexCount; ++v) vertex[v] = problem.grid.vertexPosition(v);
+  std::vector<TargetState> vertex(g.vertexCount);
+  for (std::size_t v = 0; v < g.vertexCount; ++v) vertex[v] = problem.grid.vertexState(v);
   forEachPair(g.actionCount, threads, [&](std::size_t a) {
     for (std::size_t v = 0; v < g.vertexCount; ++v) g.transition[a * g.vertexCount + v] = tabulate(problem, a, vertex[v]);
   });
@@ -100,12 +109,12 @@ GridModel GridModel::build(const Problem& problem, unsigned threads) {
 
 GridModel GridModel::buildCompact(const Problem& problem, unsigned threads) {
   GridModel g = frame(problem);
-  g.vertexPosition.resize(g.vertexCount);
-  for (std::size_t v = 0; v < g.vertexCount; ++v) g.vertexPosition[v] = problem.grid.vertexPosition(v);
+  g.vertexState.resize(g.vertexCount);
+  for (std::size_t v = 0; v < g.vertexCount; ++v) g.vertexState[v] = problem.grid.vertexState(v);
   g.reward.assign(g.vertexCount * g.actionCount, 0.0f);
   forEachPair(g.actionCount, threads, [&](std::size_t a) {
     for (std::size_t v = 0; v < g.vertexCount; ++v)
-      g.reward[a * g.vertexCount + v] = static_cast<float>(problem.reward.evaluate(problem.model, a, g.vertexPosition[v]));
+      g.reward[a * g.vertexCount + v] = static_cast<float>(problem.reward.evaluate(problem.model, a, g.vertexState[v]));
   });
   g.landingGrid = &problem.grid;
   g.landingEnvironment = &problem.environment;
@@ -118,11 +127,9 @@ GridTransition GridModel::moved(std::size_t a, std::size_t v) const {
   // tabulate() without the reward.
   GridTransition t;
   GridCell cell;
-  const Eigen::Vector3d& e = vertexPosition[v];
-  if (landingGrid->locate(rigid.empty() ? landingEnvironment->next(*landingModel, a, e) : rigidNext(a, e), cell)) {
-    t.cell = static_cast<std::int32_t>(cell.cell);
-    for (int k = 0; k < 3; ++k) t.frac[k] = cell.frac[k];
-  }
+  const TargetState& e = vertexState[v];
+  if (landingGrid->locate(rigid.empty() ? landingEnvironment->next(*landingModel, a, e) : rigidNext(a, e), cell))
+    setLanding(t, cell);
   return t;
 }
 
@@ -213,17 +220,20 @@ void addRows8(float* sum, const float* const* rows, const float* w, std::uint32_
 
 void addInterpolated(float* sum, const QTable& q, std::uint32_t s, const Stencil& stencil, float scale) {
   const std::uint32_t n = static_cast<std::uint32_t>(q.actionsOf(s));
-  const float* rows[8];
-  float w[8];
-  for (int k = 0; k < 8; ++k) {
+  const float* rows[16];
+  float w[16];
+  const int size = stencil.size <= 4 ? 4 : stencil.size <= 8 ? 8 : 16;
+  for (int k = 0; k < size; ++k) {
     const int from = k < stencil.size ? k : 0;
     rows[k] = q.row(s, stencil.vertex[from]);
     w[k] = k < stencil.size ? scale * stencil.weight[k] : 0.0f;
   }
-  if (stencil.size <= 4)
+  if (size == 4) {
     addRows4(sum, rows, w, n);
-  else
+  } else {
     addRows8(sum, rows, w, n);
+    if (size == 16) addRows8(sum, rows + 8, w + 8, n);  // the upper speed layer
+  }
 }
 
 float maxInterpolated(const QTable& q, const GridModel& g, std::uint32_t s, std::uint32_t cell, const float* frac) {

@@ -47,7 +47,7 @@ struct GridModel {
   /// finds where a vertex lands when a backup asks (at()): the same arithmetic as
   /// tabulate(), so the same backups and the same tables, for a grid locate per backup.
   std::vector<float, HugePageAllocator<float>> reward;  ///< per (a, v), compact models only
-  std::vector<Eigen::Vector3d> vertexPosition;          ///< per vertex, compact models only
+  std::vector<TargetState> vertexState;                 ///< per vertex, compact models only
   std::vector<float> discount;            ///< per action: gamma^(frames of a)
   /// Per action, if the environment model moves the target rigidly (EnvironmentModel::
   /// rigidMotion): (cos, sin, dx, dz) of the motion e' = R^T (e - d); else empty.
@@ -80,10 +80,11 @@ struct GridModel {
 
   /// The target after action a under a rigid environment model (`rigid` not empty): the
   /// same arithmetic as inverseTransformPoint(), from the precomputed sine and cosine.
-  Eigen::Vector3d rigidNext(std::size_t a, const Eigen::Vector3d& e) const {
+  TargetState rigidNext(std::size_t a, const TargetState& state) const {
     const double* r = &rigid[4 * a];
+    const Eigen::Vector3d& e = state.position;
     const double qx = e.x() - r[2], qz = e.z() - r[3];
-    return {r[0] * qx - r[1] * qz, e.y(), r[1] * qx + r[0] * qz};
+    return Eigen::Vector3d(r[0] * qx - r[1] * qz, e.y(), r[1] * qx + r[0] * qz);
   }
 
   /// Tabulates `problem` on `threads` threads. The same inputs give the same bytes.
@@ -105,7 +106,12 @@ struct GridModel {
 
 /// The transition record of action a from the grid vertex at `vertex`: what build() stores
 /// at (a, v), the same bytes.
-GridTransition tabulate(const Problem& problem, std::size_t a, const Eigen::Vector3d& vertex);
+GridTransition tabulate(const Problem& problem, std::size_t a, const TargetState& vertex);
+
+/// The 3-D record of where a state landed: its cell and fractions. On a layered grid a
+/// backup's state must land exactly on its layer (layerFrac 0: the environment keeps the
+/// speed); throws mgrl::Error if it does not.
+void setLanding(GridTransition& t, const GridCell& cell);
 
 /// max over s's out-actions a' of the Q(., a') interpolated at the point with cell
 /// `cell` and fractions `frac` (the paper's "max_a' Q(e', a')").

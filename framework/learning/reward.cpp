@@ -11,8 +11,22 @@ Eigen::Vector3d inverseTransformPoint(const GroundMotion& motion, const Eigen::V
   return {c * qx - s * qz, point.y(), s * qx + c * qz};
 }
 
-Eigen::Vector3d StaticTarget::next(const StateActionModel& model, std::size_t action, const Eigen::Vector3d& e) const {
-  return inverseTransformPoint(model.displacement(action), e);
+TargetState StaticTarget::next(const StateActionModel& model, std::size_t action, const TargetState& e) const {
+  return inverseTransformPoint(model.displacement(action), e.position);
+}
+
+TargetState MovingTarget::next(const StateActionModel& model, std::size_t action, const TargetState& e) const {
+  const GroundMotion d = model.displacement(action);
+  const double seconds = static_cast<double>(model.actionLength(action)) * model.frameTime;
+  // The velocity is a direction in the avatar frame: it turns with the frame (by -dyaw) and
+  // does not translate; the speed is copied, not recomputed, so it stays on its layer.
+  return {inverseTransformPoint(d, e.at(seconds)), e.speed, std::remainder(e.heading - d.dyaw, 2 * M_PI)};
+}
+
+TargetState MovingTarget::draw(const Eigen::Vector3d& position, Rng& rng) const {
+  const double speed = minSpeed_ + (maxSpeed_ - minSpeed_) * rng.uniform();
+  const double heading = (2 * rng.uniform() - 1) * M_PI;
+  return {position, speed, heading};
 }
 
 }  // namespace mgrl

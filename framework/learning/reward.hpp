@@ -1,7 +1,8 @@
 #pragma once
 /// \file
 /// The Reward seam (DESIGN.md sec. 4; paper sec. 4.1, 6.4): the reward of taking an action
-/// with the target at e (in the avatar frame of the decision), computed from the action's
+/// in the environment state e (the target in the avatar frame of the decision; a moving
+/// target is at e.at(t) t seconds into the action), computed from the action's
 /// samples in the StateActionModel, the in-action discount gamma^t included. gamma is the
 /// reward's: the learner discounts what follows an action of t frames by gamma^t.
 #include <cstddef>
@@ -11,7 +12,9 @@
 #include <Eigen/Core>
 
 #include "mgrl/core/registry.hpp"
+#include "mgrl/core/random.hpp"
 #include "mgrl/graph/state_action_model.hpp"
+#include "mgrl/learning/target_state.hpp"
 
 namespace mgrl {
 
@@ -22,7 +25,7 @@ class Reward {
   /// Discount per frame, in (0, 1].
   virtual double gamma() const = 0;
   /// r(e, a) >= 0.
-  virtual double evaluate(const StateActionModel& model, std::size_t action, const Eigen::Vector3d& e) const = 0;
+  virtual double evaluate(const StateActionModel& model, std::size_t action, const TargetState& e) const = 0;
   /// Prepares the reward for `model` before any evaluate() with it: finds the joints its
   /// terms name (scenarios/README.md, body points). Throws ConfigError at the term's key
   /// (mgrl::Error without a YAML block) naming the roles and joints the skeleton has.
@@ -31,16 +34,23 @@ class Reward {
 
 using RewardRegistry = Registry<Reward>;
 
-/// The EnvironmentModel seam: where the target is, in the avatar frame at the end of an
-/// action, given where it was at the decision.
+/// The EnvironmentModel seam: the environment state in the avatar frame at the end of an
+/// action, given the state at the decision.
 class EnvironmentModel {
  public:
   virtual ~EnvironmentModel() = default;
   virtual std::string type() const = 0;
-  virtual Eigen::Vector3d next(const StateActionModel& model, std::size_t action, const Eigen::Vector3d& e) const = 0;
-  /// True if next() is exactly inverseTransformPoint(model.displacement(action), e), so
-  /// learners may apply it from precomputed sines and cosines.
+  virtual TargetState next(const StateActionModel& model, std::size_t action, const TargetState& e) const = 0;
+  /// True if next() is exactly inverseTransformPoint(model.displacement(action), e.position)
+  /// with speed 0, so learners may apply it from precomputed sines and cosines.
   virtual bool rigid() const { return false; }
+  /// True if next() keeps the speed bit for bit, as a grid with speed layers requires.
+  virtual bool keepsSpeed() const { return false; }
+  /// The state of an evaluation trial's target placed at `position` (eval, compare): the
+  /// position alone for a static target; a moving one draws its motion from `rng`.
+  virtual TargetState draw(const Eigen::Vector3d& position, Rng&) const { return position; }
+  /// The most a draw() may ask of a grid's layer axis (its top speed), m/s.
+  virtual double maxSpeed() const { return 0; }
 };
 
 using EnvironmentRegistry = Registry<EnvironmentModel>;
@@ -51,8 +61,25 @@ using EnvironmentRegistry = Registry<EnvironmentModel>;
 class StaticTarget final : public EnvironmentModel {
  public:
   std::string type() const override { return "static_target"; }
-  Eigen::Vector3d next(const StateActionModel& model, std::size_t action, const Eigen::Vector3d& e) const override;
+  TargetState next(const StateActionModel& model, std::size_t action, const TargetState& e) const override;
   bool rigid() const override { return true; }
+};
+
+/// `moving_target`: the target moves on the ground in a straight line at a constant velocity
+/// for the episode (what TargetState::at() predicts); after an action of T seconds it is at
+/// p + v T seen from the action's end, its heading turned back by the avatar's yaw. The
+/// speed is kept bit for bit, so it can be a grid's layer axis.
+class MovingTarget final : public EnvironmentModel {
+ public:
+  MovingTarget(double minSpeed, double maxSpeed) : minSpeed_(minSpeed), maxSpeed_(maxSpeed) {}
+  std::string type() const override { return "moving_target"; }
+  TargetState next(const StateActionModel& model, std::size_t action, const TargetState& e) const override;
+  bool keepsSpeed() const override { return true; }
+  TargetState draw(const Eigen::Vector3d& position, Rng& rng) const override;
+  double maxSpeed() const override { return maxSpeed_; }
+
+ private:
+  double minSpeed_, maxSpeed_;
 };
 
 /// The inverse of transformPoint(): a point of the frame `motion` starts from, seen from

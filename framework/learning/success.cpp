@@ -210,10 +210,10 @@ SuccessCriterion::Tracker::Tracker(const SuccessCriterion& criterion, double fra
     : criterion_(&criterion),
       needed_(std::max<std::size_t>(1, static_cast<std::size_t>(std::lround(criterion.hold_s_ / frameTime)))) {}
 
-std::uint32_t SuccessCriterion::Tracker::play(const StateActionModel& m, std::size_t a, const Eigen::Vector3d& e) {
+std::uint32_t SuccessCriterion::Tracker::play(const StateActionModel& m, std::size_t a, const TargetState& e) {
   const auto frames = static_cast<std::uint32_t>(m.actionLength(a));
   for (std::uint32_t t = 1; t <= frames; ++t) {
-    held_ = criterion_->holdsAt(m, a, t, e) ? held_ + 1 : 0;
+    held_ = criterion_->holdsAt(m, a, t, e.at(t * m.frameTime)) ? held_ + 1 : 0;
     if (held_ >= needed_) return t;
   }
   return 0;

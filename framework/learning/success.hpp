@@ -23,6 +23,7 @@
 
 #include "mgrl/core/config.hpp"
 #include "mgrl/graph/state_action_model.hpp"
+#include "mgrl/learning/target_state.hpp"
 #include "mgrl/learning/signals.hpp"
 
 namespace mgrl {
@@ -60,7 +61,8 @@ class SuccessCriterion {
 
   const std::vector<SuccessCondition>& conditions() const { return conditions_; }
   double holdSeconds() const { return hold_s_; }
-  /// Whether every condition holds at offset t (1 = first frame) of action a, target e.
+  /// Whether every condition holds at offset t (1 = first frame) of action a, the target at
+  /// e then (in the decision's avatar frame).
   bool holdsAt(const StateActionModel& m, std::size_t a, std::uint32_t t, const Eigen::Vector3d& e) const;
   /// {"all": [{"term": ..., ...}], "hold_s": s}.
   nlohmann::json toJson() const;
@@ -71,9 +73,10 @@ class SuccessCriterion {
   class Tracker {
    public:
     explicit Tracker(const SuccessCriterion& criterion, double frameTime);
-    /// Plays action a from a decision with the target at e: the offset (1 = the action's
-    /// first frame) at which the criterion is first met, 0 if it is not met in this action.
-    std::uint32_t play(const StateActionModel& m, std::size_t a, const Eigen::Vector3d& e);
+    /// Plays action a from a decision in state e (a moving target followed frame by frame):
+    /// the offset (1 = the action's first frame) at which the criterion is first met, 0 if
+    /// it is not met in this action.
+    std::uint32_t play(const StateActionModel& m, std::size_t a, const TargetState& e);
     const SuccessCriterion* criterion() const { return criterion_; }
 
    private:

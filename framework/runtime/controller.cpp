@@ -11,12 +11,12 @@
 
 namespace mgrl {
 
-std::size_t RandomController::choose(std::uint32_t s, const Eigen::Vector3d&, Rng& rng) {
+std::size_t RandomController::choose(std::uint32_t s, const TargetState&, Rng& rng) {
   const std::uint32_t begin = model_.stateActionBegin[s];
   return begin + rng.below(model_.stateActionBegin[s + 1] - begin);
 }
 
-std::size_t RandomController::choose(std::uint32_t s, const Eigen::Vector3d&, Rng& rng, std::span<const std::uint8_t> allowed) {
+std::size_t RandomController::choose(std::uint32_t s, const TargetState&, Rng& rng, std::span<const std::uint8_t> allowed) {
   const std::uint32_t begin = model_.stateActionBegin[s];
   const auto count = static_cast<std::uint32_t>(std::count_if(allowed.begin(), allowed.end(), [](std::uint8_t x) { return x != 0; }));
   if (count == 0) throw Error(fmt::format("controller: expected an allowed action at state {}, found none", s));
@@ -30,7 +30,7 @@ PolicyController::PolicyController(const StateActionModel& model, std::vector<Po
   variety_.topK = std::max(1, variety_.topK);
 }
 
-void PolicyController::score(std::uint32_t s, const Eigen::Vector3d& e) {
+void PolicyController::score(std::uint32_t s, const TargetState& e) {
   const std::uint32_t begin = model_.stateActionBegin[s];
   const std::uint32_t n = model_.stateActionBegin[s + 1] - begin;
   buffer_.assign(n + 16, 0.0f);  // vector code writes whole 16-float registers
@@ -46,7 +46,7 @@ void PolicyController::score(std::uint32_t s, const Eigen::Vector3d& e) {
   }
 }
 
-std::size_t PolicyController::choose(std::uint32_t s, const Eigen::Vector3d& e) {
+std::size_t PolicyController::choose(std::uint32_t s, const TargetState& e) {
   score(s, e);
   const std::uint32_t begin = model_.stateActionBegin[s];
   const auto n = static_cast<std::uint32_t>(count_);
@@ -56,13 +56,13 @@ std::size_t PolicyController::choose(std::uint32_t s, const Eigen::Vector3d& e) 
   return begin + best;
 }
 
-std::size_t PolicyController::choose(std::uint32_t s, const Eigen::Vector3d& e, Rng& rng) {
+std::size_t PolicyController::choose(std::uint32_t s, const TargetState& e, Rng& rng) {
   if (variety_.topK == 1) return choose(s, e);
   score(s, e);
   return pick(s, rng, {});
 }
 
-std::size_t PolicyController::choose(std::uint32_t s, const Eigen::Vector3d& e, Rng& rng,
+std::size_t PolicyController::choose(std::uint32_t s, const TargetState& e, Rng& rng,
                                      std::span<const std::uint8_t> allowed) {
   score(s, e);
   return pick(s, rng, allowed);
@@ -112,7 +112,7 @@ OnlineSearchController::OnlineSearchController(const StateActionModel& model, co
     discount_[a] = std::pow(gamma, static_cast<double>(model.actionLength(a)));
 }
 
-double OnlineSearchController::reward(std::size_t a, const Eigen::Vector3d& e) const {
+double OnlineSearchController::reward(std::size_t a, const TargetState& e) const {
   double r = 0;
   for (const SearchPart& part : parts_) {
     if (part.activation == Activation::TargetInside && !part.grid->inside(e)) continue;
@@ -121,7 +121,7 @@ double OnlineSearchController::reward(std::size_t a, const Eigen::Vector3d& e) c
   return r;
 }
 
-double OnlineSearchController::value(std::uint32_t s, const Eigen::Vector3d& e, int depth, double frames) {
+double OnlineSearchController::value(std::uint32_t s, const TargetState& e, int depth, double frames) {
   if (depth == 0 || frames <= 0) return 0;
   double best = -std::numeric_limits<double>::infinity();
   for (std::uint32_t a = model_.stateActionBegin[s]; a < model_.stateActionBegin[s + 1]; ++a) {
@@ -133,7 +133,7 @@ double OnlineSearchController::value(std::uint32_t s, const Eigen::Vector3d& e, 
   return best;
 }
 
-std::size_t OnlineSearchController::choose(std::uint32_t s, const Eigen::Vector3d& e) {
+std::size_t OnlineSearchController::choose(std::uint32_t s, const TargetState& e) {
   expanded_ = 0;
   std::size_t bestAction = model_.stateActionBegin[s];
   double best = -std::numeric_limits<double>::infinity();
@@ -153,7 +153,7 @@ std::size_t OnlineSearchController::choose(std::uint32_t s, const Eigen::Vector3
 
 namespace mgrl {
 
-std::size_t OnlineSearchController::choose(std::uint32_t s, const Eigen::Vector3d& e, Rng&,
+std::size_t OnlineSearchController::choose(std::uint32_t s, const TargetState& e, Rng&,
                                            std::span<const std::uint8_t> allowed) {
   expanded_ = 0;
   const std::uint32_t begin = model_.stateActionBegin[s];

@@ -27,21 +27,21 @@ class Controller {
   virtual ~Controller() = default;
   /// The action (a global action index leaving s) to take at state s with the target at e
   /// in the avatar frame; `rng` drives any random choice (variety, the random controller).
-  virtual std::size_t choose(std::uint32_t s, const Eigen::Vector3d& e, Rng& rng) = 0;
+  virtual std::size_t choose(std::uint32_t s, const TargetState& e, Rng& rng) = 0;
   /// The same among the allowed out-actions only: allowed[j] != 0 for the j-th action
   /// leaving s (the world rules out actions whose root path runs into another body). At
   /// least one must be allowed (mgrl::Error otherwise). A controller that scores actions
   /// takes the best allowed one, as it would among all.
-  virtual std::size_t choose(std::uint32_t s, const Eigen::Vector3d& e, Rng& rng, std::span<const std::uint8_t> allowed) = 0;
+  virtual std::size_t choose(std::uint32_t s, const TargetState& e, Rng& rng, std::span<const std::uint8_t> allowed) = 0;
 };
 
 /// Takes a uniformly random out-action: the floor every controller is measured against.
 class RandomController final : public Controller {
  public:
   explicit RandomController(const StateActionModel& model) : model_(model) {}
-  std::size_t choose(std::uint32_t s, const Eigen::Vector3d& e, Rng& rng) override;
+  std::size_t choose(std::uint32_t s, const TargetState& e, Rng& rng) override;
   /// Uniformly among the allowed actions.
-  std::size_t choose(std::uint32_t s, const Eigen::Vector3d& e, Rng& rng, std::span<const std::uint8_t> allowed) override;
+  std::size_t choose(std::uint32_t s, const TargetState& e, Rng& rng, std::span<const std::uint8_t> allowed) override;
 
  private:
   const StateActionModel& model_;
@@ -68,17 +68,17 @@ class PolicyController final : public Controller {
 
   /// The greedy action at state s with the target at e (avatar frame); ties go to the
   /// lowest action index. If no behaviour is active, the state's first action.
-  std::size_t choose(std::uint32_t s, const Eigen::Vector3d& e);
+  std::size_t choose(std::uint32_t s, const TargetState& e);
   /// With variety (see Variety): one of the top candidates, drawn with `rng`; exactly
   /// choose(s, e) when topK is 1.
-  std::size_t choose(std::uint32_t s, const Eigen::Vector3d& e, Rng& rng) override;
+  std::size_t choose(std::uint32_t s, const TargetState& e, Rng& rng) override;
   /// The same ranking (greedy, or top k within the margin) over the allowed actions only.
-  std::size_t choose(std::uint32_t s, const Eigen::Vector3d& e, Rng& rng, std::span<const std::uint8_t> allowed) override;
+  std::size_t choose(std::uint32_t s, const TargetState& e, Rng& rng, std::span<const std::uint8_t> allowed) override;
   /// The combined scores of s's out-actions from the last choose() (for views and tests).
   std::span<const float> scores() const { return {buffer_.data(), count_}; }
 
  private:
-  void score(std::uint32_t s, const Eigen::Vector3d& e);
+  void score(std::uint32_t s, const TargetState& e);
   std::size_t pick(std::uint32_t s, Rng& rng, std::span<const std::uint8_t> allowed);
 
   const StateActionModel& model_;
@@ -121,19 +121,19 @@ class OnlineSearchController final : public Controller {
                          std::vector<SearchPart> parts, SearchHorizon horizon, double gamma);
 
   /// The first action of the best sequence; ties go to the lowest action index.
-  std::size_t choose(std::uint32_t s, const Eigen::Vector3d& e);
+  std::size_t choose(std::uint32_t s, const TargetState& e);
   /// The same (the search is deterministic; `rng` is unused).
-  std::size_t choose(std::uint32_t s, const Eigen::Vector3d& e, Rng&) override { return choose(s, e); }
+  std::size_t choose(std::uint32_t s, const TargetState& e, Rng&) override { return choose(s, e); }
   /// The first action of the best sequence that starts with an allowed action.
-  std::size_t choose(std::uint32_t s, const Eigen::Vector3d& e, Rng&, std::span<const std::uint8_t> allowed) override;
+  std::size_t choose(std::uint32_t s, const TargetState& e, Rng&, std::span<const std::uint8_t> allowed) override;
   /// Actions expanded by the last choose().
   std::size_t expanded() const { return expanded_; }
 
  private:
   /// Best discounted value from s with `depth` more actions allowed and `frames` more
   /// frames to cover (frames <= 0: the time horizon is reached).
-  double value(std::uint32_t s, const Eigen::Vector3d& e, int depth, double frames);
-  double reward(std::size_t a, const Eigen::Vector3d& e) const;
+  double value(std::uint32_t s, const TargetState& e, int depth, double frames);
+  double reward(std::size_t a, const TargetState& e) const;
 
   const StateActionModel& model_;
   const EnvironmentModel& environment_;
