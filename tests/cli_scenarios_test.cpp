@@ -65,6 +65,15 @@ TEST_CASE("scenarios made of reward terms train and meet their success criteria 
   }
 }
 
+TEST_CASE("intercept.yaml trains on a moving target and punches it far more often than random actions", "[cli][data]") {
+  Sandbox box;
+  const json report = box.trainAndEvaluate(std::string(MGRL_SOURCE_DIR) + "/scenarios/intercept.yaml");
+  CHECK(report["success"]["from"] == "declared");
+  // Measured with 300 trials, seeds 1-3: 39-42 %, random actions 1.3-1.7 %.
+  CHECK(report["success_rate"].get<double>() >= 0.3);
+  CHECK(report["random_baseline"]["success_rate"].get<double>() < 0.1);
+}
+
 TEST_CASE("the README's ten-line behaviour trains and keeps away as it says", "[cli][data]") {
   Sandbox box;
   const std::string yaml = walkthrough();
