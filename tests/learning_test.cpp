@@ -1266,3 +1266,40 @@ TEST_CASE("polar_velocity: vertices sit on speed layers, backups stay on them, d
                                                           Catch::Contains("must keep the target's speed"));
   }
 }
+
+TEST_CASE("Q-learning on speed layers: restarts on a layer, checkpoints keep the target's motion, a resumed run "
+          "ends with the uninterrupted table",
+          "[learning][moving][checkpoint]") {
+  // Two states, walks forward and back with turns: targets move between cells and layers stay.
+  const StateActionModel m = handModel(2, {{0, 1, 15, 0.1, 0.5, 0.3, {}},
+                                           {1, 0, 12, -0.1, 0.3, -0.4, {}},
+                                           {0, 0, 10, 0, -0.3, 0.2, {}},
+                                           {1, 1, 20, 0.2, 0.6, 0, {}}});
+  const auto grid = makeGrid(kLayeredGrid, m);
+  const auto reward = app::plugins().rewards.create(yaml("{type: approach, sigma: 0.3}"));
+  const MovingTarget moving(0, 1);
+  const Problem problem{m, *grid, *reward, moving};
+  const GridModel g = GridModel::build(problem, 2);
+  const std::string learner = "{type: q_learning, budget: 3000, seed: 4, checkpoint_every: 1000, curve_points: 3}";
+  const TrainResult whole = trainWith(learner, problem, g);
+  REQUIRE(trainWith(learner, problem, g).table == whole.table);
+
+  MemoryCheckpointer store(2);
+  REQUIRE_THROWS_WITH(trainWith(learner, problem, g, &store), "simulated crash");
+  // The walk's target is saved with its speed and heading; its speed is a layer's.
+  const nlohmann::json& walk = store.state()["walk"];
+  REQUIRE(walk.contains("target_motion"));
+  const double speed = walk["target_motion"][0].get<double>();
+  CHECK((speed == 0 || speed == 0.5 || speed == 1));
+  MemoryCheckpointer resumed = store;
+  const TrainResult finished = trainWith(learner, problem, g, &resumed);
+  REQUIRE(finished.stats["resumed"] == true);
+  REQUIRE(finished.table == whole.table);
+
+  // A damaged motion is refused with the member's path, what was expected and what was found.
+  MemoryCheckpointer damaged = store;
+  damaged.state()["walk"]["target_motion"] = nlohmann::json::array({-1, 0});
+  REQUIRE_THROWS_WITH(trainWith(learner, problem, g, &damaged),
+                      Catch::Contains("state.walk.target_motion: expected 2 finite numbers: a speed >= 0 (m/s) and a "
+                                      "heading (rad), found '[-1,0]'"));
+}
