@@ -1,8 +1,7 @@
-// moving_target (issue 17; the paper's sec. 7 asks for targets that move): a straight line
-// at a constant velocity, exact like the static one.
 // static_target (Lee & Lee sec. 4.1): the target stays put in the world, so after an
 // action it is seen from the action's end through the inverse of the action's root
-// displacement: exact, no sampling.
+// displacement: exact, no sampling. moving_target (issue 17): a straight line at a constant
+// velocity, exact like the static one (framework/learning/reward.cpp).
 #include <memory>
 
 #include <fmt/format.h>

@@ -1195,6 +1195,10 @@ TEST_CASE("polar_velocity: vertices sit on speed layers, backups stay on them, d
   CHECK(grid->layerVertexCount() == 4 * 3 * 4);
   CHECK(grid->vertexCount() == 4 * 3 * 4 * 3);
   CHECK(grid->describe()["layers"]["name"] == "speed");
+  // Too many vertices in all is refused before the layered corner table is made.
+  REQUIRE_THROWS_WITH(
+      makeGrid("{type: polar_velocity, sectors: 100, rings: 100, headings: 100, speeds: 100}", m),
+      Catch::Contains("expected a grid of at most 20000000 vertices, found 100000000 (1000000 per layer x 100 speed)"));
 
   // Every vertex, the top layer's included, locates on its own layer with weight 1 on itself.
   for (std::size_t v = 0; v < grid->vertexCount(); ++v) {

@@ -868,7 +868,12 @@ std::string ViewerSession::values() const {
   const QTable& q = *s.policy[shown].table;
   const World::Decision d = s.world->lastDecision(0);
   const Eigen::Vector3d e = inverseTransformPoint(d.frame, s.world->aim(0));
-  const std::size_t vertices = q.vertexCount();
+  // A grid that also holds the target's velocity (polar_velocity) repeats each position per
+  // heading and speed layer: the viewer's target stands still, so show its slice, speed 0
+  // and the first heading (at speed 0 the heading changes nothing the values depend on).
+  const Discretizer& grid = *s.policy[shown].grid;
+  const std::size_t vertices =
+      grid.layerAxis() ? grid.axes()[0].vertices.size() * grid.axes()[1].vertices.size() : q.vertexCount();
   double level = vertexPositions.empty() ? 0 : vertexPositions[1];
   for (std::size_t v = 0; v < vertices; ++v)
     if (std::abs(vertexPositions[3 * v + 1] - e.y()) < std::abs(level - e.y())) level = vertexPositions[3 * v + 1];
