@@ -224,7 +224,7 @@ TEST_CASE("behaviour mistakes name the file, line, column and key", "[behaviors]
     REQUIRE_CONFIG_ERROR(build(approachWith(11, "      type: hexgrid")),
                          at(11, 13,
                             "behaviors.approach.discretizer.type: unknown discretizer 'hexgrid' (known: "
-                            "polar2d, cylindrical3d, kd_tree)"));
+                            "polar2d, cylindrical3d, kd_tree, polar_velocity)"));
     REQUIRE_CONFIG_ERROR(build(approachWith(16, "      type: punch")),
                          at(16, 13, "behaviors.approach.reward.type: unknown reward 'punch' (known: approach, hit, terms)"));
     REQUIRE_CONFIG_ERROR(
@@ -235,7 +235,7 @@ TEST_CASE("behaviour mistakes name the file, line, column and key", "[behaviors]
                             "behaviors.approach.environment.type: unknown environment model "
                             "'orbiting_target' (known: static_target, moving_target)"));
     REQUIRE_CONFIG_ERROR(build(approachInserting(19, "    environment: {type: moving_target, min_speed: 2, max_speed: 1}")),
-                         at(19, 52, "behaviors.approach.environment.min_speed: expected at most max_speed (1 m/s), found 2 m/s"));
+                         at(19, 51, "behaviors.approach.environment.min_speed: expected at most max_speed (1 m/s), found 2 m/s"));
   }
   SECTION("an unknown plugin parameter lists the plugin's parameters") {
     REQUIRE_CONFIG_ERROR(build(approachWith(13, "      rigns: 5")),
@@ -327,7 +327,7 @@ TEST_CASE("behaviour mistakes name the file, line, column and key", "[behaviors]
     REQUIRE_CONFIG_ERROR(build(approachInserting(19, "    environment: {}")),
                          at(19, 18,
                             "behaviors.approach.environment: expected a 'type' key naming the environment "
-                            "model (static_target)"));
+                            "model (static_target, moving_target)"));
     REQUIRE_CONFIG_ERROR(build(approachInserting(19, "    environment: static_target")),
                          at(19, 18,
                             "behaviors.approach.environment: expected a map with 'type: static_target' or "
