@@ -111,15 +111,12 @@ Saved readSaved(const nlohmann::json& state, const ManifestReader& r, std::size_
       r.fail("state", "only the keys updates, walk, seconds, curve, cells_seen", json(item.key()));
   Saved saved;
   Walk& w = saved.walk;
-  const bool motion =
-      state.contains("walk") && state["walk"].is_object() && state["walk"].contains("target_motion");
+  // target_motion is optional (a moving target's speed and heading; absent for static ones).
   const json& walk =
       maxEpisode > 0
-          ? (motion ? r.object(state, "state", "walk",
-                               {"updates", "restarts", "state", "target", "rng", "episode_actions", "target_motion"})
-                    : r.object(state, "state", "walk", {"updates", "restarts", "state", "target", "rng", "episode_actions"}))
-          : (motion ? r.object(state, "state", "walk", {"updates", "restarts", "state", "target", "rng", "target_motion"})
-                    : r.object(state, "state", "walk", {"updates", "restarts", "state", "target", "rng"}));
+          ? r.object(state, "state", "walk",
+                     {"updates", "restarts", "state", "target", "rng", "episode_actions", "target_motion"})
+          : r.object(state, "state", "walk", {"updates", "restarts", "state", "target", "rng", "target_motion"});
   if (maxEpisode > 0)
     w.episodeActions = r.unsignedInteger(walk, "state.walk", "episode_actions", maxEpisode - 1);
   w.updates = r.unsignedInteger(walk, "state.walk", "updates", budget);
@@ -206,12 +203,8 @@ TrainResult QLearning::train(const TrainContext& context) const {
 
   auto restart = [&](Walk& w) {
     w.state = static_cast<std::uint32_t>(w.rng.below(m.stateCount()));
-    do {
-      // A grid with speed layers draws a fourth number for the layer; others keep the
-      // paper's three (and their random streams, so their tables are unchanged).
-      const double u0 = w.rng.uniform(), u1 = w.rng.uniform(), u2 = w.rng.uniform();
-      w.target = grid.sample({u0, u1, u2, grid.layerAxis() ? w.rng.uniform() : 0.0});
-    } while (!grid.inside(w.target));
+    do w.target = grid.sample(w.rng);
+    while (!grid.inside(w.target));
     ++w.restarts;
     w.episodeActions = 0;
   };

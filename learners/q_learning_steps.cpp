@@ -36,10 +36,8 @@ double QLearningSteps::tableBytes(const Problem& problem) {
 // As q_learning.cpp's restart(): a random pose, then a random target inside the grid.
 void QLearningSteps::restart() {
   state_ = static_cast<std::uint32_t>(rng_.below(problem_.model.stateCount()));
-  do {
-    const double u0 = rng_.uniform(), u1 = rng_.uniform(), u2 = rng_.uniform();
-    target_ = problem_.grid.sample({u0, u1, u2, problem_.grid.layerAxis() ? rng_.uniform() : 0.0});
-  } while (!problem_.grid.inside(target_));
+  do target_ = problem_.grid.sample(rng_);
+  while (!problem_.grid.inside(target_));
   ++restarts_;
 }
 

@@ -12,6 +12,7 @@
 
 #include <fmt/format.h>
 
+#include "app/compare_tables.hpp"
 #include "app/plugins.hpp"
 #include "mgrl/motion/roles.hpp"
 #include "mgrl/core/bundle.hpp"
@@ -1306,4 +1307,15 @@ TEST_CASE("Q-learning on speed layers: restarts on a layer, checkpoints keep the
   REQUIRE_THROWS_WITH(trainWith(learner, problem, g, &damaged),
                       Catch::Contains("state.walk.target_motion: expected 2 finite numbers: a speed >= 0 (m/s) and a "
                                       "heading (rad), found '[-1,0]'"));
+}
+
+TEST_CASE("compare --reference-set refuses a grid with speed layers in one line", "[learning][moving]") {
+  const StateActionModel m = turningWalk();
+  const auto layered = makeGrid(kLayeredGrid, m);
+  const auto polar = makeGrid("{type: polar2d, radius: 3, rings: 7, sectors: 13}", m);
+  REQUIRE_THROWS_WITH(app::requireCovers(*polar, *layered, "approach"),
+                      "--reference-set: behaviors.approach: a polar_velocity grid has speed layers, which a reference "
+                      "set cannot be compared on yet; compare without --reference-set (against value iteration on "
+                      "the same grid)");
+  REQUIRE_THROWS_WITH(app::requireCovers(*layered, *polar, "approach"), Catch::Contains("a polar_velocity grid"));
 }

@@ -278,6 +278,11 @@ TargetState Discretizer::sample(const std::array<double, 4>& u) const {
   return e;
 }
 
+TargetState Discretizer::sample(Rng& rng) const {
+  const double u0 = rng.uniform(), u1 = rng.uniform(), u2 = rng.uniform();
+  return sample({u0, u1, u2, layers_.vertices.empty() ? 0.0 : rng.uniform()});
+}
+
 nlohmann::json Discretizer::describe() const {
   nlohmann::json axes = nlohmann::json::array();
   for (const GridAxis& axis : axes_)

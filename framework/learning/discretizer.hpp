@@ -19,6 +19,7 @@
 #include <nlohmann/json.hpp>
 
 #include "mgrl/core/params.hpp"
+#include "mgrl/core/random.hpp"
 #include "mgrl/core/registry.hpp"
 #include "mgrl/graph/state_action_model.hpp"
 #include "mgrl/learning/target_state.hpp"
@@ -137,6 +138,9 @@ class Discretizer {
   /// A state uniform in grid coordinates, from u uniform in [0, 1)^4; on a layered grid
   /// u[3] picks a layer (exactly at a layer vertex: what learners restart from).
   TargetState sample(const std::array<double, 4>& u) const;
+  /// sample() from `rng`: three numbers, and a fourth only on a layered grid (so grids
+  /// without layers keep the paper's random stream and tables). Learners' restarts.
+  TargetState sample(Rng& rng) const;
 
   /// {"type", "axes": [{"name", "unit", "vertices": [...], "wraps"}], "vertex_count", "cell_count"}.
   virtual nlohmann::json describe() const;
