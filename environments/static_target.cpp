@@ -26,6 +26,7 @@ void registerAll(EnvironmentRegistry& registry) {
                   if (lo > hi) p.fail("min_speed", fmt::format("expected at most max_speed ({} m/s), found {} m/s", hi, lo));
                   return std::make_unique<MovingTarget>(lo, hi);
                 }});
+  registerOpponent(registry);
 }
 
 }  // namespace mgrl::environments

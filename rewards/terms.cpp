@@ -4,6 +4,7 @@
 // s(t) = sum_k w_k s_k(t). t counts frames after the decision (1 = the first).
 #include <algorithm>
 #include <cmath>
+#include <memory>
 #include <numbers>
 #include <optional>
 #include <stdexcept>
@@ -58,6 +59,13 @@ std::vector<json> readTerms(const ConfigNode& block) {
                            "centroid (the centroid is carried along rigidly; its speed is the root's)");
     if (name == "distance" && params.choice("point") == "body")
       params.fail("point", "expected centroid, pelvis, a role or a joint, found body (body is for effort only)");
+    if (name == "avoid") {
+      const std::string point = params.choice("point");
+      if (point == "centroid" || point == "pelvis" || point == "body")
+        params.fail("point", fmt::format("expected a role (head, left_fist, ...) or a joint, found {} (the opponent "
+                                         "strikes a body joint)",
+                                         point));
+    }
     if (name == "distance" && params.choice("point") == "pelvis" && params.integer("dims") == 3)
       params.fail("dims", "expected 2 with point: pelvis (a ground point has no height), found 3");
     json term = params.toJson();
@@ -91,6 +99,11 @@ class Terms final : public Reward {
         term.effectors = parseEffector(t["effector"].get<std::string>());
         term.scale = t["radius"];
         term.useSpeed = t["use_speed"];
+      } else if (name == "avoid") {
+        term.kind = Kind::Avoid;
+        term.point = parseBodyPoint(t["point"].get<std::string>());
+        term.effectors = parseEffector(t["effector"].get<std::string>());
+        term.scale = t["clear"];
       } else if (name == "travel") {
         term.kind = Kind::Travel;
         term.sign = t["direction"] == "toward" ? 1 : -1;
@@ -113,6 +126,20 @@ class Terms final : public Reward {
       if (bindBodyPoint(m, terms_[i].point, &why)) continue;
       if (!block_) throw Error(fmt::format("reward term {}: point: {}", i, why));
       block_->child("terms").elements()[i].child("point").fail(why);
+    }
+    // avoid: the opponent is an avatar of this graph, so its strikes are this model's.
+    for (std::size_t i = 0; i < terms_.size(); ++i) {
+      Term& term = terms_[i];
+      if (term.kind != Kind::Avoid) continue;
+      try {
+        term.reach = std::make_shared<const StrikeReach>(m, term.effectors, term.scale);
+      } catch (const ConfigError&) {
+        throw;
+      } catch (const Error& e) {
+        if (!block_) throw Error(fmt::format("reward term {}: effector: {}", i, e.what()));
+        const ConfigNode node = block_->child("terms").elements()[i];
+        (node.has("effector") ? node.child("effector") : node).fail(e.what());
+      }
     }
     if (joints_ != 0) joints_ = static_cast<std::int64_t>(m.jointNames.size());
   }
@@ -147,6 +174,11 @@ class Terms final : public Reward {
             s = std::clamp(progress / term.scale, 0.0, 1.0);
             break;
           }
+          case Kind::Avoid:
+            // 0 with the body point on a strike tip of the opponent, 1 from `clear` away.
+            if (!term.reach) throw std::logic_error("an avoid term evaluated before bind()");
+            s = term.reach->distance(inOpponentFrame(state, jointAt(m, frame, term.point.joint))) / term.scale;
+            break;
           case Kind::Effort:
             s = std::exp(-(term.point.kind == BodyPoint::Kind::Pelvis ? rootSpeed(m, a, t) : bodySpeed(m, frame, term.point)) /
                          term.scale);
@@ -160,7 +192,7 @@ class Terms final : public Reward {
   }
 
  private:
-  enum class Kind { Distance, Facing, Contact, Travel, Effort };
+  enum class Kind { Distance, Facing, Contact, Travel, Effort, Avoid };
   struct Term {
     Kind kind = Kind::Distance;
     double weight = 1, target = 0, scale = 1;
@@ -168,6 +200,7 @@ class Terms final : public Reward {
     int dims = 2, sign = 1;
     std::uint8_t effectors = kFists;
     bool useSpeed = true;
+    std::shared_ptr<const StrikeReach> reach;  ///< avoid, after bind()
   };
   double gamma_;
   bool sum_;
@@ -206,6 +239,16 @@ const std::vector<TermKind>& termKinds() {
                                 "pelvis: the root's ground speed; body: the mean speed of every joint in the "
                                 "capture; a role or a joint's name: that joint's speed"),
         weightSpec()}},
+      {"avoid",
+       "min(d / clear, 1), d the distance from a body point to the nearest tip of the opponent's effective strikes "
+       "(the opponent environment: an avatar of the same graph at the target, facing its heading)",
+       {ParamSpec::choiceOrName("point", "head", {"head"}, "a skeleton role or joint",
+                                "the body point the opponent must not reach: a role (head, left_shoulder, ...) or a "
+                                "joint's name"),
+        ParamSpec::choice("effector", "fists", {std::begin(kEffectorNames), std::end(kEffectorNames)},
+                          "whose strikes the opponent throws (feet: its effective kicks)"),
+        ParamSpec::number("clear", 0.3, 0.01, 1, "m", "distance from every strike tip that earns the full signal"),
+        weightSpec()}},
   };
   return kinds;
 }
@@ -213,7 +256,7 @@ const std::vector<TermKind>& termKinds() {
 void registerTerms(RewardRegistry& registry) {
   RewardRegistry::Entry entry{
       "terms",
-      "a list of terms (distance, facing, contact, travel, effort), each a signal over the action's frames; "
+      "a list of terms (distance, facing, contact, travel, effort, avoid), each a signal over the action's frames; "
       "combine: max gives max_t gamma^t sum_k w_k s_k(t) (paper sec. 4.1), sum gives the sum over t",
       {ParamSpec::choice("combine", "max", {"max", "sum"},
                          "max: the best discounted frame (the paper's); sum: every frame's discounted signal"),

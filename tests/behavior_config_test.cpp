@@ -233,9 +233,37 @@ TEST_CASE("behaviour mistakes name the file, line, column and key", "[behaviors]
     REQUIRE_CONFIG_ERROR(build(approachInserting(19, "    environment: {type: orbiting_target}")),
                          at(19, 25,
                             "behaviors.approach.environment.type: unknown environment model "
-                            "'orbiting_target' (known: static_target, moving_target)"));
+                            "'orbiting_target' (known: static_target, moving_target, opponent)"));
     REQUIRE_CONFIG_ERROR(build(approachInserting(19, "    environment: {type: moving_target, min_speed: 2, max_speed: 1}")),
                          at(19, 51, "behaviors.approach.environment.min_speed: expected at most max_speed (1 m/s), found 2 m/s"));
+  }
+  SECTION("an opponent needs a grid with a heading axis; avoid needs an opponent") {
+    const std::string dodge =
+        "  dodge:\n"                                                               // 6
+        "    discretizer: {type: polar_velocity, speeds: 1, headings: 4}\n"        // 7
+        "    reward: {type: terms, terms: [{term: avoid}, {term: facing}]}\n"      // 8
+        "    environment: {type: opponent}\n"                                      // 9
+        "    learner: {type: value_iteration}\n"                                   // 10
+        "    success: {term: avoid, clear: 0.1, hold_s: 1}\n";                     // 11
+    REQUIRE_NOTHROW(build(dodge));
+    std::string onPolar2d = dodge;
+    onPolar2d.replace(onPolar2d.find("polar_velocity, speeds: 1, headings: 4"), 38, "polar2d");
+    REQUIRE_CONFIG_ERROR(build(onPolar2d),
+                         at(9, 25,
+                            "behaviors.dodge.environment.type: expected a grid with a heading axis to hold the "
+                            "opponent's facing (polar_velocity with speeds: 1), found polar2d"));
+    std::string still = dodge;
+    still.replace(still.find("opponent"), 8, "static_target");
+    REQUIRE_CONFIG_ERROR(build(still),
+                         at(8, 42,
+                            "behaviors.dodge.reward.terms[0].term: expected environment: {type: opponent} (the "
+                            "avoid term reads the opponent's strikes), found static_target"));
+    std::string successOnly = still;
+    successOnly.replace(successOnly.find("{term: avoid}, "), 15, "");
+    REQUIRE_CONFIG_ERROR(build(successOnly),
+                         at(11, 14,
+                            "behaviors.dodge.success: expected environment: {type: opponent} (the avoid term "
+                            "reads the opponent's strikes), found static_target"));
   }
   SECTION("an unknown plugin parameter lists the plugin's parameters") {
     REQUIRE_CONFIG_ERROR(build(approachWith(13, "      rigns: 5")),
@@ -327,7 +355,7 @@ TEST_CASE("behaviour mistakes name the file, line, column and key", "[behaviors]
     REQUIRE_CONFIG_ERROR(build(approachInserting(19, "    environment: {}")),
                          at(19, 18,
                             "behaviors.approach.environment: expected a 'type' key naming the environment "
-                            "model (static_target, moving_target)"));
+                            "model (static_target, moving_target, opponent)"));
     REQUIRE_CONFIG_ERROR(build(approachInserting(19, "    environment: static_target")),
                          at(19, 18,
                             "behaviors.approach.environment: expected a map with 'type: static_target' or "

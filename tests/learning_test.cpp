@@ -14,6 +14,7 @@
 
 #include "app/compare_tables.hpp"
 #include "app/plugins.hpp"
+#include "environments/environments.hpp"
 #include "mgrl/motion/roles.hpp"
 #include "mgrl/core/bundle.hpp"
 #include "mgrl/core/files.hpp"
@@ -954,7 +955,7 @@ TEST_CASE("reward terms refuse bad YAML with the line, column and key", "[learni
                     Catch::StartsWith("test.yaml:1:22: terms: ") && Catch::Contains("expected at least one term"));
   CHECK_THROWS_WITH(build("{type: terms, terms: [{term: dist}]}"),
                     Catch::StartsWith("test.yaml:1:30: terms[0].term: ") &&
-                        Catch::Contains("unknown term 'dist' (known: distance, facing, contact, travel, effort)"));
+                        Catch::Contains("unknown term 'dist' (known: distance, facing, contact, travel, effort, avoid)"));
   CHECK_THROWS_WITH(build("{type: terms, terms: [{term: distance, sigma: 0}]}"),
                     Catch::StartsWith("test.yaml:1:47: terms[0].sigma: "));
   CHECK_THROWS_WITH(build("{type: terms, terms: [{term: distance, point: pelvis, dims: 3}]}"),
@@ -966,7 +967,7 @@ TEST_CASE("reward terms refuse bad YAML with the line, column and key", "[learni
   CHECK_THROWS_WITH(build("{type: terms, combine: mean, terms: [{term: facing}]}"),
                     Catch::Contains("combine: ") && Catch::Contains("max, sum"));
   CHECK_THROWS_WITH(build("{type: terms, terms: [facing]}"),
-                    Catch::Contains("terms[0]: expected a map with 'term: <distance|facing|contact|travel|effort>'"));
+                    Catch::Contains("terms[0]: expected a map with 'term: <distance|facing|contact|travel|effort|avoid>'"));
   CHECK_NOTHROW(build("{type: terms, terms: [{term: facing}]}"));
 }
 
@@ -1318,4 +1319,154 @@ TEST_CASE("compare --reference-set refuses a grid with speed layers in one line"
                       "set cannot be compared on yet; compare without --reference-set (against value iteration on "
                       "the same grid)");
   REQUIRE_THROWS_WITH(app::requireCovers(*layered, *polar, "approach"), Catch::Contains("a polar_velocity grid"));
+}
+
+namespace {
+
+// kickingModel() with one joint, the head, 1.3 m up and 0.1 m ahead of the pelvis in every
+// frame. Its one punch lands at (0, 1.3, 0.4) in the puncher's own frame (0.6 m ahead at
+// offset 2 of action 0, which has walked 0.2 m by then).
+StateActionModel headModel() {
+  StateActionModel m = kickingModel();
+  m.jointNames = {"Head"};
+  m.roleJoint.assign(roleNames().size(), 0);
+  m.framesTotal = 1;
+  m.sourceJoint = {0.0f, 1.3f, 0.1f};
+  m.sourceJointSpeed = {0.0f};
+  return m;
+}
+
+}  // namespace
+
+TEST_CASE("opponent: walks toward the avatar until stop_distance, turns to face it at turn_rate, seen from the "
+          "action's end",
+          "[learning][opponent]") {
+  const StateActionModel m = turningWalk();  // 0.5 s: 0.5 m ahead, turning 0.3 rad
+  const GroundMotion d = m.displacement(0);
+  const auto inDecisionFrame = [&](const TargetState& next) {
+    return std::pair(transformPoint(d, next.position), std::remainder(next.heading + d.dyaw, 2 * M_PI));
+  };
+  SECTION("pursue: 0.4 m/s for 0.5 s is 0.2 m toward where the avatar ends") {
+    const environments::Opponent pursue(true, 0.4, 0.7, M_PI);
+    const TargetState next = pursue.next(m, 0, TargetState(Eigen::Vector3d(0, 1.1, 3), 0, M_PI));
+    const auto [p, facing] = inDecisionFrame(next);
+    CHECK(p.x() == Approx(0).margin(1e-12));
+    CHECK(p.y() == Approx(1.1).margin(1e-12));
+    CHECK(p.z() == Approx(2.8).margin(1e-12));
+    CHECK(std::abs(facing) == Approx(M_PI).margin(1e-12));
+    CHECK(next.speed == 0);
+  }
+  SECTION("pursue stops stop_distance from the avatar, never walks into it") {
+    const environments::Opponent pursue(true, 0.4, 0.7, M_PI);
+    const auto [p, facing] = inDecisionFrame(pursue.next(m, 0, TargetState(Eigen::Vector3d(0, 1, 1.3), 0, M_PI)));
+    CHECK(p.z() == Approx(1.2).margin(1e-12));  // 0.7 m from the avatar's end at 0.5 m
+    const auto [q, facing2] = inDecisionFrame(pursue.next(m, 0, TargetState(Eigen::Vector3d(0, 1, 1.0), 0, M_PI)));
+    CHECK(q.z() == Approx(1.0).margin(1e-12));  // already closer: it stays put
+  }
+  SECTION("turns by at most turn_rate x duration; stand does not walk") {
+    const environments::Opponent stand(false, 0.4, 0.7, M_PI / 3);  // 60 deg/s: 30 deg in 0.5 s
+    // 2 m to the avatar's left, facing +Z: the avatar's end is 90 degrees to its right.
+    const auto [p, facing] = inDecisionFrame(stand.next(m, 0, TargetState(Eigen::Vector3d(2, 1, 0.5), 0, 0)));
+    CHECK(p.x() == Approx(2).margin(1e-12));
+    CHECK(p.z() == Approx(0.5).margin(1e-12));
+    CHECK(facing == Approx(-M_PI / 6).margin(1e-12));
+    // A fast turner faces the avatar's end exactly.
+    const environments::Opponent quick(false, 0.4, 0.7, 10 * M_PI);
+    CHECK(inDecisionFrame(quick.next(m, 0, TargetState(Eigen::Vector3d(2, 1, 0.5), 0, 0))).second ==
+          Approx(-M_PI / 2).margin(1e-12));
+  }
+  SECTION("a trial's opponent starts facing the avatar; speed 0 stays on a polar_velocity layer") {
+    const environments::Opponent pursue(true, 0.3, 0.7, M_PI);
+    Rng rng(1);
+    const TargetState start = pursue.draw(Eigen::Vector3d(1, 1.2, -1), rng);
+    const Eigen::Vector3d avatar = inOpponentFrame(start, Eigen::Vector3d(0, 1.2, 0));
+    CHECK(avatar.x() == Approx(0).margin(1e-12));
+    CHECK(avatar.z() == Approx(std::sqrt(2.0)).margin(1e-12));  // straight ahead of it
+    CHECK(pursue.keepsSpeed());
+    const auto grid = makeGrid("{type: polar_velocity, distance_max: 3, rings: 4, sectors: 6, headings: 8, speeds: 1}", m);
+    GridCell cell;
+    REQUIRE(grid->locate(pursue.next(m, 0, start), cell));
+    CHECK(cell.layerFrac == 0);
+  }
+}
+
+TEST_CASE("the opponent's reach: the graph's own strike tips in the striker's frame, as a distance field",
+          "[learning][opponent]") {
+  const StateActionModel m = kickingModel();
+  const StrikeReach fists(m, kFists, 0.5);
+  REQUIRE(fists.tips().size() == 1);
+  CHECK(fists.tips()[0].isApprox(Eigen::Vector3f(0, 1.3f, 0.4f)));
+  const StrikeReach feet(m, kFeet, 0.5);
+  REQUIRE(feet.tips().size() == 1);
+  CHECK(feet.tips()[0].isApprox(Eigen::Vector3f(0.2f, 0.9f, 0.4f)));  // the kick, at offset 3 (0.3 m walked)
+  CHECK(StrikeReach(m, kAnyLimb, 0.5).tips().size() == 2);
+  // The field is the exact distance up to half a 4 cm cell's diagonal, capped.
+  Rng rng(5);
+  double worst = 0;
+  for (int i = 0; i < 2000; ++i) {
+    const Eigen::Vector3d p(rng.uniform() * 1.6 - 0.8, 0.5 + rng.uniform() * 1.6, rng.uniform() * 1.6 - 0.4);
+    const double exact = std::min(0.5, (p - Eigen::Vector3d(0, 1.3, 0.4)).norm());
+    worst = std::max(worst, std::abs(fists.distance(p) - exact));
+  }
+  CHECK(worst < 0.035);
+  CHECK(fists.distance({0, 1.3, 0.4}) < 0.035);
+  CHECK(fists.distance({5, 0, 5}) == 0.5);
+  CHECK_THROWS_WITH(StrikeReach(m, kLeftFist, 0.5), Catch::Contains("no effective strike of these limbs"));
+  CHECK_THROWS_WITH(StrikeReach(m, kFists, 0), Catch::Contains("expected a cap in (0, 1] m, found 0"));
+}
+
+TEST_CASE("avoid: 0 with the head on the opponent's strike, 1 from `clear` away; success counts it held",
+          "[learning][opponent]") {
+  const StateActionModel m = headModel();
+  const std::string block = "{type: terms, gamma: 0.9, terms: [{term: avoid, point: head, clear: 0.3}]}";
+  const auto avoid = app::plugins().rewards.create(yaml(block));
+  const nlohmann::json reward = {
+      {"type", "terms"}, {"terms", {{{"term", "avoid"}, {"point", "head"}, {"effector", "fists"}, {"clear", 0.3}}}}};
+  // Not evaluated before bind(): the strikes and the head come from the bound model.
+  CHECK_THROWS_AS(avoid->evaluate(m, 1, Eigen::Vector3d(0, 0, 0.5)), std::logic_error);
+  avoid->bind(m);
+  // Action 1 stands: the head at (0, 1.3, 0.1). An opponent 0.5 m ahead facing the avatar
+  // punches at 0.4 m in front of itself: on the head.
+  const TargetState onHead(Eigen::Vector3d(0, 1, 0.5), 0, M_PI);
+  CHECK(avoid->evaluate(m, 1, onHead) < 0.9 * 0.035 / 0.3 + 1e-9);
+  // 0.8 m ahead, the strike falls 0.3 m short: the full signal.
+  CHECK(avoid->evaluate(m, 1, TargetState(Eigen::Vector3d(0, 1, 0.8), 0, M_PI)) == Approx(0.9).margin(0.9 * 0.035 / 0.3));
+  // 0.65 m ahead: half.
+  CHECK(avoid->evaluate(m, 1, TargetState(Eigen::Vector3d(0, 1, 0.65), 0, M_PI)) == Approx(0.45).margin(0.11));
+  // At 0.5 m but turned away: its punches go the other way.
+  CHECK(avoid->evaluate(m, 1, TargetState(Eigen::Vector3d(0, 1, 0.5), 0, 0)) == Approx(0.9).margin(1e-9));
+
+  SECTION("success: the head clear of its strikes for hold_s, point and effector from the reward") {
+    const SuccessCriterion c =
+        SuccessCriterion::read(yaml("{term: avoid, clear: 0.1, hold_s: 0.1}"), reward);
+    REQUIRE(c.conditions().size() == 1);
+    CHECK(c.conditions()[0].point.name == "head");
+    CHECK(c.describe() == "the head at least 0.1 m from the opponent's strikes for 0.1 s");
+    SuccessCriterion bound = c;
+    CHECK_THROWS_AS(bound.holdsAt(m, 1, 1, onHead), std::logic_error);
+    bound.bind(m);
+    SuccessCriterion::Tracker safe(bound, m.frameTime), hit(bound, m.frameTime);
+    CHECK(safe.play(m, 1, TargetState(Eigen::Vector3d(0, 1, 0.5), 0, 0)) == 3);
+    CHECK(hit.play(m, 1, onHead) == 0);
+  }
+  SECTION("mistakes name the line, column and key") {
+    CHECK_THROWS_WITH(SuccessCriterion::read(yaml("{term: avoid, point: pelvis}"), reward),
+                      Catch::StartsWith("test.yaml:1:22: point: ") && Catch::Contains("expected a role"));
+    CHECK_THROWS_WITH(SuccessCriterion::read(yaml("{term: avoid, clear: 2}"), reward),
+                      Catch::StartsWith("test.yaml:1:22: clear: "));
+    CHECK_THROWS_WITH(SuccessCriterion::read(yaml("{term: avoid, radius: 2}"), reward),
+                      Catch::Contains("radius: unknown key"));
+    SuccessCriterion left = SuccessCriterion::read(yaml("{term: avoid, effector: left_fist}"), reward);
+    CHECK_THROWS_WITH(left.bind(m), Catch::Contains("no effective strike of these limbs"));
+    const auto build = [](const std::string& text) { return app::plugins().rewards.create(yaml(text)); };
+    CHECK_THROWS_WITH(build("{type: terms, terms: [{term: avoid, point: centroid}]}"),
+                      Catch::StartsWith("test.yaml:1:44: terms[0].point: ") && Catch::Contains("found centroid"));
+    CHECK_THROWS_WITH(build("{type: terms, terms: [{term: avoid, clear: 0}]}"),
+                      Catch::StartsWith("test.yaml:1:44: terms[0].clear: "));
+    const auto kicks = build("{type: terms, terms: [{term: avoid, effector: left_foot}]}");
+    CHECK_THROWS_WITH(kicks->bind(m), Catch::Contains("terms[0].effector: ") &&
+                                          Catch::Contains("no effective strike of these limbs"));
+    const auto nose = build("{type: terms, terms: [{term: avoid, point: nose}]}");
+    CHECK_THROWS_WITH(nose->bind(m), Catch::Contains("terms[0].point: ") && Catch::Contains("Head"));
+  }
 }

@@ -41,6 +41,39 @@ std::pair<nlohmann::json, std::string> behaviorConfigAndKey(const BehaviorSpec& 
   return {std::move(config), h.hex()};
 }
 
+namespace {
+
+// An opponent's facing needs a grid axis to live on, and the avoid term and condition need
+// an opponent to read strikes from: refuse either half alone, at the key that asks for it.
+void checkOpponent(const BehaviorSpec& spec, const Behavior& b) {
+  const bool opponent = b.environment->type() == "opponent";
+  if (opponent) {
+    bool heading = false;
+    for (const GridAxis& axis : b.discretizer->axes()) heading |= axis.name == "heading";
+    if (!heading)
+      spec.environment.child("type").fail(fmt::format(
+          "expected a grid with a heading axis to hold the opponent's facing (polar_velocity with speeds: 1), found {}",
+          b.discretizer->type()));
+    return;
+  }
+  const std::string why = fmt::format(
+      "expected environment: {{type: opponent}} (the avoid term reads the opponent's strikes), found {}",
+      b.environment->type());
+  if (b.config["reward"].value("type", "") == "terms" && spec.reward.has("terms")) {
+    const std::vector<ConfigNode> terms = spec.reward.child("terms").elements();
+    for (std::size_t i = 0; i < terms.size(); ++i)
+      if (terms[i].has("term") && terms[i].child("term").asString() == "avoid") terms[i].child("term").fail(why);
+  }
+  if (b.success)
+    for (const SuccessCondition& c : b.success->conditions())
+      if (c.kind == SuccessCondition::Kind::Avoid) {
+        if (!spec.success.isNull()) spec.success.fail(why);
+        throw Error(why);
+      }
+}
+
+}  // namespace
+
 Behavior buildBehavior(const BehaviorSpec& spec, const Plugins& plugins, const StateActionModel& model,
                        const std::string& graphKey) {
   Behavior b;
@@ -63,6 +96,7 @@ Behavior buildBehavior(const BehaviorSpec& spec, const Plugins& plugins, const S
   b.success = b.successDeclared ? SuccessCriterion::read(spec.success, b.config["reward"])
                                 : SuccessCriterion::implied(b.config["reward"]);
   if (b.success) b.success->bind(model);
+  checkOpponent(spec, b);
   return b;
 }
 

@@ -1,6 +1,7 @@
 #include "mgrl/learning/signals.hpp"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <numbers>
 
@@ -9,6 +10,7 @@
 
 #include "mgrl/core/error.hpp"
 #include "mgrl/graph/motion_graph.hpp"
+#include "mgrl/learning/reward.hpp"
 #include "mgrl/motion/roles.hpp"
 
 namespace mgrl {
@@ -124,6 +126,77 @@ double strikeAt(const StateActionModel& m, std::size_t a, std::uint32_t t, std::
   if (effectors & kFists) scan(m.hitsOf(a), kLeftFist);
   if (effectors & kFeet) scan(m.kicksOf(a), kLeftFoot);
   return best;
+}
+
+StrikeReach::StrikeReach(const StateActionModel& m, std::uint8_t effectors, double cap) : cap_(cap) {
+  if (!(cap > 0 && cap <= 1)) throw Error(fmt::format("strike reach: expected a cap in (0, 1] m, found {}", cap));
+  // Each tip seen from the striker's root at the strike's frame (ActionHit is in the
+  // decision's frame; frameRoot carries that frame to the strike's), deduplicated to 1 cm:
+  // actions that share capture frames share strikes.
+  std::vector<std::array<std::int32_t, 3>> keys;
+  auto collect = [&](const std::vector<ActionHit>& strikes, std::uint8_t leftBit) {
+    for (const ActionHit& h : strikes) {
+      if (!(effectors & (leftBit << h.hand))) continue;
+      const double* r = &m.frameRoot[3 * (m.actionFrameBegin[h.action] + h.offset - 1)];
+      const Eigen::Vector3d tip = inverseTransformPoint({r[0], r[1], r[2]}, Eigen::Vector3d(h.x, h.y, h.z));
+      keys.push_back({static_cast<std::int32_t>(std::lround(tip.x() * 100)),
+                      static_cast<std::int32_t>(std::lround(tip.y() * 100)),
+                      static_cast<std::int32_t>(std::lround(tip.z() * 100))});
+    }
+  };
+  if (effectors & kFists) collect(m.hits, kLeftFist);
+  if (effectors & kFeet) collect(m.kicks, kLeftFoot);
+  std::sort(keys.begin(), keys.end());
+  keys.erase(std::unique(keys.begin(), keys.end()), keys.end());
+  if (keys.empty()) throw Error("no effective strike of these limbs in this capture: an opponent playing it never reaches");
+  Eigen::Vector3d lo = Eigen::Vector3d::Constant(1e9), hi = Eigen::Vector3d::Constant(-1e9);
+  for (const auto& k : keys) {
+    tips_.emplace_back(k[0] / 100.0F, k[1] / 100.0F, k[2] / 100.0F);
+    lo = lo.cwiseMin(tips_.back().cast<double>());
+    hi = hi.cwiseMax(tips_.back().cast<double>());
+  }
+  // The field covers the tips' box widened by cap: beyond it every distance is >= cap.
+  constexpr double kCell = 0.04;
+  origin_ = lo - Eigen::Vector3d::Constant(cap);
+  for (int k = 0; k < 3; ++k) n_[k] = static_cast<int>(std::ceil((hi[k] - lo[k] + 2 * cap) / kCell)) + 1;
+  field_.assign(static_cast<std::size_t>(n_[0]) * n_[1] * n_[2], static_cast<float>(cap));
+  std::size_t i = 0;
+  for (int z = 0; z < n_[2]; ++z)
+    for (int y = 0; y < n_[1]; ++y)
+      for (int x = 0; x < n_[0]; ++x, ++i) {
+        const Eigen::Vector3f p = (origin_ + kCell * Eigen::Vector3d(x, y, z)).cast<float>();
+        float best = static_cast<float>(cap * cap);
+        for (const Eigen::Vector3f& t : tips_) best = std::min(best, (t - p).squaredNorm());
+        field_[i] = std::sqrt(best);
+      }
+}
+
+double StrikeReach::distance(const Eigen::Vector3d& p) const {
+  constexpr double kCell = 0.04;
+  double f[3];
+  int c[3];
+  for (int k = 0; k < 3; ++k) {
+    const double u = (p[k] - origin_[k]) / kCell;
+    if (!(u >= 0 && u <= n_[k] - 1)) return cap_;  // outside the box: at least cap from every tip
+    c[k] = std::min(static_cast<int>(u), n_[k] - 2);
+    f[k] = u - c[k];
+  }
+  // Trilinear: the exact distance is 1-Lipschitz, so the error is below a cell's diagonal.
+  const std::size_t sx = 1, sy = static_cast<std::size_t>(n_[0]), sz = sy * static_cast<std::size_t>(n_[1]);
+  const std::size_t base = c[0] * sx + c[1] * sy + c[2] * sz;
+  double result = 0;
+  for (int corner = 0; corner < 8; ++corner) {
+    const int bx = corner & 1, by = (corner >> 1) & 1, bz = (corner >> 2) & 1;
+    const double w = (bx ? f[0] : 1 - f[0]) * (by ? f[1] : 1 - f[1]) * (bz ? f[2] : 1 - f[2]);
+    result += w * field_[base + bx * sx + by * sy + bz * sz];
+  }
+  return std::min(result, cap_);
+}
+
+Eigen::Vector3d inOpponentFrame(const TargetState& e, const Eigen::Vector3d& p) {
+  // The opponent's frame is the decision's moved to its ground point and turned by its
+  // facing, as an action's end frame is by its displacement.
+  return inverseTransformPoint({e.position.x(), e.position.z(), e.heading}, p);
 }
 
 }  // namespace mgrl

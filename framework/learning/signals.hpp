@@ -10,10 +10,12 @@
 #include <cstdint>
 #include <string>
 #include <string_view>
+#include <vector>
 
 #include <Eigen/Core>
 
 #include "mgrl/graph/state_action_model.hpp"
+#include "mgrl/learning/target_state.hpp"
 
 namespace mgrl {
 
@@ -85,5 +87,37 @@ double rootSpeed(const StateActionModel& m, std::size_t a, std::size_t t);
 /// from m.hits, kicks from m.kicks.
 double strikeAt(const StateActionModel& m, std::size_t a, std::uint32_t t, std::uint8_t effectors, double radius,
                 bool useSpeed, const Eigen::Vector3d& e);
+
+/// Where a striker's effective strikes reach (issue 17, the `avoid` term and success
+/// condition): every effective strike tip of the `effectors` in `m` (punches from m.hits,
+/// kicks from m.kicks), seen from the striker's own avatar frame at the strike's frame (its
+/// root on the ground, +Z its facing). An opponent that is another avatar of the same
+/// graph strikes at these points around itself. distance() answers "how far is a point from
+/// the nearest of them" from a distance field precomputed once (4 cm cells, trilinear), so a
+/// reward evaluated for every vertex and action pays a lookup, not a scan of the strikes.
+class StrikeReach {
+ public:
+  /// `cap`: distances are exact up to cap (m, in (0, 1]) and cap beyond. Throws mgrl::Error
+  /// if `m` has no effective strike of the effectors.
+  StrikeReach(const StateActionModel& m, std::uint8_t effectors, double cap);
+  /// The distance (m) from `p`, in the striker's avatar frame, to the nearest strike tip;
+  /// at most cap.
+  double distance(const Eigen::Vector3d& p) const;
+  /// The strike tips (deduplicated to 1 cm), striker's avatar frame.
+  const std::vector<Eigen::Vector3f>& tips() const { return tips_; }
+  double cap() const { return cap_; }
+
+ private:
+  std::vector<Eigen::Vector3f> tips_;
+  Eigen::Vector3d origin_;  ///< the field's first cell centre
+  double cap_ = 0;
+  int n_[3] = {0, 0, 0};
+  std::vector<float> field_;  ///< n_[0] x n_[1] x n_[2], x fastest
+};
+
+/// A point of the decision's avatar frame seen from an opponent standing at e.position (on
+/// the ground; its height is ignored) facing e.heading (rad, from +Z towards +X): in the
+/// opponent's own avatar frame.
+Eigen::Vector3d inOpponentFrame(const TargetState& e, const Eigen::Vector3d& p);
 
 }  // namespace mgrl

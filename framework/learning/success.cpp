@@ -40,7 +40,7 @@ void allowKeys(const ConfigNode& node, std::vector<std::string_view> allowed, bo
 // One condition; `hold` allows hold_s beside its keys (the one-condition form).
 SuccessCondition readCondition(const ConfigNode& node, const json& reward, bool hold) {
   if (!node.isMap() || !node.has("term"))
-    node.fail("expected a map with 'term: <contact|distance|facing>', e.g. {term: distance, within: 0.2}");
+    node.fail("expected a map with 'term: <contact|distance|facing|avoid>', e.g. {term: distance, within: 0.2}");
   const ConfigNode termNode = node.child("term");
   const std::string term = termNode.asString();
   const json from = rewardTerm(reward, term);
@@ -76,8 +76,25 @@ SuccessCondition readCondition(const ConfigNode& node, const json& reward, bool 
     c.kind = SuccessCondition::Kind::Facing;
     c.angle = node.number("angle_deg", from.is_null() ? 0.0 : from.value("angle_deg", 0.0), 0, 180) * kDegree;
     c.withinAngle = node.number("within_deg", 30, 0, 180) * kDegree;
+  } else if (term == "avoid") {
+    allowKeys(node, {"term", "point", "effector", "clear"}, hold);
+    c.kind = SuccessCondition::Kind::Avoid;
+    const std::string point = node.has("point") ? node.child("point").asString()
+                              : from.is_null()  ? std::string("head")
+                                                : from.value("point", std::string("head"));
+    c.point = node.withLocation([&] { return parseBodyPoint(point); });
+    c.pointNode = node.has("point") ? node.child("point") : node;
+    c.pointWritten = node.has("point");
+    if (c.point.kind != BodyPoint::Kind::Joint)
+      c.pointNode->fail(fmt::format("{}expected a role (head, ...) or a joint, found {}", c.pointWritten ? "" : "point: ",
+                                    point));
+    const std::string effector = node.has("effector") ? node.child("effector").asString()
+                                 : from.is_null()      ? std::string("fists")
+                                                       : from.value("effector", std::string("fists"));
+    c.effectors = node.withLocation([&] { return parseEffector(effector); });
+    c.clear = node.number("clear", 0.1, 0, 0.95);
   } else {
-    termNode.fail(fmt::format("unknown success term {} (known: contact, distance, facing)", quoteToken(term)));
+    termNode.fail(fmt::format("unknown success term {} (known: contact, distance, facing, avoid)", quoteToken(term)));
   }
   return c;
 }
@@ -99,6 +116,8 @@ std::string describeCondition(const SuccessCondition& c) {
     case SuccessCondition::Kind::Facing:
       return fmt::format("facing within {:g} deg of {:g} deg off the target", c.withinAngle / kDegree,
                          c.angle / kDegree);
+    case SuccessCondition::Kind::Avoid:
+      return fmt::format("the {} at least {:g} m from the opponent's strikes", bodyPointName(c.point), c.clear);
   }
   return {};
 }
@@ -148,15 +167,30 @@ SuccessCriterion SuccessCriterion::punch(double radius) {
 void SuccessCriterion::bind(const StateActionModel& m) {
   for (SuccessCondition& c : conditions_) {
     std::string why;
-    if (c.kind != SuccessCondition::Kind::Distance || bindBodyPoint(m, c.point, &why)) continue;
+    if (c.kind == SuccessCondition::Kind::Avoid) {
+      // The opponent is an avatar of this graph: its strikes are this model's. The field
+      // reaches a little past `clear` so "at least clear" is read from exact distances.
+      try {
+        c.reach = std::make_shared<const StrikeReach>(m, c.effectors, std::min(1.0, c.clear + 0.05));
+      } catch (const ConfigError&) {
+        throw;
+      } catch (const Error& e) {
+        if (c.pointNode) c.pointNode->fail(fmt::format("{}{}", c.pointWritten ? "" : "effector: ", e.what()));
+        throw Error(fmt::format("success: effector: {}", e.what()));
+      }
+    }
+    if ((c.kind != SuccessCondition::Kind::Distance && c.kind != SuccessCondition::Kind::Avoid) ||
+        bindBodyPoint(m, c.point, &why))
+      continue;
     if (c.pointNode) c.pointNode->fail(c.pointWritten ? why : fmt::format("point: {}", why));
     throw Error(fmt::format("success: point: {}", why));
   }
 }
 
 bool SuccessCriterion::holdsAt(const StateActionModel& m, std::size_t a, std::uint32_t t,
-                               const Eigen::Vector3d& e) const {
+                               const TargetState& state) const {
   const std::size_t frame = m.actionFrameBegin[a] + t - 1;
+  const Eigen::Vector3d& e = state.position;
   for (const SuccessCondition& c : conditions_) {
     switch (c.kind) {
       case SuccessCondition::Kind::Contact:
@@ -170,6 +204,11 @@ bool SuccessCriterion::holdsAt(const StateActionModel& m, std::size_t a, std::ui
         break;
       case SuccessCondition::Kind::Facing:
         if (std::abs(facingError(m, frame, e) - c.angle) > c.withinAngle) return false;
+        break;
+      case SuccessCondition::Kind::Avoid:
+        if (!c.reach || c.point.joint < 0 || static_cast<std::size_t>(c.point.joint) >= m.jointNames.size())
+          throw std::logic_error("an avoid success condition used before bind()");
+        if (c.reach->distance(inOpponentFrame(state, jointAt(m, frame, c.point.joint))) < c.clear) return false;
         break;
     }
   }
@@ -193,6 +232,9 @@ json SuccessCriterion::toJson() const {
       case SuccessCondition::Kind::Facing:
         all.push_back({{"term", "facing"}, {"angle_deg", c.angle / kDegree}, {"within_deg", c.withinAngle / kDegree}});
         break;
+      case SuccessCondition::Kind::Avoid:
+        all.push_back({{"term", "avoid"}, {"point", bodyPointName(c.point)}, {"effectors", c.effectors}, {"clear", c.clear}});
+        break;
     }
   }
   return {{"all", all}, {"hold_s", hold_s_}, {"text", describe()}};
@@ -213,7 +255,8 @@ SuccessCriterion::Tracker::Tracker(const SuccessCriterion& criterion, double fra
 std::uint32_t SuccessCriterion::Tracker::play(const StateActionModel& m, std::size_t a, const TargetState& e) {
   const auto frames = static_cast<std::uint32_t>(m.actionLength(a));
   for (std::uint32_t t = 1; t <= frames; ++t) {
-    held_ = criterion_->holdsAt(m, a, t, e.at(t * m.frameTime)) ? held_ + 1 : 0;
+    const TargetState now(e.at(t * m.frameTime), e.speed, e.heading);
+    held_ = criterion_->holdsAt(m, a, t, now) ? held_ + 1 : 0;
     if (held_ >= needed_) return t;
   }
   return 0;

@@ -8,12 +8,14 @@
 ///     success: {term: contact}                           # a strike lands (the paper's hit)
 ///     success: {term: distance, within: 0.2, hold_s: 1}  # |d - d0| <= 0.2 m for 1 s
 ///     success: {all: [{term: distance, within: 0.2}, {term: facing, within_deg: 30}], hold_s: 1}
+///     success: {term: avoid, clear: 0.1, hold_s: 6}      # out of the opponent's reach for 6 s
 ///
 /// A condition leaves out what the behaviour's reward already says: the body point, d0
 /// and dims of its distance term, the effector and radius of its contact term, the
 /// preferred angle of its facing term (the presets count as their terms: approach is a
 /// distance from the centroid with d0 0, hit a contact of the fists within contact_radius).
 #include <cstdint>
+#include <memory>
 #include <optional>
 #include <string>
 #include <vector>
@@ -29,17 +31,19 @@
 namespace mgrl {
 
 struct SuccessCondition {
-  enum class Kind { Contact, Distance, Facing };
+  enum class Kind { Contact, Distance, Facing, Avoid };
   Kind kind = Kind::Contact;
-  std::uint8_t effectors = kFists;  ///< contact
+  std::uint8_t effectors = kFists;  ///< contact; avoid: the opponent's strikes
   double radius = 0.15;             ///< contact (m)
-  BodyPoint point;                        ///< distance
+  BodyPoint point;                        ///< distance; avoid: the point kept clear
   /// Where the point was written (distance), for bind()'s message; none if implied.
   std::optional<ConfigNode> pointNode;
   bool pointWritten = false;  ///< pointNode is the `point` key itself (else its condition)
   int dims = 2;                           ///< distance
   double d0 = 0, within = 0.2;            ///< distance: |d - d0| <= within (m)
   double angle = 0, withinAngle = 0.5235987755982988;  ///< facing: |error - angle| <= withinAngle (rad)
+  double clear = 0.1;  ///< avoid: the point at least this far from every strike tip of the opponent (m)
+  std::shared_ptr<const StrikeReach> reach;  ///< avoid, after bind()
 };
 
 class SuccessCriterion {
@@ -61,9 +65,9 @@ class SuccessCriterion {
 
   const std::vector<SuccessCondition>& conditions() const { return conditions_; }
   double holdSeconds() const { return hold_s_; }
-  /// Whether every condition holds at offset t (1 = first frame) of action a, the target at
-  /// e then (in the decision's avatar frame).
-  bool holdsAt(const StateActionModel& m, std::size_t a, std::uint32_t t, const Eigen::Vector3d& e) const;
+  /// Whether every condition holds at offset t (1 = first frame) of action a, the target in
+  /// state e then (in the decision's avatar frame; an opponent's facing is e.heading).
+  bool holdsAt(const StateActionModel& m, std::size_t a, std::uint32_t t, const TargetState& e) const;
   /// {"all": [{"term": ..., ...}], "hold_s": s}.
   nlohmann::json toJson() const;
   /// "contact of the fists within 0.15 m", "pelvis within 0.2 m of 1.4 m and facing within 30 deg for 1 s".
