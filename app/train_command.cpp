@@ -289,7 +289,10 @@ json runTrain(const TrainOptions& options) {
     try {
       PolicyBundle previous = loadPolicyBundle(out, model, loaded.graph.key);
       // A stopped run's bundle holds only finished tables (its unfinished ones are absent).
-      for (auto& [name, entry] : previous.behaviors) {
+      for (auto& item : previous.behaviors) {
+        // Named, not a structured binding: clang before 16 cannot capture one in the lambda.
+        const std::string& name = item.first;
+        auto& entry = item.second;
         const auto match = std::find_if(all.begin(), all.end(), [&](const Behavior& b) { return b.name == name; });
         if (match != all.end() && match->key == entry.key) {
           bundle.behaviors.emplace(name, std::move(entry));
