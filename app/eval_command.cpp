@@ -154,6 +154,15 @@ std::string evalText(const json& r) {
       r["controller"].get<std::string>(), counted(r["trials"].get<std::size_t>(), "trial"),
       100 * r["success_rate"].get<double>(), timeToHit(r["mean_time_to_hit_s"], r["median_time_to_hit_s"]),
       r["mean_return"].get<double>(), humanCount(r["decisions_per_second"].get<double>()));
+  if (r.contains("opponent_gap_m")) {
+    const json& g = r["opponent_gap_m"];
+    const json& f = r["opponent_facing_deg"];
+    text += fmt::format("spacing to the opponent (pelvis to its ground point, every frame): median {:.2f} m, 5 % "
+                        "under {:.2f} m, closest {:.2f} m; facing it within {:.0f} deg (median), 95 % within {:.0f} "
+                        "deg\n",
+                        g["median"].get<double>(), g["p5"].get<double>(), g["min"].get<double>(),
+                        f["median"].get<double>(), f["p95"].get<double>());
+  }
   if (r.contains("random_baseline")) {
     const json& b = r["random_baseline"];
     text += fmt::format("random baseline on the same starts: success rate {:.1f} %, {}, mean return {:.3f}\n",

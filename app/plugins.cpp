@@ -75,6 +75,7 @@ std::string listText(const Plugins& p) {
           "  {term: contact, effector: E, radius: R}          an effective strike lands (default: the reward's contact)\n"
           "  {term: distance, point: P, d0: D, within: W}     |distance - d0| <= within (m)\n"
           "  {term: facing, angle_deg: A, within_deg: W}      |facing error - angle| <= within (deg)\n"
+          "  {term: avoid, point: P, effector: E, clear: C}   P at least C m from the opponent's strikes (opponent)\n"
           "  hold_s: S beside one condition, or {all: [conditions], hold_s: S}: held S seconds\n"
           "  left out: the behaviour's contact reward (the paper's hit), else an effective punch within 0.15 m\n\n";
   text += "controllers (mgrl eval / simulate --controller):\n"

@@ -10,6 +10,7 @@
 
 #include "mgrl/core/error.hpp"
 #include "mgrl/core/random.hpp"
+#include "mgrl/learning/signals.hpp"
 #include "mgrl/runtime/controller.hpp"
 
 namespace mgrl::app {
@@ -79,6 +80,7 @@ TrialStats Trials::run(const ChooseAction& choose, std::size_t count, double sec
   TrialStats stats;
   stats.trials = count;
   const double limit = seconds / model.frameTime;
+  const bool opponent = environment.type() == "opponent";
   for (std::size_t trial = 0; trial < count; ++trial) {
     auto s = static_cast<std::uint32_t>(starts.below(model.stateCount()));
     TargetState e = placeTarget(starts);
@@ -107,6 +109,14 @@ TrialStats Trials::run(const ChooseAction& choose, std::size_t count, double sec
       if (first > 0) {
         hit = true;
         stats.hitTimes.push_back((elapsed + first) * model.frameTime);
+      }
+      if (opponent) {
+        const std::size_t begin = model.actionFrameBegin[a], end = begin + model.actionLength(a);
+        for (std::size_t f = begin; f < end; ++f) {
+          stats.opponentGaps.push_back(static_cast<float>(
+              std::hypot(model.frameRoot[3 * f] - e.position.x(), model.frameRoot[3 * f + 1] - e.position.z())));
+          stats.opponentFacing.push_back(static_cast<float>(facingError(model, f, e.position) * 180 / M_PI));
+        }
       }
       const auto frames = static_cast<double>(model.actionLength(a));
       discount *= std::pow(gamma_, frames);
@@ -141,12 +151,21 @@ json Trials::summary(TrialStats stats) {
     median = n % 2 ? stats.hitTimes[n / 2] : (stats.hitTimes[n / 2 - 1] + stats.hitTimes[n / 2]) / 2;
   }
   const auto trials = static_cast<double>(std::max<std::size_t>(1, stats.trials));
-  return json{{"success_rate", static_cast<double>(stats.successes) / trials},
+  json result{{"success_rate", static_cast<double>(stats.successes) / trials},
               {"successes", stats.successes},
               {"mean_time_to_hit_s", times},
               {"median_time_to_hit_s", median},
               {"mean_return", stats.returns / trials},
               {"decisions", stats.decisions}};
+  if (!stats.opponentGaps.empty()) {
+    std::vector<float>& gaps = stats.opponentGaps;
+    std::sort(gaps.begin(), gaps.end());
+    result["opponent_gap_m"] = {{"median", gaps[gaps.size() / 2]}, {"p5", gaps[gaps.size() / 20]}, {"min", gaps.front()}};
+    std::vector<float>& facing = stats.opponentFacing;
+    std::sort(facing.begin(), facing.end());
+    result["opponent_facing_deg"] = {{"median", facing[facing.size() / 2]}, {"p95", facing[facing.size() * 19 / 20]}};
+  }
+  return result;
 }
 
 }  // namespace mgrl::app

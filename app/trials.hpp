@@ -34,6 +34,11 @@ struct TrialStats {
   std::size_t trials = 0, successes = 0, decisions = 0;
   std::vector<double> hitTimes;  ///< seconds to success, one per success
   double returns = 0;            ///< sum over trials of the discounted weighted reward
+  /// An opponent's trials (issue 17): the ground distance from the avatar's pelvis to the
+  /// opponent's ground point at every frame played (the spacing a viewer would see).
+  std::vector<float> opponentGaps;
+  /// ... and the angle (deg) between the avatar's facing and the direction to the opponent.
+  std::vector<float> opponentFacing;
 };
 
 /// Picks an action of state s (a global action index) for the environment state e (avatar frame).
@@ -54,7 +59,9 @@ class Trials {
                  std::vector<std::pair<std::uint32_t, TargetState>>* decisions = nullptr) const;
 
   /// {"success_rate", "successes", "mean_time_to_hit_s" (seconds to success; null without
-  ///  one), "median_time_to_hit_s", "mean_return", "decisions"}.
+  ///  one), "median_time_to_hit_s", "mean_return", "decisions"}, and for an opponent
+  ///  "opponent_gap_m": {"median", "p5", "min"} of TrialStats::opponentGaps and
+  ///  "opponent_facing_deg": {"median", "p95"} of TrialStats::opponentFacing.
   static nlohmann::json summary(TrialStats stats);
 
   double targetHeight() const { return targetHeight_; }

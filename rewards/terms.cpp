@@ -104,6 +104,7 @@ class Terms final : public Reward {
         term.point = parseBodyPoint(t["point"].get<std::string>());
         term.effectors = parseEffector(t["effector"].get<std::string>());
         term.scale = t["clear"];
+        term.target = t["body_radius"];
       } else if (name == "travel") {
         term.kind = Kind::Travel;
         term.sign = t["direction"] == "toward" ? 1 : -1;
@@ -175,9 +176,10 @@ class Terms final : public Reward {
             break;
           }
           case Kind::Avoid:
-            // 0 with the body point on a strike tip of the opponent, 1 from `clear` away.
+            // 0 with the body point on a strike tip of the opponent (or the bodies
+            // overlapping), 1 from `clear` away.
             if (!term.reach) throw std::logic_error("an avoid term evaluated before bind()");
-            s = term.reach->distance(inOpponentFrame(state, jointAt(m, frame, term.point.joint))) / term.scale;
+            s = opponentClearance(m, frame, term.point.joint, *term.reach, state, term.target) / term.scale;
             break;
           case Kind::Effort:
             s = std::exp(-(term.point.kind == BodyPoint::Kind::Pelvis ? rootSpeed(m, a, t) : bodySpeed(m, frame, term.point)) /
@@ -240,14 +242,18 @@ const std::vector<TermKind>& termKinds() {
                                 "capture; a role or a joint's name: that joint's speed"),
         weightSpec()}},
       {"avoid",
-       "min(d / clear, 1), d the distance from a body point to the nearest tip of the opponent's effective strikes "
-       "(the opponent environment: an avatar of the same graph at the target, facing its heading)",
+       "min(d / clear, 1), d the distance from a body point to the nearest tip of the opponent's effective strikes, "
+       "or the gap between the two bodies if smaller (the opponent environment: an avatar of the same graph at the "
+       "target, facing its heading)",
        {ParamSpec::choiceOrName("point", "head", {"head"}, "a skeleton role or joint",
                                 "the body point the opponent must not reach: a role (head, left_shoulder, ...) or a "
                                 "joint's name"),
         ParamSpec::choice("effector", "fists", {std::begin(kEffectorNames), std::end(kEffectorNames)},
                           "whose strikes the opponent throws (feet: its effective kicks)"),
         ParamSpec::number("clear", 0.3, 0.01, 1, "m", "distance from every strike tip that earns the full signal"),
+        ParamSpec::number("body_radius", 0.2, 0, 1, "m",
+                          "each body's ground radius: the bodies count as reached when the pelvis is within two of "
+                          "them of the opponent (as the world's body_radius)"),
         weightSpec()}},
   };
   return kinds;

@@ -80,10 +80,14 @@ TEST_CASE("dodge.yaml trains against a pursuing opponent and keeps out of its pu
   Sandbox box;
   const std::string dodge = std::string(MGRL_SOURCE_DIR) + "/scenarios/dodge.yaml";
   const json report = box.trainAndEvaluate(dodge);
-  CHECK(report["success"]["text"] == "the head at least 0.1 m from the opponent's strikes for 6 s");
-  // Measured with 300 trials, seeds 1-3: 80-83 %, random actions 21 %.
-  CHECK(report["success_rate"].get<double>() >= 0.65);
+  CHECK(report["success"]["text"] == "the head at least 0.1 m from the opponent's strikes and body for 6 s");
+  // Measured with 300 trials, seeds 1-3: 76-78 %, random actions 21 %.
+  CHECK(report["success_rate"].get<double>() >= 0.6);
   CHECK(report["random_baseline"]["success_rate"].get<double>() < 0.4);
+  // Spacing: the pelvis stays out of the opponent's body (measured: 5 % of frames under
+  // 0.73 m; the closest frames are trials that start on top of the opponent).
+  CHECK(report["opponent_gap_m"]["p5"].get<double>() > 0.5);
+  CHECK(report["opponent_facing_deg"]["median"].get<double>() < 45);  // measured: 18 degrees
   // A finer opponent grid (every 5 degrees of facing and position) needs 3.59 GB even with
   // the compact model:
   // refused before training, with the size it would need.

@@ -1418,10 +1418,11 @@ TEST_CASE("the opponent's reach: the graph's own strike tips in the striker's fr
 TEST_CASE("avoid: 0 with the head on the opponent's strike, 1 from `clear` away; success counts it held",
           "[learning][opponent]") {
   const StateActionModel m = headModel();
-  const std::string block = "{type: terms, gamma: 0.9, terms: [{term: avoid, point: head, clear: 0.3}]}";
+  const std::string block = "{type: terms, gamma: 0.9, terms: [{term: avoid, point: head, clear: 0.3, body_radius: 0}]}";
   const auto avoid = app::plugins().rewards.create(yaml(block));
   const nlohmann::json reward = {
-      {"type", "terms"}, {"terms", {{{"term", "avoid"}, {"point", "head"}, {"effector", "fists"}, {"clear", 0.3}}}}};
+      {"type", "terms"},
+      {"terms", {{{"term", "avoid"}, {"point", "head"}, {"effector", "fists"}, {"clear", 0.3}, {"body_radius", 0.0}}}}};
   // Not evaluated before bind(): the strikes and the head come from the bound model.
   CHECK_THROWS_AS(avoid->evaluate(m, 1, Eigen::Vector3d(0, 0, 0.5)), std::logic_error);
   avoid->bind(m);
@@ -1435,19 +1436,33 @@ TEST_CASE("avoid: 0 with the head on the opponent's strike, 1 from `clear` away;
   CHECK(avoid->evaluate(m, 1, TargetState(Eigen::Vector3d(0, 1, 0.65), 0, M_PI)) == Approx(0.45).margin(0.11));
   // At 0.5 m but turned away: its punches go the other way.
   CHECK(avoid->evaluate(m, 1, TargetState(Eigen::Vector3d(0, 1, 0.5), 0, 0)) == Approx(0.9).margin(1e-9));
+  // Bodies of 0.2 m radius 0.5 m apart leave a 0.1 m gap: a third of the signal, however
+  // the opponent faces; 0.3 m apart they overlap: none.
+  const auto bodies = app::plugins().rewards.create(
+      yaml("{type: terms, gamma: 0.9, terms: [{term: avoid, clear: 0.3, body_radius: 0.2}]}"));
+  bodies->bind(m);
+  CHECK(bodies->evaluate(m, 1, TargetState(Eigen::Vector3d(0, 1, 0.5), 0, 0)) == Approx(0.3).margin(1e-9));
+  CHECK(bodies->evaluate(m, 1, TargetState(Eigen::Vector3d(0.3, 1, 0), 0, 0)) == 0);
 
   SECTION("success: the head clear of its strikes for hold_s, point and effector from the reward") {
     const SuccessCriterion c =
         SuccessCriterion::read(yaml("{term: avoid, clear: 0.1, hold_s: 0.1}"), reward);
     REQUIRE(c.conditions().size() == 1);
     CHECK(c.conditions()[0].point.name == "head");
-    CHECK(c.describe() == "the head at least 0.1 m from the opponent's strikes for 0.1 s");
+    CHECK(c.conditions()[0].bodyRadius == 0);
+    CHECK(c.describe() == "the head at least 0.1 m from the opponent's strikes and body for 0.1 s");
     SuccessCriterion bound = c;
     CHECK_THROWS_AS(bound.holdsAt(m, 1, 1, onHead), std::logic_error);
     bound.bind(m);
     SuccessCriterion::Tracker safe(bound, m.frameTime), hit(bound, m.frameTime);
     CHECK(safe.play(m, 1, TargetState(Eigen::Vector3d(0, 1, 0.5), 0, 0)) == 3);
     CHECK(hit.play(m, 1, onHead) == 0);
+    // Given bodies: 0.5 m apart leaves 0.1 m, 0.45 m leaves 0.05 m.
+    SuccessCriterion wide = SuccessCriterion::read(yaml("{term: avoid, clear: 0.08, body_radius: 0.2}"), reward);
+    wide.bind(m);
+    SuccessCriterion::Tracker apart(wide, m.frameTime), touching(wide, m.frameTime);
+    CHECK(apart.play(m, 1, TargetState(Eigen::Vector3d(0, 1, 0.5), 0, 0)) == 1);
+    CHECK(touching.play(m, 1, TargetState(Eigen::Vector3d(0, 1, 0.45), 0, 0)) == 0);
   }
   SECTION("mistakes name the line, column and key") {
     CHECK_THROWS_WITH(SuccessCriterion::read(yaml("{term: avoid, point: pelvis}"), reward),

@@ -593,4 +593,33 @@ TEST_CASE("controllers choose among the allowed actions only", "[world][data]") 
   REQUIRE(checked > 10);
 }
 
+TEST_CASE("an opponent's facing reaches the controller: a partner's own, a target's straight at the avatar",
+          "[world][data][opponent]") {
+  const Boxing& b = boxing();
+  for (const bool opponent : {false, true}) {
+    WorldSetup s = b.setup(1);
+    s.params.mode = "targets";
+    s.opponent = opponent;
+    World world(s);
+    world.run(1);
+    const World::Decision d = world.lastDecision(0);
+    REQUIRE(d.count == 1);
+    const Eigen::Vector3d& e = d.target.position;
+    CHECK(d.target.speed == 0);
+    CHECK(d.target.heading == (opponent ? std::atan2(-e.x(), -e.z()) : 0.0));
+  }
+  WorldSetup s = b.setup(2);
+  s.params.mode = "sparring";
+  s.opponent = true;
+  World world(s);
+  REQUIRE(world.partner(0) == 1);
+  world.run(1);
+  // Partners start facing each other (+-20 degrees): each sees the other facing back at it.
+  const World::Decision d = world.lastDecision(0);
+  // Both decided at the first frame, where the partner stood where it decided from.
+  const double partnerFacing = std::remainder(world.lastDecision(1).frame.dyaw - d.frame.dyaw, 2 * M_PI);
+  CHECK(d.target.heading == Approx(partnerFacing).margin(1e-12));
+  CHECK(std::abs(d.target.heading) > M_PI - 45 * M_PI / 180);
+}
+
 }  // namespace mgrl

@@ -305,6 +305,7 @@ void ViewerSession::rebuild(Mode mode, int avatars) {
   setup.seed = 1;
   setup.threads = 1;  // every page on the server's one thread
   setup.poses = true;
+  setup.opponent = a.behaviors.front().environment->type() == "opponent";
   setup.makeController = [&a] { return std::make_unique<RandomController>(a.model()); };  // replaced below
   auto world = std::make_unique<World>(setup);
   s.world = std::move(world);
@@ -868,20 +869,31 @@ std::string ViewerSession::values() const {
   const QTable& q = *s.policy[shown].table;
   const World::Decision d = s.world->lastDecision(0);
   const Eigen::Vector3d e = inverseTransformPoint(d.frame, s.world->aim(0));
-  // A grid that also holds the target's velocity (polar_velocity) repeats each position per
-  // heading and speed layer: the viewer's target stands still, so show its slice, speed 0
-  // and the first heading (at speed 0 the heading changes nothing the values depend on).
+  // A grid that also holds the target's heading (polar_velocity) repeats each position per
+  // heading and speed layer: the viewer's target stands still, so show the speed-0 slice at
+  // the heading nearest the decision's (a moving target's heading changes nothing at speed
+  // 0; an opponent's facing, issue 17, does).
   const Discretizer& grid = *s.policy[shown].grid;
   const std::size_t vertices =
       grid.layerAxis() ? grid.axes()[0].vertices.size() * grid.axes()[1].vertices.size() : q.vertexCount();
-  double level = vertexPositions.empty() ? 0 : vertexPositions[1];
-  for (std::size_t v = 0; v < vertices; ++v)
+  std::size_t offset = 0;
+  if (grid.layerAxis() && grid.axes().size() == 3) {
+    const std::vector<double>& headings = grid.axes()[2].vertices;
+    double nearest = 10;
+    for (std::size_t h = 0; h < headings.size(); ++h)
+      if (const double gap = std::abs(std::remainder(headings[h] - d.target.heading, 2 * M_PI)); gap < nearest) {
+        nearest = gap;
+        offset = h * vertices;
+      }
+  }
+  double level = vertexPositions.empty() ? 0 : vertexPositions[3 * offset + 1];
+  for (std::size_t v = offset; v < offset + vertices; ++v)
     if (std::abs(vertexPositions[3 * v + 1] - e.y()) < std::abs(level - e.y())) level = vertexPositions[3 * v + 1];
   const std::size_t n = q.actionsOf(d.state);
   json points = json::array();
   double lo = 0, hi = 0;
   bool first = true;
-  for (std::size_t v = 0; v < vertices; ++v) {
+  for (std::size_t v = offset; v < offset + vertices; ++v) {
     const double* p = &vertexPositions[3 * v];
     if (std::abs(p[1] - level) > 1e-6 || n == 0) continue;
     const float* row = q.row(d.state, v);

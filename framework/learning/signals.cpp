@@ -199,4 +199,12 @@ Eigen::Vector3d inOpponentFrame(const TargetState& e, const Eigen::Vector3d& p) 
   return inverseTransformPoint({e.position.x(), e.position.z(), e.heading}, p);
 }
 
+double opponentClearance(const StateActionModel& m, std::size_t frame, int joint, const StrikeReach& reach,
+                         const TargetState& e, double bodyRadius) {
+  const double* r = &m.frameRoot[3 * frame];
+  const double bodies = std::hypot(r[0] - e.position.x(), r[1] - e.position.z()) - 2 * bodyRadius;
+  const double strikes = reach.distance(inOpponentFrame(e, jointAt(m, frame, joint)));
+  return std::max(0.0, std::min(strikes, bodies));
+}
+
 }  // namespace mgrl

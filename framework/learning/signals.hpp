@@ -120,4 +120,11 @@ class StrikeReach {
 /// opponent's own avatar frame.
 Eigen::Vector3d inOpponentFrame(const TargetState& e, const Eigen::Vector3d& p);
 
+/// How far joint `joint` is, at action frame `frame`, from being reached by an opponent
+/// standing at e (issue 17): the smaller of its distance to the opponent's strike tips and
+/// the ground gap between the two bodies (the avatar's pelvis to the opponent's ground
+/// point, less two `bodyRadius`: bodies overlap below 0). Never below 0, at most reach.cap().
+double opponentClearance(const StateActionModel& m, std::size_t frame, int joint, const StrikeReach& reach,
+                         const TargetState& e, double bodyRadius);
+
 }  // namespace mgrl

@@ -77,7 +77,7 @@ SuccessCondition readCondition(const ConfigNode& node, const json& reward, bool 
     c.angle = node.number("angle_deg", from.is_null() ? 0.0 : from.value("angle_deg", 0.0), 0, 180) * kDegree;
     c.withinAngle = node.number("within_deg", 30, 0, 180) * kDegree;
   } else if (term == "avoid") {
-    allowKeys(node, {"term", "point", "effector", "clear"}, hold);
+    allowKeys(node, {"term", "point", "effector", "clear", "body_radius"}, hold);
     c.kind = SuccessCondition::Kind::Avoid;
     const std::string point = node.has("point") ? node.child("point").asString()
                               : from.is_null()  ? std::string("head")
@@ -93,6 +93,7 @@ SuccessCondition readCondition(const ConfigNode& node, const json& reward, bool 
                                                        : from.value("effector", std::string("fists"));
     c.effectors = node.withLocation([&] { return parseEffector(effector); });
     c.clear = node.number("clear", 0.1, 0, 0.95);
+    c.bodyRadius = node.number("body_radius", from.is_null() ? 0.2 : from.value("body_radius", 0.2), 0, 1);
   } else {
     termNode.fail(fmt::format("unknown success term {} (known: contact, distance, facing, avoid)", quoteToken(term)));
   }
@@ -117,7 +118,7 @@ std::string describeCondition(const SuccessCondition& c) {
       return fmt::format("facing within {:g} deg of {:g} deg off the target", c.withinAngle / kDegree,
                          c.angle / kDegree);
     case SuccessCondition::Kind::Avoid:
-      return fmt::format("the {} at least {:g} m from the opponent's strikes", bodyPointName(c.point), c.clear);
+      return fmt::format("the {} at least {:g} m from the opponent's strikes and body", bodyPointName(c.point), c.clear);
   }
   return {};
 }
@@ -208,7 +209,7 @@ bool SuccessCriterion::holdsAt(const StateActionModel& m, std::size_t a, std::ui
       case SuccessCondition::Kind::Avoid:
         if (!c.reach || c.point.joint < 0 || static_cast<std::size_t>(c.point.joint) >= m.jointNames.size())
           throw std::logic_error("an avoid success condition used before bind()");
-        if (c.reach->distance(inOpponentFrame(state, jointAt(m, frame, c.point.joint))) < c.clear) return false;
+        if (opponentClearance(m, frame, c.point.joint, *c.reach, state, c.bodyRadius) < c.clear) return false;
         break;
     }
   }
@@ -233,7 +234,11 @@ json SuccessCriterion::toJson() const {
         all.push_back({{"term", "facing"}, {"angle_deg", c.angle / kDegree}, {"within_deg", c.withinAngle / kDegree}});
         break;
       case SuccessCondition::Kind::Avoid:
-        all.push_back({{"term", "avoid"}, {"point", bodyPointName(c.point)}, {"effectors", c.effectors}, {"clear", c.clear}});
+        all.push_back({{"term", "avoid"},
+                       {"point", bodyPointName(c.point)},
+                       {"effectors", c.effectors},
+                       {"clear", c.clear},
+                       {"body_radius", c.bodyRadius}});
         break;
     }
   }

@@ -43,6 +43,7 @@ struct SuccessCondition {
   double d0 = 0, within = 0.2;            ///< distance: |d - d0| <= within (m)
   double angle = 0, withinAngle = 0.5235987755982988;  ///< facing: |error - angle| <= withinAngle (rad)
   double clear = 0.1;  ///< avoid: the point at least this far from every strike tip of the opponent (m)
+  double bodyRadius = 0.2;  ///< avoid: each body's ground radius (m): the bodies at least `clear` apart too
   std::shared_ptr<const StrikeReach> reach;  ///< avoid, after bind()
 };
 

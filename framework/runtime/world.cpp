@@ -61,7 +61,7 @@ struct World::Avatar {
   /// Last frame of a landed strike, per limb: left and right fist, left and right foot.
   std::array<std::size_t, 4> landedFrame{kNever, kNever, kNever, kNever};
   std::size_t decisions = 0;
-  Eigen::Vector3d decisionTarget = Eigen::Vector3d::Zero();  ///< e at the last decision
+  TargetState decisionTarget;  ///< e at the last decision
   // Reaction to the last hit taken: displacement `push` of `part`, starting at `reactionStart`.
   BodyPart part = BodyPart::Head;
   Eigen::Vector3d push = Eigen::Vector3d::Zero();
@@ -206,7 +206,11 @@ Eigen::Vector3d World::aim(std::size_t i) const {
 
 void World::decide(std::size_t i, Controller& controller) {
   Avatar& a = avatars_[i];
-  const Eigen::Vector3d e = inverseTransformPoint(a.decision, aim(i));
+  TargetState e = inverseTransformPoint(a.decision, aim(i));
+  if (setup_.opponent)
+    e.heading = a.partner >= 0
+                    ? std::remainder(avatars_[static_cast<std::size_t>(a.partner)].now.dyaw - a.decision.dyaw, 2 * M_PI)
+                    : std::atan2(-e.position.x(), -e.position.z());
   if (setup_.params.bodyRadius > 0) {
     thread_local std::vector<std::uint8_t> allowed;
     restrictActions(i, allowed);

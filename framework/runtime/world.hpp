@@ -21,6 +21,7 @@
 #include <Eigen/Geometry>
 
 #include "mgrl/core/config.hpp"
+#include "mgrl/learning/target_state.hpp"
 #include "mgrl/runtime/controller.hpp"
 #include "mgrl/motion/motion_database.hpp"
 #include "mgrl/core/params.hpp"
@@ -132,6 +133,11 @@ struct WorldSetup {
   bool poses = false;
   /// Keep every avatar's poses for export (implies poses).
   bool record = false;
+  /// The behaviours' environment is an `opponent` (issue 17): controllers also see which
+  /// way the target faces (TargetState::heading): a partner's own facing (sparring), or,
+  /// for a target of the targets mode, straight at the avatar (an opponent that turns to
+  /// face it, as the model's does).
+  bool opponent = false;
 };
 
 class World {
@@ -163,7 +169,7 @@ class World {
   struct Decision {
     std::uint32_t state = 0, action = 0;
     GroundMotion frame;
-    Eigen::Vector3d target = Eigen::Vector3d::Zero();  ///< the aim point in that frame, as the controller saw it
+    TargetState target;  ///< the aim point in that frame (and an opponent's facing), as the controller saw it
     std::size_t count = 0;                             ///< avatar i's decisions so far (this one included)
   };
   Decision lastDecision(std::size_t i) const;
