@@ -133,6 +133,18 @@ json runEval(const EvalOptions& options) {
   if (options.controller != "random") {
     report["random_baseline"] = Trials::summary(run("random", nullptr));
   }
+  // An opponent scenario: the same controller against another avatar of the graph playing
+  // the capture and throwing its own punches, not the environment model's opponent.
+  if (trials.hasAvatarOpponent()) {
+    auto against = [&](const std::string& kind) {
+      ChooseAction chooser;
+      if (kind != "random") chooser = [&](std::uint32_t s, const TargetState& e) { return choose(kind, s, e); };
+      return Trials::summary(trials.runAgainstAvatar(chooser, options.trials, options.seconds, options.seed));
+    };
+    json avatar = against(options.controller);
+    if (options.controller != "random") avatar["random_baseline"] = against("random");
+    report["against_avatar"] = avatar;
+  }
   return report;
 }
 
@@ -168,6 +180,20 @@ std::string evalText(const json& r) {
     text += fmt::format("random baseline on the same starts: success rate {:.1f} %, {}, mean return {:.3f}\n",
                         100 * b["success_rate"].get<double>(), timeToHit(b["mean_time_to_hit_s"], json()),
                         b["mean_return"].get<double>());
+  }
+  if (r.contains("against_avatar")) {
+    const json& a = r["against_avatar"];
+    auto line = [](const json& x) {
+      return fmt::format("success rate {:.1f} %, {:.2f} strikes reaching it a minute, bodies overlapping {:.1f} % of "
+                         "the time, spacing median {:.2f} m",
+                         100 * x["success_rate"].get<double>(), x.value("strikes_reached_per_minute", 0.0),
+                         100 * x.value("bodies_overlapping", 0.0), x["opponent_gap_m"]["median"].get<double>());
+    };
+    text += fmt::format("against an avatar of the graph (playing the capture, punching at the avatar, {:g} s per "
+                        "trial): {}",
+                        r["seconds_per_trial"].get<double>(), line(a));
+    if (a.contains("random_baseline")) text += fmt::format("\n  random actions against it: {}", line(a["random_baseline"]));
+    text += "\n";
   }
   return text;
 }

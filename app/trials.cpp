@@ -11,6 +11,8 @@
 #include "mgrl/core/error.hpp"
 #include "mgrl/core/random.hpp"
 #include "mgrl/learning/signals.hpp"
+#include "environments/environments.hpp"
+#include "mgrl/graph/motion_graph.hpp"
 #include "mgrl/runtime/controller.hpp"
 
 namespace mgrl::app {
@@ -130,6 +132,145 @@ TrialStats Trials::run(const ChooseAction& choose, std::size_t count, double sec
   return stats;
 }
 
+bool Trials::hasAvatarOpponent() const {
+  if (!dynamic_cast<const environments::Opponent*>(environment_)) return false;
+  for (const SuccessCriterion& c : criteria_)
+    for (const SuccessCondition& k : c.conditions())
+      if (k.kind == SuccessCondition::Kind::Avoid) return true;
+  return false;
+}
+
+TrialStats Trials::runAgainstAvatar(const ChooseAction& choose, std::size_t count, double seconds,
+                                    std::uint64_t seed) const {
+  const StateActionModel& model = model_;
+  const auto* opponentModel = dynamic_cast<const environments::Opponent*>(environment_);
+  if (!opponentModel)
+    throw Error(fmt::format("trials against an avatar: expected an opponent environment, found {}", environment_->type()));
+  const SuccessCondition* avoid = nullptr;
+  double hold = 0;
+  for (const SuccessCriterion& c : criteria_)
+    for (const SuccessCondition& k : c.conditions())
+      if (k.kind == SuccessCondition::Kind::Avoid && !avoid) {
+        avoid = &k;
+        hold = c.holdSeconds();
+      }
+  if (!avoid) throw Error("trials against an avatar: expected a success criterion with an avoid condition, found none");
+  const auto needed = std::max<std::size_t>(1, static_cast<std::size_t>(std::lround(hold / model.frameTime)));
+  const auto limit = static_cast<std::size_t>(seconds / model.frameTime);
+  Rng starts(seed), choices(seed ^ 0x5eed5eed5eedULL), opponentRng(seed ^ 0x0bb0bb0bb0ULL);
+  TrialStats stats;
+  stats.trials = count;
+
+  // One avatar on the graph: where its current action started (world), the action, and
+  // how many of its frames have played.
+  struct Player {
+    std::uint32_t state = 0, action = 0, played = 0, length = 0;
+    GroundMotion decision;
+  };
+  auto rootAt = [&](const Player& p) {  // the root's world pose at the frame just played
+    if (p.played == 0) return p.decision;
+    const double* r = &model.frameRoot[3 * (model.actionFrameBegin[p.action] + p.played - 1)];
+    return compose(p.decision, {r[0], r[1], r[2]});
+  };
+  auto finish = [&](Player& p) {  // the pose after the whole action: the next decision's frame
+    p.decision = compose(p.decision, model.displacement(p.action));
+    p.state = model.actionTo[p.action];
+  };
+  auto start = [&](Player& p, std::size_t a) {
+    p.action = static_cast<std::uint32_t>(a);
+    p.played = 0;
+    p.length = static_cast<std::uint32_t>(model.actionLength(a));
+  };
+  // The opponent's choice, greedy over its out-actions: a punch of the action landing near
+  // the avatar's point where it is now (the paper's hit, sec. 6.4) first, then ending
+  // nearest stop_distance from the avatar (or its own start, standing) and facing it; the
+  // capture is all it can play.
+  auto opponentChoice = [&](const Player& o, const Eigen::Vector3d& avatar, const Eigen::Vector3d& target,
+                            const Eigen::Vector3d& home) {
+    const std::size_t first = model.stateActionBegin[o.state], last = model.stateActionBegin[o.state + 1];
+    std::size_t best = first;
+    double bestCost = 1e300;
+    const Eigen::Vector3d aim = inverseTransformPoint(o.decision, target);
+    for (std::size_t a = first; a < last; ++a) {
+      const GroundMotion end = compose(o.decision, model.displacement(a));
+      const Eigen::Vector3d q = inverseTransformPoint(end, avatar);
+      const double facing = std::abs(std::atan2(q.x(), q.z()));
+      const double place = opponentModel->pursues()
+                               ? std::abs(std::hypot(q.x(), q.z()) - opponentModel->stopDistance())
+                               : std::hypot(end.dx - home.x(), end.dz - home.z());
+      double punch = 0;
+      for (const ActionHit& h : model.hitsOf(a))
+        punch = std::max(punch, 1 - std::min(1.0, (Eigen::Vector3d(h.x, h.y, h.z) - aim).norm() / 0.5));
+      if (const double cost = place + 0.5 * facing - 2 * punch; cost < bestCost) {
+        bestCost = cost;
+        best = a;
+      }
+    }
+    return best;
+  };
+
+  for (std::size_t trial = 0; trial < count; ++trial) {
+    Player avatar, opponent;
+    avatar.state = static_cast<std::uint32_t>(starts.below(model.stateCount()));
+    const TargetState placed = placeTarget(starts);
+    opponent.state = static_cast<std::uint32_t>(opponentRng.below(model.stateCount()));
+    opponent.decision = {placed.position.x(), placed.position.z(), placed.heading};
+    const Eigen::Vector3d home(placed.position.x(), 0, placed.position.z());
+    std::size_t held = 0, frame = 0;
+    bool first = true, succeeded = false;
+    for (; frame < limit; ++frame) {
+      if (first || avatar.played == avatar.length) {
+        if (!first) finish(avatar);
+        const GroundMotion o = rootAt(opponent);
+        const TargetState e(inverseTransformPoint(avatar.decision, {o.dx, targetHeight_, o.dz}), 0.0,
+                            std::remainder(o.dyaw - avatar.decision.dyaw, 2 * M_PI));
+        const std::size_t begin = model.stateActionBegin[avatar.state], end = model.stateActionBegin[avatar.state + 1];
+        start(avatar, choose ? choose(avatar.state, e) : begin + choices.below(end - begin));
+        ++stats.decisions;
+      }
+      if (first || opponent.played == opponent.length) {
+        if (!first) finish(opponent);
+        const GroundMotion a = rootAt(avatar);
+        const std::size_t f = model.actionFrameBegin[avatar.action] + std::max<std::uint32_t>(avatar.played, 1) - 1;
+        const Eigen::Vector3d target = transformPoint(avatar.decision, jointAt(model, f, avoid->point.joint));
+        start(opponent, opponentChoice(opponent, {a.dx, 0, a.dz}, target, home));
+      }
+      first = false;
+      ++avatar.played;
+      ++opponent.played;
+      const std::size_t f = model.actionFrameBegin[avatar.action] + avatar.played - 1;
+      const GroundMotion me = rootAt(avatar), them = rootAt(opponent);
+      const Eigen::Vector3d point = transformPoint(avatar.decision, jointAt(model, f, avoid->point.joint));
+      bool reached = std::hypot(me.dx - them.dx, me.dz - them.dz) - 2 * avoid->bodyRadius < avoid->clear;
+      auto strikes = [&](std::span<const ActionHit> list, std::uint8_t leftBit) {
+        for (const ActionHit& h : list) {
+          if (h.offset != opponent.played || !(avoid->effectors & (leftBit << h.hand))) continue;
+          const Eigen::Vector3d tip = transformPoint(opponent.decision, Eigen::Vector3d(h.x, h.y, h.z));
+          if ((tip - point).norm() < avoid->clear) {
+            reached = true;
+            ++stats.strikesReached;
+          }
+        }
+      };
+      if (avoid->effectors & kFists) strikes(model.hitsOf(opponent.action), kLeftFist);
+      if ((avoid->effectors & kFeet) && !model.actionKickBegin.empty()) strikes(model.kicksOf(opponent.action), kLeftFoot);
+      stats.opponentGaps.push_back(static_cast<float>(std::hypot(me.dx - them.dx, me.dz - them.dz)));
+      const Eigen::Vector3d toward = inverseTransformPoint(me, {them.dx, 0, them.dz});
+      stats.opponentFacing.push_back(static_cast<float>(std::abs(std::atan2(toward.x(), toward.z())) * 180 / M_PI));
+      stats.framesOverlapping += std::hypot(me.dx - them.dx, me.dz - them.dz) < 2 * avoid->bodyRadius;
+      // The whole trial plays on after a success: strikes and overlaps are counted over all of it.
+      held = reached ? 0 : held + 1;
+      if (held == needed && !succeeded) {
+        succeeded = true;
+        ++stats.successes;
+        stats.hitTimes.push_back(static_cast<double>(frame + 1) * model.frameTime);
+      }
+    }
+    stats.secondsPlayed += static_cast<double>(frame) * model.frameTime;
+  }
+  return stats;
+}
+
 json Trials::successJson() const {
   json criteria = json::array();
   std::vector<std::string> texts;
@@ -157,6 +298,11 @@ json Trials::summary(TrialStats stats) {
               {"median_time_to_hit_s", median},
               {"mean_return", stats.returns / trials},
               {"decisions", stats.decisions}};
+  if (stats.secondsPlayed > 0) {
+    result["strikes_reached_per_minute"] = 60 * static_cast<double>(stats.strikesReached) / stats.secondsPlayed;
+    result["bodies_overlapping"] = static_cast<double>(stats.framesOverlapping) /
+                                   static_cast<double>(std::max<std::size_t>(1, stats.opponentGaps.size()));
+  }
   if (!stats.opponentGaps.empty()) {
     std::vector<float>& gaps = stats.opponentGaps;
     std::sort(gaps.begin(), gaps.end());

@@ -39,6 +39,11 @@ struct TrialStats {
   std::vector<float> opponentGaps;
   /// ... and the angle (deg) between the avatar's facing and the direction to the opponent.
   std::vector<float> opponentFacing;
+  /// runAgainstAvatar(): the opponent's effective strikes that reached the avatar's point
+  /// (within the avoid condition's `clear`), the frames the two bodies overlapped (pelvis
+  /// gap under two body radii), and the seconds played.
+  std::size_t strikesReached = 0, framesOverlapping = 0;
+  double secondsPlayed = 0;
 };
 
 /// Picks an action of state s (a global action index) for the environment state e (avatar frame).
@@ -57,6 +62,20 @@ class Trials {
   /// `decisions`, if given, receives every (state, target) a decision was asked for.
   TrialStats run(const ChooseAction& choose, std::size_t count, double seconds, std::uint64_t seed,
                  std::vector<std::pair<std::uint32_t, TargetState>>* decisions = nullptr) const;
+
+  /// True if runAgainstAvatar() can run: an opponent environment and an avoid condition.
+  bool hasAvatarOpponent() const;
+  /// An opponent scenario's trials against another avatar of the graph instead of the
+  /// environment model's opponent (issue 17): the opponent plays the capture itself, action
+  /// by action, greedily: an action whose punch lands near the avatar's point first, then
+  /// one ending stop_distance from the avatar and facing it (`policy: pursue`; `stand`:
+  /// near its start), and throws its effective strikes at the frames they happen. A trial
+  /// succeeds when, for the avoid condition's hold_s, no strike tip came within `clear` of
+  /// the avatar's point and the bodies stayed `clear` apart; every trial plays all its
+  /// seconds, so strikes and overlaps are counted over the same time for any controller.
+  /// Throws mgrl::Error if the scenario's environment is not an opponent or no criterion
+  /// has an avoid condition.
+  TrialStats runAgainstAvatar(const ChooseAction& choose, std::size_t count, double seconds, std::uint64_t seed) const;
 
   /// {"success_rate", "successes", "mean_time_to_hit_s" (seconds to success; null without
   ///  one), "median_time_to_hit_s", "mean_return", "decisions"}, and for an opponent
