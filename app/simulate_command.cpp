@@ -311,7 +311,8 @@ json runSimulate(const SimulateOptions& options) {
   if (options.controller == "policy") parts = policyParts(policyDir, behaviors, loaded.graph, options, bundle);
   std::vector<SearchPart> searchParts;
   for (const Behavior& b : behaviors) searchParts.push_back({b.discretizer.get(), b.reward.get(), b.weight, b.activation});
-  const StaticTarget environment;
+  // The search predicts the target as the behaviours were trained to (an opponent pursues).
+  const EnvironmentModel& environment = *behaviors.front().environment;
   const double gamma = behaviors.front().reward->gamma();
 
   const BodyTable body = makeBodyTable(loaded.graph.db);

@@ -35,7 +35,6 @@ struct ViewerAssets {
   std::vector<PolicyPart> policy;  ///< empty: no bundle, the policy controller is not offered
   fs::path policyDir;
   std::vector<SearchPart> search;
-  StaticTarget environment;
   double gamma = 0.95;
   BodyTable body;
   WorldParams params;
@@ -283,7 +282,8 @@ void ViewerSession::applyController() {
     if (kind == "policy")
       inner = std::make_unique<PolicyController>(assets->model(), policy, assets->params.variety);
     else if (kind == "online_search")
-      inner = std::make_unique<OnlineSearchController>(assets->model(), assets->environment, search,
+      // The search predicts the target as the behaviours were trained to (an opponent pursues).
+      inner = std::make_unique<OnlineSearchController>(assets->model(), *assets->behaviors.front().environment, search,
                                                        SearchHorizon{horizon, 0}, assets->gamma);
     else
       inner = std::make_unique<RandomController>(assets->model());

@@ -58,10 +58,11 @@ struct World::Avatar {
   std::uint32_t hitCursor = 0;  ///< next hit of the action to check
   std::uint32_t kickCursor = 0;  ///< next kick of the action to check
   std::int32_t partner = -1;
+  double decisionHeading = 0;  ///< an opponent's facing at the last decision (TargetState::heading)
   /// Last frame of a landed strike, per limb: left and right fist, left and right foot.
   std::array<std::size_t, 4> landedFrame{kNever, kNever, kNever, kNever};
   std::size_t decisions = 0;
-  TargetState decisionTarget;  ///< e at the last decision
+  Eigen::Vector3d decisionTarget = Eigen::Vector3d::Zero();  ///< e at the last decision
   // Reaction to the last hit taken: displacement `push` of `part`, starting at `reactionStart`.
   BodyPart part = BodyPart::Head;
   Eigen::Vector3d push = Eigen::Vector3d::Zero();
@@ -224,7 +225,8 @@ void World::decide(std::size_t i, Controller& controller) {
   a.hitCursor = model_.actionHitBegin[a.action];
   a.kickCursor = model_.actionKickBegin.empty() ? 0 : model_.actionKickBegin[a.action];
   ++a.decisions;
-  a.decisionTarget = e;
+  a.decisionTarget = e.position;
+  a.decisionHeading = e.heading;
   if (a.playback) a.playback->begin(a.action);
 }
 
@@ -671,7 +673,7 @@ std::size_t World::avatarCount() const { return avatars_.size(); }
 GroundMotion World::avatarFrame(std::size_t i) const { return avatars_[i].now; }
 World::Decision World::lastDecision(std::size_t i) const {
   const Avatar& a = avatars_[i];
-  return {a.state, a.action, a.decision, a.decisionTarget, a.decisions};
+  return {a.state, a.action, a.decision, TargetState(a.decisionTarget, 0.0, a.decisionHeading), a.decisions};
 }
 int World::partner(std::size_t i) const { return avatars_[i].partner; }
 const Target& World::target(std::size_t i) const { return targets_[i]; }
