@@ -266,9 +266,10 @@ void writeCompareReport(const fs::path& dir, const json& report) {
                     "training seconds", seriesOf(report, false, 1, 2), false) + "\n";
   html += "</div>\n<h2>Results per learner</h2>\n<div class=\"plots\">";
   for (const auto& [key, label] : metrics) {
-    // A metric no learner has (bundles trained before it was recorded) gets no plot.
+    // A metric no learner has (bundles trained before it was recorded) gets no plot. (The
+    // key is captured by name: clang before 16 cannot capture a structured binding.)
     const bool any = std::any_of(report["learners"].begin(), report["learners"].end(),
-                                 [&](const json& l) { return l["mean"][key].is_number(); });
+                                 [&, &name = key](const json& l) { return l["mean"][name].is_number(); });
     if (any) html += barChart(report, key, label) + "\n";
   }
   html += "</div>\n</body></html>\n";
