@@ -92,6 +92,7 @@ SuccessCondition readCondition(const ConfigNode& node, const json& reward, bool 
                                  : from.is_null()      ? std::string("fists")
                                                        : from.value("effector", std::string("fists"));
     c.effectors = node.withLocation([&] { return parseEffector(effector); });
+    c.effectorNode = node.has("effector") ? node.child("effector") : node;
     c.clear = node.number("clear", 0.1, 0, 0.95);
     c.bodyRadius = node.number("body_radius", from.is_null() ? 0.2 : from.value("body_radius", 0.2), 0, 1);
   } else {
@@ -176,7 +177,7 @@ void SuccessCriterion::bind(const StateActionModel& m) {
       } catch (const ConfigError&) {
         throw;
       } catch (const Error& e) {
-        if (c.pointNode) c.pointNode->fail(fmt::format("{}{}", c.pointWritten ? "" : "effector: ", e.what()));
+        if (c.effectorNode) c.effectorNode->fail(e.what());
         throw Error(fmt::format("success: effector: {}", e.what()));
       }
     }

@@ -45,6 +45,8 @@ struct SuccessCondition {
   double clear = 0.1;  ///< avoid: the point at least this far from every strike tip of the opponent (m)
   double bodyRadius = 0.2;  ///< avoid: each body's ground radius (m): the bodies at least `clear` apart too
   std::shared_ptr<const StrikeReach> reach;  ///< avoid, after bind()
+  /// avoid: where the effector was written (its key, or the condition), for bind()'s message.
+  std::optional<ConfigNode> effectorNode;
 };
 
 class SuccessCriterion {
