@@ -502,6 +502,45 @@ TEST_CASE("scenario overrides (--set) replace, create and reset keys", "[behavio
   }
 }
 
+TEST_CASE("an override (--set) names an element of a list by its index", "[behaviors]") {
+  const std::string keep =
+      "  keep:\n"
+      "    discretizer: {type: polar2d, radius: 2.0}\n"
+      "    reward: {type: terms, combine: sum, terms: [{term: distance, point: pelvis, d0: 1}, {term: facing}]}\n"
+      "    learner: {type: value_iteration}\n";
+  const std::vector<Behavior> plain = build(keep);
+  const std::vector<Behavior> set = build(keep, {"behaviors.keep.reward.terms[1].weight=2",
+                                                 "behaviors.keep.reward.terms[0].d0=1.5"});
+  CHECK(set[0].config["reward"]["terms"][1]["weight"] == 2.0);
+  CHECK(set[0].config["reward"]["terms"][1]["term"] == "facing");  // the element's other keys stay
+  CHECK(set[0].config["reward"]["terms"][0]["d0"] == 1.5);
+  CHECK(plain[0].config["reward"]["terms"][1]["weight"] == 1.0);
+  CHECK(set[0].key != plain[0].key);
+  // A bad value is reported at the --set that gave it, with the element's path.
+  REQUIRE_CONFIG_ERROR(build(keep, {"behaviors.keep.reward.terms[1].weight=-1"}),
+                       "--set behaviors.keep.reward.terms[1].weight=-1: behaviors.keep.reward.terms[1].weight: "
+                       "expected a number in [0, 1000], found -1");
+  const std::string source = kSource.string() + ": --set ";
+  REQUIRE_CONFIG_ERROR(parse(keep, {"behaviors.keep.reward.terms[2].weight=1"}),
+                       source + "behaviors.keep.reward.terms[2].weight: expected an index below 2 "
+                                "('behaviors.keep.reward.terms' has 2 elements), found 2");
+  REQUIRE_CONFIG_ERROR(parse(keep, {"behaviors.keep.reward.terms[x].weight=1"}),
+                       source + "behaviors.keep.reward.terms[x].weight: expected a list index such as terms[0], "
+                                "found 'terms[x]'");
+  REQUIRE_CONFIG_ERROR(parse(keep, {"behaviors.keep.reward.terms[1.weight=1"}),
+                       source + "behaviors.keep.reward.terms[1.weight: expected a list index such as terms[0], "
+                                "found 'terms[1'");
+  REQUIRE_CONFIG_ERROR(parse(keep, {"behaviors.keep.reward.terms.weight=1"}),
+                       source + "behaviors.keep.reward.terms.weight: expected 'behaviors.keep.reward.terms' to be "
+                                "a map, found a list (name an element: KEY[0])");
+  REQUIRE_CONFIG_ERROR(parse(keep, {"behaviors.keep.reward[0].type=hit"}),
+                       source + "behaviors.keep.reward[0].type: expected 'behaviors.keep.reward' to be a list, "
+                                "found a map or a value");
+  REQUIRE_CONFIG_ERROR(parse(keep, {"behaviors.keep.reward.gamma[0]=1"}),
+                       source + "behaviors.keep.reward.gamma[0]: expected 'behaviors.keep.reward.gamma' to be a "
+                                "list, found nothing");
+}
+
 // scenario.hpp: "KEY is a dotted path (...), created if missing". Only the last part is: a
 // missing map on the way is an undefined yaml-cpp node, neither a map nor null, and
 // applyOverride refuses it as "a value" (so a typo like grpah.threshold is misreported too).

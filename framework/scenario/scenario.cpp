@@ -184,7 +184,9 @@ std::vector<BehaviorSpec> readBehaviors(const ConfigNode& root) {
   return result;
 }
 
-// `--set a.b.c=value`: walks (creating) maps down the dotted path and sets a scalar.
+// `--set a.b.c=value`: walks (creating) maps down the dotted path and sets a scalar. A part
+// may end in list indices, `terms[1]`, naming an element the file has (a list is not
+// made or grown from the command line): `behaviors.keep.reward.terms[1].weight=0.5`.
 void applyOverride(YAML::Node root, const std::string& text, const std::string& source) {
   const auto eq = text.find('=');
   if (eq == std::string::npos || eq == 0)
@@ -201,21 +203,57 @@ void applyOverride(YAML::Node root, const std::string& text, const std::string& 
   }
   std::vector<YAML::Node> chain{root};
   for (std::size_t i = 0; i < parts.size(); ++i) {
-    if (parts[i].empty())
+    // "name[2][0]": the name, then its indices.
+    std::string name = parts[i];
+    std::vector<std::size_t> indices;
+    if (const std::size_t open = name.find('['); open != std::string::npos) {
+      std::string rest = name.substr(open);
+      name.resize(open);
+      while (!rest.empty()) {
+        const std::size_t close = rest.find(']');
+        const std::string digits = close == std::string::npos ? std::string() : rest.substr(1, close - 1);
+        if (rest.front() != '[' || digits.empty() || digits.size() > 6 ||
+            digits.find_first_not_of("0123456789") != std::string::npos)
+          throw ConfigError(fmt::format("{}: --set {}: expected a list index such as terms[0], found {}", source, key,
+                                        quoteToken(parts[i])));
+        indices.push_back(static_cast<std::size_t>(std::stoul(digits)));
+        rest.erase(0, close + 1);
+      }
+    }
+    if (name.empty())
       throw ConfigError(fmt::format("{}: --set {}: expected a dotted key without empty parts", source, key));
+    const std::string before = fmt::format("{}", fmt::join(parts.begin(), parts.begin() + static_cast<long>(i), "."));
     YAML::Node& here = chain.back();
     if (here.IsDefined() && !here.IsMap() && !here.IsNull())
-      throw ConfigError(fmt::format("{}: --set {}: expected '{}' to be a map, found a value", source, key,
-                                    fmt::join(parts.begin(), parts.begin() + static_cast<long>(i), ".")));
-    if (i + 1 == parts.size()) {
+      throw ConfigError(fmt::format("{}: --set {}: expected '{}' to be a map, found {}", source, key, before,
+                                    here.IsSequence() ? "a list (name an element: KEY[0])" : "a value"));
+    const bool last = i + 1 == parts.size();
+    if (last && indices.empty()) {
       // A plugin block switched to another type starts afresh: the file's other keys
       // were that type's parameters.
-      if (parts[i] == "type" && here.IsMap() && here["type"].IsScalar() && here["type"].Scalar() != value)
+      if (name == "type" && here.IsMap() && here["type"].IsScalar() && here["type"].Scalar() != value)
         here = YAML::Node(YAML::NodeType::Map);
-      here[parts[i]] = value;
-    } else {
-      chain.push_back(here[parts[i]]);
+      here[name] = value;
+      continue;
     }
+    YAML::Node node = here[name];
+    std::string path = before.empty() ? name : before + "." + name;
+    for (std::size_t k = 0; k < indices.size(); ++k) {
+      if (!node.IsSequence())
+        throw ConfigError(fmt::format("{}: --set {}: expected '{}' to be a list, found {}", source, key, path,
+                                      node.IsDefined() && !node.IsNull() ? "a map or a value" : "nothing"));
+      if (indices[k] >= node.size())
+        throw ConfigError(fmt::format("{}: --set {}: expected an index below {} ('{}' has {} element{}), found {}",
+                                      source, key, node.size(), path, node.size(), node.size() == 1 ? "" : "s",
+                                      indices[k]));
+      path += fmt::format("[{}]", indices[k]);
+      if (last && k + 1 == indices.size()) {
+        node[indices[k]] = value;
+        break;
+      }
+      node.reset(node[indices[k]]);  // rebinds; `node = ...` would overwrite the element
+    }
+    if (!last) chain.push_back(node);
   }
 }
 

@@ -31,7 +31,9 @@ struct Scenario {
 ///
 /// `overrides` are `KEY=VALUE` texts (`--set`, DESIGN.md sec. 5) applied to the document
 /// before it is checked: KEY is a dotted path (`behaviors.hit.learner.budget`), created if
-/// missing; VALUE is a scalar (a number, a word, true/false). Setting a `type` to another
+/// missing, whose parts may end in list indices naming elements the file has
+/// (`behaviors.keep.reward.terms[1].weight`); VALUE is a scalar (a number, a word,
+/// true/false). Setting a `type` to another
 /// plugin drops the block's other keys from the file (they were the old plugin's
 /// parameters). A malformed override is a ConfigError naming it.
 Scenario loadScenario(const std::filesystem::path& path, const std::filesystem::path& dataDir,
