@@ -80,10 +80,14 @@ json runEval(const EvalOptions& options) {
     expanded += search.expanded();
     return a;
   };
-  auto run = [&](const std::string& kind, std::vector<std::pair<std::uint32_t, TargetState>>* decisions) {
+  // A trial's controller: none (uniformly random actions) for "random".
+  auto chooserFor = [&](const std::string& kind) {
     ChooseAction chooser;
-    if (kind != "random") chooser = [&](std::uint32_t s, const TargetState& e) { return choose(kind, s, e); };
-    return trials.run(chooser, options.trials, options.seconds, options.seed, decisions);
+    if (kind != "random") chooser = [&, kind](std::uint32_t s, const TargetState& e) { return choose(kind, s, e); };
+    return chooser;
+  };
+  auto run = [&](const std::string& kind, std::vector<std::pair<std::uint32_t, TargetState>>* decisions) {
+    return trials.run(chooserFor(kind), options.trials, options.seconds, options.seed, decisions);
   };
 
   std::vector<std::pair<std::uint32_t, TargetState>> decisions;
@@ -137,9 +141,7 @@ json runEval(const EvalOptions& options) {
   // the capture and throwing its own punches, not the environment model's opponent.
   if (trials.hasAvatarOpponent()) {
     auto against = [&](const std::string& kind) {
-      ChooseAction chooser;
-      if (kind != "random") chooser = [&](std::uint32_t s, const TargetState& e) { return choose(kind, s, e); };
-      return Trials::summary(trials.runAgainstAvatar(chooser, options.trials, options.seconds, options.seed));
+      return Trials::summary(trials.runAgainstAvatar(chooserFor(kind), options.trials, options.seconds, options.seed));
     };
     json avatar = against(options.controller);
     if (options.controller != "random") avatar["random_baseline"] = against("random");

@@ -327,7 +327,7 @@ json runSimulate(const SimulateOptions& options) {
   setup.threads = options.threads > 0 ? options.threads : defaultThreadCount();
   setup.poses = poses;
   setup.record = !options.bvhOut.empty();
-  setup.opponent = behaviors.front().environment->type() == "opponent";
+  setup.opponent = behaviors.front().environment->faces();
   const std::string kind = options.controller;
   setup.makeController = [&, kind]() -> std::unique_ptr<Controller> {
     if (kind == "policy") return std::make_unique<PolicyController>(model, parts, params.variety);

@@ -82,7 +82,7 @@ TrialStats Trials::run(const ChooseAction& choose, std::size_t count, double sec
   TrialStats stats;
   stats.trials = count;
   const double limit = seconds / model.frameTime;
-  const bool opponent = environment.type() == "opponent";
+  const bool opponent = environment.faces();
   for (std::size_t trial = 0; trial < count; ++trial) {
     auto s = static_cast<std::uint32_t>(starts.below(model.stateCount()));
     TargetState e = placeTarget(starts);
@@ -115,8 +115,7 @@ TrialStats Trials::run(const ChooseAction& choose, std::size_t count, double sec
       if (opponent) {
         const std::size_t begin = model.actionFrameBegin[a], end = begin + model.actionLength(a);
         for (std::size_t f = begin; f < end; ++f) {
-          stats.opponentGaps.push_back(static_cast<float>(
-              std::hypot(model.frameRoot[3 * f] - e.position.x(), model.frameRoot[3 * f + 1] - e.position.z())));
+          stats.opponentGaps.push_back(static_cast<float>(bodyDistance(model, f, BodyPoint::pelvis(), 2, e.position)));
           stats.opponentFacing.push_back(static_cast<float>(facingError(model, f, e.position) * 180 / M_PI));
         }
       }
@@ -132,12 +131,15 @@ TrialStats Trials::run(const ChooseAction& choose, std::size_t count, double sec
   return stats;
 }
 
-bool Trials::hasAvatarOpponent() const {
-  if (!dynamic_cast<const environments::Opponent*>(environment_)) return false;
+std::pair<const SuccessCondition*, double> Trials::avoidCondition() const {
   for (const SuccessCriterion& c : criteria_)
     for (const SuccessCondition& k : c.conditions())
-      if (k.kind == SuccessCondition::Kind::Avoid) return true;
-  return false;
+      if (k.kind == SuccessCondition::Kind::Avoid) return {&k, c.holdSeconds()};
+  return {nullptr, 0};
+}
+
+bool Trials::hasAvatarOpponent() const {
+  return dynamic_cast<const environments::Opponent*>(environment_) && avoidCondition().first;
 }
 
 TrialStats Trials::runAgainstAvatar(const ChooseAction& choose, std::size_t count, double seconds,
@@ -146,14 +148,10 @@ TrialStats Trials::runAgainstAvatar(const ChooseAction& choose, std::size_t coun
   const auto* opponentModel = dynamic_cast<const environments::Opponent*>(environment_);
   if (!opponentModel)
     throw Error(fmt::format("trials against an avatar: expected an opponent environment, found {}", environment_->type()));
-  const SuccessCondition* avoid = nullptr;
-  double hold = 0;
-  for (const SuccessCriterion& c : criteria_)
-    for (const SuccessCondition& k : c.conditions())
-      if (k.kind == SuccessCondition::Kind::Avoid && !avoid) {
-        avoid = &k;
-        hold = c.holdSeconds();
-      }
+  // Not a structured binding: the lambdas below capture it (clang before 16 cannot).
+  const std::pair<const SuccessCondition*, double> found = avoidCondition();
+  const SuccessCondition* avoid = found.first;
+  const double hold = found.second;
   if (!avoid) throw Error("trials against an avatar: expected a success criterion with an avoid condition, found none");
   const auto needed = std::max<std::size_t>(1, static_cast<std::size_t>(std::lround(hold / model.frameTime)));
   const auto limit = static_cast<std::size_t>(seconds / model.frameTime);
@@ -241,7 +239,8 @@ TrialStats Trials::runAgainstAvatar(const ChooseAction& choose, std::size_t coun
       const std::size_t f = model.actionFrameBegin[avatar.action] + avatar.played - 1;
       const GroundMotion me = rootAt(avatar), them = rootAt(opponent);
       const Eigen::Vector3d point = transformPoint(avatar.decision, jointAt(model, f, avoid->point.joint));
-      bool reached = std::hypot(me.dx - them.dx, me.dz - them.dz) - 2 * avoid->bodyRadius < avoid->clear;
+      const double gap = std::hypot(me.dx - them.dx, me.dz - them.dz);  // pelvis to pelvis, on the ground
+      bool reached = gap - 2 * avoid->bodyRadius < avoid->clear;
       auto strikes = [&](std::span<const ActionHit> list, std::uint8_t leftBit) {
         for (const ActionHit& h : list) {
           if (h.offset != opponent.played || !(avoid->effectors & (leftBit << h.hand))) continue;
@@ -254,10 +253,10 @@ TrialStats Trials::runAgainstAvatar(const ChooseAction& choose, std::size_t coun
       };
       if (avoid->effectors & kFists) strikes(model.hitsOf(opponent.action), kLeftFist);
       if ((avoid->effectors & kFeet) && !model.actionKickBegin.empty()) strikes(model.kicksOf(opponent.action), kLeftFoot);
-      stats.opponentGaps.push_back(static_cast<float>(std::hypot(me.dx - them.dx, me.dz - them.dz)));
+      stats.opponentGaps.push_back(static_cast<float>(gap));
       const Eigen::Vector3d toward = inverseTransformPoint(me, {them.dx, 0, them.dz});
       stats.opponentFacing.push_back(static_cast<float>(std::abs(std::atan2(toward.x(), toward.z())) * 180 / M_PI));
-      stats.framesOverlapping += std::hypot(me.dx - them.dx, me.dz - them.dz) < 2 * avoid->bodyRadius;
+      stats.framesOverlapping += gap < 2 * avoid->bodyRadius;
       // The whole trial plays on after a success: strikes and overlaps are counted over all of it.
       held = reached ? 0 : held + 1;
       if (held == needed && !succeeded) {

@@ -91,6 +91,8 @@ class Trials {
 
  private:
   TargetState placeTarget(Rng& starts) const;
+  /// The first avoid condition of the criteria and its criterion's hold_s; null if none.
+  std::pair<const SuccessCondition*, double> avoidCondition() const;
   /// The first behaviour's environment model: how trial targets move (all behaviours see
   /// the same target).
   const EnvironmentModel* environment_ = nullptr;

@@ -26,6 +26,7 @@ class Opponent final : public EnvironmentModel {
   TargetState next(const StateActionModel& model, std::size_t action, const TargetState& e) const override;
   bool keepsSpeed() const override { return true; }  // always 0: the layer of a polar_velocity grid with speeds: 1
   TargetState draw(const Eigen::Vector3d& position, Rng&) const override;
+  bool faces() const override { return true; }
   bool pursues() const { return pursue_; }
   double stopDistance() const { return stopDistance_; }
 

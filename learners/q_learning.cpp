@@ -198,7 +198,8 @@ TrainResult QLearning::train(const TrainContext& context) const {
   TrainResult result;
   result.table = QTable(m, g.vertexCount);
   QTable& q = result.table;
-  Walk walk{Rng(seed_)};
+  Walk walk;
+  walk.rng = Rng(seed_);
   double secondsBefore = 0;
 
   auto restart = [&](Walk& w) {

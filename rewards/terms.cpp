@@ -197,7 +197,10 @@ class Terms final : public Reward {
   enum class Kind { Distance, Facing, Contact, Travel, Effort, Avoid };
   struct Term {
     Kind kind = Kind::Distance;
-    double weight = 1, target = 0, scale = 1;
+    double weight = 1;
+    /// target: distance d0, facing angle, avoid body_radius; scale: distance sigma, facing
+    /// sigma, contact radius, travel scale_m, effort speed_mps, avoid clear.
+    double target = 0, scale = 1;
     BodyPoint point;
     int dims = 2, sign = 1;
     std::uint8_t effectors = kFists;

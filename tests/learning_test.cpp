@@ -14,6 +14,7 @@
 
 #include "app/compare_tables.hpp"
 #include "app/plugins.hpp"
+#include "app/trials.hpp"
 #include "environments/environments.hpp"
 #include "mgrl/motion/roles.hpp"
 #include "mgrl/core/bundle.hpp"
@@ -1181,9 +1182,9 @@ TEST_CASE("moving_target: the target moves along its velocity, its heading turns
     CHECK(approach->evaluate(straight, 0, coming.position) == Approx(std::exp(-0.5 / 0.1)).margin(1e-6));
     const SuccessCriterion near = SuccessCriterion::read(yaml("{term: distance, point: centroid, within: 0.05}"),
                                                          nlohmann::json::object());
-    SuccessCriterion::Tracker moving(near, straight.frameTime), still(near, straight.frameTime);
+    SuccessCriterion::Tracker moving(near, straight.frameTime), standing(near, straight.frameTime);
     CHECK(moving.play(straight, 0, coming) > 0);
-    CHECK(still.play(straight, 0, coming.position) == 0);
+    CHECK(standing.play(straight, 0, coming.position) == 0);
   }
 }
 
@@ -1485,4 +1486,28 @@ TEST_CASE("avoid: 0 with the head on the opponent's strike, 1 from `clear` away;
     const auto nose = build("{type: terms, terms: [{term: avoid, point: nose}]}");
     CHECK_THROWS_WITH(nose->bind(m), Catch::Contains("terms[0].point: ") && Catch::Contains("Head"));
   }
+}
+
+TEST_CASE("trials against an avatar need an opponent environment and an avoid condition", "[learning][opponent]") {
+  const StateActionModel m = headModel();
+  const auto behaviours = [&](std::unique_ptr<EnvironmentModel> environment) {
+    std::vector<Behavior> list(1);
+    list[0].discretizer = makeGrid(
+        "{type: polar_velocity, distance_max: 2, rings: 3, sectors: 4, headings: 4, speeds: 1, height_from: given, "
+        "height: 1}",
+        m);
+    list[0].reward = app::plugins().rewards.create(yaml("{type: approach}"));
+    list[0].environment = std::move(environment);
+    return list;
+  };
+  const std::vector<Behavior> still = behaviours(std::make_unique<StaticTarget>());
+  const app::Trials onStatic(m, still, std::nan(""), "test.yaml");
+  CHECK_FALSE(onStatic.hasAvatarOpponent());
+  CHECK_THROWS_WITH(onStatic.runAgainstAvatar(nullptr, 1, 1, 1),
+                    "trials against an avatar: expected an opponent environment, found static_target");
+  const std::vector<Behavior> unguarded = behaviours(std::make_unique<environments::Opponent>(true, 0.3, 0.7, M_PI));
+  const app::Trials withoutAvoid(m, unguarded, std::nan(""), "test.yaml");
+  CHECK_FALSE(withoutAvoid.hasAvatarOpponent());
+  CHECK_THROWS_WITH(withoutAvoid.runAgainstAvatar(nullptr, 1, 1, 1),
+                    "trials against an avatar: expected a success criterion with an avoid condition, found none");
 }

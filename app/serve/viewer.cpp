@@ -305,7 +305,7 @@ void ViewerSession::rebuild(Mode mode, int avatars) {
   setup.seed = 1;
   setup.threads = 1;  // every page on the server's one thread
   setup.poses = true;
-  setup.opponent = a.behaviors.front().environment->type() == "opponent";
+  setup.opponent = a.behaviors.front().environment->faces();
   setup.makeController = [&a] { return std::make_unique<RandomController>(a.model()); };  // replaced below
   auto world = std::make_unique<World>(setup);
   s.world = std::move(world);

@@ -46,8 +46,7 @@ namespace {
 // An opponent's facing needs a grid axis to live on, and the avoid term and condition need
 // an opponent to read strikes from: refuse either half alone, at the key that asks for it.
 void checkOpponent(const BehaviorSpec& spec, const Behavior& b) {
-  const bool opponent = b.environment->type() == "opponent";
-  if (opponent) {
+  if (b.environment->faces()) {
     bool heading = false;
     for (const GridAxis& axis : b.discretizer->axes()) heading |= axis.name == "heading";
     if (!heading)
@@ -66,10 +65,7 @@ void checkOpponent(const BehaviorSpec& spec, const Behavior& b) {
   }
   if (b.success)
     for (const SuccessCondition& c : b.success->conditions())
-      if (c.kind == SuccessCondition::Kind::Avoid) {
-        if (!spec.success.isNull()) spec.success.fail(why);
-        throw Error(why);
-      }
+      if (c.kind == SuccessCondition::Kind::Avoid) spec.success.fail(why);  // only a declared criterion has one
 }
 
 }  // namespace

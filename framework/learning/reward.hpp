@@ -51,6 +51,10 @@ class EnvironmentModel {
   virtual TargetState draw(const Eigen::Vector3d& position, Rng&) const { return position; }
   /// The most a draw() may ask of a grid's layer axis (its top speed), m/s.
   virtual double maxSpeed() const { return 0; }
+  /// True if the state's heading is which way the target faces (an `opponent`), not where
+  /// it moves: its grid must hold a heading, the world supplies it (a sparring partner's
+  /// facing, a dragged target's toward the avatar), and trials report the spacing to it.
+  virtual bool faces() const { return false; }
 };
 
 using EnvironmentRegistry = Registry<EnvironmentModel>;

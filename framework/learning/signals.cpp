@@ -156,7 +156,6 @@ StrikeReach::StrikeReach(const StateActionModel& m, std::uint8_t effectors, doub
     hi = hi.cwiseMax(tips_.back().cast<double>());
   }
   // The field covers the tips' box widened by cap: beyond it every distance is >= cap.
-  constexpr double kCell = 0.04;
   origin_ = lo - Eigen::Vector3d::Constant(cap);
   for (int k = 0; k < 3; ++k) n_[k] = static_cast<int>(std::ceil((hi[k] - lo[k] + 2 * cap) / kCell)) + 1;
   field_.assign(static_cast<std::size_t>(n_[0]) * n_[1] * n_[2], static_cast<float>(cap));
@@ -172,7 +171,6 @@ StrikeReach::StrikeReach(const StateActionModel& m, std::uint8_t effectors, doub
 }
 
 double StrikeReach::distance(const Eigen::Vector3d& p) const {
-  constexpr double kCell = 0.04;
   double f[3];
   int c[3];
   for (int k = 0; k < 3; ++k) {
@@ -201,8 +199,7 @@ Eigen::Vector3d inOpponentFrame(const TargetState& e, const Eigen::Vector3d& p) 
 
 double opponentClearance(const StateActionModel& m, std::size_t frame, int joint, const StrikeReach& reach,
                          const TargetState& e, double bodyRadius) {
-  const double* r = &m.frameRoot[3 * frame];
-  const double bodies = std::hypot(r[0] - e.position.x(), r[1] - e.position.z()) - 2 * bodyRadius;
+  const double bodies = bodyDistance(m, frame, BodyPoint::pelvis(), 2, e.position) - 2 * bodyRadius;
   const double strikes = reach.distance(inOpponentFrame(e, jointAt(m, frame, joint)));
   return std::max(0.0, std::min(strikes, bodies));
 }

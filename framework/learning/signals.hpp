@@ -108,6 +108,7 @@ class StrikeReach {
   double cap() const { return cap_; }
 
  private:
+  static constexpr double kCell = 0.04;  ///< the field's cell size (m)
   std::vector<Eigen::Vector3f> tips_;
   Eigen::Vector3d origin_;  ///< the field's first cell centre
   double cap_ = 0;

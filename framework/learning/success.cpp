@@ -37,6 +37,31 @@ void allowKeys(const ConfigNode& node, std::vector<std::string_view> allowed, bo
       node.child(key).fail(fmt::format("unknown key (expected one of: {})", fmt::join(allowed, ", ")));
 }
 
+// A key a condition may leave out, from the reward's term of its kind, else `fallback`.
+template <class T>
+T inherited(const json& from, const char* key, T fallback) {
+  return from.is_null() ? fallback : from.value(key, fallback);
+}
+
+// A word the condition writes, else the reward term's, else `fallback`.
+std::string word(const ConfigNode& node, const json& from, const char* key, const char* fallback) {
+  return node.has(key) ? node.child(key).asString() : inherited(from, key, std::string(fallback));
+}
+
+// The condition's body point (written, from the reward, else `fallback`) and where it is
+// written: its key, or the condition that takes it from the reward.
+void readPoint(const ConfigNode& node, const json& from, const char* fallback, SuccessCondition& c) {
+  const std::string point = word(node, from, "point", fallback);
+  c.point = node.withLocation([&] { return parseBodyPoint(point); });
+  c.pointWritten = node.has("point");
+  c.pointNode = c.pointWritten ? node.child("point") : node;
+}
+
+std::uint8_t readEffector(const ConfigNode& node, const json& from) {
+  const std::string effector = word(node, from, "effector", "fists");
+  return node.withLocation([&] { return parseEffector(effector); });
+}
+
 // One condition; `hold` allows hold_s beside its keys (the one-condition form).
 SuccessCondition readCondition(const ConfigNode& node, const json& reward, bool hold) {
   if (!node.isMap() || !node.has("term"))
@@ -48,53 +73,36 @@ SuccessCondition readCondition(const ConfigNode& node, const json& reward, bool 
   if (term == "contact") {
     allowKeys(node, {"term", "effector", "radius"}, hold);
     c.kind = SuccessCondition::Kind::Contact;
-    const std::string effector = node.has("effector") ? node.child("effector").asString()
-                                 : from.is_null()      ? std::string("fists")
-                                                       : from.value("effector", std::string("fists"));
-    c.effectors = node.withLocation([&] { return parseEffector(effector); });
-    c.radius = node.number("radius", from.is_null() ? 0.15 : from.value("radius", 0.15), 1e-4, 10);
+    c.effectors = readEffector(node, from);
+    c.radius = node.number("radius", inherited(from, "radius", 0.15), 1e-4, 10);
   } else if (term == "distance") {
     allowKeys(node, {"term", "point", "dims", "d0", "within"}, hold);
     c.kind = SuccessCondition::Kind::Distance;
-    const std::string point = node.has("point") ? node.child("point").asString()
-                              : from.is_null()  ? std::string("centroid")
-                                                : from.value("point", std::string("centroid"));
-    c.point = node.withLocation([&] { return parseBodyPoint(point); });
-    // Where the point is written: its key, or the condition that takes it from the reward.
-    c.pointNode = node.has("point") ? node.child("point") : node;
-    c.pointWritten = node.has("point");
+    readPoint(node, from, "centroid", c);
     if (c.point.kind == BodyPoint::Kind::Body)
       c.pointNode->fail(fmt::format("{}expected centroid, pelvis, a role or a joint, found body",
                                     c.pointWritten ? "" : "point: "));
-    c.dims = static_cast<int>(node.integer("dims", from.is_null() ? 2 : from.value("dims", 2), 2, 3));
+    c.dims = static_cast<int>(node.integer("dims", inherited(from, "dims", 2), 2, 3));
     if (c.dims == 3 && c.point.kind == BodyPoint::Kind::Pelvis)
       node.fail("dims: expected 2 with point: pelvis (a ground point has no height), found 3");
-    c.d0 = node.number("d0", from.is_null() ? 0.0 : from.value("d0", 0.0), 0, 100);
+    c.d0 = node.number("d0", inherited(from, "d0", 0.0), 0, 100);
     c.within = node.number("within", 0.2, 0, 100);
   } else if (term == "facing") {
     allowKeys(node, {"term", "angle_deg", "within_deg"}, hold);
     c.kind = SuccessCondition::Kind::Facing;
-    c.angle = node.number("angle_deg", from.is_null() ? 0.0 : from.value("angle_deg", 0.0), 0, 180) * kDegree;
+    c.angle = node.number("angle_deg", inherited(from, "angle_deg", 0.0), 0, 180) * kDegree;
     c.withinAngle = node.number("within_deg", 30, 0, 180) * kDegree;
   } else if (term == "avoid") {
     allowKeys(node, {"term", "point", "effector", "clear", "body_radius"}, hold);
     c.kind = SuccessCondition::Kind::Avoid;
-    const std::string point = node.has("point") ? node.child("point").asString()
-                              : from.is_null()  ? std::string("head")
-                                                : from.value("point", std::string("head"));
-    c.point = node.withLocation([&] { return parseBodyPoint(point); });
-    c.pointNode = node.has("point") ? node.child("point") : node;
-    c.pointWritten = node.has("point");
+    readPoint(node, from, "head", c);
     if (c.point.kind != BodyPoint::Kind::Joint)
       c.pointNode->fail(fmt::format("{}expected a role (head, ...) or a joint, found {}", c.pointWritten ? "" : "point: ",
-                                    point));
-    const std::string effector = node.has("effector") ? node.child("effector").asString()
-                                 : from.is_null()      ? std::string("fists")
-                                                       : from.value("effector", std::string("fists"));
-    c.effectors = node.withLocation([&] { return parseEffector(effector); });
+                                    c.point.name));
+    c.effectors = readEffector(node, from);
     c.effectorNode = node.has("effector") ? node.child("effector") : node;
     c.clear = node.number("clear", 0.1, 0, 0.95);
-    c.bodyRadius = node.number("body_radius", from.is_null() ? 0.2 : from.value("body_radius", 0.2), 0, 1);
+    c.bodyRadius = node.number("body_radius", inherited(from, "body_radius", 0.2), 0, 1);
   } else {
     termNode.fail(fmt::format("unknown success term {} (known: contact, distance, facing, avoid)", quoteToken(term)));
   }
@@ -171,15 +179,11 @@ void SuccessCriterion::bind(const StateActionModel& m) {
     std::string why;
     if (c.kind == SuccessCondition::Kind::Avoid) {
       // The opponent is an avatar of this graph: its strikes are this model's. The field
-      // reaches a little past `clear` so "at least clear" is read from exact distances.
-      try {
-        c.reach = std::make_shared<const StrikeReach>(m, c.effectors, std::min(1.0, c.clear + 0.05));
-      } catch (const ConfigError&) {
-        throw;
-      } catch (const Error& e) {
-        if (c.effectorNode) c.effectorNode->fail(e.what());
-        throw Error(fmt::format("success: effector: {}", e.what()));
-      }
+      // reaches a little past `clear` so "at least clear" is read from exact distances. A
+      // capture without the effector's strikes is refused where the effector is written.
+      if (!c.effectorNode) throw std::logic_error("an avoid condition not read from YAML");
+      c.reach = c.effectorNode->withLocation(
+          [&] { return std::make_shared<const StrikeReach>(m, c.effectors, std::min(1.0, c.clear + 0.05)); });
     }
     if ((c.kind != SuccessCondition::Kind::Distance && c.kind != SuccessCondition::Kind::Avoid) ||
         bindBodyPoint(m, c.point, &why))
