@@ -14,6 +14,15 @@ expect "$stdout" '^[^ ]*13_17_boxing\.bvh$' "the inspect report of 13_17_boxing.
 expect "$stdout" '^states +[0-9]+' "the graph's state count"
 expect "$stdout" '^policy bundle: ' "the trained policy bundle's path"
 expect "$stdout" 'success rate [0-9.]+ %' "the evaluation's success rate"
+# The trained boxer must actually hit: with the quick budgets it lands in most trials, far
+# more often than random actions on the same starts.
+policy="$(sed -nE 's/^controller policy: .*success rate ([0-9.]+) %.*/\1/p' "$stdout")"
+random="$(sed -nE 's/^random baseline .*success rate ([0-9.]+) %.*/\1/p' "$stdout")"
+[ -n "$policy" ] && [ -n "$random" ] || fail "expected the policy's and the random baseline's success rates, found '$policy' and '$random'"
+awk -v p="$policy" -v r="$random" -v min="${MGRL_DEMO_MIN_SUCCESS:-50}" 'BEGIN { exit !(p >= min && p >= r + 20) }' ||
+  fail "expected the trained policy to succeed in at least ${MGRL_DEMO_MIN_SUCCESS:-50} % of trials and 20 points more than random actions, found $policy % against $random %"
+hits="$(sed -nE 's/^hits: ([0-9]+) .*/\1/p' "$stdout" | head -1)"
+[ "${hits:-0}" -gt 0 ] || fail "expected the two-boxer bout to land hits, found '${hits:-none}'"
 expect "$stdout" '2 avatars x [0-9]+ frames' "the two-boxer bout"
 expect "$stdout" '30 avatars x [0-9]+ frames' "the 30-boxer crowd"
 expect "$stderr" 'demo: \[[0-9]+ s\] done' "the demo's last step"

@@ -8,11 +8,19 @@
 # later runs start from them. Seeds: the project's own in tests/fuzz/corpus/<reader>/, and
 # those cut from the capture (MGRL_DATA, else ../shared/mocap) by tests/fuzz/make_corpus.py
 # into build-fuzz/seeds/<reader>/ first. scripts/test.sh runs it as CI's fuzz smoke.
-# Usage: scripts/fuzz.sh [SECONDS [READER...]]
+# Usage: scripts/fuzz.sh [--build-only] [SECONDS [READER...]]
 #   FUZZ_BUILD=DIR (default build-fuzz), CXX=clang++ (default), FUZZ_BUILD_JOBS=N (default 2),
-#   FUZZ_JOBS=N harnesses run at once (default 1), FUZZ_TIMEOUT=S for one input (default 10).
+#   FUZZ_JOBS=N harnesses run at once (default 1), FUZZ_TIMEOUT=S for one input (default 10),
+#   FUZZ_WITH_TESTS=1: the same folder also builds the whole test suite and mgrl with these
+#   sanitizers (scripts/test.sh's one sanitizer build, whose ctest is its ASan/UBSan run).
+#   --build-only: configure and build, fuzz nothing.
 set -euo pipefail
 root="$(cd "$(dirname "$0")/.." && pwd)"
+build_only=0
+if [ "${1:-}" = "--build-only" ]; then
+  build_only=1
+  shift
+fi
 seconds="${1:-30}"
 shift || true
 readers=("$@")
@@ -27,9 +35,24 @@ timeout="${FUZZ_TIMEOUT:-10}"
 
 targets=()
 for r in "${readers[@]}"; do targets+=("${r}_fuzz"); done
+tests=OFF
+if [ "${FUZZ_WITH_TESTS:-0}" = 1 ]; then
+  tests=ON
+  targets=(all)
+fi
+# Line tables only (-gline-tables-only): enough for a sanitizer's or the fuzzer's stack
+# trace with files and lines, and far quicker to compile and link than full debug info.
+# ccache as in scripts/build.sh.
+launcher=(-DCMAKE_CXX_COMPILER_LAUNCHER=)
+if [ "${MGRL_CCACHE:-1}" != 0 ] && command -v ccache >/dev/null 2>&1; then
+  export CCACHE_BASEDIR="${CCACHE_BASEDIR:-$root}"
+  launcher=(-DCMAKE_CXX_COMPILER_LAUNCHER=ccache)
+fi
 cmake -S "$root" -B "$build" -G Ninja -DCMAKE_CXX_COMPILER="$cxx" -DCMAKE_BUILD_TYPE=RelWithDebInfo \
-  -DCMAKE_CXX_FLAGS_RELWITHDEBINFO="-O1 -g" -DMGRL_FUZZ=ON -DMGRL_BUILD_TESTS=OFF -DMGRL_BUILD_BENCH=OFF >/dev/null
+  -DCMAKE_CXX_FLAGS_RELWITHDEBINFO="-O1 -gline-tables-only" -DMGRL_FUZZ=ON -DMGRL_BUILD_TESTS="$tests" \
+  -DMGRL_BUILD_BENCH=OFF "${launcher[@]}" >/dev/null
 nice -n 10 cmake --build "$build" -j "${FUZZ_BUILD_JOBS:-2}" --target "${targets[@]}"
+((build_only)) && exit 0
 
 data="${MGRL_DATA:-$root/../shared/mocap}"
 python3 "$root/tests/fuzz/make_corpus.py" "$data" "$build" --capture-only

@@ -632,6 +632,7 @@ class KillTest:
                           (f", {chain} kills" if chain > 1 else "") + (", then --resume" if resume_next else ""),
                           flush=True)
                 self.round(job, prior, point, delay, chain, resume_next)
+            self.check_kills_landed(jobs)
         except (RuntimeError, subprocess.CalledProcessError, OSError) as e:
             print(f"kill_test: setup error: {e}", file=sys.stderr)
             return 2
@@ -642,6 +643,20 @@ class KillTest:
                 shutil.rmtree(work, ignore_errors=True)
         self.summary(time.monotonic() - start)
         return 1 if self.findings else 0
+
+    def check_kills_landed(self, jobs):
+        """A run whose kills all came after the command ended tested nothing: every command
+        must have been SIGKILLed at least once, and every kill at a rename or unlink (the
+        shim stops the process inside the call, so it cannot come late) must have landed."""
+        for job in jobs:
+            landed = sum(v for (c, _), v in self.kills.items() if c == job.name)
+            if landed == 0:
+                self.finding(job, "all rounds", "no SIGKILL landed: every planned kill came after the run ended, "
+                                                "so nothing was tested")
+            missed = sorted(p for (c, p), v in self.not_killed.items() if c == job.name and v and p != "random")
+            if missed:
+                self.finding(job, "all rounds", f"the kills at {', '.join(missed)} did not land: the shim never "
+                                                f"stopped the command inside the call")
 
     def plan(self, jobs):
         """Every rename of every job and prior state, before and after the call (a sample of

@@ -1,20 +1,34 @@
 #!/usr/bin/env python3
-"""Keeps the sample outputs in README.md true to what `mgrl` prints.
+"""Keeps the sample outputs and the figures in README.md true to what `mgrl` prints.
 
-A sample output in the README is a fenced block right after a marker line
+Two kinds of markers. A sample output is a fenced block right after a line
 
     <!-- mgrl-output: simulate scenarios/boxing.yaml --avatars 30 --seconds 33.3 -->
 
-naming the `mgrl` arguments that print it (run from the repository root, stdout only).
-Before the blocks run, the boxing scenario is trained with its own budgets, as the README
-tells a user to, so every block sees the same trained policy.
+naming the `mgrl` arguments that print it (run from the repository root, stdout only). A
+figure in the prose is checked by a line
 
-    scripts/readme_outputs.py --update [--mgrl build/app/mgrl]   rewrite the blocks from real runs
-    scripts/readme_outputs.py --check  [--mgrl build/app/mgrl]   fail if a block's lines differ in
-        anything but their numbers (a line added, dropped or reworded), saying which
+    <!-- mgrl-figure: ARGS ; ARGS ... => EXPECTED | EXPECTED ... -->
 
-Numbers are left out of the check: timings and rates differ from run to run and machine to
-machine. Cache paths print as ~/.cache/mgrl whatever MGRL_CACHE is.
+that runs each `mgrl ARGS` in turn (say a `train` with some --set flags, then the `eval`
+that reads its bundle) and looks in the last one's stdout for each EXPECTED text, e.g.
+`success rate 95.0 %`: same words, numbers within the tolerance below. EXPECTED may give a
+range, `93..96`, for a figure the prose states as a range. Put the marker right after the
+paragraph whose figures it checks, and keep the two in step.
+
+Before anything runs, the boxing scenario is trained with its own budgets, as the README
+tells a user to; every command shares that cache (graph and bundles), so a figure's train
+is reused by a later figure with the same settings.
+
+    scripts/readme_outputs.py --update [--mgrl build/app/mgrl]   rewrite the sample blocks from real runs
+    scripts/readme_outputs.py --check  [--mgrl build/app/mgrl]   fail on any difference, saying where
+
+What is compared: every seeded, deterministic number (success rates, times to hit in
+simulated seconds, hit counts, states, actions, frames, table sizes) must agree within 1 %
+of its value or one unit of its last printed digit, whichever is larger. Wall-clock
+timings and rates (`0.56 s` of training, `7.47 Mdecisions/s`, `in 3.5 ms`) and bundle
+hashes are masked: they differ from machine to machine. Cache paths print as
+~/.cache/mgrl whatever MGRL_CACHE is.
 """
 import argparse
 import os
@@ -22,25 +36,87 @@ import re
 import subprocess
 import sys
 import tempfile
+import time
 
 MARKER = re.compile(r"^<!-- mgrl-output: (.*) -->$")
+FIGURE = re.compile(r"^\s*<!-- mgrl-figure: (.*) => (.*) -->$")
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+NUMBER = r"-?\d+(?:\.\d+)?"
+RELATIVE = 0.01  # the tolerance: 1 % of the value ...
+
+# Wall-clock figures, masked: each pattern's group 1 is the number.
+WALL_CLOCK = [
+    re.compile(r"(" + NUMBER + r")\s?[kMG]?(?:updates|decisions|avatar-frames|frames|steps)/s\b"),
+    re.compile(r"\bin (" + NUMBER + r")\s?(?:ms|s|us|µs)\b"),
+    re.compile(r"\bupdates\s+(" + NUMBER + r") s\b"),  # train's seconds column
+    re.compile(r"^build\s+(" + NUMBER + r") s\b"),  # graph: the build (or cache read) time
+]
 
 
-def shape(line):
+def unit(text):
+    """One unit of the last printed digit: 0.1 for "95.0", 1 for "605"."""
+    return 10.0 ** -len(text.split(".")[1]) if "." in text else 1.0
+
+
+def agree(documented, actual):
+    """`actual` is within the tolerance of the README's `documented` number (a string)."""
+    if ".." in documented:
+        low, high = documented.split("..")
+        return float(low) - unit(low) <= actual <= float(high) + unit(high)
+    value = float(documented)
+    return abs(actual - value) <= max(RELATIVE * abs(value), unit(documented)) + 1e-12
+
+
+def masked(line):
+    """The line with hashes and wall-clock numbers replaced by words, so they are neither
+    compared nor counted as numbers."""
     line = re.sub(r"-[0-9a-f]{8}\b", "-HASH", line)
-    # A rate's prefix follows the machine's speed as its digits do (1.96 Mupdates/s here,
-    # 463.0 kupdates/s on a slower machine; 8.66 Mavatar-frames/s, 975.1 kavatar-frames/s).
-    line = re.sub(r"(\d\s?)[kMG](?=[A-Za-z-]+/s\b)", r"\1", line)
-    line = re.sub(r"-?\d+(\.\d+)?", "N", line)
-    return re.sub(r"\s+", " ", line).strip()  # columns pad numbers to their width
+    for pattern in WALL_CLOCK:
+        line = pattern.sub(lambda m: m.group(0).replace(m.group(1), "WALL", 1), line)
+    # A rate's prefix follows the machine's speed (1.96 Mupdates/s, 463.0 kupdates/s).
+    return re.sub(r"WALL(\s?)[kMG](?=[A-Za-z-]+/s\b)", r"WALL\1", line)
+
+
+def split(line):
+    """(the line's words with each number as a NUL and spacing collapsed, its numbers as text)."""
+    line = masked(line)
+    numbers = re.findall(NUMBER + r"(?:\.\." + NUMBER + r")?", line)
+    words = re.sub(NUMBER + r"(?:\.\." + NUMBER + r")?", "\0", line)
+    return re.sub(r"\s+", " ", words).strip(), numbers  # columns pad numbers to their width
+
+
+def compare_lines(documented, actual):
+    """None if the lines agree, else what differs."""
+    dw, dn = split(documented)
+    aw, an = split(actual)
+    if dw != aw:
+        return "the words differ"
+    wrong = [f"{d} (now {a})" for d, a in zip(dn, an) if not agree(d, float(a))]
+    return ("numbers out of tolerance: " + ", ".join(wrong)) if wrong else None
+
+
+def find_figure(expected, output):
+    """None if some line of `output` holds `expected` (words equal, numbers within the
+    tolerance), else what was found instead."""
+    words, numbers = split(expected)
+    pattern = ("(" + NUMBER + ")").join(r"\s+".join(re.escape(w) for w in piece.split(" ")) for piece in words.split("\0"))
+    near = []
+    for line in output:
+        for m in re.finditer(pattern, masked(line)):
+            actual = [float(g) for g in m.groups()]
+            if all(agree(d, a) for d, a in zip(numbers, actual)):
+                return None
+            near.append(m.group(0))
+    return f"found {' / '.join(near)}" if near else "found no line with those words"
 
 
 def run(mgrl, args, cache, data):
     env = dict(os.environ, MGRL_CACHE=cache, MGRL_DATA=data)
+    started = time.monotonic()
     result = subprocess.run([mgrl] + args.split(), cwd=ROOT, env=env, capture_output=True, text=True)
     if result.returncode != 0:
         sys.exit(f"readme_outputs: `mgrl {args}` failed with exit code {result.returncode}:\n{result.stderr}")
+    print(f"readme_outputs: mgrl {args} ({time.monotonic() - started:.1f} s)", file=sys.stderr)
     return result.stdout.replace(cache, "~/.cache/mgrl").rstrip("\n").split("\n")
 
 
@@ -62,25 +138,47 @@ def blocks(lines):
     return found
 
 
+def figures(lines):
+    """(line index, [mgrl args per command], [expected texts])."""
+    found = []
+    for i, line in enumerate(lines):
+        if not line.lstrip().startswith("<!-- mgrl-figure:"):
+            continue
+        m = FIGURE.match(line)
+        if not m:
+            sys.exit(f"README.md:{i + 1}: expected <!-- mgrl-figure: ARGS ; ARGS => EXPECTED | EXPECTED -->, "
+                     f"found {line!r}")
+        commands = [c.strip() for c in m.group(1).split(" ; ") if c.strip()]
+        expected = [e.strip() for e in m.group(2).split(" | ") if e.strip()]
+        if not commands or not expected:
+            sys.exit(f"README.md:{i + 1}: expected at least one command and one expected text, found {line!r}")
+        found.append((i, commands, expected))
+    return found
+
+
 def main():
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     mode = parser.add_mutually_exclusive_group(required=True)
     mode.add_argument("--update", action="store_true")
     mode.add_argument("--check", action="store_true")
     parser.add_argument("--mgrl", default=os.path.join(ROOT, "build", "app", "mgrl"))
+    parser.add_argument("--readme", default=os.path.join(ROOT, "README.md"), help=argparse.SUPPRESS)
     parser.add_argument("--data", default=os.environ.get("MGRL_DATA", os.path.join(ROOT, "..", "shared", "mocap")))
     options = parser.parse_args()
 
-    path = os.path.join(ROOT, "README.md")
+    path = options.readme
     with open(path) as f:
         lines = f.read().split("\n")
     found = blocks(lines)
+    stated = figures(lines)
     if not found:
         sys.exit("readme_outputs: expected mgrl-output markers in README.md, found none")
     with tempfile.TemporaryDirectory(prefix="mgrl-readme-") as cache:
         print("readme_outputs: training the boxing scenario (about 20 s)", file=sys.stderr)
         run(options.mgrl, "train scenarios/boxing.yaml", cache, options.data)
         outputs = [run(options.mgrl, args, cache, options.data) for _, args, _, _ in found]
+        figure_outputs = [[run(options.mgrl, args, cache, options.data) for args in commands][-1]
+                          for _, commands, _ in stated]
 
     if options.update:
         for (_, _, begin, end), output in reversed(list(zip(found, outputs))):
@@ -89,20 +187,37 @@ def main():
         with open(tmp, "w") as f:
             f.write("\n".join(lines))
         os.replace(tmp, path)
-        print(f"readme_outputs: rewrote {len(found)} blocks of README.md", file=sys.stderr)
-        return
+        print(f"readme_outputs: rewrote {len(found)} blocks of README.md; the figures (mgrl-figure) are edited "
+              f"by hand", file=sys.stderr)
     problems = 0
+    name = os.path.basename(path)
     for (marker, args, begin, end), output in zip(found, outputs):
+        if options.update:
+            break
         documented = lines[begin:end]
-        if [shape(l) for l in documented] != [shape(l) for l in output]:
+        why = (f"{len(documented)} lines in the README, {len(output)} from the program"
+               if len(documented) != len(output) else
+               next((f"line {k + 1}: {w}" for k, (d, o) in enumerate(zip(documented, output))
+                     if (w := compare_lines(d, o))), None))
+        if why:
             problems += 1
-            print(f"README.md:{begin + 1}: the sample output of `mgrl {args}` no longer matches the program's:",
+            print(f"{name}:{begin + 1}: the sample output of `mgrl {args}` no longer matches the program's ({why}):",
                   file=sys.stderr)
             print("  README:  " + "\n  README:  ".join(documented), file=sys.stderr)
             print("  program: " + "\n  program: ".join(output), file=sys.stderr)
+    for (marker, commands, expected), output in zip(stated, figure_outputs):
+        for text in expected:
+            why = find_figure(text, output)
+            if why:
+                problems += 1
+                print(f"{name}:{marker + 1}: the figure '{text}' no longer holds for `mgrl {commands[-1]}`: {why}",
+                      file=sys.stderr)
     if problems:
-        sys.exit(f"readme_outputs: {problems} sample outputs are stale: run scripts/readme_outputs.py --update")
-    print(f"readme_outputs: the {len(found)} sample outputs in README.md match the program's", file=sys.stderr)
+        sys.exit(f"readme_outputs: {problems} outputs or figures in {name} are stale (tolerance: "
+                 f"{RELATIVE:.0%} or one unit of the last digit; timings are not compared): update the text, "
+                 f"or run scripts/readme_outputs.py --update for the sample blocks")
+    print(f"readme_outputs: the {len(found)} sample outputs and {sum(len(e) for _, _, e in stated)} figures in "
+          f"{name} match the program's", file=sys.stderr)
 
 
 if __name__ == "__main__":

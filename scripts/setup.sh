@@ -9,7 +9,7 @@
 set -euo pipefail
 root="$(cd "$(dirname "$0")/.." && pwd)"
 
-packages=(g++ cmake ninja-build pkg-config git python3 libeigen3-dev libfmt-dev libcli11-dev nlohmann-json3-dev
+packages=(g++ cmake ninja-build ccache pkg-config git python3 libeigen3-dev libfmt-dev libcli11-dev nlohmann-json3-dev
           libyaml-cpp-dev catch2 libboost-dev)
 command -v node >/dev/null 2>&1 || packages+=(nodejs)
 command -v npm >/dev/null 2>&1 || packages+=(npm)

@@ -1,62 +1,129 @@
 #!/usr/bin/env bash
-# Sets up, builds and runs every test: the full suite in a Release build, the main job
-# (scripts/demo.sh --quick) from a fresh clone of this repository's HEAD with an empty
-# cache, a 30 s fuzz smoke of each libFuzzer harness (clang, build-fuzz-smoke/), then the
-# full suite again under AddressSanitizer and UndefinedBehaviorSanitizer.
+# Sets up, builds and runs every test.
+#   scripts/test.sh          the full suite, what CI runs (.ci/run): a Release build (ccache)
+#                            and every ctest test, the browser test, the README's figures,
+#                            the main job (scripts/demo.sh --quick) from a fresh clone of
+#                            this repository's HEAD with an empty mgrl cache, then one clang
+#                            build with AddressSanitizer, UndefinedBehaviorSanitizer and
+#                            libFuzzer's coverage (build-sanitize/) for a 30 s fuzz smoke of
+#                            each libFuzzer harness and every ctest test again.
+#   scripts/test.sh --quick  the everyday tier between commits: an incremental Release build
+#                            and every ctest test not labelled slow (a few minutes with a
+#                            warm build/).
+# Each stage prints its wall time when it ends; the last line gives the total and the three
+# slowest stages (also when a stage fails, for the stages that ran).
 set -euo pipefail
 root="$(cd "$(dirname "$0")/.." && pwd)"
+quick=0
+case "${1:-}" in
+  --quick) quick=1 ;;
+  "") ;;
+  *) echo "test.sh: expected no argument or --quick, found '$1'" >&2; exit 2 ;;
+esac
 jobs="$(nproc)"
 start=$SECONDS
 say() { echo "== [$((SECONDS - start)) s] $*" >&2; }
-"$root/scripts/setup.sh" --test
 
-say "Release build and full test suite"
-"$root/scripts/build.sh" "$root/build"
-(cd "$root/build" && ctest --output-on-failure -j "$jobs")
+# stage NAME COMMAND...: runs COMMAND, says how long it took and keeps it for the summary.
+names=() seconds=()
+stage() {
+  local name="$1" began=$SECONDS
+  shift
+  say "$name"
+  "$@"
+  names+=("$name")
+  seconds+=($((SECONDS - began)))
+  say "$name: $((SECONDS - began)) s"
+}
+scratch=()  # removed when the script ends, however it ends
+summary() {
+  local status=$? i
+  ((${#scratch[@]} == 0)) || rm -rf "${scratch[@]}"
+  ((${#names[@]})) || return 0
+  echo "== stage times:" >&2
+  for i in "${!names[@]}"; do printf '==   %5d s  %s\n' "${seconds[$i]}" "${names[$i]}" >&2; done
+  local slowest
+  slowest="$(for i in "${!names[@]}"; do printf '%s\t%s\n' "${seconds[$i]}" "${names[$i]}"; done |
+    sort -rn | head -3 | awk -F'\t' '{printf "%s%s (%d s)", (NR > 1 ? ", " : ""), $2, $1}')"
+  local verdict="every test passed"
+  ((status == 0)) || verdict="FAILED (exit $status)"
+  echo "== test.sh$( ((quick)) && echo ' --quick'): $verdict in $((SECONDS - start)) s; slowest: $slowest" >&2
+}
+trap summary EXIT
 
-say "browser test: a real mgrl serve in headless Chromium (tests/web/)"
-"$root/scripts/browser_test.sh" "$root/build"
+data="${MGRL_DATA:-$root/../shared/mocap}"
 
-say "README sample outputs against the program's (scripts/readme_outputs.py)"
-python3 "$root/scripts/readme_outputs.py" --check --mgrl "$root/build/app/mgrl"
+release_tests() {
+  local selection=()
+  ((quick)) && selection=(-LE slow)
+  (cd "$root/build" && ctest --output-on-failure -j "$jobs" "${selection[@]}")
+}
 
 # The README's first command, from what is committed (a file left out of a commit fails
-# here), on an empty cache, as a new user runs it; quick budgets keep it to minutes.
-say "main job from a fresh clone: scripts/demo.sh --quick"
-fresh="$(mktemp -d "${TMPDIR:-/tmp}/mgrl-fresh-clone.XXXXXX")"
-trap 'rm -rf "$fresh"' EXIT
-if git -C "$root" rev-parse --git-dir >/dev/null 2>&1; then
-  git clone --quiet --no-hardlinks "$root" "$fresh/mgrl"
-else
-  # Not a git checkout (an unpacked archive): copy the sources, never the builds.
-  mkdir "$fresh/mgrl"
-  tar -C "$root" --exclude='./build*' --exclude='./node_modules' -cf - . | tar -C "$fresh/mgrl" -xf -
-fi
-MGRL_DATA="${MGRL_DATA:-$root/../shared/mocap}" MGRL_CACHE="$fresh/cache" "$fresh/mgrl/scripts/demo.sh" --quick \
-  >"$fresh/demo.out" 2>"$fresh/demo.err" || {
-  cat "$fresh/demo.err" >&2
-  echo "test: the main job failed from a fresh clone (scripts/demo.sh --quick); its output is above" >&2
-  exit 1
+# here), on an empty mgrl cache, as a new user runs it; quick budgets keep it to minutes.
+# Its build is a real build of the clone's sources; ccache serves it the objects the
+# Release build above compiled from the same sources.
+fresh_clone_demo() {
+  local fresh
+  fresh="$(mktemp -d "${TMPDIR:-/tmp}/mgrl-fresh-clone.XXXXXX")"
+  scratch+=("$fresh")
+  if git -C "$root" rev-parse --git-dir >/dev/null 2>&1; then
+    git clone --quiet --no-hardlinks "$root" "$fresh/mgrl"
+  else
+    # Not a git checkout (an unpacked archive): copy the sources, never the builds.
+    mkdir "$fresh/mgrl"
+    tar -C "$root" --exclude='./build*' --exclude='./node_modules' -cf - . | tar -C "$fresh/mgrl" -xf -
+  fi
+  MGRL_DATA="$data" MGRL_CACHE="$fresh/cache" "$fresh/mgrl/scripts/demo.sh" --quick \
+    >"$fresh/demo.out" 2>"$fresh/demo.err" || {
+    cat "$fresh/demo.err" >&2
+    echo "test: the main job failed from a fresh clone (scripts/demo.sh --quick); its output is above" >&2
+    exit 1
+  }
+  "$root/scripts/check_demo.sh" "$fresh/demo.out" "$fresh/demo.err" "$fresh/mgrl/build/demo"
+  grep -E 'demo: \[[0-9]+ s\] done' "$fresh/demo.err" >&2  # the demo's wall time
+  # What `scripts/demo.sh --serve` starts, from the same clone: its page and three.js.
+  MGRL_DATA="$data" MGRL_CACHE="$fresh/cache" \
+    "$root/scripts/check_serve.sh" "$fresh/mgrl/build/app/mgrl" "$fresh/mgrl/scenarios/boxing.yaml" \
+    --set behaviors.approach.learner.budget=200000 --set behaviors.hit.learner.budget=400000
+  rm -rf "$fresh"
 }
-"$root/scripts/check_demo.sh" "$fresh/demo.out" "$fresh/demo.err" "$fresh/mgrl/build/demo"
-grep -E 'demo: \[[0-9]+ s\] done' "$fresh/demo.err" >&2  # the demo's wall time
-# What `scripts/demo.sh --serve` starts, from the same clone: its page and three.js.
-MGRL_DATA="${MGRL_DATA:-$root/../shared/mocap}" MGRL_CACHE="$fresh/cache" \
-  "$root/scripts/check_serve.sh" "$fresh/mgrl/build/app/mgrl" "$fresh/mgrl/scenarios/boxing.yaml" \
-  --set behaviors.approach.learner.budget=200000 --set behaviors.hit.learner.budget=400000
-rm -rf "$fresh"
-trap - EXIT
 
 # Issue 19: each reader's harness for 30 s, one per core at a time (CI: two), from the
 # seeds only, so that every run does the same work: a corpus left by earlier runs is read
 # whole first, which for the slow readers can outlast the 30 s. -timeout is one
 # input's wall time at nice 19, generous so that a busy machine is not taken for a hang.
-say "fuzz smoke: each libFuzzer harness 30 s (scripts/fuzz.sh, clang, build-fuzz-smoke/)"
-rm -rf "$root/build-fuzz-smoke/corpus" "$root/build-fuzz-smoke/findings"
-FUZZ_BUILD="$root/build-fuzz-smoke" FUZZ_BUILD_JOBS="$jobs" FUZZ_JOBS="$jobs" FUZZ_TIMEOUT=30 CXX=clang++ \
-  MGRL_DATA="${MGRL_DATA:-$root/../shared/mocap}" "$root/scripts/fuzz.sh" 30
+# One sanitizer build serves the fuzz smoke and the sanitizer run of the suite: clang with
+# AddressSanitizer, UndefinedBehaviorSanitizer and libFuzzer's coverage on everything, the
+# harnesses, mgrl and the tests (scripts/fuzz.sh, FUZZ_WITH_TESTS=1, build-sanitize/).
+sanitize="$root/build-sanitize"
+sanitizer_build() {
+  FUZZ_BUILD="$sanitize" FUZZ_WITH_TESTS=1 FUZZ_BUILD_JOBS="$jobs" CXX=clang++ MGRL_DATA="$data" \
+    "$root/scripts/fuzz.sh" --build-only
+}
+fuzz_smoke() {
+  rm -rf "$sanitize/corpus" "$sanitize/findings"
+  FUZZ_BUILD="$sanitize" FUZZ_WITH_TESTS=1 FUZZ_BUILD_JOBS="$jobs" FUZZ_JOBS="$jobs" FUZZ_TIMEOUT=30 CXX=clang++ \
+    MGRL_DATA="$data" "$root/scripts/fuzz.sh" 30
+}
+sanitizer_tests() {
+  (cd "$sanitize" && ASAN_OPTIONS=detect_leaks=1 ctest --output-on-failure -j "$jobs")
+}
 
-say "ASan/UBSan build and full test suite"
-"$root/scripts/build.sh" "$root/build-asan" -DMGRL_SANITIZE=ON -DMGRL_BUILD_BENCH=OFF -DCMAKE_BUILD_TYPE=RelWithDebInfo
-(cd "$root/build-asan" && ASAN_OPTIONS=detect_leaks=1 ctest --output-on-failure -j "$jobs")
-say "every test passed"
+if ((quick)); then
+  stage "set-up" "$root/scripts/setup.sh" --test
+  stage "Release build (incremental)" "$root/scripts/build.sh" "$root/build"
+  stage "Release tests not labelled slow" release_tests
+  exit 0
+fi
+
+stage "set-up" "$root/scripts/setup.sh" --test
+stage "Release build" "$root/scripts/build.sh" "$root/build"
+stage "Release tests (ctest)" release_tests
+stage "browser test: a real mgrl serve in headless Chromium (tests/web/)" "$root/scripts/browser_test.sh" "$root/build"
+stage "README figures against the program's (scripts/readme_outputs.py)" \
+  python3 "$root/scripts/readme_outputs.py" --check --mgrl "$root/build/app/mgrl"
+stage "main job from a fresh clone: scripts/demo.sh --quick" fresh_clone_demo
+stage "sanitizer build: clang, ASan/UBSan, libFuzzer coverage (build-sanitize/)" sanitizer_build
+stage "fuzz smoke: each libFuzzer harness 30 s (scripts/fuzz.sh)" fuzz_smoke
+stage "ASan/UBSan tests (ctest in build-sanitize/)" sanitizer_tests

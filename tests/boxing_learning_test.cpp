@@ -40,7 +40,7 @@ double nearOptimalFraction(const QTable& learned, const QTable& reference, doubl
 
 }  // namespace
 
-TEST_CASE("on boxing, the trained combined policy hits far more often than a random controller", "[boxing][learning]") {
+TEST_CASE("on boxing, the trained combined policy hits far more often than a random controller", "[boxing][learning][slow]") {
   test::TempDir temp("boxing-learning");
   app::TrainOptions train;
   train.scenario = kBoxing;
@@ -71,7 +71,7 @@ TEST_CASE("on boxing, the trained combined policy hits far more often than a ran
     REQUIRE(again[key] == report[key]);
 }
 
-TEST_CASE("on boxing, the Q-learned policy reaches 90 % of the online search's success", "[boxing][learning]") {
+TEST_CASE("on boxing, the Q-learned policy reaches 90 % of the online search's success", "[boxing][learning][slow]") {
   // The scenario as it is (Q-learning, the file's budgets: about 12 s), against the online
   // search at horizon 3 on the same starts. The benchmark (mgrl_bench_runtime) measures
   // the other side: each policy decision costs thousands of times less.
@@ -102,7 +102,7 @@ TEST_CASE("on boxing, the Q-learned policy reaches 90 % of the online search's s
   REQUIRE(policy >= 0.9 * baseline);
 }
 
-TEST_CASE("on boxing, Q-learning with a generous budget agrees with value iteration", "[boxing][learning]") {
+TEST_CASE("on boxing, Q-learning with a generous budget agrees with value iteration", "[boxing][learning][slow]") {
   const Scenario scenario = loadScenario(kBoxing, test::mocap());
   const MotionDatabase db = loadMotionDatabase(scenario.motion, {});
   const StateActionModel model = buildStateActionModel(db, scenario.graph);

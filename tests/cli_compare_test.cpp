@@ -35,7 +35,7 @@ struct Sandbox : mgrl::test::CliSandbox {
   Run run(const std::string& arguments) { return mgrl::test::runMgrl(arguments + where(), dir()); }
 };
 
-TEST_CASE("mgrl compare reports what separate train and eval runs measure, and reuses its bundles", "[cli][data]") {
+TEST_CASE("mgrl compare reports what separate train and eval runs measure, and reuses its bundles", "[cli][data][slow]") {
   Sandbox box;
   const Run compared = box.run(kCompare + " --seeds 1,2 --json --report " + shellWord(box.path("report")));
   const json report = compared.report();
@@ -153,7 +153,7 @@ TEST_CASE("mgrl compare reuses bundles cached without snapshots and retrains the
 }
 
 // --reference-set: value iteration on a finer grid, read at each table's vertices.
-TEST_CASE("mgrl compare measures tables against value iteration on a finer grid", "[cli][data]") {
+TEST_CASE("mgrl compare measures tables against value iteration on a finer grid", "[cli][data][slow]") {
   Sandbox box;
   const std::string compare = "compare " + shellWord(kBoxing) +
                               " --behavior hit --learners value_iteration --trials 10 --snapshots 3 --json " +

@@ -52,7 +52,7 @@ std::string walkthrough() {
 
 }  // namespace
 
-TEST_CASE("scenarios made of reward terms train and meet their success criteria in eval", "[cli][data]") {
+TEST_CASE("scenarios made of reward terms train and meet their success criteria in eval", "[cli][data][slow]") {
   for (const char* name : {"out_boxing.yaml", "walk_to.yaml", "kick.yaml"}) {
     CAPTURE(name);
     Sandbox box;
@@ -65,7 +65,7 @@ TEST_CASE("scenarios made of reward terms train and meet their success criteria 
   }
 }
 
-TEST_CASE("intercept.yaml trains on a moving target and punches it far more often than random actions", "[cli][data]") {
+TEST_CASE("intercept.yaml trains on a moving target and punches it far more often than random actions", "[cli][data][slow]") {
   Sandbox box;
   const json report = box.trainAndEvaluate(std::string(MGRL_SOURCE_DIR) + "/scenarios/intercept.yaml");
   CHECK(report["success"]["from"] == "declared");
@@ -200,7 +200,7 @@ TEST_CASE("boxing_spar.yaml keeps a fighting distance and punches from it: pelvi
 }
 
 TEST_CASE("sparring.yaml spars like the SNU capture: distance, strike rate, bodies apart, both fighters land",
-          "[cli][data]") {
+          "[cli][data][slow]") {
   Sandbox box;
   const std::string scenario = std::string(MGRL_SOURCE_DIR) + "/scenarios/sparring.yaml";
   const Run trained = box.run("train " + shellWord(scenario) + " --json --out " + shellWord(box.path("policy")));

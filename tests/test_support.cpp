@@ -1,6 +1,10 @@
 #include "test_support.hpp"
 
+#include <fcntl.h>
+#include <sys/file.h>
 #include <unistd.h>
+
+#include <fstream>
 
 #include <fmt/format.h>
 
@@ -17,7 +21,9 @@ std::filesystem::path mocap() {
   return dir;
 }
 
-std::filesystem::path testData() { return MGRL_TEST_DATA_DIR; }
+std::filesystem::path testData() { return MGRL_TEST_PATH_DATA; }
+const char* sourceDirectory() { return MGRL_TEST_PATH_SOURCE; }
+const char* mgrlBinary() { return MGRL_TEST_PATH_BINARY; }
 
 TempDir::TempDir(std::string_view tag) {
   static int counter = 0;
@@ -29,6 +35,37 @@ TempDir::TempDir(std::string_view tag) {
 TempDir::~TempDir() {
   std::error_code ignored;
   std::filesystem::remove_all(path, ignored);
+}
+
+std::filesystem::path sharedResult(const std::string& name,
+                                   const std::function<void(const std::filesystem::path&)>& make) {
+  namespace fs = std::filesystem;
+  const fs::path exe = fs::read_symlink("/proc/self/exe");
+  const auto built = fs::last_write_time(exe).time_since_epoch().count();
+  const fs::path root = exe.parent_path() / "shared-results";
+  const fs::path dir = root / fmt::format("{}", built);
+  if (!fs::is_directory(dir)) {
+    fs::create_directories(dir);
+    std::error_code ignored;  // a folder another process removes first is fine
+    for (const fs::directory_entry& e : fs::directory_iterator(root, ignored))
+      if (e.path() != dir) fs::remove_all(e.path(), ignored);
+  }
+  const fs::path folder = dir / name, done = dir / (name + ".done");
+  const std::string lockPath = (dir / (name + ".lock")).string();
+  const int lock = ::open(lockPath.c_str(), O_RDWR | O_CREAT | O_CLOEXEC, 0644);
+  REQUIRE(lock >= 0);
+  REQUIRE(::flock(lock, LOCK_EX) == 0);  // released when the descriptor closes, also on a throw
+  struct Close {
+    int fd;
+    ~Close() { ::close(fd); }
+  } closeLock{lock};
+  if (!fs::exists(done)) {
+    fs::remove_all(folder);  // what a killed maker left
+    fs::create_directories(folder);
+    make(folder);
+    std::ofstream(done) << "done\n";
+  }
+  return folder;
 }
 
 LoadedMotion loadMocap(const std::string& relative, const LoadOptions& options) {

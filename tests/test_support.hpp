@@ -2,6 +2,7 @@
 // Shared helpers for the test suite: where the real capture and the tiny test files are.
 
 #include <filesystem>
+#include <functional>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -16,7 +17,21 @@
     REQUIRE_THROWS_WITH(expr, ::Catch::Contains(message));     \
   } while (false)
 
+// The source tree and the built program, as values rather than command-line definitions:
+// only test_support.cpp is compiled with the paths (MGRL_TEST_PATH_*), so every other test
+// file compiles to the same object in any checkout and a second checkout's build hits
+// ccache (scripts/build.sh).
+#ifndef MGRL_TEST_PATH_SOURCE
+#define MGRL_SOURCE_DIR (::mgrl::test::sourceDirectory())
+#define MGRL_BINARY (::mgrl::test::mgrlBinary())
+#endif
+
 namespace mgrl::test {
+
+/// The repository root this suite was built from.
+const char* sourceDirectory();
+/// The `mgrl` program built beside the suite.
+const char* mgrlBinary();
 
 /// ../shared/mocap (or MGRL_DATA). Fails the test if it is missing: the integration tests
 /// run on the real data, never silently skip it.
@@ -42,5 +57,15 @@ struct TempDir {
   TempDir& operator=(const TempDir&) = delete;
   std::filesystem::path path;
 };
+
+/// A folder shared by every test process of this build of the suite, for a result that
+/// many tests need and none tests the making of (boxing trained by value iteration, say):
+/// ctest runs each test case in a process of its own, so a fixture built per process is
+/// built again for every test. The first caller runs `make(folder)` under an exclusive
+/// lock (a second process waits for it), later callers get the finished folder. The
+/// folders live in the test binary's build folder, under a name taken from the binary's
+/// modification time: a rebuilt suite starts afresh, and removes the older ones.
+std::filesystem::path sharedResult(const std::string& name,
+                                   const std::function<void(const std::filesystem::path&)>& make);
 
 }  // namespace mgrl::test

@@ -28,10 +28,11 @@ const fs::path kBoxing = fs::path(MGRL_SOURCE_DIR) / "scenarios" / "boxing.yaml"
 const std::vector<std::string> kValueIteration = {"behaviors.approach.learner.type=value_iteration",
                                                   "behaviors.hit.learner.type=value_iteration"};
 
-// Boxing with both behaviours trained to convergence by value iteration (under a second),
-// built once for every test here.
+// Boxing with both behaviours trained to convergence by value iteration, trained once for
+// every test process of the suite (test::sharedResult; the world tests test the world, the
+// learning tests the training) and loaded once per process.
 struct Boxing {
-  test::TempDir temp{"world"};
+  fs::path dir = test::sharedResult("boxing-value-iteration", [](const fs::path& d) { app::runTrain(trainOptions(d)); });
   app::Loaded loaded;
   std::vector<Behavior> behaviors;
   PolicyBundle bundle;
@@ -49,14 +50,13 @@ struct Boxing {
     train.sets = kValueIteration;
     return train;
   }
-  static app::Loaded trainAndLoad(const fs::path& dir) {
+  static app::Loaded load(const fs::path& dir) {
     const app::TrainOptions train = trainOptions(dir);
-    app::runTrain(train);
     return app::load(train, app::checkedScenario(train));
   }
 
-  Boxing() : loaded(trainAndLoad(temp.path)) {
-    const app::TrainOptions train = trainOptions(temp.path);
+  Boxing() : loaded(load(dir)) {
+    const app::TrainOptions train = trainOptions(dir);
     behaviors = buildBehaviors(loaded.scenario, app::plugins(), loaded.graph.model, loaded.graph.key);
     parts = app::policyParts(train.out, behaviors, loaded.graph, train, bundle);
     body = makeBodyTable(loaded.graph.db);

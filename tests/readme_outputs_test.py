@@ -1,0 +1,65 @@
+#!/usr/bin/env python3
+"""The README check's comparison (scripts/readme_outputs.py): a changed deterministic
+figure fails it, a changed timing does not. ctest runs this as `readme_outputs_rules`; the
+check itself runs on the real README in scripts/test.sh."""
+import os
+import sys
+import unittest
+
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.dirname(os.path.abspath(__file__))), "scripts"))
+import readme_outputs as r  # noqa: E402
+
+EVAL = ("controller policy: 300 trials, success rate 100.0 %, time to hit mean 3.40 s median 3.38 s, "
+        "mean return 0.421, 7.47 Mdecisions/s")
+TRAIN = "  hit        q_learning           20000000 updates     10.20 s     1.96 Mupdates/s  residual 0.574  table 11.0 MB"
+SIMULATE = "simulate (policy controller, sparring): 30 avatars x 999 frames (33.3 s) in 3.5 ms: 8.66 Mavatar-frames/s"
+
+
+class SampleLines(unittest.TestCase):
+    def test_the_same_line_agrees(self):
+        for line in (EVAL, TRAIN, SIMULATE):
+            self.assertIsNone(r.compare_lines(line, line))
+
+    def test_timings_and_rates_are_not_compared(self):
+        self.assertIsNone(r.compare_lines(EVAL, EVAL.replace("7.47 Mdecisions/s", "463.0 kdecisions/s")))
+        self.assertIsNone(r.compare_lines(TRAIN, TRAIN.replace("10.20 s", "31.07 s").replace("1.96 M", "612.3 k")))
+        self.assertIsNone(r.compare_lines(SIMULATE, SIMULATE.replace("3.5 ms", "12.0 ms")))
+        build = "build           0.006 s (reused from ~/.cache/mgrl/graphs/boxing-ef73e760)"
+        self.assertIsNone(r.compare_lines(build, "build           1.250 s (reused from ~/.cache/mgrl/graphs/boxing-0123abcd)"))
+
+    def test_a_changed_deterministic_figure_fails(self):
+        self.assertIn("100.0 (now 95.0)", r.compare_lines(EVAL, EVAL.replace("success rate 100.0", "success rate 95.0")))
+        self.assertIn("3.40 (now 4.2)", r.compare_lines(EVAL, EVAL.replace("mean 3.40 s", "mean 4.2 s")))
+        self.assertIn("0.574", r.compare_lines(TRAIN, TRAIN.replace("residual 0.574", "residual 0.61")))
+        self.assertIn("11.0", r.compare_lines(TRAIN, TRAIN.replace("table 11.0 MB", "table 12.5 MB")))
+        self.assertIn("999", r.compare_lines(SIMULATE, SIMULATE.replace("999 frames", "900 frames")))
+        self.assertEqual(r.compare_lines("hits: 605 (36.3 per avatar-minute)", "hits: 605 (36.3 per minute)"),
+                         "the words differ")
+
+    def test_the_tolerance_is_one_percent_or_a_unit_of_the_last_digit(self):
+        self.assertIsNone(r.compare_lines("hits: 605", "hits: 611"))  # 1 %
+        self.assertIsNotNone(r.compare_lines("hits: 605", "hits: 612"))
+        self.assertIsNone(r.compare_lines("states 117", "states 118"))  # one unit
+        self.assertIsNotNone(r.compare_lines("states 117", "states 119"))
+        self.assertIsNone(r.compare_lines("rate 5.0 %", "rate 5.1 %"))
+        self.assertIsNotNone(r.compare_lines("rate 5.0 %", "rate 5.3 %"))
+
+
+class Figures(unittest.TestCase):
+    OUTPUT = [EVAL, "random baseline on the same starts: success rate 5.0 %, time to hit mean 5.64 s"]
+
+    def test_a_figure_found_within_tolerance(self):
+        self.assertIsNone(r.find_figure("success rate 100.0 %, time to hit mean 3.40 s", self.OUTPUT))
+        self.assertIsNone(r.find_figure("success rate 5.0 %", self.OUTPUT))
+        self.assertIsNone(r.find_figure("success rate 99..100 %", self.OUTPUT))
+
+    def test_a_wrong_figure_fails_saying_what_was_found(self):
+        self.assertEqual(r.find_figure("success rate 95.0 %", self.OUTPUT),
+                         "found success rate 100.0 % / success rate 5.0 %")
+        self.assertIsNotNone(r.find_figure("success rate 100.0 %, time to hit mean 4.2 s", self.OUTPUT))
+        self.assertIsNotNone(r.find_figure("success rate 93..96 %", self.OUTPUT))
+        self.assertEqual(r.find_figure("hit rate 100.0 %", self.OUTPUT), "found no line with those words")
+
+
+if __name__ == "__main__":
+    unittest.main()
