@@ -384,6 +384,64 @@ TEST_CASE("locked feet stay where they landed while planted, with bones of const
   CHECK(freeBone < 1e-6);
 }
 
+// The lock must let go: a foot that stayed pinned after lifting would keep planted ankles
+// still too, so the test above, which looks at planted frames only, cannot see it. The lock
+// turns only the locked leg's joints and never moves the root, so once a lifted foot's
+// release is over its ankle is exactly where the same walk without the lock puts it.
+TEST_CASE("a locked foot follows the motion again once its contact ends", "[graph][data]") {
+  const Boxing& b = boxing();
+  ActionPlayback unlocked(b.db, b.model, b.scenario.graph.blendFrames, false),
+      locked(b.db, b.model, b.scenario.graph.blendFrames, false);
+  locked.setFootLock(true);
+  unlocked.reset(0);
+  locked.reset(0);
+  // "Let go over a few frames when it lifts" (playback.hpp); playback.cpp takes 4, so from
+  // the 8th lifted frame on the lock must have no effect left.
+  constexpr int kReleased = 8;
+  Rng rng(11);
+  Pose unlockedPose, lockedPose;
+  std::array<int, 2> lifted{0, 0};  // per foot: frames since its contact ended (0 while down)
+  std::size_t released = 0, pinnedFrames = 0;
+  double worst = 0, lockedMoves = 0;
+  std::array<Eigen::Vector3d, 2> lockedBefore{Eigen::Vector3d::Zero(), Eigen::Vector3d::Zero()};
+  // Boxers keep their feet down most of the time: a long walk for enough lifted frames.
+  for (int n = 0; n < 2000; ++n) {
+    const std::uint32_t s = unlocked.state();
+    REQUIRE(locked.state() == s);
+    const std::uint32_t begin = b.model.stateActionBegin[s];
+    const auto action = begin + static_cast<std::uint32_t>(rng.below(b.model.stateActionBegin[s + 1] - begin));
+    unlocked.begin(action);
+    locked.begin(action);
+    while (unlocked.next(unlockedPose)) {
+      REQUIRE(locked.next(lockedPose));
+      const std::uint32_t v = unlocked.frame();
+      const std::size_t c = b.db.clipOf(v);
+      for (std::size_t side = 0; side < 2; ++side) {
+        const bool down = b.db.clips[c].annotation.contact[side][v - b.db.offsets[c]] != 0;
+        const auto ankle = static_cast<std::size_t>(b.db.roles.ankle[side]);
+        const Eigen::Vector3d lockedAnkle = locked.positions()[ankle];
+        lifted[side] = down ? 0 : lifted[side] + 1;
+        if (lifted[side] >= kReleased) {
+          const double gap = (lockedAnkle - unlocked.positions()[ankle]).norm();
+          worst = std::max(worst, gap);
+          ++released;
+          // And the lifted foot moves as the capture does, rather than hanging in the air.
+          const double step = std::hypot(lockedAnkle.x() - lockedBefore[side].x(), lockedAnkle.z() - lockedBefore[side].z());
+          lockedMoves += step;
+          pinnedFrames += step < 1e-6;
+        }
+        lockedBefore[side] = lockedAnkle;
+      }
+    }
+  }
+  INFO(released << " lifted frames past the release; largest ankle gap to the unlocked walk " << worst << " m; "
+                << pinnedFrames << " of them with the ankle still; mean step " << lockedMoves / static_cast<double>(released)
+                << " m");
+  REQUIRE(released > 500);
+  CHECK(worst < 1e-9);
+  CHECK(pinnedFrames < released / 10);
+}
+
 TEST_CASE("frames posed from the source poses are forward kinematics' poses", "[graph][data]") {
   const Boxing& b = boxing();
   const SourcePoses source = makeSourcePoses(b.db);

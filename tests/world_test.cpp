@@ -185,6 +185,60 @@ TEST_CASE("a posed crowd's joint positions are its poses' forward kinematics, th
   CHECK(worst < 1e-9);
 }
 
+// The world poses its avatars with planted feet held (WorldParams::plantFeet, on unless a
+// scenario turns it off): a planted ankle stays where it landed in world space. Deleting
+// the world's call of ActionPlayback::setFootLock would leave the lock off and the feet
+// sliding as the capture's do, which no other test sees.
+TEST_CASE("a posed avatar's planted feet stay still in the world unless plant_feet is off", "[world][data]") {
+  const Boxing& b = boxing();
+  REQUIRE(WorldParams{}.plantFeet);  // the default
+  const StateActionModel& model = b.model();
+  const MotionDatabase& db = b.db();
+  // Horizontal ankle speeds (m/s) over frame pairs with the foot planted in both, for one
+  // avatar with a target of its own (no partner to push it or to strike it) for a minute.
+  auto plantedSpeeds = [&](bool plantFeet) {
+    WorldSetup s = b.setup(1);
+    s.poses = true;
+    s.params.plantFeet = plantFeet;
+    World world(s);
+    // The source frame shown: the world plays its last decision's action from that
+    // action's first frame, one frame per run(1).
+    std::size_t decisions = 0;
+    std::uint32_t step = 0;
+    std::array<Eigen::Vector3d, 2> before{Eigen::Vector3d::Zero(), Eigen::Vector3d::Zero()};
+    std::array<bool, 2> wasDown{false, false};
+    std::vector<double> speeds;
+    const std::size_t frames = framesFor(b, 60);
+    for (std::size_t f = 0; f < frames; ++f) {
+      world.run(1);
+      const World::Decision decision = world.lastDecision(0);
+      step = decision.count == decisions ? step + 1 : 1;
+      decisions = decision.count;
+      REQUIRE(step <= model.actionLength(decision.action));
+      const std::uint32_t v = model.actionFrames[model.actionFrameBegin[decision.action] + step - 1];
+      const std::size_t c = db.clipOf(v);
+      for (std::size_t side = 0; side < 2; ++side) {
+        const bool down = db.clips[c].annotation.contact[side][v - db.offsets[c]] != 0;
+        const Eigen::Vector3d ankle = world.jointPositions(0)[static_cast<std::size_t>(db.roles.ankle[side])];
+        if (down && wasDown[side])
+          speeds.push_back(std::hypot(ankle.x() - before[side].x(), ankle.z() - before[side].z()) / model.frameTime);
+        before[side] = ankle;
+        wasDown[side] = down;
+      }
+    }
+    std::sort(speeds.begin(), speeds.end());
+    return speeds;
+  };
+  const std::vector<double> held = plantedSpeeds(true), sliding = plantedSpeeds(false);
+  REQUIRE(held.size() == sliding.size());  // the same bout: poses never change what happens
+  REQUIRE(held.size() > 500);
+  const double heldMedian = held[held.size() / 2], slidingMedian = sliding[sliding.size() / 2];
+  INFO(held.size() << " planted frame pairs; median planted ankle speed " << heldMedian << " m/s held, "
+                   << slidingMedian << " m/s with plant_feet off");
+  CHECK(heldMedian < 0.01);
+  CHECK(slidingMedian > 0.05);  // what the lock removes is there without it
+}
+
 TEST_CASE("in a two-avatar bout both boxers land hits, far more than random controllers", "[world][data]") {
   const Boxing& b = boxing();
   const std::size_t frames = framesFor(b, 120);
