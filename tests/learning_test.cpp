@@ -273,6 +273,39 @@ TEST_CASE("value iteration gives the corridor's closed-form values", "[learning]
   REQUIRE(vi.finalResidual < 1e-6);
 }
 
+// A backup whose target leaves the grid is the action's own reward, earned before it left,
+// with no future: r(v, a) + gamma^t * 0 (problem.hpp's backup(); "future value 0 there,
+// paper sec. 4.2", Discretizer::locate()). The corridor's own ways out of the grid earn
+// nothing, so they cannot tell this reward from 0: a lunge, the punch taken while walking
+// 0.5 m forward, lands its hit on a target 0.5 m ahead (gamma^3 on frame 3) and then
+// leaves it at distance 0, off the grid.
+TEST_CASE("a step that leaves the grid backs up its own reward and no future", "[learning]") {
+  const ActionHit punch{0, 3, 1, 0.0f, 1.0f, 0.5f, 1.0f};
+  const CorridorSetup parts(2, handModel(1, {{0, 0, 5, 0, 0.5, 0, {}}, {0, 0, 5, 0, -0.5, 0, {}},
+                                             {0, 0, 5, 0, 0, 0, {punch}}, {0, 0, 5, 0, 0.5, 0, {punch}}}));
+  const std::size_t lunge = 3, ahead = centre(*parts.grid, 0);
+  const double gamma = 0.97, reward = std::pow(gamma, 3);  // the hit's weight is 1
+  REQUIRE(parts.reward->gamma() == gamma);
+  REQUIRE_FALSE(parts.grid->inside(parts.environment.next(parts.model, lunge, parts.grid->vertexState(ahead))));
+
+  // Whatever the table holds, the backup is the reward alone, tabulated or compact.
+  QTable q(parts.model, parts.tabulated.vertexCount);
+  for (float& x : q.values()) x = 10.0f;
+  const GridModel compact = GridModel::buildCompact(parts.problem, 1);
+  CHECK(parts.tabulated.at(lunge, ahead).cell < 0);
+  CHECK(backup(q, parts.tabulated, lunge, ahead) == Approx(reward).epsilon(1e-6));
+  CHECK(backup(q, compact, lunge, ahead) == Approx(reward).epsilon(1e-6));
+
+  // And so it converges in value iteration; one vertex further out the same lunge misses
+  // (0.5 m short), lands on the grid and backs up only the future: gamma^5 times the best
+  // there, punching in place forever (the corridor's v0).
+  const TrainResult vi = trainWith("{type: value_iteration, tolerance: 1e-7}", parts.problem, parts.tabulated);
+  REQUIRE(vi.stats["converged"] == true);
+  const double v0 = reward / (1 - std::pow(gamma, 5));
+  CHECK(vi.table.at(lunge, ahead) == Approx(reward).epsilon(1e-5));
+  CHECK(vi.table.at(lunge, centre(*parts.grid, 1)) == Approx(std::pow(gamma, 5) * v0).epsilon(1e-5));
+}
+
 TEST_CASE("Q-learning's greedy policy converges to value iteration's on the corridor", "[learning]") {
   const CorridorSetup parts(2);
   const Problem& problem = parts.problem;
