@@ -5,9 +5,11 @@
 
 #include <catch2/catch.hpp>
 
+#include <algorithm>
 #include <cmath>
 #include <cstring>
 #include <filesystem>
+#include <limits>
 #include <utility>
 
 #include <fmt/format.h>
@@ -504,16 +506,27 @@ TEST_CASE("a resumed Q-learning run reports the whole walk's coverage, as an uni
 
 // Issue 15: the viewer's learn panel steps Q-learning one action at a time. It must be the
 // paper's algorithm, not a look-alike: the same seed and budget end with q_learning's
-// table bit for bit, and every step reports the update rule's own numbers.
+// table bit for bit, and every step reports the update rule's own numbers. Both share
+// backup() and the grid model, so each update is also recomputed here from the table
+// before the step, by the rule as q_learning.cpp states it (Lee & Lee sec. 4.2):
+//   Q(v, a) <- (1 - alpha) Q(v, a) + alpha (r(v, a) + gamma^t_a max_a' Q(e'_v, a')),
+// e'_v the vertex moved along by the action, Q(e'_v, .) interpolated in its cell (0 off
+// the grid), t_a the action's frames, alpha falling linearly from 1 over the budget.
 TEST_CASE("Q-learning taken step by step is q_learning, and each step reports its update", "[learning][lesson]") {
   const RingSetup setup;
   const Problem& problem = setup.problem;
+  const StateActionModel& m = setup.model;
   const TrainResult whole = trainWith("{type: q_learning, budget: 2000, seed: 9, curve_points: 4}", problem, setup.tabulated);
+  // A step updates Q(., a) only, and no action of the ring ends where it starts, so the
+  // look-ahead's actions (those leaving a's end state) never include a: every corner's
+  // look-ahead reads the table as it was before the step, whatever the corners' order.
+  for (std::size_t a = 0; a < m.actionCount(); ++a) REQUIRE(m.actionFrom[a] != m.actionTo[a]);
   learners::QLearningSteps steps(problem, 2000, 9);
   REQUIRE(steps.restarts() == 1);
   QTable previous = steps.table();
   std::size_t restarts = 0, futures = 0;
   while (!steps.done()) {
+    const QTable before = steps.table();
     const learners::QStep step = steps.step();
     REQUIRE(step.vertices.size() == 4);  // a 2-D grid's cell
     CHECK(step.alpha == Approx(1.0 - static_cast<double>(step.update - 1) / 2000).epsilon(1e-6));
@@ -530,6 +543,29 @@ TEST_CASE("Q-learning taken step by step is q_learning, and each step reports it
       if (!v.nextInside) CHECK(v.future == 0);
       futures += v.future != 0;
       previous.at(step.action, v.vertex) = static_cast<float>(v.after);
+
+      // The same update from `before` alone, without the step's own numbers.
+      const std::size_t a = step.action;
+      const TargetState vertex = setup.grid->vertexState(v.vertex);
+      const double reward = setup.reward->evaluate(m, a, vertex);
+      GridCell landing;
+      const bool inside = setup.grid->locate(setup.environment.next(m, a, vertex), landing);
+      double future = 0;
+      if (inside) {
+        const Stencil stencil = setup.grid->stencil(landing);
+        const std::uint32_t next = m.actionTo[a];
+        future = -std::numeric_limits<double>::infinity();
+        for (std::uint32_t b = m.stateActionBegin[next]; b < m.stateActionBegin[next + 1]; ++b) {
+          double value = 0;
+          for (int k = 0; k < stencil.size; ++k) value += stencil.weight[k] * before.at(b, stencil.vertex[k]);
+          future = std::max(future, value);
+        }
+      }
+      const double target = reward + std::pow(setup.reward->gamma(), static_cast<double>(m.actionLength(a))) * future;
+      const double alpha = 1 - static_cast<double>(step.update - 1) / 2000;
+      CAPTURE(step.update, a, v.vertex, reward, inside, future, target);
+      CHECK(v.nextInside == inside);
+      CHECK(v.after == Approx((1 - alpha) * before.at(a, v.vertex) + alpha * target).epsilon(1e-5).margin(1e-6));
     }
     CHECK(weights == Approx(1.0).margin(1e-5));
     restarts += step.restarted;
