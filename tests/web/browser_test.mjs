@@ -6,9 +6,10 @@
 // Environment: MGRL_BINARY (default build/app/mgrl), MGRL_SERVE_ARGS (more words for
 // `mgrl serve`, e.g. "--data DIR --cache DIR"), MGRL_SCREENSHOT_DIR (default docs/img),
 // MGRL_CHROMIUM (default /usr/bin/chromium), MGRL_WEB_TEST_TIMEOUT_S (default 420).
-import {spawn} from 'node:child_process';
+import {execFileSync, spawn} from 'node:child_process';
 import {createRequire} from 'node:module';
-import {mkdirSync} from 'node:fs';
+import {mkdirSync, mkdtempSync, readFileSync, rmSync} from 'node:fs';
+import os from 'node:os';
 import path from 'node:path';
 import {fileURLToPath} from 'node:url';
 
@@ -32,6 +33,13 @@ const kSideDistance = 1.5;         // m beside the boxer, where the target is dr
 const kMinVariance = 30;           // luminance variance of a canvas that shows something
 const kValuesWithinSimSeconds = 2; // the teaching view: values messages counted over this
 const kMinValuesMessages = 3;      //   many simulated seconds, at least this many (5/s sent)
+const kLessonBudget = 20000;       // the learn panel's budget (its input's default)
+const kChainSteps = 400;           // single learn steps whose table the test rebuilds itself
+// Live retraining's trials (app/serve/viewer.cpp: kRetrainTrials, kRetrainTrialSeconds, seed 1),
+// repeated with `mgrl eval`.
+const kRetrainTrials = 200;
+const kRetrainSeconds = 10;
+const kRetrainSeed = 1;
 
 let passed = 0;
 let server = null;
@@ -110,6 +118,33 @@ async function cleanUp() {
   if (browser !== null) await browser.close().catch(() => {});
   browser = null;
   await stopServer();
+}
+
+// ---- the command line, to check the server against --------------------------------
+
+/** The values MGRL_SERVE_ARGS gives option `name` (`--name VALUE` or `--name=VALUE`), in order. */
+function serveOption(name) {
+  const values = [];
+  for (let k = 0; k < serveArgs.length; ++k) {
+    if (serveArgs[k] === name && k + 1 < serveArgs.length) values.push(serveArgs[++k]);
+    else if (serveArgs[k].startsWith(`${name}=`)) values.push(serveArgs[k].slice(name.length + 1));
+  }
+  return values;
+}
+
+/** Runs `$MGRL_BINARY ...args` from the repository root (blocking) and returns its stdout. */
+function mgrlCommand(args) {
+  console.log(`#      running ${binary} ${args.join(' ')}`);
+  const started = Date.now();
+  try {
+    const out = execFileSync(binary, args, {cwd: repo, encoding: 'utf8', stdio: ['ignore', 'pipe', 'pipe'],
+                                            maxBuffer: 64 << 20, timeout: 300000});
+    console.log(`#      (${((Date.now() - started) / 1000).toFixed(1)} s)`);
+    return out;
+  } catch (e) {
+    const said = String(e.stderr ?? '').trim().split('\n').slice(-5).join(' | ');
+    throw new CheckFailed(`${binary} ${args.join(' ')} failed (exit ${e.status}, signal ${e.signal}): ${said || e.message}`);
+  }
 }
 
 // ---- the page --------------------------------------------------------------------
@@ -517,26 +552,85 @@ async function setCrowdSize(page, avatars) {
 
 
 // The learn panel (issue 15): Q-learning stepped on the page, each update shown as the
-// paper's Fig. 4 draws it. The server's own numbers must obey the update rule, the table
-// of a fresh lesson starts at zero, and the page must show what it was sent.
-function ruleHolds(step) {
-  const close = (a, b) => Math.abs(a - b) <= 1e-5 * Math.max(1, Math.abs(a), Math.abs(b));
-  return step.vertices.every((v) => close(v.backup, v.reward + v.discount * v.future) &&
-                                    close(v.after, v.before + step.alpha * (v.backup - v.before)) &&
-                                    (v.next_inside || v.future === 0));
+// paper's Fig. 4 draws it. Each update is recomputed here from the numbers it shows, as
+// learners/q_learning_steps.cpp computes it in float (built with -ffp-contract=off):
+//   alpha    = float(1 - (update - 1) / budget)       (alpha_final 0, the panel's lesson)
+//   discount = float(gamma^frames)                    (to an ulp: std::pow and Math.pow)
+//   backup   = r + discount * future, or r off the grid (future 0 there)
+//   after    = before + alpha (backup - before)
+// and over a run of single steps from a fresh lesson the test keeps the table itself: each
+// `before` is the `after` the last step left at that (action, vertex), 0 if none did, and
+// each look-ahead `future` (max over a' of Q interpolated at e'_v, weights >= 0) lies
+// within the smallest and largest entry of that table.
+const f32 = Math.fround;
+
+/** What breaks the update rule in `step` (a learn_step message), [] if nothing. */
+function ruleBreaks(step, gamma, budget = kLessonBudget) {
+  const broken = [];
+  const alpha = f32(1 - (1 / budget) * (step.update - 1));
+  if (step.alpha !== alpha) broken.push(`update ${step.update}: alpha ${step.alpha}, expected ${alpha}`);
+  for (const v of step.vertices) {
+    const at = `update ${step.update}, action ${step.action}, vertex ${v.vertex}`;
+    const discount = f32(gamma ** step.frames);
+    if (Math.abs(v.discount - discount) > discount * 2 ** -23) {
+      broken.push(`${at}: discount ${v.discount}, expected gamma^${step.frames} = ${discount}`);
+    }
+    if (!v.next_inside && v.future !== 0) broken.push(`${at}: e' off the grid but future ${v.future}`);
+    const backup = v.next_inside ? f32(v.reward + f32(v.discount * v.future)) : v.reward;
+    if (v.backup !== backup) broken.push(`${at}: backup ${v.backup}, expected r + discount * future = ${backup}`);
+    const after = f32(v.before + f32(alpha * f32(backup - v.before)));
+    if (v.after !== after) broken.push(`${at}: after ${v.after}, expected before + alpha (backup - before) = ${after}`);
+  }
+  return broken;
+}
+const ruleHolds = (step, gamma) => ruleBreaks(step, gamma).length === 0;
+
+/**
+ * Replays `steps` (every step of a lesson from its first, one each) on a table kept here:
+ * what breaks the chain, how many updates found an entry an earlier one had left, how many
+ * looked ahead into a nonzero value.
+ */
+function replayTable(steps) {
+  const table = new Map();   // "action vertex" -> Q after its last update; absent: 0
+  const broken = [];
+  let revisits = 0, looked = 0;
+  steps.forEach((step, k) => {
+    if (step.update !== k + 1 || step.taken !== 1) broken.push(`message ${k}: update ${step.update}, taken ${step.taken}`);
+    for (const v of step.vertices) {
+      const key = `${step.action} ${v.vertex}`;
+      const at = `update ${step.update}, action ${step.action}, vertex ${v.vertex}`;
+      const known = table.has(key);
+      const expected = known ? table.get(key) : 0;
+      if (v.before !== expected) {
+        broken.push(`${at}: before ${v.before}, but ${known ? 'the last update there left' : 'no update had touched it:'} ${expected}`);
+      }
+      revisits += known;
+      if (v.next_inside) {
+        let lo = 0, hi = 0;
+        for (const q of table.values()) { lo = Math.min(lo, q); hi = Math.max(hi, q); }
+        if (v.future < lo || v.future > hi) broken.push(`${at}: future ${v.future} outside the table's [${lo}, ${hi}]`);
+        looked += v.future !== 0;
+      }
+      table.set(key, v.after);
+    }
+  });
+  return {broken, revisits, looked, entries: table.size};
 }
 
 async function learnPanel(page) {
   const scene = await page.evaluate(() => mgrl.state.scene);
   const approach = scene.behaviors.find((b) => b.name === 'approach');
   await page.selectOption('#learn-behavior', 'approach');
-  await page.fill('#learn-budget', '20000');
+  await page.fill('#learn-budget', String(kLessonBudget));
   await page.click('#learn-start');
   await waitInPage(page, () => mgrl.state.learn.lesson?.behavior === 'approach', null, 10000, 'a lesson on approach');
   const lesson = await page.evaluate(() => mgrl.state.learn.lesson);
-  check(lesson.vertices.length === approach.vertices && lesson.updates === 0 && lesson.budget === 20000,
+  const gamma = lesson.gamma;
+  check(lesson.vertices.length === approach.vertices && lesson.updates === 0 && lesson.budget === kLessonBudget &&
+        gamma === approach.parameters?.['reward.gamma'],
         'learn: a lesson starts on approach\'s grid with no update yet',
-        `${lesson.vertices.length} vertices (scene: ${approach.vertices}), ${lesson.updates} updates`);
+        `${lesson.vertices.length} vertices (scene: ${approach.vertices}), ${lesson.updates} updates, budget ${lesson.budget}, ` +
+        `gamma ${gamma} (scene: ${approach.parameters?.['reward.gamma']})`);
 
   await page.click('#learn-step');
   await waitInPage(page, () => mgrl.state.learn.steps.length === 1, null, 5000, 'the first step');
@@ -545,7 +639,8 @@ async function learnPanel(page) {
         first.vertices.every((v) => v.before === 0 && v.future === 0 && v.after === v.reward),
         'learn: the first update starts from zeros (alpha 1, max Q(e\') = 0, Q after = r)',
         JSON.stringify(first.vertices.map((v) => [v.before, v.future, v.reward, v.after])));
-  check(ruleHolds(first), 'learn: the first update obeys Q += alpha (r + gamma^t max Q(e\'_v) - Q) at each corner');
+  check(ruleHolds(first, gamma), 'learn: the first update obeys Q += alpha (r + gamma^t max Q(e\'_v) - Q) at each corner',
+        ruleBreaks(first, gamma).join('; '));
   const drawn = await page.evaluate(() => ({
     corners: document.querySelectorAll('#lesson-chart .lesson-corner').length,
     e: document.querySelectorAll('#lesson-chart .lesson-e, #lesson-chart .lesson-e-next').length,
@@ -558,14 +653,33 @@ async function learnPanel(page) {
   check(drawn.rows.length === 5 && drawn.rows.slice(1).every((r, k) => Number(r[0]) === first.vertices[k].vertex),
         'learn: the table lists each updated vertex', JSON.stringify(drawn.rows));
 
+  // One step at a time through the panel's button, each its own message: the test keeps
+  // the table these steps build from zeros and checks every number of every step against it.
+  await page.evaluate(async (n) => {
+    for (let k = 0; k < n; ++k) {
+      document.getElementById('learn-step').click();
+      if (k % 40 === 39) await new Promise((resolve) => setTimeout(resolve, 500));   // the server takes 200 messages/s
+    }
+  }, kChainSteps - 1);
+  await waitInPage(page, (n) => mgrl.state.learn.last?.update === n, kChainSteps, 30000, `${kChainSteps} single steps`);
+  const chain = await page.evaluate(() => mgrl.state.learn.steps);
+  const replay = replayTable(chain);
+  const chainBreaks = [...replay.broken, ...chain.flatMap((m) => ruleBreaks(m, gamma))];
+  check(chain.length === kChainSteps && chainBreaks.length === 0 && replay.revisits > 0,
+        `learn: ${kChainSteps} single steps replayed on the test's own table from zeros: each Q before is what the last ` +
+        `update of that (action, vertex) left (${replay.revisits} revisits over ${replay.entries} entries), else 0; each ` +
+        `look-ahead within the table's range (${replay.looked} nonzero); alpha, gamma^t, backup and Q after recomputed in float`,
+        `${chain.length} messages, ${replay.revisits} revisits; ${chainBreaks.length} breaks: ${chainBreaks.slice(0, 4).join('; ')}`);
+
   // Ten at a time, then running faster: the count and alpha follow, and every update shown
   // obeys the rule; values learned earlier come back as look-ahead.
   await page.click('#learn-step10');
-  await waitInPage(page, () => mgrl.state.learn.last?.update === 11, null, 5000, '10 more steps');
+  await waitInPage(page, (n) => mgrl.state.learn.last?.update === n, kChainSteps + 10, 5000, '10 more steps');
   const ten = await page.evaluate(() => mgrl.state.learn.last);
-  check(ten.taken === 10 && Math.abs(ten.alpha - (1 - 10 / 20000)) < 1e-6 && ruleHolds(ten),
-        'learn: 10 steps at once: update 11, alpha falls linearly over the budget, the rule holds',
-        `taken ${ten.taken}, alpha ${ten.alpha}`);
+  check(ten.taken === 10 && ruleHolds(ten, gamma),
+        `learn: 10 steps at once: update ${kChainSteps + 10}, alpha ${ten.alpha} = 1 - ${kChainSteps + 9}/${kLessonBudget} ` +
+        `(falls linearly over the budget), the rule holds`,
+        `taken ${ten.taken}; ${ruleBreaks(ten, gamma).join('; ')}`);
   await page.click('#learn-run');
   for (let k = 0; k < 3; ++k) await page.click('#learn-faster');
   await waitInPage(page, () => mgrl.state.learn.last?.update > 1500, null, 20000, 'the lesson running fast');
@@ -573,9 +687,10 @@ async function learnPanel(page) {
   const run = await page.evaluate(() => mgrl.state.learn.steps);
   const looked = run.filter((m) => m.vertices.some((v) => v.future !== 0)).length;
   const changed = run.filter((m) => m.vertices.some((v) => v.after !== v.before)).length;
-  check(run.every(ruleHolds) && looked > 0 && changed > 0,
+  const runBreaks = run.flatMap((m) => ruleBreaks(m, gamma));
+  check(runBreaks.length === 0 && looked > 0 && changed > 0,
         `learn: running, ${run.length} updates shown, each obeys the rule; ${looked} look ahead into learned values`,
-        `${run.filter((m) => !ruleHolds(m)).length} break it`);
+        `${runBreaks.length} breaks: ${runBreaks.slice(0, 4).join('; ')}`);
   await screenshot(page, 'teach-learn.png');
 
   // The hit grid is 3-D: 8 corners per update.
@@ -585,7 +700,9 @@ async function learnPanel(page) {
   await page.click('#learn-step');
   await waitInPage(page, () => mgrl.state.learn.last?.update === 1, null, 5000, 'the first hit step');
   const hit = await page.evaluate(() => mgrl.state.learn.last);
-  check(hit.vertices.length === 8 && ruleHolds(hit), 'learn: a hit update changes the 8 corners of a 3-D cell by the rule');
+  const hitGamma = await page.evaluate(() => mgrl.state.learn.lesson.gamma);
+  check(hit.vertices.length === 8 && ruleHolds(hit, hitGamma), 'learn: a hit update changes the 8 corners of a 3-D cell by the rule',
+        `${hit.vertices.length} corners; ${ruleBreaks(hit, hitGamma).join('; ')}`);
   await page.click('#learn-stop');
   await waitInPage(page, () => mgrl.state.learn.lesson === null, null, 5000, 'the lesson stopped');
   check(await page.evaluate(() => document.getElementById('lesson').hidden), 'learn: stop hides the lesson view');
@@ -607,11 +724,82 @@ async function retrainOnce(page, behaviour, parameter, value) {
   return {seconds, message};
 }
 
+// The trials' summary (app/trials.hpp, Trials::summary) compared field by field: what differs.
+function summaryDifferences(server, cli, keys) {
+  const same = (a, b) => (a === null && b === null) ||
+    (Number.isFinite(a) && Number.isFinite(b) && Math.abs(a - b) <= 1e-9 * Math.max(1, Math.abs(a), Math.abs(b)));
+  return keys.filter((k) => !same(server?.[k], cli?.[k])).map((k) => `${k}: server ${server?.[k]}, mgrl eval ${cli?.[k]}`);
+}
+
+// The server's "before" and "after" repeated on the command line, from scratch: `mgrl eval`
+// of the bundle the server was started with (the page's weights are the bundle's: checked
+// before retraining), and `mgrl train` with the bundle's own --set's (its manifest's
+// provenance) and the page's change, by value iteration with its defaults as the server's
+// retraining, then `mgrl eval` of that bundle; the same trials (count, seconds, seed 1).
+// The server counts success by the scenario's criterion, not the retrained reward's (hit's
+// contact within the old radius): the second eval declares that criterion
+// (behaviors.hit.success), which the behaviour's key leaves out. Its mean return is of the
+// retrained reward, the server's of the scenario's: not compared.
+function retrainAgainstCommandLine(m, hitBefore, change) {
+  const policy = serveOption('--policy').at(-1);
+  if (policy === undefined) {
+    console.log('#      retrain: no --policy in MGRL_SERVE_ARGS, so no bundle to repeat the trials with: not compared');
+    return;
+  }
+  const bundle = path.resolve(repo, policy);
+  const bundleSets = JSON.parse(readFileSync(path.join(bundle, 'manifest.json'), 'utf8')).provenance?.sets ?? [];
+  const sets = [...bundleSets, ...serveOption('--set')];
+  const where = [...serveOption('--cache').flatMap((d) => ['--cache', d]), ...serveOption('--data').flatMap((d) => ['--data', d])];
+  const common = ['--trials', String(kRetrainTrials), '--seconds', String(kRetrainSeconds), '--seed', String(kRetrainSeed), ...where];
+  const asSets = (list) => list.flatMap((x) => ['--set', x]);
+  const before = JSON.parse(mgrlCommand(['eval', 'scenarios/boxing.yaml', '--policy', bundle, '--json', ...asSets(sets), ...common]));
+  const beforeDiff = summaryDifferences(m.before, before,
+    ['success_rate', 'successes', 'mean_time_to_hit_s', 'median_time_to_hit_s', 'decisions', 'mean_return']);
+  check(beforeDiff.length === 0 && before.success?.text === hitBefore.success,
+        `retrain: the server's "before" is \`mgrl eval\` of its bundle on ${kRetrainTrials} trials of ${kRetrainSeconds} s, ` +
+        `seed ${kRetrainSeed}: success ${before.success_rate} (${before.successes}), time to hit ${before.mean_time_to_hit_s} s, ` +
+        `return ${before.mean_return}`,
+        `${beforeDiff.join('; ')}; success "${before.success?.text}", server's "${hitBefore.success}"`);
+
+  const work = mkdtempSync(path.join(os.tmpdir(), 'mgrl-retrain-'));
+  try {
+    // The server retrains with {type: value_iteration} whatever the bundle's learner: the
+    // last --set of the type resets the block to its defaults (approach keeps the bundle's).
+    const changed = [...sets, ...Object.entries(change).map(([key, value]) => `behaviors.hit.${key}=${value}`),
+                     'behaviors.hit.learner.type=value_iteration'];
+    mgrlCommand(['train', 'scenarios/boxing.yaml', ...asSets(changed), '--out', path.join(work, 'policy'), ...where]);
+    const criterion = ['behaviors.hit.success.term=contact',
+                       `behaviors.hit.success.radius=${hitBefore.parameters['reward.contact_radius']}`];
+    const after = JSON.parse(mgrlCommand(['eval', 'scenarios/boxing.yaml', '--policy', path.join(work, 'policy'), '--json',
+                                          ...asSets([...changed, ...criterion]), ...common]));
+    const afterDiff = summaryDifferences(m.after, after,
+      ['success_rate', 'successes', 'mean_time_to_hit_s', 'median_time_to_hit_s', 'decisions']);
+    check(afterDiff.length === 0 && after.success?.text === hitBefore.success,
+          `retrain: the server's "after" is \`mgrl train\` (value iteration, ${Object.entries(change).map(([k, v]) => `${k}=${v}`)}) ` +
+          `then \`mgrl eval\` on the same trials: success ${after.success_rate} (${after.successes}), time to hit ` +
+          `${after.mean_time_to_hit_s} s`,
+          `${afterDiff.join('; ')}; success "${after.success?.text}", server's "${hitBefore.success}"`);
+  } finally {
+    rmSync(work, {recursive: true, force: true});
+  }
+}
+
 async function liveRetraining(page) {
+  // What "before" is of: this page's policy, the bundle's tables at the bundle's weights
+  // (a page's weights are its own; this page, loaded afresh, has changed none).
+  const behaviours = await page.evaluate(() => mgrl.state.scene.behaviors);
+  const hitBefore = behaviours.find((b) => b.name === 'hit');
+  const policyDir = serveOption('--policy').at(-1);
+  if (policyDir !== undefined) {
+    const manifest = JSON.parse(readFileSync(path.join(path.resolve(repo, policyDir), 'manifest.json'), 'utf8'));
+    check(behaviours.every((b) => !b.retrained && b.weight === manifest.behaviors?.[b.name]?.record?.weight),
+          'retrain: before it, the page runs the bundle\'s tables at the bundle\'s weights',
+          JSON.stringify(behaviours.map((b) => [b.name, b.weight, manifest.behaviors?.[b.name]?.record?.weight, b.retrained])));
+  }
   const radius = await retrainOnce(page, 'hit', 'reward.contact_radius', 0.3);
   const m = radius.message;
   check(m.status === 'done' && m.learner === 'value_iteration' && Number.isFinite(m.before?.success_rate) &&
-        Number.isFinite(m.after?.success_rate) && m.set['reward.contact_radius'] === 0.3,
+        Number.isFinite(m.after?.success_rate) && m.set['reward.contact_radius'] === 0.3 && m.trials === kRetrainTrials,
         `retrain: hit with contact radius 0.3 m retrained by value iteration in ${radius.seconds.toFixed(1)} s ` +
         `(server ${Number(m.seconds).toFixed(1)} s); success ${(100 * m.before?.success_rate).toFixed(1)} % -> ` +
         `${(100 * m.after?.success_rate).toFixed(1)} % on ${m.trials} trials`, JSON.stringify(m).slice(0, 300));
@@ -620,11 +808,18 @@ async function liveRetraining(page) {
   check(scene.retrained?.['reward.contact_radius'] === 0.3 && scene.learner === 'value_iteration' &&
         scene.parameters['reward.contact_radius'] === 0.3 && status.includes('→'),
         'retrain: the scene says hit is retrained and the page shows old -> new success', `${JSON.stringify(scene.retrained)}; "${status}"`);
+  // The command line's numbers, with the world held still meanwhile (2 cores).
+  await setPaused(page, true);
+  retrainAgainstCommandLine(m, hitBefore, {'reward.contact_radius': 0.3});
+  await setPaused(page, false);
 
   const grid = await retrainOnce(page, 'hit', 'discretizer.angles', 10);
-  check(grid.message.status === 'done' && grid.message.vertices !== m.vertices && grid.message.set['discretizer.angles'] === 10,
+  // Its "before" is the page's policy as the first retraining left it: that one's "after".
+  check(grid.message.status === 'done' && grid.message.vertices !== m.vertices && grid.message.set['discretizer.angles'] === 10 &&
+        grid.message.set['reward.contact_radius'] === 0.3 && JSON.stringify(grid.message.before) === JSON.stringify(m.after),
         `retrain: hit on a coarser grid (10 angles, ${grid.message.vertices} vertices against ${m.vertices}) in ` +
-        `${grid.seconds.toFixed(1)} s`, JSON.stringify(grid.message).slice(0, 300));
+        `${grid.seconds.toFixed(1)} s; its "before" is the first retraining's "after"`,
+        `${JSON.stringify(grid.message).slice(0, 300)}; first's after ${JSON.stringify(m.after)}`);
 
   // A value the reward refuses: one error naming it, nothing retrained.
   const errorsBefore = await page.evaluate(() => mgrl.state.errors.length);
