@@ -13,6 +13,7 @@
 #include <nlohmann/json.hpp>
 
 #include "cli_support.hpp"
+#include "mgrl/core/bundle.hpp"
 #include "test_support.hpp"
 
 namespace fs = std::filesystem;
@@ -126,6 +127,7 @@ TEST_CASE("mgrl compare reuses bundles cached without snapshots and retrains the
   const fs::path manifest = fs::path(first["runs"][0]["policy"].get<std::string>()) / "manifest.json";
   json m = json::parse(readText(manifest));
   REQUIRE(m["behaviors"]["hit"]["record"].erase("snapshots") == 1);
+  m["hash"] = mgrl::manifestHash(m);  // sealed again: an old entry, not a tampered one
   std::ofstream(manifest) << m.dump(2);
 
   const Run without = box.run(compare + " --snapshots 0");

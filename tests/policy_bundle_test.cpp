@@ -105,8 +105,15 @@ std::map<std::string, std::string> filesIn(const fs::path& dir) {
   return files;
 }
 
+// Writes an edited manifest sealed again (its "hash" recomputed, as a script that knows the
+// format could), so that the checks behind the seal are the ones that catch the edit.
+void writeResealed(const fs::path& bundle, json manifest) {
+  if (manifest.contains("hash")) manifest["hash"] = mgrl::manifestHash(manifest);
+  writeBytes(bundle / "manifest.json", manifest.dump());
+}
+
 // Replaces an array file with well-formed `bytes` and updates its manifest entry to match,
-// so only the content checks after the hash can catch what is wrong.
+// so only the content checks after the hashes can catch what is wrong.
 void rewriteArray(const fs::path& bundle, json& manifest, const std::string& behavior, const std::string& array,
                   const std::string& file, const std::string& bytes, const std::vector<std::size_t>& shape) {
   writeBytes(bundle / file, bytes);
@@ -114,7 +121,7 @@ void rewriteArray(const fs::path& bundle, json& manifest, const std::string& beh
   entry["bytes"] = bytes.size();
   entry["hash"] = mgrl::hexDigest(mgrl::hashBytes(bytes));
   entry["shape"] = shape;
-  writeBytes(bundle / "manifest.json", manifest.dump());
+  writeResealed(bundle, manifest);
 }
 
 // Collects what a checkpointer logs.
@@ -291,16 +298,17 @@ TEST_CASE("loadPolicyBundle refuses a missing, foreign or stale bundle with one 
   }
   SECTION("another format") {
     manifest["format"] = "mgrl.graph";
-    message = "manifest.json: expected format 'mgrl.policy' version 1, found format 'mgrl.graph' version '1': "
+    message = "manifest.json: expected format 'mgrl.policy' version 2, found format 'mgrl.graph' version '2': "
               "retrain with `mgrl train`";
   }
   SECTION("another version") {
-    manifest["version"] = 2;
-    message = "expected format 'mgrl.policy' version 1, found format 'mgrl.policy' version '2'";
+    manifest["version"] = 3;
+    message = "expected format 'mgrl.policy' version 2, found format 'mgrl.policy' version '3'";
   }
   SECTION("an unknown top-level key") {
     manifest["extra"] = 1;
-    message = "manifest.json: expected only the keys format, version, graph_key, provenance, behaviors, found 'extra'";
+    message = "manifest.json: expected only the keys format, version, graph_key, provenance, behaviors, hash, found "
+              "'extra'";
   }
   SECTION("a behaviour without a key") {
     manifest["behaviors"]["hit"].erase("key");
@@ -310,7 +318,7 @@ TEST_CASE("loadPolicyBundle refuses a missing, foreign or stale bundle with one 
     manifest["behaviors"]["hit"]["record"] = "fast";
     message = "manifest.json: behaviors.hit.record: expected an object, found '\"fast\"'";
   }
-  if (manifest != good) writeBytes(bundle / "manifest.json", manifest.dump());
+  if (manifest != good) writeResealed(bundle, manifest);
   CAPTURE(message);
   REQUIRE_THROWS_AS(mgrl::loadPolicyBundle(dir, model, kGraphKey), mgrl::Error);
   REQUIRE_THROWS_WITH(mgrl::loadPolicyBundle(dir, model, kGraphKey), Contains(message));
@@ -335,6 +343,69 @@ TEST_CASE("loadPolicyBundle refuses a bundle made for another graph, naming both
   }
 }
 
+// Audit finding: the manifest carried no hash of its own, so a graph key edited to match
+// another graph, or an edited behaviour key or record, loaded without complaint.
+TEST_CASE("loadPolicyBundle refuses a manifest edited by hand (its graph key or a behaviour's key or record)",
+          "[policy_bundle]") {
+  mgrl::test::TempDir tmp("policy-bundle-test");
+  const StateActionModel model = tableModel();
+  const fs::path bundle = tmp.path / "policy";
+  mgrl::savePolicyBundle(bundle, sampleBundle(model));
+  REQUIRE_NOTHROW(mgrl::loadPolicyBundle(bundle, model, kGraphKey));  // untouched: it loads
+
+  json manifest = json::parse(mgrl::readFile(bundle / "manifest.json"));
+  CHECK(manifest.value("hash", std::string()) == mgrl::manifestHash(manifest));
+  std::string loadKey = kGraphKey;
+  SECTION("the graph key, edited to pass for another graph's") {
+    manifest["graph_key"] = kOtherGraphKey;
+    loadKey = kOtherGraphKey;
+  }
+  SECTION("a behaviour's key") { manifest["behaviors"]["hit"]["key"] = "behaviour-key-edited"; }
+  SECTION("a behaviour's record") { manifest["behaviors"]["walk-2_b"]["record"]["learner"] = "value_iteration"; }
+  SECTION("a number in a record") { manifest["behaviors"]["hit"]["record"]["params"]["gamma"] = 0.95; }
+  SECTION("the provenance") { manifest["provenance"]["scenario"] = "dodge"; }
+  writeBytes(bundle / "manifest.json", manifest.dump(2));
+  try {
+    mgrl::loadPolicyBundle(bundle, model, loadKey);
+    FAIL("expected mgrl::Error");
+  } catch (const mgrl::Error& e) {
+    const std::string message = e.what();
+    CAPTURE(message);
+    CHECK_THAT(message, Contains("policy/manifest.json: expected its members to hash to '" +
+                                 manifest.value("hash", std::string()) + "' as its \"hash\" says, found '" +
+                                 mgrl::manifestHash(manifest) + "'"));
+    CHECK_THAT(message, Contains("was edited after it was written; retrain with `mgrl train`"));
+    CHECK(message.find('\n') == std::string::npos);
+  }
+}
+
+TEST_CASE("loadPolicyBundle refuses an unsealed manifest (its hash removed or a version 1 bundle)", "[policy_bundle]") {
+  mgrl::test::TempDir tmp("policy-bundle-test");
+  const StateActionModel model = tableModel();
+  const fs::path bundle = tmp.path / "policy";
+  mgrl::savePolicyBundle(bundle, sampleBundle(model));
+  json manifest = json::parse(mgrl::readFile(bundle / "manifest.json"));
+  manifest.erase("hash");
+  std::string message;
+  SECTION("the hash removed") {
+    message = "policy/manifest.json: expected a \"hash\" member sealing the manifest, found none (removed by hand?): "
+              "retrain with `mgrl train`";
+  }
+  SECTION("a bundle written before the seal") {
+    manifest["version"] = 1;
+    message = "policy/manifest.json: expected format 'mgrl.policy' version 2, found format 'mgrl.policy' version "
+              "'1' (written before policy manifests were sealed by a hash, so an edit to its graph key or records "
+              "could not be noticed): retrain with `mgrl train`";
+  }
+  SECTION("a hash that is not a string") {
+    manifest["hash"] = 7;
+    message = "policy/manifest.json: hash: expected a string of 16 hex digits, found '7': retrain with `mgrl train`";
+  }
+  writeBytes(bundle / "manifest.json", manifest.dump(2));
+  CAPTURE(message);
+  REQUIRE_THROWS_WITH(mgrl::loadPolicyBundle(bundle, model, kGraphKey), Contains(message));
+}
+
 TEST_CASE("loadPolicyBundle refuses behaviour names that are not file stems", "[policy_bundle]") {
   mgrl::test::TempDir tmp("policy-bundle-test");
   const StateActionModel model = tableModel();
@@ -347,7 +418,7 @@ TEST_CASE("loadPolicyBundle refuses behaviour names that are not file stems", "[
   SECTION("empty") { name = ""; }
   CAPTURE(name);
   manifest["behaviors"][name] = manifest["behaviors"]["hit"];
-  writeBytes(bundle / "manifest.json", manifest.dump());
+  writeResealed(bundle, manifest);
   REQUIRE_THROWS_WITH(mgrl::loadPolicyBundle(bundle, model, kGraphKey),
                       Contains(fmt::format("manifest.json: behaviors: expected names made of letters, digits, '_' "
                                            "and '-' (they name files), found '{}'",
@@ -379,7 +450,7 @@ TEST_CASE("loadPolicyBundle refuses altered, truncated or missing files", "[poli
   SECTION("a file name pointing outside the bundle") {
     json manifest = json::parse(mgrl::readFile(bundle / "manifest.json"));
     manifest["behaviors"]["hit"]["table"]["file"] = "../hit.q.npy";
-    writeBytes(bundle / "manifest.json", manifest.dump());
+    writeResealed(bundle, manifest);
     message = "manifest.json: behaviors.hit.table.file: expected 'hit.q.npy', found '\"../hit.q.npy\"'";
   }
   CAPTURE(message);

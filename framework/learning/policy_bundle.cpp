@@ -37,6 +37,30 @@ std::string dumpForMessage(const json& value) {
   return quoteToken(value.dump(-1, ' ', false, json::error_handler_t::replace));
 }
 
+// The manifest's "hash" (manifestHash(): every other member, the files' entries with their
+// own sizes and hashes included) must match, so an edited graph key, behaviour key or record
+// is refused like an altered table. One line: the file, both digests, what to do.
+void checkSeal(const json& manifest, const ManifestReader& reader) {
+  const auto stored = manifest.find("hash");
+  if (stored == manifest.end())
+    throw Error(fmt::format("{}: expected a \"hash\" member sealing the manifest, found none (removed by hand?): {}",
+                            reader.source(), kRetrain));
+  if (!stored->is_string())
+    throw Error(fmt::format("{}: hash: expected a string of 16 hex digits, found {}: {}", reader.source(),
+                            dumpForMessage(*stored), kRetrain));
+  std::string actual;
+  try {
+    actual = manifestHash(manifest);
+  } catch (const json::exception& e) {
+    throw Error(fmt::format("{}: expected valid UTF-8 strings, found {}: {}", reader.source(), e.what(), kRetrain));
+  }
+  if (actual != stored->get<std::string>())
+    throw Error(fmt::format("{}: expected its members to hash to {} as its \"hash\" says, found {}: the manifest "
+                            "(graph key, behaviour keys, records or file entries) was edited after it was written; "
+                            "{}",
+                            reader.source(), quoteToken(stored->get<std::string>()), quoteToken(actual), kRetrain));
+}
+
 }  // namespace
 
 bool isPolicyBehaviorName(std::string_view name) {
@@ -106,7 +130,7 @@ void savePolicyBundle(const fs::path& dirArgument, const PolicyBundle& bundle) {
     }
   }
 
-  const json manifest = {
+  json manifest = {
       {"format", std::string(kPolicyFormatName)},
       {"version", kPolicyFormatVersion},
       {"graph_key", bundle.graphKey},
@@ -115,6 +139,9 @@ void savePolicyBundle(const fs::path& dirArgument, const PolicyBundle& bundle) {
   };
   std::string manifestText;
   try {
+    // Sealed: the graph key, each behaviour's key and record and the files' entries (their
+    // sizes and hashes) are checked on load, so a hand edit is refused, not trusted.
+    manifest["hash"] = manifestHash(manifest);
     manifestText = manifest.dump(2) + "\n";
   } catch (const json::exception& e) {
     throw Error(fmt::format("{}: expected valid UTF-8 strings in keys, provenance and records, found {}", source,
@@ -145,17 +172,23 @@ PolicyBundle loadPolicyBundle(const fs::path& dirArgument, const StateActionMode
     const std::string format = reader.string(manifest, "", "format");
     const json& version = reader.member(manifest, "", "version");
     if (format != kPolicyFormatName || version != kPolicyFormatVersion)
-      throw Error(fmt::format("{}: expected format '{}' version {}, found format {} version {}: {}", reader.source(),
+      throw Error(fmt::format("{}: expected format '{}' version {}, found format {} version {}{}: {}", reader.source(),
                               kPolicyFormatName, kPolicyFormatVersion, quoteToken(format), dumpForMessage(version),
+                              format == kPolicyFormatName && version == 1
+                                  ? " (written before policy manifests were sealed by a hash, so an edit to its graph "
+                                    "key or records could not be noticed)"
+                                  : "",
                               kRetrain));
+    // Before anything else is read from it: every value below is then as `mgrl train` wrote it.
+    checkSeal(manifest, reader);
     const std::string bundleGraphKey = reader.string(manifest, "", "graph_key");
     if (bundleGraphKey != graphKey)
       throw Error(fmt::format("{}: expected graph key {}, found {}: the policy was made for another graph; {}",
                               reader.source(), quoteKey(graphKey), quoteKey(bundleGraphKey), kRetrain));
     for (const auto& item : manifest.items())
       if (item.key() != "format" && item.key() != "version" && item.key() != "graph_key" &&
-          item.key() != "provenance" && item.key() != "behaviors")
-        throw Error(fmt::format("{}: expected only the keys format, version, graph_key, provenance, behaviors, "
+          item.key() != "provenance" && item.key() != "behaviors" && item.key() != "hash")
+        throw Error(fmt::format("{}: expected only the keys format, version, graph_key, provenance, behaviors, hash, "
                                 "found '{}'",
                                 reader.source(), item.key()));
 

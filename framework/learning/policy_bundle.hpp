@@ -6,7 +6,7 @@
 ///
 /// manifest.json:
 ///
-///     {"format": "mgrl.policy", "version": 1,
+///     {"format": "mgrl.policy", "version": 2,
 ///      "graph_key": "<graph cache key the tables were trained on>",
 ///      "provenance": {...whatever the caller records},
 ///      "behaviors": {"hit": {"key": "<behaviour key>", "record": {...},
@@ -14,7 +14,13 @@
 ///                                      "shape": [A, V], "bytes": size, "hash": "<xxh64>"},
 ///                            "vertices": {"file": "hit.vertices.npy", "dtype": "<f8",
 ///                                         "shape": [V, 3], ...}},
-///                    ...}}
+///                    ...},
+///      "hash": "<xxh64 of every other member: manifestHash(), mgrl/core/bundle.hpp>"}
+///
+/// The "hash" seals the manifest: the graph key, each behaviour's key and record and the
+/// file entries (each with its file's size and hash), so a hand-edited manifest is refused
+/// on load as an altered table is. Version 1 bundles (before the seal) are refused with a
+/// message to retrain: nothing in them tells an edit from what `mgrl train` wrote.
 ///
 /// `<name>.q.npy` holds Q(v, a) with row a = action a's table over the V vertices
 /// (QTable::actionMajor()); `<name>.vertices.npy` holds the vertices' positions, one row
@@ -41,7 +47,7 @@ namespace mgrl {
 
 /// The manifest's "format" and "version"; loadPolicyBundle() refuses others.
 inline constexpr std::string_view kPolicyFormatName = "mgrl.policy";
-inline constexpr int kPolicyFormatVersion = 1;
+inline constexpr int kPolicyFormatVersion = 2;
 
 /// One trained behaviour.
 struct PolicyBehavior {
@@ -89,7 +95,10 @@ void savePolicyBundle(const std::filesystem::path& dir, const PolicyBundle& bund
 /// vertices (V, 3), and every file against its size and hash in the manifest.
 /// Throws mgrl::Error with one line naming the file and what was expected and found:
 /// no directory (`<dir>: no policy bundle here: run `mgrl train` first (or pass --policy
-/// DIR)`), a missing or malformed manifest, another format or version, a bundle made for
+/// DIR)`), a missing or malformed manifest, another format or version (version 1: written
+/// before the seal), a missing "hash" or one its members do not match (`<dir>/manifest.json:
+/// expected its members to hash to '<stored>' as its "hash" says, found '<computed>': the
+/// manifest ... was edited after it was written; retrain with `mgrl train`), a bundle made for
 /// another graph (both keys, shortened to 16 characters), a behaviour name that is not a
 /// file stem, a missing, truncated or altered file, or wrong shapes or values.
 PolicyBundle loadPolicyBundle(const std::filesystem::path& dir, const StateActionModel& model,
