@@ -58,10 +58,20 @@ Scenario loadChecked(const LearnOptions& options, const std::vector<std::string>
   }
 }
 
-double touchedShare(const QTable& q) {
+// The share of Q entries that are not zero. Not a count of updates: an entry backed up to
+// 0 (no reward within reach) stays 0, so value iteration, which updates every entry each
+// sweep, has zeros too; the walk's reach is q_learning's cell_coverage.
+double nonzeroShare(const QTable& q) {
   const auto values = q.values();
-  const auto touched = std::count_if(values.begin(), values.end(), [](float x) { return x != 0.0f; });
-  return values.empty() ? 0.0 : static_cast<double>(touched) / static_cast<double>(values.size());
+  const auto nonzero = std::count_if(values.begin(), values.end(), [](float x) { return x != 0.0f; });
+  return values.empty() ? 0.0 : static_cast<double>(nonzero) / static_cast<double>(values.size());
+}
+
+// A figure of a trained behaviour's record, null when the record lacks it (a bundle written
+// before it was recorded, or by another writer): reported as missing, never as a measured 0.
+json recorded(const json& record, const char* key) {
+  const auto it = record.find(key);
+  return it != record.end() && it->is_number() ? *it : json(nullptr);
 }
 
 // Copies the shared behaviours' bundle into a run's folder, unless it has a bundle already.
@@ -296,7 +306,7 @@ json runCompare(const CompareOptions& options) {
                         {"grid", referenceGrid.type()},
                         {"vertices", referenceGrid.vertexCount()},
                         {"sets", options.referenceSets},
-                        {"train_seconds", referenceTrained.record.value("seconds", 0.0)}};
+                        {"train_seconds", recorded(referenceTrained.record, "seconds")}};
   referenceJson["description"] =
       referenceSets.empty()
           ? fmt::format("value iteration on the behaviour's grid ({}, {} vertices)", referenceGrid.type(),
@@ -342,15 +352,15 @@ json runCompare(const CompareOptions& options) {
               {"success_rate", evaluated["success_rate"]},
               {"mean_time_to_hit_s", evaluated["mean_time_to_hit_s"]},
               {"mean_return", evaluated["mean_return"]},
-              {"train_seconds", trained.record.value("seconds", 0.0)},
-              {"updates", trained.record.value("updates", std::uint64_t{0})},
+              {"train_seconds", recorded(trained.record, "seconds")},
+              {"updates", recorded(trained.record, "updates")},
               {"table_bytes", trained.table.bytes()},
-              {"final_residual", trained.record.value("final_residual", 0.0)},
-              {"decision_us", perSecond > 0 ? 1e6 / perSecond : 0.0},
+              {"final_residual", recorded(trained.record, "final_residual")},
+              {"decision_us", perSecond > 0 ? json(1e6 / perSecond) : json(nullptr)},
               {"value_rmse", c.rmse},
               {"greedy_agreement", c.agreement},
               {"reference_interpolated", c.interpolated},
-              {"touched_share", touchedShare(trained.table)},
+              {"nonzero_share", nonzeroShare(trained.table)},
               {"cell_coverage", trained.record.contains("stats") ? trained.record["stats"].value("cell_coverage", json())
                                                                  : json()},
               {"curve", trained.record.value("curve", json::array())},
@@ -366,8 +376,8 @@ json runCompare(const CompareOptions& options) {
     if (c.agreement < kAgreementFlag)
       report["flags"].push_back(fmt::format(
           "{}: its greedy policy agrees with the reference's on {:.1f} % of (state, vertex) pairs (value RMSE {:.3g}; "
-          "{:.1f} % of its Q entries were ever updated)",
-          label, 100 * c.agreement, c.rmse, 100 * r["touched_share"].get<double>()));
+          "{:.1f} % of its Q entries are not zero)",
+          label, 100 * c.agreement, c.rmse, 100 * r["nonzero_share"].get<double>()));
     report["runs"].push_back(r);
   }
   for (const std::string& learner : options.learners) {
@@ -401,7 +411,7 @@ std::string compareText(const json& r) {
                                  r["reference"]["description"].get<std::string>());
   text += fmt::format("{:<24} {:>14} {:>13} {:>13} {:>12} {:>10} {:>11} {:>11} {:>10}\n", "learner (mean ± sd)",
                       "success %", "time to hit s", "train s", "updates", "decide us", "V RMSE", "agreement %",
-                      "touched %");
+                      "non-zero %");
   auto cell = [](const json& l, const char* key, double scale, const char* format) {
     if (!l["mean"][key].is_number()) return std::string("n/a");
     return fmt::format(fmt::runtime(format), scale * l["mean"][key].get<double>(), scale * l["sd"][key].get<double>());
@@ -411,7 +421,7 @@ std::string compareText(const json& r) {
                         cell(l, "success_rate", 100, "{:.1f} ± {:.1f}"), cell(l, "mean_time_to_hit_s", 1, "{:.2f} ± {:.2f}"),
                         cell(l, "train_seconds", 1, "{:.2f} ± {:.2f}"), cell(l, "updates", 1e-6, "{:.1f}M"),
                         cell(l, "decision_us", 1, "{:.2f}"), cell(l, "value_rmse", 1, "{:.3g}"),
-                        cell(l, "greedy_agreement", 100, "{:.1f}"), cell(l, "touched_share", 100, "{:.1f}"));
+                        cell(l, "greedy_agreement", 100, "{:.1f}"), cell(l, "nonzero_share", 100, "{:.1f}"));
   bool curves = false;
   for (const auto& [name, l] : r["learners"].items()) {
     if (l["success_curve"].empty()) continue;

@@ -37,8 +37,11 @@ inline constexpr std::size_t kDefaultSnapshotTrials = 50;
 /// Trains (or reuses from <cache>/compare/) and evaluates every learner x seed and returns
 /// {"behavior", "reference", "runs": [...], "learners": {NAME: {"mean": {...}, "sd": {...},
 /// "success_curve": [...]}}, "flags": [...]}; each run carries its residual "curve" and its
-/// "snapshots" (success rate along training). Every mistake in the options is reported
-/// before any training.
+/// "snapshots" (success rate along training). A run's "nonzero_share" is the share of its
+/// Q entries that are not zero (not of those updated). Figures its bundle's record lacks
+/// ("train_seconds", "updates", "final_residual": a bundle written before they were
+/// recorded) are null, as are the learner's mean and sd over them, never 0. Every mistake
+/// in the options is reported before any training.
 nlohmann::json runCompare(const CompareOptions& options);
 std::string compareText(const nlohmann::json& report);
 

@@ -22,7 +22,7 @@ const std::vector<std::pair<std::string, std::string>>& compareMetrics() {
       {"mean_return", "mean return"},  {"train_seconds", "training (s)"},
       {"updates", "updates"},          {"table_bytes", "table (bytes)"},
       {"decision_us", "decision (us)"}, {"value_rmse", "V RMSE vs reference"},
-      {"greedy_agreement", "greedy agreement"}, {"touched_share", "Q entries touched"},
+      {"greedy_agreement", "greedy agreement"}, {"nonzero_share", "Q entries non-zero"},
       {"cell_coverage", "grid cells walked"},
   };
   return metrics;

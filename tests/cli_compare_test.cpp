@@ -2,9 +2,12 @@
 // `mgrl train` + `mgrl eval` runs with the same settings, a second run reuses the first's
 // bundles, the report folder holds the plots and tables, and mistakes are refused in one
 // line before anything is trained.
+#include <algorithm>
+#include <cstdint>
 #include <filesystem>
 #include <fstream>
 #include <string>
+#include <vector>
 
 #include <sys/wait.h>
 #include <unistd.h>
@@ -13,7 +16,9 @@
 #include <nlohmann/json.hpp>
 
 #include "cli_support.hpp"
+#include "compare_command.hpp"
 #include "mgrl/core/bundle.hpp"
+#include "mgrl/core/npy.hpp"
 #include "test_support.hpp"
 
 namespace fs = std::filesystem;
@@ -152,6 +157,114 @@ TEST_CASE("mgrl compare reuses bundles cached without snapshots and retrains the
   REQUIRE(other.status == 0);
   CHECK(other.err.find("training again") != std::string::npos);
   CHECK(other.report()["snapshot_trials"] == 5);
+}
+
+// Value iteration alone: one deterministic run, which is also the reference's bundle.
+const std::string kCompareValueIteration = "compare " + shellWord(kBoxing) +
+                                           " --behavior hit --learners value_iteration --trials 5 --snapshots 0 " +
+                                           kFastApproach;
+
+// The row of `learner` in compareText()'s table, or "" if there is none.
+std::string textRow(const std::string& text, const std::string& learner) {
+  for (const std::string& line : mgrl::test::lines(text))
+    if (line.rfind(learner + " ", 0) == 0) return line;
+  return "";
+}
+
+std::size_t countOf(const std::string& text, const std::string& what) {
+  std::size_t n = 0;
+  for (std::size_t at = text.find(what); at != std::string::npos; at = text.find(what, at + what.size())) ++n;
+  return n;
+}
+
+// Audit finding: compare called the share of non-zero Q entries the share "touched" / "ever
+// updated", and value iteration, which updates every entry on every sweep, showed 77.7 %.
+TEST_CASE("mgrl compare reports the share of non-zero Q entries under that name, not as entries updated",
+          "[cli][data]") {
+  Sandbox box;
+  const Run compared = box.run(kCompareValueIteration + " --json --report " + shellWord(box.path("report")));
+  const json report = compared.report();
+  REQUIRE(report["runs"].size() == 1);
+  const json& run = report["runs"][0];
+  CHECK_FALSE(run.contains("touched_share"));
+  REQUIRE(run.contains("nonzero_share"));
+  // It is what the name says: the share of the saved table's entries that are not zero.
+  const std::string bytes = readText(fs::path(run["policy"].get<std::string>()) / "hit.q.npy");
+  const std::vector<float> q = mgrl::npyDecode<float>(bytes, "hit.q.npy");
+  const auto nonzero = std::count_if(q.begin(), q.end(), [](float x) { return x != 0.0f; });
+  CHECK(run["nonzero_share"].get<double>() == Approx(static_cast<double>(nonzero) / static_cast<double>(q.size())));
+  // Value iteration backs up every entry on every sweep (its updates are a whole number of
+  // sweeps over them), and still has zeros: this figure is no count of updates.
+  CHECK(run["updates"].get<std::uint64_t>() % q.size() == 0);
+  CHECK(run["nonzero_share"].get<double>() < 1.0);
+  const std::string text = mgrl::app::compareText(report);
+  CAPTURE(text);
+  CHECK_THAT(text, Contains("non-zero %"));
+  CHECK_THAT(text, !Contains("touched") && !Contains("updated"));
+  const std::string html = readText(box.path("report") / "index.html");
+  CHECK_THAT(html, Contains("Q entries non-zero"));
+  CHECK_THAT(html, !Contains("touched"));
+  CHECK_THAT(mgrl::test::lines(readText(box.path("report") / "results.csv")).front(), Contains(",nonzero_share,"));
+}
+
+// Audit finding: figures a cached bundle's record lacks (written before they were recorded)
+// were reported as a measured 0 s of training, 0 updates and a residual of 0.
+TEST_CASE("mgrl compare reports training figures missing from a cached bundle as missing, not as 0",
+          "[cli][data]") {
+  Sandbox box;
+  const json first = box.run(kCompareValueIteration + " --json").report();
+  REQUIRE(first["runs"][0]["train_seconds"].get<double>() > 0);
+  // Make it an older bundle: a record without the training time, updates and residual.
+  const fs::path manifest = fs::path(first["runs"][0]["policy"].get<std::string>()) / "manifest.json";
+  json m = json::parse(readText(manifest));
+  json& record = m["behaviors"]["hit"]["record"];
+  for (const char* key : {"seconds", "updates", "final_residual"}) REQUIRE(record.erase(key) == 1);
+  if (m.contains("hash")) m["hash"] = mgrl::manifestHash(m);  // sealed again: an old entry, not a tampered one
+  std::ofstream(manifest) << m.dump(2);
+
+  const Run again = box.run(kCompareValueIteration + " --json --report " + shellWord(box.path("report")));
+  CHECK(again.err.find("train hit:") == std::string::npos);  // loaded, not trained again
+  const json report = again.report();
+  const json& run = report["runs"][0];
+  CHECK(run["train_seconds"].is_null());
+  CHECK(run["updates"].is_null());
+  CHECK(run["final_residual"].is_null());
+  CHECK(report["reference"]["train_seconds"].is_null());
+  CHECK(report["learners"]["value_iteration"]["mean"]["train_seconds"].is_null());
+  CHECK(report["learners"]["value_iteration"]["mean"]["updates"].is_null());
+  CHECK(run["success_rate"] == first["runs"][0]["success_rate"]);  // what was measured still is
+
+  // Text: "n/a" in the train s and updates columns.
+  const std::string row = textRow(mgrl::app::compareText(report), "value_iteration");
+  CAPTURE(row);
+  CHECK(countOf(row, "n/a") == 2);
+  // CSV: empty fields, as for any missing value; HTML: n/a.
+  const std::vector<std::string> csv = mgrl::test::lines(readText(box.path("report") / "results.csv"));
+  REQUIRE(csv.size() >= 2);
+  CAPTURE(csv[0], csv[1]);
+  auto field = [](const std::string& line, std::size_t index) {
+    std::size_t begin = 0;
+    for (std::size_t i = 0; i < index; ++i) begin = line.find(',', begin) + 1;
+    return line.substr(begin, line.find(',', begin) - begin);
+  };
+  const std::vector<std::string> header = {"learner", "seed", "success_rate", "mean_time_to_hit_s", "mean_return",
+                                           "train_seconds", "updates"};
+  for (std::size_t i = 0; i < header.size(); ++i) REQUIRE(field(csv[0], i) == header[i]);
+  CHECK(field(csv[1], 5).empty());
+  CHECK(field(csv[1], 6).empty());
+  CHECK_FALSE(field(csv[1], 2).empty());
+  const std::string html = readText(box.path("report") / "index.html");
+  const std::size_t rowAt = html.find("<tr><td>value_iteration</td>");
+  REQUIRE(rowAt != std::string::npos);
+  const std::string htmlRow = html.substr(rowAt, html.find("</tr>", rowAt) - rowAt);
+  CAPTURE(htmlRow);
+  std::vector<std::string> cells;  // the learner, then the metrics in results.csv's order
+  for (std::size_t at = htmlRow.find("<td>"); at != std::string::npos; at = htmlRow.find("<td>", at + 4))
+    cells.push_back(htmlRow.substr(at + 4, htmlRow.find("</td>", at) - at - 4));
+  REQUIRE(cells.size() >= 6);
+  CHECK(cells[4] == "n/a");  // train_seconds
+  CHECK(cells[5] == "n/a");  // updates
+  CHECK(cells[1] != "n/a");  // success_rate, measured
 }
 
 // --reference-set: value iteration on a finer grid, read at each table's vertices.
