@@ -1,8 +1,9 @@
 // The `mgrl compare` report (issue 15) in headless Chromium: it opens from disk with no
 // network, and every plot is drawn (each SVG has a size and shapes in it), the learning
-// curves with a line per run.
+// curves with a line per run, and the table has a row for every learner of results.json.
 //
 //   node tests/web/report_test.mjs REPORT_DIR [SCREENSHOT.png]
+import fs from 'node:fs';
 import {createRequire} from 'node:module';
 import path from 'node:path';
 import {fileURLToPath, pathToFileURL} from 'node:url';
@@ -59,10 +60,12 @@ try {
   check(plots.length >= kMetrics - 2 + kCurves.length && plots.length <= kMetrics + kCurves.length,
         `the report has a plot per metric recorded and the ${kCurves.length} learning curves ` +
         `(${kMetrics + kCurves.length} at most)`, `found ${plots.length}`);
+  const results = JSON.parse(fs.readFileSync(path.resolve(reportDir, 'results.json'), 'utf8'));
+  const runs = (results.runs ?? []).length;
   for (const label of kCurves) {
     const plot = plots.find((p) => p.label === label);
     const drawn = plot ? plot.lines.filter((n) => n >= 2).length : 0;
-    check(plot && drawn >= 2, `"${label}" has a line of at least 2 points per learner`,
+    check(plot && runs >= 1 && drawn === runs, `"${label}" has a line of at least 2 points per run (${runs})`,
           plot ? `lines of ${plot.lines.join(', ')} points` : 'no such plot');
     if (label.startsWith('Success rate'))
       check(plot && plot.dots >= 2 * 5, `"${label}" marks each snapshot`, plot ? `${plot.dots} dots` : '');
@@ -70,8 +73,16 @@ try {
   for (const plot of plots)
     check(plot.width > 100 && plot.height > 40 && plot.shapes > 0, `plot "${plot.label}" is drawn`,
           `${plot.width}x${plot.height} px, ${plot.shapes} shapes`);
-  const rows = await page.evaluate(() => document.querySelectorAll('table tr').length);
-  check(rows >= 2, 'the table has a row per learner', `${rows - 1} rows`);
+  // Every learner compared (results.json's learner_names, written with the page) has its
+  // row, and nothing else has one: a report that lost a learner's row fails here.
+  const learners = results.learner_names ?? [];
+  const rows = await page.evaluate(() => [...document.querySelectorAll('table tr')].slice(1).map(
+      (tr) => (tr.cells[0]?.textContent ?? '').trim()));
+  check(learners.length >= 1, 'results.json names the learners compared', JSON.stringify(learners));
+  for (const learner of learners)
+    check(rows.includes(learner), `the table has a row for ${learner}`, `rows: ${rows.join(', ')}`);
+  check(rows.length === learners.length, 'the table has one row per learner and no other',
+        `${rows.length} rows for ${learners.length} learners`);
   check(outside.length === 0, 'the report loads nothing from the network', outside.join(', '));
   check(errors.length === 0, 'no script errors', errors.join('; '));
   if (screenshot) await page.screenshot({path: screenshot, fullPage: true});
