@@ -34,7 +34,6 @@ namespace mgrl::discretizers {
 
 namespace {
 
-constexpr double kDeg = M_PI / 180;
 constexpr double kTwoPi = 2 * M_PI;
 constexpr int kMaxAxisSplits = 30;  // integer corner coordinates fit in 32 bits
 
