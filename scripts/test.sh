@@ -66,7 +66,7 @@ release_tests() {
 fresh_clone_demo() {
   local fresh
   fresh="$(mktemp -d "${TMPDIR:-/tmp}/mgrl-fresh-clone.XXXXXX")"
-  scratch+=("$fresh")
+  trap 'rm -rf "$fresh"' EXIT  # in product_checks' subshell: removed when it ends
   if git -C "$root" rev-parse --git-dir >/dev/null 2>&1; then
     git clone --quiet --no-hardlinks "$root" "$fresh/mgrl"
   else
@@ -87,6 +87,37 @@ fresh_clone_demo() {
     "$root/scripts/check_serve.sh" "$fresh/mgrl/build/app/mgrl" "$fresh/mgrl/scenarios/boxing.yaml" \
     --set behaviors.approach.learner.budget=200000 --set behaviors.hit.learner.budget=400000
   rm -rf "$fresh"
+}
+
+# The browser test (a real mgrl serve in headless Chromium, tests/web/), the README's
+# figures against the program's (scripts/readme_outputs.py) and the main job from a fresh
+# clone run side by side: each leaves a core idle much of the time (a page waiting for
+# frames, a single-threaded training), and none depends on another. Each one's output goes
+# to a log, shown whole if it fails; each one's time is said when it ends.
+product_checks() {
+  local logs pids=() names=(browser readme demo) i failed=0
+  logs="$(mktemp -d "${TMPDIR:-/tmp}/mgrl-checks.XXXXXX")"
+  scratch+=("$logs")
+  timed() {  # NAME COMMAND...: runs it, then writes its seconds to NAME.seconds
+    local name="$1" began=$SECONDS
+    shift
+    "$@" >"$logs/$name.log" 2>&1 || { echo $((SECONDS - began)) >"$logs/$name.seconds"; return 1; }
+    echo $((SECONDS - began)) >"$logs/$name.seconds"
+  }
+  timed browser "$root/scripts/browser_test.sh" "$root/build" & pids+=($!)
+  timed readme python3 "$root/scripts/readme_outputs.py" --check --mgrl "$root/build/app/mgrl" & pids+=($!)
+  timed demo fresh_clone_demo & pids+=($!)
+  for i in "${!pids[@]}"; do
+    if wait "${pids[$i]}"; then
+      say "  ${names[$i]}: passed in $(cat "$logs/${names[$i]}.seconds") s"
+    else
+      failed=1
+      say "  ${names[$i]}: FAILED after $(cat "$logs/${names[$i]}.seconds" 2>/dev/null || echo '?') s; its output:"
+      sed "s/^/  ${names[$i]}: /" "$logs/${names[$i]}.log" >&2
+    fi
+  done
+  grep -h -E '^(browser_test|readme_outputs|check_demo|check_serve|demo: \[)' "$logs"/*.log | tail -n 12 >&2 || true
+  return $failed
 }
 
 # Issue 19: each reader's harness for 30 s, one per core at a time (CI: two), from the
@@ -120,10 +151,7 @@ fi
 stage "set-up" "$root/scripts/setup.sh" --test
 stage "Release build" "$root/scripts/build.sh" "$root/build"
 stage "Release tests (ctest)" release_tests
-stage "browser test: a real mgrl serve in headless Chromium (tests/web/)" "$root/scripts/browser_test.sh" "$root/build"
-stage "README figures against the program's (scripts/readme_outputs.py)" \
-  python3 "$root/scripts/readme_outputs.py" --check --mgrl "$root/build/app/mgrl"
-stage "main job from a fresh clone: scripts/demo.sh --quick" fresh_clone_demo
+stage "three checks at once: browser test, README figures, main job from a fresh clone" product_checks
 stage "sanitizer build: clang, ASan/UBSan, libFuzzer coverage (build-sanitize/)" sanitizer_build
 stage "fuzz smoke: each libFuzzer harness 30 s (scripts/fuzz.sh)" fuzz_smoke
 stage "ASan/UBSan tests (ctest in build-sanitize/)" sanitizer_tests

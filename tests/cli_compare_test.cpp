@@ -32,7 +32,11 @@ namespace {
 
 const std::string kBoxing = std::string(MGRL_SOURCE_DIR) + "/scenarios/boxing.yaml";
 // The shared approach behaviour trained in a fraction of a second.
-const std::string kFastApproach = "--set behaviors.approach.learner.budget=200000";
+// The hit grid coarser than the scenario's (10 x 16 x 3 vertices, a quarter), so that value
+// iteration, compare's reference in every run, takes seconds, under the sanitizers too.
+const std::string kFastApproach =
+    "--set behaviors.approach.learner.budget=200000 --set behaviors.hit.discretizer.angles=10 "
+    "--set behaviors.hit.discretizer.heights=3";
 const std::string kCompare = "compare " + shellWord(kBoxing) + " --behavior hit --learners q_learning,value_iteration " +
                              "--learner-set q_learning:budget=300000 --trials 20 " + kFastApproach;
 
@@ -272,10 +276,7 @@ TEST_CASE("mgrl compare measures tables against value iteration on a finer grid"
   Sandbox box;
   const std::string compare = "compare " + shellWord(kBoxing) +
                               " --behavior hit --learners value_iteration --trials 10 --snapshots 3 --json " +
-                              kFastApproach +
-                              // A coarser hit grid than the scenario's (10 x 16 x 3), so that the
-                              // finer reference below trains in seconds, under the sanitizers too.
-                              " --set behaviors.hit.discretizer.angles=10 --set behaviors.hit.discretizer.heights=3";
+                              kFastApproach;  // on the 10 x 16 x 3 hit grid
   // The behaviour's grid given explicitly is the same grid: vertex by vertex, no difference.
   const json same = box.run(compare + " --reference-set angles=10").report();
   CHECK(same["runs"][0]["value_rmse"] == 0.0);
