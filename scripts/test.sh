@@ -38,6 +38,9 @@ stage() {
 scratch=()  # removed when the script ends, however it ends
 summary() {
   local status=$? i
+  if [ -n "${sanitizer_pid:-}" ] && kill -0 "$sanitizer_pid" 2>/dev/null; then
+    kill -TERM -- "-$sanitizer_pid" 2>/dev/null || true  # the background build, when a stage failed
+  fi
   ((${#scratch[@]} == 0)) || rm -rf "${scratch[@]}"
   ((${#names[@]})) || return 0
   echo "== stage times:" >&2
@@ -64,9 +67,8 @@ release_tests() {
 # Its build is a real build of the clone's sources; ccache serves it the objects the
 # Release build above compiled from the same sources.
 fresh_clone_demo() {
-  local fresh
-  fresh="$(mktemp -d "${TMPDIR:-/tmp}/mgrl-fresh-clone.XXXXXX")"
-  trap 'rm -rf "$fresh"' EXIT  # in product_checks' subshell: removed when it ends
+  fresh="$(mktemp -d "${TMPDIR:-/tmp}/mgrl-fresh-clone.XXXXXX")"  # global: the trap below reads it
+  trap 'rm -rf "${fresh:-}"' EXIT  # in product_checks' subshell: removed when it ends
   if git -C "$root" rev-parse --git-dir >/dev/null 2>&1; then
     git clone --quiet --no-hardlinks "$root" "$fresh/mgrl"
   else
@@ -128,9 +130,28 @@ product_checks() {
 # AddressSanitizer, UndefinedBehaviorSanitizer and libFuzzer's coverage on everything, the
 # harnesses, mgrl and the tests (scripts/fuzz.sh, FUZZ_WITH_TESTS=1, build-sanitize/).
 sanitize="$root/build-sanitize"
-sanitizer_build() {
+# The sanitizer build starts right after the Release build, in the background at low
+# priority (fuzz.sh builds at nice 10), and takes the CPU that the Release tests and the
+# three checks leave idle (processes waiting on each other, a page waiting for frames); its
+# stage below waits for what is left of it.
+sanitizer_build_started=0
+start_sanitizer_build() {
+  sanitizer_log="$(mktemp "${TMPDIR:-/tmp}/mgrl-sanitizer-build.XXXXXX")"
+  scratch+=("$sanitizer_log")
+  sanitizer_build_started=$SECONDS
+  # A session of its own (setsid), so that a failing stage can stop the whole build.
   FUZZ_BUILD="$sanitize" FUZZ_WITH_TESTS=1 FUZZ_BUILD_JOBS="$jobs" CXX=clang++ MGRL_DATA="$data" \
-    "$root/scripts/fuzz.sh" --build-only
+    setsid "$root/scripts/fuzz.sh" --build-only >"$sanitizer_log" 2>&1 &
+  sanitizer_pid=$!
+  say "sanitizer build started in the background (log: $sanitizer_log)"
+}
+finish_sanitizer_build() {
+  if ! wait "$sanitizer_pid"; then
+    cat "$sanitizer_log" >&2
+    echo "test: the sanitizer build failed; its output is above" >&2
+    return 1
+  fi
+  say "the sanitizer build took $((SECONDS - sanitizer_build_started)) s from its start, beside the stages above"
 }
 fuzz_smoke() {
   rm -rf "$sanitize/corpus" "$sanitize/findings"
@@ -150,8 +171,10 @@ fi
 
 stage "set-up" "$root/scripts/setup.sh" --test
 stage "Release build" "$root/scripts/build.sh" "$root/build"
-stage "Release tests (ctest)" release_tests
+start_sanitizer_build
+stage "Release tests (ctest; the sanitizer build beside them)" release_tests
 stage "three checks at once: browser test, README figures, main job from a fresh clone" product_checks
-stage "sanitizer build: clang, ASan/UBSan, libFuzzer coverage (build-sanitize/)" sanitizer_build
+stage "sanitizer build, what is left of it: clang, ASan/UBSan, libFuzzer coverage (build-sanitize/)" \
+  finish_sanitizer_build
 stage "fuzz smoke: each libFuzzer harness 30 s (scripts/fuzz.sh)" fuzz_smoke
 stage "ASan/UBSan tests (ctest in build-sanitize/)" sanitizer_tests
