@@ -47,7 +47,7 @@ RELATIVE = 0.01  # the tolerance: 1 % of the value ...
 # Wall-clock figures, masked: each pattern's group 1 is the number.
 WALL_CLOCK = [
     re.compile(r"(" + NUMBER + r")\s?[kMG]?(?:updates|decisions|avatar-frames|frames|steps)/s\b"),
-    re.compile(r"\bin (" + NUMBER + r")\s?(?:ms|s|us|µs)\b"),
+    re.compile(r"\bin (" + NUMBER + r"\s?(?:ms|s|us|µs))(?=\W|$)"),  # the unit too: 3.5 ms on one machine, 0.10 s on another
     re.compile(r"\bupdates\s+(" + NUMBER + r") s\b"),  # train's seconds column
     re.compile(r"^build\s+(" + NUMBER + r") s\b"),  # graph: the build (or cache read) time
 ]

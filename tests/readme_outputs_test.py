@@ -24,6 +24,8 @@ class SampleLines(unittest.TestCase):
         self.assertIsNone(r.compare_lines(EVAL, EVAL.replace("7.47 Mdecisions/s", "463.0 kdecisions/s")))
         self.assertIsNone(r.compare_lines(TRAIN, TRAIN.replace("10.20 s", "31.07 s").replace("1.96 M", "612.3 k")))
         self.assertIsNone(r.compare_lines(SIMULATE, SIMULATE.replace("3.5 ms", "12.0 ms")))
+        slower = SIMULATE.replace("in 3.5 ms: 8.66 Mavatar-frames/s", "in 0.10 s: 294.4 kavatar-frames/s")
+        self.assertIsNone(r.compare_lines(SIMULATE, slower))  # another unit on a slower machine
         build = "build           0.006 s (reused from ~/.cache/mgrl/graphs/boxing-ef73e760)"
         self.assertIsNone(r.compare_lines(build, "build           1.250 s (reused from ~/.cache/mgrl/graphs/boxing-0123abcd)"))
 
