@@ -388,6 +388,28 @@ TEST_CASE("locked feet stay where they landed while planted, with bones of const
 // still too, so the test above, which looks at planted frames only, cannot see it. The lock
 // turns only the locked leg's joints and never moves the root, so once a lifted foot's
 // release is over its ankle is exactly where the same walk without the lock puts it.
+// Plays `actions` seeded random actions on two playbacks in lock step (the same action
+// from the same state each time), calling `frame(a, b)` after each frame both produced;
+// `endTogether`: also require that `two` has no frame left when `one` ends an action.
+template <typename Frame>
+void walkInLockstep(const StateActionModel& model, ActionPlayback& one, ActionPlayback& two, Pose& a, Pose& b,
+                    std::uint64_t seed, int actions, Frame frame, bool endTogether = false) {
+  Rng rng(seed);
+  for (int n = 0; n < actions; ++n) {
+    const std::uint32_t s = one.state();
+    REQUIRE(two.state() == s);
+    const std::uint32_t begin = model.stateActionBegin[s];
+    const auto action = begin + static_cast<std::uint32_t>(rng.below(model.stateActionBegin[s + 1] - begin));
+    one.begin(action);
+    two.begin(action);
+    while (one.next(a)) {
+      REQUIRE(two.next(b));
+      frame(a, b);
+    }
+    if (endTogether) REQUIRE_FALSE(two.next(b));
+  }
+}
+
 TEST_CASE("a locked foot follows the motion again once its contact ends", "[graph][data]") {
   const Boxing& b = boxing();
   ActionPlayback unlocked(b.db, b.model, b.scenario.graph.blendFrames, false),
@@ -398,22 +420,13 @@ TEST_CASE("a locked foot follows the motion again once its contact ends", "[grap
   // "Let go over a few frames when it lifts" (playback.hpp); playback.cpp takes 4, so from
   // the 8th lifted frame on the lock must have no effect left.
   constexpr int kReleased = 8;
-  Rng rng(11);
   Pose unlockedPose, lockedPose;
   std::array<int, 2> lifted{0, 0};  // per foot: frames since its contact ended (0 while down)
   std::size_t released = 0, pinnedFrames = 0;
   double worst = 0, lockedMoves = 0;
   std::array<Eigen::Vector3d, 2> lockedBefore{Eigen::Vector3d::Zero(), Eigen::Vector3d::Zero()};
   // Boxers keep their feet down most of the time: a long walk for enough lifted frames.
-  for (int n = 0; n < 2000; ++n) {
-    const std::uint32_t s = unlocked.state();
-    REQUIRE(locked.state() == s);
-    const std::uint32_t begin = b.model.stateActionBegin[s];
-    const auto action = begin + static_cast<std::uint32_t>(rng.below(b.model.stateActionBegin[s + 1] - begin));
-    unlocked.begin(action);
-    locked.begin(action);
-    while (unlocked.next(unlockedPose)) {
-      REQUIRE(locked.next(lockedPose));
+  walkInLockstep(b.model, unlocked, locked, unlockedPose, lockedPose, 11, 2000, [&](const Pose&, const Pose&) {
       const std::uint32_t v = unlocked.frame();
       const std::size_t c = b.db.clipOf(v);
       for (std::size_t side = 0; side < 2; ++side) {
@@ -432,8 +445,7 @@ TEST_CASE("a locked foot follows the motion again once its contact ends", "[grap
         }
         lockedBefore[side] = lockedAnkle;
       }
-    }
-  }
+  });
   INFO(released << " lifted frames past the release; largest ankle gap to the unlocked walk " << worst << " m; "
                 << pinnedFrames << " of them with the ankle still; mean step " << lockedMoves / static_cast<double>(released)
                 << " m");
@@ -456,19 +468,10 @@ TEST_CASE("frames posed from the source poses are forward kinematics' poses", "[
       p->reset(3, GroundMotion{1.5, -2.0, 0.7});
     }
     fast.setSourcePoses(&source);
-    Rng rng(5);
     Pose a, c;
     std::size_t frames = 0;
     double worst = 0, worstRotation = 0;
-    for (int n = 0; n < 200; ++n) {
-      const std::uint32_t s = plain.state();
-      REQUIRE(fast.state() == s);
-      const std::uint32_t begin = b.model.stateActionBegin[s];
-      const auto action = begin + static_cast<std::uint32_t>(rng.below(b.model.stateActionBegin[s + 1] - begin));
-      plain.begin(action);
-      fast.begin(action);
-      while (plain.next(a)) {
-        REQUIRE(fast.next(c));
+    walkInLockstep(b.model, plain, fast, a, c, 5, 200, [&](const Pose&, const Pose&) {
         ++frames;
         // The pose itself (what is exported and streamed) is the same to the bit, unless the
         // root shift or a foot lock used positions that differ by rounding.
@@ -488,9 +491,7 @@ TEST_CASE("frames posed from the source poses are forward kinematics' poses", "[
           worstRotation = std::max(worstRotation,
                                    (plain.globalRotations()[j].coeffs() - fast.globalRotations()[j].coeffs()).norm());
         }
-      }
-      REQUIRE_FALSE(fast.next(c));
-    }
+    }, /*endTogether=*/true);
     INFO("lockFeet " << lockFeet << ", footLock " << footLock << ": " << frames << " frames; largest difference " << worst << " m, "
                      << worstRotation << " in a quaternion");
     CHECK(frames > 2000);
