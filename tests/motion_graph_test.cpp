@@ -460,7 +460,9 @@ TEST_CASE("frames posed from the source poses are forward kinematics' poses", "[
   REQUIRE(source.frameCount() == b.db.frameCount());
   // The same seeded walk (with transitions, blends, root shifts and foot locks) played twice:
   // forward kinematics on every frame, and the source poses outside blends.
-  for (const auto& [lockFeet, footLock] : {std::pair{false, false}, std::pair{true, false}, std::pair{true, true}}) {
+  for (const auto& [lockFeetOption, footLockOption] : {std::pair{false, false}, std::pair{true, false}, std::pair{true, true}}) {
+    // Copies: clang 14 does not let a lambda capture a structured binding (C++20 allows it).
+    const bool lockFeet = lockFeetOption, footLock = footLockOption;
     ActionPlayback plain(b.db, b.model, b.scenario.graph.blendFrames, lockFeet),
         fast(b.db, b.model, b.scenario.graph.blendFrames, lockFeet);
     for (ActionPlayback* p : {&plain, &fast}) {
