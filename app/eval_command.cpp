@@ -7,6 +7,7 @@
 #include <fmt/format.h>
 
 #include "learn_common.hpp"
+#include "mgrl/session/session.hpp"
 #include "plural.hpp"
 #include "mgrl/learning/behavior.hpp"
 #include "mgrl/scenario/behaviors.hpp"
@@ -32,47 +33,29 @@ void keepResult(std::size_t value) { observed = value; }
 }  // namespace
 
 json runEval(const EvalOptions& options) {
-  if (options.controller != "policy" && options.controller != "random" && options.controller != "online_search")
-    throw Error(fmt::format("--controller: expected one of: policy, online_search, random, found {}",
-                            quoteToken(options.controller)));
-  if (options.horizon < 1 || options.horizon > 8)
-    throw Error(fmt::format("--horizon: expected a search depth in actions in [1, 8], found {}", options.horizon));
-  if (!(options.horizonSeconds >= 0 && options.horizonSeconds <= 5))
-    throw Error(fmt::format("--horizon-seconds: expected seconds of motion to search in [0, 5], found {}",
-                            options.horizonSeconds));
+  const ControllerChoice choice{options.controller, options.horizon, options.horizonSeconds};
+  checkControllerChoice(choice);
   if (options.trials < 1 || options.trials > 10'000'000)
     throw Error(fmt::format("--trials: expected a number of trials in [1, 10000000], found {}", options.trials));
   if (!(options.seconds > 0 && options.seconds <= 3600))
     throw Error(fmt::format("--seconds: expected seconds of motion per trial in (0, 3600], found {}", options.seconds));
-  Scenario scenario = checkedScenario(options);
-  std::string graphKey;
-  const fs::path dir =
-      options.controller == "policy" ? resolvePolicy(options.policy, scenario, options, &graphKey) : fs::path();
-  Loaded loaded = load(options, std::move(scenario), false, std::move(graphKey));  // trials need no poses
-  const StateActionModel& model = loaded.graph.model;
-  std::vector<Behavior> behaviors = buildBehaviors(loaded.scenario, plugins(), model, loaded.graph.key);
-
-  PolicyBundle bundle;
-  std::vector<PolicyPart> parts;
-  if (options.controller == "policy") parts = policyParts(dir, behaviors, loaded.graph, options, bundle);
+  SessionNeeds needs;
+  needs.policy = options.controller == "policy" ? PolicyNeed::Required : PolicyNeed::None;
+  needs.policyDir = options.policy;
+  needs.motion = false;  // trials need no poses
+  const std::unique_ptr<Session> session = openSession(options, needs);
+  const StateActionModel& model = session->model();
+  const fs::path& dir = session->policyDir;
 
   // The target's height: --target-height, else the scenario's world.target_height, else
   // the hitting points' centroid's.
-  double targetHeight = options.targetHeight;
-  if (std::isnan(targetHeight) && loaded.scenario.root.has("world")) {
-    const double worldHeight = readWorldParams(loaded.scenario.root.child("world")).targetHeight;
-    if (worldHeight >= 0) targetHeight = worldHeight;
-  }
-  const Trials trials(model, behaviors, targetHeight, loaded.scenario.path.string());
-  const double gamma = behaviors.front().reward->gamma();
-  // The online search moves the target as the behaviours' environment model does (as trials do).
-  const EnvironmentModel& environment = *behaviors.front().environment;
-  PolicyController controller(model, parts);
-  std::vector<SearchPart> searchParts;
-  for (const Behavior& b : behaviors)
-    searchParts.push_back({b.discretizer.get(), b.reward.get(), b.weight, b.activation});
-  OnlineSearchController search(model, environment, searchParts, SearchHorizon{options.horizon, options.horizonSeconds},
-                                gamma);
+  const Trials trials(model, session->behaviors, session->task.targetHeight(options.targetHeight),
+                      session->scenario.path.string());
+  // eval measures the policy's own choice: greedy, without the world's variety. The online
+  // search moves the target as the behaviours' environment model does (as trials do).
+  PolicyController controller(model, session->policy);
+  OnlineSearchController search(model, *session->task.environment, session->search,
+                                SearchHorizon{options.horizon, options.horizonSeconds}, session->task.gamma);
   std::size_t expanded = 0;
   auto choose = [&](const std::string& kind, std::uint32_t s, const TargetState& e) -> std::size_t {
     if (kind == "policy") return controller.choose(s, e);

@@ -14,6 +14,7 @@
 #include "mgrl/core/error.hpp"
 #include "mgrl/learning/learner.hpp"
 #include "mgrl/scenario/scenario.hpp"
+#include "mgrl/session/policy_source.hpp"
 
 namespace mgrl {
 struct Behavior;
@@ -21,12 +22,9 @@ struct Behavior;
 
 namespace mgrl::app {
 
-struct GraphResult;
 
-struct LearnOptions {
-  std::filesystem::path scenario, dataDir, cacheDir;
-  std::vector<std::string> sets;  ///< --set KEY=VALUE
-  WarningSink log;                ///< progress lines and messages (stderr)
+/// The session's options (scenario, --data, --cache, --set, the log) and the terminal's.
+struct LearnOptions : SessionOptions {
   bool progressBar = false;       ///< draw a progress bar on stderr (a terminal)
 };
 
@@ -98,11 +96,7 @@ struct SimulateOptions : LearnOptions {
 nlohmann::json runSimulate(const SimulateOptions& options);
 std::string simulateText(const nlohmann::json& report);
 
-/// Where `mgrl train` puts a scenario's policy bundle by default:
-/// <cache>/policies/<name>-<hash of the scenario's path, graph and behaviour settings>.
-/// `graphKey`: the scenario's graphCacheKey() if the caller has it (else computed here).
-std::filesystem::path defaultPolicyDirectory(const std::filesystem::path& cacheDir, const Scenario& scenario,
-                                             std::string_view graphKey = {});
+using mgrl::defaultPolicyDirectory;  // framework/session/policy_source.hpp
 
 /// A run stopped by Ctrl-C or SIGTERM after saving what it could; the message says how to
 /// continue. The command line exits with 130 for it.

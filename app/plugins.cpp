@@ -2,25 +2,10 @@
 
 #include <fmt/format.h>
 
-#include "discretizers/discretizers.hpp"
-#include "environments/environments.hpp"
-#include "learners/learners.hpp"
 #include "mgrl/runtime/world.hpp"
 #include "rewards/rewards.hpp"
 
 namespace mgrl::app {
-
-const Plugins& plugins() {
-  static const Plugins instance = [] {
-    Plugins p;
-    discretizers::registerAll(p.discretizers);
-    rewards::registerAll(p.rewards);
-    environments::registerAll(p.environments);
-    learners::registerAll(p.learners);
-    return p;
-  }();
-  return instance;
-}
 
 namespace {
 

@@ -5,11 +5,12 @@
 #include <string>
 
 #include "mgrl/learning/behavior.hpp"
+#include "mgrl/session/plugins.hpp"
 
 namespace mgrl::app {
 
-/// The registries with every built-in plugin (built once).
-const Plugins& plugins();
+/// The registries with every built-in plugin (mgrl::builtinPlugins(), the session stage's).
+inline const Plugins& plugins() { return builtinPlugins(); }
 
 /// `mgrl list`: every registered name with its summary and parameters (default, range and
 /// unit, help), seam by seam.

@@ -19,6 +19,7 @@
 #include <fmt/format.h>
 
 #include "learn_common.hpp"
+#include "mgrl/session/session.hpp"
 #include "plural.hpp"
 #include "mgrl/learning/behavior.hpp"
 #include "mgrl/scenario/behaviors.hpp"
@@ -206,25 +207,14 @@ double recordingBytes(double avatarFrames, double joints) {
 // What a hit struck: the partner's body part, or the attacker's own target.
 const char* struckName(const HitEvent& e) { return e.target < 0 ? "target" : bodyPartName(e.part); }
 
-std::string eventLine(const HitEvent& e) {
-  const json line = {{"time", e.time},
-                     {"attacker", e.attacker},
-                     {"target", e.target},
-                     {"part", struckName(e)},
-                     {"hand", e.hand == 0 ? "left" : "right"},
-                     {"limb", e.kick ? "foot" : "fist"},
-                     {"speed", e.speed},
-                     {"point", {e.point.x(), e.point.y(), e.point.z()}}};
-  return line.dump();
-}
+std::string eventLine(const HitEvent& e) { return hitEventJson(e).dump(); }
 
 }  // namespace
 
 json runSimulate(const SimulateOptions& options) {
   // Every mistake in the command line is reported before anything is loaded.
-  if (options.controller != "policy" && options.controller != "random" && options.controller != "online_search")
-    throw Error(fmt::format("--controller: expected one of: policy, online_search, random, found {}",
-                            quoteToken(options.controller)));
+  const ControllerChoice choice{options.controller, options.horizon, options.horizonSeconds};
+  checkControllerChoice(choice);
   if (options.avatars < 1 || options.avatars > kMaxAvatars)
     throw Error(fmt::format("--avatars: expected a number of avatars in [1, {}], found {}", kMaxAvatars,
                             options.avatars));
@@ -234,41 +224,12 @@ json runSimulate(const SimulateOptions& options) {
                             kMaxAvatarsWithPoses, options.avatars));
   if (!(options.seconds > 0 && options.seconds <= 86400))
     throw Error(fmt::format("--seconds: expected simulated seconds in (0, 86400], found {}", options.seconds));
-  if (options.horizon < 1 || options.horizon > 8)
-    throw Error(fmt::format("--horizon: expected a search depth in actions in [1, 8], found {}", options.horizon));
-  if (!(options.horizonSeconds >= 0 && options.horizonSeconds <= 5))
-    throw Error(fmt::format("--horizon-seconds: expected seconds of motion to search in [0, 5], found {}",
-                            options.horizonSeconds));
   if (options.topK < 0 || options.topK > 64)
     throw Error(fmt::format("--top-k: expected a number of candidates in [1, 64] (0: world.top_k), found {}",
                             options.topK));
   if (options.threads > 256)
     throw Error(fmt::format("--threads: expected at most 256 threads, found {}", options.threads));
 
-  Scenario scenario = checkedScenario(options);
-  WorldParams params =
-      readWorldParams(scenario.root.has("world") ? scenario.root.child("world") : ConfigNode::parse("", "world"));
-  if (options.topK > 0) params.variety.topK = static_cast<int>(options.topK);
-  std::string graphKey;
-  const fs::path policyDir =
-      options.controller == "policy" ? resolvePolicy(options.policy, scenario, options, &graphKey) : fs::path();
-
-  // Output places are checked (and scratch folders made) before any simulation: first
-  // what can be checked without creating anything.
-  if (!options.eventsOut.empty()) {
-    if (fs::is_directory(options.eventsOut))
-      throw Error(fmt::format("--events-out {}: expected a file name, found a folder", options.eventsOut.string()));
-    // A missing folder is made, as for --bvh-out (prepareFolder and prepareBundle below).
-  }
-  if (!options.bvhOut.empty()) {
-    // A first estimate with a small skeleton (20 joints), exact once the skeleton is known.
-    const double avatarFrames = static_cast<double>(options.avatars) * std::round(options.seconds * scenario.motion.fps);
-    if (recordingBytes(avatarFrames, 20) > kMaxRecordingBytes)
-      throw Error(fmt::format("--bvh-out: recording {} avatars for {} s needs more than {:.1f} GB of memory; expected "
-                              "at most {:.0f} GB: use fewer --avatars or --seconds",
-                              options.avatars, options.seconds, recordingBytes(avatarFrames, 20) / 1e9,
-                              kMaxRecordingBytes / 1e9));
-  }
   // An events file directly inside --bvh-out's folder is one of that folder's files, so
   // it is replaced with the BVH files as one unit.
   auto folderOf = [](const fs::path& p) {
@@ -277,26 +238,51 @@ json runSimulate(const SimulateOptions& options) {
   };
   const bool eventsInBundle = !options.bvhOut.empty() && !options.eventsOut.empty() &&
                               folderOf(options.eventsOut).parent_path() == folderOf(options.bvhOut);
-  if (eventsInBundle) {
-    const std::string name = options.eventsOut.filename().string();
-    if (name == "manifest.json" || (name.rfind("avatar_", 0) == 0 && name.ends_with(".bvh")))
-      throw Error(fmt::format("--events-out {}: expected a name other than the BVH folder's own files "
-                              "(manifest.json, avatar_NNN.bvh), found {}",
-                              options.eventsOut.string(), quoteToken(name)));
-  }
   std::unique_ptr<ScratchDirectory> bvhCreated, eventsScratch;
   std::unique_ptr<BundleWriter> bvhBundle;
-  if (!options.eventsOut.empty() && !eventsInBundle) {
-    const fs::path parent = options.eventsOut.parent_path().empty() ? fs::path(".") : options.eventsOut.parent_path();
-    eventsScratch = prepareFolder(parent, "--events-out");
-  }
-  if (!options.bvhOut.empty()) bvhBundle = prepareBundle(options.bvhOut, bvhCreated);
-
-  Loaded loaded = load(options, std::move(scenario), true, std::move(graphKey));
-  const StateActionModel& model = loaded.graph.model;
+  SessionNeeds needs;
+  needs.policy = choice.name == "policy" ? PolicyNeed::Required : PolicyNeed::None;
+  needs.policyDir = options.policy;
+  needs.beforeGraph = [&](const Scenario& scenario) {
+    // Output places are checked (and scratch folders made) before any simulation: first
+    // what can be checked without creating anything.
+    if (!options.eventsOut.empty()) {
+      if (fs::is_directory(options.eventsOut))
+        throw Error(fmt::format("--events-out {}: expected a file name, found a folder", options.eventsOut.string()));
+      // A missing folder is made, as for --bvh-out (prepareFolder and prepareBundle below).
+    }
+    if (!options.bvhOut.empty()) {
+      // A first estimate with a small skeleton (20 joints), exact once the skeleton is known.
+      const double avatarFrames = static_cast<double>(options.avatars) * std::round(options.seconds * scenario.motion.fps);
+      if (recordingBytes(avatarFrames, 20) > kMaxRecordingBytes)
+        throw Error(fmt::format("--bvh-out: recording {} avatars for {} s needs more than {:.1f} GB of memory; expected "
+                                "at most {:.0f} GB: use fewer --avatars or --seconds",
+                                options.avatars, options.seconds, recordingBytes(avatarFrames, 20) / 1e9,
+                                kMaxRecordingBytes / 1e9));
+    }
+    if (eventsInBundle) {
+      const std::string name = options.eventsOut.filename().string();
+      if (name == "manifest.json" || (name.rfind("avatar_", 0) == 0 && name.ends_with(".bvh")))
+        throw Error(fmt::format("--events-out {}: expected a name other than the BVH folder's own files "
+                                "(manifest.json, avatar_NNN.bvh), found {}",
+                                options.eventsOut.string(), quoteToken(name)));
+    }
+    if (!options.eventsOut.empty() && !eventsInBundle) {
+      const fs::path parent = options.eventsOut.parent_path().empty() ? fs::path(".") : options.eventsOut.parent_path();
+      eventsScratch = prepareFolder(parent, "--events-out");
+    }
+    if (!options.bvhOut.empty()) bvhBundle = prepareBundle(options.bvhOut, bvhCreated);
+  };
+  const std::unique_ptr<Session> session = openSession(options, needs);
+  if (options.topK > 0) session->task.world.variety.topK = static_cast<int>(options.topK);
+  const WorldParams& params = session->task.world;
+  const fs::path& policyDir = session->policyDir;
+  const Scenario& scenario = session->scenario;
+  const GraphResult& graph = session->graph;
+  const StateActionModel& model = session->model();
   const auto frames = static_cast<std::size_t>(std::max(1.0, std::round(options.seconds / model.frameTime)));
   const auto avatars = static_cast<std::size_t>(options.avatars);
-  const std::size_t joints = loaded.graph.db.skeleton->jointCount();
+  const std::size_t joints = graph.db.skeleton->jointCount();
   if (!options.bvhOut.empty()) {
     const double bytes =
         recordingBytes(static_cast<double>(avatars) * static_cast<double>(frames), static_cast<double>(joints));
@@ -305,37 +291,10 @@ json runSimulate(const SimulateOptions& options) {
                               "at most {:.0f} GB: use fewer --avatars or --seconds",
                               avatars, frames, bytes / 1e9, kMaxRecordingBytes / 1e9));
   }
-  std::vector<Behavior> behaviors = buildBehaviors(loaded.scenario, plugins(), model, loaded.graph.key);
-  PolicyBundle bundle;
-  std::vector<PolicyPart> parts;
-  if (options.controller == "policy") parts = policyParts(policyDir, behaviors, loaded.graph, options, bundle);
-  std::vector<SearchPart> searchParts;
-  for (const Behavior& b : behaviors) searchParts.push_back({b.discretizer.get(), b.reward.get(), b.weight, b.activation});
-  // The search predicts the target as the behaviours were trained to (an opponent pursues).
-  const EnvironmentModel& environment = *behaviors.front().environment;
-  const double gamma = behaviors.front().reward->gamma();
-
-  const BodyTable body = makeBodyTable(loaded.graph.db);
-  WorldSetup setup;
-  setup.model = &model;
-  setup.body = &body;
-  setup.db = &loaded.graph.db;
-  setup.blendFrames = loaded.scenario.graph.blendFrames;
-  setup.params = params;
-  setup.avatars = avatars;
-  setup.seed = options.seed;
+  WorldSetup setup = session->worldSetup(avatars, options.seed, choice);
   setup.threads = options.threads > 0 ? options.threads : defaultThreadCount();
   setup.poses = poses;
   setup.record = !options.bvhOut.empty();
-  setup.opponent = behaviors.front().environment->faces();
-  const std::string kind = options.controller;
-  setup.makeController = [&, kind]() -> std::unique_ptr<Controller> {
-    if (kind == "policy") return std::make_unique<PolicyController>(model, parts, params.variety);
-    if (kind == "online_search")
-      return std::make_unique<OnlineSearchController>(model, environment, searchParts,
-                                                      SearchHorizon{options.horizon, options.horizonSeconds}, gamma);
-    return std::make_unique<RandomController>(model);
-  };
   World world(setup);
   const double startup = secondsSinceStart();
 
@@ -379,7 +338,7 @@ json runSimulate(const SimulateOptions& options) {
     for (std::size_t i = 0; i < avatars; ++i) {
       const std::string name = fmt::format("avatar_{:0{}}.bvh", i, std::max(width, 3));
       std::ostringstream text;
-      writeBvh(text, motionFromPoses(loaded.graph.db.skeleton, world.recorded(i), model.frameTime), bvhOptions);
+      writeBvh(text, motionFromPoses(graph.db.skeleton, world.recorded(i), model.frameTime), bvhOptions);
       add(name, std::move(text).str());
       bvhFiles.push_back((options.bvhOut / name).string());
     }
@@ -388,8 +347,8 @@ json runSimulate(const SimulateOptions& options) {
         {"format", kOutputFormat},
         {"version", kOutputVersion},
         {"run",
-         {{"scenario", loaded.scenario.path.string()},
-          {"graph_key", loaded.graph.key},
+         {{"scenario", scenario.path.string()},
+          {"graph_key", graph.key},
           {"controller", options.controller},
           {"policy", policyDir.string()},
           {"avatars", avatars},
@@ -429,7 +388,7 @@ json runSimulate(const SimulateOptions& options) {
     ++byPart[struckName(e)];
   }
   const double simulated = static_cast<double>(frames) * model.frameTime;
-  json report = {{"scenario", loaded.scenario.path.string()},
+  json report = {{"scenario", scenario.path.string()},
                  {"controller", options.controller},
                  {"mode", params.mode},
                  {"avatars", avatars},

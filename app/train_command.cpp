@@ -197,21 +197,6 @@ void removeCheckpoint(const fs::path& dir) {
 
 }  // namespace
 
-fs::path defaultPolicyDirectory(const fs::path& cacheDir, const Scenario& scenario, std::string_view knownKey) {
-  // Everything that trains the tables names the folder: the scenario file, its graph and
-  // every behaviour's settings (after --set), so another learner gets another bundle.
-  std::error_code ec;
-  Hasher h;
-  h.update(std::string_view("mgrl.policy-path.v2"));
-  h.update(std::string_view(fs::weakly_canonical(scenario.path, ec).string()));
-  const std::string graphKey = knownKey.empty() ? graphCacheKey(scenario) : std::string(knownKey);
-  h.update(std::string_view(graphKey));
-  for (const BehaviorSpec& spec : scenario.behaviors) {
-    h.update(std::string_view(spec.name));
-    h.update(std::string_view(behaviorConfigAndKey(spec, plugins(), graphKey).second));
-  }
-  return cacheDir / "policies" / fmt::format("{}-{}", scenario.name, h.hex().substr(0, 8));
-}
 
 namespace {
 

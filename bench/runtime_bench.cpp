@@ -27,6 +27,7 @@
 #include "mgrl/core/data_paths.hpp"
 #include "mgrl/core/parallel.hpp"
 #include "mgrl/runtime/world.hpp"
+#include "mgrl/session/session.hpp"
 
 namespace {
 
@@ -65,33 +66,22 @@ int main(int argc, char** argv) {
   try {
     const mgrl::app::TrainOptions train = mgrl::bench::trainBoxingByValueIteration("runtime");
     const fs::path scratch = train.cacheDir;
-    mgrl::app::Loaded loaded = mgrl::app::load(train, mgrl::app::checkedScenario(train));
-    const mgrl::StateActionModel& model = loaded.graph.model;
-    std::vector<mgrl::Behavior> behaviors =
-        mgrl::buildBehaviors(loaded.scenario, mgrl::app::plugins(), model, loaded.graph.key);
-    mgrl::PolicyBundle bundle;
-    const std::vector<mgrl::PolicyPart> parts = mgrl::app::policyParts(train.out, behaviors, loaded.graph, train, bundle);
+    mgrl::SessionNeeds needs;
+    needs.policy = mgrl::PolicyNeed::Required;
+    needs.policyDir = train.out;
+    const std::unique_ptr<mgrl::Session> session = mgrl::openSession(train, needs);
+    const mgrl::StateActionModel& model = session->model();
+    const std::vector<mgrl::PolicyPart>& parts = session->policy;
     fs::remove_all(scratch);
-    const mgrl::BodyTable body = mgrl::makeBodyTable(loaded.graph.db);
-    const mgrl::WorldParams params = mgrl::readWorldParams(loaded.scenario.root.child("world"));
+    const mgrl::WorldParams& params = session->task.world;
     std::printf("boxing: %zu states, %zu actions, %zu joints, %.0f fps; %u threads; medians of %d runs\n",
-                model.stateCount(), model.actionCount(), loaded.graph.db.skeleton->jointCount(), 1 / model.frameTime,
+                model.stateCount(), model.actionCount(), session->graph.db.skeleton->jointCount(), 1 / model.frameTime,
                 threads, runs);
 
     auto setup = [&](std::size_t avatars, bool poses) {
-      mgrl::WorldSetup s;
-      s.model = &model;
-      s.body = &body;
-      s.db = &loaded.graph.db;
-      s.blendFrames = loaded.scenario.graph.blendFrames;
-      s.params = params;
-      s.avatars = avatars;
-      s.seed = 1;
+      mgrl::WorldSetup s = session->worldSetup(avatars, 1, {"policy"});
       s.threads = threads;
       s.poses = poses;
-      s.makeController = [&]() -> std::unique_ptr<mgrl::Controller> {
-        return std::make_unique<mgrl::PolicyController>(model, parts, params.variety);
-      };
       return s;
     };
     // Avatar-frames per second of `frames` frames (the world made outside the timing).
@@ -152,10 +142,9 @@ int main(int argc, char** argv) {
       const double policy = timeController(greedy, queries.size());
       std::printf("  %-28s %12.3f us\n", "policy (greedy)", policy * 1e6);
       std::printf("  %-28s %12.3f us\n", "policy (top 3, margin 0.1)", timeController(varied, queries.size()) * 1e6);
-      std::vector<mgrl::SearchPart> searchParts;
-      for (const mgrl::Behavior& b : behaviors) searchParts.push_back({b.discretizer.get(), b.reward.get(), b.weight, b.activation});
-      const mgrl::StaticTarget environment;
-      const double gamma = behaviors.front().reward->gamma();
+      const std::vector<mgrl::SearchPart>& searchParts = session->search;
+      const mgrl::EnvironmentModel& environment = *session->task.environment;
+      const double gamma = session->task.gamma;
       struct Horizon {
         int actions;
         double seconds;

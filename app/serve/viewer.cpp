@@ -20,6 +20,7 @@
 #include "mgrl/runtime/controller.hpp"
 #include "mgrl/runtime/world.hpp"
 #include "mgrl/scenario/behaviors.hpp"
+#include "mgrl/session/session.hpp"
 #include "plugins.hpp"
 
 namespace mgrl::serve {
@@ -29,15 +30,9 @@ using json = nlohmann::json;
 using Clock = std::chrono::steady_clock;
 
 struct ViewerAssets {
-  std::optional<app::Loaded> loaded;
-  std::vector<Behavior> behaviors;
-  PolicyBundle bundle;
-  std::vector<PolicyPart> policy;  ///< empty: no bundle, the policy controller is not offered
-  fs::path policyDir;
-  std::vector<SearchPart> search;
-  double gamma = 0.95;
-  BodyTable body;
-  WorldParams params;
+  /// The scenario opened once for every page: graph, behaviours, task and (when one serves)
+  /// the policy bundle; session->policy empty: the policy controller is not offered.
+  std::unique_ptr<Session> session;
   double meanOutDegree = 1;  ///< actions per state, for the online search's cost
   std::string note;          ///< shown on the page (no policy bundle, ...)
   ServeOptions options;      ///< what the server was started with (live retraining adds --set's)
@@ -46,7 +41,7 @@ struct ViewerAssets {
   std::vector<SuccessCriterion> criteria;
   std::string criteriaText;
 
-  const StateActionModel& model() const { return loaded->graph.model; }
+  const StateActionModel& model() const { return session->model(); }
 };
 
 namespace {
@@ -96,8 +91,6 @@ class TimedController final : public Controller {
   DecisionClock& clock_;
 };
 
-const char* struckName(const HitEvent& e) { return e.target < 0 ? "target" : bodyPartName(e.part); }
-
 // A page is sent at most this many hit messages per call of advance(); the others are
 // only counted (a crowd of 2,000 lands over a thousand a second).
 constexpr std::size_t kHitMessagesPerAdvance = 30;
@@ -108,39 +101,22 @@ std::shared_ptr<const ViewerAssets> loadViewerAssets(const ServeOptions& options
   auto assets = std::make_shared<ViewerAssets>();
   assets->options = options;
   assets->options.log = {};  // never called from a retraining thread
-  Scenario scenario = app::checkedScenario(options);
-  assets->params =
-      readWorldParams(scenario.root.has("world") ? scenario.root.child("world") : ConfigNode::parse("", "world"));
   // With no --policy, a missing or stale default bundle is not an error: the search runs
   // and the page says how to train one. An explicit --policy must work.
-  fs::path policyDir;
-  if (!options.policy.empty()) {
-    policyDir = app::resolvePolicy(options.policy, scenario, options);
-  } else {
-    try {
-      policyDir = app::resolvePolicy({}, scenario, options);
-    } catch (const Error& e) {
-      assets->note = fmt::format("No usable policy bundle ({}), so the online search runs instead. Train one with: "
-                                 "mgrl train {}",
-                                 e.what(), options.scenario.string());
-    }
-  }
-  assets->loaded.emplace(app::load(options, std::move(scenario)));
-  const app::Loaded& loaded = *assets->loaded;
-  assets->behaviors = buildBehaviors(loaded.scenario, app::plugins(), loaded.graph.model, loaded.graph.key);
-  if (!policyDir.empty()) {
-    assets->policy = app::policyParts(policyDir, assets->behaviors, loaded.graph, options, assets->bundle);
-    assets->policyDir = policyDir;
-  }
-  for (const Behavior& b : assets->behaviors)
-    assets->search.push_back({b.discretizer.get(), b.reward.get(), b.weight, b.activation});
-  assets->gamma = assets->behaviors.front().reward->gamma();
-  assets->criteria = app::trialCriteria(assets->behaviors).first;
+  SessionNeeds needs;
+  needs.policy = options.policy.empty() ? PolicyNeed::IfAvailable : PolicyNeed::Required;
+  needs.policyDir = options.policy;
+  assets->session = openSession(options, needs);
+  const Session& session = *assets->session;
+  if (!session.policyNote.empty())
+    assets->note = fmt::format("No usable policy bundle ({}), so the online search runs instead. Train one with: "
+                               "mgrl train {}",
+                               session.policyNote, options.scenario.string());
+  assets->criteria = app::trialCriteria(session.behaviors).first;
   std::vector<std::string> texts;
   for (const SuccessCriterion& c : assets->criteria) texts.push_back(c.describe());
   assets->criteriaText = fmt::format("{}", fmt::join(texts, ", or "));
-  assets->body = makeBodyTable(loaded.graph.db);
-  const StateActionModel& model = loaded.graph.model;
+  const StateActionModel& model = session.model();
   assets->meanOutDegree =
       std::max(1.0, static_cast<double>(model.actionCount()) / static_cast<double>(std::max<std::size_t>(1, model.stateCount())));
   return assets;
@@ -239,10 +215,10 @@ struct ViewerSession::State {
 
 ViewerSession::ViewerSession(std::shared_ptr<const ViewerAssets> assets)
     : assets_(std::move(assets)), state_(std::make_unique<State>()) {
-  for (const Behavior& b : assets_->behaviors) state_->weights.push_back(b.weight);
-  state_->policy = assets_->policy;
-  state_->retrained.resize(assets_->behaviors.size());
-  state_->controller = assets_->policy.empty() ? "online_search" : "policy";
+  for (const Behavior& b : assets_->session->behaviors) state_->weights.push_back(b.weight);
+  state_->policy = assets_->session->policy;
+  state_->retrained.resize(assets_->session->behaviors.size());
+  state_->controller = assets_->session->policy.empty() ? "online_search" : "policy";
   rebuild(Mode::Target, 1);
 }
 
@@ -265,48 +241,29 @@ void ViewerSession::applyController() {
       s.horizon = affordable;
     }
   }
-  std::vector<PolicyPart> policy = s.policy;
-  std::vector<SearchPart> search = a.search;
+  // The page's weights on the session's parts; the protocol's horizon is in actions only.
+  ControllerParts parts = a.session->controllerParts(a.session->task.world.variety);
+  parts.policy = s.policy;
   for (std::size_t i = 0; i < s.weights.size(); ++i) {
-    if (i < policy.size()) policy[i].weight = s.weights[i];
-    search[i].weight = s.weights[i];
+    if (i < parts.policy.size()) parts.policy[i].weight = s.weights[i];
+    parts.search[i].weight = s.weights[i];
   }
-  const std::string kind = s.controller;
-  const int horizon = s.horizon;
-  const ViewerAssets* assets = assets_.get();
+  const ControllerChoice choice{s.controller, s.horizon, 0};
   DecisionClock* clock = &s.decisions;
-  const std::vector<std::shared_ptr<const Retrained>> keep = s.retrained;  // the tables `policy` points into
+  const std::vector<std::shared_ptr<const Retrained>> keep = s.retrained;  // the tables `parts` points into
   s.world->setControllerFactory([=]() -> std::unique_ptr<Controller> {
     (void)keep;
-    std::unique_ptr<Controller> inner;
-    if (kind == "policy")
-      inner = std::make_unique<PolicyController>(assets->model(), policy, assets->params.variety);
-    else if (kind == "online_search")
-      // The search predicts the target as the behaviours were trained to (an opponent pursues).
-      inner = std::make_unique<OnlineSearchController>(assets->model(), *assets->behaviors.front().environment, search,
-                                                       SearchHorizon{horizon, 0}, assets->gamma);
-    else
-      inner = std::make_unique<RandomController>(assets->model());
-    return std::make_unique<TimedController>(std::move(inner), *clock);
+    return std::make_unique<TimedController>(makeController(choice, parts), *clock);
   });
 }
 
 void ViewerSession::rebuild(Mode mode, int avatars) {
   const ViewerAssets& a = *assets_;
   State& s = *state_;
-  WorldSetup setup;
-  setup.model = &a.model();
-  setup.body = &a.body;
-  setup.db = &a.loaded->graph.db;
-  setup.blendFrames = a.loaded->scenario.graph.blendFrames;
-  setup.params = a.params;
+  WorldSetup setup = a.session->worldSetup(static_cast<std::size_t>(avatars), 1, {"random"});  // replaced below
   setup.params.mode = mode == Mode::Target ? "targets" : "sparring";
-  setup.avatars = static_cast<std::size_t>(avatars);
-  setup.seed = 1;
   setup.threads = 1;  // every page on the server's one thread
   setup.poses = true;
-  setup.opponent = a.behaviors.front().environment->faces();
-  setup.makeController = [&a] { return std::make_unique<RandomController>(a.model()); };  // replaced below
   auto world = std::make_unique<World>(setup);
   s.world = std::move(world);
   mode_ = mode;
@@ -331,25 +288,25 @@ std::string ViewerSession::scene() const {
   const ViewerAssets& a = *assets_;
   const State& s = *state_;
   json joints = json::array();
-  for (const Joint& joint : a.loaded->graph.db.skeleton->joints())
+  for (const Joint& joint : a.session->graph.db.skeleton->joints())
     joints.push_back({{"name", joint.name}, {"parent", joint.parent}});
   json partners = json::array();
   for (std::size_t i = 0; i < s.world->avatarCount(); ++i) partners.push_back(s.world->partner(i));
   json behaviors = json::array();
-  for (std::size_t i = 0; i < a.behaviors.size(); ++i) {
-    json b = {{"name", a.behaviors[i].name},
+  for (std::size_t i = 0; i < a.session->behaviors.size(); ++i) {
+    json b = {{"name", a.session->behaviors[i].name},
               {"weight", s.weights[i]},
-              {"activation", std::string(activationName(a.behaviors[i].activation))}};
+              {"activation", std::string(activationName(a.session->behaviors[i].activation))}};
     // The bundle's training record: its learner and curve (updates, seconds, residual,
     // mean residual), for the page's learning-curve view.
-    const auto trained = a.bundle.behaviors.find(a.behaviors[i].name);
+    const auto trained = a.session->bundle.behaviors.find(a.session->behaviors[i].name);
     if (const Retrained* r = s.retrained[i].get()) {
       // Retrained by this page: value iteration on the changed parameters.
       b["learner"] = "value_iteration";
       b["curve"] = r->curve;
       b["vertices"] = r->table.vertexCount();
       b["retrained"] = r->set;
-    } else if (!a.policy.empty() && trained != a.bundle.behaviors.end()) {
+    } else if (!a.session->policy.empty() && trained != a.session->bundle.behaviors.end()) {
       b["learner"] = trained->second.record.value("learner", std::string());
       b["curve"] = trained->second.record.value("curve", json::array());
       b["vertices"] = trained->second.table.vertexCount();
@@ -357,17 +314,17 @@ std::string ViewerSession::scene() const {
     // The parameters live retraining may change: the reward's and the grid's numbers.
     json parameters = json::object();
     for (const char* section : {"reward", "discretizer"})
-      for (const auto& [key, value] : a.behaviors[i].config[section].items())
+      for (const auto& [key, value] : a.session->behaviors[i].config[section].items())
         if (value.is_number()) parameters[fmt::format("{}.{}", section, key)] = value;
     if (const Retrained* r = s.retrained[i].get())
       for (const auto& [key, value] : r->set.items()) parameters[key] = value;
     b["parameters"] = parameters;
     // What eval counts as this behaviour's success (scenarios/README.md, "success:").
-    b["success"] = a.behaviors[i].success ? json(a.behaviors[i].success->describe()) : json(nullptr);
+    b["success"] = a.session->behaviors[i].success ? json(a.session->behaviors[i].success->describe()) : json(nullptr);
     behaviors.push_back(std::move(b));
   }
   json controllers = json::array();
-  if (!a.policy.empty()) controllers.push_back("policy");
+  if (!a.session->policy.empty()) controllers.push_back("policy");
   controllers.push_back("online_search");
   controllers.push_back("random");
   std::string note = a.note;
@@ -382,9 +339,9 @@ std::string ViewerSession::scene() const {
               {"controllers", controllers},
               {"horizon", s.horizon},
               {"behaviors", behaviors},
-              {"policy", a.policyDir.empty() ? json(nullptr) : json(a.policyDir.string())},
+              {"policy", a.session->policyDir.empty() ? json(nullptr) : json(a.session->policyDir.string())},
               {"note", note},
-              {"scenario", a.loaded->scenario.name},
+              {"scenario", a.session->scenario.name},
               {"limits",
                {{"crowd_min", Limits::kCrowdMin},
                 {"crowd_max", Limits::kCrowdMax},
@@ -400,14 +357,14 @@ std::string ViewerSession::scene() const {
 }
 
 int ViewerSession::behaviorIndex(std::string_view name) const {
-  const auto& behaviors = assets_->behaviors;
+  const auto& behaviors = assets_->session->behaviors;
   const auto it = std::find_if(behaviors.begin(), behaviors.end(), [&](const Behavior& b) { return b.name == name; });
   return it == behaviors.end() ? -1 : static_cast<int>(it - behaviors.begin());
 }
 
 std::string ViewerSession::behaviorNames() const {
   std::vector<std::string> names;
-  for (const Behavior& b : assets_->behaviors) names.push_back(b.name);
+  for (const Behavior& b : assets_->session->behaviors) names.push_back(b.name);
   return fmt::format("{}", fmt::join(names, ", "));
 }
 
@@ -423,7 +380,7 @@ void ViewerSession::handle(std::string_view text) {
         throw Error(fmt::format("move_target: expected target mode, found {} mode", modeName(mode_)));
       s.world->moveTarget(0, move->position);
     } else if (const auto* choice = std::get_if<SetController>(&message)) {
-      if (choice->controller == "policy" && a.policy.empty())
+      if (choice->controller == "policy" && a.session->policy.empty())
         throw Error("controller.controller: expected online_search or random (this server has no policy bundle), "
                     "found \"policy\"");
       const std::string old = s.controller;
@@ -468,7 +425,7 @@ void ViewerSession::handle(std::string_view text) {
         if (i < 0)
           throw Error(fmt::format("values.behavior: expected one of {} or null, found \"{}\"", behaviorNames(),
                                   show->behavior));
-        if (a.policy.empty())
+        if (a.session->policy.empty())
           throw Error("values: expected a policy bundle to take values from; this server has none (mgrl train makes one)");
         s.shown = i;
         outbox_.push_back(values());
@@ -498,7 +455,7 @@ void ViewerSession::learn(const Learn& message) {
     auto lesson = std::make_unique<State::Lesson>();
     lesson->behavior = i;
     lesson->keep = s.retrained[static_cast<std::size_t>(i)];
-    const Behavior& b = lesson->keep ? lesson->keep->behavior : a.behaviors[static_cast<std::size_t>(i)];
+    const Behavior& b = lesson->keep ? lesson->keep->behavior : a.session->behaviors[static_cast<std::size_t>(i)];
     const Problem problem = b.problem(a.model());
     const double bytes = learners::QLearningSteps::tableBytes(problem);
     if (bytes > Limits::kLessonBytes)
@@ -555,7 +512,7 @@ std::string ViewerSession::lessonMessage() const {
   const ViewerAssets& a = *assets_;
   const State::Lesson& lesson = *s.lesson;
   const learners::QLearningSteps& steps = *lesson.steps;
-  const Behavior& b = lesson.keep ? lesson.keep->behavior : a.behaviors[static_cast<std::size_t>(lesson.behavior)];
+  const Behavior& b = lesson.keep ? lesson.keep->behavior : a.session->behaviors[static_cast<std::size_t>(lesson.behavior)];
   json vertices = json::array();
   for (std::size_t v = 0; v < b.discretizer->vertexCount(); ++v) vertices.push_back(point3(b.discretizer->vertexPosition(v)));
   return json{{"type", "lesson"},
@@ -598,7 +555,7 @@ std::string ViewerSession::stepMessage(const learners::QStep& step, std::size_t 
   for (std::uint32_t k = model.actionFrameBegin[step.action]; k < model.actionFrameBegin[step.action + 1]; ++k)
     path.push_back({round3(model.frameRoot[3 * k]), 0, round3(model.frameRoot[3 * k + 1])});
   return json{{"type", "learn_step"},
-              {"behavior", assets_->behaviors[static_cast<std::size_t>(s.lesson->behavior)].name},
+              {"behavior", assets_->session->behaviors[static_cast<std::size_t>(s.lesson->behavior)].name},
               {"update", step.update},
               {"budget", steps.budget()},
               {"taken", taken},
@@ -630,17 +587,17 @@ void ViewerSession::retrain(const Retrain& message) {
   const int i = behaviorIndex(message.behavior);
   if (i < 0)
     throw Error(fmt::format("retrain.behavior: expected one of {}, found \"{}\"", behaviorNames(), message.behavior));
-  if (a.policy.empty())
+  if (a.session->policy.empty())
     throw Error("retrain: expected a policy bundle to start from; this server has none (mgrl train makes one)");
   if (s.job)
     throw Error(fmt::format("retrain: expected no retraining under way on this page, found one of {} (started {:.1f} s "
                             "ago)",
-                            a.behaviors[static_cast<std::size_t>(s.job->behavior)].name,
+                            a.session->behaviors[static_cast<std::size_t>(s.job->behavior)].name,
                             std::chrono::duration<double>(Clock::now() - s.job->started).count()));
   const auto index = static_cast<std::size_t>(i);
   if (message.set.empty()) {  // back to the bundle's table
     s.retrained[index].reset();
-    s.policy[index] = a.policy[index];
+    s.policy[index] = a.session->policy[index];
     applyController();
     outbox_.push_back(scene());
     outbox_.push_back(json{{"type", "retrain"}, {"behavior", message.behavior}, {"status", "reverted"}}.dump());
@@ -656,7 +613,7 @@ void ViewerSession::retrain(const Retrain& message) {
   }
   Scenario scenario = app::checkedScenario(options);
   std::vector<Behavior> built =
-      buildBehaviors(scenario, app::plugins(), a.model(), a.loaded->graph.key, message.behavior);
+      buildBehaviors(scenario, app::plugins(), a.model(), a.session->graph.key, message.behavior);
   auto result = std::make_shared<Retrained>();
   result->behavior = std::move(built.front());
   result->set = set;
@@ -702,9 +659,8 @@ void ViewerSession::retrain(const Retrain& message) {
       }
       // Success as the scenario defines it (its contact radius), on the same starts.
       // Targets at the scenario's world.target_height when it gives one, as eval's.
-      const double height = assets->params.targetHeight >= 0 ? assets->params.targetHeight
-                                                             : std::numeric_limits<double>::quiet_NaN();
-      const app::Trials trials(model, assets->behaviors, height, assets->loaded->scenario.path.string());
+      const double height = assets->session->task.targetHeight(std::numeric_limits<double>::quiet_NaN());
+      const app::Trials trials(model, assets->session->behaviors, height, assets->session->scenario.path.string());
       std::vector<PolicyPart> after = before;
       after[index].grid = &g;
       after[index].table = &result->table;
@@ -735,7 +691,7 @@ void ViewerSession::collectRetraining() {
   s.job->thread.join();
   const std::unique_ptr<State::Job> job = std::move(s.job);
   const auto index = static_cast<std::size_t>(job->behavior);
-  const std::string& name = assets_->behaviors[index].name;
+  const std::string& name = assets_->session->behaviors[index].name;
   if (!job->failure.empty()) {
     outbox_.push_back(json{{"type", "retrain"}, {"behavior", name}, {"status", "failed"}, {"message", job->failure}}.dump());
     return;
@@ -812,16 +768,9 @@ bool ViewerSession::advance(double frames) {
     const HitEvent& e = events[s.eventsSeen];
     s.hitTimes.push_back(e.time);
     if (sent++ >= kHitMessagesPerAdvance) continue;
-    outbox_.push_back(json{{"type", "hit"},
-                           {"time", e.time},
-                           {"attacker", e.attacker},
-                           {"target", e.target},
-                           {"part", struckName(e)},
-                           {"hand", e.hand == 0 ? "left" : "right"},
-                           {"limb", e.kick ? "foot" : "fist"},
-                           {"speed", e.speed},
-                           {"point", {e.point.x(), e.point.y(), e.point.z()}}}
-                          .dump());
+    json hit = hitEventJson(e);
+    hit["type"] = "hit";
+    outbox_.push_back(hit.dump());
   }
   while (!s.hitTimes.empty() && s.hitTimes.front() < s.world->time() - 30) s.hitTimes.pop_front();
   while (!s.successTimes.empty() && s.successTimes.front() < s.world->time() - 30) s.successTimes.pop_front();
@@ -840,7 +789,7 @@ const std::vector<std::uint8_t>& ViewerSession::frame() {
   std::uint32_t targets = 0;
   for (std::size_t i = 0; i < world.avatarCount(); ++i) targets += world.partner(i) < 0;
   FrameHeader header;
-  header.joints = static_cast<std::uint16_t>(assets_->loaded->graph.db.skeleton->jointCount());
+  header.joints = static_cast<std::uint16_t>(assets_->session->graph.db.skeleton->jointCount());
   header.avatars = static_cast<std::uint32_t>(world.avatarCount());
   header.targets = targets;
   header.frame = static_cast<std::uint32_t>(world.frame());
@@ -863,9 +812,9 @@ std::string ViewerSession::values() const {
   const State& s = *state_;
   const auto shown = static_cast<std::size_t>(s.shown);
   const Retrained* retrained = s.retrained[shown].get();
-  const Behavior& behavior = retrained ? retrained->behavior : a.behaviors[shown];
+  const Behavior& behavior = retrained ? retrained->behavior : a.session->behaviors[shown];
   const std::vector<double>& vertexPositions =
-      retrained ? retrained->vertices : a.bundle.behaviors.at(behavior.name).vertices;
+      retrained ? retrained->vertices : a.session->bundle.behaviors.at(behavior.name).vertices;
   const QTable& q = *s.policy[shown].table;
   const World::Decision d = s.world->lastDecision(0);
   const Eigen::Vector3d e = inverseTransformPoint(d.frame, s.world->aim(0));
@@ -947,7 +896,7 @@ std::string ViewerSession::stats(std::size_t framesSent, std::size_t framesDropp
             {"frames_sent", framesSent},
             {"frames_dropped", framesDropped},
             {"bytes_per_avatar_frame",
-             avatarRecordBytes(assets_->loaded->graph.db.skeleton->jointCount())}};
+             avatarRecordBytes(assets_->session->graph.db.skeleton->jointCount())}};
   s.decisions = {};
   s.busySeconds = 0;
   s.busyFrames = 0;

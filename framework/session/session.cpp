@@ -1,0 +1,87 @@
+#include "mgrl/session/session.hpp"
+
+#include <fmt/format.h>
+
+#include "mgrl/scenario/behaviors.hpp"
+#include "mgrl/session/plugins.hpp"
+
+namespace mgrl {
+
+ControllerParts Session::controllerParts(Variety variety) const {
+  ControllerParts parts;
+  parts.model = &graph.model;
+  parts.policy = policy;
+  parts.search = search;
+  parts.environment = task.environment;
+  parts.gamma = task.gamma;
+  parts.variety = variety;
+  return parts;
+}
+
+WorldSetup Session::worldSetup(std::size_t avatars, std::uint64_t seed, const ControllerChoice& choice) const {
+  checkControllerChoice(choice);
+  WorldSetup setup;
+  setup.model = &graph.model;
+  setup.body = &body;
+  setup.db = &graph.db;
+  setup.blendFrames = scenario.graph.blendFrames;
+  setup.params = task.world;
+  setup.avatars = avatars;
+  setup.seed = seed;
+  setup.opponent = task.opponent;
+  const ControllerParts parts = controllerParts(task.world.variety);
+  if (choice.name == "policy" && parts.policy.empty()) makeController(choice, parts);  // says why, now
+  setup.makeController = [choice, parts] { return makeController(choice, parts); };
+  return setup;
+}
+
+std::unique_ptr<Session> openSession(const SessionOptions& options, const SessionNeeds& needs) {
+  Scenario scenario = checkedScenario(options);
+  // The bundle first: what its manifest alone refuses is said before the graph is loaded.
+  std::string graphKey, policyNote;
+  std::filesystem::path policyDir;
+  if (needs.policy == PolicyNeed::Required) {
+    policyDir = resolvePolicy(needs.policyDir, scenario, options, &graphKey);
+  } else if (needs.policy == PolicyNeed::IfAvailable) {
+    try {
+      policyDir = resolvePolicy(needs.policyDir, scenario, options, &graphKey);
+    } catch (const Error& e) {
+      policyNote = e.what();
+    }
+  }
+  if (needs.beforeGraph) needs.beforeGraph(scenario);
+  GraphOptions graphOptions;
+  graphOptions.key = std::move(graphKey);
+  graphOptions.cacheDir = options.cacheDir;
+  graphOptions.log = options.log;
+  graphOptions.motion = needs.motion;
+  GraphResult graph = obtainGraph(scenario, graphOptions);
+
+  auto session = std::make_unique<Session>(std::move(scenario));
+  session->options = options;
+  session->graph = std::move(graph);
+  session->policyDir = std::move(policyDir);
+  session->policyNote = std::move(policyNote);
+  const Scenario& s = session->scenario;
+  session->behaviors = buildBehaviors(s, builtinPlugins(), session->graph.model, session->graph.key);
+  session->task = makeTask(s, session->behaviors);
+  if (!session->policyDir.empty())
+    session->policy = policyParts(session->policyDir, session->behaviors, session->graph, options, session->bundle);
+  for (const Behavior& b : session->behaviors)
+    session->search.push_back({b.discretizer.get(), b.reward.get(), b.weight, b.activation});
+  if (session->graph.db.skeleton) session->body = makeBodyTable(session->graph.db);
+  return session;
+}
+
+nlohmann::json hitEventJson(const HitEvent& e) {
+  return {{"time", e.time},
+          {"attacker", e.attacker},
+          {"target", e.target},
+          {"part", e.target < 0 ? "target" : bodyPartName(e.part)},
+          {"hand", e.hand == 0 ? "left" : "right"},
+          {"limb", e.kick ? "foot" : "fist"},
+          {"speed", e.speed},
+          {"point", {e.point.x(), e.point.y(), e.point.z()}}};
+}
+
+}  // namespace mgrl

@@ -1,0 +1,94 @@
+#pragma once
+/// \file
+/// One way into the pipeline (DESIGN.md sec. 2): a Session is a scenario opened with its
+/// graph, behaviours, the task they share and, when asked for, the policy bundle bound to
+/// them. `mgrl eval`, `simulate`, `serve`, the benchmarks and the Python module open one
+/// and go from it, instead of composing the chain scenario -> graph -> behaviours ->
+/// policy -> controllers -> world each on its own.
+///
+///   mgrl::SessionOptions options;
+///   options.scenario = "scenarios/boxing.yaml";
+///   auto session = mgrl::openSession(options, {.policy = mgrl::PolicyNeed::Required});
+///   mgrl::World world(session->worldSetup(2, 1, {.name = "policy"}));
+///   world.run(300);
+#include <filesystem>
+#include <functional>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+#include "mgrl/learning/behavior.hpp"
+#include "mgrl/learning/policy_bundle.hpp"
+#include "mgrl/runtime/world.hpp"
+#include "mgrl/scenario/scenario.hpp"
+#include "mgrl/session/controllers.hpp"
+#include "mgrl/session/graph_source.hpp"
+#include "mgrl/session/policy_source.hpp"
+#include "mgrl/session/task.hpp"
+
+namespace mgrl {
+
+enum class PolicyNeed {
+  None,         ///< no bundle is read (training, the online search, random actions)
+  Required,     ///< a bundle must serve: a missing or stale one is an error
+  IfAvailable,  ///< the bundle is used when it serves; else Session::policyNote says why not
+};
+
+/// What a caller needs from the session beyond the scenario itself.
+struct SessionNeeds {
+  PolicyNeed policy = PolicyNeed::None;
+  /// The bundle to use; "" the scenario's default one (defaultPolicyDirectory()).
+  std::filesystem::path policyDir;
+  /// Parse the capture even when the graph comes from the cache: poses, bodies and BVH
+  /// need it; trials and training need only the model (a cached graph then starts faster).
+  bool motion = true;
+  /// Called with the final scenario after every check that needs no graph and before the
+  /// graph is loaded (a command's own checks, so that their message is the only one).
+  std::function<void(const Scenario&)> beforeGraph;
+};
+
+class Session {
+ public:
+  explicit Session(Scenario checked) : scenario(std::move(checked)) {}
+  Session(const Session&) = delete;
+  Session& operator=(const Session&) = delete;
+
+  SessionOptions options;
+  Scenario scenario;  ///< checked; with a bundle's own settings if one was adopted
+  GraphResult graph;
+  std::vector<Behavior> behaviors;  ///< the scenario's, in its order
+  Task task;                        ///< what they share, checked once
+  /// The policy bundle and one part per behaviour pointing into it (empty: none read).
+  std::filesystem::path policyDir;
+  PolicyBundle bundle;
+  std::vector<PolicyPart> policy;
+  /// PolicyNeed::IfAvailable and no bundle used: why (shown to the user); "" otherwise.
+  std::string policyNote;
+  /// The behaviours as the online search sees them (rewards, weights, activations).
+  std::vector<SearchPart> search;
+  /// The avatars' body capsules (empty without the capture: SessionNeeds::motion false).
+  BodyTable body;
+
+  const StateActionModel& model() const { return graph.model; }
+  /// What makeController() needs; `variety` is the policy's choice among near-best actions
+  /// ({}: greedy, as eval measures; task.world.variety: as the world plays).
+  ControllerParts controllerParts(Variety variety = {}) const;
+  /// A world of `avatars` on this session's graph and task (mode, spacing ... from
+  /// `world:`), each avatar run by a controller of `choice` with the world's variety. One
+  /// thread, no poses: set WorldSetup::threads, poses and record as needed.
+  WorldSetup worldSetup(std::size_t avatars, std::uint64_t seed, const ControllerChoice& choice) const;
+};
+
+/// Opens the scenario of `options` for `needs`: the scenario checked, the bundle looked up
+/// (and checked from its manifest) before the graph is loaded, the graph from the cache or
+/// built, the behaviours built, the task checked, the bundle's tables bound. Throws
+/// mgrl::Error (ConfigError with file:line:col for the scenario's mistakes).
+std::unique_ptr<Session> openSession(const SessionOptions& options, const SessionNeeds& needs = {});
+
+/// A hit as the events file and the viewer's protocol carry it: {"time", "attacker",
+/// "target", "part" (head, chest, spine, or target), "hand", "limb", "speed", "point"}.
+nlohmann::json hitEventJson(const HitEvent& event);
+
+}  // namespace mgrl
