@@ -6,6 +6,7 @@
 #include <fmt/format.h>
 
 #include "compare_report.hpp"
+#include "learn_common.hpp"
 #include "mgrl/core/files.hpp"
 #include "mgrl/runtime/controller.hpp"
 
@@ -19,7 +20,11 @@ SnapshotEvaluator::SnapshotEvaluator(const Behavior& trained, const std::vector<
                                      std::size_t count, std::size_t trials)
     : all_(all), graph_(graph), trainedName_(trained.name), count_(count), trialCount_(trials),
       seconds_(options.seconds),
-      trials_(graph.model, all, std::numeric_limits<double>::quiet_NaN(), options.scenario.string()) {
+      // The final evaluation is eval's: targets at the scenario's world.target_height when
+      // it gives one, so the snapshots' too.
+      task_(makeTask(checkedScenario(options), all)),
+      trials_(graph.model, all, task_, task_.targetHeight(std::numeric_limits<double>::quiet_NaN()),
+              options.scenario.string()) {
   if (all.size() > 1) shared_ = policyParts(shared, all, graph, options, bundle_, trained.name);
 }
 

@@ -39,6 +39,7 @@ class SnapshotEvaluator final : public TrainListener {
   std::string trainedName_;
   std::size_t count_, trialCount_;
   double seconds_;
+  Task task_;  ///< the world's target height and the behaviours' environment, as eval's
   Trials trials_;
   PolicyBundle bundle_;
   std::vector<PolicyPart> shared_;

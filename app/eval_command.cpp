@@ -49,7 +49,7 @@ json runEval(const EvalOptions& options) {
 
   // The target's height: --target-height, else the scenario's world.target_height, else
   // the hitting points' centroid's.
-  const Trials trials(model, session->behaviors, session->task.targetHeight(options.targetHeight),
+  const Trials trials(model, session->behaviors, session->task, session->task.targetHeight(options.targetHeight),
                       session->scenario.path.string());
   // eval measures the policy's own choice: greedy, without the world's variety. The online
   // search moves the target as the behaviours' environment model does (as trials do).

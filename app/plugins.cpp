@@ -3,11 +3,18 @@
 #include <fmt/format.h>
 
 #include "mgrl/runtime/world.hpp"
+#include "mgrl/session/controllers.hpp"
 #include "rewards/rewards.hpp"
 
 namespace mgrl::app {
 
 namespace {
+
+nlohmann::json controllerNames() {
+  nlohmann::json names = nlohmann::json::array();
+  for (const ControllerSpec& spec : controllerSpecs()) names.push_back(spec.name);
+  return names;
+}
 
 template <class Registry>
 void describe(std::string& text, const Registry& registry, std::string_view heading) {
@@ -63,10 +70,9 @@ std::string listText(const Plugins& p) {
           "  {term: avoid, point: P, effector: E, clear: C}   P at least C m from the opponent's strikes (opponent)\n"
           "  hold_s: S beside one condition, or {all: [conditions], hold_s: S}: held S seconds\n"
           "  left out: the behaviour's contact reward (the paper's hit), else an effective punch within 0.15 m\n\n";
-  text += "controllers (mgrl eval / simulate --controller):\n"
-          "  policy: the trained behaviours' weighted Q values, with the world's variety in simulate\n"
-          "  online_search: depth-limited graph search for the best discounted reward (--horizon, --horizon-seconds)\n"
-          "  random: a uniformly random out-action\n\n";
+  text += "controllers (mgrl eval / simulate --controller):\n";
+  for (const ControllerSpec& spec : controllerSpecs()) text += fmt::format("  {}: {}\n", spec.name, spec.summary);
+  text += "\n";
   text += "world (mgrl simulate; scenario section world:):\n";
   text += describeParams(worldParamSpecs(), "      ");
   return text;
@@ -78,7 +84,7 @@ nlohmann::json listJson(const Plugins& p) {
           {"reward_terms", termsJson()},
           {"environments", toJson(p.environments)},
           {"learners", toJson(p.learners)},
-          {"controllers", {"policy", "online_search", "random"}},
+          {"controllers", controllerNames()},
           {"world", paramsJson(worldParamSpecs())}};
 }
 

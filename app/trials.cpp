@@ -19,8 +19,8 @@ namespace mgrl::app {
 
 using json = nlohmann::json;
 
-Trials::Trials(const StateActionModel& model, const std::vector<Behavior>& behaviors, double targetHeight,
-               const std::string& source)
+Trials::Trials(const StateActionModel& model, const std::vector<Behavior>& behaviors, const Task& task,
+               double targetHeight, const std::string& source)
     : model_(model), behaviors_(behaviors) {
   // The approach region: the first always-active behaviour's grid, sampled uniformly by area.
   const auto region = std::find_if(behaviors.begin(), behaviors.end(),
@@ -47,10 +47,10 @@ Trials::Trials(const StateActionModel& model, const std::vector<Behavior>& behav
                             source, targetHeight_));
   // Success: what the behaviours declare, else what the first contact reward implies, else
   // a punch (what trials counted before success criteria). Returns are discounted with the
-  // first behaviour's gamma.
+  // task's gamma.
   std::tie(criteria_, criteriaFrom_) = trialCriteria(behaviors);
-  environment_ = behaviors.front().environment.get();
-  gamma_ = behaviors.front().reward->gamma();
+  environment_ = task.environment;
+  gamma_ = task.gamma;
 }
 
 std::pair<std::vector<SuccessCriterion>, std::string> trialCriteria(const std::vector<Behavior>& behaviors) {

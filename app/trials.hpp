@@ -21,6 +21,7 @@
 #include "mgrl/core/random.hpp"
 #include "mgrl/graph/state_action_model.hpp"
 #include "mgrl/learning/behavior.hpp"
+#include "mgrl/session/task.hpp"
 
 namespace mgrl::app {
 
@@ -51,10 +52,11 @@ using ChooseAction = std::function<std::size_t(std::uint32_t s, const TargetStat
 
 class Trials {
  public:
-  /// `targetHeight` NaN: the effective hitting points' centroid height. Throws mgrl::Error
-  /// naming `source` (the scenario) if no behaviour's grid has a distance axis to place
-  /// targets in. Keeps references to `model` and `behaviors`.
-  Trials(const StateActionModel& model, const std::vector<Behavior>& behaviors, double targetHeight,
+  /// `targetHeight` NaN: the effective hitting points' centroid height. The target moves as
+  /// `task`'s environment model moves it, returns are discounted with its gamma. Throws
+  /// mgrl::Error naming `source` (the scenario) if no behaviour's grid has a distance axis
+  /// to place targets in. Keeps references to `model`, `behaviors` and what `task` points to.
+  Trials(const StateActionModel& model, const std::vector<Behavior>& behaviors, const Task& task, double targetHeight,
          const std::string& source);
 
   /// Runs `count` trials of `seconds` of motion each from the starts drawn with `seed`:

@@ -316,6 +316,26 @@ TEST_CASE("mgrl compare removes the writability probe a killed run left in --rep
   CHECK(fs::exists(live));
 }
 
+// Issue 39: the snapshots were evaluated with targets at the hitting points' centroid
+// height while the final evaluation (eval's) put them at the scenario's world.target_height:
+// on kick.yaml (0.6 m) the last snapshot, the trained table itself, said 40 % and the
+// final evaluation 55 %. Both now take the session's task.
+TEST_CASE("mgrl compare's last snapshot is its final evaluation, at the scenario's target height",
+          "[cli][data][slow]") {
+  Sandbox box;
+  const std::string kick = std::string(MGRL_SOURCE_DIR) + "/scenarios/kick.yaml";
+  const json report = box.run("compare " + shellWord(kick) +
+                              " --behavior kick --learners q_learning --learner-set q_learning:budget=300000 "
+                              "--trials 20 --snapshots 2 --json")
+                          .report();
+  const json& run = report["runs"][0];
+  const json& last = run["snapshots"]["points"].back();
+  REQUIRE(last[0] == run["updates"]);  // taken at the end of training: the table evaluated
+  CHECK(last[3] == run["success_rate"]);
+  CHECK(last[4] == run["mean_time_to_hit_s"]);
+  CHECK(last[5] == run["mean_return"]);
+}
+
 TEST_CASE("mgrl compare refuses mistakes in one line before training anything", "[cli][data]") {
   Sandbox box;
   const std::string base = "compare " + shellWord(kBoxing) + " --behavior hit ";

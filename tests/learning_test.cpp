@@ -1570,12 +1570,14 @@ TEST_CASE("trials against an avatar need an opponent environment and an avoid co
     return list;
   };
   const std::vector<Behavior> still = behaviours(std::make_unique<StaticTarget>());
-  const app::Trials onStatic(m, still, std::nan(""), "test.yaml");
+  const Task stillTask = makeTask(still, "test.yaml");
+  const app::Trials onStatic(m, still, stillTask, std::nan(""), "test.yaml");
   CHECK_FALSE(onStatic.hasAvatarOpponent());
   CHECK_THROWS_WITH(onStatic.runAgainstAvatar(nullptr, 1, 1, 1),
                     "trials against an avatar: expected an opponent environment, found static_target");
   const std::vector<Behavior> unguarded = behaviours(std::make_unique<environments::Opponent>(true, 0.3, 0.7, M_PI));
-  const app::Trials withoutAvoid(m, unguarded, std::nan(""), "test.yaml");
+  const Task unguardedTask = makeTask(unguarded, "test.yaml");
+  const app::Trials withoutAvoid(m, unguarded, unguardedTask, std::nan(""), "test.yaml");
   CHECK_FALSE(withoutAvoid.hasAvatarOpponent());
   CHECK_THROWS_WITH(withoutAvoid.runAgainstAvatar(nullptr, 1, 1, 1),
                     "trials against an avatar: expected a success criterion with an avoid condition, found none");

@@ -10,6 +10,7 @@
 #include <nlohmann/json.hpp>
 
 #include "mgrl/core/error.hpp"
+#include "mgrl/session/controllers.hpp"
 
 namespace mgrl::serve {
 
@@ -67,10 +68,13 @@ class Fields {
     return static_cast<int>(value.get<long long>());
   }
   std::string word(const json& value, const char* name, std::initializer_list<const char*> choices) {
+    return word(value, name, std::vector<std::string>(choices.begin(), choices.end()));
+  }
+  std::string word(const json& value, const char* name, const std::vector<std::string>& choices) {
     const auto list = fmt::format("{}", fmt::join(choices, ", "));
     if (!value.is_string()) throw Error(fmt::format("{}.{}: expected one of {}, found {}", type_, name, list, shown(value)));
     const std::string text = value.get<std::string>();
-    if (choices.size() > 0 && std::none_of(choices.begin(), choices.end(), [&](const char* c) { return text == c; }))
+    if (choices.size() > 0 && std::none_of(choices.begin(), choices.end(), [&](const std::string& c) { return text == c; }))
       throw Error(fmt::format("{}.{}: expected one of {}, found {}", type_, name, list, shown(value)));
     return text;
   }
@@ -127,7 +131,9 @@ ClientMessage parseClientMessage(std::string_view text) {
     result = m;
   } else if (type == "controller") {
     SetController m;
-    m.controller = fields.word(fields.required("controller"), "controller", {"policy", "online_search", "random"});
+    std::vector<std::string> controllers;  // the session's list (framework/session/controllers.hpp)
+    for (const ControllerSpec& spec : controllerSpecs()) controllers.push_back(spec.name);
+    m.controller = fields.word(fields.required("controller"), "controller", controllers);
     if (const json* h = fields.optional("horizon")) m.horizon = fields.whole(*h, "horizon", 1, Limits::kHorizonMax);
     result = m;
   } else if (type == "weights") {

@@ -660,7 +660,7 @@ void ViewerSession::retrain(const Retrain& message) {
       // Success as the scenario defines it (its contact radius), on the same starts.
       // Targets at the scenario's world.target_height when it gives one, as eval's.
       const double height = assets->session->task.targetHeight(std::numeric_limits<double>::quiet_NaN());
-      const app::Trials trials(model, assets->session->behaviors, height, assets->session->scenario.path.string());
+      const app::Trials trials(model, assets->session->behaviors, assets->session->task, height, assets->session->scenario.path.string());
       std::vector<PolicyPart> after = before;
       after[index].grid = &g;
       after[index].table = &result->table;

@@ -15,45 +15,74 @@ double Task::targetHeight(double given) const {
   return std::numeric_limits<double>::quiet_NaN();
 }
 
-Task makeTask(const Scenario& scenario, const std::vector<Behavior>& behaviors) {
-  if (behaviors.empty())
-    scenario.root.fail("expected a 'behaviors' section naming at least one behaviour (see scenarios/README.md), "
-                       "found none");
+namespace {
+
+// The first behaviour that does not share the first one's world, and what differs; null
+// when they all agree.
+struct Disagreement {
+  const Behavior* behavior = nullptr;
+  bool environment = false;  ///< else gamma
+  std::string problem;
+};
+
+Disagreement findDisagreement(const std::vector<Behavior>& behaviors) {
   const Behavior& first = behaviors.front();
-  // Every behaviour of a scenario acts in the one world: the target moves one way, and
-  // returns are discounted alike (the online search and eval's returns use this gamma).
-  auto specOf = [&](const Behavior& b) -> const BehaviorSpec* {
-    for (const BehaviorSpec& spec : scenario.behaviors)
-      if (spec.name == b.name) return &spec;
-    return nullptr;
-  };
+  const nlohmann::json theirs = first.config.value("environment", nlohmann::json::object());
   for (const Behavior& b : behaviors) {
-    const BehaviorSpec* spec = specOf(b);
-    const nlohmann::json& mine = b.config.value("environment", nlohmann::json::object());
-    const nlohmann::json& theirs = first.config.value("environment", nlohmann::json::object());
-    if (mine != theirs) {
-      const std::string problem =
-          fmt::format("expected the environment model of behaviors.{} ({}): a scenario's behaviours share one world, "
-                      "found {}",
-                      first.name, theirs.dump(), mine.dump());
-      if (spec && spec->environment.has("type")) spec->environment.fail(problem);
-      if (spec) spec->node.fail(fmt::format("environment: {}", problem));
-      throw Error(fmt::format("{}: behaviors.{}.environment: {}", scenario.path.string(), b.name, problem));
-    }
-    if (b.reward->gamma() != first.reward->gamma()) {
-      const std::string problem =
-          fmt::format("expected gamma {:g} as behaviors.{}.reward has: a scenario's behaviours discount alike (the "
-                      "online search and eval's returns use one gamma), found {:g}",
-                      first.reward->gamma(), first.name, b.reward->gamma());
-      if (spec && spec->reward.has("gamma")) spec->reward.child("gamma").fail(problem);
-      if (spec) spec->reward.fail(fmt::format("gamma: {}", problem));
-      throw Error(fmt::format("{}: behaviors.{}.reward.gamma: {}", scenario.path.string(), b.name, problem));
-    }
+    const nlohmann::json mine = b.config.value("environment", nlohmann::json::object());
+    if (mine != theirs)
+      return {&b, true,
+              fmt::format("expected the environment model of behaviors.{} ({}): a scenario's behaviours share one "
+                          "world, found {}",
+                          first.name, theirs.dump(), mine.dump())};
+    if (b.reward->gamma() != first.reward->gamma())
+      return {&b, false,
+              fmt::format("expected gamma {:g} as behaviors.{}.reward has: a scenario's behaviours discount alike "
+                          "(the online search and eval's returns use one gamma), found {:g}",
+                          first.reward->gamma(), first.name, b.reward->gamma())};
   }
+  return {};
+}
+
+Task taskOf(const Behavior& first) {
   Task task;
   task.environment = first.environment.get();
   task.gamma = first.reward->gamma();
   task.opponent = first.environment->faces();
+  return task;
+}
+
+}  // namespace
+
+Task makeTask(const std::vector<Behavior>& behaviors, const std::string& source) {
+  if (behaviors.empty()) throw Error(fmt::format("{}: expected at least one behaviour, found none", source));
+  const Disagreement d = findDisagreement(behaviors);
+  if (d.behavior)
+    throw Error(fmt::format("{}: behaviors.{}.{}: {}", source, d.behavior->name,
+                            d.environment ? "environment" : "reward.gamma", d.problem));
+  return taskOf(behaviors.front());
+}
+
+Task makeTask(const Scenario& scenario, const std::vector<Behavior>& behaviors) {
+  if (behaviors.empty())
+    scenario.root.fail("expected a 'behaviors' section naming at least one behaviour (see scenarios/README.md), "
+                       "found none");
+  // Every behaviour of a scenario acts in the one world: the target moves one way, and
+  // returns are discounted alike (the online search and eval's returns use this gamma).
+  const Disagreement d = findDisagreement(behaviors);
+  if (d.behavior) {
+    for (const BehaviorSpec& spec : scenario.behaviors) {
+      if (spec.name != d.behavior->name) continue;
+      if (d.environment) {
+        if (spec.environment.has("type")) spec.environment.fail(d.problem);
+        spec.node.fail(fmt::format("environment: {}", d.problem));
+      }
+      if (spec.reward.has("gamma")) spec.reward.child("gamma").fail(d.problem);
+      spec.reward.fail(fmt::format("gamma: {}", d.problem));
+    }
+    makeTask(behaviors, scenario.path.string());  // throws: no block to point at
+  }
+  Task task = taskOf(behaviors.front());
   task.world = readWorldParams(scenario.root.has("world") ? scenario.root.child("world")
                                                           : ConfigNode::parse("", "world"));
   return task;

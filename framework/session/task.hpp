@@ -32,5 +32,8 @@ struct Task {
 /// the disagreeing behaviour's block (`file:line:col: behaviors.B.environment: ...`) when
 /// two behaviours have different environment models or different gammas.
 Task makeTask(const Scenario& scenario, const std::vector<Behavior>& behaviors);
+/// The same for behaviours built without a scenario file (tests, Python): the world's
+/// parameters are the defaults, and a disagreement is reported as `source: behaviors.B...`.
+Task makeTask(const std::vector<Behavior>& behaviors, const std::string& source);
 
 }  // namespace mgrl

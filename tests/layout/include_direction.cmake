@@ -1,7 +1,9 @@
 # The include-direction rule of framework/README.md, checked on the sources: a file under
 # framework/<stage>/ may include "mgrl/<other>/..." only for a stage at or below its own,
-# and a plug-in folder (discretizers, rewards, environments, learners) only the core and
-# learning stages (the seam headers). Run as
+# a plug-in folder (discretizers, rewards, environments, learners) only the core and
+# learning stages (the seam headers) and its own folder, never another plug-in folder (a
+# plug-in is reached through its seam and registry; only the session stage, the
+# composition root, names the folders). Run as
 #   cmake -DROOT=<tree> -P include_direction.cmake
 # and it prints every violation as `file:line: ... includes mgrl/<stage>/...` and fails.
 # tests/layout/bad_tree/ is a small tree that breaks the rule, so the check can be seen
@@ -12,7 +14,7 @@ if(NOT DEFINED ROOT)
 endif()
 
 get_filename_component(ROOT "${ROOT}" ABSOLUTE)
-set(stages core motion graph learning runtime scenario)
+set(stages core motion graph learning runtime scenario session)
 set(plugin_folders discretizers rewards environments learners)
 set(plugin_allowed core learning)
 
@@ -36,6 +38,13 @@ function(check_file file)
         list(APPEND violations "${rel}:${n}: ${text}: expected only mgrl/{${allowed_text}}/ here")
         set(violations "${violations}" PARENT_SCOPE)
       endif()
+    elseif(DEFINED own_folder AND line MATCHES "^[ \t]*#[ \t]*include[ \t]+\"(discretizers|rewards|environments|learners)/")
+      if(NOT CMAKE_MATCH_1 STREQUAL own_folder)
+        file(RELATIVE_PATH rel "${ROOT}" "${file}")
+        string(STRIP "${line}" text)
+        list(APPEND violations "${rel}:${n}: ${text}: expected no other plug-in folder's header here (plug-ins meet through the seams)")
+        set(violations "${violations}" PARENT_SCOPE)
+      endif()
     elseif(line MATCHES "^[ \t]*#[ \t]*include[ \t]+\"mgrl/[a-z_]+\\.hpp\"")
       file(RELATIVE_PATH rel "${ROOT}" "${file}")
       list(APPEND violations "${rel}:${n}: a header outside the stage folders (expected mgrl/<stage>/name.hpp)")
@@ -55,6 +64,7 @@ foreach(stage IN LISTS stages)
 endforeach()
 foreach(folder IN LISTS plugin_folders)
   file(GLOB sources "${ROOT}/${folder}/*.hpp" "${ROOT}/${folder}/*.cpp")
+  set(own_folder "${folder}")
   foreach(file IN LISTS sources)
     check_file("${file}" ${plugin_allowed})
     math(EXPR checked "${checked} + 1")

@@ -1,0 +1,230 @@
+// The session stage (framework/session/, issue 39): one way into the pipeline for every
+// command, the viewer, the benchmarks and Python. A session opens the scenario, its graph,
+// behaviours, the task they share and the policy bundle; controllers are listed, checked
+// and made in one place; hits become JSON in one place.
+#include <catch2/catch.hpp>
+
+#include <cmath>
+#include <filesystem>
+
+#include "app/learn_commands.hpp"
+#include "mgrl/core/random.hpp"
+#include "mgrl/runtime/world.hpp"
+#include "mgrl/session/session.hpp"
+#include "test_support.hpp"
+
+namespace mgrl {
+namespace {
+
+namespace fs = std::filesystem;
+using Catch::Contains;
+
+const fs::path kBoxing = fs::path(MGRL_SOURCE_DIR) / "scenarios" / "boxing.yaml";
+const fs::path kKick = fs::path(MGRL_SOURCE_DIR) / "scenarios" / "kick.yaml";
+
+// Boxing trained by value iteration: the same shared folder, made the same way, as
+// world_test's fixture (test::sharedResult trains it once for the whole suite).
+fs::path trainedBoxing() {
+  return test::sharedResult("boxing-value-iteration", [](const fs::path& d) {
+    app::TrainOptions train;
+    train.scenario = kBoxing;
+    train.dataDir = test::mocap();
+    train.cacheDir = d;
+    train.out = d / "policy";
+    train.sets = {"behaviors.approach.learner.type=value_iteration", "behaviors.hit.learner.type=value_iteration"};
+    app::runTrain(train);
+  });
+}
+
+SessionOptions boxingOptions(const fs::path& cache) {
+  SessionOptions options;
+  options.scenario = kBoxing;
+  options.dataDir = test::mocap();
+  options.cacheDir = cache;
+  options.sets = {"behaviors.approach.learner.type=value_iteration", "behaviors.hit.learner.type=value_iteration"};
+  return options;
+}
+
+}  // namespace
+
+TEST_CASE("a session opens the scenario's graph, behaviours, task and policy bundle together", "[session][data]") {
+  const fs::path trained = trainedBoxing();
+  const auto session = openSession(boxingOptions(trained), {.policy = PolicyNeed::Required, .policyDir = trained / "policy"});
+  REQUIRE(session->behaviors.size() == 2);
+  CHECK(session->behaviors[0].name == "approach");
+  CHECK(session->model().stateCount() > 0);
+  CHECK(session->graph.db.skeleton);  // the capture is parsed by default: poses need it
+  // One policy part and one search part per behaviour, each pointing at the behaviour's own
+  // grid and reward; the tables have a row per (state, vertex).
+  REQUIRE(session->policy.size() == 2);
+  REQUIRE(session->search.size() == 2);
+  for (std::size_t i = 0; i < 2; ++i) {
+    CHECK(session->search[i].reward == session->behaviors[i].reward.get());
+    CHECK(session->policy[i].table->vertexCount() == session->policy[i].grid->vertexCount());
+    CHECK(session->policy[i].weight == session->behaviors[i].weight);
+  }
+  CHECK(session->policyDir == trained / "policy");
+  CHECK(session->policyNote.empty());
+  // The task: boxing.yaml's gamma (0.97 in both behaviours), a static target, and its world
+  // section as read once (mode sparring, no target height given).
+  CHECK(session->task.gamma == Approx(0.97));
+  CHECK(session->task.environment == session->behaviors[0].environment.get());
+  CHECK(session->task.environment->type() == "static_target");
+  CHECK_FALSE(session->task.opponent);
+  CHECK(session->task.world.mode == "sparring");
+  CHECK(std::isnan(session->task.targetHeight(std::nan(""))));
+  CHECK(session->task.targetHeight(1.2) == 1.2);
+  CHECK_FALSE(session->body.points.empty());
+}
+
+TEST_CASE("a session without the capture's poses starts from the cached model alone", "[session][data]") {
+  const fs::path trained = trainedBoxing();
+  const auto session = openSession(boxingOptions(trained), {.motion = false});
+  CHECK(session->policy.empty());
+  CHECK(session->policyDir.empty());
+  CHECK(session->graph.fromCache);
+  CHECK_FALSE(session->graph.db.skeleton);  // nothing parsed: the graph came from the cache
+  CHECK(session->body.points.empty());
+}
+
+TEST_CASE("a session refuses a missing bundle when one is required, and says why when it is optional",
+          "[session][data]") {
+  test::TempDir temp("session-no-bundle");
+  const SessionOptions options = boxingOptions(temp.path);
+  CHECK_THROWS_WITH(openSession(options, {.policy = PolicyNeed::Required}),
+                    Contains("no policy bundle here: run `mgrl train") && Contains("boxing.yaml"));
+  // The refusal comes before the graph: nothing was built into the cache.
+  CHECK_FALSE(fs::exists(temp.path / "graphs"));
+  const auto session = openSession(options, {.policy = PolicyNeed::IfAvailable, .motion = false});
+  CHECK(session->policy.empty());
+  CHECK_THAT(session->policyNote, Contains("no policy bundle here"));
+}
+
+TEST_CASE("a session calls the caller's checks after the scenario's and before the graph", "[session][data]") {
+  test::TempDir temp("session-before-graph");
+  SessionNeeds needs;
+  needs.motion = false;
+  bool called = false;
+  needs.beforeGraph = [&](const Scenario& scenario) {
+    called = true;
+    CHECK(scenario.name == "boxing");
+    CHECK_FALSE(fs::exists(temp.path / "graphs"));
+    throw Error("--bvh-out: the caller's own refusal");
+  };
+  CHECK_THROWS_WITH(openSession(boxingOptions(temp.path), needs), "--bvh-out: the caller's own refusal");
+  CHECK(called);
+  CHECK_FALSE(fs::exists(temp.path / "graphs"));
+}
+
+TEST_CASE("a scenario whose behaviours disagree on the world they share is refused at the behaviour",
+          "[session][data]") {
+  test::TempDir temp("session-disagree");
+  SessionOptions options = boxingOptions(temp.path);
+  options.sets.push_back("behaviors.hit.reward.gamma=0.9");
+  CHECK_THROWS_WITH(openSession(options, {.motion = false}),
+                    Contains("behaviors.hit.reward.gamma") &&
+                        Contains("expected gamma 0.97 as behaviors.approach.reward has") && Contains("found 0.9"));
+  options = boxingOptions(temp.path);
+  options.sets.push_back("behaviors.hit.environment.type=moving_target");
+  CHECK_THROWS_WITH(openSession(options, {.motion = false}),
+                    Contains("behaviors.hit.environment") &&
+                        Contains("expected the environment model of behaviors.approach") &&
+                        Contains("share one world") && Contains("moving_target"));
+  // Without a scenario file (tests, Python), the same check names the source.
+  const auto session = openSession(boxingOptions(temp.path), {.motion = false});
+  CHECK_NOTHROW(makeTask(session->behaviors, "built.yaml"));
+  CHECK_THROWS_WITH(makeTask(std::vector<Behavior>{}, "built.yaml"), "built.yaml: expected at least one behaviour, found none");
+}
+
+TEST_CASE("a scenario's world section reaches the task: kick's target height", "[session][data]") {
+  test::TempDir temp("session-kick");
+  SessionOptions options;
+  options.scenario = kKick;
+  options.dataDir = test::mocap();
+  options.cacheDir = temp.path;
+  const auto session = openSession(options, {.motion = false});
+  CHECK(session->task.world.targetHeight == Approx(0.6));
+  CHECK(session->task.targetHeight(std::nan("")) == Approx(0.6));
+  CHECK(session->task.targetHeight(1.0) == 1.0);
+}
+
+TEST_CASE("the controllers are listed, checked and made in one place", "[session]") {
+  REQUIRE(controllerSpecs().size() == 3);
+  CHECK(controllerSpecs()[0].name == "policy");
+  CHECK(controllerSpecs()[0].needsPolicy);
+  CHECK(findController("online_search")->searches);
+  CHECK(findController("sarsa") == nullptr);
+  CHECK_NOTHROW(checkControllerChoice({"random", 3, 0}));
+  CHECK_THROWS_WITH(checkControllerChoice({"sarsa", 3, 0}),
+                    "--controller: expected one of: policy, online_search, random, found 'sarsa'");
+  CHECK_THROWS_WITH(checkControllerChoice({"online_search", 9, 0}),
+                    "--horizon: expected a search depth in actions in [1, 8], found 9");
+  CHECK_THROWS_WITH(checkControllerChoice({"online_search", 0, 0}),
+                    "--horizon: expected a search depth in actions in [1, 8], found 0");
+  CHECK_THROWS_WITH(checkControllerChoice({"online_search", 3, 6.5}),
+                    "--horizon-seconds: expected seconds of motion to search in [0, 5], found 6.5");
+  CHECK_THROWS_WITH(checkControllerChoice({"online_search", 3, std::nan("")}),
+                    Contains("--horizon-seconds: expected seconds of motion to search in [0, 5], found nan"));
+  // Named as the caller names them (the viewer's protocol has its own field names).
+  CHECK_THROWS_WITH(checkControllerChoice({"x", 3, 0}, {.controller = "controller.controller"}),
+                    Contains("controller.controller: expected one of"));
+}
+
+TEST_CASE("a session makes every listed controller, and a world that repeats itself", "[session][data]") {
+  const fs::path trained = trainedBoxing();
+  const auto session = openSession(boxingOptions(trained), {.policy = PolicyNeed::Required, .policyDir = trained / "policy"});
+  const StateActionModel& model = session->model();
+  Rng rng(3);
+  for (const ControllerSpec& spec : controllerSpecs()) {
+    INFO(spec.name);
+    const std::unique_ptr<Controller> c = makeController({spec.name, 2, 0}, session->controllerParts());
+    REQUIRE(c);
+    const std::size_t a = c->choose(0, TargetState(0.5, 1.2, 0.4), rng);
+    CHECK(a >= model.stateActionBegin[0]);
+    CHECK(a < model.stateActionBegin[1]);
+  }
+  // A policy without tables is refused when it is made, not at the first decision.
+  ControllerParts noTables = session->controllerParts();
+  noTables.policy.clear();
+  CHECK_THROWS_WITH(makeController({"policy", 3, 0}, noTables), Contains("expected a trained policy bundle"));
+
+  // The session's world: its scenario's world section, its task (no opponent), its body;
+  // the same seed gives the same hits.
+  auto run = [&](const std::string& controller) {
+    WorldSetup setup = session->worldSetup(4, 5, {controller, 2, 0});
+    CHECK(setup.params.mode == "sparring");
+    CHECK(setup.body == &session->body);
+    CHECK_FALSE(setup.opponent);
+    World world(setup);
+    world.run(600);
+    return world.events();
+  };
+  const std::vector<HitEvent> first = run("policy");
+  CHECK_FALSE(first.empty());  // trained sparring partners land punches in 20 s
+  const std::vector<HitEvent> again = run("policy");
+  REQUIRE(first.size() == again.size());
+  for (std::size_t i = 0; i < first.size(); ++i) CHECK(hitEventJson(first[i]) == hitEventJson(again[i]));
+  CHECK_THROWS_WITH(session->worldSetup(2, 1, {"sarsa", 3, 0}), Contains("--controller: expected one of"));
+}
+
+TEST_CASE("a hit reads the same in the events file and the viewer's protocol", "[session]") {
+  HitEvent e;
+  e.time = 1.5;
+  e.attacker = 3;
+  e.target = 2;
+  e.hand = 1;
+  e.part = BodyPart::Chest;
+  e.speed = 4.25;
+  e.point = Eigen::Vector3d(0.1, 1.3, -0.2);
+  const nlohmann::json j = hitEventJson(e);
+  CHECK(j.dump() ==
+        R"({"attacker":3,"hand":"right","limb":"fist","part":"chest","point":[0.1,1.3,-0.2],"speed":4.25,"target":2,"time":1.5})");
+  e.target = -1;  // the attacker's own target
+  e.kick = true;
+  e.hand = 0;
+  CHECK(hitEventJson(e)["part"] == "target");
+  CHECK(hitEventJson(e)["limb"] == "foot");
+  CHECK(hitEventJson(e)["hand"] == "left");
+}
+
+}  // namespace mgrl
