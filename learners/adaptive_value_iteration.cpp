@@ -645,7 +645,10 @@ void registerAdaptiveValueIteration(LearnerRegistry& registry) {
         ParamSpec::number("start_step", 0.1, 0.01, 0.5, "",
                           "starts: each further start's initial cells are the first's times 1 - i x start_step"),
         threadsSpec()},
-       [](const Params& p) { return std::make_unique<AdaptiveValueIteration>(p); }});
+       [](const Params& p) { return std::make_unique<AdaptiveValueIteration>(p); },
+       {},
+       nullptr,
+       "{type: adaptive_value_iteration, max_vertices: 60, max_rounds: 3}"});  // the conformance suite's
 }
 
 }  // namespace mgrl::learners

@@ -490,7 +490,10 @@ void registerQLearning(LearnerRegistry& registry) {
                            "restart the walk after this many actions even if the target stays on the grid (0: only "
                            "when it leaves, the paper's rule)"),
         threadsSpec()},
-       [](const Params& p) { return std::make_unique<QLearning>(p); }});
+       [](const Params& p) { return std::make_unique<QLearning>(p); },
+       {},
+       nullptr,
+       "{type: q_learning, budget: 200000}"});  // the conformance suite's: seconds, not minutes
 }
 
 }  // namespace mgrl::learners

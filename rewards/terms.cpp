@@ -273,6 +273,7 @@ void registerTerms(RewardRegistry& registry) {
       [](const Params& p) { return std::make_unique<Terms>(p, readTerms(*p.block())); }};
   entry.blockKeys = {"terms"};
   entry.readBlock = [](const ConfigNode& block) { return json{{"terms", readTerms(block)}}; };
+  entry.example = "{type: terms, terms: [{term: distance, point: pelvis, d0: 1.4}]}";
   registry.add(std::move(entry));
 }
 

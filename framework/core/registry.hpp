@@ -33,6 +33,9 @@ class Registry {
     /// reaches them through Params::block().
     std::vector<std::string> blockKeys = {};
     std::function<nlohmann::json(const ConfigNode& block)> readBlock = nullptr;
+    /// A block that builds a working instance, for the seam's conformance suite
+    /// (tests/conformance_test.cpp); "" means `{type: NAME}` with the defaults.
+    std::string example = {};
   };
 
   /// `seam` names the kind of plugin in messages: "discretizer", "reward", ...

@@ -25,11 +25,17 @@ struct Disagreement {
   std::string problem;
 };
 
+// A behaviour's environment block as built (defaults filled in); {} for a behaviour built
+// by hand without a config (tests).
+nlohmann::json environmentOf(const Behavior& b) {
+  return b.config.is_object() ? b.config.value("environment", nlohmann::json::object()) : nlohmann::json::object();
+}
+
 Disagreement findDisagreement(const std::vector<Behavior>& behaviors) {
   const Behavior& first = behaviors.front();
-  const nlohmann::json theirs = first.config.value("environment", nlohmann::json::object());
+  const nlohmann::json theirs = environmentOf(first);
   for (const Behavior& b : behaviors) {
-    const nlohmann::json mine = b.config.value("environment", nlohmann::json::object());
+    const nlohmann::json mine = environmentOf(b);
     if (mine != theirs)
       return {&b, true,
               fmt::format("expected the environment model of behaviors.{} ({}): a scenario's behaviours share one "

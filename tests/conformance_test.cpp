@@ -1,0 +1,173 @@
+// Conformance per seam (issue 39): every plug-in registered with the built-in registries
+// (mgrl::builtinPlugins(), framework/session/plugins.cpp) is held to its seam's contract,
+// so registering a plug-in enrols it here without editing this file. A plug-in whose
+// defaults alone do not build gives a working block as its registry entry's `example`.
+#include <catch2/catch.hpp>
+
+#include <algorithm>
+#include <cmath>
+
+#include "mgrl/core/random.hpp"
+#include "mgrl/learning/discretizer.hpp"
+#include "mgrl/learning/learner.hpp"
+#include "mgrl/learning/problem.hpp"
+#include "mgrl/learning/reward.hpp"
+#include "mgrl/session/plugins.hpp"
+#include "synthetic_model.hpp"
+
+namespace mgrl {
+namespace {
+
+const StateActionModel& model() {
+  static const StateActionModel m = [] {
+    SyntheticModelSpec spec;
+    spec.states = 30;
+    spec.actions = 400;
+    return makeSyntheticModel(spec);
+  }();
+  return m;
+}
+
+template <class Entry>
+ConfigNode exampleOf(const Entry& entry) {
+  return ConfigNode::parse(entry.example.empty() ? "{type: " + entry.name + "}" : entry.example,
+                           "conformance " + entry.name);
+}
+
+// A function linear in the grid's coordinates (angles that wrap left out: a periodic axis
+// is not linear across its seam) and in the layer coordinate.
+double linear(const Discretizer& grid, const TargetState& e) {
+  const std::array<double, 3> c = grid.coordinates(e);
+  double f = 0.25;
+  const double slopes[3] = {0.7, -1.3, 2.1};
+  for (int i = 0; i < grid.dimension(); ++i)
+    if (!grid.axes()[static_cast<std::size_t>(i)].wraps) f += slopes[i] * c[static_cast<std::size_t>(i)];
+  if (grid.layerAxis()) f += 0.9 * Discretizer::layerCoordinate(e);
+  return f;
+}
+
+}  // namespace
+
+TEST_CASE("every discretizer's weights are a partition of unity and reproduce linear functions", "[conformance]") {
+  const auto& registry = builtinPlugins().discretizers;
+  REQUIRE(registry.entries().size() >= 4);
+  for (const auto& entry : registry.entries()) {
+    INFO("discretizer " << entry.name);
+    const std::unique_ptr<Discretizer> grid = registry.create(exampleOf(entry), model());
+    REQUIRE(grid->type() == entry.name);
+    REQUIRE(grid->vertexCount() > 0);
+    REQUIRE(grid->cellCorners().size() == grid->cellCount() << grid->dimension());
+    std::vector<double> f(grid->vertexCount());
+    for (std::size_t v = 0; v < f.size(); ++v) f[v] = linear(*grid, grid->vertexState(v));
+    Rng rng(7);
+    for (int n = 0; n < 2000; ++n) {
+      const TargetState e = grid->sample(rng);
+      GridCell cell;
+      REQUIRE(grid->locate(e, cell));  // a sample of the grid lies in it
+      const Stencil stencil = grid->stencil(cell);
+      REQUIRE(stencil.size >= 1 << grid->dimension());
+      double sum = 0, interpolated = 0;
+      for (int k = 0; k < stencil.size; ++k) {
+        REQUIRE(stencil.weight[static_cast<std::size_t>(k)] >= 0);
+        REQUIRE(stencil.vertex[static_cast<std::size_t>(k)] < grid->vertexCount());
+        sum += stencil.weight[static_cast<std::size_t>(k)];
+        interpolated += stencil.weight[static_cast<std::size_t>(k)] * f[stencil.vertex[static_cast<std::size_t>(k)]];
+      }
+      CAPTURE(e.position.transpose(), e.speed);
+      REQUIRE(sum == Approx(1).margin(1e-5));
+      REQUIRE(interpolated == Approx(linear(*grid, e)).margin(1e-4));
+    }
+  }
+}
+
+TEST_CASE("every reward is finite and the same for the same action and state", "[conformance]") {
+  const auto& registry = builtinPlugins().rewards;
+  REQUIRE(registry.entries().size() >= 3);
+  const std::unique_ptr<Discretizer> grid =
+      builtinPlugins().discretizers.create(ConfigNode::parse("{type: polar2d, radius: 2, rings: 4, sectors: 8}", "c"), model());
+  for (const auto& entry : registry.entries()) {
+    INFO("reward " << entry.name);
+    const std::unique_ptr<Reward> reward = registry.create(exampleOf(entry));
+    REQUIRE(reward->type() == entry.name);
+    reward->bind(model());
+    REQUIRE(reward->gamma() > 0);
+    REQUIRE(reward->gamma() < 1);
+    for (std::size_t a = 0; a < model().actionCount(); a += 7)
+      for (std::size_t v = 0; v < grid->vertexCount(); v += 3) {
+        const TargetState e = grid->vertexState(v);
+        const double r = reward->evaluate(model(), a, e);
+        REQUIRE(std::isfinite(r));
+        REQUIRE(reward->evaluate(model(), a, e) == r);
+      }
+  }
+}
+
+TEST_CASE("every environment model is deterministic and keeps a still target still, an opponent aside", "[conformance]") {
+  const auto& registry = builtinPlugins().environments;
+  REQUIRE(registry.entries().size() >= 3);
+  for (const auto& entry : registry.entries()) {
+    INFO("environment " << entry.name);
+    const std::unique_ptr<EnvironmentModel> environment = registry.create(exampleOf(entry));
+    REQUIRE(environment->type() == entry.name);
+    Rng rng(3);
+    for (std::size_t a = 0; a < model().actionCount(); a += 5) {
+      const TargetState e = environment->draw(Eigen::Vector3d(rng.uniform() * 2 - 1, 1.2, rng.uniform() * 2), rng);
+      const TargetState next = environment->next(model(), a, e);
+      const TargetState again = environment->next(model(), a, e);
+      REQUIRE(next.position == again.position);
+      REQUIRE(next.speed == again.speed);
+      REQUIRE(next.heading == again.heading);
+      REQUIRE(next.position.allFinite());
+      // A target standing still stays where it was in the world (in the avatar's new frame:
+      // the old position moved by the action's displacement), unless the model is an
+      // opponent with a will of its own (faces(): it steps towards the avatar).
+      if (!environment->faces()) {
+        const TargetState standing(e.position);
+        const TargetState after = environment->next(model(), a, standing);
+        REQUIRE((after.position - inverseTransformPoint(model().displacement(a), standing.position)).norm() < 1e-9);
+        REQUIRE_FALSE(after.moving());
+      }
+      if (environment->rigid()) REQUIRE((next.position - inverseTransformPoint(model().displacement(a), e.position)).norm() < 1e-12);
+    }
+  }
+}
+
+TEST_CASE("every learner trains a finite table of the problem's shape, the same for the same seed", "[conformance]") {
+  const auto& registry = builtinPlugins().learners;
+  REQUIRE(registry.entries().size() >= 3);
+  const std::unique_ptr<Reward> reward =
+      builtinPlugins().rewards.create(ConfigNode::parse("{type: approach, sigma: 0.1}", "c"));
+  const StaticTarget environment;
+  for (const auto& entry : registry.entries()) {
+    INFO("learner " << entry.name);
+    const std::unique_ptr<Learner> learner = registry.create(exampleOf(entry));
+    REQUIRE(learner->type() == entry.name);
+    // A fixed polar grid, or a refinable one for a learner that refuses fixed grids
+    // (adaptive resolution refines a kd_tree).
+    std::unique_ptr<Discretizer> grid = builtinPlugins().discretizers.create(
+        ConfigNode::parse("{type: polar2d, radius: 2, rings: 4, sectors: 8}", "c"), model());
+    try {
+      learner->checkGrid(*grid);
+    } catch (const Error&) {
+      grid = builtinPlugins().discretizers.create(
+          ConfigNode::parse("{type: kd_tree, coordinates: polar, angle_cells: 4, distance_cells: 2, angle_min: -180, "
+                            "angle_max: 180, distance_min: 0, distance_max: 2}",
+                            "c"),
+          model());
+      learner->checkGrid(*grid);
+    }
+    const Problem problem{model(), *grid, *reward, environment};
+    const GridModel tabulated = GridModel::build(problem, 1);
+    const TrainResult first = learner->train({problem, tabulated, nullptr, nullptr, 1});
+    const TrainResult second = learner->train({problem, tabulated, nullptr, nullptr, 1});
+    REQUIRE(first.table.stateCount() == model().stateCount());
+    const std::size_t vertices = first.grid ? first.grid->vertexCount() : grid->vertexCount();
+    REQUIRE(first.table.vertexCount() == vertices);
+    for (const float q : first.table.values()) REQUIRE(std::isfinite(q));
+    REQUIRE(std::equal(first.table.values().begin(), first.table.values().end(), second.table.values().begin(),
+                       second.table.values().end()));
+    REQUIRE(first.updates > 0);
+  }
+}
+
+}  // namespace mgrl
