@@ -112,6 +112,15 @@ std::string unknownOption(const CLI::App& command, const std::vector<std::string
 
 }  // namespace
 
+// The capture and cache folders, the same two flags on every command that reads a scenario.
+void addData(CLI::App* command, std::string& dataDir) {
+  command->add_option("--data", dataDir, "Motion capture folder (default: MGRL_DATA, else ../shared/mocap)");
+}
+void addDataAndCache(CLI::App* command, std::string& dataDir, std::string& cacheDir) {
+  addData(command, dataDir);
+  command->add_option("--cache", cacheDir, "Cache folder (default: MGRL_CACHE, else ~/.cache/mgrl)");
+}
+
 int main(int argc, char** argv) {
   // `mgrl stats --compare REAL... -- SYNTH...`: what follows `--` is the second group.
   // CLI11 would fold it into the positionals, so it is cut off before parsing.
@@ -157,8 +166,7 @@ int main(int argc, char** argv) {
                "cache, and report its size.");
   graphCommand->add_option("SCENARIO", scenarioPath, "Scenario YAML file (see scenarios/README.md)")->required();
   graphCommand->add_flag("--json", json, "Print one JSON object on stdout");
-  graphCommand->add_option("--data", dataDir, "Motion capture folder (default: MGRL_DATA, else ../shared/mocap)");
-  graphCommand->add_option("--cache", cacheDir, "Cache folder (default: MGRL_CACHE, else ~/.cache/mgrl)");
+  addDataAndCache(graphCommand, dataDir, cacheDir);
   graphCommand->add_flag("--no-cache", noCache, "Rebuild even if a matching cached graph exists");
   std::vector<std::string> graphSets;
   graphCommand->add_option("--set", graphSets, "Override a scenario key, e.g. --set graph.threshold=0.5 (repeatable)");
@@ -184,8 +192,7 @@ int main(int argc, char** argv) {
                    "(tabulated when it fits in --max-memory, else compact)")
       ->default_str("auto");
   trainCommand->add_flag("--json", json, "Print one JSON object on stdout");
-  trainCommand->add_option("--data", dataDir, "Motion capture folder (default: MGRL_DATA, else ../shared/mocap)");
-  trainCommand->add_option("--cache", cacheDir, "Cache folder (default: MGRL_CACHE, else ~/.cache/mgrl)");
+  addDataAndCache(trainCommand, dataDir, cacheDir);
 
   mgrl::app::EvalOptions eval;
   long long trials = static_cast<long long>(eval.trials);
@@ -210,8 +217,7 @@ int main(int argc, char** argv) {
                           "Height of the target (m; default: the scenario's world.target_height, else that of the effective hitting points' centroid)");
   evalCommand->add_option("--set", eval.sets, "Override a scenario key (repeatable)");
   evalCommand->add_flag("--json", json, "Print one JSON object on stdout");
-  evalCommand->add_option("--data", dataDir, "Motion capture folder (default: MGRL_DATA, else ../shared/mocap)");
-  evalCommand->add_option("--cache", cacheDir, "Cache folder (default: MGRL_CACHE, else ~/.cache/mgrl)");
+  addDataAndCache(evalCommand, dataDir, cacheDir);
 
   mgrl::app::SimulateOptions simulate;
   long long simulateSeed = 1;
@@ -240,8 +246,7 @@ int main(int argc, char** argv) {
   simulateCommand->add_option("--threads", simulate.threads, "Worker threads (default: all cores)");
   simulateCommand->add_option("--set", simulate.sets, "Override a scenario key (repeatable)");
   simulateCommand->add_flag("--json", json, "Print one JSON object on stdout");
-  simulateCommand->add_option("--data", dataDir, "Motion capture folder (default: MGRL_DATA, else ../shared/mocap)");
-  simulateCommand->add_option("--cache", cacheDir, "Cache folder (default: MGRL_CACHE, else ~/.cache/mgrl)");
+  addDataAndCache(simulateCommand, dataDir, cacheDir);
 
   mgrl::app::CompareOptions compare;
   std::string compareLearners, compareSeeds = "1";
@@ -272,8 +277,7 @@ int main(int argc, char** argv) {
   compareCommand->add_option("--report", compare.report, "Write index.html (plots, learning curves), results.json, results.csv and curves.csv here");
   compareCommand->add_option("--set", compare.sets, "Override a scenario key (repeatable)");
   compareCommand->add_flag("--json", json, "Print one JSON object on stdout");
-  compareCommand->add_option("--data", dataDir, "Motion capture folder (default: MGRL_DATA, else ../shared/mocap)");
-  compareCommand->add_option("--cache", cacheDir, "Cache folder (default: MGRL_CACHE, else ~/.cache/mgrl)");
+  addDataAndCache(compareCommand, dataDir, cacheDir);
 
   mgrl::serve::ServeCommandOptions serve;
   CLI::App* serveCommand = app.add_subcommand(
@@ -288,8 +292,7 @@ int main(int argc, char** argv) {
   serveCommand->add_flag("--open", serve.open, "Open the page in the desktop's browser (xdg-open)");
   serveCommand->add_option("--web", serve.web, "The viewer's folder (default: MGRL_WEB, else the repository's web/)");
   serveCommand->add_option("--set", serve.sets, "Override a scenario key (repeatable)");
-  serveCommand->add_option("--data", dataDir, "Motion capture folder (default: MGRL_DATA, else ../shared/mocap)");
-  serveCommand->add_option("--cache", cacheDir, "Cache folder (default: MGRL_CACHE, else ~/.cache/mgrl)");
+  addDataAndCache(serveCommand, dataDir, cacheDir);
 
   mgrl::app::StatsOptions stats;
   CLI::App* statsCommand = app.add_subcommand(
@@ -314,7 +317,7 @@ int main(int argc, char** argv) {
                            "Root steps slower than this are ignored by the reversal count (m/s)")
       ->default_val(stats.params.reversalMinSpeed_mps);
   statsCommand->add_flag("--json", json, "Print one JSON object on stdout");
-  statsCommand->add_option("--data", dataDir, "Motion capture folder (default: MGRL_DATA, else ../shared/mocap)");
+  addData(statsCommand, dataDir);
 
   CLI::App* listCommand =
       app.add_subcommand("list", "List every registered discretizer, reward, environment model and learner with its "
