@@ -26,6 +26,9 @@ target="mgrl_bench_$bench"
 commit="$(git -C "$root" rev-parse --verify --quiet "$rev^{commit}")" ||
   { echo "bench_compare.sh: expected a revision of this repository, found '$rev'" >&2; exit 2; }
 
+# The capture this checkout reads by default (../shared/mocap beside it), for both builds:
+# the other revision's worktree lives elsewhere.
+export MGRL_DATA="${MGRL_DATA:-$(cd "$root/.." && pwd)/shared/mocap}"
 scratch="$(mktemp -d "${TMPDIR:-/tmp}/mgrl-bench-compare.XXXXXX")"
 worktree="$scratch/rev"
 cleanup() {
