@@ -11,6 +11,7 @@
 #include <set>
 
 #include "learn_common.hpp"
+#include "mgrl/session/session.hpp"
 
 #include "mgrl/learning/behavior.hpp"
 #include "mgrl/scenario/behaviors.hpp"
@@ -237,33 +238,41 @@ json runTrain(const TrainOptions& options) {
   const auto log = [&](const std::string& m) {
     if (options.log) options.log(m);
   };
-  Scenario scenario = checkedScenario(options);
-  if (!options.behavior.empty()) requireBehavior(scenario, options.behavior);
-  const fs::path cacheDir = options.cacheDir.empty() ? defaultCacheDirectory() : options.cacheDir;
-  fs::path out = options.out.empty() ? defaultPolicyDirectory(cacheDir, scenario) : options.out;
-  if (!out.has_filename()) out = out.parent_path();
-  {
-    // Fail before hours of training, not after: the bundle's folder must be creatable.
-    std::error_code ec;
-    if (out.has_parent_path()) fs::create_directories(out.parent_path(), ec);
-    if (ec) throw Error(fmt::format("--out {}: cannot create {}: {}", out.string(), out.parent_path().string(), ec.message()));
-    if (fs::exists(out, ec) && !fs::is_directory(out, ec))
-      throw Error(fmt::format("--out {}: expected a policy bundle directory or nothing, found a file", out.string()));
-    // The bundle is written beside `out` and renamed into place: that folder must take a
-    // new file now, not after training (issue 19). The probe is `.<name>.probe-PID`.
-    const fs::path parent = out.has_parent_path() ? out.parent_path() : fs::path(".");
-    if (!folderTakesNewFiles(parent, fmt::format(".{}.probe-", out.filename().string())))
-      throw Error(fmt::format("--out {}: expected a folder where files can be written, found {} is not writable",
-                              out.string(), parent.string()));
-  }
-  Loaded loaded = load(options, std::move(scenario), false);  // the model is enough: no poses
-  const StateActionModel& model = loaded.graph.model;
-  std::vector<Behavior> all = buildBehaviors(loaded.scenario, plugins(), model, loaded.graph.key);
+  // The scenario, its graph and behaviours, and the task they share (behaviours that do not
+  // share one world are refused here, not after training); the model is enough: no poses.
+  fs::path out;
+  SessionNeeds needs;
+  needs.motion = false;
+  needs.beforeGraph = [&](const Scenario& scenario) {
+    if (!options.behavior.empty()) requireBehavior(scenario, options.behavior);
+    const fs::path cacheDir = options.cacheDir.empty() ? defaultCacheDirectory() : options.cacheDir;
+    out = options.out.empty() ? defaultPolicyDirectory(cacheDir, scenario) : options.out;
+    if (!out.has_filename()) out = out.parent_path();
+    {
+      // Fail before hours of training, not after: the bundle's folder must be creatable.
+      std::error_code ec;
+      if (out.has_parent_path()) fs::create_directories(out.parent_path(), ec);
+      if (ec) throw Error(fmt::format("--out {}: cannot create {}: {}", out.string(), out.parent_path().string(), ec.message()));
+      if (fs::exists(out, ec) && !fs::is_directory(out, ec))
+        throw Error(fmt::format("--out {}: expected a policy bundle directory or nothing, found a file", out.string()));
+      // The bundle is written beside `out` and renamed into place: that folder must take a
+      // new file now, not after training (issue 19). The probe is `.<name>.probe-PID`.
+      const fs::path parent = out.has_parent_path() ? out.parent_path() : fs::path(".");
+      if (!folderTakesNewFiles(parent, fmt::format(".{}.probe-", out.filename().string())))
+        throw Error(fmt::format("--out {}: expected a folder where files can be written, found {} is not writable",
+                                out.string(), parent.string()));
+    }
+  };
+  const std::unique_ptr<Session> session = openSession(options, needs);
+  const Scenario& scenario = session->scenario;
+  const GraphResult& graph = session->graph;
+  const StateActionModel& model = session->model();
+  std::vector<Behavior>& all = session->behaviors;
 
   PolicyBundle bundle;
-  bundle.graphKey = loaded.graph.key;
-  bundle.provenance = {{"scenario", loaded.scenario.path.string()},
-                       {"scenario_name", loaded.scenario.name},
+  bundle.graphKey = graph.key;
+  bundle.provenance = {{"scenario", scenario.path.string()},
+                       {"scenario_name", scenario.name},
                        {"tool", fmt::format("mgrl {}", kVersion)},
                        {"sets", options.sets}};
   // Tables already in the bundle that are still current (same key: the same settings on
@@ -272,7 +281,7 @@ json runTrain(const TrainOptions& options) {
   std::set<std::string> finished;
   if (fs::exists(out / "manifest.json")) {
     try {
-      PolicyBundle previous = loadPolicyBundle(out, model, loaded.graph.key);
+      PolicyBundle previous = loadPolicyBundle(out, model, graph.key);
       // A stopped run's bundle holds only finished tables (its unfinished ones are absent).
       for (auto& item : previous.behaviors) {
         // Named, not a structured binding: clang before 16 cannot capture one in the lambda.
@@ -293,9 +302,9 @@ json runTrain(const TrainOptions& options) {
   }
 
   const unsigned threads = defaultThreadCount();
-  json report = {{"scenario", loaded.scenario.path.string()},
+  json report = {{"scenario", scenario.path.string()},
                  {"policy", out.string()},
-                 {"graph_key", loaded.graph.key},
+                 {"graph_key", graph.key},
                  {"behaviors", json::object()}};
   std::vector<std::string> wanted;
   for (const Behavior& behavior : all)
@@ -371,7 +380,7 @@ json runTrain(const TrainOptions& options) {
     CrashTestCheckpointer checkpointer(directory, behavior.name, options.log);
     checkpoints.push_back(directory.directory());
     std::optional<TrainResult> trained;
-    std::unique_ptr<TrainListener> listener = options.listen ? options.listen(behavior, all, loaded.graph) : nullptr;
+    std::unique_ptr<TrainListener> listener = options.listen ? options.listen(behavior, all, graph) : nullptr;
     {
       ProgressReporter progress(behavior.name, options.progressBar, options.log, listener.get());
       try {

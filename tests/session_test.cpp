@@ -136,6 +136,16 @@ TEST_CASE("a scenario whose behaviours disagree on the world they share is refus
   CHECK_THROWS_WITH(makeTask(std::vector<Behavior>{}, "built.yaml"), "built.yaml: expected at least one behaviour, found none");
 }
 
+TEST_CASE("mgrl train refuses behaviours that disagree on their world before training anything", "[session][data]") {
+  test::TempDir temp("session-train-disagree");
+  app::TrainOptions train;
+  static_cast<SessionOptions&>(train) = boxingOptions(temp.path);
+  train.sets.push_back("behaviors.hit.reward.gamma=0.9");
+  train.out = temp.path / "policy";
+  CHECK_THROWS_WITH(app::runTrain(train), Contains("behaviors.hit.reward.gamma") && Contains("expected gamma 0.97"));
+  CHECK_FALSE(fs::exists(train.out));
+}
+
 TEST_CASE("a scenario's world section reaches the task: kick's target height", "[session][data]") {
   test::TempDir temp("session-kick");
   SessionOptions options;
