@@ -1,0 +1,126 @@
+#pragma once
+// The viewer's page session (viewer.hpp), its parts shared by the files that implement it:
+// viewer.cpp (the world, controllers, scene, frames, success), viewer_lesson.cpp (the
+// learn panel), viewer_retrain.cpp (live retraining), viewer_values.cpp (the values view).
+// Not for other code: include serve/viewer.hpp.
+#include <atomic>
+#include <chrono>
+#include <cmath>
+#include <deque>
+#include <memory>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+#include "learners/q_learning_steps.hpp"
+#include "mgrl/learning/success.hpp"
+#include "mgrl/session/session.hpp"
+#include "serve/viewer.hpp"
+
+namespace mgrl::serve {
+
+using Clock = std::chrono::steady_clock;
+
+struct ViewerAssets {
+  /// The scenario opened once for every page: graph, behaviours, task and (when one serves)
+  /// the policy bundle; session->policy empty: the policy controller is not offered.
+  std::unique_ptr<Session> session;
+  double meanOutDegree = 1;  ///< actions per state, for the online search's cost
+  std::string note;          ///< shown on the page (no policy bundle, ...)
+  ServeOptions options;      ///< what the server was started with (live retraining adds --set's)
+  /// What eval counts as success (app::trialCriteria), which the page counts live, and
+  /// its text ("contact of the fists within 0.15 m").
+  std::vector<SuccessCriterion> criteria;
+  std::string criteriaText;
+
+  const StateActionModel& model() const { return session->model(); }
+};
+
+// Decisions timed (paper sec. 6.6 reports the runtime cost of a choice).
+struct DecisionClock {
+  double seconds = 0;
+  std::size_t count = 0;
+};
+
+// A behaviour retrained by one page (live retraining): its plugins built with the page's
+// changed parameters, value iteration's table on them, and what evaluation said.
+struct Retrained {
+  Behavior behavior;
+  std::shared_ptr<const Discretizer> refined;  ///< the learner's own grid, if it refined one
+  QTable table;
+  std::vector<double> vertices;  ///< (vertices, 3) positions, avatar frame
+  nlohmann::json set;                      ///< the parameters changed, as the page sent them
+  nlohmann::json curve = nlohmann::json::array();    ///< [updates, seconds, residual, mean residual]
+  nlohmann::json before, after;            ///< Trials::summary of the policy without and with this table
+  double trainSeconds = 0, totalSeconds = 0;
+  std::uint64_t updates = 0;
+
+  const Discretizer& grid() const { return refined ? *refined : *behavior.discretizer; }
+};
+
+inline double round3(double x) { return std::round(x * 1000) / 1000; }
+inline nlohmann::json point3(const Eigen::Vector3d& p) {
+  return nlohmann::json::array({round3(p.x()), round3(p.y()), round3(p.z())});
+}
+
+struct ViewerSession::State {
+  std::unique_ptr<World> world;
+  std::string controller;
+  int horizon = 3;
+  std::vector<double> weights;
+  double speed = 1, carry = 0;
+  bool paused = false;
+  int steps = 0;
+  DecisionClock decisions;
+  std::size_t eventsSeen = 0;
+  std::deque<double> hitTimes;  ///< simulated times of the hits of the last 30 s
+  // Successes as eval counts them (issue 17): each avatar's actions are followed by the
+  // scenario's criteria from the target it decided on, as one trial that restarts at
+  // each success. What the model says the action does, like eval's trials: the world's
+  // pushes and foot locks are not seen.
+  std::vector<std::vector<SuccessCriterion::Tracker>> trackers;  ///< per avatar, one per criterion
+  std::vector<std::size_t> decisionsFollowed;                   ///< per avatar
+  std::size_t successes = 0;
+  std::deque<double> successTimes;  ///< simulated times of the successes of the last 30 s
+  FrameWriter writer;
+  double busySeconds = 0;       ///< simulating and encoding, since the last stats
+  std::size_t busyFrames = 0;
+  std::string adjustment;       ///< what the session changed on its own (scene note)
+  int shown = -1;               ///< behaviour whose values are streamed (-1 none)
+  std::size_t valuesFrame = 0;  ///< world frame of the last `values` message
+
+  // The policy this page runs: the bundle's parts, a retrained behaviour's replaced.
+  std::vector<PolicyPart> policy;
+  std::vector<std::shared_ptr<const Retrained>> retrained;  ///< per behaviour; null: the bundle's
+
+  // The learn panel: Q-learning a step at a time on one behaviour's problem.
+  struct Lesson {
+    int behavior = -1;
+    std::shared_ptr<const Retrained> keep;  ///< the retrained plugins the lesson's problem uses
+    std::unique_ptr<learners::QLearningSteps> steps;
+    double rate = 0, carry = 0;  ///< steps per second while running
+  };
+  std::unique_ptr<Lesson> lesson;
+
+  // A retraining under way on its own thread.
+  struct Job {
+    int behavior = -1;
+    Clock::time_point started;
+    std::atomic<bool> stop{false}, done{false};
+    std::shared_ptr<Retrained> result;  ///< read once done
+    std::string failure;                ///< set instead of a usable result
+    std::thread thread;
+  };
+  std::unique_ptr<Job> job;
+
+  ~State() {
+    if (job && job->thread.joinable()) {
+      job->stop = true;
+      job->thread.join();
+    }
+  }
+};
+
+}  // namespace mgrl::serve

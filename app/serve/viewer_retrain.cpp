@@ -1,0 +1,185 @@
+// The viewer's live retraining (issue 15): value iteration on a thread of its own.
+#include "serve/viewer_parts.hpp"
+
+#include <algorithm>
+#include <atomic>
+#include <cmath>
+#include <mutex>
+#include <optional>
+#include <thread>
+
+#include <fmt/format.h>
+#include <fmt/ranges.h>
+#include <nlohmann/json.hpp>
+
+#include "learn_common.hpp"
+#include "learners/q_learning_steps.hpp"
+#include "trials.hpp"
+#include "mgrl/graph/motion_graph.hpp"
+#include "mgrl/learning/behavior.hpp"
+#include "mgrl/learning/policy_bundle.hpp"
+#include "mgrl/runtime/controller.hpp"
+#include "mgrl/runtime/world.hpp"
+#include "mgrl/scenario/behaviors.hpp"
+#include "mgrl/session/session.hpp"
+#include "plugins.hpp"
+
+namespace mgrl::serve {
+
+namespace fs = std::filesystem;
+using json = nlohmann::json;
+
+namespace {
+
+// At most one retraining at a time on the whole server: it takes every core for a second
+// or two, and the pages' worlds share them.
+std::atomic<bool> gRetraining{false};
+
+// What trials say about a retrained policy: this many trials of this much motion each.
+constexpr std::size_t kRetrainTrials = 200;
+constexpr double kRetrainTrialSeconds = 10;
+// The tabulated problem and two tables of a retraining, at most.
+constexpr double kRetrainBytes = 1e9;
+
+}  // namespace
+
+// Live retraining (issue 15): value iteration on one behaviour with some of its reward's or
+// grid's parameters changed, on a thread of its own; the page's avatar switches to the new
+// table when it is done, and both policies are evaluated on the same trials.
+void ViewerSession::retrain(const Retrain& message) {
+  State& s = *state_;
+  const ViewerAssets& a = *assets_;
+  const int i = behaviorIndex(message.behavior);
+  if (i < 0)
+    throw Error(fmt::format("retrain.behavior: expected one of {}, found \"{}\"", behaviorNames(), message.behavior));
+  if (a.session->policy.empty())
+    throw Error("retrain: expected a policy bundle to start from; this server has none (mgrl train makes one)");
+  if (s.job)
+    throw Error(fmt::format("retrain: expected no retraining under way on this page, found one of {} (started {:.1f} s "
+                            "ago)",
+                            a.session->behaviors[static_cast<std::size_t>(s.job->behavior)].name,
+                            std::chrono::duration<double>(Clock::now() - s.job->started).count()));
+  const auto index = static_cast<std::size_t>(i);
+  if (message.set.empty()) {  // back to the bundle's table
+    s.retrained[index].reset();
+    s.policy[index] = a.session->policy[index];
+    applyController();
+    outbox_.push_back(scene());
+    outbox_.push_back(json{{"type", "retrain"}, {"behavior", message.behavior}, {"status", "reverted"}}.dump());
+    return;
+  }
+  // The changed scenario, checked like `--set` on the command line: a wrong name or value
+  // is refused here, before anything is trained.
+  ServeOptions options = a.options;
+  json set = json::object();
+  for (const auto& [key, value] : message.set) {
+    options.sets.push_back(fmt::format("behaviors.{}.{}={}", message.behavior, key, value));
+    set[key] = value;
+  }
+  Scenario scenario = app::checkedScenario(options);
+  std::vector<Behavior> built =
+      buildBehaviors(scenario, app::plugins(), a.model(), a.session->graph.key, message.behavior);
+  auto result = std::make_shared<Retrained>();
+  result->behavior = std::move(built.front());
+  result->set = set;
+  const double bytes = GridModel::trainingBytes(a.model().actionCount(), result->behavior.discretizer->vertexCount());
+  if (bytes > kRetrainBytes)
+    throw Error(fmt::format("retrain: expected training to need at most {}, found {} for {} vertices x {} actions; "
+                            "choose a coarser grid",
+                            app::humanBytes(kRetrainBytes), app::humanBytes(bytes),
+                            result->behavior.discretizer->vertexCount(), a.model().actionCount()));
+  bool idle = false;
+  if (!gRetraining.compare_exchange_strong(idle, true))
+    throw Error("retrain: expected the server's one retraining slot to be free, found another page's retraining "
+                "under way; try again when it ends");
+
+  auto job = std::make_unique<State::Job>();
+  job->behavior = i;
+  job->started = Clock::now();
+  job->result = result;
+  // What the trials compare: this page's policy as it is, and with the new table.
+  std::vector<PolicyPart> before = s.policy;
+  for (std::size_t k = 0; k < before.size(); ++k) before[k].weight = s.weights[k];
+  State::Job* j = job.get();
+  std::shared_ptr<const ViewerAssets> assets = assets_;
+  const std::vector<std::shared_ptr<const Retrained>> keep = s.retrained;  // `before` points into these
+  job->thread = std::thread([j, assets, before, keep, result, index] {
+    try {
+      const StateActionModel& model = assets->model();
+      const unsigned threads = std::max(1u, std::thread::hardware_concurrency());
+      const auto start = Clock::now();
+      const Problem problem = result->behavior.problem(model);
+      const GridModel grid = GridModel::build(problem, threads);
+      const auto learner = app::plugins().learners.create(ConfigNode::parse("{type: value_iteration}", "retrain"));
+      TrainResult trained = learner->train({problem, grid, nullptr, nullptr, threads, &j->stop});
+      result->trainSeconds = std::chrono::duration<double>(Clock::now() - start).count();
+      result->table = std::move(trained.table);
+      result->refined = trained.grid;
+      result->updates = trained.updates;
+      for (const CurvePoint& p : trained.curve) result->curve.push_back({p.updates, p.seconds, p.residual, p.meanResidual});
+      const Discretizer& g = result->grid();
+      for (std::size_t v = 0; v < g.vertexCount(); ++v) {
+        const Eigen::Vector3d p = g.vertexPosition(v);
+        result->vertices.insert(result->vertices.end(), {p.x(), p.y(), p.z()});
+      }
+      // Success as the scenario defines it (its contact radius), on the same starts.
+      // Targets at the scenario's world.target_height when it gives one, as eval's.
+      const double height = assets->session->task.targetHeight(std::numeric_limits<double>::quiet_NaN());
+      const app::Trials trials(model, assets->session->behaviors, assets->session->task, height, assets->session->scenario.path.string());
+      std::vector<PolicyPart> after = before;
+      after[index].grid = &g;
+      after[index].table = &result->table;
+      auto evaluate = [&](const std::vector<PolicyPart>& parts) {
+        PolicyController controller(model, parts);
+        return app::Trials::summary(trials.run([&](std::uint32_t node, const TargetState& e) { return controller.choose(node, e); },
+                                               kRetrainTrials, kRetrainTrialSeconds, 1));
+      };
+      result->before = evaluate(before);
+      result->after = evaluate(after);
+      result->totalSeconds = std::chrono::duration<double>(Clock::now() - start).count();
+    } catch (const TrainInterrupted&) {
+      j->failure = "interrupted";
+    } catch (const std::exception& e) {
+      j->failure = e.what();
+    }
+    (void)keep;
+    gRetraining = false;
+    j->done = true;
+  });
+  s.job = std::move(job);
+  outbox_.push_back(json{{"type", "retrain"}, {"behavior", message.behavior}, {"status", "started"}, {"set", set}}.dump());
+}
+
+void ViewerSession::collectRetraining() {
+  State& s = *state_;
+  if (!s.job || !s.job->done) return;
+  s.job->thread.join();
+  const std::unique_ptr<State::Job> job = std::move(s.job);
+  const auto index = static_cast<std::size_t>(job->behavior);
+  const std::string& name = assets_->session->behaviors[index].name;
+  if (!job->failure.empty()) {
+    outbox_.push_back(json{{"type", "retrain"}, {"behavior", name}, {"status", "failed"}, {"message", job->failure}}.dump());
+    return;
+  }
+  const std::shared_ptr<const Retrained> r = job->result;
+  s.retrained[index] = r;
+  s.policy[index].grid = &r->grid();
+  s.policy[index].table = &r->table;
+  applyController();
+  outbox_.push_back(scene());
+  outbox_.push_back(json{{"type", "retrain"},
+                         {"behavior", name},
+                         {"status", "done"},
+                         {"set", r->set},
+                         {"learner", "value_iteration"},
+                         {"vertices", r->table.vertexCount()},
+                         {"updates", r->updates},
+                         {"train_seconds", r->trainSeconds},
+                         {"seconds", std::chrono::duration<double>(Clock::now() - job->started).count()},
+                         {"trials", kRetrainTrials},
+                         {"before", r->before},
+                         {"after", r->after}}
+                        .dump());
+}
+
+}  // namespace mgrl::serve

@@ -1,0 +1,106 @@
+// The viewer's values view (paper sec. 5): what the policy saw at avatar 0's last decision.
+#include "serve/viewer_parts.hpp"
+
+#include <algorithm>
+#include <atomic>
+#include <cmath>
+#include <mutex>
+#include <optional>
+#include <thread>
+
+#include <fmt/format.h>
+#include <fmt/ranges.h>
+#include <nlohmann/json.hpp>
+
+#include "learn_common.hpp"
+#include "learners/q_learning_steps.hpp"
+#include "trials.hpp"
+#include "mgrl/graph/motion_graph.hpp"
+#include "mgrl/learning/behavior.hpp"
+#include "mgrl/learning/policy_bundle.hpp"
+#include "mgrl/runtime/controller.hpp"
+#include "mgrl/runtime/world.hpp"
+#include "mgrl/scenario/behaviors.hpp"
+#include "mgrl/session/session.hpp"
+#include "plugins.hpp"
+
+namespace mgrl::serve {
+
+namespace fs = std::filesystem;
+using json = nlohmann::json;
+
+// What the policy saw at avatar 0's last decision (paper sec. 5): at its state s, for every
+// vertex v of the behaviour's grid (a 3-D grid's layer nearest the target's height), the
+// value max_a Q(s, v, a) and the greedy action, placed around the avatar as it stood then;
+// and the root path of the action it took.
+std::string ViewerSession::values() const {
+  const ViewerAssets& a = *assets_;
+  const State& s = *state_;
+  const auto shown = static_cast<std::size_t>(s.shown);
+  const Retrained* retrained = s.retrained[shown].get();
+  const Behavior& behavior = retrained ? retrained->behavior : a.session->behaviors[shown];
+  const std::vector<double>& vertexPositions =
+      retrained ? retrained->vertices : a.session->bundle.behaviors.at(behavior.name).vertices;
+  const QTable& q = *s.policy[shown].table;
+  const World::Decision d = s.world->lastDecision(0);
+  const Eigen::Vector3d e = inverseTransformPoint(d.frame, s.world->aim(0));
+  // A grid that also holds the target's heading (polar_velocity) repeats each position per
+  // heading and speed layer: the viewer's target stands still, so show the speed-0 slice at
+  // the heading nearest the decision's (a moving target's heading changes nothing at speed
+  // 0; an opponent's facing, issue 17, does).
+  const Discretizer& grid = *s.policy[shown].grid;
+  const std::size_t vertices =
+      grid.layerAxis() ? grid.axes()[0].vertices.size() * grid.axes()[1].vertices.size() : q.vertexCount();
+  std::size_t offset = 0;
+  if (grid.layerAxis() && grid.axes().size() == 3) {
+    const std::vector<double>& headings = grid.axes()[2].vertices;
+    double nearest = 10;
+    for (std::size_t h = 0; h < headings.size(); ++h)
+      if (const double gap = std::abs(std::remainder(headings[h] - d.target.heading, 2 * M_PI)); gap < nearest) {
+        nearest = gap;
+        offset = h * vertices;
+      }
+  }
+  double level = vertexPositions.empty() ? 0 : vertexPositions[3 * offset + 1];
+  for (std::size_t v = offset; v < offset + vertices; ++v)
+    if (std::abs(vertexPositions[3 * v + 1] - e.y()) < std::abs(level - e.y())) level = vertexPositions[3 * v + 1];
+  const std::size_t n = q.actionsOf(d.state);
+  json points = json::array();
+  double lo = 0, hi = 0;
+  bool first = true;
+  for (std::size_t v = offset; v < offset + vertices; ++v) {
+    const double* p = &vertexPositions[3 * v];
+    if (std::abs(p[1] - level) > 1e-6 || n == 0) continue;
+    const float* row = q.row(d.state, v);
+    const std::size_t best = static_cast<std::size_t>(std::max_element(row, row + n) - row);
+    const Eigen::Vector3d w = transformPoint(d.frame, {p[0], p[1], p[2]});
+    const double value = row[best];
+    lo = first ? value : std::min(lo, value);
+    hi = first ? value : std::max(hi, value);
+    first = false;
+    points.push_back({std::round(w.x() * 1000) / 1000, std::round(w.y() * 1000) / 1000, std::round(w.z() * 1000) / 1000,
+                      value, best});
+  }
+  const StateActionModel& model = a.model();
+  json path = json::array();
+  for (std::uint32_t k = model.actionFrameBegin[d.action]; k < model.actionFrameBegin[d.action + 1]; ++k) {
+    const Eigen::Vector3d w = transformPoint(d.frame, {model.frameRoot[3 * k], 0, model.frameRoot[3 * k + 1]});
+    path.push_back({std::round(w.x() * 1000) / 1000, 0, std::round(w.z() * 1000) / 1000});
+  }
+  return json{{"type", "values"},
+              {"behavior", behavior.name},
+              {"avatar", 0},
+              {"time", s.world->time()},
+              {"state", d.state},
+              {"actions", n},
+              {"chosen", d.action - model.stateActionBegin[d.state]},
+              {"height", level},
+              {"target_inside", s.policy[shown].grid->inside(e)},
+              {"v_min", lo},
+              {"v_max", hi},
+              {"points", points},
+              {"path", path}}
+      .dump();
+}
+
+}  // namespace mgrl::serve
