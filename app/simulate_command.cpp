@@ -211,15 +211,13 @@ std::string eventLine(const HitEvent& e) { return hitEventJson(e).dump(); }
 
 }  // namespace
 
-json runSimulate(const SimulateOptions& options) {
-  // Every mistake in the command line is reported before anything is loaded.
-  const ControllerChoice choice{options.controller, options.horizon, options.horizonSeconds};
-  checkControllerChoice(choice);
+// Every mistake in the command line, found before anything is loaded.
+void checkSimulateOptions(const SimulateOptions& options) {
+  checkControllerChoice({options.controller, options.horizon, options.horizonSeconds});
   if (options.avatars < 1 || options.avatars > kMaxAvatars)
     throw Error(fmt::format("--avatars: expected a number of avatars in [1, {}], found {}", kMaxAvatars,
                             options.avatars));
-  const bool poses = options.poses || !options.bvhOut.empty();
-  if (poses && options.avatars > kMaxAvatarsWithPoses)
+  if ((options.poses || !options.bvhOut.empty()) && options.avatars > kMaxAvatarsWithPoses)
     throw Error(fmt::format("--avatars: expected at most {} avatars with poses (--poses or --bvh-out), found {}",
                             kMaxAvatarsWithPoses, options.avatars));
   if (!(options.seconds > 0 && options.seconds <= 86400))
@@ -229,50 +227,143 @@ json runSimulate(const SimulateOptions& options) {
                             options.topK));
   if (options.threads > 256)
     throw Error(fmt::format("--threads: expected at most 256 threads, found {}", options.threads));
+}
 
+// Where the run's outputs go: checked, and their scratch folders made, before anything is
+// simulated (and removed again if the run fails).
+struct Outputs {
+  bool eventsInBundle = false;  ///< --events-out is a file of --bvh-out's folder
+  std::unique_ptr<ScratchDirectory> bvhCreated, eventsScratch;
+  std::unique_ptr<BundleWriter> bvhBundle;
+};
+
+Outputs prepareOutputs(const SimulateOptions& options, const Scenario& scenario) {
+  Outputs out;
   // An events file directly inside --bvh-out's folder is one of that folder's files, so
   // it is replaced with the BVH files as one unit.
   auto folderOf = [](const fs::path& p) {
     fs::path absolute = fs::absolute(p).lexically_normal();
     return absolute.has_filename() ? absolute : absolute.parent_path();
   };
-  const bool eventsInBundle = !options.bvhOut.empty() && !options.eventsOut.empty() &&
-                              folderOf(options.eventsOut).parent_path() == folderOf(options.bvhOut);
-  std::unique_ptr<ScratchDirectory> bvhCreated, eventsScratch;
-  std::unique_ptr<BundleWriter> bvhBundle;
+  out.eventsInBundle = !options.bvhOut.empty() && !options.eventsOut.empty() &&
+                       folderOf(options.eventsOut).parent_path() == folderOf(options.bvhOut);
+  // Output places are checked (and scratch folders made) before any simulation: first
+  // what can be checked without creating anything.
+  if (!options.eventsOut.empty()) {
+    if (fs::is_directory(options.eventsOut))
+      throw Error(fmt::format("--events-out {}: expected a file name, found a folder", options.eventsOut.string()));
+    // A missing folder is made, as for --bvh-out (prepareFolder and prepareBundle below).
+  }
+  if (!options.bvhOut.empty()) {
+    // A first estimate with a small skeleton (20 joints), exact once the skeleton is known.
+    const double avatarFrames = static_cast<double>(options.avatars) * std::round(options.seconds * scenario.motion.fps);
+    if (recordingBytes(avatarFrames, 20) > kMaxRecordingBytes)
+      throw Error(fmt::format("--bvh-out: recording {} avatars for {} s needs more than {:.1f} GB of memory; expected "
+                              "at most {:.0f} GB: use fewer --avatars or --seconds",
+                              options.avatars, options.seconds, recordingBytes(avatarFrames, 20) / 1e9,
+                              kMaxRecordingBytes / 1e9));
+  }
+  if (out.eventsInBundle) {
+    const std::string name = options.eventsOut.filename().string();
+    if (name == "manifest.json" || (name.rfind("avatar_", 0) == 0 && name.ends_with(".bvh")))
+      throw Error(fmt::format("--events-out {}: expected a name other than the BVH folder's own files "
+                              "(manifest.json, avatar_NNN.bvh), found {}",
+                              options.eventsOut.string(), quoteToken(name)));
+  }
+  if (!options.eventsOut.empty() && !out.eventsInBundle) {
+    const fs::path parent = options.eventsOut.parent_path().empty() ? fs::path(".") : options.eventsOut.parent_path();
+    out.eventsScratch = prepareFolder(parent, "--events-out");
+  }
+  if (!options.bvhOut.empty()) out.bvhBundle = prepareBundle(options.bvhOut, out.bvhCreated);
+  return out;
+}
+
+// Writes the run's outputs into the bundle's temporary and the scratch folder, then puts
+// them in place: the BVH folder whole (with the events if they belong to it), then the
+// events. Returns the BVH files written.
+std::vector<std::string> writeOutputs(Outputs& out, const SimulateOptions& options, const Session& session,
+                                      const World& world, std::size_t frames) {
+  const StateActionModel& model = session.model();
+  const std::size_t avatars = world.avatarCount();
+  const Scenario& scenario = session.scenario;
+  const GraphResult& graph = session.graph;
+  const WorldParams& params = session.task.world;
+  const fs::path& policyDir = session.policyDir;
+  std::string eventsText;
+  for (const HitEvent& e : world.events()) eventsText += eventLine(e) + '\n';
+  fs::path eventsTemporary;
+  if (out.eventsScratch) {
+    eventsTemporary = out.eventsScratch->path() / "events.jsonl";
+    writeWholeFile(eventsTemporary, eventsText);
+  }
+  std::vector<std::string> bvhFiles;
+  if (out.bvhBundle) {
+    const int width = static_cast<int>(std::to_string(avatars - 1).size());
+    BvhWriteOptions bvhOptions;
+    bvhOptions.lengthScale = 100;  // centimetres, as most tools expect
+    bvhOptions.continuousAngles = true;
+    json files = json::array();
+    auto add = [&](const std::string& name, const std::string& bytes) {
+      writeWholeFile(out.bvhBundle->path() / name, bytes);
+      files.push_back({{"file", name}, {"bytes", bytes.size()}, {"hash", hexDigest(hashBytes(bytes))}});
+    };
+    for (std::size_t i = 0; i < avatars; ++i) {
+      const std::string name = fmt::format("avatar_{:0{}}.bvh", i, std::max(width, 3));
+      std::ostringstream text;
+      writeBvh(text, motionFromPoses(graph.db.skeleton, world.recorded(i), model.frameTime), bvhOptions);
+      add(name, std::move(text).str());
+      bvhFiles.push_back((options.bvhOut / name).string());
+    }
+    if (out.eventsInBundle) add(options.eventsOut.filename().string(), eventsText);
+    json manifest = {
+        {"format", kOutputFormat},
+        {"version", kOutputVersion},
+        {"run",
+         {{"scenario", scenario.path.string()},
+          {"graph_key", graph.key},
+          {"controller", options.controller},
+          {"policy", policyDir.string()},
+          {"avatars", avatars},
+          {"frames", frames},
+          {"seconds", static_cast<double>(frames) * model.frameTime},
+          {"seed", options.seed},
+          {"world", worldParamsJson(params)},
+          {"time_utc", utcNow()},
+          {"pid", ::getpid()},
+          {"tool_version", kVersion}}},
+        {"files", files}};
+    // Events kept elsewhere: their hash says whether the file there is this run's.
+    if (out.eventsScratch)
+      manifest["events_out"] = {{"path", fs::absolute(options.eventsOut).lexically_normal().string()},
+                                {"bytes", eventsText.size()},
+                                {"hash", hexDigest(hashBytes(eventsText))}};
+    manifest["hash"] = manifestHash(manifest);
+    try {
+      out.bvhBundle->commit(manifest.dump(2) + "\n");
+    } catch (const Error& e) {
+      throw Error(fmt::format("--bvh-out {}", e.what()));
+    }
+    out.bvhCreated->keep();
+  }
+  if (out.eventsScratch) {
+    std::error_code ec;
+    fs::rename(eventsTemporary, options.eventsOut, ec);
+    if (ec) throw Error(fmt::format("--events-out {}: could not move the events into place: {}",
+                                    options.eventsOut.string(), ec.message()));
+    out.eventsScratch->keep();
+  }
+  return bvhFiles;
+}
+
+json runSimulate(const SimulateOptions& options) {
+  checkSimulateOptions(options);
+  const ControllerChoice choice{options.controller, options.horizon, options.horizonSeconds};
+  const bool poses = options.poses || !options.bvhOut.empty();
+  Outputs out;
   SessionNeeds needs;
   needs.policy = choice.name == "policy" ? PolicyNeed::Required : PolicyNeed::None;
   needs.policyDir = options.policy;
-  needs.beforeGraph = [&](const Scenario& scenario) {
-    // Output places are checked (and scratch folders made) before any simulation: first
-    // what can be checked without creating anything.
-    if (!options.eventsOut.empty()) {
-      if (fs::is_directory(options.eventsOut))
-        throw Error(fmt::format("--events-out {}: expected a file name, found a folder", options.eventsOut.string()));
-      // A missing folder is made, as for --bvh-out (prepareFolder and prepareBundle below).
-    }
-    if (!options.bvhOut.empty()) {
-      // A first estimate with a small skeleton (20 joints), exact once the skeleton is known.
-      const double avatarFrames = static_cast<double>(options.avatars) * std::round(options.seconds * scenario.motion.fps);
-      if (recordingBytes(avatarFrames, 20) > kMaxRecordingBytes)
-        throw Error(fmt::format("--bvh-out: recording {} avatars for {} s needs more than {:.1f} GB of memory; expected "
-                                "at most {:.0f} GB: use fewer --avatars or --seconds",
-                                options.avatars, options.seconds, recordingBytes(avatarFrames, 20) / 1e9,
-                                kMaxRecordingBytes / 1e9));
-    }
-    if (eventsInBundle) {
-      const std::string name = options.eventsOut.filename().string();
-      if (name == "manifest.json" || (name.rfind("avatar_", 0) == 0 && name.ends_with(".bvh")))
-        throw Error(fmt::format("--events-out {}: expected a name other than the BVH folder's own files "
-                                "(manifest.json, avatar_NNN.bvh), found {}",
-                                options.eventsOut.string(), quoteToken(name)));
-    }
-    if (!options.eventsOut.empty() && !eventsInBundle) {
-      const fs::path parent = options.eventsOut.parent_path().empty() ? fs::path(".") : options.eventsOut.parent_path();
-      eventsScratch = prepareFolder(parent, "--events-out");
-    }
-    if (!options.bvhOut.empty()) bvhBundle = prepareBundle(options.bvhOut, bvhCreated);
-  };
+  needs.beforeGraph = [&](const Scenario& scenario) { out = prepareOutputs(options, scenario); };
   const std::unique_ptr<Session> session = openSession(options, needs);
   if (options.topK > 0) session->task.world.variety.topK = static_cast<int>(options.topK);
   const WorldParams& params = session->task.world;
@@ -315,71 +406,7 @@ json runSimulate(const SimulateOptions& options) {
   }
   const double wall = since(start);
 
-  // Outputs: written into the bundle's temporary and the scratch folder, then put in
-  // place: the BVH folder whole (with the events if they belong to it), then the events.
-  std::string eventsText;
-  for (const HitEvent& e : world.events()) eventsText += eventLine(e) + '\n';
-  fs::path eventsTemporary;
-  if (eventsScratch) {
-    eventsTemporary = eventsScratch->path() / "events.jsonl";
-    writeWholeFile(eventsTemporary, eventsText);
-  }
-  std::vector<std::string> bvhFiles;
-  if (bvhBundle) {
-    const int width = static_cast<int>(std::to_string(avatars - 1).size());
-    BvhWriteOptions bvhOptions;
-    bvhOptions.lengthScale = 100;  // centimetres, as most tools expect
-    bvhOptions.continuousAngles = true;
-    json files = json::array();
-    auto add = [&](const std::string& name, const std::string& bytes) {
-      writeWholeFile(bvhBundle->path() / name, bytes);
-      files.push_back({{"file", name}, {"bytes", bytes.size()}, {"hash", hexDigest(hashBytes(bytes))}});
-    };
-    for (std::size_t i = 0; i < avatars; ++i) {
-      const std::string name = fmt::format("avatar_{:0{}}.bvh", i, std::max(width, 3));
-      std::ostringstream text;
-      writeBvh(text, motionFromPoses(graph.db.skeleton, world.recorded(i), model.frameTime), bvhOptions);
-      add(name, std::move(text).str());
-      bvhFiles.push_back((options.bvhOut / name).string());
-    }
-    if (eventsInBundle) add(options.eventsOut.filename().string(), eventsText);
-    json manifest = {
-        {"format", kOutputFormat},
-        {"version", kOutputVersion},
-        {"run",
-         {{"scenario", scenario.path.string()},
-          {"graph_key", graph.key},
-          {"controller", options.controller},
-          {"policy", policyDir.string()},
-          {"avatars", avatars},
-          {"frames", frames},
-          {"seconds", static_cast<double>(frames) * model.frameTime},
-          {"seed", options.seed},
-          {"world", worldParamsJson(params)},
-          {"time_utc", utcNow()},
-          {"pid", ::getpid()},
-          {"tool_version", kVersion}}},
-        {"files", files}};
-    // Events kept elsewhere: their hash says whether the file there is this run's.
-    if (eventsScratch)
-      manifest["events_out"] = {{"path", fs::absolute(options.eventsOut).lexically_normal().string()},
-                                {"bytes", eventsText.size()},
-                                {"hash", hexDigest(hashBytes(eventsText))}};
-    manifest["hash"] = manifestHash(manifest);
-    try {
-      bvhBundle->commit(manifest.dump(2) + "\n");
-    } catch (const Error& e) {
-      throw Error(fmt::format("--bvh-out {}", e.what()));
-    }
-    bvhCreated->keep();
-  }
-  if (eventsScratch) {
-    std::error_code ec;
-    fs::rename(eventsTemporary, options.eventsOut, ec);
-    if (ec) throw Error(fmt::format("--events-out {}: could not move the events into place: {}",
-                                    options.eventsOut.string(), ec.message()));
-    eventsScratch->keep();
-  }
+  const std::vector<std::string> bvhFiles = writeOutputs(out, options, *session, world, frames);
 
   std::vector<std::size_t> byAvatar(avatars, 0);
   std::map<std::string, std::size_t> byPart = {{"head", 0}, {"chest", 0}, {"spine", 0}, {"target", 0}};
