@@ -111,11 +111,4 @@ void registerCylindrical3d(DiscretizerRegistry& registry) {
        [](const Params& p, const StateActionModel& m) { return std::make_unique<Cylindrical3d>(p, m); }});
 }
 
-void registerAll(DiscretizerRegistry& registry) {
-  registerPolar2d(registry);
-  registerCylindrical3d(registry);
-  registerKdTree(registry);
-  registerPolarVelocity(registry);
-}
-
 }  // namespace mgrl::discretizers

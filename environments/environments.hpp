@@ -9,6 +9,8 @@ namespace mgrl::environments {
 /// Adds static_target (the paper's: the target stays put in the world), moving_target and
 /// opponent.
 void registerAll(EnvironmentRegistry& registry);
+/// Adds static_target and moving_target (environments/static_target.cpp).
+void registerStaticTargets(EnvironmentRegistry& registry);
 /// Adds opponent (environments/opponent.cpp).
 void registerOpponent(EnvironmentRegistry& registry);
 

@@ -10,7 +10,7 @@
 
 namespace mgrl::environments {
 
-void registerAll(EnvironmentRegistry& registry) {
+void registerStaticTargets(EnvironmentRegistry& registry) {
   registry.add({"static_target",
                 "the target stays put in the world; after an action it is seen from the action's end (exact)",
                 {},
@@ -26,7 +26,6 @@ void registerAll(EnvironmentRegistry& registry) {
                   if (lo > hi) p.fail("min_speed", fmt::format("expected at most max_speed ({} m/s), found {} m/s", hi, lo));
                   return std::make_unique<MovingTarget>(lo, hi);
                 }});
-  registerOpponent(registry);
 }
 
 }  // namespace mgrl::environments

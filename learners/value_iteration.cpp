@@ -101,10 +101,4 @@ void registerValueIteration(LearnerRegistry& registry) {
                 [](const Params& p) { return std::make_unique<ValueIteration>(p); }});
 }
 
-void registerAll(LearnerRegistry& registry) {
-  registerQLearning(registry);
-  registerValueIteration(registry);
-  registerAdaptiveValueIteration(registry);
-}
-
 }  // namespace mgrl::learners

@@ -61,7 +61,7 @@ ParamSpec gammaSpec() {
 
 }  // namespace
 
-void registerAll(RewardRegistry& registry) {
+void registerPaperRewards(RewardRegistry& registry) {
   registry.add({"approach",
                 "max over the action's frames of gamma^t exp(-|p(t) - target| / sigma), p the ground position of "
                 "the effective hitting points' centroid (paper sec. 6.4)",
@@ -75,7 +75,6 @@ void registerAll(RewardRegistry& registry) {
                  gammaSpec(),
                  ParamSpec::boolean("use_speed", true, "weight a hit by its normalised fist speed (false: 1)")},
                 [](const Params& p) { return std::make_unique<Hit>(p); }});
-  registerTerms(registry);
 }
 
 }  // namespace mgrl::rewards

@@ -12,6 +12,8 @@ namespace mgrl::rewards {
 /// Adds approach, hit (the paper's, as named presets) and terms (the vocabulary).
 void registerAll(RewardRegistry& registry);
 
+/// Adds approach and hit (rewards/rewards.cpp).
+void registerPaperRewards(RewardRegistry& registry);
 /// Adds terms (rewards/terms.cpp).
 void registerTerms(RewardRegistry& registry);
 

@@ -1,0 +1,14 @@
+// The discretizers this folder offers, in the order `mgrl list` shows them. A new grid is
+// its own file with its register function, declared and called here (docs/extending.md).
+#include "discretizers.hpp"
+
+namespace mgrl::discretizers {
+
+void registerAll(DiscretizerRegistry& registry) {
+  registerPolar2d(registry);
+  registerCylindrical3d(registry);
+  registerKdTree(registry);
+  registerPolarVelocity(registry);
+}
+
+}  // namespace mgrl::discretizers

@@ -1,0 +1,12 @@
+// The environment models this folder offers, in the order `mgrl list` shows them. A new
+// model is its own file with its register function, declared and called here.
+#include "environments.hpp"
+
+namespace mgrl::environments {
+
+void registerAll(EnvironmentRegistry& registry) {
+  registerStaticTargets(registry);
+  registerOpponent(registry);
+}
+
+}  // namespace mgrl::environments

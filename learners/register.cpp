@@ -1,0 +1,13 @@
+// The learners this folder offers, in the order `mgrl list` shows them. A new learner is
+// its own file with its register function, declared and called here (docs/extending.md).
+#include "learners.hpp"
+
+namespace mgrl::learners {
+
+void registerAll(LearnerRegistry& registry) {
+  registerQLearning(registry);
+  registerValueIteration(registry);
+  registerAdaptiveValueIteration(registry);
+}
+
+}  // namespace mgrl::learners
