@@ -40,13 +40,13 @@ enum class PolicyNeed {
 struct SessionNeeds {
   PolicyNeed policy = PolicyNeed::None;
   /// The bundle to use; "" the scenario's default one (defaultPolicyDirectory()).
-  std::filesystem::path policyDir;
+  std::filesystem::path policyDir = {};
   /// Parse the capture even when the graph comes from the cache: poses, bodies and BVH
   /// need it; trials and training need only the model (a cached graph then starts faster).
   bool motion = true;
   /// Called with the final scenario after every check that needs no graph and before the
   /// graph is loaded (a command's own checks, so that their message is the only one).
-  std::function<void(const Scenario&)> beforeGraph;
+  std::function<void(const Scenario&)> beforeGraph = nullptr;
 };
 
 class Session {
