@@ -10,12 +10,6 @@ namespace mgrl::app {
 
 namespace {
 
-nlohmann::json controllerNames() {
-  nlohmann::json names = nlohmann::json::array();
-  for (const ControllerSpec& spec : controllerSpecs()) names.push_back(spec.name);
-  return names;
-}
-
 template <class Registry>
 void describe(std::string& text, const Registry& registry, std::string_view heading) {
   text += fmt::format("{}:\n", heading);
@@ -84,7 +78,7 @@ nlohmann::json listJson(const Plugins& p) {
           {"reward_terms", termsJson()},
           {"environments", toJson(p.environments)},
           {"learners", toJson(p.learners)},
-          {"controllers", controllerNames()},
+          {"controllers", mgrl::controllerNames()},
           {"world", paramsJson(worldParamSpecs())}};
 }
 

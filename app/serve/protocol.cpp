@@ -131,9 +131,7 @@ ClientMessage parseClientMessage(std::string_view text) {
     result = m;
   } else if (type == "controller") {
     SetController m;
-    std::vector<std::string> controllers;  // the session's list (framework/session/controllers.hpp)
-    for (const ControllerSpec& spec : controllerSpecs()) controllers.push_back(spec.name);
-    m.controller = fields.word(fields.required("controller"), "controller", controllers);
+    m.controller = fields.word(fields.required("controller"), "controller", controllerNames());
     if (const json* h = fields.optional("horizon")) m.horizon = fields.whole(*h, "horizon", 1, Limits::kHorizonMax);
     result = m;
   } else if (type == "weights") {

@@ -1,6 +1,7 @@
 #include "mgrl/session/controllers.hpp"
 
 #include <fmt/format.h>
+#include <fmt/ranges.h>
 
 #include "mgrl/core/error.hpp"
 
@@ -22,12 +23,16 @@ const ControllerSpec* findController(std::string_view name) {
   return nullptr;
 }
 
+std::vector<std::string> controllerNames() {
+  std::vector<std::string> names;
+  for (const ControllerSpec& spec : controllerSpecs()) names.push_back(spec.name);
+  return names;
+}
+
 void checkControllerChoice(const ControllerChoice& choice, const ControllerFields& fields) {
-  if (!findController(choice.name)) {
-    std::string names;
-    for (const ControllerSpec& spec : controllerSpecs()) names += (names.empty() ? "" : ", ") + spec.name;
-    throw Error(fmt::format("{}: expected one of: {}, found {}", fields.controller, names, quoteToken(choice.name)));
-  }
+  if (!findController(choice.name))
+    throw Error(fmt::format("{}: expected one of: {}, found {}", fields.controller, fmt::join(controllerNames(), ", "),
+                            quoteToken(choice.name)));
   if (choice.horizon < 1 || choice.horizon > kMaxHorizon)
     throw Error(fmt::format("{}: expected a search depth in actions in [1, {}], found {}", fields.horizon, kMaxHorizon,
                             choice.horizon));
@@ -36,12 +41,14 @@ void checkControllerChoice(const ControllerChoice& choice, const ControllerField
                             kMaxHorizonSeconds, choice.horizonSeconds));
 }
 
+void requireParts(const ControllerChoice& choice, const ControllerParts& parts) {
+  if (choice.name == "policy" && parts.policy.empty())
+    throw Error("--controller policy: expected a trained policy bundle, found none (train one with mgrl train)");
+}
+
 std::unique_ptr<Controller> makeController(const ControllerChoice& choice, const ControllerParts& parts) {
-  if (choice.name == "policy") {
-    if (parts.policy.empty())
-      throw Error("--controller policy: expected a trained policy bundle, found none (train one with mgrl train)");
-    return std::make_unique<PolicyController>(*parts.model, parts.policy, parts.variety);
-  }
+  requireParts(choice, parts);
+  if (choice.name == "policy") return std::make_unique<PolicyController>(*parts.model, parts.policy, parts.variety);
   if (choice.name == "online_search")
     return std::make_unique<OnlineSearchController>(*parts.model, *parts.environment, parts.search,
                                                     SearchHorizon{choice.horizon, choice.horizonSeconds}, parts.gamma);

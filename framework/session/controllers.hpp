@@ -23,6 +23,8 @@ struct ControllerSpec {
 const std::vector<ControllerSpec>& controllerSpecs();
 /// The spec named `name`, or null.
 const ControllerSpec* findController(std::string_view name);
+/// Their names, in that order.
+std::vector<std::string> controllerNames();
 
 /// The online search's depth in actions is at most this (the cost grows as the actions per
 /// state to this power), its horizon in seconds at most kMaxHorizonSeconds.
@@ -58,6 +60,8 @@ struct ControllerParts {
   Variety variety;                   ///< the policy's choice among near-best actions ({}: greedy)
 };
 
+/// Throws mgrl::Error unless `parts` has what `choice` needs (tables for `policy`).
+void requireParts(const ControllerChoice& choice, const ControllerParts& parts);
 /// A new controller of the checked `choice`. Throws mgrl::Error for `policy` without tables.
 std::unique_ptr<Controller> makeController(const ControllerChoice& choice, const ControllerParts& parts);
 

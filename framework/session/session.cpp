@@ -30,7 +30,7 @@ WorldSetup Session::worldSetup(std::size_t avatars, std::uint64_t seed, const Co
   setup.seed = seed;
   setup.opponent = task.opponent;
   const ControllerParts parts = controllerParts(task.world.variety);
-  if (choice.name == "policy" && parts.policy.empty()) makeController(choice, parts);  // says why, now
+  requireParts(choice, parts);  // now, not at the world's first decision
   setup.makeController = [choice, parts] { return makeController(choice, parts); };
   return setup;
 }
