@@ -206,6 +206,9 @@ int main(int argc, char** argv) {
                                                  "machines)")->default_str("127.0.0.1");
   serveCommand->add_option("--port", serve.port, "Port (0: any free one; the URL is printed)")->default_val(8080);
   serveCommand->add_flag("--open", serve.open, "Open the page in the desktop's browser (xdg-open)");
+  serveCommand->add_option("--allow-origin", serve.allowOrigins,
+                           "Also answer pages of this origin, e.g. http://mybox.lan:8080 (repeatable; by default only "
+                           "the server's own address, localhost, 127.0.0.1 and [::1] at its port)");
   serveCommand->add_option("--web", serve.web, "The viewer's folder (default: MGRL_WEB, else the repository's web/)");
   serveCommand->add_option("--set", serve.sets, "Override a scenario key (repeatable)");
   addDataAndCache(serveCommand, dataDir, cacheDir);

@@ -19,6 +19,7 @@
 #include "serve/server.hpp"
 #include "serve/static_files.hpp"
 #include "serve/viewer.hpp"
+#include "serve_support.hpp"
 #include "test_support.hpp"
 
 namespace mgrl {
@@ -32,11 +33,8 @@ namespace net = boost::asio;
 using tcp = net::ip::tcp;
 using json = nlohmann::json;
 using serve::parseClientMessage;
+using namespace test::serving;
 
-void writeFile(const fs::path& path, const std::string& text) {
-  fs::create_directories(path.parent_path());
-  std::ofstream(path) << text;
-}
 
 TEST_CASE("page messages are taken only when every field is what the protocol says", "[serve]") {
   const auto mode = std::get<serve::SetMode>(parseClientMessage(R"({"type": "mode", "mode": "crowd", "avatars": 100})"));
@@ -162,41 +160,6 @@ TEST_CASE("static files come only from inside the web folder", "[serve]") {
   CHECK(serve::mimeType("a.exe") == "application/octet-stream");
 }
 
-// Boxing with a policy trained by value iteration (about two seconds with the graph).
-struct BoxingAssets {
-  test::TempDir temp{"serve"};
-  std::shared_ptr<const serve::ViewerAssets> assets;
-  app::TrainOptions train;  ///< what made the policy bundle (train.out)
-
-  explicit BoxingAssets(bool withPolicy = true, const std::string& scenario = "boxing.yaml",
-                        std::vector<std::string> sets = {"behaviors.approach.learner.type=value_iteration",
-                                                         "behaviors.hit.learner.type=value_iteration"}) {
-    train.scenario = fs::path(MGRL_SOURCE_DIR) / "scenarios" / scenario;
-    train.dataDir = test::mocap();
-    train.cacheDir = temp.path / "cache";
-    train.out = temp.path / "policy";
-    train.sets = std::move(sets);
-    if (withPolicy) {
-      // Trained once for every test process of the suite (test::sharedResult): these tests
-      // test the viewer, the learning tests the training.
-      std::string name = fs::path(scenario).stem().string();
-      for (const std::string& set : train.sets) name += "," + set;
-      const fs::path shared = test::sharedResult(fmt::format("serve-{:016x}", std::hash<std::string>{}(name)),
-                                                 [&](const fs::path& d) {
-                                                   app::TrainOptions t = train;
-                                                   t.cacheDir = d / "cache";
-                                                   t.out = d / "policy";
-                                                   app::runTrain(t);
-                                                 });
-      train.cacheDir = shared / "cache";
-      train.out = shared / "policy";
-    }
-    serve::ServeOptions options;
-    static_cast<app::LearnOptions&>(options) = train;
-    if (withPolicy) options.policy = train.out;
-    assets = serve::loadViewerAssets(options);
-  }
-};
 
 std::vector<json> textMessages(serve::ViewerSession& session) {
   std::vector<json> out;
@@ -467,110 +430,6 @@ TEST_CASE("a page's lesson steps Q-learning and a retraining switches the policy
   CHECK_FALSE(back[0]["behaviors"][1].contains("retrained"));
 }
 
-// The server on a free port, in a thread of its own, serving a small web folder.
-struct RunningServer {
-  test::TempDir web{"serve-web"};
-  std::unique_ptr<serve::Server> server;
-  std::thread thread;
-
-  RunningServer(std::shared_ptr<const serve::ViewerAssets> assets, int maxSessions) {
-    writeFile(web.path / "index.html", "<!doctype html><title>mgrl</title>");
-    writeFile(web.path / "viewer.js", "export const x = 1;");
-    writeFile(web.path / "node_modules" / "three" / "build" / "three.module.js", "export {};");
-    serve::ServerOptions options;
-    options.port = 0;
-    options.webRoot = web.path;
-    options.maxSessions = maxSessions;
-    server = std::make_unique<serve::Server>(std::move(assets), options);
-    thread = std::thread([this] { server->run(); });
-  }
-  ~RunningServer() {
-    server->stop();
-    thread.join();
-  }
-  std::uint16_t port() const { return server->port(); }
-};
-
-struct HttpReply {
-  int status = 0;
-  std::string type, body;
-};
-
-// One request on a fresh connection; `target` is sent as is.
-HttpReply get(std::uint16_t port, const std::string& target, http::verb verb = http::verb::get, bool upgrade = false) {
-  net::io_context ioc;
-  beast::tcp_stream stream(ioc);
-  stream.expires_after(std::chrono::seconds(10));
-  stream.connect(tcp::endpoint(net::ip::make_address("127.0.0.1"), port));
-  http::request<http::empty_body> request{verb, target, 11};
-  request.set(http::field::host, "127.0.0.1");
-  if (upgrade) {  // a WebSocket handshake by hand, to see the refusal's status
-    request.set(http::field::connection, "Upgrade");
-    request.set(http::field::upgrade, "websocket");
-    request.set(http::field::sec_websocket_key, "dGhlIHNhbXBsZSBub25jZQ==");
-    request.set(http::field::sec_websocket_version, "13");
-  }
-  http::write(stream, request);
-  beast::flat_buffer buffer;
-  http::response_parser<http::string_body> parser;
-  parser.skip(verb == http::verb::head);
-  http::read(stream, buffer, parser);
-  const auto& response = parser.get();
-  return {static_cast<int>(response.result_int()), std::string(response[http::field::content_type]), response.body()};
-}
-
-// A page over a real WebSocket, every read bounded by a timeout.
-struct Page {
-  net::io_context ioc;
-  websocket::stream<beast::tcp_stream> ws{ioc};
-  beast::flat_buffer buffer;
-
-  explicit Page(std::uint16_t port) {
-    beast::get_lowest_layer(ws).expires_after(std::chrono::seconds(10));
-    beast::get_lowest_layer(ws).connect(tcp::endpoint(net::ip::make_address("127.0.0.1"), port));
-    ws.handshake("127.0.0.1", "/ws");
-  }
-  struct Message {
-    beast::error_code error;
-    bool binary = false;
-    std::string data;
-  };
-  Message read() {
-    Message m;
-    beast::get_lowest_layer(ws).expires_after(std::chrono::seconds(10));
-    buffer.consume(buffer.size());
-    ws.async_read(buffer, [&](beast::error_code ec, std::size_t) { m.error = ec; });
-    ioc.restart();
-    ioc.run();
-    m.binary = ws.got_binary();
-    m.data = beast::buffers_to_string(buffer.data());
-    return m;
-  }
-  // Reads until a message of the kind asked for (or an error).
-  Message readUntil(bool binary, const std::string& textType = "") {
-    for (int i = 0; i < 1000; ++i) {
-      Message m = read();
-      if (m.error) return m;
-      if (m.binary == binary && (binary || textType.empty() || json::parse(m.data)["type"] == textType)) return m;
-    }
-    return {};
-  }
-  beast::error_code send(const std::string& text, bool binary = false) {
-    beast::error_code ec;
-    ws.binary(binary);
-    ws.write(net::buffer(text), ec);
-    return ec;
-  }
-  // Reads until the server closes; returns the close code it gave (0 if it did not close).
-  int closeCode() {
-    for (int i = 0; i < 5000; ++i) {
-      const Message m = read();
-      if (m.error == websocket::error::closed) return static_cast<int>(ws.reason().code);
-      if (m.error) return -1;
-    }
-    return 0;
-  }
-};
 
 TEST_CASE("the server serves the page's files, refuses traversal and other methods", "[serve][data]") {
   const BoxingAssets boxing;
@@ -666,8 +525,9 @@ TEST_CASE("hostile pages get an error or a closed socket while a good page keeps
     tcp::socket raw(ioc);
     raw.connect(tcp::endpoint(net::ip::make_address("127.0.0.1"), running.port()));
     const std::string upgrade =
-        "GET /ws HTTP/1.1\r\nHost: 127.0.0.1\r\nUpgrade: websocket\r\nConnection: Upgrade\r\n"
-        "Sec-WebSocket-Key: dGhlIHNhbXBsZSBub25jZQ==\r\nSec-WebSocket-Version: 13\r\n\r\n";
+        fmt::format("GET /ws HTTP/1.1\r\nHost: 127.0.0.1:{}\r\nUpgrade: websocket\r\nConnection: Upgrade\r\n"
+                    "Sec-WebSocket-Key: dGhlIHNhbXBsZSBub25jZQ==\r\nSec-WebSocket-Version: 13\r\n\r\n",
+                    running.port());
     net::write(raw, net::buffer(upgrade));
     std::string reply(12, '\0');
     net::read(raw, net::buffer(reply.data(), reply.size()));

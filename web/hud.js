@@ -35,14 +35,26 @@ export class Hud {
       this.hitLines = [];
       this.hitsAhead = 0;
     }
-    const note = $('note');
-    note.hidden = !(typeof scene.note === 'string' && scene.note.length > 0);
-    note.textContent = note.hidden ? '' : scene.note;
+    this.showNote();
   }
 
   setStats(stats) {
     this.stats = stats;
     this.hitsAhead = 0;   // it counts every hit sent before it
+    this.showNote();
+  }
+
+  /** The scene's note (no policy bundle, a lowered horizon) and, while the server slows this
+   * page's world to share its time with the others, the stats' reason. */
+  noteText() {
+    return [this.scene?.note, this.stats?.slowed].filter((t) => typeof t === 'string' && t.length > 0).join(' ');
+  }
+
+  showNote() {
+    const note = $('note');
+    const text = this.noteText();
+    note.hidden = text.length === 0;
+    note.textContent = text;
   }
 
   setError(message) {

@@ -96,6 +96,12 @@ class Fields {
 ClientMessage parseClientMessage(std::string_view text) {
   if (text.size() > Limits::kMessageBytes)
     throw Error(fmt::format("message: expected at most {} bytes, found {}", Limits::kMessageBytes, text.size()));
+  // The JSON reader would skip a byte order mark and stop at a NUL, ignoring what follows:
+  // the message must be the JSON text and nothing else.
+  if (text.starts_with("\xEF\xBB\xBF"))
+    throw Error("message: expected a JSON object, found a UTF-8 byte order mark (EF BB BF) before it");
+  if (const std::size_t nul = text.find('\0'); nul != std::string_view::npos)
+    throw Error(fmt::format("message: expected JSON text without NUL bytes, found one at byte {}", nul));
   const json message = json::parse(text.begin(), text.end(), nullptr, /*allow_exceptions=*/false);
   if (message.is_discarded()) throw Error("message: expected a JSON object, found text that is not JSON");
   if (!message.is_object()) throw Error(fmt::format("message: expected a JSON object, found {}", shown(message)));
@@ -157,7 +163,7 @@ ClientMessage parseClientMessage(std::string_view text) {
     result = SetSpeed{fields.number(fields.required("speed"), "speed", Limits::kSpeedMin, Limits::kSpeedMax)};
   } else if (type == "values") {
     const json& b = fields.required("behavior");
-    if (!(b.is_null() || (b.is_string() && b.get<std::string>().size() <= 64)))
+    if (!(b.is_null() || (b.is_string() && !b.get<std::string>().empty() && b.get<std::string>().size() <= 64)))
       throw Error(fmt::format("values.behavior: expected a behaviour name or null, found {}", shown(b)));
     result = ShowValues{b.is_null() ? std::string() : b.get<std::string>()};
   } else if (type == "learn") {
@@ -206,6 +212,7 @@ ClientMessage parseClientMessage(std::string_view text) {
                                 key.size() > 40 ? key.substr(0, 37) + "..." : key));
       const std::string field = fmt::format("set[\"{}\"]", key);
       m.set[key] = fields.number(value, field.c_str(), -1e9, 1e9);
+      if (value.is_number_float()) m.fractional[key] = value.dump();
     }
     result = m;
   } else {

@@ -81,6 +81,9 @@ struct Learn {
 struct Retrain {
   std::string behavior;
   std::map<std::string, double> set;
+  /// The keys whose number was written with a fraction or an exponent (3.0, 1e3), as the
+  /// page wrote it: a whole-number parameter refuses them (as `avatars` does).
+  std::map<std::string, std::string> fractional;
 };
 
 using ClientMessage =

@@ -6,6 +6,7 @@
 
 #include <fmt/format.h>
 
+#include "serve/origin.hpp"
 #include "serve/server.hpp"
 
 extern char** environ;
@@ -40,6 +41,7 @@ void openBrowser(const std::string& url, const WarningSink& log) {
 void runServe(const ServeCommandOptions& options) {
   if (options.port < 0 || options.port > 65535)
     throw Error(fmt::format("--port: expected a port in [0, 65535] (0: any free one), found {}", options.port));
+  OriginPolicy(options.host, 0, options.allowOrigins);  // a malformed --allow-origin: refused before anything loads
   const fs::path web = webDirectory(options.web);
   if (options.log) options.log(fmt::format("serve: loading {} (graph and policy, once)", options.scenario.string()));
   std::shared_ptr<const ViewerAssets> assets = loadViewerAssets(options);
@@ -48,6 +50,7 @@ void runServe(const ServeCommandOptions& options) {
   serverOptions.port = static_cast<std::uint16_t>(options.port);
   serverOptions.webRoot = web;
   serverOptions.log = options.log;
+  serverOptions.allowOrigins = options.allowOrigins;
   Server server(assets, serverOptions);
   if (options.host != "127.0.0.1" && options.host != "::1" && options.log)
     options.log(fmt::format("serve: warning: listening on {}, so other machines can reach this server", options.host));

@@ -6,6 +6,7 @@
 #include <filesystem>
 #include <functional>
 #include <string>
+#include <vector>
 
 #include "serve/viewer.hpp"
 
@@ -16,6 +17,7 @@ struct ServeCommandOptions : ServeOptions {
   long long port = 8080;
   std::filesystem::path web;  ///< "" MGRL_WEB, else the repository's web/
   bool open = false;          ///< start the desktop's browser on the URL
+  std::vector<std::string> allowOrigins;  ///< --allow-origin: pages of these origins may connect too
   /// Told the URL once the server listens (stdout).
   std::function<void(const std::string&)> announce;
 };

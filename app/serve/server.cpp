@@ -6,12 +6,15 @@
 #include <deque>
 #include <optional>
 
+#include <malloc.h>
+
 #include <boost/asio.hpp>
 #include <boost/beast/core.hpp>
 #include <boost/beast/http.hpp>
 #include <boost/beast/websocket.hpp>
 #include <fmt/format.h>
 
+#include "serve/origin.hpp"
 #include "serve/static_files.hpp"
 
 namespace mgrl::serve {
@@ -28,8 +31,29 @@ namespace {
 
 constexpr std::size_t kHeaderLimit = 8 * 1024;
 constexpr auto kIdle = std::chrono::seconds(30);
-constexpr std::size_t kMaxQueuedMessages = 4096;  ///< text messages waiting for a slow page
+constexpr std::size_t kMaxQueuedMessages = 4096;  ///< messages waiting for a slow page
+/// Bytes waiting for a slow page (its pose frame included): the bound on what a page that
+/// does not read costs the server (docs/viewer-protocol.md, "Limits").
+constexpr std::size_t kMaxQueuedBytes = 8u << 20;
 constexpr double kStatsEvery_s = 0.5;
+/// The one network thread's time that the pages' worlds share (simulating, encoding and
+/// handling messages), as a fraction of wall time: each page may use this divided by the
+/// pages open, so that a light page keeps its frames whatever the others ask. The rest is
+/// the sockets'. Unused share is not lent: a heavy page is slowed even beside idle ones.
+constexpr double kWorldShare = 0.5;
+/// How far ahead of its share a page may run, s (a burst: a mode change, a retraining's
+/// table taken).
+constexpr double kAllowanceMax = 0.1;
+/// accept() failing for want of descriptors or memory: retried after this, doubling.
+constexpr auto kAcceptRetryFirst = std::chrono::milliseconds(50);
+constexpr auto kAcceptRetryMax = std::chrono::seconds(1);
+
+// glibc keeps freed memory in its arenas; a page that leaves may have held megabytes
+// (a crowd's frames, a retrained table), so hand what is free at the top back to the
+// system when one goes.
+struct TrimOnExit {
+  ~TrimOnExit() { ::malloc_trim(0); }
+};
 
 }  // namespace
 
@@ -39,10 +63,27 @@ struct Shared {
   std::shared_ptr<const ViewerAssets> assets;
   ServerOptions options;
   fs::path root;
+  std::optional<OriginPolicy> origins;  ///< set once the port is known
   std::atomic<int> sessions{0};
+  // Refusals of foreign Host or Origin headers: logged at most once a second (a hostile
+  // page may send thousands), with how many were not.
+  Clock::time_point lastRefusalLog{};
+  std::size_t refusalsNotLogged = 0;
 
   void log(const std::string& line) const {
     if (options.log) options.log(line);
+  }
+  void refused(const std::string& why) {
+    const auto now = Clock::now();
+    if (now - lastRefusalLog < std::chrono::seconds(1)) {
+      ++refusalsNotLogged;
+      return;
+    }
+    log(refusalsNotLogged ? fmt::format("serve: refused a request: {} ({} more refused since the last such line)", why,
+                                        refusalsNotLogged)
+                          : fmt::format("serve: refused a request: {}", why));
+    lastRefusalLog = now;
+    refusalsNotLogged = 0;
   }
 };
 
@@ -51,8 +92,11 @@ struct Server::Impl {
   net::io_context ioc{1};
   tcp::acceptor acceptor{ioc};
   std::optional<net::signal_set> signals;
+  net::steady_timer acceptRetry{ioc};
+  Clock::duration acceptDelay{};  ///< zero: accepting; else the back-off in force
 
   void accept();
+  void pauseAccepting(const beast::error_code& ec);
 };
 
 namespace {
@@ -61,7 +105,7 @@ namespace {
 class PageSession : public std::enable_shared_from_this<PageSession> {
  public:
   PageSession(tcp::socket socket, std::shared_ptr<Shared> server)
-      : ws_(std::move(socket)), server_(*server), keep_(std::move(server)), timer_(ws_.get_executor()),
+      : trim_(), ws_(std::move(socket)), server_(*server), keep_(std::move(server)), timer_(ws_.get_executor()),
         viewer_(server_.assets) {
     ++server_.sessions;
   }
@@ -87,6 +131,7 @@ class PageSession : public std::enable_shared_from_this<PageSession> {
     bool binary = false;
     std::string text;
     std::vector<std::uint8_t> bytes;
+    std::size_t size() const { return binary ? bytes.size() : text.size(); }
   };
 
   void read() {
@@ -115,7 +160,9 @@ class PageSession : public std::enable_shared_from_this<PageSession> {
       }
       const std::string text = beast::buffers_to_string(buffer_.data());
       buffer_.consume(buffer_.size());
+      const auto began = Clock::now();
       viewer_.handle(text);
+      spend(began);
       dirty_ = true;
       flushOutbox();
     } catch (const std::exception& e) {
@@ -133,25 +180,47 @@ class PageSession : public std::enable_shared_from_this<PageSession> {
     });
   }
 
+  // This page's share of the network thread (kWorldShare over the pages open), as an
+  // allowance of seconds refilled with time and spent by its world.
+  double share() const { return kWorldShare / std::max(1, server_.sessions.load()); }
+  void refill(Clock::time_point now) {
+    allowance_ = std::min(kAllowanceMax, allowance_ + share() * std::chrono::duration<double>(now - refilled_).count());
+    refilled_ = now;
+  }
+  void spend(Clock::time_point began) {
+    const auto now = Clock::now();
+    refill(now);
+    allowance_ -= std::chrono::duration<double>(now - began).count();
+  }
+
   void onTick() {
     if (closing_) return;
     try {
-      const bool moved = viewer_.advance(1.0);
-      if (moved || dirty_) {
+      const auto began = Clock::now();
+      refill(began);
+      ++ticks_;
+      // Over its share: this step is skipped (its world runs slower), and `stats` says why.
+      const bool over = allowance_ < 0;
+      if (over) ++ticksSkipped_;
+      const bool moved = !over && viewer_.advance(1.0);
+      if (moved || (dirty_ && !over)) {
         dirty_ = false;
         if (binaryPending_) {
           ++framesDropped_;
         } else {
           const auto& frame = viewer_.frame();
-          queue_.push_back({true, {}, frame});
+          push({true, {}, frame});
           binaryPending_ = true;
           ++framesSent_;
         }
       }
+      if (!over) spend(began);
       const auto now = Clock::now();
       if (now >= nextStats_) {
         nextStats_ = now + std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(kStatsEvery_s));
-        queue_.push_back({false, viewer_.stats(framesSent_, framesDropped_), {}});
+        const PageShare fair{share(), server_.sessions.load(), ticksSkipped_, ticks_};
+        push({false, viewer_.stats(framesSent_, framesDropped_, fair), {}});
+        ticks_ = ticksSkipped_ = 0;
       }
       flushOutbox();
       nextTick_ += period_;
@@ -164,15 +233,33 @@ class PageSession : public std::enable_shared_from_this<PageSession> {
     tick();
   }
 
+  void push(Outgoing message) {
+    queuedBytes_ += message.size();
+    queue_.push_back(std::move(message));
+  }
+
   void flushOutbox() {
-    for (std::string& text : viewer_.takeOutbox()) queue_.push_back({false, std::move(text), {}});
-    if (queue_.size() > kMaxQueuedMessages) {
-      queue_.clear();
-      binaryPending_ = false;
-      close(websocket::close_code::policy_error, "the page reads too slowly");
+    for (std::string& text : viewer_.takeOutbox()) push({false, std::move(text), {}});
+    if (queue_.size() > kMaxQueuedMessages || queuedBytes_ > kMaxQueuedBytes) {
+      server_.log(fmt::format("serve: closing a page that reads too slowly ({} messages, {} bytes waiting)",
+                              queue_.size(), queuedBytes_));
+      clearQueue();
+      close(websocket::close_code::policy_error,
+            fmt::format("the page reads too slowly: expected at most {} messages or {} MiB waiting to be sent",
+                        kMaxQueuedMessages, kMaxQueuedBytes >> 20));
       return;
     }
     write();
+  }
+
+  // Drops what waits (not a write in flight, whose buffer Beast is reading) and gives the
+  // memory back.
+  void clearQueue() {
+    std::deque<Outgoing> kept;
+    if (writing_ && !queue_.empty()) kept.push_back(std::move(queue_.front()));
+    queue_.swap(kept);
+    queuedBytes_ = queue_.empty() ? 0 : queue_.front().size();
+    binaryPending_ = !queue_.empty() && queue_.front().binary;
   }
 
   void write() {
@@ -193,6 +280,7 @@ class PageSession : public std::enable_shared_from_this<PageSession> {
       self->writing_ = false;
       if (self->queue_.empty()) return;
       if (self->queue_.front().binary) self->binaryPending_ = false;
+      self->queuedBytes_ -= self->queue_.front().size();
       self->queue_.pop_front();
       if (ec) {
         self->finish();
@@ -211,7 +299,7 @@ class PageSession : public std::enable_shared_from_this<PageSession> {
     if (closeCode_) return;
     closeCode_ = code;
     closeReason_ = std::move(reason);
-    queue_.clear();
+    clearQueue();
     write();
   }
 
@@ -223,6 +311,7 @@ class PageSession : public std::enable_shared_from_this<PageSession> {
     timer_.cancel();
   }
 
+  TrimOnExit trim_;  // first: runs after every other member is gone
   websocket::stream<beast::tcp_stream> ws_;
   Shared& server_;
   std::shared_ptr<Shared> keep_;
@@ -230,6 +319,7 @@ class PageSession : public std::enable_shared_from_this<PageSession> {
   ViewerSession viewer_;
   beast::flat_buffer buffer_;
   std::deque<Outgoing> queue_;
+  std::size_t queuedBytes_ = 0;
   bool writing_ = false, binaryPending_ = false, dirty_ = true, closing_ = false, finished_ = false;
   std::optional<websocket::close_code> closeCode_;
   std::string closeReason_;
@@ -237,6 +327,9 @@ class PageSession : public std::enable_shared_from_this<PageSession> {
   Clock::time_point nextTick_, nextStats_, windowStart_{};
   int windowCount_ = 0;
   std::size_t framesSent_ = 0, framesDropped_ = 0;
+  double allowance_ = kAllowanceMax;  ///< seconds of the network thread this page may still use
+  Clock::time_point refilled_ = Clock::now();
+  std::size_t ticks_ = 0, ticksSkipped_ = 0;  ///< since the last stats
 };
 
 // One HTTP connection: static files, or the upgrade to a PageSession.
@@ -265,7 +358,22 @@ class HttpConnection : public std::enable_shared_from_this<HttpConnection> {
       return;
     }
     http::request<http::empty_body> request = parser_->release();
+    // Who may ask (serve/origin.hpp): requests that name this server, pages of its origins.
+    const auto host = request.find(http::field::host);
+    if (const auto why = server_->origins->refuseHost(host == request.end() ? std::string_view() : host->value())) {
+      server_->refused(*why);
+      sendText(host == request.end() ? http::status::bad_request : http::status::misdirected_request, *why + "\n",
+               request.version(), false);
+      return;
+    }
     if (websocket::is_upgrade(request)) {
+      const auto origin = request.find(http::field::origin);
+      if (const auto why =
+              server_->origins->refuseOrigin(origin != request.end(), origin == request.end() ? "" : origin->value())) {
+        server_->refused(*why);
+        sendText(http::status::forbidden, *why + "\n", request.version(), false);
+        return;
+      }
       if (request.target() != "/ws") {
         sendText(http::status::not_found, "WebSocket: expected the path /ws\n", request.version(), false);
         return;
@@ -354,7 +462,40 @@ class HttpConnection : public std::enable_shared_from_this<HttpConnection> {
 void Server::Impl::accept() {
   acceptor.async_accept(ioc, [this](beast::error_code ec, tcp::socket socket) {
     if (ec == net::error::operation_aborted || !acceptor.is_open()) return;
-    if (!ec) std::make_shared<HttpConnection>(std::move(socket), shared)->read();
+    if (ec) {
+      pauseAccepting(ec);
+      return;
+    }
+    if (acceptDelay != Clock::duration::zero()) {
+      shared->log("serve: accepting connections again");
+      acceptDelay = Clock::duration::zero();
+    }
+    std::make_shared<HttpConnection>(std::move(socket), shared)->read();
+    accept();
+  });
+}
+
+// accept() failed: out of descriptors (EMFILE, ENFILE), of memory, or a connection reset
+// before it was taken. Accepting again at once would fail again at once (the connection
+// stays queued) and spin a core; so wait, doubling the wait up to a second, until a
+// descriptor frees. Said once per episode, not once per try.
+void Server::Impl::pauseAccepting(const beast::error_code& ec) {
+  if (ec == net::error::connection_aborted) {  // that client is gone; nothing is short
+    accept();
+    return;
+  }
+  if (acceptDelay == Clock::duration::zero()) {
+    shared->log(fmt::format("serve: cannot accept connections ({}); pausing and retrying every {} ms to {} s until it "
+                            "can (open pages keep running)",
+                            ec.message(), std::chrono::duration_cast<std::chrono::milliseconds>(kAcceptRetryFirst).count(),
+                            std::chrono::duration_cast<std::chrono::seconds>(kAcceptRetryMax).count()));
+    acceptDelay = kAcceptRetryFirst;
+  } else {
+    acceptDelay = std::min<Clock::duration>(2 * acceptDelay, kAcceptRetryMax);
+  }
+  acceptRetry.expires_after(acceptDelay);
+  acceptRetry.async_wait([this](beast::error_code waited) {
+    if (waited || !acceptor.is_open()) return;
     accept();
   });
 }
@@ -389,10 +530,17 @@ Server::Server(std::shared_ptr<const ViewerAssets> assets, ServerOptions options
   if (ec) throw failed("listen on");
   impl.acceptor.listen(net::socket_base::max_listen_connections, ec);
   if (ec) throw failed("listen on");
+  shared.origins.emplace(o.host, impl.acceptor.local_endpoint().port(), o.allowOrigins);
+  shared.log(fmt::format("serve: answering requests for {} only; WebSocket pages of other origins are refused "
+                         "(--allow-origin adds one)",
+                         shared.origins->hosts()));
   impl.accept();
 }
 
-Server::~Server() = default;
+Server::~Server() {
+  impl_.reset();          // the pages go, each asking its retraining (if any) to stop
+  waitForRetrainings();   // none outlives the server
+}
 
 std::uint16_t Server::port() const { return impl_->acceptor.local_endpoint().port(); }
 
@@ -402,6 +550,7 @@ void Server::stop() {
   net::post(impl_->ioc, [impl = impl_.get()] {
     beast::error_code ec;
     impl->acceptor.close(ec);
+    impl->acceptRetry.cancel();
     impl->ioc.stop();
   });
 }

@@ -7,6 +7,7 @@
 #include <filesystem>
 #include <memory>
 #include <string>
+#include <vector>
 
 #include "mgrl/core/error.hpp"
 #include "serve/viewer.hpp"
@@ -18,6 +19,9 @@ struct ServerOptions {
   std::uint16_t port = 8080;        ///< 0: any free port (see Server::port())
   std::filesystem::path webRoot;    ///< the folder of index.html
   int maxSessions = Limits::kMaxSessions;
+  /// Origins besides the server's own whose pages may open the WebSocket, and whose host
+  /// names requests may carry (--allow-origin; see serve/origin.hpp).
+  std::vector<std::string> allowOrigins;
   WarningSink log;                  ///< connections and failures (stderr); may be empty
 };
 

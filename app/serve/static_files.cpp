@@ -54,6 +54,9 @@ StaticLookup lookupStatic(const fs::path& root, std::string_view target) {
     const std::size_t end = std::min(decoded.find('/', begin), decoded.size());
     const std::string_view segment = std::string_view(decoded).substr(begin, end - begin);
     if (segment == "." || segment == "..") return refuse(400, "expected a path without . or .. segments");
+    // Dotfiles (.package-lock.json, .git, an editor's swap file) are no part of the page.
+    if (!segment.empty() && segment.front() == '.')
+      return refuse(404, "no such file (names that start with a dot are not served)");
     if (!segment.empty()) relative /= fs::path(std::string(segment));
     begin = end + 1;
   }

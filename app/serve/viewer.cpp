@@ -167,6 +167,7 @@ void ViewerSession::rebuild(Mode mode, int avatars) {
   s.successTimes.clear();
   s.decisions = {};
   s.valuesFrame = 0;  // the new world counts frames from 0
+  s.valuesSent.clear();
   s.world->run(1);  // poses exist from the first frame on
   outbox_.push_back(scene());
 }
@@ -315,7 +316,8 @@ void ViewerSession::handle(std::string_view text) {
         if (a.session->policy.empty())
           throw Error("values: expected a policy bundle to take values from; this server has none (mgrl train makes one)");
         s.shown = i;
-        outbox_.push_back(values());
+        s.valuesSent = values();
+        outbox_.push_back(s.valuesSent);
         s.valuesFrame = s.world->frame();
       }
     } else if (const auto* learnMessage = std::get_if<Learn>(&message)) {
@@ -386,8 +388,13 @@ bool ViewerSession::advance(double frames) {
   while (!s.hitTimes.empty() && s.hitTimes.front() < s.world->time() - 30) s.hitTimes.pop_front();
   while (!s.successTimes.empty() && s.successTimes.front() < s.world->time() - 30) s.successTimes.pop_front();
   // The teaching view follows avatar 0 five times a second of simulated time.
+  // Sent only when they changed: a retrained grid's values are 181 KB.
   if (s.shown >= 0 && s.world->frame() >= s.valuesFrame + 6) {
-    outbox_.push_back(values());
+    std::string now = values();
+    if (now != s.valuesSent) {
+      outbox_.push_back(now);
+      s.valuesSent = std::move(now);
+    }
     s.valuesFrame = s.world->frame();
   }
   return true;
@@ -414,7 +421,7 @@ const std::vector<std::uint8_t>& ViewerSession::frame() {
   return bytes;
 }
 
-std::string ViewerSession::stats(std::size_t framesSent, std::size_t framesDropped) {
+std::string ViewerSession::stats(std::size_t framesSent, std::size_t framesDropped, const PageShare& share) {
   State& s = *state_;
   const World& world = *s.world;
   const double window = std::min(30.0, std::max(world.time(), 1.0));
@@ -433,7 +440,19 @@ std::string ViewerSession::stats(std::size_t framesSent, std::size_t framesDropp
             {"frames_sent", framesSent},
             {"frames_dropped", framesDropped},
             {"bytes_per_avatar_frame",
-             avatarRecordBytes(assets_->session->graph.db.skeleton->jointCount())}};
+             avatarRecordBytes(assets_->session->graph.db.skeleton->jointCount())},
+            {"share_ms_per_s", round3(share.secondsPerSecond * 1e3)},
+            {"steps_skipped", share.ticksSkipped},
+            {"slowed", share.ticksSkipped == 0
+                           ? json(nullptr)
+                           : json(fmt::format("The server shares its time among {} page{}, {:.0f} ms a second each; this "
+                                              "world asks for more ({} avatars, {}{} at speed {}), so {} of its last {} "
+                                              "steps were skipped and it runs slower.",
+                                              share.pages, share.pages == 1 ? "" : "s", share.secondsPerSecond * 1e3,
+                                              world.avatarCount(), s.controller,
+                                              s.controller == "online_search" ? fmt::format(" ({} actions ahead)", s.horizon)
+                                                                              : std::string(),
+                                              s.speed, share.ticksSkipped, share.ticks))}};
   s.decisions = {};
   s.busySeconds = 0;
   s.busyFrames = 0;

@@ -29,6 +29,18 @@ struct ServeOptions : app::LearnOptions {
 struct ViewerAssets;
 std::shared_ptr<const ViewerAssets> loadViewerAssets(const ServeOptions& options);
 
+/// Waits until no retraining thread runs (pages that left ask theirs to stop; each stage
+/// of a retraining checks). The server calls it when it stops, so that none outlives it.
+void waitForRetrainings();
+
+/// The server's time as a page shares it (docs/viewer-protocol.md, "Limits and
+/// fairness"), for its `stats`.
+struct PageShare {
+  double secondsPerSecond = 0;  ///< this page's share of the network thread
+  int pages = 1;
+  std::size_t ticksSkipped = 0, ticks = 0;  ///< since the last stats
+};
+
 /// One page's world and clock.
 class ViewerSession {
  public:
@@ -45,9 +57,9 @@ class ViewerSession {
   bool advance(double frames);
   /// The pose frame of now.
   const std::vector<std::uint8_t>& frame();
-  /// The `stats` message, with the transport's frame counters (the session's own
-  /// counters restart).
-  std::string stats(std::size_t framesSent, std::size_t framesDropped);
+  /// The `stats` message, with the transport's frame counters and the page's share (the
+  /// session's own counters restart).
+  std::string stats(std::size_t framesSent, std::size_t framesDropped, const PageShare& share = {});
   /// Text messages waiting to be sent (scene, hits, errors), oldest first; cleared.
   std::vector<std::string> takeOutbox();
 

@@ -90,6 +90,7 @@ struct ViewerSession::State {
   std::string adjustment;       ///< what the session changed on its own (scene note)
   int shown = -1;               ///< behaviour whose values are streamed (-1 none)
   std::size_t valuesFrame = 0;  ///< world frame of the last `values` message
+  std::string valuesSent;       ///< the last `values` message sent
 
   // The policy this page runs: the bundle's parts, a retrained behaviour's replaced.
   std::vector<PolicyPart> policy;
@@ -104,22 +105,21 @@ struct ViewerSession::State {
   };
   std::unique_ptr<Lesson> lesson;
 
-  // A retraining under way on its own thread.
+  // A retraining under way on a thread of its own, which holds the job (and everything
+  // it reads) jointly with the page: a page that leaves asks it to stop and lets go at
+  // once, never waiting for it on the network thread; the thread frees the rest when it
+  // ends (waitForRetrainings() waits for that when the server stops).
   struct Job {
     int behavior = -1;
     Clock::time_point started;
     std::atomic<bool> stop{false}, done{false};
     std::shared_ptr<Retrained> result;  ///< read once done
     std::string failure;                ///< set instead of a usable result
-    std::thread thread;
   };
-  std::unique_ptr<Job> job;
+  std::shared_ptr<Job> job;
 
   ~State() {
-    if (job && job->thread.joinable()) {
-      job->stop = true;
-      job->thread.join();
-    }
+    if (job) job->stop = true;
   }
 };
 

@@ -4,9 +4,12 @@
 #include <algorithm>
 #include <atomic>
 #include <cmath>
+#include <condition_variable>
 #include <mutex>
 #include <optional>
 #include <thread>
+
+#include <malloc.h>
 
 #include <fmt/format.h>
 #include <fmt/ranges.h>
@@ -34,6 +37,10 @@ namespace {
 // At most one retraining at a time on the whole server: it takes every core for a second
 // or two, and the pages' worlds share them.
 std::atomic<bool> gRetraining{false};
+// Retraining threads still running (detached), for waitForRetrainings().
+std::mutex gRunningMutex;
+std::condition_variable gRunningDone;
+int gRunning = 0;
 
 // What trials say about a retrained policy: this many trials of this much motion each.
 constexpr std::size_t kRetrainTrials = 200;
@@ -71,6 +78,18 @@ void ViewerSession::retrain(const Retrain& message) {
   // The changed scenario, checked like `--set` on the command line: a wrong name or value
   // is refused here, before anything is trained.
   ServeOptions options = a.options;
+  // A whole-number parameter (the grid's counts) takes whole numbers as written: 3, not 3.0.
+  for (const auto& [key, written] : message.fractional) {
+    const std::size_t dot = key.find('.');
+    const json& config = a.session->behaviors[index].config;
+    const auto section = config.find(key.substr(0, dot));
+    if (section == config.end()) continue;  // refused below, as on the command line
+    const auto current = section->find(key.substr(dot + 1));
+    if (current != section->end() && current->is_number_integer())
+      throw Error(fmt::format("retrain.set[\"{}\"]: expected a whole number written without a decimal point or "
+                              "exponent (the scenario has {}), found {}",
+                              key, current->dump(), written));
+  }
   json set = json::object();
   for (const auto& [key, value] : message.set) {
     options.sets.push_back(fmt::format("behaviors.{}.{}={}", message.behavior, key, value));
@@ -93,23 +112,31 @@ void ViewerSession::retrain(const Retrain& message) {
     throw Error("retrain: expected the server's one retraining slot to be free, found another page's retraining "
                 "under way; try again when it ends");
 
-  auto job = std::make_unique<State::Job>();
+  auto job = std::make_shared<State::Job>();
   job->behavior = i;
   job->started = Clock::now();
   job->result = result;
   // What the trials compare: this page's policy as it is, and with the new table.
   std::vector<PolicyPart> before = s.policy;
   for (std::size_t k = 0; k < before.size(); ++k) before[k].weight = s.weights[k];
-  State::Job* j = job.get();
   std::shared_ptr<const ViewerAssets> assets = assets_;
-  const std::vector<std::shared_ptr<const Retrained>> keep = s.retrained;  // `before` points into these
-  job->thread = std::thread([j, assets, before, keep, result, index] {
+  std::vector<std::shared_ptr<const Retrained>> keep = s.retrained;  // `before` points into these
+  {
+    const std::lock_guard lock(gRunningMutex);
+    ++gRunning;
+  }
+  std::thread([j = job, assets, before, keep = std::move(keep), result, index]() mutable {
+    auto stopped = [&] {
+      if (j->stop) throw TrainInterrupted(0, 0, false);
+    };
     try {
       const StateActionModel& model = assets->model();
       const unsigned threads = std::max(1u, std::thread::hardware_concurrency());
       const auto start = Clock::now();
       const Problem problem = result->behavior.problem(model);
-      const GridModel grid = GridModel::build(problem, threads);
+      stopped();
+      const GridModel grid = GridModel::build(problem, threads, &j->stop);
+      stopped();
       const auto learner = app::plugins().learners.create(ConfigNode::parse("{type: value_iteration}", "retrain"));
       TrainResult trained = learner->train({problem, grid, nullptr, nullptr, threads, &j->stop});
       result->trainSeconds = std::chrono::duration<double>(Clock::now() - start).count();
@@ -134,7 +161,9 @@ void ViewerSession::retrain(const Retrain& message) {
         return app::Trials::summary(trials.run([&](std::uint32_t node, const TargetState& e) { return controller.choose(node, e); },
                                                kRetrainTrials, kRetrainTrialSeconds, 1));
       };
+      stopped();
       result->before = evaluate(before);
+      stopped();
       result->after = evaluate(after);
       result->totalSeconds = std::chrono::duration<double>(Clock::now() - start).count();
     } catch (const TrainInterrupted&) {
@@ -142,19 +171,34 @@ void ViewerSession::retrain(const Retrain& message) {
     } catch (const std::exception& e) {
       j->failure = e.what();
     }
-    (void)keep;
-    gRetraining = false;
+    const bool abandoned = j->stop;
+    keep.clear();
+    if (abandoned) {  // its page left: nobody will read it; its memory goes back now
+      j->result.reset();
+      result.reset();
+      ::malloc_trim(0);
+    }
     j->done = true;
-  });
+    j.reset();
+    assets.reset();
+    gRetraining = false;
+    const std::lock_guard lock(gRunningMutex);
+    --gRunning;
+    gRunningDone.notify_all();
+  }).detach();
   s.job = std::move(job);
   outbox_.push_back(json{{"type", "retrain"}, {"behavior", message.behavior}, {"status", "started"}, {"set", set}}.dump());
+}
+
+void waitForRetrainings() {
+  std::unique_lock lock(gRunningMutex);
+  gRunningDone.wait(lock, [] { return gRunning == 0; });
 }
 
 void ViewerSession::collectRetraining() {
   State& s = *state_;
   if (!s.job || !s.job->done) return;
-  s.job->thread.join();
-  const std::unique_ptr<State::Job> job = std::move(s.job);
+  const std::shared_ptr<State::Job> job = std::move(s.job);
   const auto index = static_cast<std::size_t>(job->behavior);
   const std::string& name = assets_->session->behaviors[index].name;
   if (!job->failure.empty()) {
@@ -165,6 +209,7 @@ void ViewerSession::collectRetraining() {
   s.retrained[index] = r;
   s.policy[index].grid = &r->grid();
   s.policy[index].table = &r->table;
+  s.valuesSent.clear();  // the values view shows the new table at once
   applyController();
   outbox_.push_back(scene());
   outbox_.push_back(json{{"type", "retrain"},

@@ -7,6 +7,7 @@
 
 #include "mgrl/core/error.hpp"
 #include "mgrl/core/parallel.hpp"
+#include "mgrl/learning/learner.hpp"
 
 namespace mgrl {
 
@@ -83,36 +84,39 @@ void addIncoming(GridModel& g, const StateActionModel& m) {
   for (std::size_t a = 0; a < g.actionCount; ++a) g.incoming[fill[m.actionTo[a]]++] = static_cast<std::uint32_t>(a);
 }
 
-// f(a) for every action, in chunks over `threads` threads.
+// f(a) for every action, in chunks over `threads` threads; once `stop` (may be null) is
+// set, the chunks left are skipped and TrainInterrupted is thrown.
 template <class F>
-void forEachPair(std::size_t actions, unsigned threads, F f) {
+void forEachPair(std::size_t actions, unsigned threads, const std::atomic<bool>* stop, F f) {
   constexpr std::size_t kChunk = 64;
   parallelFor((actions + kChunk - 1) / kChunk, threads, [&](std::size_t chunk, unsigned) {
+    if (stop && stop->load(std::memory_order_relaxed)) return;
     const std::size_t end = std::min(actions, (chunk + 1) * kChunk);
     for (std::size_t a = chunk * kChunk; a < end; ++a) f(a);
   });
+  if (stop && stop->load()) throw TrainInterrupted(0, 0, false);
 }
 
 }  // namespace
 
-GridModel GridModel::build(const Problem& problem, unsigned threads) {
+GridModel GridModel::build(const Problem& problem, unsigned threads, const std::atomic<bool>* stop) {
   GridModel g = frame(problem);
   g.transition.assign(g.vertexCount * g.actionCount, GridTransition{});
   std::vector<TargetState> vertex(g.vertexCount);
   for (std::size_t v = 0; v < g.vertexCount; ++v) vertex[v] = problem.grid.vertexState(v);
-  forEachPair(g.actionCount, threads, [&](std::size_t a) {
+  forEachPair(g.actionCount, threads, stop, [&](std::size_t a) {
     for (std::size_t v = 0; v < g.vertexCount; ++v) g.transition[a * g.vertexCount + v] = tabulate(problem, a, vertex[v]);
   });
   addIncoming(g, problem.model);
   return g;
 }
 
-GridModel GridModel::buildCompact(const Problem& problem, unsigned threads) {
+GridModel GridModel::buildCompact(const Problem& problem, unsigned threads, const std::atomic<bool>* stop) {
   GridModel g = frame(problem);
   g.vertexState.resize(g.vertexCount);
   for (std::size_t v = 0; v < g.vertexCount; ++v) g.vertexState[v] = problem.grid.vertexState(v);
   g.reward.assign(g.vertexCount * g.actionCount, 0.0f);
-  forEachPair(g.actionCount, threads, [&](std::size_t a) {
+  forEachPair(g.actionCount, threads, stop, [&](std::size_t a) {
     for (std::size_t v = 0; v < g.vertexCount; ++v)
       g.reward[a * g.vertexCount + v] = static_cast<float>(problem.reward.evaluate(problem.model, a, g.vertexState[v]));
   });

@@ -6,6 +6,7 @@
 /// next to e, moving e' along"), everything a backup needs besides Q is a function of
 /// (action, vertex) alone; GridModel tabulates it once: the reward r(v, a) and where the
 /// vertex lands after the action (its cell and fractions, or outside).
+#include <atomic>
 #include <cstddef>
 #include <cstdint>
 #include <vector>
@@ -88,10 +89,11 @@ struct GridModel {
   }
 
   /// Tabulates `problem` on `threads` threads. The same inputs give the same bytes.
-  static GridModel build(const Problem& problem, unsigned threads);
+  /// `stop` (may be null) is checked every 64 actions: once set, throws TrainInterrupted.
+  static GridModel build(const Problem& problem, unsigned threads, const std::atomic<bool>* stop = nullptr);
   /// The compact model of `problem` (see `reward`): tabulates the rewards only. It refers
   /// to the problem's grid, environment and state-action model, which must outlive it.
-  static GridModel buildCompact(const Problem& problem, unsigned threads);
+  static GridModel buildCompact(const Problem& problem, unsigned threads, const std::atomic<bool>* stop = nullptr);
   /// Everything build() makes except the per-(action, vertex) transitions and the incoming
   /// lists: enough for maxInterpolated() and for stepping a walk (rigidNext) when the
   /// transitions a step needs are computed one by one with tabulate() (the viewer's learn

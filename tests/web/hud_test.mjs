@@ -46,3 +46,15 @@ test('a new world forgets the old world\'s hits and stats', () => {
   hud.addHit(hit(0.4));                            // the new world's clock starts at 0
   assert.equal(hud.hitCount(), 1);
 });
+
+test('the note shows the scene\'s note and, while the server slows this world, why', () => {
+  const hud = new Hud();
+  hud.setScene({mode: 'crowd', note: 'The online search\'s horizon was lowered.'}, true);
+  assert.equal(hud.noteText(), 'The online search\'s horizon was lowered.');
+  hud.setStats({hits: 0, time: 1, slowed: 'The server shares its time among 16 pages.'});
+  assert.equal(hud.noteText(), 'The online search\'s horizon was lowered. The server shares its time among 16 pages.');
+  hud.setStats({hits: 0, time: 2, slowed: null});
+  assert.equal(hud.noteText(), 'The online search\'s horizon was lowered.');
+  hud.setScene({mode: 'target', note: ''}, true);
+  assert.equal(hud.noteText(), '');
+});
