@@ -11,6 +11,7 @@
 #include "serve/protocol.hpp"
 #include "serve/serve_command.hpp"
 #include "serve/static_files.hpp"
+#include "bench/page_load.hpp"
 #include "serve_support.hpp"
 
 namespace mgrl {
@@ -218,102 +219,33 @@ TEST_CASE("a page that never reads costs the server at most a few megabytes and 
   }
   WARN(fmt::format("a page that never reads: the server's memory grew by {:.1f} MB at most",
                    static_cast<double>(peak - before) / 1e6));
-  CHECK(peak - before < 50'000'000);
+  // AddressSanitizer keeps freed memory in quarantine (256 MB) and maps shadow memory, so
+  // the process's resident size says nothing there; the close above still shows the bound.
+  if (!kAddressSanitizer) CHECK(peak - before < 50'000'000);
   // Gone: its queue and lesson freed, and handed back to the system (malloc_trim).
   std::this_thread::sleep_for(std::chrono::milliseconds(500));
   const long after = residentBytes();
   WARN(fmt::format("after it left, the server's memory is {:+.1f} MB from before it came", (after - before) / 1e6));
-  CHECK(after - before < 25'000'000);
+  if (!kAddressSanitizer) CHECK(after - before < 25'000'000);
   CHECK(log.count("serve: closing a page that reads too slowly") == 1);
   // The good page was served all along.
   REQUIRE_FALSE(good.readUntil(true).error);
 }
 
-// Pages on one thread of the test, each reading as fast as it can (an async read always
-// waiting), timing the frames it gets.
-struct Readers {
-  net::io_context ioc;
-  struct Conn {
-    explicit Conn(net::io_context& ioc) : ws(ioc) {}
-    websocket::stream<beast::tcp_stream> ws;
-    beast::flat_buffer buffer;
-    std::vector<Clock::time_point> frames;
-    json stats;
-    int closeCode = 0;
-    bool failed = false;
-  };
-  std::vector<std::unique_ptr<Conn>> conns;
-
-  Conn& open(std::uint16_t port, const std::vector<std::string>& messages) {
-    auto c = std::make_unique<Conn>(ioc);
-    beast::get_lowest_layer(c->ws).connect(tcp::endpoint(net::ip::make_address("127.0.0.1"), port));
-    c->ws.handshake(fmt::format("127.0.0.1:{}", port), "/ws");
-    for (const std::string& m : messages) c->ws.write(net::buffer(m));
-    read(*c);
-    conns.push_back(std::move(c));
-    return *conns.back();
-  }
-  void read(Conn& c) {
-    c.ws.async_read(c.buffer, [this, &c](beast::error_code ec, std::size_t) {
-      if (ec) {
-        if (ec == websocket::error::closed) c.closeCode = static_cast<int>(c.ws.reason().code);
-        else c.failed = true;
-        return;
-      }
-      if (c.ws.got_binary()) {
-        c.frames.push_back(Clock::now());
-      } else {
-        json m = json::parse(beast::buffers_to_string(c.buffer.data()));
-        if (m["type"] == "stats") c.stats = std::move(m);
-      }
-      c.buffer.consume(c.buffer.size());
-      read(c);
-    });
-  }
-  void runFor(double seconds) { ioc.run_for(std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(seconds))); }
-};
-
 TEST_CASE("fifteen heavy pages beside a light one: the light page keeps 20 frames a second, none is closed",
           "[serve][data][slow]") {
   const BoxingAssets boxing;
   RunningServer running(boxing.assets, 16);
-  const std::uint16_t port = running.port();
-  Readers readers;
-  // The heaviest legal settings: crowds of 2,000 with the online search at speed 4.
-  for (int i = 0; i < 15; ++i)
-    readers.open(port, {R"({"type": "mode", "mode": "crowd", "avatars": 2000})",
-                        R"({"type": "controller", "controller": "online_search", "horizon": 3})",
-                        R"({"type": "speed", "speed": 4})"});
-  Readers::Conn& light = readers.open(port, {});
-  readers.runFor(3);  // the crowds built, shares settled
-  const std::size_t before = light.frames.size();
-  const auto began = Clock::now();
-  readers.runFor(6);
-  const double seconds = since(began);
-  const double fps = static_cast<double>(light.frames.size() - before) / seconds;
-  double longest = 0;
-  for (std::size_t i = before + 1; i < light.frames.size(); ++i)
-    longest = std::max(longest, std::chrono::duration<double>(light.frames[i] - light.frames[i - 1]).count());
-  std::size_t heavyFrames = 0, slowed = 0, closed = 0;
-  for (std::size_t i = 0; i + 1 < readers.conns.size(); ++i) {
-    const Readers::Conn& c = *readers.conns[i];
-    heavyFrames += c.frames.size();
-    slowed += c.stats.is_object() && c.stats.value("slowed", json()).is_string();
-    closed += c.closeCode != 0 || c.failed;
-  }
-  WARN(fmt::format("15 crowds of 2,000 (online search, speed 4) beside one light page: the light page got {:.1f} "
-                   "frames/s (longest gap {:.2f} s); the heavy pages {} frames in all, {} of them told they are slowed",
-                   fps, longest, heavyFrames, slowed));
-  if (!slowed) WARN(readers.conns[0]->stats.dump());
+  const bench::HeavyBesideLight r = bench::heavyBesideLight(running.port(), 15, 3, 6);
+  WARN(r.summary());
   // Under AddressSanitizer every step costs two to three times as much, the light page's
   // own included, and one heavy step can take the thread for most of a second; the share
   // still holds (without it the light page gets 0.3 frames/s), so ask for half.
-  CHECK(fps >= (kAddressSanitizer ? 10 : 20));
-  CHECK(light.closeCode == 0);
-  CHECK_FALSE(light.failed);
-  CHECK(closed == 0);
-  CHECK(slowed == 15);
-  CHECK((light.stats.is_object() && light.stats["slowed"].is_null()));
+  CHECK(r.lightFramesPerSecond >= (kAddressSanitizer ? 10 : 20));
+  CHECK_FALSE(r.lightClosed);
+  CHECK(r.heavyClosed == 0);
+  CHECK(r.heavySlowed == 15);
+  CHECK(r.lightSlowed == false);
 }
 
 std::size_t openDescriptors() {
@@ -336,6 +268,12 @@ TEST_CASE("out of descriptors, the server pauses accepting without spinning and 
   RunningServer running(boxing.assets, 4, {}, log.sink());
   const std::uint16_t port = running.port();
   REQUIRE(get(port, "/").status == 200);
+  // The server closes its side of that request soon after; wait, so that the count below
+  // holds.
+  for (std::size_t open = 0, i = 0; i < 40 && openDescriptors() != open; ++i) {
+    open = openDescriptors();
+    std::this_thread::sleep_for(std::chrono::milliseconds(50));
+  }
 
   rlimit original{};
   REQUIRE(getrlimit(RLIMIT_NOFILE, &original) == 0);
@@ -361,7 +299,11 @@ TEST_CASE("out of descriptors, the server pauses accepting without spinning and 
   WARN(fmt::format("descriptors exhausted ({} client connections): the process used {:.0f} % of a core", clients.size(),
                    100 * busy));
   CHECK(busy < 0.3);
-  CHECK(log.count("serve: cannot accept connections (") == 1);
+  // Said once when it pauses, not once per try (about six tries in that time); a descriptor
+  // that frees on its own (a connection ending) may end one pause and start another.
+  const std::size_t pauses = log.count("serve: cannot accept connections (");
+  CHECK(pauses >= 1);
+  CHECK(pauses <= 2);
 
   // Descriptors free: the clients leave, the limit is back, and the next request is served.
   clients.clear();
@@ -371,7 +313,7 @@ TEST_CASE("out of descriptors, the server pauses accepting without spinning and 
   CHECK(since(again) < 3);
   for (int i = 0; i < 40 && log.count("serve: accepting connections again") == 0; ++i)
     std::this_thread::sleep_for(std::chrono::milliseconds(50));
-  CHECK(log.count("serve: accepting connections again") == 1);
+  CHECK(log.count("serve: accepting connections again") == log.count("serve: cannot accept connections ("));
 }
 
 TEST_CASE("the small acceptances are refused, each with one error that names the field", "[serve]") {
@@ -407,6 +349,28 @@ TEST_CASE("the small acceptances are refused, each with one error that names the
     CHECK(found.status == 404);
     CHECK(found.reason == "no such file (names that start with a dot are not served)");
   }
+}
+
+TEST_CASE("a close code RFC 6455 does not define is not echoed: the connection is dropped", "[serve][data]") {
+  const BoxingAssets boxing;
+  LogLines log;
+  RunningServer running(boxing.assets, 4, {}, log.sink());
+  for (const int code : {5000, 65535, 4999}) {
+    INFO(code);
+    Page page(running.port());
+    REQUIRE_FALSE(page.readUntil(false, "scene").error);
+    beast::error_code ec;
+    page.ws.close(websocket::close_reason(static_cast<std::uint16_t>(code)), ec);
+    if (code < 5000) {
+      CHECK_FALSE(ec);  // a private code (4000-4999): echoed, a clean close
+      CHECK(page.ws.reason().code == code);
+    } else {
+      CHECK(ec);  // no echo: the server dropped the connection
+      CHECK(page.ws.reason().code != code);
+    }
+  }
+  CHECK(log.count("serve: a page closed with code 5000, which RFC 6455 does not define") == 1);
+  CHECK(log.count("serve: a page closed with code 65535") == 1);
 }
 
 TEST_CASE("a whole-number grid parameter refuses 3.0 from the page, as avatars does", "[serve][data]") {

@@ -114,6 +114,17 @@ class PageSession : public std::enable_shared_from_this<PageSession> {
   void start(http::request<http::empty_body> request) {
     ws_.set_option(websocket::stream_base::timeout::suggested(beast::role_type::server));
     ws_.read_message_max(Limits::kMessageBytes);
+    // RFC 6455 sec. 7.4.2 defines close codes up to 4999; Beast takes 5000-65535 too and
+    // would echo them. Such a close fails the connection instead: the socket is shut down
+    // before the echo is written.
+    ws_.control_callback([this](websocket::frame_type kind, beast::string_view) {
+      if (kind != websocket::frame_type::close || ws_.reason().code < 5000) return;
+      server_.log(fmt::format("serve: a page closed with code {}, which RFC 6455 does not define (expected 1000-4999); "
+                              "dropping its connection without an echo",
+                              static_cast<unsigned>(ws_.reason().code)));
+      beast::error_code ignored;
+      beast::get_lowest_layer(ws_).socket().shutdown(tcp::socket::shutdown_both, ignored);
+    });
     ws_.async_accept(request, [self = shared_from_this()](beast::error_code ec) {
       if (ec) return;
       self->server_.log(fmt::format("serve: a page connected ({} open)", self->server_.sessions.load()));
