@@ -36,6 +36,8 @@ constexpr std::size_t kMaxQueuedMessages = 4096;  ///< messages waiting for a sl
 /// does not read costs the server (docs/viewer-protocol.md, "Limits").
 constexpr std::size_t kMaxQueuedBytes = 8u << 20;
 constexpr double kStatsEvery_s = 0.5;
+/// A page being closed that has not taken its close frame by then is dropped.
+constexpr auto kCloseDeadline = std::chrono::seconds(10);
 /// The one network thread's time that the pages' worlds share (simulating, encoding and
 /// handling messages), as a fraction of wall time: each page may use this divided by the
 /// pages open, so that a light page keeps its frames whatever the others ask. The rest is
@@ -169,6 +171,11 @@ class PageSession : public std::enable_shared_from_this<PageSession> {
               fmt::format("expected at most {} messages per second", Limits::kMessagesPerSecond));
         return;
       }
+      if (closeCode_) {  // closing: read on (for the page's close), act on nothing
+        buffer_.consume(buffer_.size());
+        read();
+        return;
+      }
       const std::string text = beast::buffers_to_string(buffer_.data());
       buffer_.consume(buffer_.size());
       const auto began = Clock::now();
@@ -205,7 +212,7 @@ class PageSession : public std::enable_shared_from_this<PageSession> {
   }
 
   void onTick() {
-    if (closing_) return;
+    if (closing_ || closeCode_) return;
     try {
       const auto began = Clock::now();
       refill(began);
@@ -250,6 +257,11 @@ class PageSession : public std::enable_shared_from_this<PageSession> {
   }
 
   void flushOutbox() {
+    if (closeCode_) {  // closing: what the world says now is for nobody
+      (void)viewer_.takeOutbox();
+      write();
+      return;
+    }
     for (std::string& text : viewer_.takeOutbox()) push({false, std::move(text), {}});
     if (queue_.size() > kMaxQueuedMessages || queuedBytes_ > kMaxQueuedBytes) {
       server_.log(fmt::format("serve: closing a page that reads too slowly ({} messages, {} bytes waiting)",
@@ -277,8 +289,7 @@ class PageSession : public std::enable_shared_from_this<PageSession> {
     if (writing_) return;
     if (closeCode_) {
       if (closing_) return;
-      closing_ = true;
-      timer_.cancel();
+      closing_ = true;  // the timer now holds close()'s deadline, no tick
       ws_.async_close(websocket::close_reason(*closeCode_, closeReason_),
                       [self = shared_from_this()](beast::error_code) {});
       return;
@@ -306,11 +317,21 @@ class PageSession : public std::enable_shared_from_this<PageSession> {
   }
 
   // Closes with a code the page sees (after any write in flight).
+  // From then on the page's messages are ignored and its world stops. A page that does
+  // not read may never finish the write in flight, so the socket is shut down if the close
+  // has not gone out within kCloseDeadline.
   void close(websocket::close_code code, std::string reason) {
     if (closeCode_) return;
     closeCode_ = code;
     closeReason_ = std::move(reason);
     clearQueue();
+    timer_.expires_after(kCloseDeadline);  // replaces the next tick
+    timer_.async_wait([self = shared_from_this()](beast::error_code ec) {
+      if (ec || self->finished_) return;
+      self->server_.log("serve: a closing page did not take its close in time; dropping its connection");
+      beast::error_code ignored;
+      beast::get_lowest_layer(self->ws_).socket().shutdown(tcp::socket::shutdown_both, ignored);
+    });
     write();
   }
 
