@@ -291,7 +291,7 @@ class PageSession : public std::enable_shared_from_this<PageSession> {
       if (closing_) return;
       closing_ = true;  // the timer now holds close()'s deadline, no tick
       ws_.async_close(websocket::close_reason(*closeCode_, closeReason_),
-                      [self = shared_from_this()](beast::error_code) {});
+                      [self = shared_from_this()](beast::error_code) { self->finish(); });
       return;
     }
     if (queue_.empty()) return;
