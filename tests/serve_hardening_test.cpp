@@ -281,6 +281,14 @@ TEST_CASE("out of descriptors, the server pauses accepting without spinning and 
     std::this_thread::sleep_for(std::chrono::milliseconds(50));
   }
 
+  // The sanitizers' runtime needs descriptors of its own (UBSan tests whether memory is
+  // readable through a pipe before it reports on an object's type): with none to spare it
+  // reports a false "invalid vptr" (it did, in Catch's AssertionStats). So the descriptors
+  // run out only in the builds without sanitizers.
+  if (kAddressSanitizer) {
+    WARN("descriptor exhaustion is not tried under the sanitizers (their runtime needs descriptors of its own)");
+    return;
+  }
   rlimit original{};
   REQUIRE(getrlimit(RLIMIT_NOFILE, &original) == 0);
   // Room for a few more descriptors than are open now; clients take them all.
@@ -302,18 +310,22 @@ TEST_CASE("out of descriptors, the server pauses accepting without spinning and 
   const auto t = Clock::now();
   std::this_thread::sleep_for(std::chrono::seconds(1));
   const double busy = (cpuSeconds() - cpu) / since(t);
-  WARN(fmt::format("descriptors exhausted ({} client connections): the process used {:.0f} % of a core", clients.size(),
+  const std::size_t connections = clients.size();
+  const std::size_t pauses = log.count("serve: cannot accept connections (");
+
+  // Descriptors free: the clients leave and the limit is back. No assertion runs before
+  // this: with no descriptor to spare, UBSan's runtime cannot check Catch's own types
+  // (it reported an "invalid vptr" in Catch::AssertionStats under the tight limit).
+  clients.clear();
+  REQUIRE(setrlimit(RLIMIT_NOFILE, &original) == 0);
+  WARN(fmt::format("descriptors exhausted ({} client connections): the process used {:.0f} % of a core", connections,
                    100 * busy));
   CHECK(busy < 0.3);
   // Said once when it pauses, not once per try (about six tries in that time); a descriptor
   // that frees on its own (a connection ending) may end one pause and start another.
-  const std::size_t pauses = log.count("serve: cannot accept connections (");
   CHECK(pauses >= 1);
   CHECK(pauses <= 2);
-
-  // Descriptors free: the clients leave, the limit is back, and the next request is served.
-  clients.clear();
-  REQUIRE(setrlimit(RLIMIT_NOFILE, &original) == 0);
+  // The next request is served.
   const auto again = Clock::now();
   CHECK(get(port, "/").status == 200);
   CHECK(since(again) < 3);
