@@ -141,7 +141,7 @@ TEST_CASE("the server refuses foreign origins and hosts, logs it, and answers it
   }
 }
 
-TEST_CASE("a page that leaves during a retraining stalls no other page and no request", "[serve][data][slow]") {
+TEST_CASE("a page that leaves during a retraining stalls no other page and no request", "[serve][data][slow][serial]") {
   const BoxingAssets boxing;
   RunningServer running(boxing.assets, 4);
   const std::uint16_t port = running.port();
@@ -239,7 +239,7 @@ TEST_CASE("a page that never reads costs the server at most a few megabytes and 
 }
 
 TEST_CASE("fifteen heavy pages beside a light one: the light page keeps 20 frames a second, none is closed",
-          "[serve][data][slow]") {
+          "[serve][data][slow][serial]") {
   const BoxingAssets boxing;
   RunningServer running(boxing.assets, 16);
   const bench::HeavyBesideLight r = bench::heavyBesideLight(running.port(), 15, 3, 6);

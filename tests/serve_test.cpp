@@ -292,6 +292,21 @@ TEST_CASE("a page's world: the boxer punches the target where it is dragged; wei
   session.handle(R"({"type": "step"})");
   CHECK(session.advance(1.0));
   CHECK(serve::decodeFrame(session.frame()).header.frame == frame + 1);
+
+  // A slice used up after the first frame: the other frames due are dropped, not carried
+  // (the world runs slower), and stats say so.
+  session.handle(R"({"type": "pause", "paused": false})");
+  session.handle(R"({"type": "speed", "speed": 4})");
+  textMessages(session);
+  session.stats(0, 0);
+  CHECK(session.advance(1.0, 0.0));
+  CHECK(serve::decodeFrame(session.frame()).header.frame == frame + 2);
+  CHECK(session.advance(1.0, serve::kNoSlice));
+  CHECK(serve::decodeFrame(session.frame()).header.frame == frame + 6);
+  const json shed = json::parse(session.stats(0, 0));
+  CHECK(shed["frames_shed"] == 3);
+  CHECK(shed["slowed"].get<std::string>().find("3 frames were cut short") != std::string::npos);
+  CHECK(json::parse(session.stats(0, 0))["frames_shed"] == 0);
 }
 
 // Issue 17: the HUD counts success by the scenario's criterion, for behaviours that land no

@@ -46,6 +46,10 @@ constexpr double kWorldShare = 0.5;
 /// How far ahead of its share a page may run, s (a burst: a mode change, a retraining's
 /// table taken).
 constexpr double kAllowanceMax = 0.1;
+/// The longest a page's world simulates in one tick before the frames still due are
+/// dropped: a crowd's eight frames (speed 4, a late timer) took 110 ms here, and far longer
+/// on a loaded machine, holding every other page for that long.
+constexpr double kStepSlice = 0.02;
 /// accept() failing for want of descriptors or memory: retried after this, doubling.
 constexpr auto kAcceptRetryFirst = std::chrono::milliseconds(50);
 constexpr auto kAcceptRetryMax = std::chrono::seconds(1);
@@ -220,7 +224,7 @@ class PageSession : public std::enable_shared_from_this<PageSession> {
       // Over its share: this step is skipped (its world runs slower), and `stats` says why.
       const bool over = allowance_ < 0;
       if (over) ++ticksSkipped_;
-      const bool moved = !over && viewer_.advance(1.0);
+      const bool moved = !over && viewer_.advance(1.0, kStepSlice);
       if (moved || (dirty_ && !over)) {
         dirty_ = false;
         if (binaryPending_) {

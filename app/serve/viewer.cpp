@@ -350,7 +350,7 @@ void ViewerSession::followSuccess() {
   }
 }
 
-bool ViewerSession::advance(double frames) {
+bool ViewerSession::advance(double frames, double sliceSeconds) {
   State& s = *state_;
   advanceLesson(frames);
   collectRetraining();
@@ -372,6 +372,11 @@ bool ViewerSession::advance(double frames) {
   for (std::size_t k = 0; k < n; ++k) {  // frame by frame, so that no decision goes unseen
     s.world->run(1);
     followSuccess();
+    if (k + 1 < n && std::chrono::duration<double>(Clock::now() - start).count() >= sliceSeconds) {
+      s.framesShed += n - k - 1;
+      n = k + 1;
+      s.carry = 0;
+    }
   }
   s.busySeconds += std::chrono::duration<double>(Clock::now() - start).count();
   s.busyFrames += n;
@@ -443,17 +448,21 @@ std::string ViewerSession::stats(std::size_t framesSent, std::size_t framesDropp
              avatarRecordBytes(assets_->session->graph.db.skeleton->jointCount())},
             {"share_ms_per_s", round3(share.secondsPerSecond * 1e3)},
             {"steps_skipped", share.ticksSkipped},
-            {"slowed", share.ticksSkipped == 0
+            {"frames_shed", s.framesShed},
+            {"slowed", share.ticksSkipped == 0 && s.framesShed == 0
                            ? json(nullptr)
                            : json(fmt::format("The server shares its time among {} page{}, {:.0f} ms a second each; this "
                                               "world asks for more ({} avatars, {}{} at speed {}), so {} of its last {} "
-                                              "steps were skipped and it runs slower.",
+                                              "steps were skipped{} and it runs slower.",
                                               share.pages, share.pages == 1 ? "" : "s", share.secondsPerSecond * 1e3,
                                               world.avatarCount(), s.controller,
                                               s.controller == "online_search" ? fmt::format(" ({} actions ahead)", s.horizon)
                                                                               : std::string(),
-                                              s.speed, share.ticksSkipped, share.ticks))}};
+                                              s.speed, share.ticksSkipped, share.ticks,
+                                              s.framesShed == 0 ? std::string()
+                                                                : fmt::format(", {} frames were cut short", s.framesShed)))}};
   s.decisions = {};
+  s.framesShed = 0;
   s.busySeconds = 0;
   s.busyFrames = 0;
   return j.dump();

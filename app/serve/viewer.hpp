@@ -7,6 +7,7 @@
 #include <chrono>
 #include <deque>
 #include <filesystem>
+#include <limits>
 #include <memory>
 #include <string>
 #include <vector>
@@ -41,6 +42,9 @@ struct PageShare {
   std::size_t ticksSkipped = 0, ticks = 0;  ///< since the last stats
 };
 
+/// No slice: advance() runs every frame it is asked for.
+inline constexpr double kNoSlice = std::numeric_limits<double>::infinity();
+
 /// One page's world and clock.
 class ViewerSession {
  public:
@@ -53,8 +57,11 @@ class ViewerSession {
   /// message in the outbox and change nothing.
   void handle(std::string_view text);
   /// Advances the world by `frames` frames of its clock times the speed (fractions carry
-  /// over); nothing while paused unless a step was asked for. True if it moved.
-  bool advance(double frames);
+  /// over); nothing while paused unless a step was asked for. True if it moved. Once
+  /// `sliceSeconds` have gone on simulating (after the first frame), the frames still due
+  /// are dropped, not carried: a heavy world then runs slower instead of holding the
+  /// server's one thread (`stats.frames_shed` counts them).
+  bool advance(double frames, double sliceSeconds = kNoSlice);
   /// The pose frame of now.
   const std::vector<std::uint8_t>& frame();
   /// The `stats` message, with the transport's frame counters and the page's share (the

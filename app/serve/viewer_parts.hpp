@@ -87,6 +87,7 @@ struct ViewerSession::State {
   FrameWriter writer;
   double busySeconds = 0;       ///< simulating and encoding, since the last stats
   std::size_t busyFrames = 0;
+  std::size_t framesShed = 0;  ///< frames dropped at the end of a slice, since the last stats
   std::string adjustment;       ///< what the session changed on its own (scene note)
   int shown = -1;               ///< behaviour whose values are streamed (-1 none)
   std::size_t valuesFrame = 0;  ///< world frame of the last `values` message
