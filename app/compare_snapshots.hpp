@@ -11,7 +11,7 @@
 
 #include "compare_command.hpp"
 #include "learn_common.hpp"
-#include "trials.hpp"
+#include "mgrl/session/trials.hpp"
 
 namespace mgrl::app {
 

@@ -16,7 +16,7 @@
 
 #include "app/compare_tables.hpp"
 #include "app/plugins.hpp"
-#include "app/trials.hpp"
+#include "mgrl/session/trials.hpp"
 #include "environments/environments.hpp"
 #include "mgrl/motion/roles.hpp"
 #include "mgrl/core/bundle.hpp"
@@ -1571,13 +1571,13 @@ TEST_CASE("trials against an avatar need an opponent environment and an avoid co
   };
   const std::vector<Behavior> still = behaviours(std::make_unique<StaticTarget>());
   const Task stillTask = makeTask(still, "test.yaml");
-  const app::Trials onStatic(m, still, stillTask, std::nan(""), "test.yaml");
+  const Trials onStatic(m, still, stillTask, std::nan(""), "test.yaml");
   CHECK_FALSE(onStatic.hasAvatarOpponent());
   CHECK_THROWS_WITH(onStatic.runAgainstAvatar(nullptr, 1, 1, 1),
                     "trials against an avatar: expected an opponent environment, found static_target");
   const std::vector<Behavior> unguarded = behaviours(std::make_unique<environments::Opponent>(true, 0.3, 0.7, M_PI));
   const Task unguardedTask = makeTask(unguarded, "test.yaml");
-  const app::Trials withoutAvoid(m, unguarded, unguardedTask, std::nan(""), "test.yaml");
+  const Trials withoutAvoid(m, unguarded, unguardedTask, std::nan(""), "test.yaml");
   CHECK_FALSE(withoutAvoid.hasAvatarOpponent());
   CHECK_THROWS_WITH(withoutAvoid.runAgainstAvatar(nullptr, 1, 1, 1),
                     "trials against an avatar: expected a success criterion with an avoid condition, found none");

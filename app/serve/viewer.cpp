@@ -13,7 +13,7 @@
 
 #include "learn_common.hpp"
 #include "learners/q_learning_steps.hpp"
-#include "trials.hpp"
+#include "mgrl/session/trials.hpp"
 #include "mgrl/graph/motion_graph.hpp"
 #include "mgrl/learning/behavior.hpp"
 #include "mgrl/learning/policy_bundle.hpp"
@@ -90,7 +90,7 @@ std::shared_ptr<const ViewerAssets> loadViewerAssets(const ServeOptions& options
     assets->note = fmt::format("No usable policy bundle ({}), so the online search runs instead. Train one with: "
                                "mgrl train {}",
                                session.policyNote, options.scenario.string());
-  assets->criteria = app::trialCriteria(session.behaviors).first;
+  assets->criteria = trialCriteria(session.behaviors).first;
   std::vector<std::string> texts;
   for (const SuccessCriterion& c : assets->criteria) texts.push_back(c.describe());
   assets->criteriaText = fmt::format("{}", fmt::join(texts, ", or "));

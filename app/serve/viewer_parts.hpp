@@ -30,7 +30,7 @@ struct ViewerAssets {
   double meanOutDegree = 1;  ///< actions per state, for the online search's cost
   std::string note;          ///< shown on the page (no policy bundle, ...)
   ServeOptions options;      ///< what the server was started with (live retraining adds --set's)
-  /// What eval counts as success (app::trialCriteria), which the page counts live, and
+  /// What eval counts as success (trialCriteria), which the page counts live, and
   /// its text ("contact of the fists within 0.15 m").
   std::vector<SuccessCriterion> criteria;
   std::string criteriaText;

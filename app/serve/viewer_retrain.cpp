@@ -17,7 +17,7 @@
 
 #include "learn_common.hpp"
 #include "learners/q_learning_steps.hpp"
-#include "trials.hpp"
+#include "mgrl/session/trials.hpp"
 #include "mgrl/graph/motion_graph.hpp"
 #include "mgrl/learning/behavior.hpp"
 #include "mgrl/learning/policy_bundle.hpp"
@@ -152,13 +152,13 @@ void ViewerSession::retrain(const Retrain& message) {
       // Success as the scenario defines it (its contact radius), on the same starts.
       // Targets at the scenario's world.target_height when it gives one, as eval's.
       const double height = assets->session->task.targetHeight(std::numeric_limits<double>::quiet_NaN());
-      const app::Trials trials(model, assets->session->behaviors, assets->session->task, height, assets->session->scenario.path.string());
+      const Trials trials(model, assets->session->behaviors, assets->session->task, height, assets->session->scenario.path.string());
       std::vector<PolicyPart> after = before;
       after[index].grid = &g;
       after[index].table = &result->table;
       auto evaluate = [&](const std::vector<PolicyPart>& parts) {
         PolicyController controller(model, parts);
-        return app::Trials::summary(trials.run([&](std::uint32_t node, const TargetState& e) { return controller.choose(node, e); },
+        return Trials::summary(trials.run([&](std::uint32_t node, const TargetState& e) { return controller.choose(node, e); },
                                                kRetrainTrials, kRetrainTrialSeconds, 1));
       };
       stopped();

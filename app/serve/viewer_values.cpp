@@ -14,7 +14,7 @@
 
 #include "learn_common.hpp"
 #include "learners/q_learning_steps.hpp"
-#include "trials.hpp"
+#include "mgrl/session/trials.hpp"
 #include "mgrl/graph/motion_graph.hpp"
 #include "mgrl/learning/behavior.hpp"
 #include "mgrl/learning/policy_bundle.hpp"

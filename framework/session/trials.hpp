@@ -23,7 +23,7 @@
 #include "mgrl/learning/behavior.hpp"
 #include "mgrl/session/task.hpp"
 
-namespace mgrl::app {
+namespace mgrl {
 
 /// The criteria a trial succeeds by (any of them): the behaviours' declared `success:`,
 /// else the first one a reward's contact term implies, else an effective punch within
@@ -106,4 +106,4 @@ class Trials {
   std::string criteriaFrom_;
 };
 
-}  // namespace mgrl::app
+}  // namespace mgrl

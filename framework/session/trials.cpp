@@ -1,5 +1,5 @@
 // The trials `mgrl eval` reports and `mgrl compare` evaluates snapshots with (trials.hpp).
-#include "trials.hpp"
+#include "mgrl/session/trials.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -15,7 +15,7 @@
 #include "mgrl/graph/motion_graph.hpp"
 #include "mgrl/runtime/controller.hpp"
 
-namespace mgrl::app {
+namespace mgrl {
 
 using json = nlohmann::json;
 
@@ -313,4 +313,4 @@ json Trials::summary(TrialStats stats) {
   return result;
 }
 
-}  // namespace mgrl::app
+}  // namespace mgrl
