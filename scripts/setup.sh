@@ -2,20 +2,19 @@
 # Installs what mgrl needs to build and test, from Debian 12 packages, if missing, and the
 # viewer's three.js (web/, from npm, exactly as web/package-lock.json says).
 #   scripts/setup.sh          what building, the demo and `mgrl serve` need
-#   scripts/setup.sh --test   also Chromium, for the browser test (tests/web/), clang
-#                             with its runtime libraries, for the fuzz smoke (libFuzzer),
-#                             and NumPy, for the test that rebuilds a kd_tree from its
-#                             arrays with scripts/tree_value.py
+#   scripts/setup.sh --test   also Chromium, for the browser test (tests/web/), and clang
+#                             with its runtime libraries, for the fuzz smoke (libFuzzer)
+# Building installs pybind11 and NumPy too: `import mgrl` (python/) is part of the build.
 set -euo pipefail
 root="$(cd "$(dirname "$0")/.." && pwd)"
 
 packages=(g++ cmake ninja-build ccache pkg-config git python3 libeigen3-dev libfmt-dev libcli11-dev nlohmann-json3-dev
-          libyaml-cpp-dev catch2 libboost-dev)
+          libyaml-cpp-dev catch2 libboost-dev python3-dev pybind11-dev python3-numpy)
 command -v node >/dev/null 2>&1 || packages+=(nodejs)
 command -v npm >/dev/null 2>&1 || packages+=(npm)
 # libclang-rt-dev holds libFuzzer and clang's sanitizer runtimes; clang only recommends
 # it, and recommends are not installed below.
-[ "${1:-}" = "--test" ] && packages+=(chromium clang libclang-rt-dev python3-numpy)
+[ "${1:-}" = "--test" ] && packages+=(chromium clang libclang-rt-dev)
 
 missing=()
 for p in "${packages[@]}"; do

@@ -1,0 +1,30 @@
+"""mgrl from Python: the motion-graph learning problem as NumPy arrays, and mgrl's C++
+learners on it (issue 41; a first part).
+
+    import mgrl
+    s = mgrl.Session("scenarios/boxing.yaml")          # data, cache, sets as on the command line
+    p = s.problem("approach")                           # the tabulated problem
+    q = s.train("approach", learner="value_iteration")  # (A, V) float32
+
+`p` holds exactly what the C++ learners back up:
+
+    p.rewards    float32 (A, V)     r(v, a)
+    p.corners    int32   (A, V, K)  vertices of the cell where vertex v lands after
+                                    action a; -1 where it leaves the grid
+    p.weights    float32 (A, V, K)  their interpolation weights (0 with corner -1)
+    p.discount   float32 (A,)       gamma ** (frames of a)
+    p.next_state int32   (A,)       the graph state action a ends in
+    p.out_actions (indptr int32 (S+1,), indices int32 (A,)): the actions leaving each state
+    p.vertices   float64 (V, D)     each vertex's grid coordinates
+
+One value-iteration backup is
+
+    Q[a, v] = R[a, v] + discount[a] * sum_k W[a, v, k] * max over a' in out(next_state[a])
+              of Q[a', C[a, v, k]]                        (terms with C = -1 count 0)
+
+which is the paper's sec. 4.2 backup with the grid's multilinear interpolation (the max
+is taken of the interpolated row, as the C++ code does: max_a' sum_k, not sum_k max).
+"""
+from ._core import Error, Problem, Session  # noqa: F401
+
+__all__ = ["Error", "Problem", "Session"]
