@@ -173,16 +173,6 @@ class CrashTestCheckpointer final : public Checkpointer {
   bool resumed_ = false;
 };
 
-std::vector<double> vertexPositions(const Discretizer& grid) {
-  std::vector<double> out;
-  out.reserve(3 * grid.vertexCount());
-  for (std::size_t v = 0; v < grid.vertexCount(); ++v) {
-    const Eigen::Vector3d p = grid.vertexPosition(v);
-    out.insert(out.end(), {p.x(), p.y(), p.z()});
-  }
-  return out;
-}
-
 fs::path checkpointDirectory(const fs::path& out, const std::string& behavior) {
   return out.parent_path() / (out.filename().string() + ".checkpoints") / behavior;
 }

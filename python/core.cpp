@@ -9,7 +9,13 @@
 #include <algorithm>
 #include <array>
 #include <atomic>
+#include <chrono>
+#include <cmath>
+#include <condition_variable>
+#include <map>
 #include <memory>
+#include <mutex>
+#include <optional>
 #include <thread>
 
 #include <fmt/format.h>
@@ -19,9 +25,12 @@
 #include "mgrl/core/error.hpp"
 #include "mgrl/learning/behavior.hpp"
 #include "mgrl/learning/learner.hpp"
+#include "mgrl/learning/policy_bundle.hpp"
 #include "mgrl/learning/problem.hpp"
+#include "mgrl/session/evaluate.hpp"
 #include "mgrl/session/plugins.hpp"
 #include "mgrl/session/session.hpp"
+#include "mgrl/core/version.hpp"
 
 namespace py = pybind11;
 
@@ -68,6 +77,138 @@ std::vector<std::string> setsOf(const py::object& sets) {
   return out;
 }
 
+std::string typeName(const py::handle& value) {
+  return py::str(py::type::of(value).attr("__name__")).cast<std::string>();
+}
+
+// "(1438, 100)": a NumPy array's shape as Python prints it.
+std::string shapeText(const py::array& a) {
+  std::vector<py::ssize_t> dims(a.shape(), a.shape() + a.ndim());
+  if (dims.size() == 1) return fmt::format("({},)", dims[0]);
+  return fmt::format("({})", fmt::join(dims, ", "));
+}
+
+// Lines for the user (what the command line prints on stderr) go to Python's sys.stderr,
+// so that notebooks show them; callable from any thread.
+void toStderr(const std::string& line) {
+  py::gil_scoped_acquire gil;
+  py::module_::import("sys").attr("stderr").attr("write")(line + "\n");
+}
+
+// A C++ learner run off the Python thread: its progress handed to a Python callback about
+// ten times a second, Ctrl-C turned into the learner's stop request (as the command line's
+// handler does), the callback's own exception stopping it too.
+class Relay final : public TrainObserver {
+ public:
+  void progress(const TrainProgress& p) override {
+    std::lock_guard lock(mutex_);
+    last_ = p;
+    fresh_ = true;
+  }
+  void note(const std::string& line) override {
+    std::lock_guard lock(mutex_);
+    notes_.push_back(line);
+  }
+  // What came since the last call.
+  std::optional<TrainProgress> take(std::vector<std::string>& notes) {
+    std::lock_guard lock(mutex_);
+    notes.swap(notes_);
+    notes_.clear();
+    if (!fresh_) return std::nullopt;
+    fresh_ = false;
+    return last_;
+  }
+
+ private:
+  std::mutex mutex_;
+  TrainProgress last_;
+  bool fresh_ = false;
+  std::vector<std::string> notes_;
+};
+
+// Tabulates `problem` and trains `learner` on it on a worker thread while this thread
+// (holding the GIL between waits) relays progress and watches for Ctrl-C. Throws
+// KeyboardInterrupt (Python's) when interrupted, the callback's exception if it raised.
+TrainResult trainWatched(const std::string& behavior, const Learner& learner, const Problem& problem,
+                         const py::object& progress) {
+  const unsigned threads = std::max(1u, std::thread::hardware_concurrency());
+  std::atomic<bool> stop{false};
+  std::mutex mutex;
+  std::condition_variable finished;
+  bool done = false;
+  std::optional<TrainResult> result;
+  std::exception_ptr failure;
+  Relay relay;
+  std::thread worker([&] {
+    try {
+      const GridModel g = learner.takesCompactModel() ? GridModel::buildCompact(problem, threads, &stop)
+                                                      : GridModel::build(problem, threads, &stop);
+      result = learner.train({problem, g, &relay, nullptr, threads, &stop});
+    } catch (...) {
+      failure = std::current_exception();
+    }
+    std::lock_guard lock(mutex);
+    done = true;
+    finished.notify_all();
+  });
+  bool interrupted = false;
+  std::optional<py::error_already_set> callbackError;
+  for (;;) {
+    bool over = false;
+    {
+      py::gil_scoped_release release;
+      std::unique_lock lock(mutex);
+      over = finished.wait_for(lock, std::chrono::milliseconds(100), [&] { return done; });
+    }
+    std::vector<std::string> notes;
+    const std::optional<TrainProgress> p = relay.take(notes);
+    for (const std::string& line : notes) toStderr(fmt::format("train {}: {}", behavior, line));
+    if (p && !progress.is_none() && !callbackError && !interrupted) {
+      try {
+        py::dict d;
+        d["behavior"] = behavior;
+        d["updates"] = p->updates;
+        d["total"] = p->total;
+        d["seconds"] = p->seconds;
+        d["residual"] = p->residual;
+        progress(d);
+      } catch (py::error_already_set& e) {
+        // Ctrl-C while the callback ran surfaces there: the same stop as below.
+        if (e.matches(PyExc_KeyboardInterrupt))
+          interrupted = true;
+        else
+          callbackError.emplace(std::move(e));
+        stop = true;
+      }
+    }
+    if (over) break;
+    if (!interrupted && PyErr_CheckSignals() != 0) {  // Ctrl-C: KeyboardInterrupt is pending
+      PyErr_Clear();
+      interrupted = true;
+      stop = true;
+    }
+  }
+  worker.join();
+  if (callbackError) throw *callbackError;
+  if (failure) {
+    try {
+      std::rethrow_exception(failure);
+    } catch (const TrainInterrupted& e) {
+      if (!interrupted) throw;
+      const std::string where = e.total() > 0 ? fmt::format(" at {} of {} updates", e.updates(), e.total())
+                                              : fmt::format(" after {} updates", e.updates());
+      PyErr_SetString(PyExc_KeyboardInterrupt,
+                      fmt::format("interrupted while training {}{}; nothing was kept", behavior, where).c_str());
+      throw py::error_already_set();
+    }
+  }
+  if (interrupted) {  // it finished before it saw the request: still the user's Ctrl-C
+    PyErr_SetString(PyExc_KeyboardInterrupt, fmt::format("interrupted after training {}", behavior).c_str());
+    throw py::error_already_set();
+  }
+  return std::move(*result);
+}
+
 // The tabulated problem of one behaviour as NumPy arrays (python/mgrl/__init__.py,
 // Problem): what value iteration backs up, corner by corner.
 struct ProblemArrays {
@@ -87,6 +228,7 @@ class PySession {
     if (!data.is_none()) options.dataDir = data.cast<std::filesystem::path>();
     if (!cache.is_none()) options.cacheDir = cache.cast<std::filesystem::path>();
     options.sets = setsOf(sets);
+    options.log = toStderr;
     SessionNeeds needs;
     needs.motion = false;  // the model is what Python works on; a cached graph starts fast
     py::gil_scoped_release release;
@@ -172,9 +314,9 @@ class PySession {
   }
 
   // Any registered learner on one behaviour; the table as (A, V) float32.
-  py::array_t<float> train(const std::string& name, const py::object& learner, const py::object& sets) {
+  py::array_t<float> train(const std::string& name, const py::object& learner, const py::object& sets,
+                           const py::object& progress) {
     const Behavior& b = behavior(name);
-    const StateActionModel& model = session_->model();
     nlohmann::json config = b.config.value("learner", nlohmann::json::object());
     if (!learner.is_none()) config = {{"type", learner.cast<std::string>()}};
     for (const std::string& set : setsOf(sets)) {
@@ -184,22 +326,161 @@ class PySession {
                                       ? nlohmann::json(set.substr(eq + 1))
                                       : nlohmann::json::parse(set.substr(eq + 1));
     }
+    if (!progress.is_none() && !PyCallable_Check(progress.ptr()))
+      throw Error(fmt::format("progress: expected a callable taking a dict, or None, found an object of type {}",
+                              typeName(progress)));
     const auto made = builtinPlugins().learners.create(ConfigNode::parse(config.dump(), fmt::format("{} learner", name)));
     made->checkGrid(*b.discretizer);
-    const Problem problem = b.problem(model);
-    TrainResult result;
-    {
-      py::gil_scoped_release release;
-      const unsigned threads = std::max(1u, std::thread::hardware_concurrency());
-      const GridModel g = made->takesCompactModel() ? GridModel::buildCompact(problem, threads)
-                                                   : GridModel::build(problem, threads);
-      result = made->train({problem, g, nullptr, nullptr, threads, nullptr});
-    }
+    const TrainResult result = trainWatched(name, *made, b.problem(session_->model()), progress);
     if (result.grid)
       throw Error(fmt::format("train: the learner {} refined its own grid ({} vertices); tables on refined grids are "
                               "not offered to Python yet",
                               made->type(), result.table.vertexCount()));
     return tableArray(result.table);
+  }
+
+  // A NumPy Q table for behaviour `b`: float32 of shape (A, V) with finite values. Refused
+  // otherwise with one message naming both shapes, before anything is allocated for it.
+  QTable tableFrom(const Behavior& b, const py::handle& value) const {
+    const StateActionModel& model = session_->model();
+    const std::size_t A = model.actionCount(), V = b.discretizer->vertexCount();
+    const std::string where = fmt::format("tables['{}']", b.name);
+    if (!py::isinstance<py::array>(value))
+      throw Error(fmt::format("{}: expected a NumPy float32 array of shape ({}, {}), found an object of type {}", where,
+                              A, V, typeName(value)));
+    const auto a = py::reinterpret_borrow<py::array>(value);
+    if (a.ndim() != 2 || static_cast<std::size_t>(a.shape(0)) != A || static_cast<std::size_t>(a.shape(1)) != V)
+      throw Error(fmt::format("{}: expected shape ({}, {}) ({} actions of the graph x {} vertices of {}'s {} grid), "
+                              "found shape {}",
+                              where, A, V, A, V, b.name, b.discretizer->type(), shapeText(a)));
+    if (!a.dtype().is(py::dtype::of<float>()))
+      throw Error(fmt::format("{}: expected dtype float32, found {} (convert with table.astype(numpy.float32))", where,
+                              py::str(a.dtype()).cast<std::string>()));
+    const auto c = py::array_t<float, py::array::c_style>::ensure(a);  // a copy only if strided
+    const float* d = c.data();
+    for (std::size_t i = 0; i < A * V; ++i)
+      if (!std::isfinite(d[i]))
+        throw Error(fmt::format("{}: expected finite values, found {} at [{}, {}]", where, d[i], i / V, i % V));
+    QTable q(model, V);
+    q.setActionMajor({d, A * V});
+    return q;
+  }
+
+  // A behaviour's table from the scenario's trained bundle when it holds a current one,
+  // else trained here with the scenario's learner (once per session; said on stderr).
+  std::shared_ptr<PolicyBehavior> otherTable(const Behavior& b) {
+    if (const auto found = others_.find(b.name); found != others_.end()) return found->second;
+    const Session& session = *session_;
+    const std::filesystem::path dir =
+        defaultPolicyDirectory(session.options.cacheDir.empty() ? defaultCacheDirectory() : session.options.cacheDir,
+                               session.scenario, session.graph.key);
+    std::string why = "no trained bundle";
+    if (std::filesystem::exists(dir / "manifest.json")) {
+      try {
+        if (!bundle_) bundle_ = std::make_unique<PolicyBundle>(loadPolicyBundle(dir, session.model(), session.graph.key));
+        const auto found = bundle_->behaviors.find(b.name);
+        if (found == bundle_->behaviors.end()) {
+          why = "no table for it in the trained bundle";
+        } else if (found->second.key != b.key) {
+          why = "the trained bundle's table has other settings";
+        } else if (!found->second.grid.empty()) {
+          why = "the trained bundle's table is on a refined grid";
+        } else {
+          auto table = std::make_shared<PolicyBehavior>(found->second);
+          others_[b.name] = table;
+          return table;
+        }
+      } catch (const Error& e) {
+        why = fmt::format("the trained bundle is unusable: {}", e.what());
+      }
+    }
+    toStderr(fmt::format("mgrl: {} ({}): training {} with {} first; `mgrl train {} --behavior {}` keeps one", b.name,
+                         why, b.name, b.learner->type(), session.scenario.path.string(), b.name));
+    TrainResult result = trainWatched(b.name, *b.learner, b.problem(session.model()), py::none());
+    if (result.grid)
+      throw Error(fmt::format("{}: its learner {} refines its grid; train it with `mgrl train` first", b.name,
+                              b.learner->type()));
+    auto table = std::make_shared<PolicyBehavior>();
+    table->key = b.key;
+    table->record = {{"learner", b.learner->type()}, {"config", b.config}, {"updates", result.updates}};
+    table->table = std::move(result.table);
+    table->vertices = vertexPositions(*b.discretizer);
+    table->gridType = b.discretizer->type();
+    table->grid = b.discretizer->structure();
+    others_[b.name] = table;
+    return table;
+  }
+
+  // The scenario's behaviours, in its order: `tables` (a dict of NumPy arrays) for those it
+  // names, otherTable() for the rest. `learnerName` goes into the given ones' records.
+  struct Tables {
+    std::map<std::string, std::shared_ptr<PolicyBehavior>> behaviors;
+    std::vector<PolicyPart> parts;
+  };
+  Tables tablesFor(const py::object& tables, const std::string& learnerName) {
+    if (!py::isinstance<py::dict>(tables))
+      throw Error(fmt::format("tables: expected a dict {{behaviour name: NumPy (A, V) float32 table}}, found an object "
+                              "of type {}",
+                              typeName(tables)));
+    Tables out;
+    for (const auto& [key, value] : tables.cast<py::dict>()) {
+      const std::string name = py::str(key).cast<std::string>();
+      const Behavior& b = behavior(name);
+      auto given = std::make_shared<PolicyBehavior>();
+      given->key = b.key;
+      given->record = {{"learner", learnerName},
+                       {"trained_in", "python"},
+                       {"config", b.config},
+                       {"weight", b.weight},
+                       {"activation", std::string(activationName(b.activation))},
+                       {"grid", b.discretizer->describe()}};
+      given->table = tableFrom(b, value);
+      given->vertices = vertexPositions(*b.discretizer);
+      given->gridType = b.discretizer->type();
+      given->grid = b.discretizer->structure();
+      out.behaviors[name] = std::move(given);
+    }
+    for (const Behavior& b : session_->behaviors) {
+      if (!out.behaviors.count(b.name)) out.behaviors[b.name] = otherTable(b);
+      out.parts.push_back({b.discretizer.get(), &out.behaviors[b.name]->table, b.weight, b.activation});
+    }
+    return out;
+  }
+
+  py::object evaluate(const py::object& tables, std::size_t trials, std::uint64_t seed, const std::string& controller,
+                      double seconds, int horizon) {
+    EvalSettings settings;
+    settings.controller = {controller, horizon, 0};
+    settings.trials = trials;
+    settings.seconds = seconds;
+    settings.seed = seed;
+    settings.trialsField = "trials";
+    settings.secondsField = "seconds";
+    checkEvalSettings(settings, {"controller", "horizon", "horizon_seconds"});
+    Tables t;
+    if (controller == "policy") t = tablesFor(tables.is_none() ? py::dict() : tables, "python");
+    nlohmann::json report;
+    {
+      py::gil_scoped_release release;
+      report = mgrl::evaluate(*session_, t.parts, settings);
+    }
+    return py::module_::import("json").attr("loads")(report.dump());
+  }
+
+  void savePolicy(const std::filesystem::path& path, const py::object& tables, const std::string& learnerName) {
+    Tables t = tablesFor(tables, learnerName);
+    PolicyBundle bundle;
+    bundle.graphKey = session_->graph.key;
+    nlohmann::json given = nlohmann::json::object();
+    for (const auto& [key, value] : tables.cast<py::dict>()) given[py::str(key).cast<std::string>()] = learnerName;
+    bundle.provenance = {{"scenario", session_->scenario.path.string()},
+                         {"scenario_name", session_->scenario.name},
+                         {"tool", fmt::format("mgrl {} (Python)", kVersion)},
+                         {"sets", session_->options.sets},
+                         {"python_learners", given}};
+    for (const auto& [name, table] : t.behaviors) bundle.behaviors[name] = *table;
+    py::gil_scoped_release release;
+    savePolicyBundle(path, bundle);
   }
 
   // A QTable as (A, V): Q[a, v] with a the model's action index.
@@ -220,7 +501,33 @@ class PySession {
 
  private:
   std::unique_ptr<Session> session_;
+  std::unique_ptr<PolicyBundle> bundle_;  ///< the scenario's trained bundle, once read
+  std::map<std::string, std::shared_ptr<PolicyBehavior>> others_;  ///< otherTable()'s, by behaviour
 };
+
+// The graph's arrays (python/mgrl/__init__.py lists them) as read-only views of the
+// session's memory: no copy, kept alive by the session object `self`.
+py::dict graphArrays(py::object self) {
+  const StateActionModel& g = self.cast<const PySession&>().session().model();
+  auto n = [](std::size_t size) { return static_cast<py::ssize_t>(size); };
+  py::dict d;
+  d["frame_time"] = g.frameTime;
+  d["states"] = g.stateCount();
+  d["actions"] = g.actionCount();
+  d["state_frame"] = view(g.stateFrame.data(), {n(g.stateCount())}, self);
+  d["state_action_begin"] = view(g.stateActionBegin.data(), {n(g.stateActionBegin.size())}, self);
+  d["action_from"] = view(g.actionFrom.data(), {n(g.actionCount())}, self);
+  d["action_to"] = view(g.actionTo.data(), {n(g.actionCount())}, self);
+  d["action_frame_begin"] = view(g.actionFrameBegin.data(), {n(g.actionFrameBegin.size())}, self);
+  d["action_frames"] = view(g.actionFrames.data(), {n(g.actionFrames.size())}, self);
+  d["action_displacement"] = view(g.actionDisplacement.data(), {n(g.actionCount()), 3}, self);
+  d["frame_root"] = view(g.frameRoot.data(), {n(g.frameRoot.size() / 3), 3}, self);
+  d["hits"] = view(g.hits.data(), {n(g.hits.size())}, self);
+  d["action_hit_begin"] = view(g.actionHitBegin.data(), {n(g.actionHitBegin.size())}, self);
+  d["kicks"] = view(g.kicks.data(), {n(g.kicks.size())}, self);
+  d["action_kick_begin"] = view(g.actionKickBegin.data(), {n(g.actionKickBegin.size())}, self);
+  return d;
+}
 
 }  // namespace
 }  // namespace mgrl::python
@@ -228,6 +535,7 @@ class PySession {
 PYBIND11_MODULE(_core, m) {
   using namespace mgrl::python;
   m.doc() = "mgrl's C++ core: sessions, tabulated problems and learners (import mgrl, not this)";
+  PYBIND11_NUMPY_DTYPE(mgrl::ActionHit, action, offset, hand, x, y, z, weight);
   static py::exception<mgrl::Error> error(m, "Error");
   py::register_exception_translator([](std::exception_ptr p) {
     try {
@@ -258,22 +566,11 @@ PYBIND11_MODULE(_core, m) {
            py::arg("sets") = py::none())
       .def_property_readonly("behaviors", &PySession::behaviorNames)
       .def_property_readonly("scenario", [](const PySession& s) { return s.session().scenario.path; })
-      .def_property_readonly("graph",
-                             [](py::object self) {
-                               const mgrl::StateActionModel& m = self.cast<const PySession&>().session().model();
-                               py::dict d;
-                               d["action_from"] = view(m.actionFrom.data(), {static_cast<py::ssize_t>(m.actionCount())}, self);
-                               d["action_to"] = view(m.actionTo.data(), {static_cast<py::ssize_t>(m.actionCount())}, self);
-                               d["action_frame_begin"] =
-                                   view(m.actionFrameBegin.data(), {static_cast<py::ssize_t>(m.actionFrameBegin.size())}, self);
-                               d["action_displacement"] =
-                                   view(m.actionDisplacement.data(), {static_cast<py::ssize_t>(m.actionCount()), 3}, self);
-                               d["state_frame"] = view(m.stateFrame.data(), {static_cast<py::ssize_t>(m.stateCount())}, self);
-                               d["state_action_begin"] = view(m.stateActionBegin.data(),
-                                                              {static_cast<py::ssize_t>(m.stateActionBegin.size())}, self);
-                               d["frame_time"] = m.frameTime;
-                               return d;
-                             })
+      .def_property_readonly("graph", &graphArrays)
       .def("problem", &PySession::problem, py::arg("behavior"))
-      .def("train", &PySession::train, py::arg("behavior"), py::arg("learner") = py::none(), py::arg("sets") = py::none());
+      .def("train", &PySession::train, py::arg("behavior"), py::arg("learner") = py::none(), py::arg("sets") = py::none(),
+           py::arg("progress") = py::none())
+      .def("evaluate", &PySession::evaluate, py::arg("tables") = py::none(), py::arg("trials") = 300,
+           py::arg("seed") = 1, py::arg("controller") = "policy", py::arg("seconds") = 10.0, py::arg("horizon") = 3)
+      .def("save_policy", &PySession::savePolicy, py::arg("path"), py::arg("tables"), py::arg("learner") = "python");
 }

@@ -63,6 +63,16 @@ void checkSeal(const json& manifest, const ManifestReader& reader) {
 
 }  // namespace
 
+std::vector<double> vertexPositions(const Discretizer& grid) {
+  std::vector<double> out;
+  out.reserve(3 * grid.vertexCount());
+  for (std::size_t v = 0; v < grid.vertexCount(); ++v) {
+    const Eigen::Vector3d p = grid.vertexPosition(v);
+    out.insert(out.end(), {p.x(), p.y(), p.z()});
+  }
+  return out;
+}
+
 bool isPolicyBehaviorName(std::string_view name) {
   if (name.empty()) return false;
   for (char c : name) {

@@ -80,6 +80,10 @@ struct PolicyBundle {
 /// True if `name` can name a behaviour in a bundle: one or more of [A-Za-z0-9_-].
 bool isPolicyBehaviorName(std::string_view name);
 
+/// The grid's vertex positions as PolicyBehavior::vertices holds them: (vertexCount, 3),
+/// row-major.
+std::vector<double> vertexPositions(const Discretizer& grid);
+
 /// Writes `bundle` at `dir` (see the file comment), replacing a policy bundle already there,
 /// atomically as writeBundleDirectory() does (the manifest written last). Writes the same
 /// bytes for the same bundle.

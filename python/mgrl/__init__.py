@@ -5,6 +5,8 @@ learners on it (issue 41; a first part).
     s = mgrl.Session("scenarios/boxing.yaml")          # data, cache, sets as on the command line
     p = s.problem("approach")                           # the tabulated problem
     q = s.train("approach", learner="value_iteration")  # (A, V) float32
+    r = s.evaluate({"approach": q}, trials=300)         # mgrl eval --json's figures
+    s.save_policy("bundle", {"approach": q}, learner="my_vi")  # for mgrl eval --policy
 
 `p` holds exactly what the C++ learners back up:
 
@@ -24,6 +26,23 @@ One value-iteration backup is
 
 which is the paper's sec. 4.2 backup with the grid's multilinear interpolation (the max
 is taken of the interpolated row, as the C++ code does: max_a' sum_k, not sum_k max).
+
+Session:
+    graph            dict of read-only NumPy views of the graph (no copy): state_frame,
+                     state_action_begin, action_from, action_to, action_frame_begin,
+                     action_frames, action_displacement (A, 3: dx, dz, dyaw), frame_root,
+                     hits and kicks (structured: action, offset, hand, x, y, z, weight)
+                     with action_hit_begin / action_kick_begin, frame_time
+    problem(b)       the tabulated problem above
+    train(b, learner=None, sets=None, progress=None)
+                     any registered C++ learner (the scenario's by default; sets are its
+                     parameters); progress(dict) about ten times a second; Ctrl-C raises
+                     KeyboardInterrupt
+    evaluate(tables=None, trials=300, seed=1, controller="policy", seconds=10, horizon=3)
+                     mgrl eval's trials: tables {behaviour: float32 (A, V)}; the other
+                     behaviours from the scenario's trained bundle, else trained first
+    save_policy(path, tables, learner="python")
+                     a complete policy bundle mgrl eval/simulate/serve/compare accept
 """
 from ._core import Error, Problem, Session  # noqa: F401
 

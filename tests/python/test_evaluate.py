@@ -1,0 +1,153 @@
+"""Tables from Python played by mgrl (issue 41): Session.evaluate reports what `mgrl eval`
+does, save_policy writes a bundle the command line accepts as it is, NumPy tables of the
+wrong shape, dtype or values are refused naming both shapes, and training honours a
+progress callback and Ctrl-C. Run by ctest (python_tests)."""
+import json
+import os
+import pathlib
+import signal
+import subprocess
+import sys
+import tempfile
+import textwrap
+import time
+import unittest
+
+import numpy as np
+
+import mgrl
+from test_problem import BOXING, CACHE, numpy_value_iteration
+
+MGRL = os.environ.get("MGRL_BIN", str(pathlib.Path(__file__).resolve().parents[2] / "build" / "app" / "mgrl"))
+# Small budgets, so that the behaviour a test does not give (hit) trains in a second.
+SETS = {"behaviors.hit.learner.budget": 300000, "behaviors.approach.learner.budget": 300000}
+
+
+class EvaluateTest(unittest.TestCase):
+    @classmethod
+    def setUpClass(cls):
+        cls.cache = tempfile.mkdtemp(prefix="mgrl-python-eval-")
+        cls.session = mgrl.Session(BOXING, cache=cls.cache, sets=SETS)
+        cls.approach = numpy_value_iteration(cls.session.problem("approach")).astype(np.float32)
+
+    def test_a_python_table_saved_gives_the_same_figures_in_mgrl_eval(self):
+        mine = self.session.evaluate({"approach": self.approach}, trials=120, seed=3)
+        self.assertEqual(mine["trials"], 120)
+        self.assertEqual(mine["controller"], "policy")
+        # Random actions on the same starts do far worse: the table is really played.
+        self.assertGreater(mine["success_rate"], mine["random_baseline"]["success_rate"] + 0.3)
+        bundle = pathlib.Path(tempfile.mkdtemp(prefix="mgrl-python-policy-")) / "policy"
+        self.session.save_policy(bundle, {"approach": self.approach}, learner="numpy_value_iteration")
+        manifest = json.loads((bundle / "manifest.json").read_text())
+        self.assertEqual(manifest["provenance"]["python_learners"], {"approach": "numpy_value_iteration"})
+        self.assertEqual(manifest["behaviors"]["approach"]["record"]["learner"], "numpy_value_iteration")
+        self.assertEqual(set(manifest["behaviors"]), {"approach", "hit"})
+        saved = np.load(bundle / "approach.q.npy")
+        np.testing.assert_array_equal(saved, self.approach)
+        command = [MGRL, "eval", str(BOXING), "--policy", str(bundle), "--json", "--trials", "120", "--seed", "3",
+                   "--cache", self.cache]
+        for key, value in SETS.items():
+            command += ["--set", f"{key}={value}"]
+        run = subprocess.run(command, capture_output=True, text=True, check=False)
+        self.assertEqual(run.returncode, 0, run.stderr)
+        theirs = json.loads(run.stdout)
+        for key in ("success_rate", "successes", "mean_return", "mean_time_to_hit_s", "decisions"):
+            self.assertEqual(mine[key], theirs[key], key)
+        self.assertEqual(mine["random_baseline"], theirs["random_baseline"])
+
+    def test_other_controllers_need_no_tables(self):
+        r = self.session.evaluate(controller="random", trials=50, seed=2)
+        self.assertEqual(r["controller"], "random")
+        self.assertNotIn("random_baseline", r)
+        r = self.session.evaluate(controller="online_search", horizon=1, trials=10, seed=2)
+        self.assertEqual(r["horizon"], 1)
+
+    def test_wrong_tables_are_refused_naming_both_shapes(self):
+        q = self.approach
+        A, V = q.shape
+        cases = [
+            (q.astype(np.float64), r"tables\['approach'\]: expected dtype float32, found float64"),
+            (q[:, :5], rf"expected shape \({A}, {V}\) \({A} actions of the graph x {V} vertices of approach's polar2d "
+                       rf"grid\), found shape \({A}, 5\)"),
+            (q.T, rf"expected shape \({A}, {V}\) .* found shape \({V}, {A}\)"),
+            (q[0], rf"found shape \({V},\)"),
+            ([[0.0]], r"expected a NumPy float32 array of shape .* found an object of type list"),
+            (np.where(np.arange(V) == 7, np.inf, q).astype(np.float32), r"expected finite values, found inf at \[0, 7\]"),
+        ]
+        for table, message in cases:
+            with self.subTest(message=message):
+                with self.assertRaisesRegex(mgrl.Error, message):
+                    self.session.evaluate({"approach": table}, trials=5)
+        with self.assertRaisesRegex(mgrl.Error, r"behavior: expected one of the scenario's behaviours \(approach, hit\), found 'jab'"):
+            self.session.evaluate({"jab": q}, trials=5)
+        with self.assertRaisesRegex(mgrl.Error, r"tables: expected a dict"):
+            self.session.evaluate([q], trials=5)
+        with self.assertRaisesRegex(mgrl.Error, r"trials: expected a number of trials in \[1, 10000000\], found 0"):
+            self.session.evaluate({"approach": q}, trials=0)
+        with self.assertRaisesRegex(mgrl.Error, r"controller: expected one of: policy, online_search, random, found 'best'"):
+            self.session.evaluate(controller="best")
+        # A strided view is fine (copied once), the same table as the contiguous one.
+        strided = np.asfortranarray(q)
+        self.assertEqual(self.session.evaluate({"approach": strided}, trials=20, seed=4)["success_rate"],
+                         self.session.evaluate({"approach": q}, trials=20, seed=4)["success_rate"])
+
+    def test_a_refused_save_leaves_nothing_behind(self):
+        folder = pathlib.Path(tempfile.mkdtemp(prefix="mgrl-python-refused-"))
+        with self.assertRaisesRegex(mgrl.Error, r"expected dtype float32"):
+            self.session.save_policy(folder / "policy", {"approach": self.approach.astype(np.float16)})
+        self.assertEqual(list(folder.iterdir()), [])
+
+    def test_train_reports_progress_and_a_raising_callback_stops_it(self):
+        seen = []
+        q = self.session.train("approach", learner="q_learning", sets={"budget": 2000000}, progress=seen.append)
+        self.assertEqual(q.shape, self.approach.shape)
+        self.assertTrue(seen)
+        self.assertEqual(seen[-1]["behavior"], "approach")
+        self.assertTrue(all(a["updates"] <= b["updates"] for a, b in zip(seen, seen[1:])))
+
+        class Enough(Exception):
+            pass
+
+        def stop(progress):
+            raise Enough(progress["updates"])
+
+        started = time.monotonic()
+        with self.assertRaises(Enough):
+            self.session.train("approach", learner="q_learning", sets={"budget": 10**10}, progress=stop)
+        self.assertLess(time.monotonic() - started, 30)
+        with self.assertRaisesRegex(mgrl.Error, r"progress: expected a callable"):
+            self.session.train("approach", progress=3)
+
+
+class InterruptTest(unittest.TestCase):
+    def test_ctrl_c_stops_training_with_keyboard_interrupt(self):
+        script = textwrap.dedent(f"""
+            import sys, mgrl
+            s = mgrl.Session({str(BOXING)!r}, cache={CACHE!r})
+            def started(progress):
+                if progress["updates"] > 0 and not getattr(started, "said", False):
+                    started.said = True
+                    print("started", flush=True)
+            try:
+                s.train("approach", learner="q_learning", sets={{"budget": 10**11}}, progress=started)
+            except KeyboardInterrupt as e:
+                print("interrupted:", e, flush=True)
+                sys.exit(3)
+            """)
+        child = subprocess.Popen([sys.executable, "-c", script], stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+                                 text=True, env=os.environ)
+        try:
+            self.assertEqual(child.stdout.readline().strip(), "started")
+            sent = time.monotonic()
+            child.send_signal(signal.SIGINT)
+            out, err = child.communicate(timeout=30)
+        finally:
+            if child.poll() is None:
+                child.kill()
+        self.assertEqual(child.returncode, 3, err)
+        self.assertRegex(out, r"interrupted: interrupted while training approach at \d+ of 100000000000 updates")
+        self.assertLess(time.monotonic() - sent, 5)
+
+
+if __name__ == "__main__":
+    unittest.main()
