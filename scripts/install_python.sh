@@ -6,7 +6,7 @@
 set -euo pipefail
 root="$(cd "$(dirname "$0")/.." && pwd)"
 build="${1:-$root/build}"
-"$root/scripts/setup.sh"
+"$root/scripts/setup.sh" --python
 "$root/scripts/build.sh" "$build"
 module="$build/python/mgrl"
 compgen -G "$module/_core*.so" >/dev/null ||

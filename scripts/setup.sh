@@ -2,8 +2,10 @@
 # Installs what mgrl needs to build and test, from Debian 12 packages, if missing, and the
 # viewer's three.js (web/, from npm, exactly as web/package-lock.json says).
 #   scripts/setup.sh          what building, the demo and `mgrl serve` need
-#   scripts/setup.sh --test   also Chromium, for the browser test (tests/web/), and clang
-#                             with its runtime libraries, for the fuzz smoke (libFuzzer)
+#   scripts/setup.sh --python also matplotlib, nbconvert and a Jupyter kernel for Debian's
+#                             python3: the notebooks (notebooks/) and their plots
+#   scripts/setup.sh --test   all of the above, Chromium, for the browser test (tests/web/),
+#                             and clang with its runtime libraries, for the fuzz smoke (libFuzzer)
 # Building installs pybind11 and NumPy too: `import mgrl` (python/) is part of the build.
 set -euo pipefail
 root="$(cd "$(dirname "$0")/.." && pwd)"
@@ -15,6 +17,7 @@ command -v npm >/dev/null 2>&1 || packages+=(npm)
 # libclang-rt-dev holds libFuzzer and clang's sanitizer runtimes; clang only recommends
 # it, and recommends are not installed below.
 [ "${1:-}" = "--test" ] && packages+=(chromium clang libclang-rt-dev)
+case "${1:-}" in --test | --python) packages+=(python3-matplotlib jupyter-nbconvert python3-ipykernel) ;; esac
 
 missing=()
 for p in "${packages[@]}"; do

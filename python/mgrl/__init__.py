@@ -45,5 +45,6 @@ Session:
                      a complete policy bundle mgrl eval/simulate/serve/compare accept
 """
 from ._core import Error, Problem, Session  # noqa: F401
+from .env import MotionGraphEnv, MotionGraphVectorEnv  # noqa: F401
 
-__all__ = ["Error", "Problem", "Session"]
+__all__ = ["Error", "Problem", "Session", "MotionGraphEnv", "MotionGraphVectorEnv"]
