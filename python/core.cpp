@@ -32,6 +32,9 @@
 #include "mgrl/session/plugins.hpp"
 #include "mgrl/session/session.hpp"
 #include "mgrl/core/version.hpp"
+#include "compare_report.hpp"
+#include "compare_tables.hpp"
+#include "compare_command.hpp"
 
 namespace py = pybind11;
 
@@ -110,6 +113,28 @@ class Relay final : public TrainObserver {
     std::lock_guard lock(mutex_);
     notes_.push_back(line);
   }
+  // Snapshots of the table along training (compare's learning curves): copied here, on
+  // the learner's thread, and handed to Python by take().
+  explicit Relay(std::size_t snapshots = 0) : snapshots_(snapshots) {}
+  std::size_t snapshotCount() const override { return snapshots_; }
+  void snapshot(const QTable& table, const CurvePoint& point, const Discretizer* grid) override {
+    if (grid) return;  // a refined grid's table is not offered to Python
+    Taken t{point, table.actionMajor(), table.vertexCount()};
+    std::lock_guard lock(mutex_);
+    taken_.push_back(std::move(t));
+  }
+  struct Taken {
+    CurvePoint point;
+    std::vector<float> table;  // (A, V) action-major
+    std::size_t vertices = 0;
+  };
+  std::vector<Taken> takeSnapshots() {
+    std::lock_guard lock(mutex_);
+    std::vector<Taken> out;
+    out.swap(taken_);
+    return out;
+  }
+
   // What came since the last call.
   std::optional<TrainProgress> take(std::vector<std::string>& notes) {
     std::lock_guard lock(mutex_);
@@ -121,17 +146,20 @@ class Relay final : public TrainObserver {
   }
 
  private:
+  std::size_t snapshots_ = 0;
   std::mutex mutex_;
   TrainProgress last_;
   bool fresh_ = false;
   std::vector<std::string> notes_;
+  std::vector<Taken> taken_;
 };
 
 // Tabulates `problem` and trains `learner` on it on a worker thread while this thread
 // (holding the GIL between waits) relays progress and watches for Ctrl-C. Throws
 // KeyboardInterrupt (Python's) when interrupted, the callback's exception if it raised.
 TrainResult trainWatched(const std::string& behavior, const Learner& learner, const Problem& problem,
-                         const py::object& progress) {
+                         const py::object& progress, std::size_t snapshots = 0,
+                         const py::object& onSnapshot = py::none()) {
   const unsigned threads = std::max(1u, std::thread::hardware_concurrency());
   std::atomic<bool> stop{false};
   std::mutex mutex;
@@ -139,7 +167,7 @@ TrainResult trainWatched(const std::string& behavior, const Learner& learner, co
   bool done = false;
   std::optional<TrainResult> result;
   std::exception_ptr failure;
-  Relay relay;
+  Relay relay(onSnapshot.is_none() ? 0 : snapshots);
   std::thread worker([&] {
     try {
       const GridModel g = learner.takesCompactModel() ? GridModel::buildCompact(problem, threads, &stop)
@@ -164,6 +192,26 @@ TrainResult trainWatched(const std::string& behavior, const Learner& learner, co
     std::vector<std::string> notes;
     const std::optional<TrainProgress> p = relay.take(notes);
     for (const std::string& line : notes) toStderr(fmt::format("train {}: {}", behavior, line));
+    for (Relay::Taken& t : relay.takeSnapshots()) {
+      if (callbackError || interrupted) break;
+      try {
+        py::array_t<float> table({t.table.size() / std::max<std::size_t>(1, t.vertices), t.vertices});
+        std::copy(t.table.begin(), t.table.end(), table.mutable_data());
+        py::dict d;
+        d["behavior"] = behavior;
+        d["updates"] = t.point.updates;
+        d["seconds"] = t.point.seconds;
+        d["residual"] = t.point.residual;
+        d["table"] = table;
+        onSnapshot(d);
+      } catch (py::error_already_set& e) {
+        if (e.matches(PyExc_KeyboardInterrupt))
+          interrupted = true;
+        else
+          callbackError.emplace(std::move(e));
+        stop = true;
+      }
+    }
     if (p && !progress.is_none() && !callbackError && !interrupted) {
       try {
         py::dict d;
@@ -316,10 +364,13 @@ class PySession {
 
   // Any registered learner on one behaviour; the table as (A, V) float32.
   py::array_t<float> train(const std::string& name, const py::object& learner, const py::object& sets,
-                           const py::object& progress) {
+                           const py::object& progress, std::size_t snapshots, const py::object& onSnapshot) {
     const Behavior& b = behavior(name);
+    // The scenario's learner block; another learner type starts from its defaults (as
+    // --set behaviors.B.learner.type=OTHER resets the block).
     nlohmann::json config = b.config.value("learner", nlohmann::json::object());
-    if (!learner.is_none()) config = {{"type", learner.cast<std::string>()}};
+    if (!learner.is_none() && config.value("type", std::string()) != learner.cast<std::string>())
+      config = {{"type", learner.cast<std::string>()}};
     for (const std::string& set : setsOf(sets)) {
       const std::size_t eq = set.find('=');
       if (eq == std::string::npos) throw Error(fmt::format("sets: expected 'key=value', found '{}'", set));
@@ -330,14 +381,49 @@ class PySession {
     if (!progress.is_none() && !PyCallable_Check(progress.ptr()))
       throw Error(fmt::format("progress: expected a callable taking a dict, or None, found an object of type {}",
                               typeName(progress)));
+    if (!onSnapshot.is_none() && !PyCallable_Check(onSnapshot.ptr()))
+      throw Error(fmt::format("on_snapshot: expected a callable taking a dict, or None, found an object of type {}",
+                              typeName(onSnapshot)));
+    if (snapshots > 1000) throw Error(fmt::format("snapshots: expected at most 1000, found {}", snapshots));
     const auto made = builtinPlugins().learners.create(ConfigNode::parse(config.dump(), fmt::format("{} learner", name)));
     made->checkGrid(*b.discretizer);
-    const TrainResult result = trainWatched(name, *made, b.problem(session_->model()), progress);
+    const TrainResult result =
+        trainWatched(name, *made, b.problem(session_->model()), progress, snapshots, onSnapshot);
     if (result.grid)
       throw Error(fmt::format("train: the learner {} refined its own grid ({} vertices); tables on refined grids are "
                               "not offered to Python yet",
                               made->type(), result.table.vertexCount()));
+    nlohmann::json curve = nlohmann::json::array();
+    for (const CurvePoint& c : result.curve) curve.push_back({c.updates, c.seconds, c.residual, c.meanResidual});
+    lastTrain_ = {{"behavior", name},          {"learner", made->type()},
+                  {"updates", result.updates}, {"seconds", result.seconds},
+                  {"final_residual", result.finalResidual}, {"curve", curve},
+                  {"stats", result.stats}};
     return tableArray(result.table);
+  }
+
+  // What the last train() reported: updates, seconds, final_residual, curve, stats.
+  py::object lastTrain() const {
+    if (lastTrain_.is_null()) return py::none();
+    return py::module_::import("json").attr("loads")(lastTrain_.dump());
+  }
+
+  // compare's table measures against a reference table on the same behaviour's grid:
+  // {"value_rmse", "greedy_agreement", "reference_interpolated"} (app/compare_tables.hpp).
+  py::dict compareTables(const std::string& name, const py::object& table, const py::object& reference) const {
+    const Behavior& b = behavior(name);
+    const QTable q = tableFrom(b, table), r = tableFrom(b, reference);
+    const std::vector<double> positions = vertexPositions(*b.discretizer);
+    app::Comparison c;
+    {
+      py::gil_scoped_release release;
+      c = app::compareTables(q, positions, r, positions, *b.discretizer);
+    }
+    py::dict d;
+    d["value_rmse"] = c.rmse;
+    d["greedy_agreement"] = c.agreement;
+    d["reference_interpolated"] = c.interpolated;
+    return d;
   }
 
   // A NumPy Q table for behaviour `b`: float32 of shape (A, V) with finite values. Refused
@@ -504,6 +590,7 @@ class PySession {
   std::unique_ptr<Session> session_;
   std::unique_ptr<PolicyBundle> bundle_;  ///< the scenario's trained bundle, once read
   std::map<std::string, std::shared_ptr<PolicyBehavior>> others_;  ///< otherTable()'s, by behaviour
+  nlohmann::json lastTrain_;  ///< train()'s figures, for compare
 };
 
 // Episodes of one behaviour for MotionGraphEnv (python/mgrl/env.py): single steps return
@@ -521,13 +608,13 @@ class PyEpisodes {
   std::size_t maxActions() const { return episodes_->maxActions(); }
   int dimension() const { return episodes_->dimension(); }
   std::size_t states() const { return episodes_->model().stateCount(); }
-  // Per coordinate (lowest, highest) of the grid's vertices.
+  // Per coordinate (lowest, highest) of the grid's vertices (an angle: its whole turn).
   py::array_t<double> bounds() const {
     const auto& axes = episodes_->behavior().discretizer->axes();
     py::array_t<double> out({axes.size(), std::size_t{2}});
-    for (std::size_t k = 0; k < axes.size(); ++k) {
+    for (std::size_t k = 0; k < axes.size(); ++k) {  // a wrapping axis covers its whole turn
       out.mutable_at(k, 0) = axes[k].vertices.front();
-      out.mutable_at(k, 1) = axes[k].vertices.back();
+      out.mutable_at(k, 1) = axes[k].wraps ? axes[k].vertices.front() + 2 * M_PI : axes[k].vertices.back();
     }
     return out;
   }
@@ -704,10 +791,36 @@ PYBIND11_MODULE(_core, m) {
       .def_property_readonly("graph", &graphArrays)
       .def("problem", &PySession::problem, py::arg("behavior"))
       .def("train", &PySession::train, py::arg("behavior"), py::arg("learner") = py::none(), py::arg("sets") = py::none(),
-           py::arg("progress") = py::none())
+           py::arg("progress") = py::none(), py::arg("snapshots") = 0, py::arg("on_snapshot") = py::none())
+      .def_property_readonly("last_train", &PySession::lastTrain)
+      .def("compare_tables", &PySession::compareTables, py::arg("behavior"), py::arg("table"), py::arg("reference"))
       .def("evaluate", &PySession::evaluate, py::arg("tables") = py::none(), py::arg("trials") = 300,
            py::arg("seed") = 1, py::arg("controller") = "policy", py::arg("seconds") = 10.0, py::arg("horizon") = 3)
       .def("save_policy", &PySession::savePolicy, py::arg("path"), py::arg("tables"), py::arg("learner") = "python");
+
+  m.def(
+      "write_compare_report",
+      [](const std::filesystem::path& dir, const std::string& report) {
+        mgrl::app::writeCompareReport(dir, nlohmann::json::parse(report));
+      },
+      py::arg("dir"), py::arg("report_json"), "Writes mgrl compare's results.json, results.csv, curves.csv, index.html");
+  m.def(
+      "compare_text", [](const std::string& report) { return mgrl::app::compareText(nlohmann::json::parse(report)); },
+      py::arg("report_json"), "mgrl compare's table, as it prints it");
+  m.def("compare_metrics", [] { return mgrl::app::compareMetrics(); });
+  m.def(
+      "learner_parameters",
+      [](const std::string& name) {
+        const auto* entry = mgrl::builtinPlugins().learners.find(name);
+        if (!entry)
+          throw mgrl::Error(fmt::format("learners: expected a registered learner ({}), found '{}'",
+                                        mgrl::builtinPlugins().learners.describeKnown(), name));
+        std::vector<std::string> names;
+        for (const auto& p : entry->params) names.push_back(p.name);
+        return names;
+      },
+      py::arg("name"), "The parameter names of a registered C++ learner");
+  m.def("snapshot_columns", [] { return mgrl::app::snapshotColumns(); });
 
   py::class_<PyEpisodes>(m, "Episodes")
       .def(py::init<py::object, const std::string&, std::size_t, double, bool>(), py::arg("session"),

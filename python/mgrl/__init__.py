@@ -45,6 +45,7 @@ Session:
                      a complete policy bundle mgrl eval/simulate/serve/compare accept
 """
 from ._core import Error, Problem, Session  # noqa: F401
+from .compare import Observer, compare  # noqa: F401
 from .env import MotionGraphEnv, MotionGraphVectorEnv  # noqa: F401
 
-__all__ = ["Error", "Problem", "Session", "MotionGraphEnv", "MotionGraphVectorEnv"]
+__all__ = ["Error", "Problem", "Session", "MotionGraphEnv", "MotionGraphVectorEnv", "Observer", "compare"]

@@ -1,0 +1,209 @@
+"""mgrl.compare: learners side by side on one behaviour, C++ ones by name and Python ones
+as objects, with `mgrl compare`'s measures, learning curves and report (issue 41).
+
+    class MyLearner:
+        name = "my_sarsa"
+        def train(self, problem, budget, rng, observer):
+            Q = np.zeros(problem.rewards.shape, np.float32)
+            ...                                   # budget updates, drawing from rng
+            observer.snapshot(Q, updates)         # at the points observer.snapshot_points
+            return Q
+
+    report = mgrl.compare(s, "hit", ["q_learning", "value_iteration", MyLearner()],
+                          seeds=[1, 2], report="compare-out")
+
+Every run is evaluated on the same trial starts (seed 1) as `mgrl compare` does, and
+measured against value iteration on the behaviour's grid (value RMSE, greedy agreement);
+snapshots taken along training are evaluated on the first `snapshot_trials` of those
+starts, giving success-rate curves. The returned dict has mgrl compare's JSON layout, and
+with `report=DIR` the same results.json, results.csv, curves.csv and index.html are
+written there. A Python learner that raises stops the comparison with its traceback
+(the exception propagates, nothing is written).
+"""
+import time
+
+import numpy as np
+
+from . import _core
+
+
+class Observer:
+    """What a Python learner reports through: snapshots of its table along training (for
+    the learning curve) and, optionally, progress."""
+
+    def __init__(self, budget, count):
+        self.budget = int(budget)
+        self.snapshot_count = int(count)
+        # Evenly spaced, as the C++ learners take theirs: budget * i / n for i = 1..n.
+        self.snapshot_points = [self.budget * i // count for i in range(1, count + 1)] if count else []
+        self.snapshots = []
+        self.spent = 0.0  # seconds in snapshot(): left out of the training time
+        self.started = time.perf_counter()
+
+    def snapshot(self, table, updates, residual=None):
+        started = time.perf_counter()
+        self.snapshots.append({"updates": int(updates), "seconds": started - self.started - self.spent,
+                               "residual": residual, "table": np.array(table, dtype=np.float32, copy=True)})
+        self.spent += time.perf_counter() - started
+
+    def progress(self, updates, total=None):
+        pass
+
+
+def _name(learner):
+    if isinstance(learner, str):
+        return learner
+    return str(getattr(learner, "name", type(learner).__name__))
+
+
+def _stats(values):
+    if not values or any(v is None for v in values):
+        return None, None
+    xs = np.asarray(values, dtype=np.float64)
+    return float(xs.mean()), float(xs.std(ddof=1)) if len(xs) > 1 else 0.0
+
+
+def compare(session, behavior, learners, seeds=(1,), trials=100, seconds=10.0, snapshots=10, snapshot_trials=None,
+            budget=1_000_000, report=None, log=print):
+    """C++ learner names and Python learner objects (train(problem, budget, rng, observer)
+    returning a float32 (A, V) table) on `behavior` of `session`, each with every seed (a
+    C++ learner without a seed parameter runs once). `budget` is the Python learners'
+    number of updates. Returns mgrl compare's report as a dict."""
+    if isinstance(learners, (str, bytes)) or not learners:
+        raise _core.Error("learners: expected a list of C++ learner names and Python learner objects, found "
+                          f"{learners!r}")
+    names = [_name(x) for x in learners]
+    if len(set(names)) != len(names):
+        raise _core.Error(f"learners: expected each learner once, found {names}")
+    for x in learners:
+        if not isinstance(x, str) and not callable(getattr(x, "train", None)):
+            raise _core.Error(f"learners: expected a name or an object with train(problem, budget, rng, observer), "
+                              f"found {x!r}")
+    for x in learners:
+        if isinstance(x, str):
+            _core.learner_parameters(x)  # an unknown name is refused before anything trains
+    seeds = [int(s) for s in seeds]
+    if not seeds:
+        raise _core.Error("seeds: expected at least one seed")
+    snapshot_trials = min(50, trials) if snapshot_trials is None else int(snapshot_trials)
+    say = log or (lambda *_: None)
+    if report is not None:  # refused now, not after the training
+        import os
+        import tempfile
+        try:
+            os.makedirs(report, exist_ok=True)
+            tempfile.TemporaryFile(dir=report).close()
+        except OSError as e:
+            raise _core.Error(f"report {report}: expected a folder where files can be written, found {e.strerror}")
+
+    say(f"compare: reference: value_iteration on {behavior}'s grid")
+    reference = session.train(behavior, learner="value_iteration")
+    reference_seconds = (session.last_train or {}).get("seconds")
+    problem = None
+    runs = []
+
+    def evaluate(table, count):
+        return session.evaluate({behavior: table}, trials=count, seed=1, seconds=seconds)
+
+    def curve_of(points):
+        out = []
+        for p in points:
+            e = evaluate(p["table"], snapshot_trials)
+            out.append([p["updates"], p["seconds"], p.get("residual"), e["success_rate"],
+                        e["mean_time_to_hit_s"], e["mean_return"]])
+        return out
+
+    for learner, name in zip(learners, names):
+        cpp = isinstance(learner, str)
+        # A C++ learner without a seed parameter is deterministic: one run stands for all.
+        seeded = not cpp or "seed" in _core.learner_parameters(learner)
+        for seed in (seeds if seeded else seeds[:1]):
+            label = f"{name} seed {seed}" if seeded else name
+            say(f"compare: [{len(runs) + 1}] {label}")
+            taken = []
+            if cpp:
+                sets = {"seed": seed} if seeded else {}
+                table = session.train(behavior, learner=learner, sets=sets, snapshots=snapshots,
+                                      on_snapshot=taken.append)
+                done = session.last_train
+                train_seconds, updates = done["seconds"], done["updates"]
+                residual, curve = done["final_residual"], done["curve"]
+                coverage = done.get("stats", {}).get("cell_coverage")
+            else:
+                if problem is None:
+                    problem = session.problem(behavior)
+                observer = Observer(budget, snapshots)
+                table = learner.train(problem, budget, np.random.default_rng(seed), observer)
+                train_seconds = time.perf_counter() - observer.started - observer.spent
+                taken = observer.snapshots
+                updates, residual, curve, coverage = budget, None, [], None
+            evaluated = evaluate(table, trials)
+            measured = session.compare_tables(behavior, table, reference)
+            run = {
+                "learner": name,
+                "seed": seed if seeded else None,
+                "policy": None,
+                "success_rate": evaluated["success_rate"],
+                "mean_time_to_hit_s": evaluated["mean_time_to_hit_s"],
+                "mean_return": evaluated["mean_return"],
+                "train_seconds": train_seconds,
+                "updates": updates,
+                "table_bytes": int(np.asarray(table).nbytes),
+                "final_residual": residual,
+                "decision_us": 1e6 / evaluated["decisions_per_second"] if evaluated["decisions_per_second"] else None,
+                "value_rmse": measured["value_rmse"],
+                "greedy_agreement": measured["greedy_agreement"],
+                "reference_interpolated": measured["reference_interpolated"],
+                "nonzero_share": float(np.count_nonzero(table)) / np.asarray(table).size,
+                "cell_coverage": coverage,
+                "curve": curve,
+                "snapshots": {"columns": _core.snapshot_columns(), "points": curve_of(taken)} if taken else None,
+                "python": not cpp,
+            }
+            if taken:
+                rates = " ".join(f"{100 * p[3]:.0f}" for p in run["snapshots"]["points"])
+                say(f"compare: {label}: success % along training ({len(taken)} snapshots of {snapshot_trials} "
+                    f"trials): {rates}")
+            runs.append(run)
+
+    result = {
+        "scenario": str(session.scenario),
+        "scenario_name": str(session.scenario).rsplit("/", 1)[-1].rsplit(".", 1)[0],
+        "behavior": behavior,
+        "learner_names": names,
+        "seeds": seeds,
+        "trials": trials,
+        "seconds_per_trial": seconds,
+        "reference": {"learner": "value_iteration", "policy": None, "grid": None, "vertices": reference.shape[1],
+                      "sets": [], "train_seconds": reference_seconds,
+                      "description": f"value iteration on the behaviour's grid ({reference.shape[1]} vertices)"},
+        "snapshots": snapshots,
+        "snapshot_trials": snapshot_trials if snapshots else None,
+        "runs": runs,
+        "learners": {},
+        "flags": [],
+    }
+    for name in names:
+        mine = [r for r in runs if r["learner"] == name]
+        mean, sd = {}, {}
+        for key, _ in _core.compare_metrics():
+            mean[key], sd[key] = _stats([r[key] for r in mine])
+        curve = []
+        if all(r["snapshots"] for r in mine) and len({len(r["snapshots"]["points"]) for r in mine}) == 1:
+            for i in range(len(mine[0]["snapshots"]["points"])):
+                points = [r["snapshots"]["points"][i] for r in mine]
+                rates = [p[3] for p in points]
+                curve.append([float(np.mean([p[0] for p in points])), float(np.mean([p[1] for p in points])),
+                              float(np.mean(rates)), float(np.std(rates, ddof=1)) if len(rates) > 1 else 0.0])
+        result["learners"][name] = {"mean": mean, "sd": sd, "success_curve": curve}
+        for r in mine:
+            if r["greedy_agreement"] < 0.9:  # as mgrl compare flags
+                result["flags"].append(
+                    f"{name}{' seed ' + str(r['seed']) if r['seed'] is not None else ''}: its greedy policy agrees "
+                    f"with the reference's on {100 * r['greedy_agreement']:.1f} % of (state, vertex) pairs")
+    if report is not None:
+        import json
+        _core.write_compare_report(str(report), json.dumps(result))
+        result["report"] = str(report) + "/index.html"
+    say(_core.compare_text(__import__("json").dumps(result)).rstrip())
+    return result
