@@ -23,6 +23,7 @@
 
 #include "mgrl/core/config.hpp"
 #include "mgrl/core/error.hpp"
+#include "mgrl/core/parallel.hpp"
 #include "mgrl/learning/behavior.hpp"
 #include "mgrl/learning/learner.hpp"
 #include "mgrl/learning/policy_bundle.hpp"
@@ -266,6 +267,8 @@ struct ProblemArrays {
   py::array_t<std::int32_t> corners, nextState, outIndptr, outIndices;
   py::array_t<double> vertices;
   std::size_t states = 0, actions = 0, vertexCount = 0;
+  double tabulateSeconds = 0;  ///< the C++ tabulation (GridModel::build), what learners pay too
+  double arraysSeconds = 0;    ///< then filling these arrays from it
   int dimension = 0;
 };
 
@@ -308,10 +311,12 @@ class PySession {
     const StateActionModel& model = session_->model();
     const Problem problem = b.problem(model);
     GridModel g;
+    const auto started = std::chrono::steady_clock::now();
     {
       py::gil_scoped_release release;
       g = GridModel::build(problem, std::max(1u, std::thread::hardware_concurrency()));
     }
+    const double tabulated = since(started);
     const std::size_t A = g.actionCount, V = g.vertexCount, K = std::size_t{1} << g.dimension;
     ProblemArrays p;
     p.behavior = name;
@@ -325,24 +330,30 @@ class PySession {
     float* r = p.rewards.mutable_data();
     std::int32_t* c = p.corners.mutable_data();
     float* w = p.weights.mutable_data();
-    for (std::size_t a = 0; a < A; ++a)
-      for (std::size_t v = 0; v < V; ++v) {
-        const GridTransition& t = g.transition[a * V + v];
-        const std::size_t at = a * V + v;
-        r[at] = t.reward;
-        if (t.cell < 0) {
-          std::fill(c + at * K, c + at * K + K, -1);
-          std::fill(w + at * K, w + at * K + K, 0.0f);
-          continue;
+    // Filled on every core, an action at a time (each writes its own rows); the GIL is
+    // released: the arrays are not yet visible to Python.
+    {
+      py::gil_scoped_release release;
+      parallelFor(A, std::max(1u, std::thread::hardware_concurrency()), [&](std::size_t a, unsigned) {
+        for (std::size_t v = 0; v < V; ++v) {
+          const GridTransition& t = g.transition[a * V + v];
+          const std::size_t at = a * V + v;
+          r[at] = t.reward;
+          if (t.cell < 0) {
+            std::fill(c + at * K, c + at * K + K, -1);
+            std::fill(w + at * K, w + at * K + K, 0.0f);
+            continue;
+          }
+          float weight[8];
+          cornerWeights(g.dimension, {t.frac[0], t.frac[1], t.frac[2]}, weight);
+          const std::uint32_t* corner = &g.corners[static_cast<std::size_t>(t.cell) << g.dimension];
+          for (std::size_t k = 0; k < K; ++k) {
+            c[at * K + k] = static_cast<std::int32_t>(corner[k]);
+            w[at * K + k] = weight[k];
+          }
         }
-        float weight[8];
-        cornerWeights(g.dimension, {t.frac[0], t.frac[1], t.frac[2]}, weight);
-        const std::uint32_t* corner = &g.corners[static_cast<std::size_t>(t.cell) << g.dimension];
-        for (std::size_t k = 0; k < K; ++k) {
-          c[at * K + k] = static_cast<std::int32_t>(corner[k]);
-          w[at * K + k] = weight[k];
-        }
-      }
+      });
+    }
     p.discount = py::array_t<float>(A);
     std::copy(g.discount.begin(), g.discount.end(), p.discount.mutable_data());
     p.nextState = py::array_t<std::int32_t>(A);
@@ -359,6 +370,8 @@ class PySession {
       const auto coordinates = grid.coordinates(grid.vertexState(v));
       for (int d = 0; d < D; ++d) p.vertices.mutable_data()[v * D + d] = coordinates[static_cast<std::size_t>(d)];
     }
+    p.tabulateSeconds = tabulated;
+    p.arraysSeconds = since(started) - tabulated;
     return p;
   }
 
@@ -748,6 +761,12 @@ py::dict graphArrays(py::object self) {
   d["action_hit_begin"] = view(g.actionHitBegin.data(), {n(g.actionHitBegin.size())}, self);
   d["kicks"] = view(g.kicks.data(), {n(g.kicks.size())}, self);
   d["action_kick_begin"] = view(g.actionKickBegin.data(), {n(g.actionKickBegin.size())}, self);
+  // Every source frame's joint positions (root frame, m), as the graph keeps them for hits
+  // and contacts: (frames, joints, 3).
+  const std::size_t joints = g.jointNames.size();
+  d["joint_names"] = g.jointNames;
+  if (joints > 0)
+    d["joint_positions"] = view(g.sourceJoint.data(), {n(g.sourceJoint.size() / (3 * joints)), n(joints), 3}, self);
   return d;
 }
 
@@ -780,6 +799,8 @@ PYBIND11_MODULE(_core, m) {
       .def_readonly("states", &ProblemArrays::states)
       .def_readonly("actions", &ProblemArrays::actions)
       .def_readonly("dimension", &ProblemArrays::dimension)
+      .def_readonly("tabulate_seconds", &ProblemArrays::tabulateSeconds)
+      .def_readonly("arrays_seconds", &ProblemArrays::arraysSeconds)
       .def_property_readonly("vertex_count", [](const ProblemArrays& p) { return p.vertexCount; });
 
   py::class_<PySession>(m, "Session")

@@ -97,8 +97,12 @@ def compare(session, behavior, learners, seeds=(1,), trials=100, seconds=10.0, s
             raise _core.Error(f"report {report}: expected a folder where files can be written, found {e.strerror}")
 
     say(f"compare: reference: value_iteration on {behavior}'s grid")
-    reference = session.train(behavior, learner="value_iteration")
-    reference_seconds = (session.last_train or {}).get("seconds")
+    # When value_iteration is also a run, its one training (with snapshots) serves both.
+    reference_taken = []
+    reference = session.train(behavior, learner="value_iteration", snapshots=snapshots if "value_iteration" in names
+                              else 0, on_snapshot=reference_taken.append)
+    reference_done = session.last_train
+    reference_seconds = reference_done.get("seconds")
     problem = None
     runs = []
 
@@ -121,11 +125,14 @@ def compare(session, behavior, learners, seeds=(1,), trials=100, seconds=10.0, s
             label = f"{name} seed {seed}" if seeded else name
             say(f"compare: [{len(runs) + 1}] {label}")
             taken = []
+            if cpp and learner == "value_iteration":
+                table, taken, done = reference, reference_taken, reference_done
             if cpp:
-                sets = {"seed": seed} if seeded else {}
-                table = session.train(behavior, learner=learner, sets=sets, snapshots=snapshots,
-                                      on_snapshot=taken.append)
-                done = session.last_train
+                if learner != "value_iteration":
+                    sets = {"seed": seed} if seeded else {}
+                    table = session.train(behavior, learner=learner, sets=sets, snapshots=snapshots,
+                                          on_snapshot=taken.append)
+                    done = session.last_train
                 train_seconds, updates = done["seconds"], done["updates"]
                 residual, curve = done["final_residual"], done["curve"]
                 coverage = done.get("stats", {}).get("cell_coverage")
