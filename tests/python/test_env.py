@@ -1,6 +1,11 @@
 """MotionGraphEnv and MotionGraphVectorEnv (issue 41): Gymnasium's API on a behaviour,
 stepped in C++; what a step does checked against the graph's own arrays. Run by ctest
 (python_tests)."""
+import os
+import subprocess
+import sys
+import tempfile
+import textwrap
 import unittest
 
 import numpy as np
@@ -169,6 +174,45 @@ class EnvTest(unittest.TestCase):
         self.assertAlmostEqual(column, 50 - x * scale, delta=1.5)
         self.assertAlmostEqual(row, 50 - z * scale, delta=1.5)
         self.assertIsNone(mgrl.MotionGraphEnv(self.session, "approach").render())
+
+
+class GymnasiumTest(unittest.TestCase):
+    def test_with_gymnasium_importable_the_env_is_a_gymnasium_env(self):
+        # Gymnasium is not in Debian 12: a stand-in package with its names shows that the
+        # environment subclasses gymnasium.Env and builds gymnasium's spaces when it can.
+        fake = tempfile.mkdtemp(prefix="mgrl-fake-gymnasium-")
+        os.makedirs(os.path.join(fake, "gymnasium"))
+        with open(os.path.join(fake, "gymnasium", "__init__.py"), "w") as f:
+            f.write(textwrap.dedent("""
+                from . import spaces
+                class Env:
+                    def reset(self, *, seed=None, options=None):
+                        self.seeded = seed
+                """))
+        with open(os.path.join(fake, "gymnasium", "spaces.py"), "w") as f:
+            f.write(textwrap.dedent("""
+                class Discrete:
+                    def __init__(self, n): self.n = n
+                class Box:
+                    def __init__(self, low, high, shape, dtype): self.shape = shape
+                class Dict:
+                    def __init__(self, spaces): self.spaces = spaces
+                """))
+        script = textwrap.dedent(f"""
+            import gymnasium, mgrl
+            env = mgrl.MotionGraphEnv({str(BOXING)!r}, "hit", cache={CACHE!r})
+            assert isinstance(env, gymnasium.Env)
+            assert isinstance(env.action_space, gymnasium.spaces.Discrete)
+            assert isinstance(env.observation_space, gymnasium.spaces.Dict)
+            obs, info = env.reset(seed=3)
+            assert env.seeded == 3
+            print("ok", env.action_space.n)
+            """)
+        path = os.pathsep.join([fake, os.environ.get("PYTHONPATH", "")])
+        run = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True,
+                             env=dict(os.environ, PYTHONPATH=path))
+        self.assertEqual(run.returncode, 0, run.stderr)
+        self.assertTrue(run.stdout.startswith("ok "))
 
 
 if __name__ == "__main__":
