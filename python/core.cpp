@@ -305,9 +305,13 @@ class PySession {
   ProblemArrays problem(const std::string& name) const {
     const Behavior& b = behavior(name);
     const Discretizer& grid = *b.discretizer;
-    if (grid.layerAxis() || !grid.hanging().empty())
-      throw Error(fmt::format("problem({}): its grid ({}) has {}; only plain product grids are offered to Python yet",
-                              name, grid.type(), grid.layerAxis() ? "speed layers" : "hanging vertices"));
+    // Speed layers fit the formula as they are: a backup lands exactly on its layer, so a
+    // cell's corners are those of one layer. A kd-tree's hanging vertices do not: their
+    // rows are interpolated from other vertices after each backup, not backed up.
+    if (!grid.hanging().empty())
+      throw Error(fmt::format("problem({}): its grid ({}) has {} hanging vertices, whose values are interpolated, "
+                              "not backed up; only grids without them are offered to Python yet",
+                              name, grid.type(), grid.hanging().size()));
     const StateActionModel& model = session_->model();
     const Problem problem = b.problem(model);
     GridModel g;
@@ -363,12 +367,16 @@ class PySession {
     // The model numbers each state's out-actions contiguously: indices are 0 .. A-1.
     p.outIndices = py::array_t<std::int32_t>(A);
     for (std::size_t a = 0; a < A; ++a) p.outIndices.mutable_data()[a] = static_cast<std::int32_t>(a);
-    // Each vertex as the grid's coordinates (angle, distance, height, ... as its axes say).
-    const int D = grid.dimension();
-    p.vertices = py::array_t<double>({V, static_cast<std::size_t>(D)});
+    // Each vertex as the grid's coordinates (angle, distance, height, ... as its axes say),
+    // and on a grid with speed layers its layer's speed last.
+    const int D = grid.dimension(), columns = D + (grid.layerAxis() ? 1 : 0);
+    p.vertices = py::array_t<double>({V, static_cast<std::size_t>(columns)});
     for (std::size_t v = 0; v < V; ++v) {
-      const auto coordinates = grid.coordinates(grid.vertexState(v));
-      for (int d = 0; d < D; ++d) p.vertices.mutable_data()[v * D + d] = coordinates[static_cast<std::size_t>(d)];
+      const TargetState e = grid.vertexState(v);
+      const auto coordinates = grid.coordinates(e);
+      double* row = p.vertices.mutable_data() + v * static_cast<std::size_t>(columns);
+      for (int d = 0; d < D; ++d) row[d] = coordinates[static_cast<std::size_t>(d)];
+      if (grid.layerAxis()) row[D] = e.speed;
     }
     p.tabulateSeconds = tabulated;
     p.arraysSeconds = since(started) - tabulated;

@@ -25,15 +25,9 @@
 namespace mgrl {
 namespace {
 
-namespace fs = std::filesystem;
-namespace beast = boost::beast;
-namespace http = beast::http;
-namespace websocket = beast::websocket;
-namespace net = boost::asio;
-using tcp = net::ip::tcp;
-using json = nlohmann::json;
-using serve::parseClientMessage;
+// fs, beast, http, websocket, net, tcp and json come with the helpers' namespace.
 using namespace test::serving;
+using serve::parseClientMessage;
 
 
 TEST_CASE("page messages are taken only when every field is what the protocol says", "[serve]") {

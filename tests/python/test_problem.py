@@ -85,12 +85,26 @@ class ProblemTest(unittest.TestCase):
         self.assertGreater(np.abs(theirs).max(), 0.01)  # not a table of zeros
 
     @unittest.skipUnless(os.environ.get("MGRL_PYTHON_SLOW") == "1", "slow (about a minute): MGRL_PYTHON_SLOW=1")
-    def test_numpy_value_iteration_reproduces_the_cpp_one_on_hit(self):
+    def test_slow_numpy_value_iteration_reproduces_the_cpp_one_on_hit(self):
         # The paper's hit problem: 1,438 actions x 1,920 vertices x 8 corners.
         p = self.session.problem("hit")
         self.assertEqual(p.corners.shape[2], 8)
         mine = numpy_value_iteration(p)
         theirs = self.session.train("hit", learner="value_iteration", sets={"tolerance": 1e-6})
+        np.testing.assert_allclose(mine, theirs, atol=1e-4)
+        self.assertGreater(np.abs(theirs).max(), 0.01)
+
+    @unittest.skipUnless(os.environ.get("MGRL_PYTHON_SLOW") == "1", "slow (half a minute): MGRL_PYTHON_SLOW=1")
+    def test_slow_speed_layers_fit_the_same_formula(self):
+        # intercept.yaml's moving target: a polar_velocity grid with 3 speed layers. A backup
+        # lands exactly on its layer, so the cell's corners are one layer's and the formula
+        # holds as it is; the vertices carry the layer's speed as a last column.
+        session = mgrl.Session(SOURCE / "scenarios" / "intercept.yaml", cache=CACHE)
+        p = session.problem("approach")
+        self.assertEqual(p.vertices.shape, (p.rewards.shape[1], p.dimension + 1))
+        self.assertEqual(sorted(set(np.round(p.vertices[:, -1], 6))), [0.0, 0.5, 1.0])
+        mine = numpy_value_iteration(p)
+        theirs = session.train("approach", learner="value_iteration", sets={"tolerance": 1e-6})
         np.testing.assert_allclose(mine, theirs, atol=1e-4)
         self.assertGreater(np.abs(theirs).max(), 0.01)
 
@@ -100,6 +114,9 @@ class ProblemTest(unittest.TestCase):
         self.assertFalse(g["action_to"].flags.writeable)
         self.assertFalse(g["action_to"].flags.owndata)
         self.assertEqual(g["action_to"].shape, self.session.problem("approach").next_state.shape)
+        # Two reads of the graph are views of the same memory, the session's.
+        self.assertTrue(np.shares_memory(g["joint_positions"], self.session.graph["joint_positions"]))
+        self.assertEqual(g["joint_positions"].shape[1:], (len(g["joint_names"]), 3))
 
     def test_errors_cross_as_one_line(self):
         with self.assertRaisesRegex(mgrl.Error, r"behavior: expected one of the scenario's behaviours \(approach, hit\), found 'jab'"):
