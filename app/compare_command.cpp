@@ -23,9 +23,9 @@
 #include "mgrl/core/files.hpp"
 #include "mgrl/learning/policy_bundle.hpp"
 #include "mgrl/scenario/behaviors.hpp"
-#include "compare_report.hpp"
+#include "mgrl/session/compare_report.hpp"
 #include "compare_snapshots.hpp"
-#include "compare_tables.hpp"
+#include "mgrl/session/compare_tables.hpp"
 #include "plugins.hpp"
 #include "plural.hpp"
 

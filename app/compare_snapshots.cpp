@@ -5,7 +5,7 @@
 
 #include <fmt/format.h>
 
-#include "compare_report.hpp"
+#include "mgrl/session/compare_report.hpp"
 #include "learn_common.hpp"
 #include "mgrl/core/files.hpp"
 #include "mgrl/runtime/controller.hpp"

@@ -33,9 +33,8 @@
 #include "mgrl/session/plugins.hpp"
 #include "mgrl/session/session.hpp"
 #include "mgrl/core/version.hpp"
-#include "compare_report.hpp"
-#include "compare_tables.hpp"
-#include "compare_command.hpp"
+#include "mgrl/session/compare_report.hpp"
+#include "mgrl/session/compare_tables.hpp"
 
 namespace py = pybind11;
 
@@ -430,15 +429,15 @@ class PySession {
   }
 
   // compare's table measures against a reference table on the same behaviour's grid:
-  // {"value_rmse", "greedy_agreement", "reference_interpolated"} (app/compare_tables.hpp).
+  // {"value_rmse", "greedy_agreement", "reference_interpolated"} (mgrl/session/compare_tables.hpp).
   py::dict compareTables(const std::string& name, const py::object& table, const py::object& reference) const {
     const Behavior& b = behavior(name);
     const QTable q = tableFrom(b, table), r = tableFrom(b, reference);
     const std::vector<double> positions = vertexPositions(*b.discretizer);
-    app::Comparison c;
+    Comparison c;
     {
       py::gil_scoped_release release;
-      c = app::compareTables(q, positions, r, positions, *b.discretizer);
+      c = mgrl::compareTables(q, positions, r, positions, *b.discretizer);
     }
     py::dict d;
     d["value_rmse"] = c.rmse;
@@ -830,13 +829,10 @@ PYBIND11_MODULE(_core, m) {
   m.def(
       "write_compare_report",
       [](const std::filesystem::path& dir, const std::string& report) {
-        mgrl::app::writeCompareReport(dir, nlohmann::json::parse(report));
+        mgrl::writeCompareReport(dir, nlohmann::json::parse(report));
       },
       py::arg("dir"), py::arg("report_json"), "Writes mgrl compare's results.json, results.csv, curves.csv, index.html");
-  m.def(
-      "compare_text", [](const std::string& report) { return mgrl::app::compareText(nlohmann::json::parse(report)); },
-      py::arg("report_json"), "mgrl compare's table, as it prints it");
-  m.def("compare_metrics", [] { return mgrl::app::compareMetrics(); });
+  m.def("compare_metrics", [] { return mgrl::compareMetrics(); });
   m.def(
       "learner_parameters",
       [](const std::string& name) {
@@ -849,7 +845,7 @@ PYBIND11_MODULE(_core, m) {
         return names;
       },
       py::arg("name"), "The parameter names of a registered C++ learner");
-  m.def("snapshot_columns", [] { return mgrl::app::snapshotColumns(); });
+  m.def("snapshot_columns", [] { return mgrl::snapshotColumns(); });
 
   py::class_<PyEpisodes>(m, "Episodes")
       .def(py::init<py::object, const std::string&, std::size_t, double, bool>(), py::arg("session"),

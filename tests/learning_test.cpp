@@ -14,7 +14,7 @@
 
 #include <fmt/format.h>
 
-#include "app/compare_tables.hpp"
+#include "mgrl/session/compare_tables.hpp"
 #include "app/plugins.hpp"
 #include "mgrl/session/trials.hpp"
 #include "environments/environments.hpp"
@@ -1384,11 +1384,11 @@ TEST_CASE("compare --reference-set refuses a grid with speed layers in one line"
   const StateActionModel m = turningWalk();
   const auto layered = makeGrid(kLayeredGrid, m);
   const auto polar = makeGrid("{type: polar2d, radius: 3, rings: 7, sectors: 13}", m);
-  REQUIRE_THROWS_WITH(app::requireCovers(*polar, *layered, "approach"),
+  REQUIRE_THROWS_WITH(requireCovers(*polar, *layered, "approach"),
                       "--reference-set: behaviors.approach: a polar_velocity grid has speed layers, which a reference "
                       "set cannot be compared on yet; compare without --reference-set (against value iteration on "
                       "the same grid)");
-  REQUIRE_THROWS_WITH(app::requireCovers(*layered, *polar, "approach"), Catch::Contains("a polar_velocity grid"));
+  REQUIRE_THROWS_WITH(requireCovers(*layered, *polar, "approach"), Catch::Contains("a polar_velocity grid"));
 }
 
 namespace {

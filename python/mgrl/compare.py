@@ -212,5 +212,45 @@ def compare(session, behavior, learners, seeds=(1,), trials=100, seconds=10.0, s
         import json
         _core.write_compare_report(str(report), json.dumps(result))
         result["report"] = str(report) + "/index.html"
-    say(_core.compare_text(__import__("json").dumps(result)).rstrip())
+    say(text(result).rstrip())
     return result
+
+
+def _count(x):
+    """1.23 M, 456.0 k: as mgrl prints counts."""
+    for scale, unit in ((1e9, " G"), (1e6, " M"), (1e3, " k")):
+        if abs(x) >= scale:
+            return f"{x / scale:.2f}{unit}" if unit != " k" else f"{x / scale:.1f}{unit}"
+    return f"{x:.0f} "
+
+
+def text(result):
+    """The table `mgrl compare` prints, for a report from compare()."""
+    lines = [f"compare {result['behavior']} on {result['scenario_name']}: {len(result['runs'])} "
+             f"run{'s' if len(result['runs']) != 1 else ''}, {result['trials']} trials each on the same starts; "
+             f"reference: {result['reference']['description']}",
+             f"{'learner (mean ± sd)':<24} {'success %':>14} {'time to hit s':>13} {'train s':>13} {'updates':>12} "
+             f"{'decide us':>10} {'V RMSE':>11} {'agreement %':>11} {'non-zero %':>10}"]
+
+    def cell(learner, key, scale, form):
+        mean, sd = learner["mean"][key], learner["sd"][key]
+        if mean is None:
+            return "n/a"
+        return form.format(scale * mean, scale * sd)
+
+    for name, l in result["learners"].items():
+        lines.append(f"{name:<24} {cell(l, 'success_rate', 100, '{:.1f} ± {:.1f}'):>14} "
+                     f"{cell(l, 'mean_time_to_hit_s', 1, '{:.2f} ± {:.2f}'):>13} "
+                     f"{cell(l, 'train_seconds', 1, '{:.2f} ± {:.2f}'):>13} {cell(l, 'updates', 1e-6, '{:.1f}M'):>12} "
+                     f"{cell(l, 'decision_us', 1, '{:.2f}'):>10} {cell(l, 'value_rmse', 1, '{:.3g}'):>11} "
+                     f"{cell(l, 'greedy_agreement', 100, '{:.1f}'):>11} {cell(l, 'nonzero_share', 100, '{:.1f}'):>10}")
+    curves = [(name, l["success_curve"]) for name, l in result["learners"].items() if l["success_curve"]]
+    if curves:
+        lines.append(f"success % along training (mean over seeds; {result['snapshot_trials']} trials per snapshot), "
+                     "at updates:")
+        for name, curve in curves:
+            lines.append(f"{name:<24}" + "".join(f" {100 * p[2]:.0f}@{_count(p[0]).strip()}" for p in curve))
+    lines += [f"flag: {flag}" for flag in result["flags"]]
+    if "report" in result:
+        lines.append(f"report: {result['report']}")
+    return "\n".join(lines) + "\n"

@@ -1,5 +1,5 @@
 // `mgrl compare`'s measures against the reference (compare_tables.hpp).
-#include "compare_tables.hpp"
+#include "mgrl/session/compare_tables.hpp"
 
 #include <algorithm>
 #include <array>
@@ -9,7 +9,7 @@
 
 #include "mgrl/core/error.hpp"
 
-namespace mgrl::app {
+namespace mgrl {
 
 // A finer reference is read where the table's own values live, so both are compared at the
 // points where the table is exact by construction (its vertices).
@@ -77,4 +77,4 @@ void requireCovers(const Discretizer& reference, const Discretizer& grid, const 
   }
 }
 
-}  // namespace mgrl::app
+}  // namespace mgrl

@@ -10,7 +10,7 @@
 
 #include <nlohmann/json.hpp>
 
-namespace mgrl::app {
+namespace mgrl {
 
 /// The per-run metrics, in the order they are reported: (JSON key, label).
 const std::vector<std::pair<std::string, std::string>>& compareMetrics();
@@ -21,4 +21,4 @@ const std::vector<std::string>& snapshotColumns();
 /// Writes the four files into `dir` (each atomically). Throws mgrl::Error on I/O failure.
 void writeCompareReport(const std::filesystem::path& dir, const nlohmann::json& report);
 
-}  // namespace mgrl::app
+}  // namespace mgrl

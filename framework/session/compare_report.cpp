@@ -1,6 +1,6 @@
 // The files `mgrl compare --report DIR` writes (compare_report.hpp). The plots are SVG
 // drawn here, so the report needs no plotting library and opens from disk.
-#include "compare_report.hpp"
+#include "mgrl/session/compare_report.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -11,7 +11,7 @@
 
 #include "mgrl/core/files.hpp"
 
-namespace mgrl::app {
+namespace mgrl {
 
 namespace fs = std::filesystem;
 using json = nlohmann::json;
@@ -276,4 +276,4 @@ void writeCompareReport(const fs::path& dir, const json& report) {
   writeFileAtomically(dir / "index.html", html);
 }
 
-}  // namespace mgrl::app
+}  // namespace mgrl

@@ -8,7 +8,7 @@
 #include "mgrl/learning/discretizer.hpp"
 #include "mgrl/learning/q_table.hpp"
 
-namespace mgrl::app {
+namespace mgrl {
 
 /// A greedy choice whose reference value is within this share of the best counts as
 /// agreeing (ties and float round-off).
@@ -36,4 +36,4 @@ Comparison compareTables(const QTable& q, const std::vector<double>& positions, 
 /// `grid` lies inside `reference` (within 1e-6 of its bounds along each non-wrapping axis).
 void requireCovers(const Discretizer& reference, const Discretizer& grid, const std::string& behavior);
 
-}  // namespace mgrl::app
+}  // namespace mgrl
