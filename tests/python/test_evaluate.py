@@ -54,6 +54,12 @@ class EvaluateTest(unittest.TestCase):
         for key in ("success_rate", "successes", "mean_return", "mean_time_to_hit_s", "decisions"):
             self.assertEqual(mine[key], theirs[key], key)
         self.assertEqual(mine["random_baseline"], theirs["random_baseline"])
+        # simulate takes the same bundle as it is: two avatars spar for two seconds on it.
+        simulate = [MGRL, "simulate", str(BOXING), "--policy", str(bundle), "--seconds", "2", "--json", "--cache",
+                    self.cache] + command[command.index("--set"):]
+        run = subprocess.run(simulate, capture_output=True, text=True, check=False)
+        self.assertEqual(run.returncode, 0, run.stderr)
+        self.assertEqual(json.loads(run.stdout)["avatars"], 2)
 
     def test_other_controllers_need_no_tables(self):
         r = self.session.evaluate(controller="random", trials=50, seed=2)
