@@ -1,0 +1,162 @@
+// Episodes of one behaviour for MotionGraphEnv (python/mgrl/env.py) and its registration.
+#include "session.hpp"
+
+namespace mgrl::python {
+namespace {
+
+// Episodes of one behaviour for MotionGraphEnv (python/mgrl/env.py): single steps return
+// fresh arrays (a learner may keep them), the vectorised step fills N rows in one call.
+class PyEpisodes {
+ public:
+  PyEpisodes(py::object session, const std::string& behavior, std::size_t count, double seconds, bool endOnSuccess)
+      : owner_(std::move(session)) {
+    const PySession& s = owner_.cast<const PySession&>();
+    const Behavior& b = s.behavior(behavior);
+    episodes_ = std::make_unique<Episodes>(s.session().model(), b, count, EpisodeOptions{seconds, endOnSuccess});
+  }
+
+  std::size_t count() const { return episodes_->count(); }
+  std::size_t maxActions() const { return episodes_->maxActions(); }
+  int dimension() const { return episodes_->dimension(); }
+  std::size_t states() const { return episodes_->model().stateCount(); }
+  // Per coordinate (lowest, highest) of the grid's vertices (an angle: its whole turn).
+  py::array_t<double> bounds() const {
+    const auto& axes = episodes_->behavior().discretizer->axes();
+    py::array_t<double> out({axes.size(), std::size_t{2}});
+    for (std::size_t k = 0; k < axes.size(); ++k) {  // a wrapping axis covers its whole turn
+      out.mutable_at(k, 0) = axes[k].vertices.front();
+      out.mutable_at(k, 1) = axes[k].wraps ? axes[k].vertices.front() + 2 * M_PI : axes[k].vertices.back();
+    }
+    return out;
+  }
+  // The largest ground distance of a grid vertex from the avatar, m.
+  double reach() const {
+    const Discretizer& grid = *episodes_->behavior().discretizer;
+    double r = 0;
+    for (std::size_t v = 0; v < grid.vertexCount(); ++v) {
+      const Eigen::Vector3d p = grid.vertexPosition(v);
+      r = std::max(r, std::hypot(p.x(), p.z()));
+    }
+    return r;
+  }
+  std::vector<std::string> axisNames() const {
+    std::vector<std::string> names;
+    for (const GridAxis& a : episodes_->behavior().discretizer->axes()) names.push_back(a.name);
+    return names;
+  }
+
+  void check(std::size_t i) const {
+    if (i >= count()) throw Error(fmt::format("env: expected an index in [0, {}), found {}", count(), i));
+  }
+
+  // (state, position (3,), coordinates (D,), mask (maxActions,) bool) of slot i, fresh arrays.
+  py::tuple observe(std::size_t i) const {
+    check(i);
+    std::int32_t state = 0;
+    py::array_t<float> position(3), coordinates(dimension());
+    py::array_t<bool> mask(static_cast<py::ssize_t>(maxActions()));
+    episodes_->observe(i, &state, position.mutable_data(), coordinates.mutable_data(),
+                       reinterpret_cast<std::uint8_t*>(mask.mutable_data()));
+    return py::make_tuple(state, position, coordinates, mask);
+  }
+
+  void reset(std::size_t i, const py::object& seed) {
+    check(i);
+    episodes_->reset(i, seed.is_none() ? std::nullopt : std::optional<std::uint64_t>(seed.cast<std::uint64_t>()));
+  }
+
+  // One step of slot i: (reward, terminated, truncated, success, seconds played).
+  py::tuple step(std::size_t i, std::int64_t choice) {
+    check(i);
+    if (choice < 0)
+      throw Error(fmt::format("action: expected an index into state {}'s {} out-actions (info['action_mask']), found {}",
+                              episodes_->state(i), episodes_->actionsAt(i), choice));
+    const EpisodeStep r = episodes_->step(i, static_cast<std::size_t>(choice));
+    return py::make_tuple(r.reward, r.terminated, r.truncated, r.success, episodes_->seconds(i));
+  }
+
+  // Every slot reset (slot i seeded with seed + i when a seed is given).
+  void resetAll(const py::object& seed) {
+    for (std::size_t i = 0; i < count(); ++i)
+      episodes_->reset(i, seed.is_none() ? std::nullopt : std::optional<std::uint64_t>(seed.cast<std::uint64_t>() + i));
+  }
+
+  // Observations of every slot as (state (N,), position (N, 3), coordinates (N, D), mask (N, maxActions)).
+  py::tuple observeAll() const {
+    const std::size_t N = count(), D = static_cast<std::size_t>(dimension()), M = maxActions();
+    py::array_t<std::int32_t> state(static_cast<py::ssize_t>(N));
+    py::array_t<float> position({N, std::size_t{3}}), coordinates({N, D});
+    py::array_t<bool> mask({N, M});
+    std::int32_t* st = state.mutable_data();
+    float* p = position.mutable_data();
+    float* c = coordinates.mutable_data();
+    auto* m = reinterpret_cast<std::uint8_t*>(mask.mutable_data());
+    {
+      py::gil_scoped_release release;
+      for (std::size_t i = 0; i < N; ++i) episodes_->observe(i, st + i, p + 3 * i, c + D * i, m + M * i);
+    }
+    return py::make_tuple(state, position, coordinates, mask);
+  }
+
+  // Steps every slot: actions int (N,); returns (reward (N,), terminated, truncated, success).
+  py::tuple stepAll(const py::object& actions) {
+    const std::size_t N = count();
+    if (!py::isinstance<py::array>(actions) && !py::isinstance<py::sequence>(actions))
+      throw Error(fmt::format("actions: expected an integer array of shape ({},), found an object of type {}", N,
+                              typeName(actions)));
+    const auto given = py::array::ensure(actions);
+    if (!given || given.ndim() != 1 || static_cast<std::size_t>(given.shape(0)) != N)
+      throw Error(fmt::format("actions: expected an integer array of shape ({},), found shape {}", N,
+                              given ? shapeText(given) : std::string("none")));
+    if (given.dtype().kind() != 'i' && given.dtype().kind() != 'u')
+      throw Error(fmt::format("actions: expected integers, found dtype {}", py::str(given.dtype()).cast<std::string>()));
+    const auto choices = py::array_t<std::int64_t, py::array::c_style | py::array::forcecast>::ensure(given);
+    py::array_t<float> reward(static_cast<py::ssize_t>(N));
+    py::array_t<bool> terminated(static_cast<py::ssize_t>(N)), truncated(static_cast<py::ssize_t>(N)),
+        success(static_cast<py::ssize_t>(N));
+    steps_.resize(N);
+    {
+      py::gil_scoped_release release;
+      episodes_->stepAll(choices.data(), steps_.data());
+    }
+    float* r = reward.mutable_data();
+    bool* te = terminated.mutable_data();
+    bool* tr = truncated.mutable_data();
+    bool* su = success.mutable_data();
+    for (std::size_t i = 0; i < N; ++i) {
+      r[i] = steps_[i].reward;
+      te[i] = steps_[i].terminated;
+      tr[i] = steps_[i].truncated;
+      su[i] = steps_[i].success;
+    }
+    return py::make_tuple(reward, terminated, truncated, success);
+  }
+
+ private:
+  py::object owner_;  // the session, kept alive
+  std::unique_ptr<Episodes> episodes_;
+  std::vector<EpisodeStep> steps_;
+};
+
+}  // namespace
+
+void bindEpisodes(py::module_& m) {
+  py::class_<PyEpisodes>(m, "Episodes")
+      .def(py::init<py::object, const std::string&, std::size_t, double, bool>(), py::arg("session"),
+           py::arg("behavior"), py::arg("count") = 1, py::arg("seconds") = 10.0, py::arg("end_on_success") = false)
+      .def_property_readonly("count", &PyEpisodes::count)
+      .def_property_readonly("max_actions", &PyEpisodes::maxActions)
+      .def_property_readonly("dimension", &PyEpisodes::dimension)
+      .def_property_readonly("states", &PyEpisodes::states)
+      .def_property_readonly("bounds", &PyEpisodes::bounds)
+      .def_property_readonly("axes", &PyEpisodes::axisNames)
+      .def_property_readonly("reach", &PyEpisodes::reach)
+      .def("observe", &PyEpisodes::observe, py::arg("i"))
+      .def("reset", &PyEpisodes::reset, py::arg("i"), py::arg("seed") = py::none())
+      .def("step", &PyEpisodes::step, py::arg("i"), py::arg("choice"))
+      .def("observe_all", &PyEpisodes::observeAll)
+      .def("reset_all", &PyEpisodes::resetAll, py::arg("seed") = py::none())
+      .def("step_all", &PyEpisodes::stepAll, py::arg("actions"));
+}
+
+}  // namespace mgrl::python

@@ -1,0 +1,95 @@
+// mgrl.Session's graph views and its registration with the module (session.hpp).
+#include "session.hpp"
+
+namespace mgrl::python {
+namespace {
+
+// The graph's arrays (python/mgrl/__init__.py lists them) as read-only views of the
+// session's memory: no copy, kept alive by the session object `self`.
+py::dict graphArrays(py::object self) {
+  const StateActionModel& g = self.cast<const PySession&>().session().model();
+  auto n = [](std::size_t size) { return static_cast<py::ssize_t>(size); };
+  py::dict d;
+  d["frame_time"] = g.frameTime;
+  d["states"] = g.stateCount();
+  d["actions"] = g.actionCount();
+  d["state_frame"] = view(g.stateFrame.data(), {n(g.stateCount())}, self);
+  d["state_action_begin"] = view(g.stateActionBegin.data(), {n(g.stateActionBegin.size())}, self);
+  d["action_from"] = view(g.actionFrom.data(), {n(g.actionCount())}, self);
+  d["action_to"] = view(g.actionTo.data(), {n(g.actionCount())}, self);
+  d["action_frame_begin"] = view(g.actionFrameBegin.data(), {n(g.actionFrameBegin.size())}, self);
+  d["action_frames"] = view(g.actionFrames.data(), {n(g.actionFrames.size())}, self);
+  d["action_displacement"] = view(g.actionDisplacement.data(), {n(g.actionCount()), 3}, self);
+  d["frame_root"] = view(g.frameRoot.data(), {n(g.frameRoot.size() / 3), 3}, self);
+  d["hits"] = view(g.hits.data(), {n(g.hits.size())}, self);
+  d["action_hit_begin"] = view(g.actionHitBegin.data(), {n(g.actionHitBegin.size())}, self);
+  d["kicks"] = view(g.kicks.data(), {n(g.kicks.size())}, self);
+  d["action_kick_begin"] = view(g.actionKickBegin.data(), {n(g.actionKickBegin.size())}, self);
+  // Every source frame's joint positions (root frame, m), as the graph keeps them for hits
+  // and contacts: (frames, joints, 3).
+  const std::size_t joints = g.jointNames.size();
+  d["joint_names"] = g.jointNames;
+  if (joints > 0)
+    d["joint_positions"] = view(g.sourceJoint.data(), {n(g.sourceJoint.size() / (3 * joints)), n(joints), 3}, self);
+  return d;
+}
+
+}  // namespace
+
+void bindSession(py::module_& m) {
+  py::class_<ProblemArrays>(m, "Problem")
+      .def_readonly("behavior", &ProblemArrays::behavior)
+      .def_readonly("rewards", &ProblemArrays::rewards)
+      .def_readonly("corners", &ProblemArrays::corners)
+      .def_readonly("weights", &ProblemArrays::weights)
+      .def_readonly("discount", &ProblemArrays::discount)
+      .def_readonly("next_state", &ProblemArrays::nextState)
+      .def_property_readonly("out_actions",
+                             [](const ProblemArrays& p) { return py::make_tuple(p.outIndptr, p.outIndices); })
+      .def_readonly("vertices", &ProblemArrays::vertices)
+      .def_readonly("states", &ProblemArrays::states)
+      .def_readonly("actions", &ProblemArrays::actions)
+      .def_readonly("dimension", &ProblemArrays::dimension)
+      .def_readonly("tabulate_seconds", &ProblemArrays::tabulateSeconds)
+      .def_readonly("arrays_seconds", &ProblemArrays::arraysSeconds)
+      .def_property_readonly("vertex_count", [](const ProblemArrays& p) { return p.vertexCount; });
+
+  py::class_<PySession>(m, "Session")
+      .def(py::init<const std::filesystem::path&, const py::object&, const py::object&, const py::object&>(),
+           py::arg("scenario"), py::arg("data") = py::none(), py::arg("cache") = py::none(),
+           py::arg("sets") = py::none())
+      .def_property_readonly("behaviors", &PySession::behaviorNames)
+      .def_property_readonly("scenario", [](const PySession& s) { return s.session().scenario.path; })
+      .def_property_readonly("graph", &graphArrays)
+      .def("problem", &PySession::problem, py::arg("behavior"))
+      .def("train", &PySession::train, py::arg("behavior"), py::arg("learner") = py::none(), py::arg("sets") = py::none(),
+           py::arg("progress") = py::none(), py::arg("snapshots") = 0, py::arg("on_snapshot") = py::none())
+      .def_property_readonly("last_train", &PySession::lastTrain)
+      .def("compare_tables", &PySession::compareTables, py::arg("behavior"), py::arg("table"), py::arg("reference"))
+      .def("evaluate", &PySession::evaluate, py::arg("tables") = py::none(), py::arg("trials") = 300,
+           py::arg("seed") = 1, py::arg("controller") = "policy", py::arg("seconds") = 10.0, py::arg("horizon") = 3)
+      .def("save_policy", &PySession::savePolicy, py::arg("path"), py::arg("tables"), py::arg("learner") = "python");
+
+  m.def(
+      "write_compare_report",
+      [](const std::filesystem::path& dir, const std::string& report) {
+        mgrl::writeCompareReport(dir, nlohmann::json::parse(report));
+      },
+      py::arg("dir"), py::arg("report_json"), "Writes mgrl compare's results.json, results.csv, curves.csv, index.html");
+  m.def("compare_metrics", [] { return mgrl::compareMetrics(); });
+  m.def(
+      "learner_parameters",
+      [](const std::string& name) {
+        const auto* entry = mgrl::builtinPlugins().learners.find(name);
+        if (!entry)
+          throw mgrl::Error(fmt::format("learners: expected a registered learner ({}), found '{}'",
+                                        mgrl::builtinPlugins().learners.describeKnown(), name));
+        std::vector<std::string> names;
+        for (const auto& p : entry->params) names.push_back(p.name);
+        return names;
+      },
+      py::arg("name"), "The parameter names of a registered C++ learner");
+  m.def("snapshot_columns", [] { return mgrl::snapshotColumns(); });
+}
+
+}  // namespace mgrl::python

@@ -1,0 +1,401 @@
+#pragma once
+// mgrl.Session (python/mgrl/__init__.py): a session (framework/session) with its problems,
+// C++ training, eval's trials and policy bundles for NumPy tables.
+#include <pybind11/numpy.h>
+#include <pybind11/pybind11.h>
+#include <pybind11/stl.h>
+#include <pybind11/stl/filesystem.h>
+
+#include <algorithm>
+#include <array>
+#include <atomic>
+#include <chrono>
+#include <cmath>
+#include <condition_variable>
+#include <map>
+#include <memory>
+#include <mutex>
+#include <optional>
+#include <thread>
+
+#include <fmt/format.h>
+#include <fmt/ranges.h>
+
+#include "mgrl/core/config.hpp"
+#include "mgrl/core/error.hpp"
+#include "mgrl/core/parallel.hpp"
+#include "mgrl/learning/behavior.hpp"
+#include "mgrl/learning/learner.hpp"
+#include "mgrl/learning/policy_bundle.hpp"
+#include "mgrl/learning/problem.hpp"
+#include "mgrl/session/episodes.hpp"
+#include "mgrl/session/evaluate.hpp"
+#include "mgrl/session/plugins.hpp"
+#include "mgrl/session/session.hpp"
+#include "mgrl/core/version.hpp"
+#include "mgrl/session/compare_report.hpp"
+#include "mgrl/session/compare_tables.hpp"
+#include "support.hpp"
+#include "train_watch.hpp"
+
+namespace mgrl::python {
+
+// The tabulated problem of one behaviour as NumPy arrays (python/mgrl/__init__.py,
+// Problem): what value iteration backs up, corner by corner.
+struct ProblemArrays {
+  std::string behavior;
+  py::array_t<float> rewards, weights, discount;
+  py::array_t<std::int32_t> corners, nextState, outIndptr, outIndices;
+  py::array_t<double> vertices;
+  std::size_t states = 0, actions = 0, vertexCount = 0;
+  double tabulateSeconds = 0;  ///< the C++ tabulation (GridModel::build), what learners pay too
+  double arraysSeconds = 0;    ///< then filling these arrays from it
+  int dimension = 0;
+};
+
+class PySession {
+ public:
+  PySession(const std::filesystem::path& scenario, const py::object& data, const py::object& cache, const py::object& sets) {
+    SessionOptions options;
+    options.scenario = scenario;
+    if (!data.is_none()) options.dataDir = data.cast<std::filesystem::path>();
+    if (!cache.is_none()) options.cacheDir = cache.cast<std::filesystem::path>();
+    options.sets = setsOf(sets);
+    options.log = toStderr;
+    SessionNeeds needs;
+    needs.motion = false;  // the model is what Python works on; a cached graph starts fast
+    py::gil_scoped_release release;
+    session_ = openSession(options, needs);
+  }
+
+  const Session& session() const { return *session_; }
+
+  std::vector<std::string> behaviorNames() const {
+    std::vector<std::string> names;
+    for (const Behavior& b : session_->behaviors) names.push_back(b.name);
+    return names;
+  }
+
+  const Behavior& behavior(const std::string& name) const {
+    for (const Behavior& b : session_->behaviors)
+      if (b.name == name) return b;
+    throw Error(fmt::format("behavior: expected one of the scenario's behaviours ({}), found '{}'",
+                            fmt::join(behaviorNames(), ", "), name));
+  }
+
+  ProblemArrays problem(const std::string& name) const {
+    const Behavior& b = behavior(name);
+    const Discretizer& grid = *b.discretizer;
+    // Speed layers fit the formula as they are: a backup lands exactly on its layer, so a
+    // cell's corners are those of one layer. A kd-tree's hanging vertices do not: their
+    // rows are interpolated from other vertices after each backup, not backed up.
+    if (!grid.hanging().empty())
+      throw Error(fmt::format("problem({}): its grid ({}) has {} hanging vertices, whose values are interpolated, "
+                              "not backed up; only grids without them are offered to Python yet",
+                              name, grid.type(), grid.hanging().size()));
+    const StateActionModel& model = session_->model();
+    const Problem problem = b.problem(model);
+    GridModel g;
+    const auto started = std::chrono::steady_clock::now();
+    {
+      py::gil_scoped_release release;
+      g = GridModel::build(problem, std::max(1u, std::thread::hardware_concurrency()));
+    }
+    const double tabulated = since(started);
+    const std::size_t A = g.actionCount, V = g.vertexCount, K = std::size_t{1} << g.dimension;
+    ProblemArrays p;
+    p.behavior = name;
+    p.states = model.stateCount();
+    p.actions = A;
+    p.vertexCount = V;
+    p.dimension = g.dimension;
+    p.rewards = py::array_t<float>({A, V});
+    p.corners = py::array_t<std::int32_t>({A, V, K});
+    p.weights = py::array_t<float>({A, V, K});
+    float* r = p.rewards.mutable_data();
+    std::int32_t* c = p.corners.mutable_data();
+    float* w = p.weights.mutable_data();
+    // Filled on every core, an action at a time (each writes its own rows); the GIL is
+    // released: the arrays are not yet visible to Python.
+    {
+      py::gil_scoped_release release;
+      parallelFor(A, std::max(1u, std::thread::hardware_concurrency()), [&](std::size_t a, unsigned) {
+        for (std::size_t v = 0; v < V; ++v) {
+          const GridTransition& t = g.transition[a * V + v];
+          const std::size_t at = a * V + v;
+          r[at] = t.reward;
+          if (t.cell < 0) {
+            std::fill(c + at * K, c + at * K + K, -1);
+            std::fill(w + at * K, w + at * K + K, 0.0f);
+            continue;
+          }
+          float weight[8];
+          cornerWeights(g.dimension, {t.frac[0], t.frac[1], t.frac[2]}, weight);
+          const std::uint32_t* corner = &g.corners[static_cast<std::size_t>(t.cell) << g.dimension];
+          for (std::size_t k = 0; k < K; ++k) {
+            c[at * K + k] = static_cast<std::int32_t>(corner[k]);
+            w[at * K + k] = weight[k];
+          }
+        }
+      });
+    }
+    p.discount = py::array_t<float>(A);
+    std::copy(g.discount.begin(), g.discount.end(), p.discount.mutable_data());
+    p.nextState = py::array_t<std::int32_t>(A);
+    std::copy(g.actionTo.begin(), g.actionTo.end(), p.nextState.mutable_data());
+    p.outIndptr = py::array_t<std::int32_t>(model.stateCount() + 1);
+    std::copy(model.stateActionBegin.begin(), model.stateActionBegin.end(), p.outIndptr.mutable_data());
+    // The model numbers each state's out-actions contiguously: indices are 0 .. A-1.
+    p.outIndices = py::array_t<std::int32_t>(A);
+    for (std::size_t a = 0; a < A; ++a) p.outIndices.mutable_data()[a] = static_cast<std::int32_t>(a);
+    // Each vertex as the grid's coordinates (angle, distance, height, ... as its axes say),
+    // and on a grid with speed layers its layer's speed last.
+    const int D = grid.dimension(), columns = D + (grid.layerAxis() ? 1 : 0);
+    p.vertices = py::array_t<double>({V, static_cast<std::size_t>(columns)});
+    for (std::size_t v = 0; v < V; ++v) {
+      const TargetState e = grid.vertexState(v);
+      const auto coordinates = grid.coordinates(e);
+      double* row = p.vertices.mutable_data() + v * static_cast<std::size_t>(columns);
+      for (int d = 0; d < D; ++d) row[d] = coordinates[static_cast<std::size_t>(d)];
+      if (grid.layerAxis()) row[D] = e.speed;
+    }
+    p.tabulateSeconds = tabulated;
+    p.arraysSeconds = since(started) - tabulated;
+    return p;
+  }
+
+  // Any registered learner on one behaviour; the table as (A, V) float32.
+  py::array_t<float> train(const std::string& name, const py::object& learner, const py::object& sets,
+                           const py::object& progress, std::size_t snapshots, const py::object& onSnapshot) {
+    const Behavior& b = behavior(name);
+    // The scenario's learner block; another learner type starts from its defaults (as
+    // --set behaviors.B.learner.type=OTHER resets the block).
+    nlohmann::json config = b.config.value("learner", nlohmann::json::object());
+    if (!learner.is_none() && config.value("type", std::string()) != learner.cast<std::string>())
+      config = {{"type", learner.cast<std::string>()}};
+    for (const std::string& set : setsOf(sets)) {
+      const std::size_t eq = set.find('=');
+      if (eq == std::string::npos) throw Error(fmt::format("sets: expected 'key=value', found '{}'", set));
+      config[set.substr(0, eq)] = nlohmann::json::parse(set.substr(eq + 1), nullptr, false).is_discarded()
+                                      ? nlohmann::json(set.substr(eq + 1))
+                                      : nlohmann::json::parse(set.substr(eq + 1));
+    }
+    if (!progress.is_none() && !PyCallable_Check(progress.ptr()))
+      throw Error(fmt::format("progress: expected a callable taking a dict, or None, found an object of type {}",
+                              typeName(progress)));
+    if (!onSnapshot.is_none() && !PyCallable_Check(onSnapshot.ptr()))
+      throw Error(fmt::format("on_snapshot: expected a callable taking a dict, or None, found an object of type {}",
+                              typeName(onSnapshot)));
+    if (snapshots > 1000) throw Error(fmt::format("snapshots: expected at most 1000, found {}", snapshots));
+    const auto made = builtinPlugins().learners.create(ConfigNode::parse(config.dump(), fmt::format("{} learner", name)));
+    made->checkGrid(*b.discretizer);
+    const TrainResult result =
+        trainWatched(name, *made, b.problem(session_->model()), progress, snapshots, onSnapshot);
+    if (result.grid)
+      throw Error(fmt::format("train: the learner {} refined its own grid ({} vertices); tables on refined grids are "
+                              "not offered to Python yet",
+                              made->type(), result.table.vertexCount()));
+    nlohmann::json curve = nlohmann::json::array();
+    for (const CurvePoint& c : result.curve) curve.push_back({c.updates, c.seconds, c.residual, c.meanResidual});
+    lastTrain_ = {{"behavior", name},          {"learner", made->type()},
+                  {"updates", result.updates}, {"seconds", result.seconds},
+                  {"final_residual", result.finalResidual}, {"curve", curve},
+                  {"stats", result.stats}};
+    return tableArray(result.table);
+  }
+
+  // What the last train() reported: updates, seconds, final_residual, curve, stats.
+  py::object lastTrain() const {
+    if (lastTrain_.is_null()) return py::none();
+    return py::module_::import("json").attr("loads")(lastTrain_.dump());
+  }
+
+  // compare's table measures against a reference table on the same behaviour's grid:
+  // {"value_rmse", "greedy_agreement", "reference_interpolated"} (mgrl/session/compare_tables.hpp).
+  py::dict compareTables(const std::string& name, const py::object& table, const py::object& reference) const {
+    const Behavior& b = behavior(name);
+    const QTable q = tableFrom(b, table), r = tableFrom(b, reference);
+    const std::vector<double> positions = vertexPositions(*b.discretizer);
+    Comparison c;
+    {
+      py::gil_scoped_release release;
+      c = mgrl::compareTables(q, positions, r, positions, *b.discretizer);
+    }
+    py::dict d;
+    d["value_rmse"] = c.rmse;
+    d["greedy_agreement"] = c.agreement;
+    d["reference_interpolated"] = c.interpolated;
+    return d;
+  }
+
+  // A NumPy Q table for behaviour `b`: float32 of shape (A, V) with finite values. Refused
+  // otherwise with one message naming both shapes, before anything is allocated for it.
+  QTable tableFrom(const Behavior& b, const py::handle& value) const {
+    const StateActionModel& model = session_->model();
+    const std::size_t A = model.actionCount(), V = b.discretizer->vertexCount();
+    const std::string where = fmt::format("tables['{}']", b.name);
+    if (!py::isinstance<py::array>(value))
+      throw Error(fmt::format("{}: expected a NumPy float32 array of shape ({}, {}), found an object of type {}", where,
+                              A, V, typeName(value)));
+    const auto a = py::reinterpret_borrow<py::array>(value);
+    if (a.ndim() != 2 || static_cast<std::size_t>(a.shape(0)) != A || static_cast<std::size_t>(a.shape(1)) != V)
+      throw Error(fmt::format("{}: expected shape ({}, {}) ({} actions of the graph x {} vertices of {}'s {} grid), "
+                              "found shape {}",
+                              where, A, V, A, V, b.name, b.discretizer->type(), shapeText(a)));
+    if (!a.dtype().is(py::dtype::of<float>()))
+      throw Error(fmt::format("{}: expected dtype float32, found {} (convert with table.astype(numpy.float32))", where,
+                              py::str(a.dtype()).cast<std::string>()));
+    const auto c = py::array_t<float, py::array::c_style>::ensure(a);  // a copy only if strided
+    const float* d = c.data();
+    for (std::size_t i = 0; i < A * V; ++i)
+      if (!std::isfinite(d[i]))
+        throw Error(fmt::format("{}: expected finite values, found {} at [{}, {}]", where, d[i], i / V, i % V));
+    QTable q(model, V);
+    q.setActionMajor({d, A * V});
+    return q;
+  }
+
+  // A behaviour's table from the scenario's trained bundle when it holds a current one,
+  // else trained here with the scenario's learner (once per session; said on stderr).
+  std::shared_ptr<PolicyBehavior> otherTable(const Behavior& b) {
+    if (const auto found = others_.find(b.name); found != others_.end()) return found->second;
+    const Session& session = *session_;
+    const std::filesystem::path dir =
+        defaultPolicyDirectory(session.options.cacheDir.empty() ? defaultCacheDirectory() : session.options.cacheDir,
+                               session.scenario, session.graph.key);
+    std::string why = "no trained bundle";
+    if (std::filesystem::exists(dir / "manifest.json")) {
+      try {
+        if (!bundle_) bundle_ = std::make_unique<PolicyBundle>(loadPolicyBundle(dir, session.model(), session.graph.key));
+        const auto found = bundle_->behaviors.find(b.name);
+        if (found == bundle_->behaviors.end()) {
+          why = "no table for it in the trained bundle";
+        } else if (found->second.key != b.key) {
+          why = "the trained bundle's table has other settings";
+        } else if (!found->second.grid.empty()) {
+          why = "the trained bundle's table is on a refined grid";
+        } else {
+          auto table = std::make_shared<PolicyBehavior>(found->second);
+          others_[b.name] = table;
+          return table;
+        }
+      } catch (const Error& e) {
+        why = fmt::format("the trained bundle is unusable: {}", e.what());
+      }
+    }
+    toStderr(fmt::format("mgrl: {} ({}): training {} with {} first; `mgrl train {} --behavior {}` keeps one", b.name,
+                         why, b.name, b.learner->type(), session.scenario.path.string(), b.name));
+    TrainResult result = trainWatched(b.name, *b.learner, b.problem(session.model()), py::none());
+    if (result.grid)
+      throw Error(fmt::format("{}: its learner {} refines its grid; train it with `mgrl train` first", b.name,
+                              b.learner->type()));
+    auto table = std::make_shared<PolicyBehavior>();
+    table->key = b.key;
+    table->record = {{"learner", b.learner->type()}, {"config", b.config}, {"updates", result.updates}};
+    table->table = std::move(result.table);
+    table->vertices = vertexPositions(*b.discretizer);
+    table->gridType = b.discretizer->type();
+    table->grid = b.discretizer->structure();
+    others_[b.name] = table;
+    return table;
+  }
+
+  // The scenario's behaviours, in its order: `tables` (a dict of NumPy arrays) for those it
+  // names, otherTable() for the rest. `learnerName` goes into the given ones' records.
+  struct Tables {
+    std::map<std::string, std::shared_ptr<PolicyBehavior>> behaviors;
+    std::vector<PolicyPart> parts;
+  };
+  Tables tablesFor(const py::object& tables, const std::string& learnerName) {
+    if (!py::isinstance<py::dict>(tables))
+      throw Error(fmt::format("tables: expected a dict {{behaviour name: NumPy (A, V) float32 table}}, found an object "
+                              "of type {}",
+                              typeName(tables)));
+    Tables out;
+    for (const auto& [key, value] : tables.cast<py::dict>()) {
+      const std::string name = py::str(key).cast<std::string>();
+      const Behavior& b = behavior(name);
+      auto given = std::make_shared<PolicyBehavior>();
+      given->key = b.key;
+      given->record = {{"learner", learnerName},
+                       {"trained_in", "python"},
+                       {"config", b.config},
+                       {"weight", b.weight},
+                       {"activation", std::string(activationName(b.activation))},
+                       {"grid", b.discretizer->describe()}};
+      given->table = tableFrom(b, value);
+      given->vertices = vertexPositions(*b.discretizer);
+      given->gridType = b.discretizer->type();
+      given->grid = b.discretizer->structure();
+      out.behaviors[name] = std::move(given);
+    }
+    for (const Behavior& b : session_->behaviors) {
+      if (!out.behaviors.count(b.name)) out.behaviors[b.name] = otherTable(b);
+      out.parts.push_back({b.discretizer.get(), &out.behaviors[b.name]->table, b.weight, b.activation});
+    }
+    return out;
+  }
+
+  py::object evaluate(const py::object& tables, std::size_t trials, std::uint64_t seed, const std::string& controller,
+                      double seconds, int horizon) {
+    EvalSettings settings;
+    settings.controller = {controller, horizon, 0};
+    settings.trials = trials;
+    settings.seconds = seconds;
+    settings.seed = seed;
+    settings.trialsField = "trials";
+    settings.secondsField = "seconds";
+    checkEvalSettings(settings, {"controller", "horizon", "horizon_seconds"});
+    Tables t;
+    if (controller == "policy") t = tablesFor(tables.is_none() ? py::dict() : tables, "python");
+    nlohmann::json report;
+    {
+      py::gil_scoped_release release;
+      report = mgrl::evaluate(*session_, t.parts, settings);
+    }
+    return py::module_::import("json").attr("loads")(report.dump());
+  }
+
+  void savePolicy(const std::filesystem::path& path, const py::object& tables, const std::string& learnerName) {
+    Tables t = tablesFor(tables, learnerName);
+    PolicyBundle bundle;
+    bundle.graphKey = session_->graph.key;
+    nlohmann::json given = nlohmann::json::object();
+    for (const auto& [key, value] : tables.cast<py::dict>()) given[py::str(key).cast<std::string>()] = learnerName;
+    bundle.provenance = {{"scenario", session_->scenario.path.string()},
+                         {"scenario_name", session_->scenario.name},
+                         {"tool", fmt::format("mgrl {} (Python)", kVersion)},
+                         {"sets", session_->options.sets},
+                         {"python_learners", given}};
+    for (const auto& [name, table] : t.behaviors) bundle.behaviors[name] = *table;
+    py::gil_scoped_release release;
+    savePolicyBundle(path, bundle);
+  }
+
+  // A QTable as (A, V): Q[a, v] with a the model's action index.
+  py::array_t<float> tableArray(const QTable& q) const {
+    const StateActionModel& model = session_->model();
+    const std::size_t A = model.actionCount(), V = q.vertexCount();
+    py::array_t<float> out({A, V});
+    float* o = out.mutable_data();
+    for (std::size_t s = 0; s < model.stateCount(); ++s) {
+      const std::size_t first = model.stateActionBegin[s], n = q.actionsOf(s);
+      for (std::size_t v = 0; v < V; ++v) {
+        const float* row = q.row(s, v);
+        for (std::size_t j = 0; j < n; ++j) o[(first + j) * V + v] = row[j];
+      }
+    }
+    return out;
+  }
+
+ private:
+  std::unique_ptr<Session> session_;
+  std::unique_ptr<PolicyBundle> bundle_;  ///< the scenario's trained bundle, once read
+  std::map<std::string, std::shared_ptr<PolicyBehavior>> others_;  ///< otherTable()'s, by behaviour
+  nlohmann::json lastTrain_;  ///< train()'s figures, for compare
+};
+
+/// Registers Problem, Session and compare's measures and report with the module.
+void bindSession(py::module_& m);
+
+}  // namespace mgrl::python
