@@ -157,6 +157,9 @@ class EnvTest(unittest.TestCase):
             vec.step(np.array([0, 0, 500, 0]))
         with self.assertRaisesRegex(mgrl.Error, r"num_envs: expected a number of environments in \[1, 1000000\], found 0"):
             mgrl.MotionGraphVectorEnv(self.session, "hit", 0)
+        with self.assertRaisesRegex(mgrl.Error, r"max_seconds: expected seconds of motion per episode in \(0, 3600\], "
+                                                r"found 0"):
+            mgrl.MotionGraphEnv(self.session, "hit", max_seconds=0)
         with self.assertRaisesRegex(mgrl.Error, r"render_mode: expected None or 'rgb_array', found 'human'"):
             mgrl.MotionGraphEnv(self.session, "hit", render_mode="human")
 

@@ -123,6 +123,11 @@ class EvaluateTest(unittest.TestCase):
         self.assertLess(time.monotonic() - started, 30)
         with self.assertRaisesRegex(mgrl.Error, r"progress: expected a callable"):
             self.session.train("approach", progress=3)
+        with self.assertRaisesRegex(mgrl.Error, r"on_snapshot: expected a callable taking a dict, or None, found an "
+                                                r"object of type int"):
+            self.session.train("approach", snapshots=2, on_snapshot=3)
+        with self.assertRaisesRegex(mgrl.Error, r"snapshots: expected at most 1000, found 1001"):
+            self.session.train("approach", snapshots=1001, on_snapshot=print)
 
 
 class InterruptTest(unittest.TestCase):
