@@ -21,8 +21,10 @@ double rounded(double value, int decimals) {
 
 FileReport inspectFile(const std::filesystem::path& path, const InspectOptions& options) {
   const LoadedMotion loaded = loadMotion(path, options.load);
-  const Motion& motion = loaded.motion;
-  const SkeletonRoles roles = findRoles(motion.skeleton(), options.roles, path.string(), options.load.warn);
+  RootMotionReport rootMotion;
+  const SkeletonRoles fileRoles = findRoles(loaded.motion.skeleton(), options.roles, path.string(), options.load.warn);
+  const Motion motion = moveRootToPelvis(loaded.motion, fileRoles.pelvis, path.string(), rootMotion);
+  const SkeletonRoles roles = fileRoles.pelvis == 0 ? fileRoles : findRoles(motion.skeleton(), options.roles, path.string());
   const Annotation annotation = annotate(motion, roles, options.annotation);
   if (const std::string unusual = unusualHeightWarning(annotation, path.string()); !unusual.empty() && options.load.warn)
     options.load.warn(unusual);
@@ -41,12 +43,15 @@ FileReport inspectFile(const std::filesystem::path& path, const InspectOptions& 
   report.duration_s = motion.duration();
   report.height_m = annotation.standingHeight;
   report.restHeight_m = roles.restHeight;
+  report.rootMotionJoint = rootMotion.jointName;
+  if (rootMotion.joint != 0) report.rootMotion = rootMotion.sentence;
   report.knockdownFrames = annotation.knockdownFrames;
   report.knockdownRatio = options.annotation.knockdownHeadRatio;
   report.groundY_m = annotation.groundY;
   report.units = std::string(lengthUnitName(loaded.units));
   report.glitchFrames = annotation.glitchFrames;
   report.punches = annotation.punches;
+  report.swings = annotation.swings;
   for (int s = 0; s < 2; ++s) {
     report.contactFrames[s] = annotation.contactFrames(static_cast<Side>(s));
     report.hits[s] = annotation.hitCount(static_cast<Side>(s));
@@ -91,11 +96,13 @@ nlohmann::json toJson(const std::vector<FileReport>& reports) {
         {"duration_s", rounded(r.duration_s, 6)},
         {"height_m", rounded(r.height_m, 4)},
         {"rest_height_m", rounded(r.restHeight_m, 4)},
+        {"root_motion_joint", r.rootMotionJoint},
         {"units", r.units},
         {"ground_y_m", rounded(r.groundY_m, 4)},
         {"contact_frames", {{"left", r.contactFrames[0]}, {"right", r.contactFrames[1]}}},
         {"effective_hits", {{"left", r.hits[0]}, {"right", r.hits[1]}, {"total", r.hits[0] + r.hits[1]}}},
         {"punches", {{"left", r.punches[0]}, {"right", r.punches[1]}, {"total", r.punches[0] + r.punches[1]}}},
+        {"arm_swings", r.swings[0] + r.swings[1]},
         {"peak_hit_speed_mps", rounded(r.peakHitSpeed_mps, 3)},
         {"effective_kick_frames",
          {{"left", r.kickFrames[0]}, {"right", r.kickFrames[1]}, {"total", r.kickFrames[0] + r.kickFrames[1]}}},
@@ -124,6 +131,7 @@ std::string toText(const std::vector<FileReport>& reports) {
     for (const auto& [role, joint] : r.roles) roles.push_back(fmt::format("{}={}", role, joint));
     out += fmt::format("  roles: {}\n", fmt::join(roles, ", "));
     out += fmt::format("  joint names: {}\n", fmt::join(r.jointNames, " "));
+    if (!r.rootMotion.empty()) out += fmt::format("  {}\n", r.rootMotion);
     out += fmt::format("  height {:.3f} m (file units: {}), ground at y = {:.3f} m\n", r.height_m, r.units, r.groundY_m);
     const double n = static_cast<double>(std::max<std::size_t>(1, r.frames));
     out += fmt::format("  foot contact frames: left {} ({:.0f}%), right {} ({:.0f}%)\n", r.contactFrames[0],
@@ -145,6 +153,9 @@ std::string toText(const std::vector<FileReport>& reports) {
                          counted(r.kickFrames[0], "frame"), counted(static_cast<std::size_t>(r.kicks[0]), "kick"),
                          counted(r.kickFrames[1], "frame"), counted(static_cast<std::size_t>(r.kicks[1]), "kick"),
                          r.peakKickSpeed_mps, r.kickMin.y(), r.kickMax.y());
+    if (r.swings[0] + r.swings[1] > 0)
+      out += fmt::format("  {} not counted as punches (the fist did not drive out from the body)\n",
+                         counted(static_cast<std::size_t>(r.swings[0] + r.swings[1]), "arm swing"));
     if (r.glitchFrames > 0)
       out += fmt::format("  {} ignored (faster than the glitch threshold)\n",
                          counted(static_cast<std::size_t>(r.glitchFrames), "fist-speed glitch frame"));

@@ -12,6 +12,7 @@
 #include "mgrl/motion/annotation.hpp"
 #include "mgrl/motion/motion_io.hpp"
 #include "mgrl/motion/roles.hpp"
+#include "mgrl/motion/root_motion.hpp"
 
 namespace mgrl::app {
 
@@ -33,9 +34,12 @@ struct FileReport {
   double fps = 0, fileFps = 0, duration_s = 0, groundY_m = 0;
   double height_m = 0;      ///< standing height from the motion (Annotation::standingHeight)
   double restHeight_m = 0;  ///< from the rest pose (SkeletonRoles::restHeight)
+  std::string rootMotionJoint;  ///< the joint the travel is taken from (root_motion.hpp)
+  std::string rootMotion;       ///< a sentence when that is not the file's root, else empty
   std::string units;
   std::array<std::size_t, 2> contactFrames{}, hits{};
   std::array<int, 2> punches{};
+  std::array<int, 2> swings{};  ///< fast arm motions that did not drive out from the body
   int glitchFrames = 0;
   std::size_t knockdownFrames = 0;  ///< frames with no punch counted: the boxer is down
   double knockdownRatio = 0;        ///< AnnotationParams::knockdownHeadRatio used

@@ -16,6 +16,7 @@
 #include "command_line.hpp"
 #include "compare_command.hpp"
 #include "graph_command.hpp"
+#include "init_command.hpp"
 #include "inspect.hpp"
 #include "learn_commands.hpp"
 #include "plugins.hpp"
@@ -74,6 +75,28 @@ int main(int argc, char** argv) {
   inspectCommand->add_option("--punch-min-speed", inspect.annotation.punchMinSpeed_mps,
                              "Effective punch: minimum fist speed along the forearm (m/s)")
       ->default_val(inspect.annotation.punchMinSpeed_mps);
+  inspectCommand->add_option("--punch-min-body-speed", inspect.annotation.punchMinBodySpeed_mps,
+                             "Effective punch: the fist drives out from the body at this speed along the forearm, "
+                             "relative to the pelvis, at one frame at least (m/s; 0: arm swings count too)")
+      ->default_val(inspect.annotation.punchMinBodySpeed_mps);
+
+  mgrl::app::InitOptions init;
+  std::vector<std::string> initFiles;
+  std::string initOut, initUnits = "auto", initData;
+  std::vector<std::string> initRoles;
+  CLI::App* initCommand = app.add_subcommand(
+      "init", "Start a scenario for your own motion files: inspect them, choose graph settings that keep most "
+              "frames, size the grids to the capture, pick behaviours it can do, write a commented scenario and "
+              "print the commands that build, train and view it (docs/own-capture.md).");
+  initCommand->add_option("FILE", initFiles, "Motion files (.bvh, .amc) of one skeleton")->required();
+  initCommand->add_option("--out", initOut, "Scenario to write (default: NAME.yaml in the current folder)");
+  initCommand->add_option("--name", init.name, "Scenario name (default: from the first file's name)");
+  initCommand->add_option("--data", initData, "Data folder for relative paths (default: MGRL_DATA, else ../shared/mocap)");
+  initCommand->add_option("--fps", init.fps, "Frame rate of the scenario")->default_val(init.fps);
+  initCommand->add_option("--units", initUnits, "Length units of the files: auto, m, cm, inch, cmu")->default_str("auto");
+  initCommand->add_option("--role", initRoles, "Set a skeleton role, e.g. --role left_fist=LeftHand (repeatable)");
+  initCommand->add_flag("--force", init.force, "Replace an existing scenario file");
+  initCommand->add_flag("--json", json, "Print one JSON object on stdout");
 
   std::string scenarioPath, dataDir, cacheDir;
   bool noCache = false;
@@ -235,6 +258,10 @@ int main(int argc, char** argv) {
   statsCommand->add_option("--reversal-min-speed", stats.params.reversalMinSpeed_mps,
                            "Root steps slower than this are ignored by the reversal count (m/s)")
       ->default_val(stats.params.reversalMinSpeed_mps);
+  statsCommand->add_option("--punch-min-body-speed", stats.params.annotation.punchMinBodySpeed_mps,
+                           "Effective punch: the fist drives out from the body at this speed along the forearm, "
+                           "relative to the pelvis, at one frame at least (m/s; 0: arm swings count too)")
+      ->default_val(stats.params.annotation.punchMinBodySpeed_mps);
   statsCommand->add_flag("--json", json, "Print one JSON object on stdout");
   addData(statsCommand, dataDir);
 
@@ -295,6 +322,23 @@ int main(int argc, char** argv) {
         std::cout << mgrl::app::toJson(reports).dump(2) << '\n';
       else
         std::cout << mgrl::app::toText(reports);
+    }
+    if (initCommand->parsed()) {
+      for (const std::string& file : initFiles) init.files.emplace_back(file);
+      init.out = initOut;
+      init.dataDir = mgrl::dataDirectory(initData);
+      try {
+        init.units = mgrl::parseLengthUnit(initUnits);
+      } catch (const mgrl::Error& e) {
+        throw mgrl::Error(fmt::format("--units: {}", e.what()));
+      }
+      init.roles = parseRoles(initRoles);
+      init.log = [](const std::string& message) { std::cerr << "mgrl: " << message << '\n'; };
+      const nlohmann::json report = mgrl::app::runInit(init);
+      if (json)
+        std::cout << report.dump(2) << '\n';
+      else
+        std::cout << mgrl::app::initText(report);
     }
     if (graphCommand->parsed()) {
       const mgrl::Scenario scenario = mgrl::loadScenario(scenarioPath, mgrl::dataDirectory(dataDir), graphSets);

@@ -37,15 +37,15 @@ TEST_CASE("mgrl inspect reads a 21-joint boxer without fingers and says once whe
   // The standing punch counts, the one thrown lying on the floor does not.
   CHECK_THAT(run.out, Contains("effective hits: left 1 in 1 punch, right 0 in 0 punches"));
   CHECK_THAT(run.out, Contains("45 frames knocked down"));
-  CHECK_THAT(run.out, Contains("height 1.617 m (file units: cm)"));
+  CHECK_THAT(run.out, Contains("height 1.628 m (file units: cm)"));
 }
 
 TEST_CASE("mgrl inspect --json reports the standing and rest-pose heights and knocked-down frames", "[cli]") {
   CliSandbox box("cli-motion-height");
   const Run run = runMgrl("inspect --json " + shellWord(testData() / "boxer21.bvh"), box.dir());
   const nlohmann::json file = run.report()["files"][0];
-  CHECK(file["height_m"].get<double>() == Approx(1.617).margin(0.001));
-  CHECK(file["rest_height_m"].get<double>() == Approx(1.74));
+  CHECK(file["height_m"].get<double>() == Approx(1.628).margin(0.001));
+  CHECK(file["rest_height_m"].get<double>() == Approx(1.7516));
   CHECK(file["knockdown_frames"] == 45);
   CHECK(file["punches"]["total"] == 1);
 }

@@ -88,7 +88,7 @@ mgrl_cli_test(amc_without_asf ARGS inspect nope_01.amc EXIT 1
 mgrl_cli_test(units_furlong ARGS inspect tiny.bvh --units furlong EXIT 1
   MESSAGE "--units: expected one of auto, m, cm, inch, cmu, found 'furlong'")
 mgrl_cli_test(unknown_command ARGS frobnicate EXIT 2
-  REGEX "expected a command \\(inspect, graph, train, eval, simulate, compare, serve, stats, list\\), found 'frobnicate'")
+  REGEX "expected a command \\(inspect, init, graph, train, eval, simulate, compare, serve, stats, list\\), found 'frobnicate'")
 
 # --- Usage errors, exit 2 -----------------------------------------------------------------
 

@@ -46,9 +46,10 @@ TEST_CASE("roles are found by name in CMU BVH, CMU ASF and SNU skeletons", "[rol
   CHECK(nameOf(snu, s.fist[0]) == "LeftHand");
   CHECK(nameOf(snu, s.toe[1]) == "RightToe");
   // SNU's rest pose lies along +X with one leg up: height must still be a person's. Its
-  // head end site has zero length: the head top continues the neck bone (9.3 cm).
-  CHECK(s.restHeight == Approx(1.75).margin(0.05));
-  CHECK(s.headTopOffset.norm() == Approx(0.093).margin(0.002));
+  // head end site has zero length: the head top continues the neck, kHeadTopPerSpine of
+  // the 69 cm from pelvis to head (12.8 cm; the neck bone alone is 9.3 cm).
+  CHECK(s.restHeight == Approx(1.78).margin(0.05));
+  CHECK(s.headTopOffset.norm() == Approx(0.128).margin(0.002));
 }
 
 TEST_CASE("roles are found for Mixamo-like and _L/_R namings", "[roles]") {
@@ -127,12 +128,20 @@ TEST_CASE("a skeleton without finger joints uses the wrist's end site as the fis
   CHECK_THAT(warnings[0], Catch::Contains("using LeftWrist for left_fist and RightWrist's end site for right_fist"));
 }
 
-TEST_CASE("a zero-length head end site is continued by the neck bone for the head top", "[roles]") {
-  // boxer21.bvh: Head 10 cm above Neck with a zero-length end site; toes point down in the
-  // rest pose (toe tip 16 cm below the ankle). Rest height: head top 70 cm above the
-  // hips, toe tip 104 cm below.
+TEST_CASE("a zero-length head end site is continued along the neck by a head in proportion", "[roles]") {
+  // boxer21.bvh: Head 10 cm above Neck, 60 cm above the hips, with a zero-length end site;
+  // toes point down in the rest pose (toe tip 16 cm below the ankle). Head top:
+  // kHeadTopPerSpine * 60 cm = 11.16 cm above the head joint, 71.16 cm above the hips; toe
+  // tip 104 cm below.
   const LoadedMotion loaded = loadMotion(test::testData() / "boxer21.bvh");
   const SkeletonRoles r = findRoles(loaded.motion.skeleton());
-  CHECK(r.headTopOffset.y() == Approx(0.10));
-  CHECK(r.restHeight == Approx(1.74));
+  CHECK(r.headTopOffset.y() == Approx(kHeadTopPerSpine * 0.60));
+  CHECK(r.restHeight == Approx(1.7516));
+  // A short neck bone does not shorten the person: half the neck, the same head top.
+  std::vector<Joint> joints(loaded.motion.skeleton().joints().begin(), loaded.motion.skeleton().joints().end());
+  const int head = loaded.motion.skeleton().find("Head");
+  joints[static_cast<std::size_t>(head)].offset.y() = 0.05;
+  joints[static_cast<std::size_t>(head) - 1].offset.y() += 0.05;
+  const SkeletonRoles shortNeck = findRoles(Skeleton(joints));
+  CHECK(shortNeck.restHeight == Approx(1.7516));
 }

@@ -71,16 +71,21 @@ TEST_CASE("stats: a fighter walking back and forth reverses three times", "[stat
 
 TEST_CASE("stats: a lunging left fist is one effective punch, landed only when the opponent is in reach", "[stats]") {
   // Fighter 1 (facing +Z) lunges 40 cm along +X at 3 m/s: its left arm points along +X, so
-  // the fist moves along the forearm; fighter 2 stands facing it, 1.3 m or 3 m away.
-  const BoutStats near = measureFolder("punch_near");
+  // the fist moves along the forearm; fighter 2 stands facing it, 1.3 m or 3 m away. The
+  // arm does not move on the body, so by default it is an arm swing carried by the body
+  // (AnnotationParams::punchMinBodySpeed_mps); with that test off it is one punch.
+  CHECK(measureFolder("punch_near").punches == 0);
+  StatsParams carried;
+  carried.annotation.punchMinBodySpeed_mps = 0;
+  const BoutStats near = measureFolder("punch_near", carried);
   CHECK(near.punches == 1);
   CHECK(near.kicks == 0);
   CHECK(near.landed == 1);
-  const BoutStats far = measureFolder("punch_far");
+  const BoutStats far = measureFolder("punch_far", carried);
   CHECK(far.punches == 1);
   CHECK(far.landed == 0);
   // A smaller reach: the fist tip stops 7 cm short of the spine capsule's surface.
-  StatsParams tight;
+  StatsParams tight = carried;
   tight.landRadius_m = 0.02;
   CHECK(measureFolder("punch_near", tight).landed == 0);
   // Facing: fighter 1 looks along +Z at an opponent along +X (90 deg), fighter 2 at it (0).

@@ -2,18 +2,36 @@
 
 #include <algorithm>
 #include <cmath>
+#include <optional>
 
 #include <fmt/format.h>
 
 #include "mgrl/motion/motion_io.hpp"
+#include "mgrl/motion/root_motion.hpp"
 
 namespace mgrl {
 
 namespace {
 
+// A joint's local translation at rest: its offset, or, when the file animates it (game
+// exports give every joint position channels), its first frame's channel values, unless
+// those move by more than 1 cm over the clip (a joint that carries travel, like hips that
+// bake the take's start position in): then nullopt, there is no fixed bone to compare.
+std::optional<Eigen::Vector3d> fixedBone(const Motion& motion, std::size_t joint) {
+  if (motion.skeleton().translationSlot(joint) < 0) return motion.skeleton().joint(joint).offset;
+  const Eigen::Vector3d first = motion.localTranslation(0, joint);
+  for (std::size_t f = 1; f < motion.frameCount(); ++f)
+    if ((motion.localTranslation(f, joint) - first).norm() > 0.01) return std::nullopt;
+  return first;
+}
+
 // Files of one graph must share joints and hierarchy; bone lengths may differ a little
 // (capture sessions recalibrate) but a different body would make transitions meaningless.
-void requireSameSkeleton(const Skeleton& a, std::string_view nameA, const Skeleton& b, std::string_view nameB) {
+// Bones are compared where they are fixed (fixedBone()): one actor's takes that each bake
+// their start position into the hips still load together.
+void requireSameSkeleton(const Motion& ma, std::string_view nameA, const Motion& mb, std::string_view nameB) {
+  const Skeleton& a = ma.skeleton();
+  const Skeleton& b = mb.skeleton();
   if (a.jointCount() != b.jointCount())
     throw Error(fmt::format("{} and {} have different skeletons: expected {} joints, found {}", nameA, nameB,
                             a.jointCount(), b.jointCount()));
@@ -25,7 +43,9 @@ void requireSameSkeleton(const Skeleton& a, std::string_view nameA, const Skelet
                               "'{}' (parent {}) in the second",
                               nameA, nameB, j, ja.name, ja.parent, jb.name, jb.parent));
     if (j == 0) continue;  // the root's offset is replaced by its position channels
-    const double la = ja.offset.norm(), lb = jb.offset.norm();
+    const std::optional<Eigen::Vector3d> boneA = fixedBone(ma, j), boneB = fixedBone(mb, j);
+    if (!boneA || !boneB) continue;
+    const double la = boneA->norm(), lb = boneB->norm();
     if (std::abs(la - lb) > 0.01 + 0.05 * std::max(la, lb))
       throw Error(fmt::format("{} and {} have different skeletons: bone '{}' is {:.3f} m in the first, {:.3f} m in "
                               "the second (more than 5 % apart)",
@@ -45,12 +65,17 @@ MotionDatabase makeMotionDatabase(std::vector<std::pair<std::string, Motion>> mo
   if (motions.empty()) throw Error("motion: expected at least one motion file, found none");
   annotation.validate();
   MotionDatabase db;
-  db.skeleton = motions.front().second.sharedSkeleton();
   db.frameTime = motions.front().second.frameTime();
-  db.roles = findRoles(*db.skeleton, roles, motions.front().first, warn);
+  db.roles = findRoles(motions.front().second.skeleton(), roles, motions.front().first, warn);
+  // Joint 0 carries the travel from here on (root_motion.hpp); a file whose root stays at
+  // the origin above the hips gets its motion from the hips.
+  for (auto& [name, motion] : motions) motion = moveRootToPelvis(motion, db.roles.pelvis, name, db.rootMotion);
+  db.skeleton = motions.front().second.sharedSkeleton();
+  if (db.roles.pelvis != 0) db.roles = findRoles(*db.skeleton, roles, motions.front().first);
   db.offsets.push_back(0);
   for (auto& [name, motion] : motions) {
-    requireSameSkeleton(*db.skeleton, motions.front().first, motion.skeleton(), name);
+    // The first clip has moved into db.clips by the second one's turn.
+    if (!db.clips.empty()) requireSameSkeleton(db.clips.front().motion, db.clips.front().name, motion, name);
     if (std::abs(motion.frameTime() - db.frameTime) > 1e-9)
       throw Error(fmt::format("{}: expected {} fps like {}, found {} fps", name, 1.0 / db.frameTime,
                               motions.front().first, motion.fps()));

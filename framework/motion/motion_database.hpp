@@ -11,6 +11,7 @@
 #include "mgrl/core/error.hpp"
 #include "mgrl/motion/motion.hpp"
 #include "mgrl/motion/roles.hpp"
+#include "mgrl/motion/root_motion.hpp"
 #include "mgrl/motion/units.hpp"
 
 namespace mgrl {
@@ -36,6 +37,8 @@ struct Clip {
 struct MotionDatabase {
   std::shared_ptr<const Skeleton> skeleton;  ///< the first clip's
   SkeletonRoles roles;
+  /// Which joint carries the root motion, and why (root_motion.hpp): the last clip's.
+  RootMotionReport rootMotion;
   std::vector<Clip> clips;
   /// Global index of each clip's first frame, plus the total at the end.
   std::vector<std::uint32_t> offsets;

@@ -252,12 +252,21 @@ SkeletonRoles findRoles(const Skeleton& skeleton, const RoleOverrides& overrides
     const auto& end = skeleton.joint(static_cast<std::size_t>(roles.toe[s])).endSite;
     roles.toeTipOffset[s] = end ? *end : Eigen::Vector3d::Zero();
   }
-  // The head top. SNU's head end site has zero length and others have none: without a
-  // stand-in the person would measure about a head short. The neck-to-head bone once more
-  // is the stand-in (CMU's head end site is about that long).
+  // The head top: the head's end site when it has a real length. Game exports give it none
+  // or a zero-length one, and their head joint sits at the base of the skull: without a
+  // stand-in the person would measure about a head short. The stand-in continues the neck by
+  // a head length in proportion to the body: kHeadTopPerSpine of the rest-pose distance from
+  // pelvis to head, as in CMU subject 13 (whose end site gives his known 1.63 m), and never
+  // less than the neck-to-head bone.
   const Joint& head = skeleton.joint(static_cast<std::size_t>(roles.head));
   const double neckLength = roles.head > 0 ? head.offset.norm() : 0;
-  roles.headTopOffset = head.endSite && head.endSite->norm() >= 0.25 * neckLength ? *head.endSite : head.offset;
+  if (head.endSite && head.endSite->norm() >= 0.25 * neckLength) {
+    roles.headTopOffset = *head.endSite;
+  } else {
+    const double spine = (rest[roles.head] - rest[roles.pelvis]).norm();
+    roles.headTopOffset = neckLength > 0 ? Eigen::Vector3d(head.offset.normalized() * std::max(neckLength, kHeadTopPerSpine * spine))
+                                         : Eigen::Vector3d::Zero();
+  }
   if (roles.head == 0) roles.headTopOffset.setZero();
   // Standing height: head top down to the lowest foot point, along the spine axis.
   const double top = (rest[roles.head] + roles.headTopOffset).dot(up);

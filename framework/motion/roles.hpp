@@ -27,6 +27,10 @@ using RoleOverrides = std::map<std::string, std::string, std::less<>>;
 /// Every role name: left_fist, right_fist, left_wrist, ..., head, pelvis.
 std::vector<std::string> roleNames();
 
+/// Head-joint-to-head-top distance per rest-pose pelvis-to-head distance, where a file gives
+/// no head top: CMU subject 13's (his head end site, 1.78 of 9.58 units; he stands 1.63 m).
+inline constexpr double kHeadTopPerSpine = 0.186;
+
 /// Joint indices of each role, plus geometry derived from the rest pose.
 struct SkeletonRoles {
   std::array<int, 2> fist{}, wrist{}, forearm{}, shoulder{}, ankle{}, toe{};
@@ -38,7 +42,8 @@ struct SkeletonRoles {
   std::array<Eigen::Vector3d, 2> fistTipOffset{Eigen::Vector3d::Zero(), Eigen::Vector3d::Zero()};
   /// The head top: a point fixed on the head joint, at this offset in its frame. The head's
   /// end site, unless it has none or one shorter than a quarter of the neck-to-head bone
-  /// (SNU's has zero length): then the neck-to-head bone vector again, continuing the neck.
+  /// (game exports' have zero length): then a point continuing the neck, kHeadTopPerSpine of
+  /// the pelvis-to-head distance past the head joint (at least the neck-to-head bone again).
   Eigen::Vector3d headTopOffset = Eigen::Vector3d::Zero();
   /// Toe tip per side: the toe joint's End Site offset (zero if it has none).
   std::array<Eigen::Vector3d, 2> toeTipOffset{Eigen::Vector3d::Zero(), Eigen::Vector3d::Zero()};

@@ -17,7 +17,9 @@ namespace {
 
 // Bump when the graph construction changes what it computes, so old caches go stale.
 // 2: no effective punch while knocked down; the fist falls back to the wrist's end site.
-constexpr int kGraphAlgorithmVersion = 4;  // 3: effective kicks; 4: kicks by the toe's whole speed
+// 3: effective kicks; 4: kicks by the toe's whole speed; 5: root motion from the pelvis role,
+// punches that drive the fist out from the body, heads in proportion (issue 42)
+constexpr int kGraphAlgorithmVersion = 5;
 
 bool wildcardMatch(std::string_view pattern, std::string_view text) {
   // Iterative '*' / '?' matching with backtracking to the last star.
@@ -109,7 +111,7 @@ MotionSpec readMotion(const ConfigNode& motion, const std::filesystem::path& sce
     const ConfigNode a = motion.child("annotation");
     a.allowOnly({"contact_height_enter_m", "contact_height_exit_m", "contact_speed_enter_mps",
                  "contact_speed_exit_mps", "punch_min_speed_mps", "punch_min_alignment", "punch_max_speed_mps",
-                 "knockdown_head_ratio", "kick_min_speed_mps", "kick_min_alignment", "kick_min_height_m",
+                 "punch_min_body_speed_mps", "knockdown_head_ratio", "kick_min_speed_mps", "kick_min_alignment", "kick_min_height_m",
                  "kick_max_speed_mps"});
     AnnotationParams& p = spec.annotation;
     p.contactHeightEnter_m = a.number("contact_height_enter_m", p.contactHeightEnter_m, 0, 1);
@@ -119,6 +121,7 @@ MotionSpec readMotion(const ConfigNode& motion, const std::filesystem::path& sce
     p.punchMinSpeed_mps = a.number("punch_min_speed_mps", p.punchMinSpeed_mps, 0, 100);
     p.punchMinAlignment = a.number("punch_min_alignment", p.punchMinAlignment, -1, 1);
     p.punchMaxSpeed_mps = a.number("punch_max_speed_mps", p.punchMaxSpeed_mps, 0, 1000);
+    p.punchMinBodySpeed_mps = a.number("punch_min_body_speed_mps", p.punchMinBodySpeed_mps, 0, 100);
     p.knockdownHeadRatio = a.number("knockdown_head_ratio", p.knockdownHeadRatio, 0, 0.99);
     p.kickMinSpeed_mps = a.number("kick_min_speed_mps", p.kickMinSpeed_mps, 0, 100);
     p.kickMinAlignment = a.number("kick_min_alignment", p.kickMinAlignment, -1, 1);
@@ -344,7 +347,7 @@ std::string graphCacheKey(const Scenario& s) {
   }
   const AnnotationParams& a = m.annotation;
   for (double v : {a.contactHeightEnter_m, a.contactHeightExit_m, a.contactSpeedEnter_mps, a.contactSpeedExit_mps,
-                   a.punchMinSpeed_mps, a.punchMinAlignment, a.punchMaxSpeed_mps, a.knockdownHeadRatio,
+                   a.punchMinSpeed_mps, a.punchMinAlignment, a.punchMaxSpeed_mps, a.punchMinBodySpeed_mps, a.knockdownHeadRatio,
                    a.kickMinSpeed_mps, a.kickMinAlignment, a.kickMinHeight_m, a.kickMaxSpeed_mps})
     h.update(v);
   const GraphParams& g = s.graph;
