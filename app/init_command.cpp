@@ -148,8 +148,8 @@ nlohmann::json runInit(const InitOptions& options) {
   std::size_t strikes = 0, kicks = 0;
   double minHeight = 1e300, maxHeight = 0;
   for (const Clip& clip : db.clips) {
-    strikes += clip.annotation.hits.size();
-    kicks += clip.annotation.kicks.size();
+    strikes += static_cast<std::size_t>(clip.annotation.punches[0] + clip.annotation.punches[1]);
+    kicks += static_cast<std::size_t>(clip.annotation.kickCount[0] + clip.annotation.kickCount[1]);
     minHeight = std::min(minHeight, clip.annotation.standingHeight);
     maxHeight = std::max(maxHeight, clip.annotation.standingHeight);
   }
@@ -190,8 +190,8 @@ nlohmann::json runInit(const InitOptions& options) {
   const std::string kind = chosen->hits >= kMinStrikes    ? "punch"
                            : chosen->kicks >= kMinStrikes ? "kick"
                                                           : "goal";
-  // Approach's grid: three of the longer actions (their 90th percentile), 1 to 4 m.
-  const double approachRadius = std::clamp(roundUpTo(3 * chosen->p90ActionTravel, 0.5), 1.0, 4.0);
+  // Approach's grid: three of the longer actions (their 90th percentile), 2 to 4 m (the paper's is 2 m).
+  const double approachRadius = std::clamp(roundUpTo(3 * chosen->p90ActionTravel, 0.5), 2.0, 4.0);
   const double goalRadius = std::clamp(roundUpTo(6 * chosen->p90ActionTravel, 0.5), 2.0, 6.0);
 
   const fs::path scenarioDir = fs::absolute(out).parent_path();
@@ -256,8 +256,8 @@ nlohmann::json runInit(const InitOptions& options) {
   y += "behaviors:\n";
   if (kind == "punch") {
     y += fmt::format(
-        "  # The paper's two behaviours (sec. 6.4). The capture has {} effective punches inside the\n"
-        "  # graph's actions. Approach's grid reaches three of the longer actions ({:.2f} m each).\n",
+        "  # The paper's two behaviours (sec. 6.4). The graph's actions hold {} effective hitting\n"
+        "  # points (sec. 6.2). Approach's grid reaches three of the longer actions ({:.2f} m each).\n",
         chosen->hits, chosen->p90ActionTravel);
     y += "  approach:\n"
          "    description: bring the effective hitting points' centroid to the target\n"
@@ -276,7 +276,7 @@ nlohmann::json runInit(const InitOptions& options) {
          "    reward: {type: hit, contact_radius: 0.15, gamma: 0.97}\n"
          "    learner: {type: value_iteration}\n";
   } else if (kind == "kick") {
-    y += fmt::format("  # The capture has {} effective kicks inside the graph's actions and too few punches.\n",
+    y += fmt::format("  # The graph's actions hold {} effective kick frames and too few punches.\n",
                      chosen->kicks);
     y += "  kick:\n"
          "    description: land an effective kick of either foot within 0.3 m of the target\n"

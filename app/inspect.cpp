@@ -52,6 +52,8 @@ FileReport inspectFile(const std::filesystem::path& path, const InspectOptions& 
   report.glitchFrames = annotation.glitchFrames;
   report.punches = annotation.punches;
   report.swings = annotation.swings;
+  report.punchScale = annotation.punchScale;
+  for (int s = 0; s < 2; ++s) report.punchMinSpeed_mps[s] = options.annotation.punchMinSpeed_mps * annotation.punchScale[s];
   for (int s = 0; s < 2; ++s) {
     report.contactFrames[s] = annotation.contactFrames(static_cast<Side>(s));
     report.hits[s] = annotation.hitCount(static_cast<Side>(s));
@@ -103,6 +105,7 @@ nlohmann::json toJson(const std::vector<FileReport>& reports) {
         {"effective_hits", {{"left", r.hits[0]}, {"right", r.hits[1]}, {"total", r.hits[0] + r.hits[1]}}},
         {"punches", {{"left", r.punches[0]}, {"right", r.punches[1]}, {"total", r.punches[0] + r.punches[1]}}},
         {"arm_swings", r.swings[0] + r.swings[1]},
+        {"punch_min_speed_mps", {rounded(r.punchMinSpeed_mps[0], 3), rounded(r.punchMinSpeed_mps[1], 3)}},
         {"peak_hit_speed_mps", rounded(r.peakHitSpeed_mps, 3)},
         {"effective_kick_frames",
          {{"left", r.kickFrames[0]}, {"right", r.kickFrames[1]}, {"total", r.kickFrames[0] + r.kickFrames[1]}}},
@@ -153,6 +156,10 @@ std::string toText(const std::vector<FileReport>& reports) {
                          counted(r.kickFrames[0], "frame"), counted(static_cast<std::size_t>(r.kicks[0]), "kick"),
                          counted(r.kickFrames[1], "frame"), counted(static_cast<std::size_t>(r.kicks[1]), "kick"),
                          r.peakKickSpeed_mps, r.kickMin.y(), r.kickMax.y());
+    if (r.punchScale[0] < 1 || r.punchScale[1] < 1)
+      out += fmt::format("  punch speed threshold {:.2f} / {:.2f} m/s (left / right): the fist tip found is the wrist or "
+                         "near it, which moves slower than knuckles (scaled by {:.2f} / {:.2f})\n",
+                         r.punchMinSpeed_mps[0], r.punchMinSpeed_mps[1], r.punchScale[0], r.punchScale[1]);
     if (r.swings[0] + r.swings[1] > 0)
       out += fmt::format("  {} not counted as punches (the fist did not drive out from the body)\n",
                          counted(static_cast<std::size_t>(r.swings[0] + r.swings[1]), "arm swing"));

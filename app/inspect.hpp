@@ -39,7 +39,9 @@ struct FileReport {
   std::string units;
   std::array<std::size_t, 2> contactFrames{}, hits{};
   std::array<int, 2> punches{};
-  std::array<int, 2> swings{};  ///< fast arm motions that did not drive out from the body
+  std::array<int, 2> swings{};
+  std::array<double, 2> punchMinSpeed_mps{};  ///< the threshold used per hand (scaled for a wrist)
+  std::array<double, 2> punchScale{1.0, 1.0};  ///< Annotation::punchScale  ///< fast arm motions that did not drive out from the body
   int glitchFrames = 0;
   std::size_t knockdownFrames = 0;  ///< frames with no punch counted: the boxer is down
   double knockdownRatio = 0;        ///< AnnotationParams::knockdownHeadRatio used

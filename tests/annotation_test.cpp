@@ -256,3 +256,70 @@ TEST_CASE("windowQuantiles gives each window's quantile exactly as a selection o
     }
   }
 }
+
+TEST_CASE("a plain front kick is found with the default kick settings, which count no kick in walks and runs",
+          "[annotation]") {
+  // kick.bvh: boxer21's body swings its straight left leg forward and up to 80 degrees in 6
+  // frames (the toe tip at about 6 m/s) while the body steps forward and the ankle points
+  // the toes: the toe tip's velocity is mostly across the shin (cosine 0.13 at best).
+  const Motion m = loadMotion(test::testData() / "kick.bvh").motion;
+  const SkeletonRoles roles = findRoles(m.skeleton());
+  const Annotation a = annotate(m, roles);
+  CHECK(a.kickCount[0] == 1);
+  CHECK(a.kickCount[1] == 0);
+  REQUIRE(!a.kicks.empty());
+  CHECK(a.kicks.front().hand == Side::Left);
+  CHECK(a.kicks.front().tipWorld.y() - a.groundY >= 0.3);
+  CHECK(a.punches[0] + a.punches[1] == 0);
+  // The defaults before (only kicks along the shin, from 3 m/s) missed it.
+  AnnotationParams alongOnly;
+  alongOnly.kickMinAlignment = 0.5;
+  alongOnly.kickMinSpeed_mps = 3.0;
+  CHECK(annotate(m, roles, alongOnly).kicks.empty());
+}
+
+TEST_CASE("walks and runs have no kicks and few punches with the default annotation", "[annotation][data]") {
+  // Feet swing fast in a run but stay low; arms swing along the forearm but are carried by
+  // the body, not driven out from it (punch_min_body_speed_mps).
+  int punches = 0, swings = 0;
+  for (const char* file : {"cmu/bvh/02_02_walk.bvh", "cmu/bvh/07_05_walk.bvh", "cmu/bvh/09_06_run.bvh"}) {
+    CAPTURE(file);
+    const Annotation a = annotateFile(file, 30);
+    CHECK(a.kicks.empty());
+    punches += a.punches[0] + a.punches[1];
+    swings += a.swings[0] + a.swings[1];
+  }
+  CHECK(punches <= 3);
+  CHECK(swings >= 3);
+  // CMU's boxing keeps every punch: the test drops none of them.
+  const Annotation boxing = annotateFile("cmu/bvh/13_17_boxing.bvh", 30);
+  CHECK(boxing.swings[0] + boxing.swings[1] == 0);
+  CHECK(boxing.punches[0] + boxing.punches[1] > 20);
+}
+
+TEST_CASE("a wrist standing in for the fist lowers the punch thresholds in proportion to its reach", "[annotation]") {
+  // boxer21.bvh's wrists have 8 cm end sites past a 25 cm forearm: a fist's reach (1.32
+  // forearms from the elbow, at least kFistReachPerForearm), thresholds as set. Without the
+  // end sites the wrist itself is the tip, 1.0 forearm from the elbow: thresholds times 0.8.
+  const Motion m = loadMotion(test::testData() / "boxer21.bvh").motion;
+  const Annotation withTips = annotate(m, findRoles(m.skeleton()));
+  CHECK(withTips.punchScale[0] == 1.0);
+  CHECK(withTips.punchScale[1] == 1.0);
+
+  std::vector<Joint> joints(m.skeleton().joints().begin(), m.skeleton().joints().end());
+  for (Joint& j : joints)
+    if (j.name == "LeftWrist" || j.name == "RightWrist") j.endSite.reset();
+  auto bare = std::make_shared<const Skeleton>(joints);
+  std::vector<Eigen::Quaterniond> rotations;
+  std::vector<Eigen::Vector3d> translations;
+  for (std::size_t f = 0; f < m.frameCount(); ++f) {
+    for (const Eigen::Quaterniond& q : m.rotations(f)) rotations.push_back(q);
+    for (const Eigen::Vector3d& t : m.translations(f)) translations.push_back(t);
+  }
+  const Motion wrists(bare, m.frameTime(), rotations, translations);
+  const Annotation a = annotate(wrists, findRoles(wrists.skeleton()));
+  CHECK(a.punchScale[0] == Approx(1.0 / kFistReachPerForearm));
+  CHECK(a.punchScale[1] == Approx(1.0 / kFistReachPerForearm));
+  // Its one standing punch is still found, from the slower wrist.
+  CHECK(a.punches[0] == 1);
+}

@@ -58,7 +58,7 @@ TEST_CASE("mgrl init reports in JSON what it found and chose", "[cli][data]") {
   CHECK(r["graph"]["contact_event"] == "left_foot_liftoff");
   CHECK(r["graph"]["usable"] == true);
   CHECK(r["graph"]["kept_share"].get<double>() > 0.9);
-  CHECK(r["effective_punches"].get<int>() > 50);
+  CHECK(r["effective_punches"].get<int>() > 20);  // punches, not frames
   CHECK(r["behaviors"] == nlohmann::json{"approach", "hit"});
   CHECK(r["next"].size() == 4);
 }

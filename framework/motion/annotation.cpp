@@ -183,6 +183,17 @@ Annotation annotate(const Motion& motion, const SkeletonRoles& roles, const Anno
     double bodyDrive = 0;
   };
   std::array<std::vector<Candidate>, 2> candidates;
+  // The thresholds are for a fist tip. A skeleton without fingers gives the wrist (or a
+  // point near it) instead, which moves slower as the forearm turns about the elbow: scale
+  // the thresholds by how far the tip found stands from the elbow against a fist's reach,
+  // kFistReachPerForearm forearms (CMU's knuckles: 1.8, SNU's: 1.3; a wrist: 1.0).
+  const std::vector<Eigen::Vector3d> rest = restPositions(skeleton);
+  for (int s = 0; s < 2; ++s) {
+    const Eigen::Vector3d elbow = rest[static_cast<std::size_t>(roles.forearm[s])];
+    const double forearm = (rest[static_cast<std::size_t>(roles.wrist[s])] - elbow).norm();
+    const double tip = (rest[static_cast<std::size_t>(roles.fistTipJoint[s])] + roles.fistTipOffset[s] - elbow).norm();
+    result.punchScale[s] = forearm > 0 ? std::clamp(tip / (kFistReachPerForearm * forearm), 0.25, 1.0) : 1.0;
+  }
   for (std::size_t f = 0; f < frames; ++f) {
     const bool down = headAbove[f] < knockdownBelow;
     result.knockdownFrames += down ? 1 : 0;
@@ -205,7 +216,7 @@ Annotation annotate(const Motion& motion, const SkeletonRoles& roles, const Anno
       } else if (!down && axis.norm() > 1e-9) {
         axis.normalize();
         const double along = v.dot(axis);
-        if (along >= params.punchMinSpeed_mps && along >= params.punchMinAlignment * speed) {
+        if (along >= params.punchMinSpeed_mps * result.punchScale[s] && along >= params.punchMinAlignment * speed) {
           Candidate c;
           c.hit.frame = static_cast<std::uint32_t>(f);
           c.hit.hand = static_cast<Side>(s);
@@ -226,7 +237,7 @@ Annotation annotate(const Motion& motion, const SkeletonRoles& roles, const Anno
       while (end < list.size() && list[end].hit.frame == list[end - 1].hit.frame + 1) ++end;
       double drive = -1e300;
       for (std::size_t k = i; k < end; ++k) drive = std::max(drive, list[k].bodyDrive);
-      if (drive >= params.punchMinBodySpeed_mps) {
+      if (drive >= params.punchMinBodySpeed_mps * result.punchScale[s]) {
         ++result.punches[s];
         for (std::size_t k = i; k < end; ++k) result.hits.push_back(list[k].hit);
       } else {

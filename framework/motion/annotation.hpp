@@ -17,6 +17,11 @@
 
 namespace mgrl {
 
+/// Distance from the elbow to the knuckles, in forearms (elbow to wrist), below which the
+/// punch thresholds scale down (Annotation::punchScale): a quarter of a forearm past the
+/// wrist. CMU's fist tips reach 1.8 forearms, SNU's 1.3, a wrist 1.0.
+inline constexpr double kFistReachPerForearm = 1.25;
+
 /// Thresholds in SI units. Defaults suit 30 to 120 fps human capture.
 struct AnnotationParams {
   /// A foot joint (ankle or toe) is near the ground within this height above its planted
@@ -28,7 +33,8 @@ struct AnnotationParams {
   double contactSpeedEnter_mps = 0.5;
   double contactSpeedExit_mps = 0.9;
   /// A punch is effective when the fist tip's velocity along the forearm axis (elbow to
-  /// wrist) exceeds this (m/s)...
+  /// wrist) exceeds this (m/s; for a wrist standing in for the fist, this times
+  /// Annotation::punchScale)...
   double punchMinSpeed_mps = 2.0;
   /// ...and the velocity is not opposed to the axis: the cosine of the angle between them
   /// is at least this.
@@ -94,6 +100,10 @@ struct Annotation {
   std::vector<EffectiveHit> hits;
   /// Punches per hand: runs of consecutive effective frames.
   std::array<int, 2> punches{0, 0};
+  /// Per hand, the factor on the punch speed thresholds for the effector this skeleton has:
+  /// 1 for a fist tip at least kFistReachPerForearm forearms from the elbow, less for a
+  /// wrist standing in for a fist (its speed about the elbow is that much lower).
+  std::array<double, 2> punchScale{1.0, 1.0};
   /// Runs per hand that were fast enough but did not drive the fist out from the body
   /// (AnnotationParams::punchMinBodySpeed_mps): arm swings, not counted as punches.
   std::array<int, 2> swings{0, 0};
