@@ -2,9 +2,12 @@
 #include <cmath>
 
 #include <catch2/catch.hpp>
+#include <fmt/format.h>
+#include <nlohmann/json.hpp>
 
 #include "mgrl/motion/annotation.hpp"
 #include "mgrl/core/error.hpp"
+#include "mgrl/core/files.hpp"
 #include "test_support.hpp"
 
 using namespace mgrl;
@@ -322,4 +325,54 @@ TEST_CASE("a wrist standing in for the fist lowers the punch thresholds in propo
   CHECK(a.punchScale[1] == Approx(1.0 / kFistReachPerForearm));
   // Its one standing punch is still found, from the slower wrist.
   CHECK(a.punches[0] == 1);
+}
+
+TEST_CASE("effective punches against strikes labelled by hand in CMU 13_17: precision and recall", "[annotation][data]") {
+  // tests/data/labels/13_17_boxing_strikes.json says how the strikes were labelled. A punch
+  // (a run of effective frames of one hand) matches a label of its hand whose peak frame
+  // lies from 2 frames before the run's start to 10 frames after its end (the fist is
+  // fastest before the arm is straight).
+  const nlohmann::json labels =
+      nlohmann::json::parse(readFile(test::testData() / "labels" / "13_17_boxing_strikes.json"));
+  const Annotation a = annotateFile(labels["clip"], labels["fps"]);
+  struct Run {
+    Side hand;
+    std::uint32_t first, last;
+  };
+  std::vector<Run> runs;
+  for (int s = 0; s < 2; ++s) {
+    const auto side = static_cast<Side>(s);
+    for (const EffectiveHit& h : a.hits) {
+      if (h.hand != side) continue;
+      if (!runs.empty() && runs.back().hand == side && runs.back().last + 1 == h.frame)
+        runs.back().last = h.frame;
+      else
+        runs.push_back({side, h.frame, h.frame});
+    }
+  }
+  auto matches = [](const Run& r, const nlohmann::json& label) {
+    const Side side = label[0] == "left" ? Side::Left : Side::Right;
+    const int frame = label[1];
+    return r.hand == side && static_cast<int>(r.first) - 2 <= frame && frame <= static_cast<int>(r.last) + 10;
+  };
+  int found = 0;
+  for (const nlohmann::json& label : labels["strikes"])
+    found += std::any_of(runs.begin(), runs.end(), [&](const Run& r) { return matches(r, label); }) ? 1 : 0;
+  int right = 0, wrong = 0;
+  for (const Run& r : runs) {
+    const auto hit = [&](const nlohmann::json& list) {
+      return std::any_of(list.begin(), list.end(), [&](const nlohmann::json& l) { return matches(r, l); });
+    };
+    if (hit(labels["strikes"]))
+      ++right;
+    else if (!hit(labels["unsure"]))
+      ++wrong;
+  }
+  const double recall = static_cast<double>(found) / static_cast<double>(labels["strikes"].size());
+  const double precision = static_cast<double>(right) / std::max(1, right + wrong);
+  WARN(fmt::format("CMU 13_17 at 30 fps: {} punches found; recall {:.2f} ({} of {} labelled strikes), precision {:.2f} "
+                   "({} right, {} wrong, the rest on unsure labels)",
+                   runs.size(), recall, found, labels["strikes"].size(), precision, right, wrong));
+  CHECK(recall >= 0.75);
+  CHECK(precision >= 0.7);
 }
