@@ -1,0 +1,13 @@
+#include "command.hpp"
+
+namespace mgrl::app::cli {
+
+std::vector<std::unique_ptr<Command>> makeCommands(CLI::App& app, Common& common) {
+  std::vector<std::unique_ptr<Command>> commands;
+  for (auto* make : {inspectCommand, initCommand, graphCommand, trainCommand, evalCommand, simulateCommand,
+                     compareCommand, serveCommand, statsCommand, listCommand})
+    commands.push_back(make(app, common));
+  return commands;
+}
+
+}  // namespace mgrl::app::cli
