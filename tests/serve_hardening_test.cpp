@@ -12,6 +12,7 @@
 #include "serve/serve_command.hpp"
 #include "serve/static_files.hpp"
 #include "bench/page_load.hpp"
+#include "sanitizer.hpp"
 #include "serve_support.hpp"
 
 namespace mgrl {
@@ -20,17 +21,7 @@ namespace {
 using namespace test::serving;
 using Clock = std::chrono::steady_clock;
 
-#if defined(__SANITIZE_ADDRESS__)
-constexpr bool kAddressSanitizer = true;
-#elif defined(__has_feature)
-#if __has_feature(address_sanitizer)
-constexpr bool kAddressSanitizer = true;
-#else
-constexpr bool kAddressSanitizer = false;
-#endif
-#else
-constexpr bool kAddressSanitizer = false;
-#endif
+using test::kAddressSanitizer;
 
 double since(Clock::time_point t) { return std::chrono::duration<double>(Clock::now() - t).count(); }
 
