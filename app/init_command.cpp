@@ -196,16 +196,10 @@ nlohmann::json runInit(const InitOptions& options) {
 
   const fs::path scenarioDir = fs::absolute(out).parent_path();
   std::string y;
-  y += fmt::format("# Starter scenario written by `mgrl init` for {}.\n",
-                   fmt::join(options.files.size() > 3
-                                 ? std::vector<std::string>{options.files[0].filename().string(), "...",
-                                                            options.files.back().filename().string()}
-                                 : [&] {
-                                     std::vector<std::string> names;
-                                     for (const fs::path& f : options.files) names.push_back(f.filename().string());
-                                     return names;
-                                   }(),
-                             ", "));
+  std::vector<std::string> names;
+  for (const fs::path& f : options.files) names.push_back(f.filename().string());
+  if (names.size() > 3) names = {names.front(), "...", names.back()};
+  y += fmt::format("# Starter scenario written by `mgrl init` for {}.\n", fmt::join(names, ", "));
   y += "# Every key is explained in scenarios/README.md; docs/own-capture.md says what init detects.\n";
   y += fmt::format("name: {}\n", name);
   y += fmt::format("description: {}\n\n",

@@ -10,4 +10,11 @@ std::vector<std::unique_ptr<Command>> makeCommands(CLI::App& app, Common& common
   return commands;
 }
 
+void fillSession(LearnOptions& options, const Common& common) {
+  options.scenario = common.scenario;
+  options.dataDir = common.dataDir;
+  options.cacheDir = common.cacheDir;
+  options.log = logLine;
+}
+
 }  // namespace mgrl::app::cli

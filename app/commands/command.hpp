@@ -12,6 +12,8 @@
 #include <CLI/CLI.hpp>
 #include <nlohmann/json.hpp>
 
+#include "learn_commands.hpp"
+
 namespace mgrl::app::cli {
 
 /// What several commands share: --json, and a scenario's path, --data and --cache (only
@@ -55,6 +57,10 @@ std::unique_ptr<Command> compareCommand(CLI::App& app, Common& common);
 std::unique_ptr<Command> serveCommand(CLI::App& app, Common& common);
 std::unique_ptr<Command> statsCommand(CLI::App& app, Common& common);
 std::unique_ptr<Command> listCommand(CLI::App& app, Common& common);
+
+/// The session's options (scenario, --data, --cache, the log) from the shared ones, for
+/// every command that opens a session.
+void fillSession(LearnOptions& options, const Common& common);
 
 /// --json: the report as one JSON object on stdout; else the text.
 inline void print(const Common& common, const nlohmann::json& report, const std::string& text) {

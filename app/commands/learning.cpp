@@ -16,14 +16,6 @@
 namespace mgrl::app::cli {
 namespace {
 
-// The session's options every learning command takes from the shared ones.
-void fillSession(LearnOptions& options, const Common& common) {
-  options.scenario = common.scenario;
-  options.dataDir = common.dataDir;
-  options.cacheDir = common.cacheDir;
-  options.log = logLine;
-}
-
 class Train final : public Command {
  public:
   Train(CLI::App& app, Common& common)

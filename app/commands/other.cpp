@@ -38,10 +38,7 @@ class Serve final : public Command {
   }
 
   void run(const Common& common) override {
-    options_.scenario = common.scenario;
-    options_.dataDir = common.dataDir;
-    options_.cacheDir = common.cacheDir;
-    options_.log = logLine;
+    fillSession(options_, common);
     const std::string scenario = common.scenario;
     options_.announce = [scenario](const std::string& url) {
       std::cout << fmt::format("serving {} at {} (Ctrl-C stops)", scenario, url) << std::endl;
