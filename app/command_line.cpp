@@ -20,6 +20,24 @@ void addDataAndCache(CLI::App* command, std::string& dataDir, std::string& cache
   command->add_option("--cache", cacheDir, "Cache folder (default: MGRL_CACHE, else ~/.cache/mgrl)");
 }
 
+void setPunchMinSpeed(const std::string& text, mgrl::AnnotationParams& params) {
+  if (text == "auto") {
+    params.punchMinSpeedAuto = true;
+    return;
+  }
+  std::size_t used = 0;
+  double value = 0;
+  try {
+    value = std::stod(text, &used);
+  } catch (const std::exception&) {
+    used = 0;
+  }
+  if (used == 0 || used != text.size() || !(value > 0 && value <= 100))
+    throw mgrl::Error(fmt::format("--punch-min-speed: expected a speed in (0, 100] m/s or auto, found '{}'", text));
+  params.punchMinSpeed_mps = value;
+  params.punchMinSpeedAuto = false;
+}
+
 mgrl::RoleOverrides parseRoles(const std::vector<std::string>& pairs) {
   mgrl::RoleOverrides roles;
   for (const std::string& pair : pairs) {

@@ -9,6 +9,7 @@
 
 #include <CLI/CLI.hpp>
 
+#include "mgrl/motion/annotation.hpp"
 #include "mgrl/motion/roles.hpp"
 
 namespace mgrl::app::cli {
@@ -20,6 +21,9 @@ void addDataAndCache(CLI::App* command, std::string& dataDir, std::string& cache
 
 /// --role ROLE=JOINT pairs; throws mgrl::Error ("--role: expected ROLE=JOINT, found 'x'").
 mgrl::RoleOverrides parseRoles(const std::vector<std::string>& pairs);
+/// --punch-min-speed SPEED|auto into `params`; throws mgrl::Error ("--punch-min-speed:
+/// expected a speed in m/s or auto, found 'x'").
+void setPunchMinSpeed(const std::string& text, mgrl::AnnotationParams& params);
 /// 80 % of the machine's memory, in GB: what training may plan to use by default.
 double defaultMaxMemoryGb();
 /// "a, b,c" -> {"a", "b", "c"}; empty items are kept (as "") so that they are reported.

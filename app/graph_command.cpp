@@ -85,6 +85,7 @@ nlohmann::json graphJson(const GraphResult& g) {
             {"worst_joint_step_ratio", round3(g.playback.worstJointStepRatio)}}},
           {"travel", travelJson(g.travel)},
           {"root_motion_joint", g.db.clips.empty() ? nlohmann::json() : nlohmann::json(g.db.rootMotion.jointName)},
+          {"punch_min_speed_auto_mps", g.db.autoPunchSpeed ? nlohmann::json(round3(g.db.autoPunchSpeed->speed_mps)) : nlohmann::json()},
           {"seconds", round3(g.seconds)},
           {"cached", g.fromCache},
           {"cache", g.bundle.string()}};
@@ -97,6 +98,7 @@ std::string graphText(const GraphResult& g) {
   out += fmt::format("frames          {} in {} at {:g} fps ({:.1f} s)\n", m.framesTotal, counted(g.db.clips.size(), "file"),
                      1.0 / m.frameTime, m.framesTotal * m.frameTime);
   if (g.db.rootMotion.joint != 0) out += fmt::format("root motion     {}\n", g.db.rootMotion.sentence);
+  if (g.db.autoPunchSpeed) out += fmt::format("punches         {}\n", g.db.autoPunchSpeed->sentence());
   out += fmt::format("component       {} frames ({:.1f} % of the data)\n", m.componentFrames.size(),
                      m.framesTotal ? 100.0 * static_cast<double>(m.componentFrames.size()) / m.framesTotal : 0.0);
   out += fmt::format("transitions     {}\n", m.transitionDistance.size());

@@ -25,7 +25,17 @@ FileReport inspectFile(const std::filesystem::path& path, const InspectOptions& 
   const SkeletonRoles fileRoles = findRoles(loaded.motion.skeleton(), options.roles, path.string(), options.load.warn);
   const Motion motion = moveRootToPelvis(loaded.motion, fileRoles.pelvis, path.string(), rootMotion);
   const SkeletonRoles roles = fileRoles.pelvis == 0 ? fileRoles : findRoles(motion.skeleton(), options.roles, path.string());
-  const Annotation annotation = annotate(motion, roles, options.annotation);
+  // `--punch-min-speed auto`: chosen from this file's own fist speeds.
+  AnnotationParams params = options.annotation;
+  std::string autoPunch;
+  if (params.punchMinSpeedAuto) {
+    const Motion* const one[] = {&motion};
+    const AutoPunchSpeed chosen = autoPunchMinSpeed(one, roles, params);
+    params.punchMinSpeed_mps = chosen.speed_mps;
+    params.punchMinSpeedAuto = false;
+    autoPunch = chosen.sentence();
+  }
+  const Annotation annotation = annotate(motion, roles, params);
   if (const std::string unusual = unusualHeightWarning(annotation, path.string()); !unusual.empty() && options.load.warn)
     options.load.warn(unusual);
 
@@ -53,7 +63,8 @@ FileReport inspectFile(const std::filesystem::path& path, const InspectOptions& 
   report.punches = annotation.punches;
   report.swings = annotation.swings;
   report.punchScale = annotation.punchScale;
-  for (int s = 0; s < 2; ++s) report.punchMinSpeed_mps[s] = options.annotation.punchMinSpeed_mps * annotation.punchScale[s];
+  for (int s = 0; s < 2; ++s) report.punchMinSpeed_mps[s] = params.punchMinSpeed_mps * annotation.punchScale[s];
+  report.autoPunchSpeed = autoPunch;
   for (int s = 0; s < 2; ++s) {
     report.contactFrames[s] = annotation.contactFrames(static_cast<Side>(s));
     report.hits[s] = annotation.hitCount(static_cast<Side>(s));
@@ -106,6 +117,7 @@ nlohmann::json toJson(const std::vector<FileReport>& reports) {
         {"punches", {{"left", r.punches[0]}, {"right", r.punches[1]}, {"total", r.punches[0] + r.punches[1]}}},
         {"arm_swings", r.swings[0] + r.swings[1]},
         {"punch_min_speed_mps", {rounded(r.punchMinSpeed_mps[0], 3), rounded(r.punchMinSpeed_mps[1], 3)}},
+        {"punch_min_speed_auto", r.autoPunchSpeed.empty() ? nlohmann::json(nullptr) : nlohmann::json(r.autoPunchSpeed)},
         {"peak_hit_speed_mps", rounded(r.peakHitSpeed_mps, 3)},
         {"effective_kick_frames",
          {{"left", r.kickFrames[0]}, {"right", r.kickFrames[1]}, {"total", r.kickFrames[0] + r.kickFrames[1]}}},
@@ -156,6 +168,7 @@ std::string toText(const std::vector<FileReport>& reports) {
                          counted(r.kickFrames[0], "frame"), counted(static_cast<std::size_t>(r.kicks[0]), "kick"),
                          counted(r.kickFrames[1], "frame"), counted(static_cast<std::size_t>(r.kicks[1]), "kick"),
                          r.peakKickSpeed_mps, r.kickMin.y(), r.kickMax.y());
+    if (!r.autoPunchSpeed.empty()) out += fmt::format("  {}\n", r.autoPunchSpeed);
     if (r.punchScale[0] < 1 || r.punchScale[1] < 1)
       out += fmt::format("  punch speed threshold {:.2f} / {:.2f} m/s (left / right): the fist tip found is the wrist or "
                          "near it, which moves slower than knuckles (scaled by {:.2f} / {:.2f})\n",

@@ -41,7 +41,8 @@ struct FileReport {
   std::array<int, 2> punches{};
   std::array<int, 2> swings{};
   std::array<double, 2> punchMinSpeed_mps{};  ///< the threshold used per hand (scaled for a wrist)
-  std::array<double, 2> punchScale{1.0, 1.0};  ///< Annotation::punchScale  ///< fast arm motions that did not drive out from the body
+  std::string autoPunchSpeed;                  ///< what `--punch-min-speed auto` chose (AutoPunchSpeed::sentence()), else empty
+  std::array<double, 2> punchScale{1.0, 1.0};  ///< Annotation::punchScale
   int glitchFrames = 0;
   std::size_t knockdownFrames = 0;  ///< frames with no punch counted: the boxer is down
   double knockdownRatio = 0;        ///< AnnotationParams::knockdownHeadRatio used

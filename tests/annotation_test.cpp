@@ -327,14 +327,19 @@ TEST_CASE("a wrist standing in for the fist lowers the punch thresholds in propo
   CHECK(a.punches[0] == 1);
 }
 
-TEST_CASE("effective punches against strikes labelled by hand in CMU 13_17: precision and recall", "[annotation][data]") {
-  // tests/data/labels/13_17_boxing_strikes.json says how the strikes were labelled. A punch
-  // (a run of effective frames of one hand) matches a label of its hand whose peak frame
-  // lies from 2 frames before the run's start to 10 frames after its end (the fist is
-  // fastest before the arm is straight).
-  const nlohmann::json labels =
-      nlohmann::json::parse(readFile(test::testData() / "labels" / "13_17_boxing_strikes.json"));
-  const Annotation a = annotateFile(labels["clip"], labels["fps"]);
+// Precision and recall of `a`'s punches against the strikes labelled by hand in
+// tests/data/labels/13_17_boxing_strikes.json (which says how they were labelled). A punch
+// (a run of effective frames of one hand) matches a label of its hand whose peak frame lies
+// from 2 frames before the run's start to 10 frames after its end (the fist is fastest
+// before the arm is straight).
+namespace {
+
+struct LabelScore {
+  std::size_t punches = 0, labels = 0;
+  int found = 0, right = 0, wrong = 0;
+  double recall = 0, precision = 0;
+};
+LabelScore scoreAgainstLabels(const Annotation& a, const nlohmann::json& labels) {
   struct Run {
     Side hand;
     std::uint32_t first, last;
@@ -355,24 +360,105 @@ TEST_CASE("effective punches against strikes labelled by hand in CMU 13_17: prec
     const int frame = label[1];
     return r.hand == side && static_cast<int>(r.first) - 2 <= frame && frame <= static_cast<int>(r.last) + 10;
   };
-  int found = 0;
+  LabelScore score;
+  score.punches = runs.size();
+  score.labels = labels["strikes"].size();
   for (const nlohmann::json& label : labels["strikes"])
-    found += std::any_of(runs.begin(), runs.end(), [&](const Run& r) { return matches(r, label); }) ? 1 : 0;
-  int right = 0, wrong = 0;
+    score.found += std::any_of(runs.begin(), runs.end(), [&](const Run& r) { return matches(r, label); }) ? 1 : 0;
   for (const Run& r : runs) {
     const auto hit = [&](const nlohmann::json& list) {
       return std::any_of(list.begin(), list.end(), [&](const nlohmann::json& l) { return matches(r, l); });
     };
     if (hit(labels["strikes"]))
-      ++right;
+      ++score.right;
     else if (!hit(labels["unsure"]))
-      ++wrong;
+      ++score.wrong;
   }
-  const double recall = static_cast<double>(found) / static_cast<double>(labels["strikes"].size());
-  const double precision = static_cast<double>(right) / std::max(1, right + wrong);
+  score.recall = static_cast<double>(score.found) / static_cast<double>(score.labels);
+  score.precision = static_cast<double>(score.right) / std::max(1, score.right + score.wrong);
+  return score;
+}
+
+nlohmann::json strikeLabels() {
+  return nlohmann::json::parse(readFile(test::testData() / "labels" / "13_17_boxing_strikes.json"));
+}
+
+}  // namespace
+
+TEST_CASE("effective punches against strikes labelled by hand in CMU 13_17: precision and recall", "[annotation][data]") {
+  const nlohmann::json labels = strikeLabels();
+  const LabelScore s = scoreAgainstLabels(annotateFile(labels["clip"], labels["fps"]), labels);
   WARN(fmt::format("CMU 13_17 at 30 fps: {} punches found; recall {:.2f} ({} of {} labelled strikes), precision {:.2f} "
                    "({} right, {} wrong, the rest on unsure labels)",
-                   runs.size(), recall, found, labels["strikes"].size(), precision, right, wrong));
-  CHECK(recall >= 0.75);
-  CHECK(precision >= 0.7);
+                   s.punches, s.recall, s.found, s.labels, s.precision, s.right, s.wrong));
+  CHECK(s.recall >= 0.75);
+  CHECK(s.precision >= 0.7);
+}
+
+TEST_CASE("punch_min_speed_mps: auto chooses a threshold from the capture's fist speeds that finds the labelled strikes",
+          "[annotation][data]") {
+  const nlohmann::json labels = strikeLabels();
+  LoadOptions options;
+  options.fps = labels["fps"];
+  const Motion m = test::loadMocap(labels["clip"], options).motion;
+  const SkeletonRoles roles = findRoles(m.skeleton());
+  AnnotationParams params;
+  params.punchMinSpeedAuto = true;
+  const Motion* const one[] = {&m};
+  const AutoPunchSpeed chosen = autoPunchMinSpeed(one, roles, params);
+  INFO(chosen.sentence());
+  CHECK_FALSE(chosen.fellBack);
+  CHECK_FALSE(chosen.clamped);
+  CHECK(chosen.samples >= 300);
+  // The strikes' mode lies above it and the guard's below: between 1.5 and 2.3 m/s, where
+  // the labelled strikes are found as well as at the default (a linear-scale split, 2.6 m/s,
+  // would lose a tenth of them).
+  CHECK(chosen.speed_mps > 1.5);
+  CHECK(chosen.speed_mps < 2.3);
+  CHECK_THAT(chosen.sentence(), Catch::Matches("punch threshold auto: [0-9.]+ m/s, the Otsu split of [0-9]+ fist speeds "
+                                               "\\(log scale\\)"));
+  // annotate() with auto is annotate() at the chosen speed.
+  const Annotation automatic = annotate(m, roles, params);
+  AnnotationParams fixed;
+  fixed.punchMinSpeed_mps = chosen.speed_mps;
+  const Annotation given = annotate(m, roles, fixed);
+  CHECK(automatic.hits.size() == given.hits.size());
+  CHECK(automatic.punches == given.punches);
+  const LabelScore s = scoreAgainstLabels(automatic, labels);
+  WARN(fmt::format("CMU 13_17 with auto ({:.2f} m/s): recall {:.2f}, precision {:.2f}", chosen.speed_mps, s.recall,
+                   s.precision));
+  CHECK(s.recall >= 0.75);
+  CHECK(s.precision >= 0.7);
+}
+
+TEST_CASE("punch_min_speed_mps: auto keeps the default with too few fist speeds, and stays within its bounds",
+          "[annotation]") {
+  // The humanoid standing still: no fist moves, no sample.
+  const Motion still = bobbing(std::vector<double>(60, 1.0), 30);
+  AnnotationParams params;
+  params.punchMinSpeedAuto = true;
+  const Motion* const one[] = {&still};
+  const AutoPunchSpeed chosen = autoPunchMinSpeed(one, findRoles(still.skeleton()), params);
+  CHECK(chosen.fellBack);
+  CHECK(chosen.samples == 0);
+  CHECK(chosen.speed_mps == AnnotationParams{}.punchMinSpeed_mps);
+  CHECK_THAT(chosen.sentence(), Catch::Contains("0 fist speeds are too few to choose from (expected at least 30)"));
+  // No motion at all: the same.
+  CHECK(autoPunchMinSpeed({}, findRoles(still.skeleton()), params).fellBack);
+}
+
+TEST_CASE("Otsu's threshold splits two groups between them and refuses a histogram it cannot make", "[annotation]") {
+  std::vector<double> values;
+  for (int i = 0; i < 100; ++i) values.push_back(1.0 + 0.002 * i);  // 1.0 .. 1.2
+  for (int i = 0; i < 30; ++i) values.push_back(3.0 + 0.01 * i);    // 3.0 .. 3.3
+  // Any edge in the empty gap between them splits them alike: the middle of the gap.
+  const double t = otsuThreshold(values, 0, 4, 400);
+  CHECK(t == Approx(2.1).margin(0.011));
+  // Shifting the upper group moves the split with it (it is not a fixed point).
+  for (int i = 100; i < 130; ++i) values[static_cast<std::size_t>(i)] += 0.5;
+  CHECK(otsuThreshold(values, 0, 4, 400) > t);
+  // One bin holds everything: nothing to split.
+  CHECK(otsuThreshold(std::vector<double>(10, 2.0), 0, 4, 400) == 0);
+  CHECK_THROWS_WITH(otsuThreshold(values, 1, 1, 400), Catch::Contains("expected at least 2 bins over lo < hi"));
+  CHECK_THROWS_WITH(otsuThreshold(values, 0, 4, 1), Catch::Contains("found 1 over [0, 4]"));
 }

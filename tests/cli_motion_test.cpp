@@ -92,3 +92,34 @@ TEST_CASE("mgrl graph reports how far the capture travels and warns about grids 
                                "but the capture carries the root at most"));
   CHECK_THAT(run.out, Contains("frames          1960 in 2 files"));
 }
+
+TEST_CASE("mgrl inspect --punch-min-speed auto chooses and reports each file's threshold; a bad value is refused",
+          "[cli][data]") {
+  CliSandbox box("cli-motion-auto");
+  const std::string file = shellWord(mocap() / "cmu/bvh/13_17_boxing.bvh");
+  const Run chosen = runMgrl("inspect --fps 30 --json --punch-min-speed auto " + file, box.dir());
+  INFO(chosen.err);
+  REQUIRE(chosen.status == 0);
+  const auto report = chosen.report()["files"][0];
+  const auto speeds = report["punch_min_speed_mps"];
+  CHECK(speeds[0].get<double>() > 1.5);
+  CHECK(speeds[0].get<double>() < 2.3);
+  CHECK(speeds[0] == speeds[1]);  // CMU's fists are knuckles: no wrist scaling
+  CHECK_THAT(report["punch_min_speed_auto"].get<std::string>(),
+             Contains("punch threshold auto: ") && Contains("the Otsu split of"));
+  const Run text = runMgrl("inspect --fps 30 --punch-min-speed auto " + file, box.dir());
+  CHECK_THAT(text.out, Contains("  punch threshold auto: "));
+  // Given, it is what the report says, with no auto sentence.
+  const Run given = runMgrl("inspect --fps 30 --json --punch-min-speed 2.5 " + file, box.dir());
+  REQUIRE(given.status == 0);
+  CHECK(given.report()["files"][0]["punch_min_speed_mps"][0].get<double>() == Approx(2.5));
+  CHECK(given.report()["files"][0]["punch_min_speed_auto"].is_null());
+  for (const char* bad : {"fast", "2.5x", "0", "-1"}) {
+    CAPTURE(bad);
+    const Run refused = runMgrl(std::string("inspect --punch-min-speed ") + bad + " " + file, box.dir());
+    CHECK(refused.status == 1);
+    CHECK(refused.out.empty());
+    CHECK_THAT(refused.err, Contains(std::string("--punch-min-speed: expected a speed in (0, 100] m/s or auto, found '") +
+                                     bad + "'"));
+  }
+}

@@ -6,6 +6,7 @@
 
 #include "graph_command.hpp"
 #include "mgrl/graph/graph_cache.hpp"
+#include "mgrl/motion/motion_database.hpp"
 #include "mgrl/scenario/scenario.hpp"
 #include "test_support.hpp"
 
@@ -116,6 +117,15 @@ TEST_CASE("scenario mistakes name the file, line, column and key", "[scenario]")
         parse("motion:\n  files: [cmu/bvh/13_17_boxing.bvh]\n  annotation:\n    contact_height_enter_m: 0.2\ngraph: {}\n"),
         Contains("test.yaml:4:5: motion.annotation: annotation: expected exit thresholds at least the enter thresholds"));
   }
+  SECTION("a punch threshold that is neither a speed nor auto") {
+    REQUIRE_THROWS_WITH(
+        parse("motion:\n  files: [cmu/bvh/13_17_boxing.bvh]\n  annotation:\n    punch_min_speed_mps: fast\ngraph: {}\n"),
+        Contains("test.yaml:4:26: motion.annotation.punch_min_speed_mps: expected a speed in [0, 100] m/s or auto, found "
+                 "'fast'"));
+    REQUIRE_THROWS_WITH(
+        parse("motion:\n  files: [cmu/bvh/13_17_boxing.bvh]\n  annotation:\n    punch_min_speed_mps: [2]\ngraph: {}\n"),
+        Contains("punch_min_speed_mps: expected a speed in [0, 100] m/s or auto, found 'a list or map'"));
+  }
   SECTION("malformed YAML") {
     REQUIRE_THROWS_WITH(parse("motion: [\n"), Contains("test.yaml:2:1: expected valid YAML, found a syntax error"));
     REQUIRE_THROWS_WITH(parse("- just\n- a list\n"), Contains("expected a scenario"));
@@ -192,4 +202,27 @@ TEST_CASE("a scenario name is a safe word of bounded length", "[scenario][errors
   // Without a name, the file's stem, made safe.
   CHECK(parseScenario(body, std::filesystem::path("/tmp/my scenario (1).yaml"), test::mocap()).name ==
         "my_scenario__1_");
+}
+
+TEST_CASE("punch_min_speed_mps: auto reaches the annotation and the graph cache key, and the database says what it chose",
+          "[scenario][data]") {
+  const std::string text = "motion:\n  files: [cmu/bvh/13_17_boxing.bvh]\n  fps: 30\n  annotation:\n"
+                           "    punch_min_speed_mps: auto\ngraph:\n  threshold: 0.4\n";
+  const Scenario automatic = parse(text);
+  CHECK(automatic.motion.annotation.punchMinSpeedAuto);
+  const Scenario given = parse(kGood);
+  CHECK_FALSE(given.motion.annotation.punchMinSpeedAuto);
+  // The same scenario with a threshold given has another graph: another cache key.
+  CHECK(graphCacheKey(automatic) != graphCacheKey(given));
+  const MotionDatabase db = loadMotionDatabase(automatic.motion);
+  REQUIRE(db.autoPunchSpeed.has_value());
+  CHECK(db.autoPunchSpeed->samples >= 300);
+  CHECK(db.autoPunchSpeed->speed_mps > 1.5);
+  CHECK(db.autoPunchSpeed->speed_mps < 2.3);
+  // Every clip was annotated at the chosen speed: as many hits as annotate() at that speed.
+  AnnotationParams at = automatic.motion.annotation;
+  at.punchMinSpeedAuto = false;
+  at.punchMinSpeed_mps = db.autoPunchSpeed->speed_mps;
+  CHECK(db.clips[0].annotation.hits.size() == annotate(db.clips[0].motion, db.roles, at).hits.size());
+  CHECK_FALSE(loadMotionDatabase(given.motion).autoPunchSpeed.has_value());
 }

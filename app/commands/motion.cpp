@@ -33,9 +33,10 @@ class Inspect final : public Command {
     sub_->add_option("--units", units_, "Length units of the files: auto, m, cm, inch, cmu")->default_str("auto");
     sub_->add_option("--asf", asf_, "Skeleton for .amc files (default: <subject>.asf beside each)");
     sub_->add_option("--role", roles_, "Set a skeleton role, e.g. --role left_fist=LeftHand (repeatable)");
-    sub_->add_option("--punch-min-speed", options_.annotation.punchMinSpeed_mps,
-                     "Effective punch: minimum fist speed along the forearm (m/s)")
-        ->default_val(options_.annotation.punchMinSpeed_mps);
+    sub_->add_option("--punch-min-speed", punchMinSpeed_,
+                     "Effective punch: minimum fist speed along the forearm (m/s), or auto: chosen from each file's "
+                     "own fist speeds")
+        ->default_str(fmt::format("{}", options_.annotation.punchMinSpeed_mps));
     sub_->add_option("--punch-min-body-speed", options_.annotation.punchMinBodySpeed_mps,
                      "Effective punch: the fist drives out from the body at this speed along the forearm, relative "
                      "to the pelvis, at one frame at least (m/s; 0: arm swings count too)")
@@ -49,6 +50,7 @@ class Inspect final : public Command {
     options_.load.asf = asf_;
     options_.load.warn = warnLine;
     options_.roles = parseRoles(roles_);
+    if (!punchMinSpeed_.empty()) setPunchMinSpeed(punchMinSpeed_, options_.annotation);
     options_.annotation.validate();
     // Read everything first: on any error, stdout stays empty.
     std::vector<FileReport> reports;
@@ -58,6 +60,7 @@ class Inspect final : public Command {
 
  private:
   InspectOptions options_;
+  std::string punchMinSpeed_;
   std::string units_ = "auto", asf_;
   std::vector<std::string> roles_, files_;
 };

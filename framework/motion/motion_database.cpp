@@ -82,10 +82,22 @@ MotionDatabase makeMotionDatabase(std::vector<std::pair<std::string, Motion>> mo
     const std::uint64_t total = std::uint64_t{db.offsets.back()} + motion.frameCount();
     if (total > std::uint64_t{1} << 30)
       throw Error(fmt::format("motion: expected at most 2^30 frames in one graph, found {}", total));
-    Annotation ann = annotate(motion, db.roles, annotation);
-    if (const std::string unusual = unusualHeightWarning(ann, name); !unusual.empty() && warn) warn(unusual);
-    db.clips.push_back(Clip{name, {}, std::move(motion), std::move(ann)});
+    db.clips.push_back(Clip{name, {}, std::move(motion), {}});
     db.offsets.push_back(static_cast<std::uint32_t>(total));
+  }
+  // `punch_min_speed_mps: auto` chooses one threshold over every clip, so one actor's
+  // takes are judged alike.
+  AnnotationParams params = annotation;
+  if (params.punchMinSpeedAuto) {
+    std::vector<const Motion*> all;
+    for (const Clip& clip : db.clips) all.push_back(&clip.motion);
+    db.autoPunchSpeed = autoPunchMinSpeed(all, db.roles, params);
+    params.punchMinSpeed_mps = db.autoPunchSpeed->speed_mps;
+    params.punchMinSpeedAuto = false;
+  }
+  for (Clip& clip : db.clips) {
+    clip.annotation = annotate(clip.motion, db.roles, params);
+    if (const std::string unusual = unusualHeightWarning(clip.annotation, clip.name); !unusual.empty() && warn) warn(unusual);
   }
   return db;
 }

@@ -4,6 +4,7 @@
 /// one frame rate, annotated (contacts, effective hits), numbered globally in file order.
 #include <filesystem>
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -39,6 +40,8 @@ struct MotionDatabase {
   SkeletonRoles roles;
   /// Which joint carries the root motion, and why (root_motion.hpp): the last clip's.
   RootMotionReport rootMotion;
+  /// What `punch_min_speed_mps: auto` chose over every clip; empty when the threshold was given.
+  std::optional<AutoPunchSpeed> autoPunchSpeed;
   std::vector<Clip> clips;
   /// Global index of each clip's first frame, plus the total at the end.
   std::vector<std::uint32_t> offsets;

@@ -118,7 +118,20 @@ MotionSpec readMotion(const ConfigNode& motion, const std::filesystem::path& sce
     p.contactHeightExit_m = a.number("contact_height_exit_m", p.contactHeightExit_m, 0, 1);
     p.contactSpeedEnter_mps = a.number("contact_speed_enter_mps", p.contactSpeedEnter_mps, 0, 10);
     p.contactSpeedExit_mps = a.number("contact_speed_exit_mps", p.contactSpeedExit_mps, 0, 10);
-    p.punchMinSpeed_mps = a.number("punch_min_speed_mps", p.punchMinSpeed_mps, 0, 100);
+    // A speed, or `auto`: chosen from the capture's own fist speeds (autoPunchMinSpeed()).
+    if (a.has("punch_min_speed_mps")) {
+      const ConfigNode speed = a.child("punch_min_speed_mps");
+      if (speed.yaml().IsScalar() && speed.yaml().Scalar() == "auto") {
+        p.punchMinSpeedAuto = true;
+      } else {
+        try {
+          p.punchMinSpeed_mps = speed.asNumber(0, 100);
+        } catch (const ConfigError&) {
+          speed.fail(fmt::format("expected a speed in [0, 100] m/s or auto, found '{}'",
+                                 speed.yaml().IsScalar() ? speed.yaml().Scalar() : std::string("a list or map")));
+        }
+      }
+    }
     p.punchMinAlignment = a.number("punch_min_alignment", p.punchMinAlignment, -1, 1);
     p.punchMaxSpeed_mps = a.number("punch_max_speed_mps", p.punchMaxSpeed_mps, 0, 1000);
     p.punchMinBodySpeed_mps = a.number("punch_min_body_speed_mps", p.punchMinBodySpeed_mps, 0, 100);
@@ -350,6 +363,8 @@ std::string graphCacheKey(const Scenario& s) {
                    a.punchMinSpeed_mps, a.punchMinAlignment, a.punchMaxSpeed_mps, a.punchMinBodySpeed_mps, a.knockdownHeadRatio,
                    a.kickMinSpeed_mps, a.kickMinAlignment, a.kickMinHeight_m, a.kickMaxSpeed_mps})
     h.update(v);
+  // Only when set, so that every other scenario keeps its key.
+  if (a.punchMinSpeedAuto) h.update(std::string_view("punch_min_speed_mps=auto"));
   const GraphParams& g = s.graph;
   for (double v : {g.threshold, g.velocityWeight, g.rootHeightWeight}) h.update(v);
   h.update(std::int64_t(g.contactEvent));
