@@ -122,6 +122,10 @@ nlohmann::json runInit(const InitOptions& options) {
   const fs::path out = options.out.empty() ? fs::path(name + ".yaml") : options.out;
   if (fs::exists(out) && !options.force)
     throw Error(fmt::format("init: {} already exists; expected a new file (--force replaces it)", out.string()));
+  // Before any work: the folder it goes into must be there.
+  if (const fs::path folder = fs::absolute(out).parent_path(); !fs::is_directory(folder))
+    throw Error(fmt::format("init: --out {}: expected an existing folder to write into, found no folder {}", out.string(),
+                            folder.string()));
   if (!(options.fps > 0 && options.fps <= 1000))
     throw Error(fmt::format("--fps: expected a frame rate in (0, 1000], found {}", options.fps));
 

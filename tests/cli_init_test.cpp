@@ -103,4 +103,19 @@ TEST_CASE("mgrl init refuses what it cannot use and leaves no file behind", "[cl
                 box.dir());
   CHECK(run.status != 0);
   CHECK_THAT(run.lastErrorLine(), Contains("--fps: expected a frame rate in (0, 1000], found 0"));
+
+  // Units it does not know.
+  run = runMgrl("init " + shellWord(testData() / "tiny.bvh") + " --units furlong --out " +
+                    shellWord(box.path("other.yaml")),
+                box.dir());
+  CHECK(run.status != 0);
+  CHECK_THAT(run.lastErrorLine(), Contains("--units: expected one of auto, m, cm, inch, cmu, found 'furlong'"));
+  CHECK_FALSE(std::filesystem::exists(box.path("other.yaml")));
+
+  // A folder to write into that is not there: refused before any work, nothing written.
+  run = runMgrl("init " + shellWord(testData() / "tiny.bvh") + " --out " + shellWord(box.path("no/such/dir/x.yaml")),
+                box.dir());
+  CHECK(run.status != 0);
+  CHECK_THAT(run.lastErrorLine(), Contains("no/such/dir"));
+  CHECK_FALSE(std::filesystem::exists(box.path("no")));
 }
