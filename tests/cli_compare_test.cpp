@@ -19,6 +19,7 @@
 #include "compare_command.hpp"
 #include "mgrl/core/bundle.hpp"
 #include "mgrl/core/npy.hpp"
+#include "mgrl/session/compare_report.hpp"
 #include "test_support.hpp"
 
 namespace fs = std::filesystem;
@@ -109,6 +110,11 @@ TEST_CASE("mgrl compare reports what separate train and eval runs measure, and r
   const std::string curves = readText(box.path("report") / "curves.csv");
   CHECK(curves.find("q_learning,2,snapshot,300000,") != std::string::npos);
   CHECK(curves.find("q_learning,1,training,") != std::string::npos);
+  // Numbers for people: the table size in MB, updates with a prefix, no exponent anywhere.
+  CHECK(html.find("e+") == std::string::npos);
+  CHECK(html.find(" MB<br><span class=\"sd\">&plusmn; ") != std::string::npos);
+  CHECK(html.find(" M<br><span class=\"sd\">&plusmn; ") != std::string::npos);
+  CHECK(html.find(" s<br><span class=\"sd\">&plusmn; ") != std::string::npos);
   CHECK(html.find("src=") == std::string::npos);  // self-contained: it opens from disk, offline
   CHECK(html.find("href=\"http") == std::string::npos);
   CHECK(readText(box.path("report") / "results.csv").find("q_learning,2,") != std::string::npos);
@@ -390,3 +396,26 @@ TEST_CASE("mgrl compare refuses mistakes in one line before training anything", 
 }
 
 }  // namespace
+
+TEST_CASE("the compare report writes numbers for people: units, prefixes, three digits, no exponent", "[compare]") {
+  using mgrl::reportNumber;
+  CHECK(reportNumber("table_bytes", 1.104e7) == "11.0 MB");
+  CHECK(reportNumber("table_bytes", 512) == "512 B");
+  CHECK(reportNumber("table_bytes", 2.5e9) == "2.50 GB");
+  CHECK(reportNumber("updates", 6.626e7) == "66.3 M");
+  CHECK(reportNumber("updates", 300000) == "300 k");
+  CHECK(reportNumber("updates", 42) == "42");
+  CHECK(reportNumber("updates", 999999) == "1.00 M");
+  CHECK(reportNumber("train_seconds", 3.6789) == "3.68 s");
+  CHECK(reportNumber("train_seconds", 123.4) == "123 s");
+  CHECK(reportNumber("train_seconds", 0.0123) == "12.3 ms");
+  CHECK(reportNumber("mean_time_to_hit_s", 0) == "0 s");
+  CHECK(reportNumber("decision_us", 12.34) == "12.3 us");
+  CHECK(reportNumber("decision_us", 2500) == "2.50 ms");
+  CHECK(reportNumber("success_rate", 0.95) == "95.0 %");
+  CHECK(reportNumber("success_rate", 0.021, true) == "2.1");  // a spread, in percentage points
+  CHECK(reportNumber("mean_return", 0.012345) == "0.0123");
+  CHECK(reportNumber("mean_return", 1234.5) == "1234");
+  CHECK(reportNumber("value_rmse", 2.5e-5) == "2.50e-05");
+  CHECK(reportNumber("value_rmse", -0.5) == "-0.500");
+}

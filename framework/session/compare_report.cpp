@@ -18,10 +18,10 @@ using json = nlohmann::json;
 
 const std::vector<std::pair<std::string, std::string>>& compareMetrics() {
   static const std::vector<std::pair<std::string, std::string>> metrics = {
-      {"success_rate", "success"},     {"mean_time_to_hit_s", "time to hit (s)"},
-      {"mean_return", "mean return"},  {"train_seconds", "training (s)"},
-      {"updates", "updates"},          {"table_bytes", "table (bytes)"},
-      {"decision_us", "decision (us)"}, {"value_rmse", "V RMSE vs reference"},
+      {"success_rate", "success"},     {"mean_time_to_hit_s", "time to hit"},
+      {"mean_return", "mean return"},  {"train_seconds", "training time"},
+      {"updates", "updates"},          {"table_bytes", "table size"},
+      {"decision_us", "decision time"}, {"value_rmse", "V RMSE vs reference"},
       {"greedy_agreement", "greedy agreement"}, {"nonzero_share", "Q entries non-zero"},
       {"cell_coverage", "grid cells walked"},
   };
@@ -32,6 +32,50 @@ const std::vector<std::string>& snapshotColumns() {
   static const std::vector<std::string> columns = {"updates",      "seconds",            "residual",
                                                    "success_rate", "mean_time_to_hit_s", "mean_return"};
   return columns;
+}
+
+namespace {
+
+// Three significant digits, no exponent from 0.001 to a million.
+std::string plain(double v) {
+  const double a = std::abs(v);
+  if (a == 0) return "0";
+  if (a < 1e-3 || a >= 1e6 || !std::isfinite(v)) return fmt::format("{:.2e}", v);
+  // The decimals of the value rounded to three digits (0.9999 -> 1.00, not 1.000).
+  const double rounded = std::abs(std::stod(fmt::format("{:.2e}", v)));
+  const int decimals = std::max(0, 2 - static_cast<int>(std::floor(std::log10(rounded))));
+  return fmt::format("{:.{}f}", v, decimals);
+}
+
+// v with an SI prefix for thousands (k, M, G, T) and the unit, three significant digits.
+std::string prefixed(double v, std::string_view unit, bool withSpaceForBare) {
+  static const char* const prefixes[] = {"", "k", "M", "G", "T"};
+  int p = 0;
+  while (std::abs(v) >= 999.5 && p < 4) {
+    v /= 1000;
+    ++p;
+  }
+  if (p == 0 && std::abs(v - std::round(v)) < 1e-9) return fmt::format("{:.0f}{}{}", v, withSpaceForBare ? " " : "", unit);
+  return fmt::format("{} {}{}", plain(v), prefixes[p], unit);
+}
+
+}  // namespace
+
+std::string reportNumber(std::string_view key, double value, bool delta) {
+  if (!std::isfinite(value)) return fmt::format("{}", value);
+  if (key == "success_rate" || key == "greedy_agreement" || key == "nonzero_share" || key == "cell_coverage") {
+    const double percent = 100 * value;
+    return fmt::format("{:.1f}{}", percent, delta ? "" : " %");
+  }
+  if (key == "mean_time_to_hit_s" || key == "train_seconds" || key == "seconds") {
+    const double a = std::abs(value);
+    if (a != 0 && a < 0.1) return fmt::format("{} ms", plain(value * 1e3));
+    return fmt::format("{} s", plain(value));
+  }
+  if (key == "decision_us") return std::abs(value) >= 1000 ? fmt::format("{} ms", plain(value / 1e3)) : fmt::format("{} us", plain(value));
+  if (key == "updates") return prefixed(value, "", false);
+  if (key == "table_bytes") return prefixed(value, "B", true);
+  return plain(value);
 }
 
 namespace {
@@ -81,7 +125,10 @@ std::string barChart(const json& report, const std::string& metric, const std::s
       svg += fmt::format("<rect x=\"{}\" y=\"{}\" width=\"{:.1f}\" height=\"18\" fill=\"#4a7bd0\"/>", left, y + 2, w);
       svg += fmt::format("<line x1=\"{:.1f}\" x2=\"{:.1f}\" y1=\"{}\" y2=\"{}\" stroke=\"#222\"/>",
                          left + width * std::max(0.0, mean - sd) / top, left + width * (mean + sd) / top, y + 11, y + 11);
-      svg += fmt::format("<text x=\"{:.1f}\" y=\"{}\" font-size=\"12\">{:.4g}</text>", left + w + 6, y + 15, mean);
+      // The value after the bar and its whisker, never across them.
+      svg += fmt::format("<text x=\"{:.1f}\" y=\"{}\" font-size=\"12\">{}</text>",
+                         left + std::max(w, width * (mean + sd) / top) + 6, y + 15,
+                         escapeHtml(reportNumber(metric, mean)));
     } else {
       svg += fmt::format("<text x=\"{}\" y=\"{}\" font-size=\"12\">n/a</text>", left, y + 15);
     }
@@ -129,10 +176,13 @@ std::string lineChart(const std::string& label, const std::string& title, const 
   };
   svg += fmt::format("<rect x=\"{}\" y=\"{}\" width=\"{}\" height=\"{}\" fill=\"none\" stroke=\"#888\"/>", left, top,
                      width - left - right, height - top - bottom);
-  svg += fmt::format("<text x=\"{}\" y=\"{}\" font-size=\"11\">{:.3g}</text><text x=\"{}\" y=\"{}\" font-size=\"11\" "
-                     "text-anchor=\"end\">{:.3g}</text><text x=\"{}\" y=\"{}\" font-size=\"11\" "
+  // The axis ends in the x quantity's unit (updates: a count, else seconds).
+  const std::string xKey = xLabel == "updates" ? "updates" : "seconds";
+  svg += fmt::format("<text x=\"{}\" y=\"{}\" font-size=\"11\">{}</text><text x=\"{}\" y=\"{}\" font-size=\"11\" "
+                     "text-anchor=\"end\">{}</text><text x=\"{}\" y=\"{}\" font-size=\"11\" "
                      "text-anchor=\"middle\">{}</text>",
-                     left, height - bottom + 14, xMin, width - right, height - bottom + 14, xMax,
+                     left, height - bottom + 14, escapeHtml(reportNumber(xKey, xMin)), width - right, height - bottom + 14,
+                     escapeHtml(reportNumber(xKey, xMax)),
                      (left + width - right) / 2, height - bottom + 28, escapeHtml(xLabel));
   if (rate)
     for (double y : {0.0, 0.5, 1.0})
@@ -140,9 +190,9 @@ std::string lineChart(const std::string& label, const std::string& title, const 
                          "y1=\"{:.1f}\" y2=\"{:.1f}\" stroke=\"#ddd\"/>",
                          py(y) + 4, 100 * y, left, width - right, py(y), py(y));
   else
-    svg += fmt::format("<text x=\"4\" y=\"{}\" font-size=\"11\">{:.3g}</text><text x=\"4\" y=\"{}\" "
-                       "font-size=\"11\">{:.3g}</text>",
-                       top + 10, yMax, height - bottom, yMin);
+    svg += fmt::format("<text x=\"4\" y=\"{}\" font-size=\"11\">{}</text><text x=\"4\" y=\"{}\" "
+                       "font-size=\"11\">{}</text>",
+                       top + 10, plain(yMax), height - bottom, plain(yMin));
   std::map<std::string, int> colourOf;
   int legendY = top + 14;
   for (const Series& s : series) {
@@ -220,8 +270,8 @@ void writeCompareReport(const fs::path& dir, const json& report) {
   const json& reference = report["reference"];
   std::string html = fmt::format(
       "<!doctype html>\n<html lang=\"en\"><head><meta charset=\"utf-8\"><title>mgrl compare: {}</title>"
-      "<style>body{{font-family:sans-serif;margin:2em;max-width:60em}}table{{border-collapse:collapse}}"
-      "td,th{{border:1px solid #ccc;padding:2px 6px;text-align:right}}th:first-child,td:first-child{{text-align:left}}"
+      "<style>body{{font-family:sans-serif;margin:2em;max-width:80em}}table{{border-collapse:collapse;font-size:90%}}"
+      "td,th{{border:1px solid #ccc;padding:2px 6px;text-align:right}}td{{white-space:nowrap}}.sd{{color:#666;font-size:85%}}th:first-child,td:first-child{{text-align:left}}"
       ".plots{{display:flex;flex-wrap:wrap}}.plots svg{{margin:0.5em 1.5em 0.5em 0}}</style></head><body>\n"
       "<h1>{} on {}: {}</h1>\n<p>Every policy evaluated on the same {} trials; reference: {}. Results: "
       "<a href=\"results.json\">results.json</a>, <a href=\"results.csv\">results.csv</a>, "
@@ -237,7 +287,10 @@ void writeCompareReport(const fs::path& dir, const json& report) {
     html += "<tr><td>" + escapeHtml(name) + "</td>";
     for (const auto& [key, label] : metrics)
       html += l["mean"][key].is_number()
-                  ? fmt::format("<td>{:.4g} &plusmn; {:.2g}</td>", l["mean"][key].get<double>(), l["sd"][key].get<double>())
+                  ? fmt::format("<td>{}<br><span class=\"sd\">&plusmn; {}</span></td>",
+                                escapeHtml(reportNumber(key, l["mean"][key].get<double>())),
+                                l["sd"][key].get<double>() == 0 ? std::string("0")
+                                                                : escapeHtml(reportNumber(key, l["sd"][key].get<double>(), true)))
                   : std::string("<td>n/a</td>");
     html += "</tr>\n";
   }
