@@ -5,6 +5,31 @@ import {throttled} from './protocol.js';
 
 const $ = (id) => document.getElementById(id);
 const kCrowdMin = 2, kCrowdMax = 2000;
+// Which panel sections the user opened or folded (localStorage), by data-section.
+const kSectionsKey = 'mgrl.panel.sections';
+
+/** Folds the panel's sections as the user left them (else as index.html has them) and
+ *  remembers every fold from now on. Without storage (disabled, private) it only folds. */
+function keepSectionFolds() {
+  const sections = [...document.querySelectorAll('#panel details[data-section]')];
+  let saved = {};
+  try {
+    saved = JSON.parse(localStorage.getItem(kSectionsKey) ?? '{}') ?? {};
+  } catch {
+    saved = {};
+  }
+  for (const section of sections) {
+    if (typeof saved[section.dataset.section] === 'boolean') section.open = saved[section.dataset.section];
+    section.addEventListener('toggle', () => {
+      const state = Object.fromEntries(sections.map((s) => [s.dataset.section, s.open]));
+      try {
+        localStorage.setItem(kSectionsKey, JSON.stringify(state));
+      } catch {
+        // not remembered: the folds still work
+      }
+    });
+  }
+}
 
 export class Panel {
   /** @param send  sends one page message (an object) */
@@ -15,6 +40,7 @@ export class Panel {
     this.weightInputs = new Map();   // behaviour name -> <input type=range>
     this.sendWeights = throttled(send, 100);
     this.sendSpeed = throttled(send, 100);
+    keepSectionFolds();
 
     for (const button of document.querySelectorAll('[data-mode]')) {
       button.addEventListener('click', () => this.sendMode(button.dataset.mode));

@@ -197,7 +197,54 @@ const snapshot = (page) => page.evaluate(() => ({
 }));
 const floorDistance = (a, b) => Math.hypot(a[0] - b[0], a[2] - b[2]);
 
+// The panel's sections fold; the checks below use them all, so they open every one (the
+// page remembers it, so a reload keeps them open).
+const openPanelSections = (page) => page.evaluate(() => {
+  for (const d of document.querySelectorAll('#panel details')) d.open = true;
+});
+
 // ---- the checks ------------------------------------------------------------------
+
+// In an 800 x 600 window the panel fits with its default folds (its top stays in view,
+// nothing scrolls), every section's title shows, a folded one opens on a click, and the
+// page remembers it after a reload.
+async function smallWindow(url) {
+  const small = await browser.newPage({viewport: {width: 800, height: 600}});
+  try {
+    await small.goto(url);
+    await waitInPage(small, () => window.mgrl?.state?.scene?.mode === 'target' && window.mgrl.state.draw.count >= 3, null,
+                     30000, 'the page in an 800 x 600 window gets its scene and draws');
+    const fit = () => small.evaluate(() => {
+      const panel = document.getElementById('panel').getBoundingClientRect();
+      const head = document.querySelector('#panel h1').getBoundingClientRect();
+      return {top: panel.top, bottom: panel.bottom, headTop: head.top, scrolls: document.getElementById('panel').scrollHeight >
+              document.getElementById('panel').clientHeight, titles: [...document.querySelectorAll('#panel summary')].map((t) => {
+                const r = t.getBoundingClientRect();
+                return {text: t.textContent, shown: r.height > 0 && r.bottom <= innerHeight};
+              }), open: [...document.querySelectorAll('#panel details')].filter((d) => d.open).map((d) => d.dataset.section)};
+    });
+    const folded = await fit();
+    check(folded.headTop >= 0 && folded.bottom <= 600 && !folded.scrolls,
+          '800 x 600: the panel fits the window with its default folds (its title in view, nothing to scroll)',
+          `panel ${folded.top.toFixed(0)} to ${folded.bottom.toFixed(0)} px, scrolls: ${folded.scrolls}, open: ${folded.open.join(', ')}`);
+    check(folded.titles.length === 7 && folded.titles.every((t) => t.shown),
+          '800 x 600: every section of the panel shows its title', JSON.stringify(folded.titles));
+    check(folded.open.join(',') === 'mode,clock,controller', '800 x 600: Mode, Clock and Controller start open',
+          folded.open.join(', '));
+    await screenshot(small, 'viewer-800x600.png');
+    await small.click('#panel details[data-section="learn"] > summary');
+    await small.click('#learn-start');  // a control inside the section it opened
+    const opened = await fit();
+    check(opened.open.includes('learn'), '800 x 600: a click on "Learn" opens its section', opened.open.join(', '));
+    await small.reload();
+    await waitInPage(small, () => window.mgrl?.state?.scene?.mode === 'target', null, 30000, 'the reloaded small page');
+    const kept = await fit();
+    check(kept.open.join(',') === 'mode,clock,controller,learn', '800 x 600: the page remembers the sections opened',
+          kept.open.join(', '));
+  } finally {
+    await small.close();
+  }
+}
 
 async function targetMode(page) {
   await waitInPage(page, () => {
@@ -861,6 +908,7 @@ async function main() {
     if (!request.url().startsWith('data:') && !request.url().startsWith(url) && !request.url().startsWith(url.replace('http:', 'ws:'))) outside.push(request.url());
   });
   await page.goto(url);
+  await openPanelSections(page);
 
   const target = await targetMode(page);
 
@@ -927,6 +975,7 @@ async function main() {
     const s = window.mgrl?.state;
     return s?.scene?.mode === 'target' && s.frames.count > 0 && s.draw.count >= 5;
   }, null, 30000, 'the reloaded page gets a target-mode scene and frames, and draws');
+  await openPanelSections(page);
   await teachViews(page);
   await valuesAcrossModeChange(page);
   const after = await page.evaluate(() => ({errors: mgrl.state.errors, bad: mgrl.state.frames.bad}));
@@ -937,6 +986,7 @@ async function main() {
   const learnt = await page.evaluate(() => ({errors: mgrl.state.errors, bad: mgrl.state.frames.bad}));
   check(learnt.errors.length === 1 && learnt.bad === 0, 'learn and retrain: no error from the server but the one asked for',
         learnt.errors.join('; '));
+  await smallWindow(url);
   check(pageErrors.length === 0, 'no script errors in the page', pageErrors.join('; '));
   check(outside.length === 0, 'the page loads nothing from outside the server', outside.join(', '));
 }
