@@ -6,6 +6,7 @@
 #include <vector>
 
 #include "mgrl/learning/reward.hpp"
+#include "term.hpp"
 
 namespace mgrl::rewards {
 
@@ -17,14 +18,7 @@ void registerPaperRewards(RewardRegistry& registry);
 /// Adds terms (rewards/terms.cpp).
 void registerTerms(RewardRegistry& registry);
 
-/// Text for `mgrl list`: every term of the vocabulary with its parameters.
+/// Text for `mgrl list`: every term of the vocabulary with its parameters (term.hpp).
 std::string describeTerms(std::string_view indent);
-/// A term of the vocabulary: its name, what its signal is, its parameters.
-struct TermKind {
-  const char* name;
-  const char* summary;
-  ParamSpecs params;
-};
-const std::vector<TermKind>& termKinds();
 
 }  // namespace mgrl::rewards

@@ -16,7 +16,8 @@ command -v node >/dev/null 2>&1 || packages+=(nodejs)
 command -v npm >/dev/null 2>&1 || packages+=(npm)
 # libclang-rt-dev holds libFuzzer and clang's sanitizer runtimes; clang only recommends
 # it, and recommends are not installed below.
-[ "${1:-}" = "--test" ] && packages+=(chromium clang libclang-rt-dev)
+# clang-format: the quick tier holds changed lines to .clang-format (scripts/format_check.sh).
+[ "${1:-}" = "--test" ] && packages+=(chromium clang libclang-rt-dev clang-format)
 case "${1:-}" in --test | --python) packages+=(python3-matplotlib jupyter-nbconvert python3-ipykernel) ;; esac
 
 missing=()

@@ -142,6 +142,7 @@ sanitizer_tests() {
 
 if ((quick)); then
   stage "set-up" "$root/scripts/setup.sh" --test
+  stage "format of the C++ lines changed since HEAD (scripts/format_check.sh)" "$root/scripts/format_check.sh"
   stage "Release build (incremental)" "$root/scripts/build.sh" "$root/build"
   stage "Release tests not labelled slow" release_tests
   exit 0

@@ -1,0 +1,76 @@
+#pragma once
+/// \file
+/// One term of the `terms` reward (rewards/terms.cpp; scenarios/README.md, "reward
+/// terms"): a signal s_k(t) in [0, 1] at each frame t of an action, which the reward
+/// weighs and combines over the frames. A term kind is one file here (distance.cpp,
+/// facing.cpp, ...) with its register function, called in register.cpp.
+#include <cstddef>
+#include <string>
+
+#include <Eigen/Core>
+
+#include "mgrl/core/error.hpp"
+#include "mgrl/core/registry.hpp"
+#include "mgrl/graph/state_action_model.hpp"
+#include "mgrl/learning/signals.hpp"
+#include "mgrl/learning/target_state.hpp"
+
+namespace mgrl::rewards {
+
+/// What a term may read at frame t of action `action` (t = 1: the first frame after the
+/// decision).
+struct TermFrame {
+  const StateActionModel& model;
+  std::size_t action;
+  std::size_t t;
+  std::size_t frame;              ///< the global action-frame index of t
+  const Eigen::Vector3d& target;  ///< where the target is at t (a moving one has moved)
+  const TargetState& state;       ///< the environment state at the decision
+  double startDistance;           ///< the pelvis's ground distance to the target at the decision
+};
+
+class Term {
+ public:
+  virtual ~Term() = default;
+  /// Finds what the term reads in `m` (a joint, the opponent's strikes) before any
+  /// signal(). Throws TermError naming the term's key at fault.
+  virtual void bind(const StateActionModel&) {}
+  /// s_k(t), in [0, 1].
+  virtual double signal(const TermFrame& f) const = 0;
+  /// True if signal() reads per-joint arrays of the bound model (the reward then refuses
+  /// a model with another joint count).
+  virtual bool readsJoints() const { return false; }
+};
+
+/// A term's binding failed at one of its keys ("point", "effector"): the reward reports
+/// it there.
+struct TermError : Error {
+  TermError(std::string key_, const std::string& message) : Error(message), key(std::move(key_)) {}
+  std::string key;
+};
+
+/// The term kinds: `term: NAME` and the parameters it reads (a factory's Params also hold
+/// `weight`, which the reward reads). A factory may refuse a combination of parameters
+/// with Params::fail().
+using TermRegistry = Registry<Term>;
+using TermKind = TermRegistry::Entry;
+
+/// Every term kind, in the order `mgrl list` shows them (register.cpp).
+const std::vector<TermKind>& termKinds();
+const TermRegistry& termRegistry();
+
+/// The parameter every term has: its weight w_k in the frame's signal.
+ParamSpec weightSpec();
+
+/// The term files' register functions (register.cpp calls them in order).
+void registerDistance(TermRegistry& registry);
+void registerFacing(TermRegistry& registry);
+void registerContact(TermRegistry& registry);
+void registerTravel(TermRegistry& registry);
+void registerEffort(TermRegistry& registry);
+void registerAvoid(TermRegistry& registry);
+
+/// Binds `point` to `m`, or throws TermError at "point" saying which roles and joints `m` has.
+void bindPoint(const StateActionModel& m, BodyPoint& point);
+
+}  // namespace mgrl::rewards
