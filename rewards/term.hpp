@@ -11,7 +11,7 @@
 
 #include "mgrl/core/error.hpp"
 #include "mgrl/core/registry.hpp"
-#include "mgrl/graph/state_action_model.hpp"
+#include "mgrl/learning/reward.hpp"
 #include "mgrl/learning/signals.hpp"
 #include "mgrl/learning/target_state.hpp"
 
