@@ -32,10 +32,9 @@ namespace {
 
 using nlohmann::json;
 
-// One term as written: its kind, its parameters (defaults filled in) and the term built
-// from them.
+// One term as written: its parameters (defaults filled in, for manifests and keys), the
+// term built from them and its weight.
 struct ReadTerm {
-  const TermKind* kind;
   json params;
   std::unique_ptr<Term> term;
   double weight;
@@ -61,8 +60,7 @@ std::vector<ReadTerm> readTerms(const ConfigNode& block) {
     const TermKind* kind = registry.find(name);
     if (!kind) termNode.fail(fmt::format("unknown term {} (known: {})", quoteToken(name), registry.describeKnown()));
     const Params params = Params::read(element, kind->params, {"term"});
-    ReadTerm read{kind, params.toJson(), element.withLocation([&] { return kind->make(params); }),
-                  params.number("weight")};
+    ReadTerm read{params.toJson(), element.withLocation([&] { return kind->make(params); }), params.number("weight")};
     read.params["term"] = name;
     terms.push_back(std::move(read));
   }

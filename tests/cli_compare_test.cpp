@@ -410,6 +410,7 @@ TEST_CASE("the compare report writes numbers for people: units, prefixes, three 
   CHECK(reportNumber("train_seconds", 123.4) == "123 s");
   CHECK(reportNumber("train_seconds", 0.0123) == "12.3 ms");
   CHECK(reportNumber("mean_time_to_hit_s", 0) == "0 s");
+  CHECK(reportNumber("mean_time_to_hit_s", 0.0613, true) == "0.0613 s");  // a spread in its mean's unit
   CHECK(reportNumber("decision_us", 12.34) == "12.3 us");
   CHECK(reportNumber("decision_us", 2500) == "2.50 ms");
   CHECK(reportNumber("success_rate", 0.95) == "95.0 %");

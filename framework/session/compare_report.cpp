@@ -68,8 +68,9 @@ std::string reportNumber(std::string_view key, double value, bool delta) {
     return fmt::format("{:.1f}{}", percent, delta ? "" : " %");
   }
   if (key == "mean_time_to_hit_s" || key == "train_seconds" || key == "seconds") {
+    // A spread stays in seconds, the unit its mean is read in ("4.26 s" +- "0.0613 s").
     const double a = std::abs(value);
-    if (a != 0 && a < 0.1) return fmt::format("{} ms", plain(value * 1e3));
+    if (!delta && a != 0 && a < 0.1) return fmt::format("{} ms", plain(value * 1e3));
     return fmt::format("{} s", plain(value));
   }
   if (key == "decision_us") return std::abs(value) >= 1000 ? fmt::format("{} ms", plain(value / 1e3)) : fmt::format("{} us", plain(value));

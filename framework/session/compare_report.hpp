@@ -24,7 +24,7 @@ const std::vector<std::string>& snapshotColumns();
 /// ("3.68 s", "12.3 ms"), microseconds ("12.3 us"), counts with a prefix ("66.3 M"), bytes
 /// ("11.0 MB"); other values plain ("0.0123"), in scientific notation only when below
 /// 0.001 or from a million up. `delta` formats a spread (a standard deviation) alike, a
-/// share in percentage points without the sign.
+/// share in percentage points without the sign, a time in seconds however short.
 std::string reportNumber(std::string_view key, double value, bool delta = false);
 
 /// Writes the four files into `dir` (each atomically). Throws mgrl::Error on I/O failure.
