@@ -1,5 +1,6 @@
 // `mgrl train` (DESIGN.md sec. 5): trains a scenario's behaviours and saves a policy bundle.
 #include <atomic>
+#include <cmath>
 #include <csignal>
 #include <cstdlib>
 #include <iostream>
@@ -13,15 +14,16 @@
 #include "learn_common.hpp"
 #include "mgrl/session/session.hpp"
 
-#include "mgrl/learning/behavior.hpp"
-#include "mgrl/scenario/behaviors.hpp"
-#include "mgrl/learning/checkpoint_store.hpp"
 #include "mgrl/core/bundle.hpp"
 #include "mgrl/core/files.hpp"
 #include "mgrl/core/hash.hpp"
 #include "mgrl/core/parallel.hpp"
-#include "mgrl/learning/policy_bundle.hpp"
 #include "mgrl/core/version.hpp"
+#include "mgrl/learning/behavior.hpp"
+#include "mgrl/learning/checkpoint_store.hpp"
+#include "mgrl/learning/policy_bundle.hpp"
+#include "mgrl/learning/problem.hpp"
+#include "mgrl/scenario/behaviors.hpp"
 #include "plugins.hpp"
 
 namespace mgrl::app {
@@ -191,6 +193,42 @@ void removeCheckpoint(const fs::path& dir) {
 
 namespace {
 
+// Self-play scores (issue 43): the same episodes for every table compared.
+constexpr std::uint64_t kSelfPlaySeed = 43;
+
+struct SelfPlayScore {
+  double meanReturn = 0;
+};
+
+// The mean discounted return of the greedy policy of `table` over 200 episodes of 10 s
+// against the behaviour's environment as it stands (its opponent playing what it was last
+// given): starts drawn from `seed` (graph state uniform, the opponent at a grid position
+// drawn uniformly in grid coordinates, its own state drawn by the environment).
+SelfPlayScore selfPlayScore(const Behavior& b, const StateActionModel& m, const QTable& table, std::uint64_t seed) {
+  constexpr int kEpisodes = 200;
+  constexpr double kSeconds = 10;
+  Rng rng(seed);
+  const double gamma = b.reward->gamma();
+  const double limit = kSeconds / m.frameTime;
+  double total = 0;
+  for (int episode = 0; episode < kEpisodes; ++episode) {
+    auto s = static_cast<std::uint32_t>(rng.below(m.stateCount()));
+    TargetState e = b.environment->draw(b.discretizer->sample(rng).position, rng);
+    double elapsed = 0, discount = 1, sum = 0;
+    while (elapsed < limit) {
+      const std::size_t a = greedyAction(m, *b.discretizer, table, s, e);
+      sum += discount * b.reward->evaluate(m, a, e);
+      const auto frames = static_cast<double>(m.actionLength(a));
+      discount *= std::pow(gamma, frames);
+      elapsed += frames;
+      e = b.environment->next(m, a, e);
+      s = m.actionTo[a];
+    }
+    total += sum;
+  }
+  return {total / kEpisodes};
+}
+
 // A stopped run keeps what had finished: the bundle is saved with the finished tables and
 // the unfinished behaviours named in its provenance (so eval and simulate refuse it,
 // saying to resume, instead of taking it for a whole one), then the run ends with
@@ -277,10 +315,15 @@ json runTrain(const TrainOptions& options) {
         // Named, not a structured binding: clang before 16 cannot capture one in the lambda.
         const std::string& name = item.first;
         auto& entry = item.second;
-        const auto match = std::find_if(all.begin(), all.end(), [&](const Behavior& b) { return b.name == name; });
+        // A self-play round's table (NAME-roundK) belongs to behaviour NAME.
+        std::string base = name;
+        if (const auto cut = name.rfind("-round"); cut != std::string::npos && cut > 0) base = name.substr(0, cut);
+        const auto match = std::find_if(all.begin(), all.end(), [&](const Behavior& b) {
+          return b.name == name || (b.name == base && b.environment->rounds() > 1);
+        });
         if (match != all.end() && match->key == entry.key) {
           bundle.behaviors.emplace(name, std::move(entry));
-          if (options.resume) finished.insert(name);
+          if (options.resume && match->name == name) finished.insert(name);
         } else {
           log(fmt::format("warning: dropping {}'s table from {}: the scenario {}", name, out.string(),
                           match == all.end() ? "no longer has this behaviour" : "now asks for other settings"));
@@ -354,70 +397,115 @@ json runTrain(const TrainOptions& options) {
       checkpoints.push_back(checkpointDirectory(out, behavior.name));
       continue;
     }
-    const Problem problem = behavior.problem(model);
-    const auto tabulateStart = Clock::now();
-    const bool compact = compactModel.at(behavior.name);
-    const GridModel grid = compact ? GridModel::buildCompact(problem, threads) : GridModel::build(problem, threads);
-    const double tabulateSeconds = since(tabulateStart);
-    log(fmt::format("train {}: {} on a {} grid ({} vertices) x {} actions, {} tabulated in {:.2f} s ({} MB)",
-                    behavior.name, behavior.learner->type(), behavior.discretizer->type(),
-                    behavior.discretizer->vertexCount(), model.actionCount(),
-                    compact ? "rewards (compact model)" : "problem", tabulateSeconds, grid.bytes() / 1000000));
-
-    DirectoryCheckpointer directory(checkpointDirectory(out, behavior.name), behavior.key, model,
-                                    behavior.discretizer->vertexCount(), options.log);
-    if (!options.resume) directory.remove();
-    CrashTestCheckpointer checkpointer(directory, behavior.name, options.log);
-    checkpoints.push_back(directory.directory());
-    std::optional<TrainResult> trained;
-    std::unique_ptr<TrainListener> listener = options.listen ? options.listen(behavior, all, graph) : nullptr;
-    {
-      ProgressReporter progress(behavior.name, options.progressBar, options.log, listener.get());
-      try {
-        trained = behavior.learner->train({problem, grid, &progress, &checkpointer, threads, &stopRequested});
-      } catch (const TrainInterrupted& stop) {
-        interrupted(options, out, bundle, wanted, behavior.name, stop, directory.directory());
+    // Self-play rounds (issue 43): round 1 against the opponent the scenario names, round k
+    // against round k - 1's table; each round's table is kept, the last under the
+    // behaviour's own name, the others as NAME-roundK.
+    const int rounds = behavior.environment->rounds();
+    std::shared_ptr<const QTable> previous;
+    json roundsReport = json::array();
+    for (int round = 1; round <= rounds; ++round) {
+      const std::string label = round < rounds ? fmt::format("{}-round{}", behavior.name, round) : behavior.name;
+      const std::string roundKey = rounds > 1 ? fmt::format("{}-round{}", behavior.key, round) : behavior.key;
+      if (rounds > 1) {
+        if (previous)
+          behavior.environment->playPolicy(behavior.discretizer.get(), previous, fmt::format("round {}", round - 1));
+        log(fmt::format("train {}: self-play round {} of {}, against {}", behavior.name, round, rounds,
+                        previous ? fmt::format("round {}'s table", round - 1)
+                                 : fmt::format("the {} opponent", behavior.environment->policyKey())));
       }
-    }
-    if (options.resume && !checkpointer.resumed())
-      log(fmt::format("resume: {}: no checkpoint to continue from, trained from the start", behavior.name));
-    TrainResult& result = *trained;
+      const Problem problem = behavior.problem(model);
+      const auto tabulateStart = Clock::now();
+      const bool compact = compactModel.at(behavior.name);
+      const GridModel grid = compact ? GridModel::buildCompact(problem, threads) : GridModel::build(problem, threads);
+      const double tabulateSeconds = since(tabulateStart);
+      log(fmt::format("train {}: {} on a {} grid ({} vertices) x {} actions, {} tabulated in {:.2f} s ({} MB)", label,
+                      behavior.learner->type(), behavior.discretizer->type(), behavior.discretizer->vertexCount(),
+                      model.actionCount(), compact ? "rewards (compact model)" : "problem", tabulateSeconds,
+                      grid.bytes() / 1000000));
 
-    // An adaptive learner returns the grid it refined: the table's vertices are its.
-    const Discretizer& tableGrid = result.grid ? *result.grid : *behavior.discretizer;
-    json curve = json::array();
-    for (const CurvePoint& p : result.curve) curve.push_back({p.updates, p.seconds, p.residual, p.meanResidual});
-    const double rate = result.seconds > 0 ? static_cast<double>(result.updates) / result.seconds : 0;
-    json summary = {{"learner", behavior.learner->type()},
-                    {"updates", result.updates},
-                    {"seconds", result.seconds},
-                    {"updates_per_second", rate},
-                    {"final_residual", result.finalResidual},
-                    {"table_bytes", result.table.bytes()},
-                    {"vertices", tableGrid.vertexCount()},
-                    {"actions", model.actionCount()},
-                    {"tabulate_seconds", tabulateSeconds},
-                    {"stats", result.stats}};
-    report["behaviors"][behavior.name] = summary;
-    report["behaviors"][behavior.name]["model"] = compact ? "compact" : "tabulated";
-    report["behaviors"][behavior.name]["model_bytes"] = grid.bytes();
-    json record = summary;
-    record["config"] = behavior.config;
-    record["weight"] = behavior.weight;
-    record["activation"] = std::string(activationName(behavior.activation));
-    record["grid"] = tableGrid.describe();
-    record["curve_columns"] = {"updates", "seconds", "residual", "mean_residual"};
-    record["curve"] = curve;
-    if (listener) {
-      json snapshots = listener->record();
-      if (!snapshots.is_null()) record["snapshots"] = std::move(snapshots);
+      DirectoryCheckpointer directory(checkpointDirectory(out, label), roundKey, model,
+                                      behavior.discretizer->vertexCount(), options.log);
+      if (!options.resume) directory.remove();
+      CrashTestCheckpointer checkpointer(directory, behavior.name, options.log);
+      checkpoints.push_back(directory.directory());
+      std::optional<TrainResult> trained;
+      std::unique_ptr<TrainListener> listener = options.listen ? options.listen(behavior, all, graph) : nullptr;
+      {
+        ProgressReporter progress(label, options.progressBar, options.log, listener.get());
+        try {
+          trained = behavior.learner->train({problem, grid, &progress, &checkpointer, threads, &stopRequested});
+        } catch (const TrainInterrupted& stop) {
+          interrupted(options, out, bundle, wanted, behavior.name, stop, directory.directory());
+        }
+      }
+      if (options.resume && !checkpointer.resumed())
+        log(fmt::format("resume: {}: no checkpoint to continue from, trained from the start", behavior.name));
+      TrainResult& result = *trained;
+
+      // An adaptive learner returns the grid it refined: the table's vertices are its.
+      const Discretizer& tableGrid = result.grid ? *result.grid : *behavior.discretizer;
+      json curve = json::array();
+      for (const CurvePoint& p : result.curve) curve.push_back({p.updates, p.seconds, p.residual, p.meanResidual});
+      const double rate = result.seconds > 0 ? static_cast<double>(result.updates) / result.seconds : 0;
+      json summary = {{"learner", behavior.learner->type()},
+                      {"updates", result.updates},
+                      {"seconds", result.seconds},
+                      {"updates_per_second", rate},
+                      {"final_residual", result.finalResidual},
+                      {"table_bytes", result.table.bytes()},
+                      {"vertices", tableGrid.vertexCount()},
+                      {"actions", model.actionCount()},
+                      {"tabulate_seconds", tabulateSeconds},
+                      {"stats", result.stats}};
+      if (round == rounds) {
+        report["behaviors"][behavior.name] = summary;
+        report["behaviors"][behavior.name]["model"] = compact ? "compact" : "tabulated";
+        report["behaviors"][behavior.name]["model_bytes"] = grid.bytes();
+      }
+      json record = summary;
+      record["config"] = behavior.config;
+      record["weight"] = behavior.weight;
+      record["activation"] = std::string(activationName(behavior.activation));
+      record["grid"] = tableGrid.describe();
+      record["curve_columns"] = {"updates", "seconds", "residual", "mean_residual"};
+      record["curve"] = curve;
+      if (listener) {
+        json snapshots = listener->record();
+        if (!snapshots.is_null()) record["snapshots"] = std::move(snapshots);
+      }
+      log(fmt::format("train {}: {} updates in {:.2f} s ({}updates/s), Bellman residual {:.3g}", label, result.updates,
+                      result.seconds, humanCount(rate), result.finalResidual));
+      if (rounds > 1) {
+        // Self-play (issue 43): how much this round's table gains over the last round's
+        // against the opponent it was trained against (that last round's table): a
+        // best-response gap, which shrinks as the rounds settle.
+        json entry = {
+            {"round", round},
+            {"opponent", round == 1 ? behavior.environment->policyKey() : fmt::format("round {}", round - 1)}};
+        const SelfPlayScore mine = selfPlayScore(behavior, model, result.table, kSelfPlaySeed);
+        entry["return"] = mine.meanReturn;
+        if (previous) {
+          const SelfPlayScore old = selfPlayScore(behavior, model, *previous, kSelfPlaySeed);
+          entry["previous_return"] = old.meanReturn;
+          entry["gap"] = mine.meanReturn - old.meanReturn;
+          log(fmt::format(
+              "train {}: round {}: return {:.3f} against round {}'s table, which itself gets {:.3f}: "
+              "best-response gap {:.3f}",
+              behavior.name, round, mine.meanReturn, round - 1, old.meanReturn, mine.meanReturn - old.meanReturn));
+        } else {
+          log(fmt::format("train {}: round {}: return {:.3f} against its {} opponent", behavior.name, round,
+                          mine.meanReturn, behavior.environment->policyKey()));
+        }
+        roundsReport.push_back(entry);
+        record["round"] = round;
+        record["rounds"] = roundsReport;
+        report["behaviors"][behavior.name]["rounds"] = roundsReport;
+        if (round < rounds) previous = std::make_shared<const QTable>(result.table);
+      }
+      bundle.behaviors[round == rounds ? behavior.name : label] = PolicyBehavior{
+          behavior.key,          record, std::move(result.table), vertexPositions(tableGrid), tableGrid.type(),
+          tableGrid.structure(), nullptr};
     }
-    bundle.behaviors[behavior.name] = PolicyBehavior{behavior.key,          record,
-                                                     std::move(result.table), vertexPositions(tableGrid),
-                                                     tableGrid.type(),      tableGrid.structure(),
-                                                     nullptr};
-    log(fmt::format("train {}: {} updates in {:.2f} s ({}updates/s), Bellman residual {:.3g}", behavior.name,
-                    result.updates, result.seconds, humanCount(rate), result.finalResidual));
   }
   if (bundle.provenance.contains("unfinished")) bundle.provenance.erase("unfinished");
   savePolicyBundle(out, bundle);

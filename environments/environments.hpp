@@ -2,6 +2,10 @@
 /// \file
 /// The environment-model plugins (DESIGN.md sec. 4): how the target moves relative to the
 /// avatar under an action.
+#include <memory>
+#include <string>
+#include <vector>
+
 #include "mgrl/learning/reward.hpp"
 
 namespace mgrl::environments {
@@ -13,6 +17,8 @@ void registerAll(EnvironmentRegistry& registry);
 void registerStaticTargets(EnvironmentRegistry& registry);
 /// Adds opponent (environments/opponent.cpp).
 void registerOpponent(EnvironmentRegistry& registry);
+/// Adds learned_opponent (environments/learned_opponent.cpp).
+void registerLearnedOpponent(EnvironmentRegistry& registry);
 
 /// `opponent`: the target is another avatar of the same graph, standing at e.position on
 /// the ground and facing e.heading (speed 0). After each of the avatar's actions it has
@@ -35,6 +41,71 @@ class Opponent final : public EnvironmentModel {
  private:
   bool pursue_;
   double speed_, stopDistance_, turnRate_;  // m/s, m, rad/s
+};
+
+/// A number no earlier call returned (from 1), thread-safe.
+std::uint64_t freshGeneration();
+
+/// `learned_opponent` (issue 43): the target is another avatar of the same graph playing
+/// graph actions (see learned_opponent.cpp for the state and how time is handled). Its
+/// discrete state is TargetState::opponent = s * phases + b: the graph state s its current
+/// action ends at and the phase bucket b of the frames left (0: about to arrive).
+class LearnedOpponent final : public EnvironmentModel {
+ public:
+  LearnedOpponent(std::string policy, int phases, int rounds, double stopDistance, double reach, double strikeBonus)
+      : policy_(std::move(policy)),
+        phases_(phases),
+        rounds_(rounds),
+        stopDistance_(stopDistance),
+        reach_(reach),
+        strikeBonus_(strikeBonus) {}
+  std::string type() const override { return "learned_opponent"; }
+  void bind(const StateActionModel& m) override;
+  std::size_t opponentStates() const override;
+  TargetState next(const StateActionModel& model, std::size_t action, const TargetState& e) const override;
+  bool track(const StateActionModel& model, std::size_t action, const TargetState& e,
+             std::vector<OpponentFrame>& out) const override;
+  bool keepsSpeed() const override { return true; }  // always 0
+  TargetState draw(const Eigen::Vector3d& position, Rng& rng) const override;
+  bool faces() const override { return true; }
+  void playPolicy(const Discretizer* grid, std::shared_ptr<const QTable> table, const std::string& key) override;
+  std::string policyKey() const override { return table_ ? key_ : "scripted"; }
+  std::string policySource() const override { return policy_ == "scripted" ? "" : policy_; }
+
+  /// `policy` as written: "scripted" or a bundle directory.
+  const std::string& policy() const { return policy_; }
+  int phases() const { return phases_; }
+  int rounds() const override { return rounds_; }
+  /// The graph state s's representative incoming action (what the opponent is taken to be
+  /// playing when only its end state and phase are known).
+  std::uint32_t representative(std::uint32_t s) const { return representative_[s]; }
+  /// The phase bucket of tau frames left of an action of `length` frames (tau in [1, length]).
+  std::uint32_t phaseOf(std::uint32_t tau, std::uint32_t length) const;
+  /// The frames left that phase b of state s stands for (the middle of the bucket on its
+  /// representative action).
+  std::uint32_t framesLeft(const StateActionModel& m, std::uint32_t s, std::uint32_t b) const;
+  /// The opponent's decision at state s with its root at `self` (avatar decision frame), the
+  /// avatar at frame t of `avatarAction`: the table's greedy action, or the scripted one.
+  std::uint32_t choose(const StateActionModel& m, std::uint32_t s, const GroundMotion& self, std::size_t avatarAction,
+                       std::uint32_t t, double height) const;
+
+ private:
+  TargetState simulate(const StateActionModel& m, std::size_t action, const TargetState& e,
+                       std::vector<OpponentFrame>* out) const;
+
+  std::string policy_;
+  int phases_, rounds_;
+  double stopDistance_, reach_, strikeBonus_;
+  const StateActionModel* model_ = nullptr;
+  std::vector<std::uint32_t> representative_;
+  int head_ = -1;
+  const Discretizer* grid_ = nullptr;
+  std::shared_ptr<const QTable> table_;
+  std::string key_;
+  /// Unique to this object's binding and policy (a fresh one at each bind() and playPolicy()),
+  /// so that next() reuses only a track() of the same opponent.
+  std::uint64_t policyGeneration_ = freshGeneration();
+  std::vector<double> cosYaw_, sinYaw_;  ///< per action: its turn's cosine and sine
 };
 
 }  // namespace mgrl::environments

@@ -7,6 +7,7 @@ namespace mgrl::environments {
 void registerAll(EnvironmentRegistry& registry) {
   registerStaticTargets(registry);
   registerOpponent(registry);
+  registerLearnedOpponent(registry);
 }
 
 }  // namespace mgrl::environments

@@ -13,6 +13,10 @@ namespace mgrl::rewards {
 
 namespace {
 
+/// A learned opponent's strike threatens from this many frames before its effective frame
+/// to as many after (the fist near its tip).
+constexpr std::uint32_t kStrikeWindow = 2;
+
 class Avoid final : public Term {
  public:
   explicit Avoid(const Params& p)
@@ -39,6 +43,11 @@ class Avoid final : public Term {
     // 0 with the body point on a strike tip of the opponent (or the bodies overlapping), 1
     // from `clear` away. The opponent stands where the decision's state has it.
     if (!reach_) throw std::logic_error("an avoid term evaluated before bind()");
+    // A learned opponent: only the strikes its action really throws near this frame.
+    if (f.opponent)
+      return trackedClearance(f.model, f.frame, point_.joint, *f.opponent, effectors_, kStrikeWindow, clear_,
+                              bodyRadius_) /
+             clear_;
     return opponentClearance(f.model, f.frame, point_.joint, *reach_, f.state, bodyRadius_) / clear_;
   }
   bool readsJoints() const override { return true; }

@@ -91,7 +91,10 @@ class Terms final : public Reward {
       }
     }
     if (joints_ != 0) joints_ = static_cast<std::int64_t>(m.jointNames.size());
+    BodyPoint head = parseBodyPoint("head");
+    head_ = bindBodyPoint(m, head, nullptr) ? head.joint : -1;
   }
+  void bindEnvironment(const EnvironmentModel* environment) override { environment_ = environment; }
 
   double evaluate(const StateActionModel& m, std::size_t a, const TargetState& state) const override {
     // Joint indices are the bound model's: a model with another joint count (or none) would
@@ -100,11 +103,26 @@ class Terms final : public Reward {
       throw std::logic_error("reward terms naming joints evaluated on a model they were not bound to");
     const std::size_t begin = m.actionFrameBegin[a], frames = m.actionLength(a);
     const double start = std::hypot(state.position.x(), state.position.z());  // the pelvis is at the origin at the decision
+    // A learned opponent moves and strikes during the action: the terms see it frame by frame.
+    thread_local std::vector<OpponentFrame> track;
+    const bool tracked = environment_ && environment_->track(m, a, state, track);
     double result = 0, discount = 1;
     for (std::size_t t = 1; t <= frames; ++t) {
       discount *= gamma_;
-      const Eigen::Vector3d e = state.at(static_cast<double>(t) * m.frameTime);  // where a moving target is at frame t
-      const TermFrame frame{m, a, t, begin + t - 1, e, state, start};
+      Eigen::Vector3d e;
+      const OpponentFrame* opponent = nullptr;
+      if (tracked) {
+        opponent = &track[t - 1];
+        if (head_ >= 0) {
+          e = opponent->toAvatar(jointAt(m, opponent->frame(m), head_));
+        } else {
+          e = opponent->ground(m);
+          e.y() = state.position.y();
+        }
+      } else {
+        e = state.at(static_cast<double>(t) * m.frameTime);  // where a moving target is at frame t
+      }
+      const TermFrame frame{m, a, t, begin + t - 1, e, state, start, opponent};
       double signal = 0;
       for (const Weighted& term : terms_) signal += term.weight * term.term->signal(frame);
       result = sum_ ? result + discount * signal : std::max(result, discount * signal);
@@ -123,6 +141,8 @@ class Terms final : public Reward {
   std::optional<ConfigNode> block_;  ///< the reward's YAML block, for bind()'s messages
   /// 0 if no term names a joint; else the bound model's joint count, -1 before bind().
   std::int64_t joints_ = 0;
+  int head_ = -1;  ///< the bound model's head joint, for a learned opponent's target
+  const EnvironmentModel* environment_ = nullptr;
 };
 
 }  // namespace

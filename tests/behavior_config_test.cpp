@@ -233,7 +233,7 @@ TEST_CASE("behaviour mistakes name the file, line, column and key", "[behaviors]
     REQUIRE_CONFIG_ERROR(build(approachInserting(19, "    environment: {type: orbiting_target}")),
                          at(19, 25,
                             "behaviors.approach.environment.type: unknown environment model "
-                            "'orbiting_target' (known: static_target, moving_target, opponent)"));
+                            "'orbiting_target' (known: static_target, moving_target, opponent, learned_opponent)"));
     REQUIRE_CONFIG_ERROR(build(approachInserting(19, "    environment: {type: moving_target, min_speed: 2, max_speed: 1}")),
                          at(19, 51, "behaviors.approach.environment.min_speed: expected at most max_speed (1 m/s), found 2 m/s"));
   }
@@ -355,7 +355,7 @@ TEST_CASE("behaviour mistakes name the file, line, column and key", "[behaviors]
     REQUIRE_CONFIG_ERROR(build(approachInserting(19, "    environment: {}")),
                          at(19, 18,
                             "behaviors.approach.environment: expected a 'type' key naming the environment "
-                            "model (static_target, moving_target, opponent)"));
+                            "model (static_target, moving_target, opponent, learned_opponent)"));
     REQUIRE_CONFIG_ERROR(build(approachInserting(19, "    environment: static_target")),
                          at(19, 18,
                             "behaviors.approach.environment: expected a map with 'type: static_target' or "

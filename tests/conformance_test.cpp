@@ -46,7 +46,7 @@ double linear(const Discretizer& grid, const TargetState& e) {
   const double slopes[3] = {0.7, -1.3, 2.1};
   for (int i = 0; i < grid.dimension(); ++i)
     if (!grid.axes()[static_cast<std::size_t>(i)].wraps) f += slopes[i] * c[static_cast<std::size_t>(i)];
-  if (grid.layerAxis()) f += 0.9 * Discretizer::layerCoordinate(e);
+  if (grid.layerAxis()) f += 0.9 * grid.layerCoordinate(e);
   return f;
 }
 
@@ -113,6 +113,8 @@ TEST_CASE("every environment model is deterministic and keeps a still target sti
     INFO("environment " << entry.name);
     const std::unique_ptr<EnvironmentModel> environment = registry.create(exampleOf(entry));
     REQUIRE(environment->type() == entry.name);
+    environment->bind(model());
+    const std::size_t opponentStates = environment->opponentStates();
     Rng rng(3);
     for (std::size_t a = 0; a < model().actionCount(); a += 5) {
       const TargetState e = environment->draw(Eigen::Vector3d(rng.uniform() * 2 - 1, 1.2, rng.uniform() * 2), rng);
@@ -121,7 +123,20 @@ TEST_CASE("every environment model is deterministic and keeps a still target sti
       REQUIRE(next.position == again.position);
       REQUIRE(next.speed == again.speed);
       REQUIRE(next.heading == again.heading);
+      REQUIRE(next.opponent == again.opponent);
       REQUIRE(next.position.allFinite());
+      // A learned opponent's discrete state stays among its states; what it plays during the
+      // action is one frame per avatar frame. Other models have neither.
+      std::vector<OpponentFrame> track;
+      if (opponentStates > 0) {
+        REQUIRE(e.opponent >= 0);
+        REQUIRE(static_cast<std::size_t>(next.opponent) < opponentStates);
+        REQUIRE(environment->track(model(), a, e, track));
+        REQUIRE(track.size() == model().actionLength(a));
+      } else {
+        REQUIRE(next.opponent == -1);
+        REQUIRE_FALSE(environment->track(model(), a, e, track));
+      }
       // A target standing still stays where it was in the world (in the avatar's new frame:
       // the old position moved by the action's displacement), unless the model is an
       // opponent with a will of its own (faces(): it steps towards the avatar).

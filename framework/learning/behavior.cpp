@@ -6,6 +6,7 @@
 #include <tuple>
 
 #include "mgrl/core/hash.hpp"
+#include "mgrl/learning/policy_bundle.hpp"
 
 namespace mgrl {
 
@@ -68,6 +69,51 @@ void checkOpponent(const BehaviorSpec& spec, const Behavior& b) {
       if (c.kind == SuccessCondition::Kind::Avoid) spec.success.fail(why);  // only a declared criterion has one
 }
 
+// A learned opponent (issue 43): the model binds to the graph, the grid gets one layer per
+// opponent state, the reward reads the opponent's track, and a policy bundle the scenario
+// names is loaded for the opponent to play (its table for this behaviour, same grid).
+void bindEnvironment(const BehaviorSpec& spec, Behavior& b, const StateActionModel& model,
+                     const std::string& graphKey) {
+  EnvironmentModel& environment = *b.environment;
+  try {
+    environment.bind(model);
+  } catch (const ConfigError&) {
+    throw;
+  } catch (const Error& e) {
+    spec.environment.child("type").fail(e.what());
+  }
+  if (const std::size_t states = environment.opponentStates()) {
+    try {
+      b.discretizer->setOpponentLayers(states);
+    } catch (const Error& e) {
+      spec.discretizer.child("type").fail(
+          fmt::format("a learned opponent's {} states as grid layers: {}", states, e.what()));
+    }
+  }
+  b.reward->bindEnvironment(&environment);
+  const std::string source = environment.policySource();
+  if (source.empty()) return;
+  const ConfigNode at = spec.environment.child("policy");
+  try {
+    PolicyBundle bundle = loadPolicyBundle(source, model, graphKey);
+    auto found = bundle.behaviors.find(spec.name);
+    if (found == bundle.behaviors.end())
+      at.fail(fmt::format(
+          "expected a table for behaviour {} in the policy bundle {}, found {}", spec.name, source,
+          bundle.behaviors.empty() ? std::string("none") : [&] {
+            std::string names;
+            for (const auto& [name, _] : bundle.behaviors) names += (names.empty() ? "" : ", ") + name;
+            return names;
+          }()));
+    auto table = std::make_shared<const QTable>(std::move(found->second.table));
+    environment.playPolicy(b.discretizer.get(), std::move(table), found->second.key);
+  } catch (const ConfigError&) {
+    throw;
+  } catch (const Error& e) {
+    at.fail(e.what());
+  }
+}
+
 }  // namespace
 
 Behavior buildBehavior(const BehaviorSpec& spec, const Plugins& plugins, const StateActionModel& model,
@@ -86,6 +132,7 @@ Behavior buildBehavior(const BehaviorSpec& spec, const Plugins& plugins, const S
   } else {
     b.environment = plugins.environments.create(spec.environment);
   }
+  bindEnvironment(spec, b, model, graphKey);
   b.learner = plugins.learners.create(spec.learner);
   std::tie(b.config, b.key) = behaviorConfigAndKey(spec, plugins, graphKey);
   b.successDeclared = !spec.success.isNull();

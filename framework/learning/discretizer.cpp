@@ -154,6 +154,19 @@ void Discretizer::setLayers(GridAxis layer) {
   layers_ = std::move(layer);
 }
 
+void Discretizer::setOpponentLayers(std::size_t count) {
+  if (opponentLayers_) throw Error(fmt::format("{}: the grid has opponent layers already", type()));
+  if (layers_.vertices.size() > 1)
+    throw Error(fmt::format("{}: expected one speed layer under a learned opponent's layers, found {} (set speeds: 1)",
+                            type(), layers_.vertices.size()));
+  if (count == 0 || count > kMaxGridVertices)
+    throw Error(fmt::format("{}: expected 1 to {} opponent states, found {}", type(), kMaxGridVertices, count));
+  std::vector<double> layers(count);
+  for (std::size_t l = 0; l < count; ++l) layers[l] = static_cast<double>(l);
+  setLayers(GridAxis{"opponent", "state", std::move(layers), false});
+  opponentLayers_ = true;
+}
+
 bool Discretizer::locateLayer(double c, std::uint32_t& layer, float& frac) const {
   const std::vector<double>& v = layers_.vertices;
   const std::size_t n = v.size();
@@ -259,7 +272,10 @@ TargetState Discretizer::vertexState(std::size_t v) const {
     v /= n;
   }
   TargetState e = state(c);
-  if (!layers_.vertices.empty()) e.speed = layers_.vertices[layer];
+  if (opponentLayers_)
+    e.opponent = static_cast<std::int32_t>(layer);
+  else if (!layers_.vertices.empty())
+    e.speed = layers_.vertices[layer];
   return e;
 }
 
@@ -273,7 +289,11 @@ TargetState Discretizer::sample(const std::array<double, 4>& u) const {
   TargetState e = state(c);
   if (!layers_.vertices.empty()) {
     const std::size_t n = layers_.vertices.size();
-    e.speed = layers_.vertices[std::min(n - 1, static_cast<std::size_t>(u[3] * static_cast<double>(n)))];
+    const std::size_t layer = std::min(n - 1, static_cast<std::size_t>(u[3] * static_cast<double>(n)));
+    if (opponentLayers_)
+      e.opponent = static_cast<std::int32_t>(layer);
+    else
+      e.speed = layers_.vertices[layer];
   }
   return e;
 }

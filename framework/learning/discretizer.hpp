@@ -118,8 +118,16 @@ class Discretizer {
   const GridAxis* layerAxis() const { return layers_.vertices.empty() ? nullptr : &layers_; }
   /// Vertices per layer (all of them without a layer axis); vertex v is in layer v / this.
   std::size_t layerVertexCount() const { return layerVertices_; }
-  /// The layer coordinate of a state: its speed (the one coordinate a moving_target keeps).
-  static double layerCoordinate(const TargetState& e) { return e.speed; }
+  /// The layer coordinate of a state: its speed (the one coordinate a moving_target keeps),
+  /// or on a grid with opponent layers the opponent's discrete state.
+  double layerCoordinate(const TargetState& e) const { return opponentLayers_ ? e.opponent : e.speed; }
+  /// Repeats the grid once per discrete opponent state (`learned_opponent`, issue 43): layer
+  /// l holds the states whose TargetState::opponent is l. Unlike speed layers these are
+  /// never interpolated across (a state is exactly at one), and an action may move a state
+  /// to another layer. Throws mgrl::Error if the grid already has more than one speed layer
+  /// or hanging vertices, or if the layered grid would exceed kMaxGridVertices.
+  void setOpponentLayers(std::size_t count);
+  bool hasOpponentLayers() const { return opponentLayers_; }
 
   /// Locates e: false if it lies outside the grid (future value 0 there, paper sec. 4.2).
   virtual bool locate(const TargetState& e, GridCell& out) const;
@@ -195,6 +203,7 @@ class Discretizer {
   /// Evenly spaced axes are located by arithmetic instead of a search: 1 / spacing, or 0.
   std::array<double, 3> inverseStep_{0, 0, 0};
   GridAxis layers_;
+  bool opponentLayers_ = false;
   std::size_t layerVertices_ = 0, layerCells_ = 0;
   /// The layer below coordinate c and the fraction towards the next (0 at a layer, and at the
   /// last layer itself); false outside (or NaN).

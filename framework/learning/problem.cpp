@@ -222,6 +222,18 @@ void addRows8(float* sum, const float* const* rows, const float* w, std::uint32_
 
 }  // namespace
 
+std::size_t greedyAction(const StateActionModel& m, const Discretizer& grid, const QTable& q, std::uint32_t s,
+                         const TargetState& e) {
+  const std::uint32_t begin = m.stateActionBegin[s], n = m.stateActionBegin[s + 1] - begin;
+  thread_local std::vector<float> scores;
+  scores.assign(n + 16, 0.0f);  // vector code writes whole 16-float registers
+  addInterpolated(scores.data(), q, s, grid.stencil(grid.locateClamped(e)), 1.0f);
+  std::uint32_t best = 0;
+  for (std::uint32_t j = 1; j < n; ++j)
+    if (scores[j] > scores[best]) best = j;
+  return begin + best;
+}
+
 void addInterpolated(float* sum, const QTable& q, std::uint32_t s, const Stencil& stencil, float scale) {
   const std::uint32_t n = static_cast<std::uint32_t>(q.actionsOf(s));
   const float* rows[16];

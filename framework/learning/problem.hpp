@@ -124,6 +124,12 @@ float maxInterpolated(const QTable& q, const GridModel& g, std::uint32_t s, std:
 /// whole registers; the extra entries receive garbage).
 void addInterpolated(float* sum, const QTable& q, std::uint32_t s, const Stencil& stencil, float scale);
 
+/// The greedy action at state s with the environment in state e: the largest of s's
+/// out-actions' Q interpolated at e, clamped into the grid, ties to the lowest index (the
+/// runtime's PolicyController::choose, for one table of weight 1).
+std::size_t greedyAction(const StateActionModel& m, const Discretizer& grid, const QTable& q, std::uint32_t s,
+                         const TargetState& e);
+
 /// The backup of (action a, vertex v): r(v, a) + gamma^t_a max_a' Q(e'(v, a), a'), with
 /// future value 0 when e' leaves the grid.
 inline float backup(const QTable& q, const GridModel& g, std::size_t a, const GridTransition& t) {

@@ -2,6 +2,10 @@
 
 #include <cmath>
 
+#include <fmt/format.h>
+
+#include "mgrl/core/error.hpp"
+
 namespace mgrl {
 
 Eigen::Vector3d inverseTransformPoint(const GroundMotion& motion, const Eigen::Vector3d& point) {
@@ -27,6 +31,14 @@ TargetState MovingTarget::draw(const Eigen::Vector3d& position, Rng& rng) const 
   const double speed = minSpeed_ + (maxSpeed_ - minSpeed_) * rng.uniform();
   const double heading = (2 * rng.uniform() - 1) * M_PI;
   return {position, speed, heading};
+}
+
+}  // namespace mgrl
+
+namespace mgrl {
+
+void EnvironmentModel::playPolicy(const Discretizer*, std::shared_ptr<const QTable>, const std::string&) {
+  throw Error(fmt::format("environment {}: has no learned opponent to play a policy", type()));
 }
 
 }  // namespace mgrl

@@ -8,12 +8,14 @@
 #include <cstddef>
 #include <memory>
 #include <string>
+#include <vector>
 
 #include <Eigen/Core>
 
-#include "mgrl/core/registry.hpp"
 #include "mgrl/core/random.hpp"
+#include "mgrl/core/registry.hpp"
 #include "mgrl/graph/state_action_model.hpp"
+#include "mgrl/learning/signals.hpp"
 #include "mgrl/learning/target_state.hpp"
 
 namespace mgrl {
@@ -30,9 +32,16 @@ class Reward {
   /// terms name (scenarios/README.md, body points). Throws ConfigError at the term's key
   /// (mgrl::Error without a YAML block) naming the roles and joints the skeleton has.
   virtual void bind(const StateActionModel&) {}
+  /// The behaviour's environment model (it outlives the reward), before any evaluate(): a
+  /// reward whose terms read a learned opponent's actual body and strikes asks it for them
+  /// (EnvironmentModel::track).
+  virtual void bindEnvironment(const class EnvironmentModel*) {}
 };
 
 using RewardRegistry = Registry<Reward>;
+
+class QTable;
+class Discretizer;
 
 /// The EnvironmentModel seam: the environment state in the avatar frame at the end of an
 /// action, given the state at the decision.
@@ -55,6 +64,33 @@ class EnvironmentModel {
   /// it moves: its grid must hold a heading, the world supplies it (a sparring partner's
   /// facing, a dragged target's toward the avatar), and trials report the spacing to it.
   virtual bool faces() const { return false; }
+
+  // A learned opponent (issue 43): an avatar of the same graph playing a policy table, whose
+  // discrete state (graph state and phase) is TargetState::opponent, one grid layer each.
+
+  /// Prepares the model for `model` before any next(); throws mgrl::Error.
+  virtual void bind(const StateActionModel&) {}
+  /// The number of discrete opponent states (layers the grid gets), 0 for none.
+  virtual std::size_t opponentStates() const { return 0; }
+  /// What the opponent does at frames 1..L of action a from e (out[t - 1] for frame t, L
+  /// entries); false (out untouched) for a model without a learned opponent.
+  virtual bool track(const StateActionModel&, std::size_t /*action*/, const TargetState&,
+                     std::vector<OpponentFrame>& /*out*/) const {
+    return false;
+  }
+  /// Makes the opponent play `table` on `grid` (the same grid, opponent layers included, as
+  /// the behaviour's own: self-play; it must outlive this model); a null table: its scripted
+  /// policy. `key` names the
+  /// table for the behaviour's key. Throws mgrl::Error for a model without one, or a table
+  /// of another shape.
+  virtual void playPolicy(const Discretizer* grid, std::shared_ptr<const QTable> table, const std::string& key);
+  /// Self-play rounds `mgrl train` runs (round k's opponent plays round k - 1's table).
+  virtual int rounds() const { return 1; }
+  /// What the opponent plays, for messages and records: "" without a learned opponent.
+  virtual std::string policyKey() const { return ""; }
+  /// The policy bundle directory the scenario asks the opponent to play, "" for none (a
+  /// scripted opponent, or none at all); buildBehavior() loads it and calls playPolicy().
+  virtual std::string policySource() const { return ""; }
 };
 
 using EnvironmentRegistry = Registry<EnvironmentModel>;

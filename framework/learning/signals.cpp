@@ -204,4 +204,31 @@ double opponentClearance(const StateActionModel& m, std::size_t frame, int joint
   return std::max(0.0, std::min(strikes, bodies));
 }
 
+GroundMotion actionFrameMotion(const StateActionModel& m, std::size_t a, std::uint32_t k) {
+  if (k == 0) return {};
+  const double* r = &m.frameRoot[3 * (m.actionFrameBegin[a] + k - 1)];
+  return {r[0], r[1], r[2]};
+}
+
+Eigen::Vector3d applyMotion(const GroundMotion& g, const Eigen::Vector3d& p) { return transformPoint(g, p); }
+
+GroundMotion composeMotion(const GroundMotion& a, const GroundMotion& b) { return compose(a, b); }
+
+double trackedClearance(const StateActionModel& m, std::size_t frame, int joint, const OpponentFrame& o,
+                        std::uint8_t effectors, std::uint32_t window, double cap, double bodyRadius) {
+  double nearest = cap;
+  const Eigen::Vector3d p = jointAt(m, frame, joint);
+  nearest = std::min(nearest, bodyDistance(m, frame, BodyPoint::pelvis(), 2, o.ground(m)) - 2 * bodyRadius);
+  auto scan = [&](std::span<const ActionHit> strikes, std::uint8_t leftBit) {
+    for (const ActionHit& h : strikes) {
+      if (!(effectors & (leftBit << h.hand))) continue;
+      if (h.offset + window < o.offset || h.offset > o.offset + window) continue;
+      nearest = std::min(nearest, (o.toAvatar(Eigen::Vector3d(h.x, h.y, h.z)) - p).norm());
+    }
+  };
+  if (effectors & kFists) scan(m.hitsOf(o.action), kLeftFist);
+  if (effectors & kFeet) scan(m.kicksOf(o.action), kLeftFoot);
+  return std::max(0.0, nearest);
+}
+
 }  // namespace mgrl

@@ -128,4 +128,43 @@ Eigen::Vector3d inOpponentFrame(const TargetState& e, const Eigen::Vector3d& p);
 double opponentClearance(const StateActionModel& m, std::size_t frame, int joint, const StrikeReach& reach,
                          const TargetState& e, double bodyRadius);
 
+/// Where a learned opponent is at one frame of the avatar's action (issue 43), in the
+/// avatar frame of the avatar's decision: it plays frame `offset` (1 = the first after its
+/// decision) of `action`, which it decided on with its root at `decision`.
+struct OpponentFrame {
+  GroundMotion decision;
+  std::uint32_t action = 0, offset = 0;
+  double cosYaw = 1, sinYaw = 0;  ///< of decision.dyaw, computed once per opponent decision
+  std::size_t frame(const StateActionModel& m) const { return m.actionFrameBegin[action] + offset - 1; }
+  /// A point of the opponent's decision frame (its action's, as jointAt() and ActionHit
+  /// give them) in the avatar's decision frame: applyMotion(decision, p), without a sine.
+  Eigen::Vector3d toAvatar(const Eigen::Vector3d& p) const {
+    return {decision.dx + cosYaw * p.x() + sinYaw * p.z(), p.y(), decision.dz - sinYaw * p.x() + cosYaw * p.z()};
+  }
+  /// Its root's ground point at this frame, in the avatar's decision frame (height 0).
+  Eigen::Vector3d ground(const StateActionModel& m) const {
+    const double* r = &m.frameRoot[3 * frame(m)];
+    return toAvatar({r[0], 0, r[1]});
+  }
+};
+
+/// The root motion from action a's decision to its frame k (k = 0: none).
+GroundMotion actionFrameMotion(const StateActionModel& m, std::size_t a, std::uint32_t k);
+/// `b` expressed in the frame `a` leads to, composed: the frame b leads to from a's start.
+GroundMotion composeMotion(const GroundMotion& a, const GroundMotion& b);
+/// The point p of the frame `g` leads to, seen from g's start.
+Eigen::Vector3d applyMotion(const GroundMotion& g, const Eigen::Vector3d& p);
+/// A learned opponent's root at frame f, in the avatar's decision frame.
+inline GroundMotion opponentRootAt(const StateActionModel& m, const OpponentFrame& f) {
+  return composeMotion(f.decision, actionFrameMotion(m, f.action, f.offset));
+}
+
+/// How far joint `joint` of the avatar, at its action frame `frame`, is from the opponent's
+/// actual strikes at its frame `o` (issue 43): the distance to the tip of each effective
+/// strike of the `effectors` that its action throws within `window` frames of o, and the
+/// ground gap between the bodies (pelvis to the opponent's root, less two bodyRadius).
+/// Never below 0, at most cap.
+double trackedClearance(const StateActionModel& m, std::size_t frame, int joint, const OpponentFrame& o,
+                        std::uint8_t effectors, std::uint32_t window, double cap, double bodyRadius);
+
 }  // namespace mgrl

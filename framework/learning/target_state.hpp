@@ -5,6 +5,7 @@
 /// metres) and how it moves on the ground. A static target has speed 0; a `moving_target`
 /// keeps its speed for a whole episode and its heading turns with the avatar.
 #include <cmath>
+#include <cstdint>
 
 #include <Eigen/Core>
 
@@ -14,6 +15,9 @@ struct TargetState {
   Eigen::Vector3d position{0, 0, 0};
   double speed = 0;    ///< ground speed, m/s (>= 0)
   double heading = 0;  ///< direction of the ground velocity in the avatar frame, rad: atan2(vx, vz)
+  /// A `learned_opponent`'s discrete state (its graph state and phase, a grid layer), -1 for
+  /// every other environment model.
+  std::int32_t opponent = -1;
 
   TargetState() = default;
   /// A static target at `p` (implicit: every static-target call site passes a position, or

@@ -39,7 +39,7 @@ Trials::Trials(const StateActionModel& model, const std::vector<Behavior>& behav
   Rng probe(1);
   std::size_t inside = 0;
   for (int i = 0; i < 100000 && inside == 0; ++i)
-    inside += region_->inside({(2 * probe.uniform() - 1) * reach_, targetHeight_, (2 * probe.uniform() - 1) * reach_});
+    inside += insideRegion({(2 * probe.uniform() - 1) * reach_, targetHeight_, (2 * probe.uniform() - 1) * reach_});
   if (inside == 0)
     throw Error(fmt::format("{}: expected targets at height {:.2f} m to fall inside the grid of the behaviour that "
                             "places them, found none in 100000 draws (set --target-height or world.target_height "
@@ -67,10 +67,18 @@ std::pair<std::vector<SuccessCriterion>, std::string> trialCriteria(const std::v
 // height, rejected until the region holds it. The constructor has checked that some do.
 // A moving target's motion is drawn after its position (a static target draws nothing, so
 // its trials are those of before moving targets).
+// Whether a target placed at `position` falls in the placing grid: on a grid with a learned
+// opponent's layers, in the first layer (every layer has the same positions).
+bool Trials::insideRegion(const Eigen::Vector3d& position) const {
+  TargetState e(position);
+  if (region_->hasOpponentLayers()) e.opponent = 0;
+  return region_->inside(e);
+}
+
 TargetState Trials::placeTarget(Rng& starts) const {
   for (;;) {
     const Eigen::Vector3d e((2 * starts.uniform() - 1) * reach_, targetHeight_, (2 * starts.uniform() - 1) * reach_);
-    if (region_->inside(e)) return environment_->draw(e, starts);
+    if (insideRegion(e)) return environment_->draw(e, starts);
   }
 }
 

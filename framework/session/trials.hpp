@@ -101,6 +101,7 @@ class Trials {
   const StateActionModel& model_;
   const std::vector<Behavior>& behaviors_;
   const Discretizer* region_ = nullptr;
+  bool insideRegion(const Eigen::Vector3d& position) const;
   double reach_ = 0, targetHeight_ = 0, gamma_ = 0.97;
   std::vector<SuccessCriterion> criteria_;
   std::string criteriaFrom_;

@@ -1,0 +1,332 @@
+// The learned opponent (issue 43): how time is handled when the two fighters' actions end at
+// different moments, and that the environment model's transition is exact: replaying both
+// fighters frame by frame in world coordinates lands where next() and track() say.
+#include <algorithm>
+#include <cmath>
+#include <cstring>
+#include <vector>
+
+#include <fmt/format.h>
+#include <catch2/catch.hpp>
+
+#include "app/plugins.hpp"
+#include "cli_support.hpp"
+#include "environments/environments.hpp"
+#include "mgrl/core/random.hpp"
+#include "mgrl/graph/motion_graph.hpp"
+#include "mgrl/learning/behavior.hpp"
+#include "mgrl/learning/policy_bundle.hpp"
+#include "mgrl/learning/problem.hpp"
+#include "mgrl/learning/signals.hpp"
+#include "mgrl/motion/motion_database.hpp"
+#include "mgrl/scenario/behaviors.hpp"
+#include "mgrl/scenario/scenario.hpp"
+#include "test_support.hpp"
+
+namespace mgrl {
+
+namespace fs = std::filesystem;
+
+namespace {
+
+struct SparFixture {
+  Scenario scenario;
+  StateActionModel model;
+  std::vector<Behavior> behaviors;
+
+  SparFixture()
+      : scenario(loadScenario(std::string(test::sourceDirectory()) + "/scenarios/spar_learned.yaml", test::mocap())),
+        model(buildStateActionModel(loadMotionDatabase(scenario.motion, {}), scenario.graph)) {
+    behaviors = buildBehaviors(scenario, app::plugins(), model, "test");
+  }
+  const environments::LearnedOpponent& opponent() const {
+    return dynamic_cast<const environments::LearnedOpponent&>(*behaviors.front().environment);
+  }
+};
+
+SparFixture& fixture() {
+  static SparFixture f;
+  return f;
+}
+
+double wrapped(double angle) { return std::remainder(angle, 2 * M_PI); }
+
+}  // namespace
+
+TEST_CASE("a learned opponent's state is its end state and phase, one grid layer each", "[opponent][data]") {
+  SparFixture& f = fixture();
+  const StateActionModel& m = f.model;
+  const auto& opponent = f.opponent();
+  const Discretizer& grid = *f.behaviors.front().discretizer;
+  REQUIRE(opponent.opponentStates() == m.stateCount() * 2);
+  REQUIRE(grid.hasOpponentLayers());
+  CHECK(grid.layerVertexCount() == 6 * 4 * 6);
+  CHECK(grid.vertexCount() == grid.layerVertexCount() * m.stateCount() * 2);
+  // A vertex's state carries its layer as the opponent's state; locating it finds that layer
+  // exactly (no interpolation across opponent states).
+  const std::size_t v = 5 * grid.layerVertexCount() + 17;
+  const TargetState e = grid.vertexState(v);
+  CHECK(e.opponent == 5);
+  GridCell cell;
+  REQUIRE(grid.locate(e, cell));
+  CHECK(cell.layerFrac == 0);
+  const Stencil stencil = grid.stencil(cell);
+  CHECK(stencil.size == 8);
+  for (int k = 0; k < stencil.size; ++k)
+    if (stencil.weight[k] > 0) CHECK(stencil.vertex[k] / grid.layerVertexCount() == 5);
+  // Phases: bucket b of an action's frames left, and the frames a bucket stands for.
+  CHECK(opponent.phaseOf(1, 10) == 0);
+  CHECK(opponent.phaseOf(5, 10) == 0);
+  CHECK(opponent.phaseOf(6, 10) == 1);
+  CHECK(opponent.phaseOf(10, 10) == 1);
+  for (std::uint32_t s = 0; s < m.stateCount(); ++s) {
+    const std::uint32_t r = opponent.representative(s);
+    CHECK(m.actionTo[r] == s);
+    const auto length = static_cast<std::uint32_t>(m.actionLength(r));
+    for (std::uint32_t b = 0; b < 2; ++b) {
+      const std::uint32_t tau = opponent.framesLeft(m, s, b);
+      CHECK(tau >= 1);
+      CHECK(tau <= length);
+      if (length >= 2) CHECK(opponent.phaseOf(tau, length) == b);
+    }
+  }
+}
+
+TEST_CASE("during one long avatar action the opponent decides several times, each at its own action's end",
+          "[opponent][data]") {
+  SparFixture& f = fixture();
+  const StateActionModel& m = f.model;
+  const auto& opponent = f.opponent();
+  // The avatar's longest action; the opponent about to arrive at a state whose actions are short.
+  std::size_t longest = 0;
+  for (std::size_t a = 0; a < m.actionCount(); ++a)
+    if (m.actionLength(a) > m.actionLength(longest)) longest = a;
+  const std::size_t L = m.actionLength(longest);
+  REQUIRE(L >= 40);
+  TargetState e(Eigen::Vector3d(0.3, 1.4, 1.2), 0.0, M_PI);
+  std::size_t bestDecisions = 0;
+  for (std::uint32_t s = 0; s < m.stateCount(); ++s) {
+    e.opponent = static_cast<std::int32_t>(2 * s);
+    std::vector<OpponentFrame> track;
+    REQUIRE(opponent.track(m, longest, e, track));
+    REQUIRE(track.size() == L);
+    // The frames it plays are consecutive: within an action offset + 1; at an action's end
+    // a new action from its first frame, decided at the root the last one ended at.
+    std::size_t decisions = 0;
+    for (std::size_t t = 1; t < L; ++t) {
+      const OpponentFrame& a = track[t - 1];
+      const OpponentFrame& b = track[t];
+      if (b.action == a.action && b.offset == a.offset + 1) {
+        CHECK(b.decision.dx == a.decision.dx);
+        continue;
+      }
+      ++decisions;
+      REQUIRE(a.offset == m.actionLength(a.action));
+      REQUIRE(b.offset == 1);
+      CHECK(m.actionFrom[b.action] == m.actionTo[a.action]);
+      const GroundMotion end = compose(a.decision, m.displacement(a.action));
+      CHECK(b.decision.dx == Approx(end.dx).margin(1e-12));
+      CHECK(b.decision.dz == Approx(end.dz).margin(1e-12));
+      CHECK(wrapped(b.decision.dyaw - end.dyaw) == Approx(0).margin(1e-12));
+    }
+    bestDecisions = std::max(bestDecisions, decisions);
+    // next() ends where the track does: its end state and phase, its root seen from the
+    // avatar's end.
+    const TargetState n = opponent.next(m, longest, e);
+    const OpponentFrame& last = track.back();
+    const std::uint32_t left = static_cast<std::uint32_t>(m.actionLength(last.action)) - last.offset;
+    const std::uint32_t expectState = left == 0 ? m.actionFrom[last.action] : m.actionTo[last.action];
+    if (left > 0) CHECK(static_cast<std::uint32_t>(n.opponent) / 2 == expectState);
+    const GroundMotion root = opponentRootAt(m, last);
+    const Eigen::Vector3d seen = inverseTransformPoint(m.displacement(longest), Eigen::Vector3d(root.dx, 0, root.dz));
+    CHECK(n.position.x() == Approx(seen.x()).margin(1e-12));
+    CHECK(n.position.z() == Approx(seen.z()).margin(1e-12));
+    CHECK(n.position.y() == e.position.y());
+  }
+  // A 2.3 s punch against 0.2 s shuffles: the opponent decides several times inside it.
+  CHECK(bestDecisions >= 3);
+}
+
+TEST_CASE(
+    "the learned opponent's transition is deterministic and exact: a frame-by-frame replay of both fighters in "
+    "world coordinates lands where the table says",
+    "[opponent][data]") {
+  SparFixture& f = fixture();
+  const StateActionModel& m = f.model;
+  const auto& opponent = f.opponent();
+  const EnvironmentModel& environment = *f.behaviors.front().environment;
+  Rng rng(7);
+  std::size_t decisions = 0, frames = 0;
+  std::vector<double> snapGap;  // how far the snapped opponent is from one that kept its true action
+  for (int episode = 0; episode < 20; ++episode) {
+    // World frame: the avatar starts at the origin facing +Z.
+    GroundMotion avatar{};
+    auto s = static_cast<std::uint32_t>(rng.below(m.stateCount()));
+    TargetState e = environment.draw(Eigen::Vector3d(1.5 * rng.uniform() - 0.75, 1.4, 1.0 + rng.uniform()), rng);
+    // The opponent in the world: the action it plays, frames played, the root it decided at.
+    std::uint32_t os = static_cast<std::uint32_t>(e.opponent) / 2;
+    std::uint32_t oa = opponent.representative(os);
+    std::uint32_t played = static_cast<std::uint32_t>(m.actionLength(oa)) -
+                           opponent.framesLeft(m, os, static_cast<std::uint32_t>(e.opponent) % 2);
+    const GroundMotion start = compose(avatar, {e.position.x(), e.position.z(), e.heading});
+    GroundMotion odecision = compose(start, [&] {
+      const GroundMotion k = actionFrameMotion(m, oa, played);
+      const Eigen::Vector3d back = inverseTransformPoint(k, Eigen::Vector3d::Zero());
+      return GroundMotion{back.x(), back.z(), -k.dyaw};
+    }());
+    for (int step = 0; step < 12; ++step) {
+      const std::size_t a = m.stateActionBegin[s] + rng.below(m.stateActionBegin[s + 1] - m.stateActionBegin[s]);
+      const auto L = static_cast<std::uint32_t>(m.actionLength(a));
+      std::vector<OpponentFrame> track;
+      REQUIRE(environment.track(m, a, e, track));
+      const TargetState predicted = environment.next(m, a, e);
+      // Deterministic: the same call gives the same bits.
+      const TargetState again = environment.next(m, a, e);
+      REQUIRE(std::memcmp(&predicted.position, &again.position, sizeof predicted.position) == 0);
+      REQUIRE(predicted.heading == again.heading);
+      REQUIRE(predicted.opponent == again.opponent);
+      // Frame by frame in the world.
+      for (std::uint32_t t = 1; t <= L; ++t) {
+        if (played == m.actionLength(oa)) {
+          odecision = compose(odecision, m.displacement(oa));
+          os = m.actionTo[oa];
+          // The opponent decides with the avatar where the world has it at this frame.
+          const GroundMotion selfSeen = [&] {
+            const Eigen::Vector3d p = inverseTransformPoint(avatar, Eigen::Vector3d(odecision.dx, 0, odecision.dz));
+            return GroundMotion{p.x(), p.z(), wrapped(odecision.dyaw - avatar.dyaw)};
+          }();
+          oa = opponent.choose(m, os, selfSeen, a, t - 1, e.position.y());
+          played = 0;
+        }
+        ++played;
+        ++frames;
+        // The track's frame, carried into the world, is the replay's.
+        const OpponentFrame& o = track[t - 1];
+        REQUIRE(o.action == oa);
+        REQUIRE(o.offset == played);
+        const GroundMotion world = compose(avatar, opponentRootAt(m, o));
+        const GroundMotion replay = compose(odecision, actionFrameMotion(m, oa, played));
+        CHECK(world.dx == Approx(replay.dx).margin(1e-9));
+        CHECK(world.dz == Approx(replay.dz).margin(1e-9));
+        CHECK(wrapped(world.dyaw - replay.dyaw) == Approx(0).margin(1e-9));
+      }
+      if (played == m.actionLength(oa)) {  // it arrives exactly at the avatar's end: decides there
+        odecision = compose(odecision, m.displacement(oa));
+        os = m.actionTo[oa];
+        const Eigen::Vector3d p = inverseTransformPoint(avatar, Eigen::Vector3d(odecision.dx, 0, odecision.dz));
+        oa = opponent.choose(m, os, {p.x(), p.z(), wrapped(odecision.dyaw - avatar.dyaw)}, a, L, e.position.y());
+        played = 0;
+      }
+      avatar = compose(avatar, m.displacement(a));
+      s = m.actionTo[a];
+      ++decisions;
+      // At the avatar's decision: the state the table holds is the world's, seen from the avatar.
+      const GroundMotion root = compose(odecision, actionFrameMotion(m, oa, played));
+      const Eigen::Vector3d seen = inverseTransformPoint(avatar, Eigen::Vector3d(root.dx, e.position.y(), root.dz));
+      CHECK(predicted.position.x() == Approx(seen.x()).margin(1e-9));
+      CHECK(predicted.position.z() == Approx(seen.z()).margin(1e-9));
+      CHECK(wrapped(predicted.heading - (root.dyaw - avatar.dyaw)) == Approx(0).margin(1e-9));
+      const auto length = static_cast<std::uint32_t>(m.actionLength(oa));
+      CHECK(predicted.opponent ==
+            static_cast<std::int32_t>(m.actionTo[oa] * 2 + opponent.phaseOf(length - played, length)));
+      // The snap (sample and hold): from here the table takes the opponent to be on its end
+      // state's representative action; how far that one's end is from the true action's.
+      os = m.actionTo[oa];
+      const std::uint32_t r = opponent.representative(os);
+      const std::uint32_t rplayed = static_cast<std::uint32_t>(m.actionLength(r)) -
+                                    opponent.framesLeft(m, os, static_cast<std::uint32_t>(predicted.opponent) % 2);
+      const GroundMotion trueEnd = compose(odecision, m.displacement(oa));
+      const GroundMotion snappedDecision = compose(root, [&] {
+        const GroundMotion k = actionFrameMotion(m, r, rplayed);
+        const Eigen::Vector3d back = inverseTransformPoint(k, Eigen::Vector3d::Zero());
+        return GroundMotion{back.x(), back.z(), -k.dyaw};
+      }());
+      const GroundMotion snappedEnd = compose(snappedDecision, m.displacement(r));
+      snapGap.push_back(std::hypot(trueEnd.dx - snappedEnd.dx, trueEnd.dz - snappedEnd.dz));
+      oa = r;
+      played = rplayed;
+      odecision = snappedDecision;
+      e = predicted;
+    }
+  }
+  std::sort(snapGap.begin(), snapGap.end());
+  WARN(
+      fmt::format("learned opponent replay: {} avatar decisions, {} frames exact; the snap to the representative "
+                  "action moves the opponent's next arrival point by {:.3f} m (median), {:.3f} m (90th percentile)",
+                  decisions, frames, snapGap[snapGap.size() / 2], snapGap[snapGap.size() * 9 / 10]));
+  CHECK(decisions == 240);
+}
+
+namespace {
+
+// spar_learned.yaml shrunk for tests: 3 sectors x 2 rings x 3 facings, one phase: 18
+// positions x 117 opponent states, 2,106 vertices (3 M table entries).
+const char* kSmallSpar =
+    " --set behaviors.spar.discretizer.sectors=3 --set behaviors.spar.discretizer.rings=2"
+    " --set behaviors.spar.discretizer.headings=3 --set behaviors.spar.environment.phases=1";
+
+struct SparSandbox : test::CliSandbox {
+  SparSandbox() : CliSandbox("mgrl_learned_opponent") {}
+  test::Run run(const std::string& arguments) { return test::runMgrl(arguments + where(), dir()); }
+  std::string scenario() const {
+    return test::shellWord(std::string(test::sourceDirectory()) + "/scenarios/spar_learned.yaml");
+  }
+};
+
+}  // namespace
+
+TEST_CASE("mgrl train runs self-play rounds against a learned opponent, keeps every round and reports the gap",
+          "[opponent][cli][data][slow]") {
+  SparSandbox box;
+  const test::Run trained =
+      box.run("train " + box.scenario() + kSmallSpar + " --set behaviors.spar.environment.rounds=2 --json --out " +
+              test::shellWord(box.path("policy")));
+  INFO(trained.err);
+  REQUIRE(trained.status == 0);
+  const nlohmann::json report = trained.report();
+  const nlohmann::json& rounds = report["behaviors"]["spar"]["rounds"];
+  REQUIRE(rounds.size() == 2);
+  CHECK(rounds[0]["opponent"] == "scripted");
+  CHECK_FALSE(rounds[0].contains("gap"));
+  CHECK(rounds[1]["opponent"] == "round 1");
+  CHECK(rounds[1]["gap"].get<double>() ==
+        Approx(rounds[1]["return"].get<double>() - rounds[1]["previous_return"].get<double>()));
+  // Round 2 is a best response to round 1: against round 1's table it does at least as well
+  // as round 1's own table (up to the grid's interpolation).
+  CHECK(rounds[1]["gap"].get<double>() > -0.05 * rounds[1]["return"].get<double>());
+  CHECK(trained.err.find("train spar: self-play round 2 of 2, against round 1's table") != std::string::npos);
+  CHECK(trained.err.find("best-response gap") != std::string::npos);
+  CHECK(report["behaviors"]["spar"]["vertices"] == 18 * 117);
+
+  // Both rounds are in the bundle, and they differ: the opponent changed between them.
+  const nlohmann::json manifest = nlohmann::json::parse(test::readText(box.path("policy") / "manifest.json"));
+  CHECK(manifest.dump().find("spar-round1") != std::string::npos);
+  CHECK(test::readText(box.path("policy") / "spar.q.npy") != test::readText(box.path("policy") / "spar-round1.q.npy"));
+
+  // The opponent can play a bundle's table (here round 2's) from round 1 on.
+  const test::Run against = box.run("train " + box.scenario() + kSmallSpar +
+                                    " --set behaviors.spar.environment.policy=" + test::shellWord(box.path("policy")) +
+                                    " --out " + test::shellWord(box.path("next")));
+  INFO(against.err);
+  CHECK(against.status == 0);
+  CHECK(test::readText(box.path("next") / "spar.q.npy") != test::readText(box.path("policy") / "spar-round1.q.npy"));
+}
+
+TEST_CASE("a learned opponent refuses a grid with speed layers and a missing policy bundle, each at its key",
+          "[opponent][cli][data]") {
+  SparSandbox box;
+  const test::Run speeds = box.run("train " + box.scenario() + " --set behaviors.spar.discretizer.speeds=3 --out " +
+                                   test::shellWord(box.path("a")));
+  CHECK(speeds.status != 0);
+  CHECK(speeds.lastErrorLine().find("behaviors.spar.discretizer.type: a learned opponent's 234 states as grid layers: "
+                                    "polar_velocity: expected one speed layer under a learned opponent's layers, "
+                                    "found 3 (set speeds: 1)") != std::string::npos);
+  const test::Run missing = box.run("train " + box.scenario() + " --set behaviors.spar.environment.policy=" +
+                                    test::shellWord(box.path("nothing")) + " --out " + test::shellWord(box.path("b")));
+  CHECK(missing.status != 0);
+  CHECK(missing.lastErrorLine().find("behaviors.spar.environment.policy") != std::string::npos);
+  CHECK(missing.lastErrorLine().find("no policy bundle here") != std::string::npos);
+  CHECK_FALSE(fs::exists(box.path("b")));
+}
+
+}  // namespace mgrl
