@@ -82,6 +82,9 @@ struct SimulateOptions : LearnOptions {
   std::string controller = "policy";  ///< policy | online_search | random
   int horizon = 3;                    ///< online_search: depth in actions
   double horizonSeconds = 0;          ///< online_search: > 0 searches this much motion instead
+  /// A second bundle the second avatar of each sparring pair plays ("" none: all play `policy`).
+  std::filesystem::path partnerPolicy;
+  int partnerRound = 0;  ///< > 0: the partner plays that self-play round's tables
   long long avatars = 2;
   double seconds = 10;                ///< simulated time
   std::uint64_t seed = 1;

@@ -367,6 +367,19 @@ json runSimulate(const SimulateOptions& options) {
   const std::unique_ptr<Session> session = openSession(options, needs);
   if (options.topK > 0) session->task.world.variety.topK = static_cast<int>(options.topK);
   const WorldParams& params = session->task.world;
+  if (!options.partnerPolicy.empty()) {
+    if (params.mode != "sparring")
+      throw Error(
+          fmt::format("--partner-policy: expected a sparring world (world.mode: sparring), found {}", params.mode));
+    if (choice.name != "policy")
+      throw Error(
+          fmt::format("--partner-policy: expected --controller policy (the first avatar of each pair plays "
+                      "--policy), found {}",
+                      choice.name));
+    session->loadPartnerPolicy(options.partnerPolicy, options.partnerRound);
+  } else if (options.partnerRound > 0) {
+    throw Error("--partner-round: expected --partner-policy DIR as well (the bundle whose round the partner plays)");
+  }
   const fs::path& policyDir = session->policyDir;
   const Scenario& scenario = session->scenario;
   const GraphResult& graph = session->graph;
@@ -440,6 +453,15 @@ json runSimulate(const SimulateOptions& options) {
                  {"world", worldParamsJson(params)}};
   if (avatars <= 1000) report["hits_by_avatar"] = byAvatar;
   if (options.controller == "policy") report["policy"] = policyDir.string();
+  if (!options.partnerPolicy.empty()) {
+    // Two policies spar: the hits each side landed (the first avatar of each pair plays
+    // --policy, the second --partner-policy).
+    std::size_t first = 0, second = 0;
+    for (const HitEvent& e : world.events()) (e.attacker % 2 == 0 ? first : second) += 1;
+    report["partner_policy"] = session->partnerPolicyDir.string();
+    if (options.partnerRound > 0) report["partner_round"] = options.partnerRound;
+    report["hits_by_side"] = {{"policy", first}, {"partner_policy", second}};
+  }
   if (!bvhFiles.empty()) {
     report["bvh_files"] = bvhFiles;
     report["bvh_folder"] = options.bvhOut.string();
@@ -460,6 +482,10 @@ std::string simulateText(const json& r) {
       r["hits_per_avatar_minute"].get<double>(), r["hits_by_part"]["head"].get<std::size_t>(),
       r["hits_by_part"]["chest"].get<std::size_t>(), r["hits_by_part"]["spine"].get<std::size_t>(),
       r["hits_by_part"]["target"].get<std::size_t>());
+  if (r.contains("hits_by_side"))
+    text += fmt::format("sides: {} landed {}, {} (the partners) landed {}\n", r["policy"].get<std::string>(),
+                        r["hits_by_side"]["policy"].get<std::size_t>(), r["partner_policy"].get<std::string>(),
+                        r["hits_by_side"]["partner_policy"].get<std::size_t>());
   if (r.contains("bvh_files"))
     text += fmt::format("wrote {} to {}\n", counted(r["bvh_files"].size(), "BVH file"),
                         r["bvh_folder"].get<std::string>());

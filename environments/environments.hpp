@@ -74,7 +74,7 @@ class LearnedOpponent final : public EnvironmentModel {
 
   /// `policy` as written: "scripted" or a bundle directory.
   const std::string& policy() const { return policy_; }
-  int phases() const { return phases_; }
+  int opponentPhases() const override { return phases_; }
   int rounds() const override { return rounds_; }
   /// The graph state s's representative incoming action (what the opponent is taken to be
   /// playing when only its end state and phase are known).

@@ -93,8 +93,7 @@ std::size_t LearnedOpponent::opponentStates() const {
 
 std::uint32_t LearnedOpponent::phaseOf(std::uint32_t tau, std::uint32_t length) const {
   // tau in [1, length]: bucket b covers tau in (b length / P, (b + 1) length / P].
-  return std::min<std::uint32_t>(static_cast<std::uint32_t>(phases_) - 1,
-                                 (tau - 1) * static_cast<std::uint32_t>(phases_) / length);
+  return static_cast<std::uint32_t>(opponentStateIndex(0, tau, length, phases_));
 }
 
 std::uint32_t LearnedOpponent::framesLeft(const StateActionModel& m, std::uint32_t s, std::uint32_t b) const {

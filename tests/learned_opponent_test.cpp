@@ -310,6 +310,23 @@ TEST_CASE("mgrl train runs self-play rounds against a learned opponent, keeps ev
   INFO(against.err);
   CHECK(against.status == 0);
   CHECK(test::readText(box.path("next") / "spar.q.npy") != test::readText(box.path("policy") / "spar-round1.q.npy"));
+
+  // Two policies spar in the world: the first of each pair plays --policy, the second
+  // --partner-policy, each told what the other is doing; the hits are counted per side.
+  const test::Run bout =
+      box.run("simulate " + box.scenario() + kSmallSpar + " --seconds 20 --avatars 4 --json --policy " +
+              test::shellWord(box.path("policy")) + " --partner-policy " + test::shellWord(box.path("next")));
+  const nlohmann::json sides = bout.report();
+  REQUIRE(sides.contains("hits_by_side"));
+  CHECK(sides["hits_by_side"]["policy"].get<std::size_t>() +
+            sides["hits_by_side"]["partner_policy"].get<std::size_t>() ==
+        sides["hits"].get<std::size_t>());
+  CHECK(sides["partner_policy"] == box.path("next").string());
+  // A partner policy needs policies on both sides.
+  const test::Run random = box.run("simulate " + box.scenario() + kSmallSpar +
+                                   " --controller random --partner-policy " + test::shellWord(box.path("next")));
+  CHECK(random.status != 0);
+  CHECK(random.lastErrorLine().find("--partner-policy: expected --controller policy") != std::string::npos);
 }
 
 TEST_CASE("a learned opponent refuses a grid with speed layers and a missing policy bundle, each at its key",

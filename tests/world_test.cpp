@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <cmath>
 #include <set>
+#include <span>
 #include <sstream>
 
 #include "app/graph_command.hpp"
@@ -674,6 +675,80 @@ TEST_CASE("an opponent's facing reaches the controller: a partner's own, a targe
   const double partnerFacing = std::remainder(world.lastDecision(1).frame.dyaw - d.frame.dyaw, 2 * M_PI);
   CHECK(d.target.heading == Approx(partnerFacing).margin(1e-12));
   CHECK(std::abs(d.target.heading) > M_PI - 45 * M_PI / 180);
+}
+
+namespace {
+
+// Takes the first (or last) action of every state, and remembers what it was shown.
+class EndController final : public Controller {
+ public:
+  EndController(const StateActionModel& m, bool last) : model_(m), last_(last) {}
+  std::size_t choose(std::uint32_t s, const TargetState&, Rng&) override {
+    return last_ ? model_.stateActionBegin[s + 1] - 1 : model_.stateActionBegin[s];
+  }
+  std::size_t choose(std::uint32_t s, const TargetState& e, Rng& rng, std::span<const std::uint8_t>) override {
+    return choose(s, e, rng);
+  }
+
+ private:
+  const StateActionModel& model_;
+  bool last_;
+};
+
+}  // namespace
+
+TEST_CASE("a learned opponent's state reaches the controller: what the partner is doing, and two policies spar",
+          "[world][data][opponent]") {
+  const Boxing& b = boxing();
+  const StateActionModel& m = b.model();
+  WorldSetup s = b.setup(2);
+  s.params.mode = "sparring";
+  s.params.bodyRadius = 0;  // every action allowed: the controllers' choices are what they say
+  s.opponent = true;
+  s.opponentPhases = 2;
+  s.makeController = [&m] { return std::make_unique<EndController>(m, false); };
+  s.makePartnerController = [&m] { return std::make_unique<EndController>(m, true); };
+  World world(s);
+  REQUIRE(world.partner(0) == 1);
+  std::size_t seen = 0, decidedAt = 0, partnerDecidedAt = 0, partnerDecisions = 0;
+  World::Decision partner{};
+  for (std::size_t frame = 1; frame <= 900; ++frame) {
+    const World::Decision before = world.lastDecision(0);
+    const World::Decision partnerBefore = partner;
+    const std::size_t partnerBeforeAt = partnerDecidedAt;
+    world.run(1);
+    const World::Decision mine = world.lastDecision(0);
+    partner = world.lastDecision(1);
+    if (partner.count != partnerDecisions) {
+      partnerDecisions = partner.count;
+      partnerDecidedAt = frame;
+      // The partner plays its own controller: the last action of its state.
+      CHECK(partner.action == m.stateActionBegin[partner.state + 1] - 1);
+    }
+    if (mine.count == before.count) continue;
+    decidedAt = frame;
+    ++seen;
+    CHECK(mine.action == m.stateActionBegin[mine.state]);
+    // Avatar 0 decided at this frame from the last frame's snapshot of its partner: the
+    // action it had decided on at partnerBeforeAt, with frame - partnerBeforeAt frames played.
+    if (frame == 1) {
+      CHECK(mine.target.opponent == opponentStateIndex(world.lastDecision(1).state, 1, 1, 2));
+    } else {
+      const auto length = static_cast<std::uint32_t>(m.actionLength(partnerBefore.action));
+      const auto played = static_cast<std::uint32_t>(frame - partnerBeforeAt);
+      REQUIRE(played <= length);
+      CHECK(mine.target.opponent == opponentStateIndex(m.actionTo[partnerBefore.action],
+                                                       std::max<std::uint32_t>(1, length - played), length, 2));
+    }
+  }
+  CHECK(seen >= 10);
+  CHECK(decidedAt > 0);
+  // Without phases the field stays -1, as every other environment model has it.
+  WorldSetup plain = b.setup(2);
+  plain.opponent = true;
+  World other(plain);
+  other.run(1);
+  CHECK(other.lastDecision(0).target.opponent == -1);
 }
 
 }  // namespace mgrl

@@ -118,6 +118,12 @@ class Simulate final : public Command {
     sub_->add_option("--bvh-out", options_.bvhOut, "Write one BVH per avatar into this folder");
     sub_->add_option("--events-out", options_.eventsOut, "Write the hits as JSON lines to this file");
     sub_->add_option("--policy", options_.policy, "Policy bundle folder (default: the one mgrl train writes)");
+    sub_->add_option("--partner-policy", options_.partnerPolicy,
+                     "Sparring: the second avatar of each pair plays this bundle instead (two policies spar)");
+    sub_->add_option("--partner-round", options_.partnerRound,
+                     "With --partner-policy: the partner plays that self-play round's tables (mgrl train keeps every "
+                     "round)")
+        ->check(CLI::Range(1, 1000));
     sub_->add_option("--controller", options_.controller, "policy, online_search or random")->default_str("policy");
     sub_->add_option("--horizon", options_.horizon, "online_search: search depth in actions")->default_val(3);
     sub_->add_option("--horizon-seconds", options_.horizonSeconds, "online_search: search this much motion instead (s)");

@@ -72,6 +72,9 @@ class EnvironmentModel {
   virtual void bind(const StateActionModel&) {}
   /// The number of discrete opponent states (layers the grid gets), 0 for none.
   virtual std::size_t opponentStates() const { return 0; }
+  /// The phase buckets per graph state of those (opponentStateIndex()), 0 for none: what the
+  /// runtime world needs to tell a controller what a sparring partner is doing.
+  virtual int opponentPhases() const { return 0; }
   /// What the opponent does at frames 1..L of action a from e (out[t - 1] for frame t, L
   /// entries); false (out untouched) for a model without a learned opponent.
   virtual bool track(const StateActionModel&, std::size_t /*action*/, const TargetState&,

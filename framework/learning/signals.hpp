@@ -6,6 +6,7 @@
 /// is the model's action frame actionFrameBegin[a] + t - 1; the target e is in the
 /// decision's avatar frame (DESIGN.md sec. 3: +Z facing, +X left, Y up), as the learners
 /// see it.
+#include <algorithm>
 #include <cstddef>
 #include <cstdint>
 #include <string>
@@ -157,6 +158,15 @@ Eigen::Vector3d applyMotion(const GroundMotion& g, const Eigen::Vector3d& p);
 /// A learned opponent's root at frame f, in the avatar's decision frame.
 inline GroundMotion opponentRootAt(const StateActionModel& m, const OpponentFrame& f) {
   return composeMotion(f.decision, actionFrameMotion(m, f.action, f.offset));
+}
+
+/// A learned opponent's discrete state (TargetState::opponent, issue 43): `endState`, the
+/// graph state its current action ends at, and the phase bucket of the `framesLeft` (in [1,
+/// length]) of that action's `length` frames, out of `phases` (bucket 0: about to arrive).
+inline std::int32_t opponentStateIndex(std::uint32_t endState, std::uint32_t framesLeft, std::uint32_t length,
+                                       int phases) {
+  const auto p = static_cast<std::uint32_t>(phases);
+  return static_cast<std::int32_t>(endState * p + std::min<std::uint32_t>(p - 1, (framesLeft - 1) * p / length));
 }
 
 /// How far joint `joint` of the avatar, at its action frame `frame`, is from the opponent's

@@ -162,6 +162,20 @@ Eigen::Vector3d World::aim(std::size_t i) const {
 void World::decide(std::size_t i, Controller& controller) {
   Avatar& a = avatars_[i];
   TargetState e = inverseTransformPoint(a.decision, aim(i));
+  if (setup_.opponentPhases > 0) {
+    // What the partner is doing, from the last frame's snapshot (the same whatever the
+    // order avatars are advanced in): the state its action ends at and the frames left.
+    if (a.partner >= 0) {
+      const auto partner = static_cast<std::size_t>(a.partner);
+      const Track& t = tracks_[partner];
+      e.opponent = t.length > 0
+                       ? opponentStateIndex(model_.actionTo[t.action], std::max<std::uint32_t>(1, t.length - t.step),
+                                            t.length, setup_.opponentPhases)
+                       : opponentStateIndex(avatars_[partner].state, 1, 1, setup_.opponentPhases);
+    } else {
+      e.opponent = 0;
+    }
+  }
   if (setup_.opponent)
     e.heading = a.partner >= 0
                     ? std::remainder(avatars_[static_cast<std::size_t>(a.partner)].now.dyaw - a.decision.dyaw, 2 * M_PI)
@@ -181,10 +195,13 @@ void World::decide(std::size_t i, Controller& controller) {
   ++a.decisions;
   a.decisionTarget = e.position;
   a.decisionHeading = e.heading;
+  a.decisionOpponent = e.opponent;
   if (a.playback) a.playback->begin(a.action);
 }
 
-void World::advance(std::size_t begin, std::size_t end, Controller& controller) {
+void World::advance(std::size_t begin, std::size_t end, unsigned worker) {
+  Controller& controller = *controllers_[worker];
+  Controller* partnerController = partnerControllers_.empty() ? nullptr : partnerControllers_[worker].get();
   const WorldParams& p = setup_.params;
   const double dt = model_.frameTime;
   const double time = static_cast<double>(frame_) * dt;  // frame_ already counts this frame
@@ -209,7 +226,7 @@ void World::advance(std::size_t begin, std::size_t end, Controller& controller) 
         a.decision = compose(a.decision, model_.displacement(a.action));
         a.state = model_.actionTo[a.action];
       }
-      decide(i, controller);
+      decide(i, partnerController && (i & 1) && a.partner >= 0 ? *partnerController : controller);
     }
     ++a.step;
     const std::size_t k = model_.actionFrameBegin[a.action] + a.step - 1;
@@ -350,6 +367,8 @@ void World::run(std::size_t frames) {
   const auto threads = static_cast<unsigned>(
       std::clamp<std::size_t>(std::min<std::size_t>(setup_.threads, n / 64), 1, 64));
   while (controllers_.size() < threads) controllers_.push_back(setup_.makeController());
+  if (setup_.makePartnerController)
+    while (partnerControllers_.size() < threads) partnerControllers_.push_back(setup_.makePartnerController());
   std::vector<std::vector<HitEvent>> found(threads);
   auto range = [&](unsigned w) { return std::pair<std::size_t, std::size_t>{n * w / threads, n * (w + 1) / threads}; };
   auto finishFrame = [&] {
@@ -373,7 +392,7 @@ void World::run(std::size_t frames) {
   if (threads == 1) {
     for (std::size_t f = 0; f < frames; ++f) {
       ++frame_;
-      advance(0, n, *controllers_[0]);
+      advance(0, n, 0);
       placeBodies();
       if (setup_.poses) updatePoses(0, n);
       collide(0, n, found[0]);
@@ -390,7 +409,7 @@ void World::run(std::size_t frames) {
       if (w == 0) ++frame_;
       sync.arrive_and_wait();
       try {
-        advance(begin, end, *controllers_[w]);
+        advance(begin, end, w);
       } catch (...) {
         const std::lock_guard lock(failureMutex);
         if (!failure) failure = std::current_exception();
@@ -439,7 +458,9 @@ std::size_t World::avatarCount() const { return avatars_.size(); }
 GroundMotion World::avatarFrame(std::size_t i) const { return avatars_[i].now; }
 World::Decision World::lastDecision(std::size_t i) const {
   const Avatar& a = avatars_[i];
-  return {a.state, a.action, a.decision, TargetState(a.decisionTarget, 0.0, a.decisionHeading), a.decisions};
+  TargetState target(a.decisionTarget, 0.0, a.decisionHeading);
+  target.opponent = a.decisionOpponent;
+  return {a.state, a.action, a.decision, target, a.decisions};
 }
 int World::partner(std::size_t i) const { return avatars_[i].partner; }
 const Target& World::target(std::size_t i) const { return targets_[i]; }

@@ -138,6 +138,16 @@ struct WorldSetup {
   /// for a target of the targets mode, straight at the avatar (an opponent that turns to
   /// face it, as the model's does).
   bool opponent = false;
+  /// The behaviours' environment is a `learned_opponent` (issue 43) with this many phases per
+  /// graph state: controllers also see what a sparring partner is doing (TargetState::
+  /// opponent: the state its action ends at and the phase of the frames left, as the tables
+  /// were trained with); a target of the targets mode is taken to be about to arrive at
+  /// state 0. 0: no such state.
+  int opponentPhases = 0;
+  /// Optional: makes the controllers of the second avatar of each sparring pair (odd
+  /// indices), so that two policies spar (`simulate --partner-policy`); unset, every avatar
+  /// plays makeController's.
+  std::function<std::unique_ptr<Controller>()> makePartnerController;
 };
 
 class World {
@@ -205,7 +215,7 @@ class World {
   struct Worker;
   void startAvatar(std::size_t i);
   void decide(std::size_t i, Controller& controller);
-  void advance(std::size_t begin, std::size_t end, Controller& controller);
+  void advance(std::size_t begin, std::size_t end, unsigned worker);
   void collide(std::size_t begin, std::size_t end, std::vector<HitEvent>& out);
   void react(const HitEvent& event);
   void updatePoses(std::size_t begin, std::size_t end);
@@ -241,6 +251,7 @@ class World {
   std::vector<Eigen::Vector3d> heads_;  ///< every avatar's aim point (head or chest) at the end of the last frame
   std::vector<HitEvent> events_;
   std::vector<std::unique_ptr<Controller>> controllers_;
+  std::vector<std::unique_ptr<Controller>> partnerControllers_;  ///< one per worker, if makePartnerController
   std::size_t frame_ = 0;
   double centroidHeight_ = 0;
   int aimPoint_ = BodyTable::Head;

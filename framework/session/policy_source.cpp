@@ -207,8 +207,13 @@ fs::path resolvePolicy(const fs::path& policy, Scenario& scenario, const Session
 
 std::vector<PolicyPart> policyParts(const fs::path& dir, const std::vector<Behavior>& behaviors,
                                     const GraphResult& graph, const SessionOptions& options, PolicyBundle& bundle,
-                                    const std::string& skip) {
+                                    const std::string& skip, bool sameSettings) {
   bundle = loadPolicyBundle(dir, graph.model, graph.key);
+  return policyPartsOf(bundle, dir, behaviors, options, skip, sameSettings);
+}
+
+std::vector<PolicyPart> policyPartsOf(PolicyBundle& bundle, const fs::path& dir, const std::vector<Behavior>& behaviors,
+                                      const SessionOptions& options, const std::string& skip, bool sameSettings) {
   std::vector<PolicyPart> parts;
   for (const Behavior& b : behaviors) {
     if (b.name == skip) continue;
@@ -217,7 +222,7 @@ std::vector<PolicyPart> policyParts(const fs::path& dir, const std::vector<Behav
       throw Error(fmt::format("{}: expected a trained table for behaviour '{}' that the scenario asks for, found "
                               "none; run mgrl train {} --behavior {}{}",
                               dir.string(), b.name, options.scenario.string(), b.name, setFlags(options.sets)));
-    if (found->second.key != b.key)
+    if (sameSettings && found->second.key != b.key)
       throw Error(fmt::format("{}: behaviour '{}' was trained with other settings than the scenario's now (key {} "
                               "vs {}); retrain with mgrl train {} --behavior {}{}",
                               dir.string(), b.name, found->second.key.substr(0, 16), b.key.substr(0, 16),

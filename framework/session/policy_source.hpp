@@ -63,9 +63,15 @@ std::filesystem::path resolvePolicy(const std::filesystem::path& policy, Scenari
 
 /// Loads the bundle into `bundle` and returns one part per behaviour (pointing into
 /// `bundle` and `behaviors`), in order, leaving out the behaviour named `skip` (compare
-/// supplies that one's table itself). Throws mgrl::Error for a missing or stale behaviour.
+/// supplies that one's table itself). Throws mgrl::Error for a missing or stale behaviour;
+/// with `sameSettings` false (a sparring partner's bundle) a table trained with other
+/// settings is taken when it fits the grid.
 std::vector<PolicyPart> policyParts(const std::filesystem::path& dir, const std::vector<Behavior>& behaviors,
                                     const GraphResult& graph, const SessionOptions& options, PolicyBundle& bundle,
-                                    const std::string& skip = {});
+                                    const std::string& skip = {}, bool sameSettings = true);
+/// The same for a bundle already loaded from `dir`.
+std::vector<PolicyPart> policyPartsOf(PolicyBundle& bundle, const std::filesystem::path& dir,
+                                      const std::vector<Behavior>& behaviors, const SessionOptions& options,
+                                      const std::string& skip = {}, bool sameSettings = true);
 
 }  // namespace mgrl

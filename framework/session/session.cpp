@@ -29,10 +29,39 @@ WorldSetup Session::worldSetup(std::size_t avatars, std::uint64_t seed, const Co
   setup.avatars = avatars;
   setup.seed = seed;
   setup.opponent = task.opponent;
+  setup.opponentPhases = task.opponentPhases;
   const ControllerParts parts = controllerParts(task.world.variety);
   requireParts(choice, parts);  // now, not at the world's first decision
   setup.makeController = [choice, parts] { return makeController(choice, parts); };
+  if (!partnerPolicy.empty()) {
+    ControllerParts partner = parts;
+    partner.policy = partnerPolicy;
+    const ControllerChoice greedy{.name = "policy"};
+    setup.makePartnerController = [greedy, partner] { return makeController(greedy, partner); };
+  }
   return setup;
+}
+
+void Session::loadPartnerPolicy(const std::filesystem::path& dir, int round) {
+  partnerBundle = loadPolicyBundle(dir, graph.model, graph.key);
+  if (round > 0) {
+    // Self-play rounds are kept as NAME-roundK (mgrl train, issue 43).
+    for (const Behavior& b : behaviors) {
+      const std::string name = fmt::format("{}-round{}", b.name, round);
+      auto found = partnerBundle.behaviors.find(name);
+      if (found == partnerBundle.behaviors.end()) {
+        std::string have;
+        for (const auto& entry : partnerBundle.behaviors) have += (have.empty() ? "" : ", ") + entry.first;
+        throw Error(fmt::format("{}: expected self-play round {}'s table for behaviour '{}' ({}), found only {}",
+                                dir.string(), round, b.name, name, have));
+      }
+      partnerBundle.behaviors[b.name] = std::move(found->second);
+    }
+  }
+  // A partner may have been trained with other settings (another opponent, other self-play
+  // rounds): its tables need only fit the scenario's graph and grids.
+  partnerPolicy = policyPartsOf(partnerBundle, dir, behaviors, options, {}, false);
+  partnerPolicyDir = dir;
 }
 
 std::unique_ptr<Session> openSession(const SessionOptions& options, const SessionNeeds& needs) {

@@ -64,6 +64,11 @@ class Session {
   std::filesystem::path policyDir;
   PolicyBundle bundle;
   std::vector<PolicyPart> policy;
+  /// A second bundle for the second avatar of each sparring pair (loadPartnerPolicy()):
+  /// two policies spar (issue 43). Empty: every avatar plays `policy`.
+  std::filesystem::path partnerPolicyDir;
+  PolicyBundle partnerBundle;
+  std::vector<PolicyPart> partnerPolicy;
   /// PolicyNeed::IfAvailable and no bundle used: why (shown to the user); "" otherwise.
   std::string policyNote;
   /// The behaviours as the online search sees them (rewards, weights, activations).
@@ -79,6 +84,11 @@ class Session {
   /// `world:`), each avatar run by a controller of `choice` with the world's variety. One
   /// thread, no poses: set WorldSetup::threads, poses and record as needed.
   WorldSetup worldSetup(std::size_t avatars, std::uint64_t seed, const ControllerChoice& choice) const;
+  /// Loads `dir`, a bundle trained on this graph with tables for every behaviour (checked
+  /// as the main one is), for the partners: worldSetup() then gives the second avatar of
+  /// each pair a policy controller on it. Throws mgrl::Error naming the bundle's problem.
+  /// `round` > 0: the tables of that self-play round (NAME-roundK) instead of the final ones.
+  void loadPartnerPolicy(const std::filesystem::path& dir, int round = 0);
 };
 
 /// Opens the scenario of `options` for `needs`: the scenario checked, the bundle looked up

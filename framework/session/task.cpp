@@ -55,6 +55,7 @@ Task taskOf(const Behavior& first) {
   task.environment = first.environment.get();
   task.gamma = first.reward->gamma();
   task.opponent = first.environment->faces();
+  task.opponentPhases = first.environment->opponentPhases();
   return task;
 }
 

@@ -20,6 +20,8 @@ struct Task {
   double gamma = 0.97;
   /// The environment is an opponent that turns to face the avatar (TargetState::heading).
   bool opponent = false;
+  /// A learned opponent's phases per graph state (EnvironmentModel::opponentPhases()), 0 for none.
+  int opponentPhases = 0;
   /// The scenario's `world:` section (defaults where absent), parsed once here.
   WorldParams world;
 
