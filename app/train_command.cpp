@@ -367,18 +367,27 @@ json runTrain(const TrainOptions& options) {
     const bool compact = options.model == "compact" ||
                          (options.model == "auto" && tabulatedBytes > options.maxMemoryBytes && canCompact);
     const double needed = compact ? compactBytes : tabulatedBytes;
+    // A learned opponent's states multiply the grid (issue 43): say by how much.
+    const std::size_t opponentStates = behavior.environment->opponentStates();
+    const std::string opponentNote =
+        opponentStates > 0 ? fmt::format(
+                                 " (a learned opponent's {} states times {} positions: fewer phases or a "
+                                 "coarser grid shrink it; a table larger than one machine needs a distributed "
+                                 "learner, which mgrl does not have yet)",
+                                 opponentStates, behavior.discretizer->layerVertexCount())
+                           : std::string();
     if (needed > options.maxMemoryBytes)
-      throw Error(fmt::format("behaviors.{}: training on a {} grid of {}{} vertices x {} actions needs about {} "
-                              "({} model and Q tables{}); expected at most {} (--max-memory): use a coarser grid{}, or "
-                              "raise --max-memory",
-                              behavior.name, behavior.discretizer->type(),
-                              vertices > behavior.discretizer->vertexCount() ? "up to " : "", vertices,
-                              model.actionCount(), humanBytes(needed), compact ? "compact" : "tabulated",
-                              extra > 0 ? fmt::format(", {} more tables held", behavior.learner->extraTables()) : "",
-                              humanBytes(options.maxMemoryBytes),
-                              !compact && canCompact && compactBytes <= options.maxMemoryBytes
-                                  ? fmt::format(", --model compact (about {})", humanBytes(compactBytes))
-                                  : ""));
+      throw Error(fmt::format(
+          "behaviors.{}: training on a {} grid of {}{} vertices{} x {} actions needs about {} "
+          "({} model and Q tables{}); expected at most {} (--max-memory): use a coarser grid{}, or "
+          "raise --max-memory",
+          behavior.name, behavior.discretizer->type(), vertices > behavior.discretizer->vertexCount() ? "up to " : "",
+          vertices, opponentNote, model.actionCount(), humanBytes(needed), compact ? "compact" : "tabulated",
+          extra > 0 ? fmt::format(", {} more tables held", behavior.learner->extraTables()) : "",
+          humanBytes(options.maxMemoryBytes),
+          !compact && canCompact && compactBytes <= options.maxMemoryBytes
+              ? fmt::format(", --model compact (about {})", humanBytes(compactBytes))
+              : ""));
     compactModel[behavior.name] = compact;
     if (compact && options.model == "auto")
       log(fmt::format("train {}: the tabulated model and tables would need about {}, over --max-memory {}: using "

@@ -344,6 +344,14 @@ TEST_CASE("a learned opponent refuses a grid with speed layers and a missing pol
   CHECK(missing.lastErrorLine().find("behaviors.spar.environment.policy") != std::string::npos);
   CHECK(missing.lastErrorLine().find("no policy bundle here") != std::string::npos);
   CHECK_FALSE(fs::exists(box.path("b")));
+  // Too large for --max-memory: refused before anything is tabulated, saying what multiplies it.
+  const test::Run big =
+      box.run("train " + box.scenario() + " --max-memory 0.5 --out " + test::shellWord(box.path("c")));
+  CHECK(big.status != 0);
+  CHECK(big.lastErrorLine().find("behaviors.spar: training on a polar_velocity grid of 33696 vertices (a learned "
+                                 "opponent's 234 states times 144 positions") != std::string::npos);
+  CHECK(big.lastErrorLine().find("expected at most 500.0 MB (--max-memory)") != std::string::npos);
+  CHECK(big.err.find("tabulated") == std::string::npos);
 }
 
 }  // namespace mgrl
