@@ -149,7 +149,8 @@ class PySession {
     p.outIndices = py::array_t<std::int32_t>(A);
     for (std::size_t a = 0; a < A; ++a) p.outIndices.mutable_data()[a] = static_cast<std::int32_t>(a);
     // Each vertex as the grid's coordinates (angle, distance, height, ... as its axes say),
-    // and on a grid with speed layers its layer's speed last.
+    // and on a grid with speed layers its layer's speed last (with a learned opponent's
+    // layers, its discrete state: graph state x phases + phase).
     const int D = grid.dimension(), columns = D + (grid.layerAxis() ? 1 : 0);
     p.vertices = py::array_t<double>({V, static_cast<std::size_t>(columns)});
     for (std::size_t v = 0; v < V; ++v) {
@@ -157,7 +158,7 @@ class PySession {
       const auto coordinates = grid.coordinates(e);
       double* row = p.vertices.mutable_data() + v * static_cast<std::size_t>(columns);
       for (int d = 0; d < D; ++d) row[d] = coordinates[static_cast<std::size_t>(d)];
-      if (grid.layerAxis()) row[D] = e.speed;
+      if (grid.layerAxis()) row[D] = grid.layerCoordinate(e);
     }
     p.tabulateSeconds = tabulated;
     p.arraysSeconds = since(started) - tabulated;
