@@ -1,6 +1,5 @@
 // `mgrl train` (DESIGN.md sec. 5): trains a scenario's behaviours and saves a policy bundle.
 #include <atomic>
-#include <cmath>
 #include <csignal>
 #include <cstdlib>
 #include <iostream>
@@ -25,6 +24,7 @@
 #include "mgrl/learning/problem.hpp"
 #include "mgrl/scenario/behaviors.hpp"
 #include "plugins.hpp"
+#include "self_play.hpp"
 
 namespace mgrl::app {
 
@@ -192,42 +192,6 @@ void removeCheckpoint(const fs::path& dir) {
 
 
 namespace {
-
-// Self-play scores (issue 43): the same episodes for every table compared.
-constexpr std::uint64_t kSelfPlaySeed = 43;
-
-struct SelfPlayScore {
-  double meanReturn = 0;
-};
-
-// The mean discounted return of the greedy policy of `table` over 200 episodes of 10 s
-// against the behaviour's environment as it stands (its opponent playing what it was last
-// given): starts drawn from `seed` (graph state uniform, the opponent at a grid position
-// drawn uniformly in grid coordinates, its own state drawn by the environment).
-SelfPlayScore selfPlayScore(const Behavior& b, const StateActionModel& m, const QTable& table, std::uint64_t seed) {
-  constexpr int kEpisodes = 200;
-  constexpr double kSeconds = 10;
-  Rng rng(seed);
-  const double gamma = b.reward->gamma();
-  const double limit = kSeconds / m.frameTime;
-  double total = 0;
-  for (int episode = 0; episode < kEpisodes; ++episode) {
-    auto s = static_cast<std::uint32_t>(rng.below(m.stateCount()));
-    TargetState e = b.environment->draw(b.discretizer->sample(rng).position, rng);
-    double elapsed = 0, discount = 1, sum = 0;
-    while (elapsed < limit) {
-      const std::size_t a = greedyAction(m, *b.discretizer, table, s, e);
-      sum += discount * b.reward->evaluate(m, a, e);
-      const auto frames = static_cast<double>(m.actionLength(a));
-      discount *= std::pow(gamma, frames);
-      elapsed += frames;
-      e = b.environment->next(m, a, e);
-      s = m.actionTo[a];
-    }
-    total += sum;
-  }
-  return {total / kEpisodes};
-}
 
 // A stopped run keeps what had finished: the bundle is saved with the finished tables and
 // the unfinished behaviours named in its provenance (so eval and simulate refuse it,
@@ -485,27 +449,7 @@ json runTrain(const TrainOptions& options) {
       log(fmt::format("train {}: {} updates in {:.2f} s ({}updates/s), Bellman residual {:.3g}", label, result.updates,
                       result.seconds, humanCount(rate), result.finalResidual));
       if (rounds > 1) {
-        // Self-play (issue 43): how much this round's table gains over the last round's
-        // against the opponent it was trained against (that last round's table): a
-        // best-response gap, which shrinks as the rounds settle.
-        json entry = {
-            {"round", round},
-            {"opponent", round == 1 ? behavior.environment->policyKey() : fmt::format("round {}", round - 1)}};
-        const SelfPlayScore mine = selfPlayScore(behavior, model, result.table, kSelfPlaySeed);
-        entry["return"] = mine.meanReturn;
-        if (previous) {
-          const SelfPlayScore old = selfPlayScore(behavior, model, *previous, kSelfPlaySeed);
-          entry["previous_return"] = old.meanReturn;
-          entry["gap"] = mine.meanReturn - old.meanReturn;
-          log(fmt::format(
-              "train {}: round {}: return {:.3f} against round {}'s table, which itself gets {:.3f}: "
-              "best-response gap {:.3f}",
-              behavior.name, round, mine.meanReturn, round - 1, old.meanReturn, mine.meanReturn - old.meanReturn));
-        } else {
-          log(fmt::format("train {}: round {}: return {:.3f} against its {} opponent", behavior.name, round,
-                          mine.meanReturn, behavior.environment->policyKey()));
-        }
-        roundsReport.push_back(entry);
+        roundsReport.push_back(selfPlayRound(behavior, model, round, result.table, previous.get(), log));
         record["round"] = round;
         record["rounds"] = roundsReport;
         report["behaviors"][behavior.name]["rounds"] = roundsReport;
