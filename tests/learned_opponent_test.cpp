@@ -52,6 +52,12 @@ SparFixture& fixture() {
 
 double wrapped(double angle) { return std::remainder(angle, 2 * M_PI); }
 
+// The motion that undoes g: compose(g, inverse(g)) is no motion.
+GroundMotion inverse(const GroundMotion& g) {
+  const Eigen::Vector3d back = inverseTransformPoint(g, Eigen::Vector3d::Zero());
+  return {back.x(), back.z(), -g.dyaw};
+}
+
 }  // namespace
 
 TEST_CASE("a learned opponent's state is its end state and phase, one grid layer each", "[opponent][data]") {
@@ -170,11 +176,7 @@ TEST_CASE(
     std::uint32_t played = static_cast<std::uint32_t>(m.actionLength(oa)) -
                            opponent.framesLeft(m, os, static_cast<std::uint32_t>(e.opponent) % 2);
     const GroundMotion start = compose(avatar, {e.position.x(), e.position.z(), e.heading});
-    GroundMotion odecision = compose(start, [&] {
-      const GroundMotion k = actionFrameMotion(m, oa, played);
-      const Eigen::Vector3d back = inverseTransformPoint(k, Eigen::Vector3d::Zero());
-      return GroundMotion{back.x(), back.z(), -k.dyaw};
-    }());
+    GroundMotion odecision = compose(start, inverse(actionFrameMotion(m, oa, played)));
     for (int step = 0; step < 12; ++step) {
       const std::size_t a = m.stateActionBegin[s] + rng.below(m.stateActionBegin[s + 1] - m.stateActionBegin[s]);
       const auto L = static_cast<std::uint32_t>(m.actionLength(a));
@@ -237,11 +239,7 @@ TEST_CASE(
       const std::uint32_t rplayed = static_cast<std::uint32_t>(m.actionLength(r)) -
                                     opponent.framesLeft(m, os, static_cast<std::uint32_t>(predicted.opponent) % 2);
       const GroundMotion trueEnd = compose(odecision, m.displacement(oa));
-      const GroundMotion snappedDecision = compose(root, [&] {
-        const GroundMotion k = actionFrameMotion(m, r, rplayed);
-        const Eigen::Vector3d back = inverseTransformPoint(k, Eigen::Vector3d::Zero());
-        return GroundMotion{back.x(), back.z(), -k.dyaw};
-      }());
+      const GroundMotion snappedDecision = compose(root, inverse(actionFrameMotion(m, r, rplayed)));
       const GroundMotion snappedEnd = compose(snappedDecision, m.displacement(r));
       snapGap.push_back(std::hypot(trueEnd.dx - snappedEnd.dx, trueEnd.dz - snappedEnd.dz));
       oa = r;
@@ -334,8 +332,10 @@ TEST_CASE("mgrl train runs self-play rounds against a learned opponent, keeps ev
   CHECK(random.lastErrorLine().find("--partner-policy: expected --controller policy") != std::string::npos);
 }
 
-TEST_CASE("a learned opponent refuses a grid with speed layers and a missing policy bundle, each at its key",
-          "[opponent][cli][data]") {
+TEST_CASE(
+    "a learned opponent refuses a grid with speed layers and a missing policy bundle, each at its key; simulate "
+    "refuses a partner it cannot use",
+    "[opponent][cli][data]") {
   SparSandbox box;
   const test::Run speeds = box.run("train " + box.scenario() + " --set behaviors.spar.discretizer.speeds=3 --out " +
                                    test::shellWord(box.path("a")));
@@ -357,6 +357,15 @@ TEST_CASE("a learned opponent refuses a grid with speed layers and a missing pol
                                  "opponent's 234 states times 144 positions") != std::string::npos);
   CHECK(big.lastErrorLine().find("expected at most 500.0 MB (--max-memory)") != std::string::npos);
   CHECK(big.err.find("tabulated") == std::string::npos);
+  // simulate: a partner's round without a partner bundle, a partner outside a sparring world.
+  const test::Run round = box.run("simulate " + box.scenario() + " --controller random --partner-round 1");
+  CHECK(round.status != 0);
+  CHECK(round.lastErrorLine().find("--partner-round: expected --partner-policy DIR as well") != std::string::npos);
+  const test::Run targets = box.run("simulate " + box.scenario() + " --controller random --set world.mode=targets" +
+                                    " --partner-policy " + test::shellWord(box.path("nothing")));
+  CHECK(targets.status != 0);
+  CHECK(targets.lastErrorLine().find("--partner-policy: expected a sparring world (world.mode: sparring), found "
+                                     "targets") != std::string::npos);
 }
 
 }  // namespace mgrl
