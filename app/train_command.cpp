@@ -16,6 +16,7 @@
 #include "mgrl/core/bundle.hpp"
 #include "mgrl/core/files.hpp"
 #include "mgrl/core/hash.hpp"
+#include "mgrl/core/launch.hpp"
 #include "mgrl/core/parallel.hpp"
 #include "mgrl/core/version.hpp"
 #include "mgrl/learning/behavior.hpp"
@@ -226,7 +227,17 @@ namespace {
 
 }  // namespace
 
-json runTrain(const TrainOptions& options) {
+json runTrain(const TrainOptions& given) {
+  // Under an MPI launcher (issue 44: `mpirun -np K mgrl train`), every process runs the
+  // command, a distributed learner's ranks train together, and rank 0 alone writes (the
+  // bundle, checkpoints) and speaks; the others read the same files and stay silent.
+  const bool writes = launchedProcess().rank == 0;
+  TrainOptions options = given;
+  if (!writes) {
+    options.log = nullptr;
+    options.progressBar = false;
+    options.listen = nullptr;
+  }
   const auto log = [&](const std::string& m) {
     if (options.log) options.log(m);
   };
@@ -321,7 +332,10 @@ json runTrain(const TrainOptions& options) {
     const std::size_t vertices = behavior.learner->trainingVertices(*behavior.discretizer);
     const double extra = static_cast<double>(behavior.learner->extraTables()) * static_cast<double>(vertices) *
                          static_cast<double>(model.actionCount()) * sizeof(float);
-    const double tabulatedBytes = GridModel::trainingBytes(model.actionCount(), vertices, false) + extra;
+    // A distributed learner knows its share (issue 44).
+    const double share = behavior.learner->bytesPerProcess(model.actionCount(), vertices);
+    const double tabulatedBytes =
+        (share >= 0 ? share : GridModel::trainingBytes(model.actionCount(), vertices, false)) + extra;
     const double compactBytes = GridModel::trainingBytes(model.actionCount(), vertices, true) + extra;
     const bool canCompact = behavior.learner->takesCompactModel();
     if (options.model == "compact" && !canCompact)
@@ -333,13 +347,13 @@ json runTrain(const TrainOptions& options) {
     const double needed = compact ? compactBytes : tabulatedBytes;
     // A learned opponent's states multiply the grid (issue 43): say by how much.
     const std::size_t opponentStates = behavior.environment->opponentStates();
-    const std::string opponentNote =
-        opponentStates > 0 ? fmt::format(
-                                 " (a learned opponent's {} states times {} positions: fewer phases or a "
-                                 "coarser grid shrink it; a table larger than one machine needs a distributed "
-                                 "learner, which mgrl does not have yet)",
-                                 opponentStates, behavior.discretizer->layerVertexCount())
-                           : std::string();
+    const std::string opponentNote = opponentStates > 0
+                                         ? fmt::format(
+                                               " (a learned opponent's {} states times {} positions: fewer phases or a "
+                                               "coarser grid shrink it; a table larger than one machine trains with "
+                                               "mpi_value_iteration across machines, docs/distributed.md)",
+                                               opponentStates, behavior.discretizer->layerVertexCount())
+                                         : std::string();
     if (needed > options.maxMemoryBytes)
       throw Error(fmt::format(
           "behaviors.{}: training on a {} grid of {}{} vertices{} x {} actions needs about {} "
@@ -389,16 +403,25 @@ json runTrain(const TrainOptions& options) {
       const Problem problem = behavior.problem(model);
       const auto tabulateStart = Clock::now();
       const bool compact = compactModel.at(behavior.name);
-      const GridModel grid = compact ? GridModel::buildCompact(problem, threads) : GridModel::build(problem, threads);
+      // A learner that tabulates itself (each MPI rank its share) gets the model's frame only.
+      const bool itself = !compact && behavior.learner->tabulatesItself();
+      const GridModel grid = compact  ? GridModel::buildCompact(problem, threads)
+                             : itself ? GridModel::frame(problem)
+                                      : GridModel::build(problem, threads);
       const double tabulateSeconds = since(tabulateStart);
-      log(fmt::format("train {}: {} on a {} grid ({} vertices) x {} actions, {} tabulated in {:.2f} s ({} MB)", label,
-                      behavior.learner->type(), behavior.discretizer->type(), behavior.discretizer->vertexCount(),
-                      model.actionCount(), compact ? "rewards (compact model)" : "problem", tabulateSeconds,
-                      grid.bytes() / 1000000));
+      if (itself)
+        log(fmt::format("train {}: {} on a {} grid ({} vertices) x {} actions, tabulated by the learner", label,
+                        behavior.learner->type(), behavior.discretizer->type(), behavior.discretizer->vertexCount(),
+                        model.actionCount()));
+      else
+        log(fmt::format("train {}: {} on a {} grid ({} vertices) x {} actions, {} tabulated in {:.2f} s ({} MB)", label,
+                        behavior.learner->type(), behavior.discretizer->type(), behavior.discretizer->vertexCount(),
+                        model.actionCount(), compact ? "rewards (compact model)" : "problem", tabulateSeconds,
+                        grid.bytes() / 1000000));
 
       DirectoryCheckpointer directory(checkpointDirectory(out, label), roundKey, model,
                                       behavior.discretizer->vertexCount(), options.log);
-      if (!options.resume) directory.remove();
+      if (!options.resume && writes) directory.remove();
       CrashTestCheckpointer checkpointer(directory, behavior.name, options.log);
       checkpoints.push_back(directory.directory());
       std::optional<TrainResult> trained;
@@ -406,8 +429,10 @@ json runTrain(const TrainOptions& options) {
       {
         ProgressReporter progress(label, options.progressBar, options.log, listener.get());
         try {
-          trained = behavior.learner->train({problem, grid, &progress, &checkpointer, threads, &stopRequested});
+          trained = behavior.learner->train(
+              {problem, grid, &progress, writes ? &checkpointer : nullptr, threads, &stopRequested, round < rounds});
         } catch (const TrainInterrupted& stop) {
+          if (!writes) throw;
           interrupted(options, out, bundle, wanted, behavior.name, stop, directory.directory());
         }
       }
@@ -449,7 +474,8 @@ json runTrain(const TrainOptions& options) {
       log(fmt::format("train {}: {} updates in {:.2f} s ({}updates/s), Bellman residual {:.3g}", label, result.updates,
                       result.seconds, humanCount(rate), result.finalResidual));
       if (rounds > 1) {
-        roundsReport.push_back(selfPlayRound(behavior, model, round, result.table, previous.get(), log));
+        // Scoring the round is reporting: rank 0's (issue 44).
+        if (writes) roundsReport.push_back(selfPlayRound(behavior, model, round, result.table, previous.get(), log));
         record["round"] = round;
         record["rounds"] = roundsReport;
         report["behaviors"][behavior.name]["rounds"] = roundsReport;
@@ -461,6 +487,7 @@ json runTrain(const TrainOptions& options) {
     }
   }
   if (bundle.provenance.contains("unfinished")) bundle.provenance.erase("unfinished");
+  if (!writes) return report;
   savePolicyBundle(out, bundle);
   for (const fs::path& dir : checkpoints) removeCheckpoint(dir);
   log(fmt::format("policy: {}", out.string()));

@@ -6,11 +6,12 @@
 
 namespace mgrl::learners {
 
-/// Adds q_learning, value_iteration and adaptive_value_iteration.
+/// Adds q_learning, value_iteration, adaptive_value_iteration and mpi_value_iteration.
 void registerAll(LearnerRegistry& registry);
 void registerQLearning(LearnerRegistry& registry);
 void registerValueIteration(LearnerRegistry& registry);
 void registerAdaptiveValueIteration(LearnerRegistry& registry);
+void registerMpiValueIteration(LearnerRegistry& registry);
 
 /// The `threads` parameter both learners share.
 ParamSpec threadsSpec();

@@ -8,6 +8,7 @@ void registerAll(LearnerRegistry& registry) {
   registerQLearning(registry);
   registerValueIteration(registry);
   registerAdaptiveValueIteration(registry);
+  registerMpiValueIteration(registry);
 }
 
 }  // namespace mgrl::learners

@@ -5,7 +5,8 @@
 #   scripts/setup.sh --python also matplotlib, nbconvert and a Jupyter kernel for Debian's
 #                             python3: the notebooks (notebooks/) and their plots
 #   scripts/setup.sh --test   all of the above, Chromium, for the browser test (tests/web/),
-#                             and clang with its runtime libraries, for the fuzz smoke (libFuzzer)
+#                             clang with its runtime libraries, for the fuzz smoke (libFuzzer),
+#                             and Open MPI, for mpi_value_iteration's tests under mpirun
 # Building installs pybind11 and NumPy too: `import mgrl` (python/) is part of the build.
 set -euo pipefail
 root="$(cd "$(dirname "$0")/.." && pwd)"
@@ -17,7 +18,9 @@ command -v npm >/dev/null 2>&1 || packages+=(npm)
 # libclang-rt-dev holds libFuzzer and clang's sanitizer runtimes; clang only recommends
 # it, and recommends are not installed below.
 # clang-format: the quick tier holds changed lines to .clang-format (scripts/format_check.sh).
-[ "${1:-}" = "--test" ] && packages+=(chromium clang libclang-rt-dev clang-format)
+# openmpi-bin, libopenmpi-dev: mpirun and MPI's headers (issue 44; without them the build
+# still works and mpi_value_iteration runs as one process).
+[ "${1:-}" = "--test" ] && packages+=(chromium clang libclang-rt-dev clang-format openmpi-bin libopenmpi-dev)
 case "${1:-}" in --test | --python) packages+=(python3-matplotlib jupyter-nbconvert python3-ipykernel) ;; esac
 
 missing=()

@@ -227,9 +227,10 @@ TEST_CASE("behaviour mistakes name the file, line, column and key", "[behaviors]
                             "polar2d, cylindrical3d, kd_tree, polar_velocity)"));
     REQUIRE_CONFIG_ERROR(build(approachWith(16, "      type: punch")),
                          at(16, 13, "behaviors.approach.reward.type: unknown reward 'punch' (known: approach, hit, terms)"));
-    REQUIRE_CONFIG_ERROR(
-        build(approachWith(20, "      type: sarsa")),
-        at(20, 13, "behaviors.approach.learner.type: unknown learner 'sarsa' (known: q_learning, value_iteration, adaptive_value_iteration)"));
+    REQUIRE_CONFIG_ERROR(build(approachWith(20, "      type: sarsa")),
+                         at(20, 13,
+                            "behaviors.approach.learner.type: unknown learner 'sarsa' (known: q_learning, "
+                            "value_iteration, adaptive_value_iteration, mpi_value_iteration)"));
     REQUIRE_CONFIG_ERROR(build(approachInserting(19, "    environment: {type: orbiting_target}")),
                          at(19, 25,
                             "behaviors.approach.environment.type: unknown environment model "
@@ -347,7 +348,7 @@ TEST_CASE("behaviour mistakes name the file, line, column and key", "[behaviors]
     REQUIRE_CONFIG_ERROR(build(approachWith(20, "")),
                          at(20, 7,
                             "behaviors.approach.learner: expected a 'type' key naming the learner "
-                            "(q_learning, value_iteration, adaptive_value_iteration)"));
+                            "(q_learning, value_iteration, adaptive_value_iteration, mpi_value_iteration)"));
     REQUIRE_CONFIG_ERROR(build(approachWith(16, "")),
                          at(16, 7,
                             "behaviors.approach.reward: expected a 'type' key naming the reward (approach, "
@@ -474,7 +475,7 @@ TEST_CASE("scenario overrides (--set) replace, create and reset keys", "[behavio
     REQUIRE_CONFIG_ERROR(build(both, {"behaviors.approach.learner.type=sarsa"}),
                          std::string("--set behaviors.approach.learner.type=sarsa") +
                              ": behaviors.approach.learner.type: unknown learner 'sarsa' (known: "
-                             "q_learning, value_iteration, adaptive_value_iteration)");
+                             "q_learning, value_iteration, adaptive_value_iteration, mpi_value_iteration)");
     REQUIRE_CONFIG_ERROR(build(both, {"grpah=0.3"}),
                          std::string("--set grpah=0.3") +
                              ": grpah: unknown key (expected one of: name, description, motion, graph, "

@@ -12,6 +12,7 @@
 #include "compare_command.hpp"
 #include "learn_commands.hpp"
 #include "mgrl/core/error.hpp"
+#include "mgrl/core/launch.hpp"
 
 namespace mgrl::app::cli {
 namespace {
@@ -50,6 +51,8 @@ class Train final : public Command {
     if (options_.model != "auto" && options_.model != "tabulated" && options_.model != "compact")
       throw Error(fmt::format("--model: expected auto, tabulated or compact, found '{}'", options_.model));
     const nlohmann::json report = runTrain(options_);
+    // Under an MPI launcher, rank 0 speaks for the job (issue 44).
+    if (launchedProcess().rank > 0) return;
     print(common, report, common.json ? std::string() : trainText(report));
   }
 

@@ -126,6 +126,10 @@ struct TrainContext {
   /// When set and true (e.g. by a Ctrl-C handler), the learner stops at its next safe
   /// point, saves a checkpoint if it can, and throws TrainInterrupted.
   const std::atomic<bool>* stop = nullptr;
+  /// A distributed learner (mpi_value_iteration) returns the whole table on every process
+  /// when set (a self-play round's table, which the next round's opponent plays), else on
+  /// rank 0 only (the others return an empty table: rank 0 writes the bundle).
+  bool wholeTableEverywhere = false;
 };
 
 /// Thrown by Learner::train when TrainContext::stop was raised.
@@ -153,6 +157,18 @@ class Learner {
   /// True if train() takes a compact GridModel (GridModel::buildCompact: rewards only, the
   /// landings found per backup) as well as a tabulated one, with the same result.
   virtual bool takesCompactModel() const { return false; }
+  /// True if train() tabulates the problem itself, so that a caller may hand it
+  /// GridModel::frame() instead of a tabulated model (mpi_value_iteration: each process
+  /// tabulates only the actions it backs up). Given a tabulated or compact model, such a
+  /// learner uses it.
+  virtual bool tabulatesItself() const { return false; }
+  /// The bytes training on `actions` x `vertices` needs in this process, when the learner
+  /// knows better than GridModel::trainingBytes (a distributed learner holds a share of the
+  /// model); negative: it does not.
+  virtual double bytesPerProcess(std::size_t actions, std::size_t vertices) const {
+    (void)actions, (void)vertices;
+    return -1;
+  }
   /// The most grid vertices training on `grid` will hold a table for: the grid's own,
   /// or, for a learner that refines it, its vertex budget.
   virtual std::size_t trainingVertices(const Discretizer& grid) const { return grid.vertexCount(); }

@@ -25,6 +25,21 @@ double GridModel::trainingBytes(std::size_t actions, std::size_t vertices, bool 
          static_cast<double>(actions) * 16;
 }
 
+namespace {
+
+// The lists of actions by end state, which sweeps go by.
+void addIncoming(GridModel& g, const StateActionModel& m) {
+  const std::size_t states = m.stateCount();
+  g.incomingBegin.assign(states + 1, 0);
+  for (std::uint32_t to : m.actionTo) ++g.incomingBegin[to + 1];
+  for (std::size_t s = 0; s < states; ++s) g.incomingBegin[s + 1] += g.incomingBegin[s];
+  g.incoming.resize(g.actionCount);
+  std::vector<std::uint32_t> fill(g.incomingBegin.begin(), g.incomingBegin.end() - 1);
+  for (std::size_t a = 0; a < g.actionCount; ++a) g.incoming[fill[m.actionTo[a]]++] = static_cast<std::uint32_t>(a);
+}
+
+}  // namespace
+
 GridModel GridModel::frame(const Problem& problem) {
   const StateActionModel& m = problem.model;
   const Discretizer& grid = problem.grid;
@@ -51,6 +66,7 @@ GridModel GridModel::frame(const Problem& problem) {
       g.rigid[4 * a + 3] = d.dz;
     }
   }
+  addIncoming(g, m);
   return g;
 }
 
@@ -73,17 +89,6 @@ GridTransition tabulate(const Problem& problem, std::size_t a, const TargetState
 
 namespace {
 
-// The lists of actions by end state, which sweeps go by.
-void addIncoming(GridModel& g, const StateActionModel& m) {
-  const std::size_t states = m.stateCount();
-  g.incomingBegin.assign(states + 1, 0);
-  for (std::uint32_t to : m.actionTo) ++g.incomingBegin[to + 1];
-  for (std::size_t s = 0; s < states; ++s) g.incomingBegin[s + 1] += g.incomingBegin[s];
-  g.incoming.resize(g.actionCount);
-  std::vector<std::uint32_t> fill(g.incomingBegin.begin(), g.incomingBegin.end() - 1);
-  for (std::size_t a = 0; a < g.actionCount; ++a) g.incoming[fill[m.actionTo[a]]++] = static_cast<std::uint32_t>(a);
-}
-
 // f(a) for every action, in chunks over `threads` threads; once `stop` (may be null) is
 // set, the chunks left are skipped and TrainInterrupted is thrown.
 template <class F>
@@ -105,9 +110,9 @@ GridModel GridModel::build(const Problem& problem, unsigned threads, const std::
   std::vector<TargetState> vertex(g.vertexCount);
   for (std::size_t v = 0; v < g.vertexCount; ++v) vertex[v] = problem.grid.vertexState(v);
   forEachPair(g.actionCount, threads, stop, [&](std::size_t a) {
-    for (std::size_t v = 0; v < g.vertexCount; ++v) g.transition[a * g.vertexCount + v] = tabulate(problem, a, vertex[v]);
+    for (std::size_t v = 0; v < g.vertexCount; ++v)
+      g.transition[a * g.vertexCount + v] = tabulate(problem, a, vertex[v]);
   });
-  addIncoming(g, problem.model);
   return g;
 }
 
@@ -123,7 +128,6 @@ GridModel GridModel::buildCompact(const Problem& problem, unsigned threads, cons
   g.landingGrid = &problem.grid;
   g.landingEnvironment = &problem.environment;
   g.landingModel = &problem.model;
-  addIncoming(g, problem.model);
   return g;
 }
 

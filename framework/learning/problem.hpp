@@ -94,10 +94,10 @@ struct GridModel {
   /// The compact model of `problem` (see `reward`): tabulates the rewards only. It refers
   /// to the problem's grid, environment and state-action model, which must outlive it.
   static GridModel buildCompact(const Problem& problem, unsigned threads, const std::atomic<bool>* stop = nullptr);
-  /// Everything build() makes except the per-(action, vertex) transitions and the incoming
-  /// lists: enough for maxInterpolated() and for stepping a walk (rigidNext) when the
-  /// transitions a step needs are computed one by one with tabulate() (the viewer's learn
-  /// panel, which takes a few steps of Q-learning where build() would tabulate them all).
+  /// Everything build() makes except the per-(action, vertex) transitions: enough for maxInterpolated() and for
+  /// stepping a walk (rigidNext) when the transitions a step needs are computed one by one with tabulate() (the
+  /// viewer's learn panel, which takes a few steps of Q-learning where build() would tabulate them all), and for a
+  /// learner that tabulates its own share (Learner::tabulatesItself()).
   static GridModel frame(const Problem& problem);
 
   // A compact model's problem, for landing().

@@ -1,0 +1,557 @@
+// mpi_value_iteration: value_iteration's Jacobi sweeps (paper sec. 4.2's backup at every
+// (vertex, action) pair) across the processes of an MPI job (issue 44), for tables that
+// outgrow one machine. Without a launcher it runs as one process, the same code.
+//
+// How the work and the table are split: by graph state. Rank r owns a set of states S_r,
+// chosen so that each rank backs up about as many (action, vertex) pairs.
+//  - It backs up every action that ENDS in one of its states: such a backup reads only the
+//    rows of that end state (max over the next actions of Q interpolated at the landing
+//    point), which rank r holds. It tabulates (reward, landing cell) for those actions only.
+//  - It holds the table's block of every state in S_r (the values of the actions that
+//    LEAVE them), and receives each sweep the new values of those actions from the ranks
+//    that backed them up, in one MPI_Alltoallv. It measures the change on its block.
+//  - Convergence is the global largest change (MPI_Allreduce, max), as value_iteration's.
+// A backup reads the previous sweep's table only, in the same arithmetic as value_iteration
+// (the framework's backup() and maxInterpolated()), so the table is the same, bit for bit,
+// whatever the number of ranks. Why not another split (measured in bench/mpi_bench.cpp):
+// a landing point's corners are at any vertex of any opponent layer, so splitting by
+// vertex blocks or by opponent state needs nearly the whole table at every rank; the
+// values cannot be reduced to one per vertex before the exchange, as the max is taken
+// over interpolated Q (sec. 4.2), not interpolated after it.
+//
+// A rank holds the rows of its own states only. Every `checkpoint_every` sweeps rank 0
+// gathers the whole table and saves it through the checkpointer: a lost rank costs the
+// sweeps since. Rank 0 also gathers the final table, and every rank receives it when the
+// caller needs it there (TrainContext::wholeTableEverywhere: a self-play round's table).
+#include <algorithm>
+#include <chrono>
+#include <climits>
+#include <cmath>
+#include <csignal>
+#include <cstdio>
+#include <cstdlib>
+#include <iostream>
+#include <numeric>
+
+#include <fmt/format.h>
+
+#include "learners.hpp"
+#include "mgrl/core/launch.hpp"
+#include "mgrl/core/parallel.hpp"
+
+#if MGRL_HAVE_MPI
+#include <mpi.h>
+#endif
+
+namespace mgrl::learners {
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+using nlohmann::json;
+
+// The processes of the run: MPI's world when a launcher started this one, else this
+// process alone (no MPI call is made then).
+class Ranks {
+ public:
+  static Ranks join() {
+    Ranks r;
+    const LaunchedProcess launched = launchedProcess();
+#if MGRL_HAVE_MPI
+    if (launched.byLauncher) {
+      int initialized = 0;
+      MPI_Initialized(&initialized);
+      if (!initialized) {
+        int provided = 0;
+        MPI_Init_thread(nullptr, nullptr, MPI_THREAD_FUNNELED, &provided);
+        std::atexit([] {
+          int finalized = 0;
+          MPI_Finalized(&finalized);
+          if (!finalized) MPI_Finalize();
+        });
+      }
+      r.mpi_ = true;
+      MPI_Comm_rank(MPI_COMM_WORLD, &r.rank_);
+      MPI_Comm_size(MPI_COMM_WORLD, &r.size_);
+      MPI_Comm local;
+      MPI_Comm_split_type(MPI_COMM_WORLD, MPI_COMM_TYPE_SHARED, r.rank_, MPI_INFO_NULL, &local);
+      MPI_Comm_size(local, &r.localSize_);
+      MPI_Comm_free(&local);
+    }
+#else
+    if (launched.byLauncher && launched.size > 1)
+      throw Error(
+          fmt::format("mpi_value_iteration: started as rank {} of {} by an MPI launcher, but this mgrl was "
+                      "built without MPI (install libopenmpi-dev and rebuild)",
+                      launched.rank, launched.size));
+#endif
+    return r;
+  }
+
+  int rank() const { return rank_; }
+  int size() const { return size_; }
+  int localSize() const { return localSize_; }
+  bool root() const { return rank_ == 0; }
+
+  // The largest of each value over all ranks, in place.
+  void maxAll(double* values, int n) const {
+#if MGRL_HAVE_MPI
+    if (mpi_ && size_ > 1) MPI_Allreduce(MPI_IN_PLACE, values, n, MPI_DOUBLE, MPI_MAX, MPI_COMM_WORLD);
+#endif
+    (void)values, (void)n;
+  }
+
+  // Rank 0's floats to every rank, in pieces that an int counts.
+  void broadcast(float* values, std::size_t n) const {
+#if MGRL_HAVE_MPI
+    if (!mpi_ || size_ == 1) return;
+    constexpr std::size_t kPiece = std::size_t{1} << 28;
+    for (std::size_t at = 0; at < n; at += kPiece)
+      MPI_Bcast(values + at, static_cast<int>(std::min(kPiece, n - at)), MPI_FLOAT, 0, MPI_COMM_WORLD);
+#endif
+    (void)values, (void)n;
+  }
+  void broadcast(std::string& text) const {
+#if MGRL_HAVE_MPI
+    if (!mpi_ || size_ == 1) return;
+    unsigned long long n = text.size();
+    MPI_Bcast(&n, 1, MPI_UNSIGNED_LONG_LONG, 0, MPI_COMM_WORLD);
+    text.resize(n);
+    MPI_Bcast(text.data(), static_cast<int>(n), MPI_CHAR, 0, MPI_COMM_WORLD);
+#endif
+    (void)text;
+  }
+
+  // Rows of `width` floats: sendCount[d] rows from `send` to rank d (in rank order), and
+  // recvCount[q] rows from rank q into `recv`. With one rank, a copy.
+  void exchange(const float* send, const std::vector<int>& sendCount, float* recv, const std::vector<int>& recvCount,
+                std::size_t width) const {
+#if MGRL_HAVE_MPI
+    if (mpi_ && size_ > 1) {
+      MPI_Datatype row;
+      MPI_Type_contiguous(static_cast<int>(width), MPI_FLOAT, &row);
+      MPI_Type_commit(&row);
+      std::vector<int> sendAt(size_), recvAt(size_);
+      std::exclusive_scan(sendCount.begin(), sendCount.end(), sendAt.begin(), 0);
+      std::exclusive_scan(recvCount.begin(), recvCount.end(), recvAt.begin(), 0);
+      MPI_Alltoallv(send, sendCount.data(), sendAt.data(), row, recv, recvCount.data(), recvAt.data(), row,
+                    MPI_COMM_WORLD);
+      MPI_Type_free(&row);
+      return;
+    }
+#endif
+    std::copy(send, send + static_cast<std::size_t>(sendCount[0]) * width, recv);
+    (void)recvCount;
+  }
+
+  // Rank 0 puts the block of every state into `whole` (the whole table): its own from
+  // `held`, the others' received from their owners, which send theirs in increasing
+  // state order. A state's block (its actions' rows at every vertex) is contiguous in both.
+  void gather(QTable& held, QTable& whole, const GridModel& g, const std::vector<int>& owner) const {
+    move(held, whole, g, owner, true);
+  }
+  // The inverse, after rank 0 read a checkpoint: each rank receives its states' blocks.
+  void scatter(QTable& whole, QTable& held, const GridModel& g, const std::vector<int>& owner) const {
+    move(held, whole, g, owner, false);
+  }
+
+  // After an error on this rank, while the others may wait for it: says which rank failed
+  // and ends the whole job (MPI_Abort), or, alone, lets the error go on.
+  void failed(const std::exception& e) const {
+#if MGRL_HAVE_MPI
+    if (mpi_ && size_ > 1) {
+      std::cerr << fmt::format("mgrl: mpi_value_iteration: rank {} of {}: {}\n", rank_, size_, e.what());
+      std::cerr.flush();
+      MPI_Abort(MPI_COMM_WORLD, 1);
+    }
+#endif
+    (void)e;
+  }
+
+ private:
+  // `whole` is read or written at rank 0 only (elsewhere it may be empty); the same object
+  // as `held` when one rank holds everything.
+  void move(QTable& held, QTable& whole, const GridModel& g, const std::vector<int>& owner, bool toWhole) const {
+    if (&held == &whole) return;
+    const std::size_t V = held.vertexCount();
+    for (std::size_t s = 0; s < owner.size(); ++s) {
+      const std::size_t actions = g.stateActionBegin[s + 1] - g.stateActionBegin[s], n = actions * V;
+      if (n == 0) continue;
+      if (owner[s] == rank_ && rank_ == 0) {
+        if (toWhole)
+          std::copy_n(held.row(s, 0), n, whole.row(s, 0));
+        else
+          std::copy_n(whole.row(s, 0), n, held.row(s, 0));
+        continue;
+      }
+#if MGRL_HAVE_MPI
+      if (!mpi_) continue;
+      MPI_Datatype row;
+      MPI_Type_contiguous(static_cast<int>(V), MPI_FLOAT, &row);
+      MPI_Type_commit(&row);
+      const int rows = static_cast<int>(actions), tag = static_cast<int>(s % 32768);
+      if (toWhole) {
+        if (rank_ == 0)
+          MPI_Recv(whole.row(s, 0), rows, row, owner[s], tag, MPI_COMM_WORLD, MPI_STATUS_IGNORE);
+        else if (owner[s] == rank_)
+          MPI_Send(held.row(s, 0), rows, row, 0, tag, MPI_COMM_WORLD);
+      } else {
+        if (rank_ == 0)
+          MPI_Send(whole.row(s, 0), rows, row, owner[s], tag, MPI_COMM_WORLD);
+        else if (owner[s] == rank_)
+          MPI_Recv(held.row(s, 0), rows, row, 0, tag, MPI_COMM_WORLD, MPI_STATUS_IGNORE);
+      }
+      MPI_Type_free(&row);
+#endif
+    }
+  }
+
+  bool mpi_ = false;
+  int rank_ = 0, size_ = 1, localSize_ = 1;
+};
+
+// Which rank owns each graph state: longest first to the least loaded rank, the load of a
+// state being the actions that end at it (its backups per vertex). Deterministic.
+std::vector<int> partition(const GridModel& g, int ranks) {
+  const std::size_t states = g.incomingBegin.size() - 1;
+  std::vector<std::size_t> order(states);
+  std::iota(order.begin(), order.end(), 0);
+  auto work = [&](std::size_t s) { return g.incomingBegin[s + 1] - g.incomingBegin[s]; };
+  std::stable_sort(order.begin(), order.end(), [&](std::size_t x, std::size_t y) { return work(x) > work(y); });
+  std::vector<std::uint64_t> load(static_cast<std::size_t>(ranks), 0);
+  std::vector<int> owner(states, 0);
+  for (std::size_t s : order) {
+    const auto least = std::min_element(load.begin(), load.end()) - load.begin();
+    owner[s] = static_cast<int>(least);
+    load[static_cast<std::size_t>(least)] += work(s);
+  }
+  return owner;
+}
+
+class MpiValueIteration final : public Learner {
+ public:
+  explicit MpiValueIteration(const Params& p)
+      : tolerance_(p.number("tolerance")),
+        maxSweeps_(static_cast<std::uint64_t>(p.integer("max_sweeps"))),
+        threads_(static_cast<unsigned>(p.integer("threads"))),
+        checkpointEvery_(static_cast<std::uint64_t>(p.integer("checkpoint_every"))) {}
+
+  std::string type() const override { return "mpi_value_iteration"; }
+  bool takesCompactModel() const override { return true; }
+  bool tabulatesItself() const override { return true; }
+
+  // A share of everything a sweep holds: the transitions (20 bytes a pair), the rows of
+  // its states, the send and receive buffers (4 + 4 + 4); with several ranks, rank 0 also
+  // holds the whole table (4) for checkpoints and the result: the busiest rank's figure.
+  double bytesPerProcess(std::size_t actions, std::size_t vertices) const override {
+    const double pairs = static_cast<double>(actions) * static_cast<double>(vertices);
+    const int ranks = std::max(1, launchedProcess().size);
+    const double perPair =
+        (sizeof(GridTransition) + 3 * sizeof(float)) / static_cast<double>(ranks) + (ranks > 1 ? sizeof(float) : 0.0);
+    return pairs * perPair + static_cast<double>(vertices) * (8 * sizeof(std::uint32_t) + sizeof(TargetState)) +
+           static_cast<double>(actions) * 24;
+  }
+
+  TrainResult train(const TrainContext& context) const override {
+    const Ranks ranks = Ranks::join();
+    try {
+      return run(context, ranks);
+    } catch (const TrainInterrupted&) {
+      throw;
+    } catch (const std::exception& e) {
+      ranks.failed(e);
+      throw;
+    }
+  }
+
+ private:
+  TrainResult run(const TrainContext& context, const Ranks& ranks) const {
+    const GridModel& g = context.grid;
+    const Problem& problem = context.problem;
+    const std::size_t V = g.vertexCount, A = g.actionCount;
+    const std::size_t states = g.incomingBegin.size() - 1;
+    const int me = ranks.rank(), K = ranks.size();
+    // Ranks sharing a machine share its cores.
+    const unsigned threads =
+        threads_ > 0 ? threads_ : std::max(1u, context.threads / static_cast<unsigned>(std::max(1, ranks.localSize())));
+    const auto start = Clock::now();
+    double paused = 0;
+    auto elapsed = [&] { return std::chrono::duration<double>(Clock::now() - start).count() - paused; };
+
+    // The split, and the order of the rows each rank sends and receives: by the other
+    // rank, then by action.
+    const std::vector<int> owner = partition(g, K);
+    std::vector<std::uint32_t> from(A);
+    for (std::size_t s = 0; s < states; ++s)
+      for (std::uint32_t a = g.stateActionBegin[s]; a < g.stateActionBegin[s + 1]; ++a)
+        from[a] = static_cast<std::uint32_t>(s);
+    std::vector<std::uint32_t> mine, theirs;  // backed up here; leaving a state held here
+    for (std::uint32_t a = 0; a < A; ++a) {
+      if (owner[g.actionTo[a]] == me) mine.push_back(a);
+      if (owner[from[a]] == me) theirs.push_back(a);
+    }
+    std::stable_sort(mine.begin(), mine.end(), [&](auto x, auto y) { return owner[from[x]] < owner[from[y]]; });
+    std::stable_sort(theirs.begin(), theirs.end(),
+                     [&](auto x, auto y) { return owner[g.actionTo[x]] < owner[g.actionTo[y]]; });
+    std::vector<int> sendCount(K, 0), recvCount(K, 0);
+    std::vector<std::uint32_t> slot(A, 0), recvSlot(A, 0);
+    for (std::size_t i = 0; i < mine.size(); ++i) {
+      ++sendCount[owner[from[mine[i]]]];
+      slot[mine[i]] = static_cast<std::uint32_t>(i);
+    }
+    for (std::size_t i = 0; i < theirs.size(); ++i) {
+      ++recvCount[owner[g.actionTo[theirs[i]]]];
+      recvSlot[theirs[i]] = static_cast<std::uint32_t>(i);
+    }
+    std::vector<std::uint32_t> held;  // this rank's states
+    for (std::size_t s = 0; s < states; ++s)
+      if (owner[s] == me) held.push_back(static_cast<std::uint32_t>(s));
+    std::uint64_t sentRows = 0;
+    for (int d = 0; d < K; ++d)
+      if (d != me) sentRows += static_cast<std::uint64_t>(sendCount[d]);
+    const double exchanged = static_cast<double>(sentRows) * static_cast<double>(V) * sizeof(float);
+
+    // This rank's transitions, unless the caller tabulated the problem (then its own).
+    const bool given = !g.transition.empty() || g.compact();
+    std::vector<GridTransition, HugePageAllocator<GridTransition>> local;
+    if (!given) {
+      std::vector<TargetState> vertex(V);
+      for (std::size_t v = 0; v < V; ++v) vertex[v] = problem.grid.vertexState(v);
+      local.resize(mine.size() * V);
+      parallelFor(mine.size(), threads, [&](std::size_t i, unsigned) {
+        if (K == 1 && context.stop && context.stop->load(std::memory_order_relaxed)) return;
+        for (std::size_t v = 0; v < V; ++v) local[i * V + v] = tabulate(problem, mine[i], vertex[v]);
+      });
+      if (K == 1 && context.stop && context.stop->load()) throw TrainInterrupted(0, 0, false);
+    }
+    // Training time starts after the tabulation, as for learners given a tabulated model.
+    const double tabulateSeconds = elapsed();
+    paused += tabulateSeconds;
+
+    // The rows of this rank's states only: a table over a model in which the other
+    // states have no actions (QTable keeps each state's block contiguous, so row(s, v) of
+    // an own state is where backups and maxInterpolated() expect it). Rank 0 keeps the
+    // whole table too, for checkpoints and the result, allocated when first needed.
+    StateActionModel heldModel;
+    heldModel.stateFrame.assign(states, 0);
+    heldModel.stateActionBegin.assign(states + 1, 0);
+    for (std::size_t s = 0; s < states; ++s)
+      heldModel.stateActionBegin[s + 1] =
+          heldModel.stateActionBegin[s] + (owner[s] == me ? g.stateActionBegin[s + 1] - g.stateActionBegin[s] : 0);
+    heldModel.actionFrom.assign(heldModel.stateActionBegin.back(), 0);
+    QTable q(heldModel, V);
+    QTable whole;  // K > 1 only: with one rank `q` is the whole table
+    auto wholeTable = [&]() -> QTable& {
+      if (K == 1) return q;
+      if (whole.vertexCount() == 0) whole = QTable(problem.model, V);
+      return whole;
+    };
+    std::vector<float> send(mine.size() * V), received(K > 1 ? theirs.size() * V : 0);
+    float* recv = K > 1 ? received.data() : send.data();
+    // The backups of the actions ending at this rank's states, into `send`, then the
+    // exchange; the seconds of each are summed for the report.
+    double seconds[2] = {0, 0};  // backups and settling; exchanging
+    auto backups = [&] {
+      const auto began = Clock::now();
+      parallelFor(held.size(), threads, [&](std::size_t i, unsigned) {
+        const std::uint32_t s = held[i];
+        for (std::uint32_t k = g.incomingBegin[s]; k < g.incomingBegin[s + 1]; ++k) {
+          const std::size_t a = g.incoming[k];
+          float* values = &send[static_cast<std::size_t>(slot[a]) * V];
+          if (!given) {
+            const GridTransition* t = &local[static_cast<std::size_t>(slot[a]) * V];
+            for (std::size_t v = 0; v < V; ++v) values[v] = backup(q, g, a, t[v]);
+          } else if (g.compact()) {
+            for (std::size_t v = 0; v < V; ++v) values[v] = backup(q, g, a, g.landing(a, v));
+          } else {
+            for (std::size_t v = 0; v < V; ++v) values[v] = backup(q, g, a, g.transition[a * V + v]);
+          }
+          g.hanging.apply(values);
+        }
+      });
+      const auto exchanging = Clock::now();
+      ranks.exchange(send.data(), sendCount, recv, recvCount, V);
+      seconds[0] += std::chrono::duration<double>(exchanging - began).count();
+      seconds[1] += std::chrono::duration<double>(Clock::now() - exchanging).count();
+    };
+    // The received values against this rank's block: the largest change (as value_iteration
+    // measures it), written into the block when `write`; else the Bellman residual (as
+    // bellmanResidual() measures it: in double, hanging vertices skipped).
+    std::vector<std::uint8_t> tied(g.hanging.empty() ? 0 : V, 0);
+    for (std::uint32_t v : g.hanging.vertex) tied[v] = 1;
+    auto settle = [&](bool write) {
+      const auto began = Clock::now();
+      std::vector<double> change(held.size(), 0.0);
+      parallelFor(held.size(), threads, [&](std::size_t i, unsigned) {
+        const std::uint32_t s = held[i];
+        const std::size_t n = q.actionsOf(s), begin = g.stateActionBegin[s];
+        double largest = 0;
+        for (std::size_t v = 0; v < V; ++v) {
+          float* row = q.row(s, v);
+          if (!write && !tied.empty() && tied[v]) continue;
+          for (std::size_t j = 0; j < n; ++j) {
+            const float value = recv[static_cast<std::size_t>(recvSlot[begin + j]) * V + v];
+            if (write) {
+              largest = std::max(largest, static_cast<double>(std::fabs(value - row[j])));
+              row[j] = value;
+            } else {
+              largest = std::max(largest, std::fabs(static_cast<double>(value) - row[j]));
+            }
+          }
+        }
+        change[i] = largest;
+      });
+      double largest = 0;
+      for (double c : change) largest = std::max(largest, c);
+      seconds[0] += std::chrono::duration<double>(Clock::now() - began).count();
+      return largest;
+    };
+
+    TrainResult result;
+    const std::uint64_t pairs = static_cast<std::uint64_t>(V) * A;
+    std::uint64_t sweeps = 0;
+    double change = 0;
+    bool converged = false;
+    // Whether rank 0 checkpoints decides for every rank.
+    double checkpointing[1] = {context.checkpointer && ranks.root() && checkpointEvery_ > 0 ? 1.0 : 0.0};
+    ranks.maxAll(checkpointing, 1);
+    if (checkpointing[0] > 0) {
+      QTable dummy;
+      resume(context, ranks, ranks.root() ? wholeTable() : dummy, q, g, owner, sweeps, change, result.curve);
+    }
+    auto save = [&] {
+      QTable dummy;
+      QTable& target = ranks.root() ? wholeTable() : dummy;
+      ranks.gather(q, target, g, owner);
+      if (!ranks.root()) return;
+      json curve = json::array();
+      for (const CurvePoint& p : result.curve) curve.push_back({p.updates, p.seconds, p.residual});
+      context.checkpointer->save(
+          {{"updates", sweeps * pairs}, {"sweeps", sweeps}, {"change", change}, {"curve", curve}}, target);
+    };
+    const int killRank = testKill("rank"), killSweep = testKill("sweep");
+    while (sweeps < maxSweeps_) {
+      backups();
+      change = settle(true);
+      ++sweeps;
+      double global[2] = {change, context.stop && context.stop->load(std::memory_order_relaxed) ? 1.0 : 0.0};
+      ranks.maxAll(global, 2);
+      change = global[0];
+      result.curve.push_back({sweeps * pairs, elapsed(), change, 0});
+      if (context.observer && ranks.root()) context.observer->progress({sweeps * pairs, 0, elapsed(), change});
+      const bool last = change < tolerance_ || sweeps == maxSweeps_;
+      if (checkpointing[0] > 0 && !last && (sweeps % checkpointEvery_ == 0 || global[1] > 0)) {
+        const auto began = Clock::now();
+        save();
+        paused += std::chrono::duration<double>(Clock::now() - began).count();
+      }
+      // A test of a lost rank (MGRL_TEST_KILL="RANK:SWEEP"): this rank kills itself, as a
+      // crashed machine would, after that sweep's checkpoint.
+      if (me == killRank && sweeps == static_cast<std::uint64_t>(killSweep)) std::raise(SIGKILL);
+      if (change < tolerance_) {
+        converged = true;
+        break;
+      }
+      if (global[1] > 0 && !last) throw TrainInterrupted(sweeps * pairs, 0, checkpointing[0] > 0);
+    }
+    // The Bellman residual of the final table: one more round of backups, measured only.
+    backups();
+    double residual[1] = {settle(false)};
+    ranks.maxAll(residual, 1);
+    // The whole table to rank 0, and to every rank when the caller needs it there (a
+    // self-play round's, which the next round's opponent plays); else the other ranks
+    // return an empty table.
+    QTable dummy;
+    QTable& target = ranks.root() || context.wholeTableEverywhere ? wholeTable() : dummy;
+    ranks.gather(q, ranks.root() ? target : dummy, g, owner);
+    if (context.wholeTableEverywhere) ranks.broadcast(target.values().data(), target.values().size());
+    double busiest[3] = {exchanged, seconds[0], seconds[1]};  // the busiest rank's
+    ranks.maxAll(busiest, 3);
+    result.table = K == 1 ? std::move(q) : std::move(whole);
+    result.updates = sweeps * pairs;
+    result.finalResidual = residual[0];
+    result.seconds = elapsed();
+    result.stats = {{"sweeps", sweeps},
+                    {"converged", converged},
+                    {"last_change", change},
+                    {"ranks", K},
+                    {"threads_per_rank", threads},
+                    {"tabulate_seconds", tabulateSeconds},
+                    {"bytes_sent_per_sweep_busiest_rank", busiest[0]},
+                    {"backup_seconds_busiest_rank", busiest[1]},
+                    {"exchange_seconds_busiest_rank", busiest[2]}};
+    if (context.observer && ranks.root())
+      context.observer->note(
+          fmt::format("{} rank{}, {} sweeps; the busiest rank sent {:.1f} MB a sweep, backed up for {:.2f} s and "
+                      "exchanged for {:.2f} s",
+                      K, K > 1 ? "s" : "", sweeps, busiest[0] / 1e6, busiest[1], busiest[2]));
+    return result;
+  }
+
+  // Continues from rank 0's checkpoint, if any: its sweep count, change, curve and table
+  // go to every rank.
+  void resume(const TrainContext& context, const Ranks& ranks, QTable& whole, QTable& held, const GridModel& g,
+              const std::vector<int>& owner, std::uint64_t& sweeps, double& change,
+              std::vector<CurvePoint>& curve) const {
+    std::string text;
+    if (ranks.root()) {
+      std::uint64_t maxSweeps = maxSweeps_;
+      const auto check = [maxSweeps](const json& state, const ManifestReader& reader) {
+        if (!state.is_object()) reader.fail("state", "an object", state);
+        (void)reader.unsignedInteger(state, "state", "sweeps", maxSweeps);
+        (void)reader.number(state, "state", "change");
+        const json& points = reader.member(state, "state", "curve");
+        if (!points.is_array()) reader.fail("state.curve", "an array", points);
+        for (const json& p : points)
+          if (!p.is_array() || p.size() != 3 || !p[0].is_number_unsigned() || !p[1].is_number() || !p[2].is_number())
+            reader.fail("state.curve", "[updates, seconds, change] triples", p);
+      };
+      if (std::optional<json> state = context.checkpointer->loadChecked(whole, check)) text = state->dump();
+    }
+    ranks.broadcast(text);
+    if (text.empty()) return;
+    const json state = json::parse(text);
+    sweeps = state["sweeps"].get<std::uint64_t>();
+    change = state["change"].get<double>();
+    for (const json& p : state["curve"])
+      curve.push_back({p[0].get<std::uint64_t>(), p[1].get<double>(), p[2].get<double>(), 0});
+    ranks.scatter(whole, held, g, owner);
+  }
+
+  // MGRL_TEST_KILL="RANK:SWEEP" (tests only): the rank, or the sweep; -1 when unset.
+  static int testKill(std::string_view part) {
+    const char* text = std::getenv("MGRL_TEST_KILL");
+    if (!text) return -1;
+    int rank = -1, sweep = -1;
+    if (std::sscanf(text, "%d:%d", &rank, &sweep) != 2) return -1;
+    return part == "rank" ? rank : sweep;
+  }
+
+  double tolerance_;
+  std::uint64_t maxSweeps_;
+  unsigned threads_;
+  std::uint64_t checkpointEvery_;
+};
+
+}  // namespace
+
+void registerMpiValueIteration(LearnerRegistry& registry) {
+  registry.add({
+    "mpi_value_iteration",
+#if MGRL_HAVE_MPI
+        "value_iteration across the processes of an MPI job (mpirun -np K mgrl train ...), the table split by "
+        "graph state; the same table as value_iteration, bit for bit (docs/distributed.md)",
+#else
+        "unavailable: this mgrl was built without MPI (install libopenmpi-dev and rebuild); alone it runs "
+        "as one process, value_iteration's table (docs/distributed.md)",
+#endif
+        {ParamSpec::number("tolerance", 1e-4, 1e-9, 1, "", "stop when no value changes more than this"),
+         ParamSpec::integer("max_sweeps", 1000, 1, 1'000'000, "sweeps", "give up after this many sweeps"),
+         threadsSpec(),
+         ParamSpec::integer("checkpoint_every", 1, 0, 1'000'000, "sweeps",
+                            "rank 0 gathers and saves the table after this many sweeps (0: never)")},
+        [](const Params& p) { return std::make_unique<MpiValueIteration>(p); }
+  });
+}
+
+}  // namespace mgrl::learners

@@ -1,0 +1,219 @@
+// Issue 44: mpi_value_iteration under a real `mpirun` on this machine (oversubscribed):
+// the same table, bit for bit, as value_iteration, alone and across 2 and 3 ranks, on
+// boxing's hit behaviour and on a learned-opponent behaviour; a rank killed mid-run fails
+// the job naming it, and `--resume` ends with the uninterrupted table.
+#include <cstdlib>
+#include <optional>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include <catch2/catch.hpp>
+
+#include "cli_support.hpp"
+#include "mgrl/core/launch.hpp"
+#include "sanitizer.hpp"
+#include "test_support.hpp"
+
+using namespace mgrl;
+
+namespace {
+
+// mpirun on this machine only: more ranks than cores, as root too (CI runs as root).
+// LeakSanitizer is off in the ranks: Open MPI keeps allocations until exit that it never
+// frees, which would fail every rank; mgrl's own code runs leak-checked in the runs alone.
+std::string mpirun(int ranks, const std::string& environment = "") {
+  return "env OMPI_MCA_btl=self,vader OMPI_MCA_rmaps_base_oversubscribe=1 " + environment +
+         (test::kAddressSanitizer ? " ASAN_OPTIONS=detect_leaks=0" : "") +
+         " mpirun --allow-run-as-root --oversubscribe --bind-to none -np " + std::to_string(ranks);
+}
+
+struct MpiSandbox : test::CliSandbox {
+  MpiSandbox() : CliSandbox("mgrl_mpi") {}
+  test::Run run(const std::string& arguments, const std::string& prefix = "") {
+    return test::runMgrl(arguments + where(), dir(), prefix);
+  }
+  std::string table(const std::string& out, const std::string& behavior) const {
+    return test::readText(path(out) / (behavior + ".q.npy"));
+  }
+};
+
+// The tests need mpirun and an mgrl built with MPI: scripts/setup.sh --test installs both.
+void requireMpi(MpiSandbox& box) {
+  const test::Run list = test::runMgrl("list", box.dir());
+  REQUIRE(list.status == 0);
+  INFO("mgrl list:\n" << list.out);
+  REQUIRE(list.out.find("mpi_value_iteration") != std::string::npos);
+  if (list.out.find("built without MPI") != std::string::npos)
+    FAIL("this mgrl was built without MPI: run scripts/setup.sh --test (Open MPI) and build again");
+  REQUIRE(std::system("command -v mpirun >/dev/null 2>&1") == 0);
+}
+
+std::string scenario(const char* name) {
+  return test::shellWord(std::string(test::sourceDirectory()) + "/scenarios/" + name);
+}
+
+// boxing.yaml's hit behaviour on a coarser grid: 10 angles x 16 distances x 3 heights
+// (under AddressSanitizer, about 7 times slower, 6 x 8 x 2).
+const std::string kHit = std::string(" --behavior hit ") +
+                         (test::kAddressSanitizer ? "--set behaviors.hit.discretizer.angles=6 "
+                                                    "--set behaviors.hit.discretizer.distances=8 "
+                                                    "--set behaviors.hit.discretizer.heights=2 "
+                                                  : "--set behaviors.hit.discretizer.angles=10 "
+                                                    "--set behaviors.hit.discretizer.heights=3 ") +
+                         "--set behaviors.hit.learner.type=";
+
+// spar_learned.yaml on 2 x 2 x 2 positions, one phase: 8 positions x 117 opponent states,
+// two self-play rounds (the second plays the first's table, which every rank must have).
+// The tolerance is the scenario's: another learner type starts from its own defaults.
+const std::string kSpar =
+    " --set behaviors.spar.discretizer.sectors=2 --set behaviors.spar.discretizer.rings=2 "
+    "--set behaviors.spar.discretizer.headings=2 --set behaviors.spar.environment.phases=1 "
+    "--set behaviors.spar.environment.rounds=2 --set behaviors.spar.learner.type=";
+std::string sparLearner(const std::string& type) {
+  return kSpar + type + " --set behaviors.spar.learner.tolerance=0.01";
+}
+
+// "identical", or where two saved tables first differ (not the bytes themselves).
+std::string compareTables(const std::string& a, const std::string& b) {
+  if (a == b) return "identical";
+  std::size_t at = 0;
+  while (at < a.size() && at < b.size() && a[at] == b[at]) ++at;
+  return "sizes " + std::to_string(a.size()) + " and " + std::to_string(b.size()) + ", first difference at byte " +
+         std::to_string(at);
+}
+
+}  // namespace
+
+TEST_CASE("mpi_value_iteration gives value_iteration's table bit for bit, alone and across 2 and 3 ranks",
+          "[mpi][cli][data][slow]") {
+  MpiSandbox box;
+  requireMpi(box);
+  SECTION("boxing's hit behaviour") {
+    const test::Run single =
+        box.run("train " + scenario("boxing.yaml") + kHit + "value_iteration --out " + test::shellWord(box.path("vi")));
+    INFO(single.err);
+    REQUIRE(single.status == 0);
+    const std::string reference = box.table("vi", "hit");
+    REQUIRE(reference.size() > 1000);
+    const test::Run alone = box.run("train " + scenario("boxing.yaml") + kHit + "mpi_value_iteration --json --out " +
+                                    test::shellWord(box.path("alone")));
+    INFO(alone.err);
+    REQUIRE(alone.status == 0);
+    CHECK(alone.report()["behaviors"]["hit"]["stats"]["ranks"] == 1);
+    CHECK(compareTables(box.table("alone", "hit"), reference) == "identical");
+    for (int ranks : {2, 3}) {
+      const std::string out = "np" + std::to_string(ranks);
+      const test::Run run = box.run("train " + scenario("boxing.yaml") + kHit + "mpi_value_iteration --json --out " +
+                                        test::shellWord(box.path(out)),
+                                    mpirun(ranks));
+      INFO("mpirun -np " << ranks << ":\n" << run.err);
+      REQUIRE(run.status == 0);
+      // Rank 0 alone speaks: one JSON report on stdout, one progress line per stage.
+      const nlohmann::json report = run.report();
+      CHECK(report["behaviors"]["hit"]["stats"]["ranks"] == ranks);
+      CHECK(report["behaviors"]["hit"]["stats"]["bytes_sent_per_sweep_busiest_rank"].get<double>() > 0);
+      CHECK(compareTables(box.table(out, "hit"), reference) == "identical");
+      CHECK(test::lines(run.err).size() < 12);
+    }
+  }
+  SECTION("a learned-opponent behaviour (spar_learned.yaml, smaller)") {
+    const test::Run single = box.run("train " + scenario("spar_learned.yaml") + sparLearner("value_iteration") +
+                                     " --out " + test::shellWord(box.path("vi")));
+    INFO(single.err);
+    REQUIRE(single.status == 0);
+    const std::string reference = box.table("vi", "spar"), round1 = box.table("vi", "spar-round1");
+    REQUIRE(reference.size() > 1000);
+    for (int ranks : {2, 3}) {
+      const std::string out = "np" + std::to_string(ranks);
+      const test::Run run = box.run("train " + scenario("spar_learned.yaml") + sparLearner("mpi_value_iteration") +
+                                        " --out " + test::shellWord(box.path(out)),
+                                    mpirun(ranks));
+      INFO("mpirun -np " << ranks << ":\n" << run.err);
+      REQUIRE(run.status == 0);
+      CHECK(compareTables(box.table(out, "spar-round1"), round1) == "identical");
+      CHECK(compareTables(box.table(out, "spar"), reference) == "identical");
+    }
+  }
+}
+
+TEST_CASE(
+    "a rank killed in the middle of mpi_value_iteration fails the job naming it; --resume ends with the same table",
+    "[mpi][cli][data][slow]") {
+  MpiSandbox box;
+  requireMpi(box);
+  const std::string train = "train " + scenario("boxing.yaml") + kHit + "mpi_value_iteration --out ";
+  const test::Run whole = box.run(train + test::shellWord(box.path("whole")), mpirun(2));
+  INFO(whole.err);
+  REQUIRE(whole.status == 0);
+
+  // Rank 1 kills itself (SIGKILL, as a lost machine) after sweep 3 and its checkpoint.
+  const std::string out = test::shellWord(box.path("killed"));
+  const test::Run killed = box.run(train + out, mpirun(2, "MGRL_TEST_KILL=1:3"));
+  INFO(killed.err);
+  CHECK(killed.status != 0);
+  CHECK(killed.err.find("rank 1") != std::string::npos);
+  CHECK_FALSE(std::filesystem::exists(box.path("killed") / "manifest.json"));
+  const std::filesystem::path checkpoint = box.path("killed.checkpoints") / "hit" / "state.json";
+  REQUIRE(std::filesystem::exists(checkpoint));
+  CHECK(nlohmann::json::parse(test::readText(checkpoint))["state"]["sweeps"] == 3);
+
+  // The checkpoint holds the whole table: the job may resume on another number of ranks.
+  const test::Run resumed = box.run(train + out + " --resume", mpirun(3));
+  INFO(resumed.err);
+  REQUIRE(resumed.status == 0);
+  CHECK(resumed.err.find("resume: hit: continuing from the checkpoint") != std::string::npos);
+  CHECK(compareTables(box.table("killed", "hit"), box.table("whole", "hit")) == "identical");
+  CHECK_FALSE(std::filesystem::exists(box.path("killed.checkpoints")));
+}
+
+TEST_CASE("the launcher's rank and size are read from its environment, and bad values are refused by name",
+          "[mpi][unit]") {
+  // Each case sets the variables, reads them and puts the environment back as it was.
+  struct Env {
+    std::vector<std::pair<std::string, std::optional<std::string>>> saved;
+    void set(const char* name, const char* value) {
+      const char* old = std::getenv(name);
+      saved.emplace_back(name, old ? std::optional<std::string>(old) : std::nullopt);
+      if (value)
+        ::setenv(name, value, 1);
+      else
+        ::unsetenv(name);
+    }
+    ~Env() {
+      for (auto it = saved.rbegin(); it != saved.rend(); ++it)
+        if (it->second)
+          ::setenv(it->first.c_str(), it->second->c_str(), 1);
+        else
+          ::unsetenv(it->first.c_str());
+    }
+  };
+  Env env;
+  for (const char* name :
+       {"OMPI_COMM_WORLD_RANK", "OMPI_COMM_WORLD_SIZE", "PMI_RANK", "PMI_SIZE", "PMIX_RANK", "SLURM_STEP_NUM_TASKS"})
+    env.set(name, nullptr);
+  LaunchedProcess alone = launchedProcess();
+  CHECK(alone.rank == 0);
+  CHECK(alone.size == 1);
+  CHECK_FALSE(alone.byLauncher);
+
+  env.set("OMPI_COMM_WORLD_RANK", "2");
+  env.set("OMPI_COMM_WORLD_SIZE", "3");
+  const LaunchedProcess open = launchedProcess();
+  CHECK(open.rank == 2);
+  CHECK(open.size == 3);
+  CHECK(open.byLauncher);
+
+  env.set("OMPI_COMM_WORLD_RANK", "3");
+  REQUIRE_THROWS_WITH(launchedProcess(), "OMPI_COMM_WORLD_RANK: expected a rank below OMPI_COMM_WORLD_SIZE=3, found 3");
+  env.set("OMPI_COMM_WORLD_RANK", "two");
+  REQUIRE_THROWS_WITH(launchedProcess(),
+                      "OMPI_COMM_WORLD_RANK: expected a whole number from 0 to 16777216 (set by an "
+                      "MPI launcher), found 'two'");
+  env.set("OMPI_COMM_WORLD_RANK", nullptr);
+  env.set("PMIX_RANK", "1");
+  env.set("SLURM_STEP_NUM_TASKS", "4");
+  const LaunchedProcess slurm = launchedProcess();
+  CHECK(slurm.rank == 1);
+  CHECK(slurm.size == 4);
+}
