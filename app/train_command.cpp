@@ -405,6 +405,11 @@ json runTrain(const TrainOptions& given) {
       const bool compact = compactModel.at(behavior.name);
       // A learner that tabulates itself (each MPI rank its share) gets the model's frame only.
       const bool itself = !compact && behavior.learner->tabulatesItself();
+      if (const int ranks = launchedProcess().size; ranks > 1 && !behavior.learner->tabulatesItself())
+        log(
+            fmt::format("train {}: {} runs in one process: the other {} ranks of this MPI job repeat it and keep "
+                        "nothing (mpi_value_iteration shares the work)",
+                        label, behavior.learner->type(), ranks - 1));
       const GridModel grid = compact  ? GridModel::buildCompact(problem, threads)
                              : itself ? GridModel::frame(problem)
                                       : GridModel::build(problem, threads);

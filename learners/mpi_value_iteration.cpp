@@ -13,11 +13,14 @@
 //  - Convergence is the global largest change (MPI_Allreduce, max), as value_iteration's.
 // A backup reads the previous sweep's table only, in the same arithmetic as value_iteration
 // (the framework's backup() and maxInterpolated()), so the table is the same, bit for bit,
-// whatever the number of ranks. Why not another split (measured in bench/mpi_bench.cpp):
-// a landing point's corners are at any vertex of any opponent layer, so splitting by
-// vertex blocks or by opponent state needs nearly the whole table at every rank; the
-// values cannot be reduced to one per vertex before the exchange, as the max is taken
-// over interpolated Q (sec. 4.2), not interpolated after it.
+// whatever the number of ranks. Why this split: a backup needs nothing during the sweep,
+// and the exchange is one regular Alltoallv of whole rows. A split by vertex blocks (by
+// opponent layer on a learned-opponent grid) would receive 1.0 to 1.6 times fewer bytes
+// on the problems counted by bench/mpi_bench.cpp (docs/distributed.md), but it must fetch
+// scattered rows of other blocks at the landing corners, with per-rank lists of them and
+// a local numbering of the vertices it reads: left for later. No split can send one value
+// per vertex instead of a row: the max is taken over interpolated Q (sec. 4.2), not
+// interpolated after it.
 //
 // A rank holds the rows of its own states only. Every `checkpoint_every` sweeps rank 0
 // gathers the whole table and saves it through the checkpointer: a lost rank costs the

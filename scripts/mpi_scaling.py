@@ -127,12 +127,15 @@ def main():
     for entries, label in ((N, "this table"), (100e9 / 4, "a 100 GB table")):
         for machines in (16, 64):
             c, x, l = model(entries, machines)
+            # learners/mpi_value_iteration.cpp, bytesPerProcess(): a share of the model,
+            # rows and buffers (32 bytes an entry / M), and at rank 0 the whole table (4).
+            share, head = entries * 32 / machines, entries * (4 + 32 / machines)
             modelled.append({"table_bytes": 4 * entries, "machines": machines, "compute_seconds": c,
                              "exchange_seconds": x, "latency_seconds": l, "sweep_seconds": c + x + l,
-                             "memory_per_machine_bytes": entries * (4 + 28 / machines)})
+                             "rank0_bytes": head, "other_rank_bytes": share})
             print(f"  {label} ({human_bytes(4 * entries)}) on {machines:2d} machines: {c + x + l:9.3f} s a sweep "
-                  f"(backups {c:.3f}, exchange {x:.3f}, latency {l:.4f}); each machine holds "
-                  f"{human_bytes(entries * (4 + 28 / machines))}")
+                  f"(backups {c:.3f}, exchange {x:.3f}, latency {l:.4f}); rank 0 holds {human_bytes(head)}, "
+                  f"each other rank {human_bytes(share)}")
     if args.json:
         with open(args.json, "w") as f:
             json.dump({"counts": counts, "measured": measured, "model": modelled,
