@@ -712,7 +712,7 @@ TEST_CASE("kd_tree starts from any number of initial cells: a forest of root box
   REQUIRE(refined->cellCount() == 19);
 }
 
-TEST_CASE("a refined forest kd_tree round-trips through a policy bundle; bad roots are refused",
+TEST_CASE("a refined forest kd_tree round-trips through a policy bundle, bad roots are refused",
           "[adaptive][kd_tree]") {
   const std::string forest = "{type: kd_tree, coordinates: polar, height: 1, angle_cells: 6, distance_cells: 12}";
   const Solved solved(forest, "{type: adaptive_value_iteration, max_vertices: 200}");

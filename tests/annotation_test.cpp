@@ -46,7 +46,7 @@ int transitions(const std::vector<std::uint8_t>& flags) {
 
 }  // namespace
 
-TEST_CASE("boxing yields many effective hits at punch speeds; walking few or none", "[annotation][data]") {
+TEST_CASE("boxing yields many effective hits at punch speeds, walking few or none", "[annotation][data]") {
   for (const char* file : {"cmu/bvh/13_17_boxing.bvh", "cmu/bvh/13_18_boxing.bvh"}) {
     CAPTURE(file);
     const Annotation a = annotateFile(file);
@@ -221,7 +221,7 @@ TEST_CASE("punches while knocked down are not effective", "[annotation]") {
   CHECK(std::any_of(b.hits.begin(), b.hits.end(), [](const EffectiveHit& h) { return h.frame >= 60; }));
 }
 
-TEST_CASE("no boxing punch is lost to the knockdown rule; SNU's take-downs are", "[annotation][data]") {
+TEST_CASE("no boxing punch is lost to the knockdown rule, SNU's take-downs are", "[annotation][data]") {
   for (const char* file : {"cmu/bvh/13_17_boxing.bvh", "cmu/bvh/135_06_martial_arts.bvh"}) {
     CAPTURE(file);
     CHECK(annotateFile(file).knockdownFrames == 0);

@@ -713,7 +713,7 @@ TEST_CASE("mgrl list names every plugin and parameter with its default and unit"
 // Body points (scenarios/README.md): a distance or effort term, or a success condition, may
 // name a skeleton role or a joint; the model built from the capture records the joints, and
 // one it lacks is refused where it is written, with the roles and joints there are.
-TEST_CASE("a body point names a skeleton role or joint; one the skeleton lacks lists those it has",
+TEST_CASE("a body point names a skeleton role or joint, one the skeleton lacks lists those it has",
           "[behaviors][terms]") {
   auto keeper = [](const std::string& terms, const std::string& success = "") {
     return "  keep:\n"                                  // 6

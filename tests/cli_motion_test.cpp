@@ -93,7 +93,7 @@ TEST_CASE("mgrl graph reports how far the capture travels and warns about grids 
   CHECK_THAT(run.out, Contains("frames          1960 in 2 files"));
 }
 
-TEST_CASE("mgrl inspect --punch-min-speed auto chooses and reports each file's threshold; a bad value is refused",
+TEST_CASE("mgrl inspect --punch-min-speed auto chooses and reports each file's threshold, a bad value is refused",
           "[cli][data]") {
   CliSandbox box("cli-motion-auto");
   const std::string file = shellWord(mocap() / "cmu/bvh/13_17_boxing.bvh");

@@ -144,7 +144,7 @@ void checkEventShape(const json& e) {
 
 }  // namespace
 
-TEST_CASE("mgrl simulate --json prints one report object; without it, a text summary", "[cli][data][simulate-cli]") {
+TEST_CASE("mgrl simulate --json prints one report object, without it, a text summary", "[cli][data][simulate-cli]") {
   Sandbox box("contract");
   box.trainPolicy();
 

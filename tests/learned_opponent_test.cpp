@@ -333,7 +333,7 @@ TEST_CASE("mgrl train runs self-play rounds against a learned opponent, keeps ev
 }
 
 TEST_CASE(
-    "a learned opponent refuses a grid with speed layers and a missing policy bundle, each at its key; simulate "
+    "a learned opponent refuses a grid with speed layers and a missing policy bundle, each at its key, simulate "
     "refuses a partner it cannot use",
     "[opponent][cli][data]") {
   SparSandbox box;

@@ -1485,7 +1485,7 @@ TEST_CASE("the opponent's reach: the graph's own strike tips in the striker's fr
   CHECK_THROWS_WITH(StrikeReach(m, kFists, 0), Catch::Contains("expected a cap in (0, 1] m, found 0"));
 }
 
-TEST_CASE("avoid: 0 with the head on the opponent's strike, 1 from `clear` away; success counts it held",
+TEST_CASE("avoid: 0 with the head on the opponent's strike, 1 from `clear` away, success counts it held",
           "[learning][opponent]") {
   const StateActionModel m = headModel();
   const std::string block = "{type: terms, gamma: 0.9, terms: [{term: avoid, point: head, clear: 0.3, body_radius: 0}]}";

@@ -142,7 +142,7 @@ TEST_CASE("mpi_value_iteration gives value_iteration's table bit for bit, alone 
 }
 
 TEST_CASE(
-    "a rank killed in the middle of mpi_value_iteration fails the job naming it; --resume ends with the same table",
+    "a rank killed in the middle of mpi_value_iteration fails the job naming it, --resume ends with the same table",
     "[mpi][cli][data][slow]") {
   MpiSandbox box;
   requireMpi(box);

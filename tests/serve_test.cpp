@@ -161,7 +161,7 @@ std::vector<json> textMessages(serve::ViewerSession& session) {
   return out;
 }
 
-TEST_CASE("a page's world: the boxer punches the target where it is dragged; weights and controllers switch live",
+TEST_CASE("a page's world: the boxer punches the target where it is dragged, weights and controllers switch live",
           "[serve][data]") {
   const BoxingAssets boxing;
   serve::ViewerSession session(boxing.assets);

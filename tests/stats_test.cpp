@@ -103,7 +103,8 @@ TEST_CASE("stats: bodies 20 cm apart interpenetrate every frame", "[stats]") {
   CHECK(measureFolder("overlap", tighter).closeFrames == 0);
 }
 
-TEST_CASE("stats: each capture fighter faces the nearest other; simulate's avatars 2k and 2k+1 are partners", "[stats]") {
+TEST_CASE("stats: each capture fighter faces the nearest other, simulate's avatars 2k and 2k+1 are partners",
+          "[stats]") {
   // Two pairs 5 m apart, 1.0 m and 1.2 m within: half the samples each.
   const BoutStats four = measureFolder("four");
   CHECK(four.fighters == 4);

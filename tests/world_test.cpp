@@ -446,7 +446,7 @@ TEST_CASE("a boxer follows a target the user drags and punches it", "[world][dat
   REQUIRE_THROWS_AS(World(b.setup(2)).moveTarget(0, far), Error);
 }
 
-TEST_CASE("variety draws among the top k actions, seeded; k = 1 is greedy", "[world][data]") {
+TEST_CASE("variety draws among the top k actions, seeded, k = 1 is greedy", "[world][data]") {
   const Boxing& b = boxing();
   const StateActionModel& m = b.model();
   PolicyController greedy(m, b.parts);
