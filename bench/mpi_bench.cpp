@@ -12,13 +12,13 @@
 #include <algorithm>
 #include <cstdio>
 #include <iostream>
-#include <numeric>
 #include <string>
 #include <vector>
 
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>
 
+#include "learners/mpi_ranks.hpp"
 #include "mgrl/core/error.hpp"
 #include "mgrl/core/parallel.hpp"
 #include "mgrl/learning/problem.hpp"
@@ -29,25 +29,6 @@ using nlohmann::json;
 
 namespace {
 
-// The graph-state split of mpi_value_iteration (learners/mpi_value_iteration.cpp,
-// partition()): longest first to the least loaded rank, the load of a state being the
-// actions that end at it.
-std::vector<int> stateSplit(const GridModel& g, int ranks) {
-  const std::size_t states = g.incomingBegin.size() - 1;
-  std::vector<std::size_t> order(states);
-  std::iota(order.begin(), order.end(), 0);
-  auto work = [&](std::size_t s) { return g.incomingBegin[s + 1] - g.incomingBegin[s]; };
-  std::stable_sort(order.begin(), order.end(), [&](std::size_t x, std::size_t y) { return work(x) > work(y); });
-  std::vector<std::uint64_t> load(static_cast<std::size_t>(ranks), 0);
-  std::vector<int> owner(states, 0);
-  for (std::size_t s : order) {
-    const auto least = std::min_element(load.begin(), load.end()) - load.begin();
-    owner[s] = static_cast<int>(least);
-    load[static_cast<std::size_t>(least)] += work(s);
-  }
-  return owner;
-}
-
 struct Volume {
   double busiest = 0, total = 0;  // bytes received per sweep
 };
@@ -55,7 +36,7 @@ struct Volume {
 // By graph state: a rank receives the new values of the actions leaving its states that
 // other ranks backed up (those ending at their states): V floats per such action.
 Volume byState(const GridModel& g, int ranks) {
-  const std::vector<int> owner = stateSplit(g, ranks);
+  const std::vector<int> owner = learners::partitionByEndState(g, ranks);
   std::vector<double> received(static_cast<std::size_t>(ranks), 0);
   const std::size_t states = g.incomingBegin.size() - 1;
   for (std::size_t s = 0; s < states; ++s)

@@ -3,6 +3,7 @@
 // boxing's hit behaviour and on a learned-opponent behaviour; a rank killed mid-run fails
 // the job naming it, and `--resume` ends with the uninterrupted table.
 #include <cstdlib>
+#include <fstream>
 #include <optional>
 #include <string>
 #include <utility>
@@ -11,6 +12,7 @@
 #include <catch2/catch.hpp>
 
 #include "cli_support.hpp"
+#include "mgrl/core/bundle.hpp"
 #include "mgrl/core/launch.hpp"
 #include "sanitizer.hpp"
 #include "test_support.hpp"
@@ -220,4 +222,29 @@ TEST_CASE("the launcher's rank and size are read from its environment, and bad v
   const LaunchedProcess slurm = launchedProcess();
   CHECK(slurm.rank == 1);
   CHECK(slurm.size == 4);
+}
+
+TEST_CASE("mpi_value_iteration --resume ignores a checkpoint whose sweep count is out of range, naming it",
+          "[mpi][cli][data]") {
+  // One process (no launcher): MGRL_TEST_KILL=0:3 kills it after sweep 3's checkpoint.
+  MpiSandbox box;
+  const std::string train = "train " + scenario("boxing.yaml") + kHit + "mpi_value_iteration --out ";
+  const std::string out = test::shellWord(box.path("bundle"));
+  REQUIRE(box.run(train + out, "env MGRL_TEST_KILL=0:3").status != 0);
+  const std::filesystem::path state = box.path("bundle.checkpoints") / "hit" / "state.json";
+  nlohmann::json checkpoint = nlohmann::json::parse(test::readText(state));
+  REQUIRE(checkpoint["state"]["sweeps"] == 3);
+  checkpoint["state"]["sweeps"] = 5000;  // over max_sweeps (1000), under a valid seal
+  checkpoint["hash"] = manifestHash(checkpoint);
+  std::ofstream(state) << checkpoint.dump(2);
+
+  const test::Run resumed = box.run(train + out + " --resume");
+  INFO(resumed.err);
+  REQUIRE(resumed.status == 0);
+  CHECK(resumed.err.find(state.string()) != std::string::npos);
+  CHECK(resumed.err.find("state.sweeps") != std::string::npos);
+  CHECK(resumed.err.find("ignoring the checkpoint") != std::string::npos);
+  CHECK(resumed.err.find("no checkpoint to continue from, trained from the start") != std::string::npos);
+  REQUIRE(box.run(train + test::shellWord(box.path("straight"))).status == 0);
+  CHECK(compareTables(box.table("bundle", "hit"), box.table("straight", "hit")) == "identical");
 }
