@@ -5,19 +5,10 @@
 #include <fmt/format.h>
 #include <fmt/ranges.h>
 
+#include "numbers.hpp"
 #include "plural.hpp"
 
 namespace mgrl::app {
-namespace {
-
-// Rounds to `decimals` places; dividing by an exact power of ten yields the double nearest
-// the decimal, so JSON shows 0.5679 rather than 0.5679000000000001.
-double rounded(double value, int decimals) {
-  const double scale = std::pow(10.0, decimals);
-  return std::round(value * scale) / scale;
-}
-
-}  // namespace
 
 FileReport inspectFile(const std::filesystem::path& path, const InspectOptions& options) {
   const LoadedMotion loaded = loadMotion(path, options.load);

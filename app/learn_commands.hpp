@@ -90,6 +90,7 @@ struct SimulateOptions : LearnOptions {
   std::uint64_t seed = 1;
   long long topK = 0;                 ///< > 0 overrides world.top_k
   std::filesystem::path bvhOut;       ///< one BVH per avatar here ("" none)
+  std::filesystem::path gltfOut;      ///< one binary glTF (.glb) per avatar here ("" none)
   std::filesystem::path eventsOut;    ///< hits as JSON lines ("" none)
   bool poses = false;                 ///< forward kinematics of every joint each frame
   unsigned threads = 0;               ///< 0: the hardware's

@@ -19,21 +19,22 @@
 #include <fmt/format.h>
 
 #include "learn_common.hpp"
-#include "mgrl/session/session.hpp"
-#include "plural.hpp"
-#include "mgrl/learning/behavior.hpp"
-#include "mgrl/scenario/behaviors.hpp"
-#include "mgrl/motion/bvh.hpp"
-#include "mgrl/runtime/controller.hpp"
-#include "mgrl/motion/motion_io.hpp"
 #include "mgrl/core/bundle.hpp"
 #include "mgrl/core/files.hpp"
 #include "mgrl/core/hash.hpp"
 #include "mgrl/core/parallel.hpp"
 #include "mgrl/core/version.hpp"
+#include "mgrl/learning/behavior.hpp"
 #include "mgrl/learning/policy_bundle.hpp"
+#include "mgrl/motion/bvh.hpp"
+#include "mgrl/motion/gltf.hpp"
+#include "mgrl/motion/motion_io.hpp"
+#include "mgrl/runtime/controller.hpp"
 #include "mgrl/runtime/world.hpp"
+#include "mgrl/scenario/behaviors.hpp"
+#include "mgrl/session/session.hpp"
 #include "plugins.hpp"
+#include "plural.hpp"
 
 namespace mgrl::app {
 
@@ -159,14 +160,15 @@ bool earlierSimulateOutput(const fs::path& dir) {
   return !ec;
 }
 
-// Creates --bvh-out's parent folders and the bundle's temporary beside the folder; throws
-// if either fails (and then leaves nothing created).
-std::unique_ptr<BundleWriter> prepareBundle(const fs::path& dirArgument, std::unique_ptr<ScratchDirectory>& created) {
+// Creates an output folder's parents and the bundle's temporary beside the folder; throws
+// if either fails (and then leaves nothing created). `option` names it in messages.
+std::unique_ptr<BundleWriter> prepareBundle(const fs::path& dirArgument, std::unique_ptr<ScratchDirectory>& created,
+                                            std::string_view option) {
   const fs::path dir = dirArgument.has_filename() ? dirArgument : dirArgument.parent_path();
   std::error_code ec;
   const fs::file_status status = fs::status(dir, ec);
   if (fs::exists(status) && !fs::is_directory(status))
-    throw Error(fmt::format("--bvh-out {}: expected a folder, found another kind of file", dir.string()));
+    throw Error(fmt::format("{} {}: expected a folder, found another kind of file", option, dir.string()));
   // The outermost missing folder on the way to `dir`'s parent, to remove if the run fails.
   fs::path outermost;
   for (fs::path p = fs::absolute(dir, ec).parent_path(); !p.empty() && !fs::exists(p, ec); p = p.parent_path()) {
@@ -177,7 +179,7 @@ std::unique_ptr<BundleWriter> prepareBundle(const fs::path& dirArgument, std::un
     fs::create_directories(dir.parent_path(), ec);
     if (ec || !fs::is_directory(dir.parent_path())) {
       if (!outermost.empty()) fs::remove_all(outermost, ec);
-      throw Error(fmt::format("--bvh-out {}: expected a folder that can be created, found: {}", dir.string(),
+      throw Error(fmt::format("{} {}: expected a folder that can be created, found: {}", option, dir.string(),
                               ec ? ec.message() : std::string("not a folder")));
     }
   }
@@ -186,7 +188,7 @@ std::unique_ptr<BundleWriter> prepareBundle(const fs::path& dirArgument, std::un
   try {
     return std::make_unique<BundleWriter>(dir, "simulate output", "manifest.json", earlierSimulateOutput);
   } catch (const Error& e) {
-    throw Error(fmt::format("--bvh-out {}", e.what()));
+    throw Error(fmt::format("{} {}", option, e.what()));
   }
 }
 
@@ -217,9 +219,11 @@ void checkSimulateOptions(const SimulateOptions& options) {
   if (options.avatars < 1 || options.avatars > kMaxAvatars)
     throw Error(fmt::format("--avatars: expected a number of avatars in [1, {}], found {}", kMaxAvatars,
                             options.avatars));
-  if ((options.poses || !options.bvhOut.empty()) && options.avatars > kMaxAvatarsWithPoses)
-    throw Error(fmt::format("--avatars: expected at most {} avatars with poses (--poses or --bvh-out), found {}",
-                            kMaxAvatarsWithPoses, options.avatars));
+  if ((options.poses || !options.bvhOut.empty() || !options.gltfOut.empty()) && options.avatars > kMaxAvatarsWithPoses)
+    throw Error(
+        fmt::format("--avatars: expected at most {} avatars with poses (--poses, --bvh-out or --gltf-out), "
+                    "found {}",
+                    kMaxAvatarsWithPoses, options.avatars));
   if (!(options.seconds > 0 && options.seconds <= 86400))
     throw Error(fmt::format("--seconds: expected simulated seconds in (0, 86400], found {}", options.seconds));
   if (options.topK < 0 || options.topK > 64)
@@ -229,24 +233,62 @@ void checkSimulateOptions(const SimulateOptions& options) {
     throw Error(fmt::format("--threads: expected at most 256 threads, found {}", options.threads));
 }
 
+namespace {
+
 // Where the run's outputs go: checked, and their scratch folders made, before anything is
 // simulated (and removed again if the run fails).
-struct Outputs {
-  bool eventsInBundle = false;  ///< --events-out is a file of --bvh-out's folder
-  std::unique_ptr<ScratchDirectory> bvhCreated, eventsScratch;
-  std::unique_ptr<BundleWriter> bvhBundle;
+// One output folder (--bvh-out, --gltf-out, or both when they name the same folder): one
+// unit, written beside it and swapped in whole with its manifest.
+struct OutputFolder {
+  std::string option;  ///< "--bvh-out", "--gltf-out" or "--bvh-out and --gltf-out"
+  fs::path dir;        ///< as given
+  bool bvh = false, gltf = false, events = false;
+  std::unique_ptr<ScratchDirectory> created;
+  std::unique_ptr<BundleWriter> bundle;
 };
+struct Outputs {
+  std::vector<OutputFolder> folders;
+  std::unique_ptr<ScratchDirectory> eventsScratch;  ///< --events-out outside every output folder
+};
+
+// A folder argument as an absolute, normal path without a trailing separator.
+fs::path folderOf(const fs::path& p) {
+  fs::path absolute = fs::absolute(p).lexically_normal();
+  return absolute.has_filename() ? absolute : absolute.parent_path();
+}
+
+// avatar_NNN.bvh or avatar_NNN.glb: the name of a file an output folder holds per avatar.
+bool avatarFileName(std::string_view name) {
+  return name.rfind("avatar_", 0) == 0 && (name.ends_with(".bvh") || name.ends_with(".glb"));
+}
 
 Outputs prepareOutputs(const SimulateOptions& options, const Scenario& scenario) {
   Outputs out;
-  // An events file directly inside --bvh-out's folder is one of that folder's files, so
-  // it is replaced with the BVH files as one unit.
-  auto folderOf = [](const fs::path& p) {
-    fs::path absolute = fs::absolute(p).lexically_normal();
-    return absolute.has_filename() ? absolute : absolute.parent_path();
-  };
-  out.eventsInBundle = !options.bvhOut.empty() && !options.eventsOut.empty() &&
-                       folderOf(options.eventsOut).parent_path() == folderOf(options.bvhOut);
+  if (!options.bvhOut.empty()) {
+    OutputFolder& folder = out.folders.emplace_back();
+    folder.option = "--bvh-out";
+    folder.dir = options.bvhOut;
+    folder.bvh = true;
+  }
+  if (!options.gltfOut.empty()) {
+    if (!out.folders.empty() && folderOf(options.gltfOut) == folderOf(options.bvhOut)) {
+      out.folders.front().gltf = true;  // one folder, one unit, both formats
+      out.folders.front().option = "--bvh-out and --gltf-out";
+    } else {
+      OutputFolder& folder = out.folders.emplace_back();
+      folder.option = "--gltf-out";
+      folder.dir = options.gltfOut;
+      folder.gltf = true;
+    }
+  }
+  // An events file directly inside an output folder is one of that folder's files, so it
+  // is replaced with the motion files as one unit.
+  OutputFolder* eventsFolder = nullptr;
+  for (OutputFolder& folder : out.folders)
+    if (!options.eventsOut.empty() && folderOf(options.eventsOut).parent_path() == folderOf(folder.dir)) {
+      folder.events = true;
+      eventsFolder = &folder;
+    }
   // Output places are checked (and scratch folders made) before any simulation: first
   // what can be checked without creating anything.
   if (!options.eventsOut.empty()) {
@@ -254,35 +296,79 @@ Outputs prepareOutputs(const SimulateOptions& options, const Scenario& scenario)
       throw Error(fmt::format("--events-out {}: expected a file name, found a folder", options.eventsOut.string()));
     // A missing folder is made, as for --bvh-out (prepareFolder and prepareBundle below).
   }
-  if (!options.bvhOut.empty()) {
+  if (!out.folders.empty()) {
     // A first estimate with a small skeleton (20 joints), exact once the skeleton is known.
     const double avatarFrames = static_cast<double>(options.avatars) * std::round(options.seconds * scenario.motion.fps);
     if (recordingBytes(avatarFrames, 20) > kMaxRecordingBytes)
-      throw Error(fmt::format("--bvh-out: recording {} avatars for {} s needs more than {:.1f} GB of memory; expected "
-                              "at most {:.0f} GB: use fewer --avatars or --seconds",
-                              options.avatars, options.seconds, recordingBytes(avatarFrames, 20) / 1e9,
-                              kMaxRecordingBytes / 1e9));
+      throw Error(
+          fmt::format("{}: recording {} avatars for {} s needs more than {:.1f} GB of memory; expected "
+                      "at most {:.0f} GB: use fewer --avatars or --seconds",
+                      out.folders.front().option, options.avatars, options.seconds,
+                      recordingBytes(avatarFrames, 20) / 1e9, kMaxRecordingBytes / 1e9));
   }
-  if (out.eventsInBundle) {
+  if (eventsFolder) {
     const std::string name = options.eventsOut.filename().string();
-    if (name == "manifest.json" || (name.rfind("avatar_", 0) == 0 && name.ends_with(".bvh")))
-      throw Error(fmt::format("--events-out {}: expected a name other than the BVH folder's own files "
-                              "(manifest.json, avatar_NNN.bvh), found {}",
-                              options.eventsOut.string(), quoteToken(name)));
+    if (name == "manifest.json" || avatarFileName(name))
+      throw Error(
+          fmt::format("--events-out {}: expected a name other than the {} folder's own files "
+                      "(manifest.json, avatar_NNN.bvh, avatar_NNN.glb), found {}",
+                      options.eventsOut.string(), eventsFolder->option, quoteToken(name)));
   }
-  if (!options.eventsOut.empty() && !out.eventsInBundle) {
+  if (!options.eventsOut.empty() && !eventsFolder) {
     const fs::path parent = options.eventsOut.parent_path().empty() ? fs::path(".") : options.eventsOut.parent_path();
     out.eventsScratch = prepareFolder(parent, "--events-out");
   }
-  if (!options.bvhOut.empty()) out.bvhBundle = prepareBundle(options.bvhOut, out.bvhCreated);
+  for (OutputFolder& folder : out.folders) folder.bundle = prepareBundle(folder.dir, folder.created, folder.option);
   return out;
 }
 
-// Writes the run's outputs into the bundle's temporary and the scratch folder, then puts
-// them in place: the BVH folder whole (with the events if they belong to it), then the
-// events. Returns the BVH files written.
-std::vector<std::string> writeOutputs(Outputs& out, const SimulateOptions& options, const Session& session,
-                                      const World& world, std::size_t frames) {
+// The look of an exported body: gloves on the fists (and what hangs under them) and the
+// wrists, shoes on the ankles and toes, the rest of the body in the avatar's colour
+// (sparring partners differ); the trunk (pelvis up to the neck) wider than the limbs, the
+// head a ball, the fists glove-sized.
+GltfWriteOptions gltfOptions(const Skeleton& skeleton, const SkeletonRoles& roles, std::size_t avatar,
+                             const std::string& name) {
+  GltfWriteOptions options;
+  options.name = name;
+  options.bodyColor = avatar % 2 == 0 ? Eigen::Vector3f(0.20f, 0.36f, 0.70f) : Eigen::Vector3f(0.72f, 0.42f, 0.16f);
+  const Eigen::Vector3f glove(0.75f, 0.08f, 0.08f), shoe(0.12f, 0.12f, 0.12f);
+  std::vector<char> gloved(skeleton.jointCount(), 0);
+  for (int side = 0; side < 2; ++side) {
+    if (roles.fist[side] >= 0) gloved[static_cast<std::size_t>(roles.fist[side])] = 1;
+    if (roles.wrist[side] >= 0) options.jointColors[roles.wrist[side]] = glove;
+    if (roles.ankle[side] >= 0) options.jointColors[roles.ankle[side]] = shoe;
+    if (roles.toe[side] >= 0) options.jointColors[roles.toe[side]] = shoe;
+  }
+  for (std::size_t j = 1; j < skeleton.jointCount(); ++j)  // parents come first
+    if (gloved[static_cast<std::size_t>(skeleton.joint(j).parent)]) gloved[j] = 1;
+  for (std::size_t j = 0; j < skeleton.jointCount(); ++j)
+    if (gloved[j]) options.jointColors[static_cast<int>(j)] = glove;
+  // The trunk: the head's ancestors down to the pelvis (the neck's bones narrower).
+  if (roles.head >= 0 && roles.pelvis >= 0) {
+    std::vector<int> chain;
+    for (int j = skeleton.joint(static_cast<std::size_t>(roles.head)).parent; j >= 0 && j != roles.pelvis;
+         j = skeleton.joint(static_cast<std::size_t>(j)).parent)
+      chain.push_back(j);
+    const std::size_t neck = std::min<std::size_t>(chain.size(), 2);  // the two joints under the head
+    for (std::size_t k = 0; k < chain.size(); ++k) options.jointRadii[chain[k]] = k < neck ? 0.05 : 0.1;
+    options.jointRadii[roles.pelvis] = 0.1;
+    options.jointRadii[roles.head] = 0.1;
+  }
+  for (int side = 0; side < 2; ++side)
+    if (roles.fist[side] >= 0) options.jointRadii[roles.fist[side]] = 0.05;
+  return options;
+}
+
+struct WrittenFiles {
+  std::vector<std::string> bvh, gltf;
+  std::string bvhFolder, gltfFolder;
+};
+
+// Writes the run's outputs into the bundles' temporaries and the scratch folder, then puts
+// them in place: each output folder whole (with the events if they belong to it), then the
+// events. Returns the motion files written.
+WrittenFiles writeOutputs(Outputs& out, const SimulateOptions& options, const Session& session, const World& world,
+                          std::size_t frames) {
   const StateActionModel& model = session.model();
   const std::size_t avatars = world.avatarCount();
   const Scenario& scenario = session.scenario;
@@ -296,25 +382,34 @@ std::vector<std::string> writeOutputs(Outputs& out, const SimulateOptions& optio
     eventsTemporary = out.eventsScratch->path() / "events.jsonl";
     writeWholeFile(eventsTemporary, eventsText);
   }
-  std::vector<std::string> bvhFiles;
-  if (out.bvhBundle) {
-    const int width = static_cast<int>(std::to_string(avatars - 1).size());
-    BvhWriteOptions bvhOptions;
-    bvhOptions.lengthScale = 100;  // centimetres, as most tools expect
-    bvhOptions.continuousAngles = true;
+  WrittenFiles written;
+  const int width = std::max(static_cast<int>(std::to_string(avatars - 1).size()), 3);
+  for (OutputFolder& folder : out.folders) {
     json files = json::array();
     auto add = [&](const std::string& name, const std::string& bytes) {
-      writeWholeFile(out.bvhBundle->path() / name, bytes);
+      writeWholeFile(folder.bundle->path() / name, bytes);
       files.push_back({{"file", name}, {"bytes", bytes.size()}, {"hash", hexDigest(hashBytes(bytes))}});
     };
     for (std::size_t i = 0; i < avatars; ++i) {
-      const std::string name = fmt::format("avatar_{:0{}}.bvh", i, std::max(width, 3));
-      std::ostringstream text;
-      writeBvh(text, motionFromPoses(graph.db.skeleton, world.recorded(i), model.frameTime), bvhOptions);
-      add(name, std::move(text).str());
-      bvhFiles.push_back((options.bvhOut / name).string());
+      const Motion motion = motionFromPoses(graph.db.skeleton, world.recorded(i), model.frameTime);
+      const std::string stem = fmt::format("avatar_{:0{}}", i, width);
+      if (folder.bvh) {
+        BvhWriteOptions bvhOptions;
+        bvhOptions.lengthScale = 100;  // centimetres, as most tools expect
+        bvhOptions.continuousAngles = true;
+        std::ostringstream text;
+        writeBvh(text, motion, bvhOptions);
+        add(stem + ".bvh", std::move(text).str());
+        written.bvh.push_back((folder.dir / (stem + ".bvh")).string());
+      }
+      if (folder.gltf) {
+        add(stem + ".glb", writeGlb(motion, gltfOptions(*graph.db.skeleton, graph.db.roles, i, stem)));
+        written.gltf.push_back((folder.dir / (stem + ".glb")).string());
+      }
     }
-    if (out.eventsInBundle) add(options.eventsOut.filename().string(), eventsText);
+    if (folder.bvh) written.bvhFolder = folder.dir.string();
+    if (folder.gltf) written.gltfFolder = folder.dir.string();
+    if (folder.events) add(options.eventsOut.filename().string(), eventsText);
     json manifest = {
         {"format", kOutputFormat},
         {"version", kOutputVersion},
@@ -339,11 +434,11 @@ std::vector<std::string> writeOutputs(Outputs& out, const SimulateOptions& optio
                                 {"hash", hexDigest(hashBytes(eventsText))}};
     manifest["hash"] = manifestHash(manifest);
     try {
-      out.bvhBundle->commit(manifest.dump(2) + "\n");
+      folder.bundle->commit(manifest.dump(2) + "\n");
     } catch (const Error& e) {
-      throw Error(fmt::format("--bvh-out {}", e.what()));
+      throw Error(fmt::format("{} {}", folder.option, e.what()));
     }
-    out.bvhCreated->keep();
+    folder.created->keep();
   }
   if (out.eventsScratch) {
     std::error_code ec;
@@ -352,13 +447,16 @@ std::vector<std::string> writeOutputs(Outputs& out, const SimulateOptions& optio
                                     options.eventsOut.string(), ec.message()));
     out.eventsScratch->keep();
   }
-  return bvhFiles;
+  return written;
 }
+
+}  // namespace
 
 json runSimulate(const SimulateOptions& options) {
   checkSimulateOptions(options);
   const ControllerChoice choice{options.controller, options.horizon, options.horizonSeconds};
-  const bool poses = options.poses || !options.bvhOut.empty();
+  const bool record = !options.bvhOut.empty() || !options.gltfOut.empty();
+  const bool poses = options.poses || record;
   Outputs out;
   SessionNeeds needs;
   needs.policy = choice.name == "policy" ? PolicyNeed::Required : PolicyNeed::None;
@@ -387,18 +485,19 @@ json runSimulate(const SimulateOptions& options) {
   const auto frames = static_cast<std::size_t>(std::max(1.0, std::round(options.seconds / model.frameTime)));
   const auto avatars = static_cast<std::size_t>(options.avatars);
   const std::size_t joints = graph.db.skeleton->jointCount();
-  if (!options.bvhOut.empty()) {
+  if (record) {
     const double bytes =
         recordingBytes(static_cast<double>(avatars) * static_cast<double>(frames), static_cast<double>(joints));
     if (bytes > kMaxRecordingBytes)
-      throw Error(fmt::format("--bvh-out: recording {} avatars for {} frames needs about {:.1f} GB of memory; expected "
-                              "at most {:.0f} GB: use fewer --avatars or --seconds",
-                              avatars, frames, bytes / 1e9, kMaxRecordingBytes / 1e9));
+      throw Error(fmt::format(
+          "{}: recording {} avatars for {} frames needs about {:.1f} GB of memory; expected "
+          "at most {:.0f} GB: use fewer --avatars or --seconds",
+          options.bvhOut.empty() ? "--gltf-out" : "--bvh-out", avatars, frames, bytes / 1e9, kMaxRecordingBytes / 1e9));
   }
   WorldSetup setup = session->worldSetup(avatars, options.seed, choice);
   setup.threads = options.threads > 0 ? options.threads : defaultThreadCount();
   setup.poses = poses;
-  setup.record = !options.bvhOut.empty();
+  setup.record = record;
   World world(setup);
   const double startup = secondsSinceStart();
 
@@ -419,7 +518,7 @@ json runSimulate(const SimulateOptions& options) {
   }
   const double wall = since(start);
 
-  const std::vector<std::string> bvhFiles = writeOutputs(out, options, *session, world, frames);
+  const WrittenFiles written = writeOutputs(out, options, *session, world, frames);
 
   std::vector<std::size_t> byAvatar(avatars, 0);
   std::map<std::string, std::size_t> byPart = {{"head", 0}, {"chest", 0}, {"spine", 0}, {"target", 0}};
@@ -462,10 +561,15 @@ json runSimulate(const SimulateOptions& options) {
     if (options.partnerRound > 0) report["partner_round"] = options.partnerRound;
     report["hits_by_side"] = {{"policy", first}, {"partner_policy", second}};
   }
-  if (!bvhFiles.empty()) {
-    report["bvh_files"] = bvhFiles;
-    report["bvh_folder"] = options.bvhOut.string();
+  if (!written.bvh.empty()) {
+    report["bvh_files"] = written.bvh;
+    report["bvh_folder"] = written.bvhFolder;
     report["bvh_manifest"] = (options.bvhOut / "manifest.json").string();
+  }
+  if (!written.gltf.empty()) {
+    report["gltf_files"] = written.gltf;
+    report["gltf_folder"] = written.gltfFolder;
+    report["gltf_manifest"] = (options.gltfOut / "manifest.json").string();
   }
   if (!options.eventsOut.empty()) report["events_file"] = options.eventsOut.string();
   return report;
@@ -489,6 +593,9 @@ std::string simulateText(const json& r) {
   if (r.contains("bvh_files"))
     text += fmt::format("wrote {} to {}\n", counted(r["bvh_files"].size(), "BVH file"),
                         r["bvh_folder"].get<std::string>());
+  if (r.contains("gltf_files"))
+    text += fmt::format("wrote {} to {}\n", counted(r["gltf_files"].size(), "glTF file"),
+                        r["gltf_folder"].get<std::string>());
   if (r.contains("events_file")) text += fmt::format("wrote the hits to {}\n", r["events_file"].get<std::string>());
   return text;
 }

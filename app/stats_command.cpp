@@ -11,6 +11,7 @@
 
 #include <fmt/format.h>
 
+#include "numbers.hpp"
 #include "plural.hpp"
 
 namespace mgrl::app {
@@ -25,13 +26,6 @@ bool isBvh(const fs::path& path) {
   std::string ext = path.extension().string();
   std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return std::tolower(c); });
   return ext == ".bvh";
-}
-
-// Rounds for JSON (0.5679, not 0.5679000000000001); NaN stays NaN (null in JSON).
-double rounded(double value, int decimals) {
-  if (!std::isfinite(value)) return value;
-  const double scale = std::pow(10.0, decimals);
-  return std::round(value * scale) / scale;
 }
 
 json distribution(const std::vector<double>& samples, int decimals) {

@@ -9,9 +9,7 @@
 
 namespace mgrl::discretizers {
 
-namespace {
-constexpr double kDeg = M_PI / 180;
-}  // namespace
+namespace {}  // namespace
 
 // The bounding volume, in (angle, distance, height), of the effective hitting points as
 // seen from the decision that leads to them: a target there can be hit by some action.

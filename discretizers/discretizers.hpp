@@ -3,9 +3,14 @@
 /// The discretizer plugins (paper sec. 4.2, 6.4): `polar2d` for approaching (the target's
 /// ground position around the avatar) and `cylindrical3d` for hitting (angle, distance and
 /// height over the volume the avatar's effective punches reach).
+#include <cmath>
+
 #include "mgrl/learning/discretizer.hpp"
 
 namespace mgrl::discretizers {
+
+/// Radians per degree: the discretizers' angle parameters are given in degrees.
+inline constexpr double kDeg = M_PI / 180;
 
 /// Adds polar2d, cylindrical3d, kd_tree and polar_velocity.
 void registerAll(DiscretizerRegistry& registry);

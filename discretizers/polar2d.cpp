@@ -17,8 +17,6 @@ std::vector<double> evenVertices(double from, double to, std::size_t count, bool
 
 namespace {
 
-constexpr double kDeg = M_PI / 180;
-
 /// Axes: angle theta = atan2(x, z) (0 straight ahead, positive to the left), then ground
 /// distance. Vertex counts, not cells: `rings` distances from min_radius to radius and
 /// `sectors` angles; sectors covering 360 degrees wrap around.

@@ -14,8 +14,6 @@ namespace mgrl::discretizers {
 
 namespace {
 
-constexpr double kDeg = M_PI / 180;
-
 class PolarVelocity final : public Discretizer {
  public:
   PolarVelocity(const Params& p, const StateActionModel& m) {

@@ -2,7 +2,9 @@
 # The browser tests (tests/web/): the page's frame reader (node --test), the viewer end to
 # end (browser_test.mjs: a real `mgrl serve` from BUILD_DIR driven by headless Chromium,
 # with a boxing policy trained by value iteration, about a second, into
-# BUILD_DIR/browser-test/), and the `mgrl compare` report (report_test.mjs). Screenshots
+# BUILD_DIR/browser-test/), the `mgrl compare` report (report_test.mjs), and a sparring bout
+# exported with --gltf-out beside --bvh-out (gltf_test.mjs: the Khronos validator, and
+# three.js's GLTFLoader against its BVHLoader on the same run). Screenshots
 # go to MGRL_SCREENSHOT_DIR (default BUILD_DIR/browser-test/img; docs/img holds the
 # README's).
 #   scripts/browser_test.sh [BUILD_DIR]
@@ -27,5 +29,10 @@ mkdir -p "$shots"
   --cache "$work/cache" --data "$data" --report "$work/report" >"$work/compare.out" 2>"$work/compare.err" ||
   { cat "$work/compare.err" >&2; exit 1; }
 node "$root/tests/web/report_test.mjs" "$work/report" "$shots/compare-report.png"
+rm -rf "$work/export"
+"$mgrl" simulate "$root/scenarios/boxing.yaml" --policy "$work/policy" --cache "$work/cache" --data "$data" \
+  --avatars 2 --seconds 8 --seed 3 --bvh-out "$work/export" --gltf-out "$work/export" >"$work/export.out" \
+  2>"$work/export.err" || { cat "$work/export.err" >&2; exit 1; }
+node "$root/tests/web/gltf_test.mjs" "$work/export" "$shots/gltf-bodies.png"
 MGRL_BINARY="$mgrl" MGRL_SERVE_ARGS="--policy $work/policy --cache $work/cache --data $data" \
   MGRL_SCREENSHOT_DIR="$shots" node "$root/tests/web/browser_test.mjs"

@@ -28,6 +28,7 @@
 #include "cli_support.hpp"
 #include "mgrl/core/bundle.hpp"
 #include "mgrl/core/hash.hpp"
+#include "mgrl/motion/gltf.hpp"
 #include "test_support.hpp"
 
 namespace fs = std::filesystem;
@@ -310,6 +311,61 @@ TEST_CASE("mgrl simulate --bvh-out writes one readable BVH per avatar", "[cli][d
     CHECK(file["fps"].get<double>() == Approx(r["fps"].get<double>()));
     CHECK(file["duration_s"].get<double>() == Approx(r["seconds"].get<double>()).margin(1.0 / 30));
   }
+}
+
+TEST_CASE("mgrl simulate --gltf-out writes one binary glTF per avatar, alone or beside the BVH",
+          "[cli][data][simulate-cli]") {
+  Sandbox box("gltf");
+  box.trainPolicy();
+  const fs::path alone = box.path("glb");
+  const json r = box.simulate("--json --avatars 2 --seconds 4 --seed 5 --gltf-out " + shellWord(alone)).report();
+  CHECK(r["poses"] == true);  // implied by --gltf-out
+  CHECK(entries(alone) == std::vector<std::string>{"avatar_000.glb", "avatar_001.glb", "manifest.json"});
+  CHECK(r["gltf_manifest"] == (alone / "manifest.json").string());
+  REQUIRE(r["gltf_files"].size() == 2);
+  CHECK_FALSE(r.contains("bvh_files"));
+  const json manifest = json::parse(readText(alone / "manifest.json"));
+  CHECK(manifest["format"] == "mgrl-simulate-output");
+  REQUIRE(manifest["files"].size() == 2);
+  for (const json& file : manifest["files"]) {
+    CAPTURE(file);
+    const std::string bytes = readText(alone / file["file"].get<std::string>());
+    CHECK(file["bytes"] == bytes.size());
+    CHECK(file["hash"] == mgrl::hexDigest(mgrl::hashBytes(bytes)));
+    const json doc = json::parse(mgrl::splitGlb(bytes, file["file"].get<std::string>()).json);
+    // One key per simulated frame, one node per joint besides the body.
+    const int input = doc["animations"][0]["samplers"][0]["input"].get<int>();
+    CHECK(doc["accessors"][input]["count"] == r["frames"]);
+    CHECK(doc["nodes"].size() > 20);
+    CHECK(doc["skins"][0]["joints"].size() == doc["nodes"].size() - 1);
+  }
+  // Sparring partners in different colours (the first avatar blue, the second orange), gloves red.
+  CHECK(readText(alone / "avatar_000.glb") != readText(alone / "avatar_001.glb"));
+
+  // The same folder as --bvh-out: one unit with both formats; the same seed, the same bytes.
+  const fs::path both = box.path("both");
+  const json r2 = box.simulate("--json --avatars 2 --seconds 4 --seed 5 --bvh-out " + shellWord(both) + " --gltf-out " +
+                               shellWord(both / ""))
+                      .report();
+  CHECK(entries(both) == std::vector<std::string>{"avatar_000.bvh", "avatar_000.glb", "avatar_001.bvh",
+                                                  "avatar_001.glb", "manifest.json"});
+  CHECK(r2["bvh_files"].size() == 2);
+  CHECK(r2["gltf_files"].size() == 2);
+  CHECK(json::parse(readText(both / "manifest.json"))["files"].size() == 4);
+  CHECK(readText(both / "avatar_000.glb") == readText(alone / "avatar_000.glb"));
+  CHECK(scratchLeft(box.dir()).empty());
+
+  // A file where the folder should be: refused, the file untouched, nothing left behind.
+  const fs::path file = box.path("afile");
+  std::ofstream(file) << "a file\n";
+  requireRefusal(box.simulate("--json --avatars 2 --seconds 4 --gltf-out " + shellWord(file)),
+                 "--gltf-out " + file.string(), "expected a folder, found another kind of file");
+  CHECK(readText(file) == "a file\n");
+  // An events file named like the folder's own files.
+  requireRefusal(box.simulate("--json --avatars 2 --seconds 4 --gltf-out " + shellWord(alone) + " --events-out " +
+                              shellWord(alone / "avatar_007.glb")),
+                 "--events-out ", "expected a name other than the --gltf-out folder's own files");
+  CHECK(scratchLeft(box.dir()).empty());
 }
 
 TEST_CASE("mgrl simulate repeats itself to the byte for a seed and differs for another", "[cli][data][simulate-cli]") {

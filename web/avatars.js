@@ -1,5 +1,6 @@
 // What the world looks like on the page: every avatar's bones as one instanced mesh of
-// thin cylinders (one instance per bone per avatar) and its head as one of spheres, the
+// cylinders (one instance per bone per avatar; capsule-wide in body mode, thin in bones
+// mode), its joints as one of spheres (body mode) and its head as one of spheres, the
 // targets and the hit flashes as instanced spheres too. Three draw calls for the
 // bodies whatever the crowd's size, so a thousand boxers stay fast; a frame's joint
 // positions are written straight into the instance matrices.
@@ -93,7 +94,44 @@ export function avatarColour(i, partners, out) {
                      : out.setHSL(0.6 + 0.03 * shade, 0.75, 0.55 + 0.12 * shade);
 }
 
-/** The bodies: bones, heads and their colours. */
+// Body mode (issue 45): each bone a capsule sized from its length, as the glTF export's
+// body (framework/motion/gltf.hpp): a cylinder of radius kBodyRadiusPerLength x length
+// within [kBodyMinRadius, kBodyMaxRadius], closed by a sphere at each joint as wide as the
+// widest bone meeting there. Gloves and shoes in their own colours.
+const kBodyRadiusPerLength = 0.2;
+const kBodyMinRadius = 0.025;  // m
+const kBodyMaxRadius = 0.075;  // m
+const kGloveRadius = 0.055;    // m: the fist's sphere, a glove's size
+const kTrunkRadius = 0.085;    // m: bones from the pelvis and spine joints
+const kNeckRadius = 0.05;      // m
+const kTrunk = /hips|pelvis|spine|chest|back/i;
+const kGlove = new THREE.Color(0.93, 0.92, 0.88);  // white gloves: seen on either corner's colour
+const kShoe = new THREE.Color(0.12, 0.12, 0.12);
+const kStruck = new THREE.Color(1, 0.8, 0.05);
+const kStruckSeconds = 0.35;
+
+// What a joint is by its name: 'glove' (hands, fists, fingers), 'shoe' (feet, toes) or ''.
+function jointKind(name) {
+  if (/hand|fist|finger|thumb|wrist/i.test(name)) return 'glove';
+  if (/foot|toe|ankle/i.test(name)) return 'shoe';
+  return '';
+}
+
+// The body part a hit event names, as joints: the head, the chest (spine joints above the
+// lowest two), the spine (the rest of the trunk).
+function struckJoints(part, joints) {
+  const trunk = joints.map((j, k) => ({name: j.name, k}))
+                    .filter(({name}) => /spine|chest|back|neck|hips|pelvis|root|head/i.test(name));
+  if (part === 'head') return trunk.filter(({name}) => /head|neck/i.test(name)).map(({k}) => k);
+  if (part === 'chest') return trunk.filter(({name}) => /chest|spine[1-9]|neck/i.test(name)).map(({k}) => k);
+  if (part === 'spine') return trunk.filter(({name}) => /spine|hips|pelvis|root|back/i.test(name)).map(({k}) => k);
+  return [];
+}
+
+/**
+ * The bodies. Two looks: 'body' (the default: capsules, gloves, shoes) and 'bones' (thin
+ * bones and a head, for teaching: every joint visible). Instanced meshes either way.
+ */
 export class Avatars {
   constructor(scene) {
     const material = new THREE.MeshLambertMaterial({color: 0xffffff});
@@ -101,30 +139,53 @@ export class Avatars {
     // (SwiftShader) pays for each. Bones are open tubes: their ends hide in the joints.
     this.bones = new GrowingInstances(scene, new THREE.CylinderGeometry(1, 1, 1, 6, 1, true), material, true);
     this.heads = new GrowingInstances(scene, new THREE.SphereGeometry(1, 8, 6), material, true);
+    this.joints = new GrowingInstances(scene, new THREE.SphereGeometry(1, 5, 3), material, true);
     this.positions = new Float32Array(0);
+    this.look = 'body';
+    this.struck = [];  // {avatar, joints, until}
     this.setSkeleton([]);
     this.partners = [];
     this.colouredFor = null;
   }
 
+  /** 'body' or 'bones'. */
+  setLook(look) {
+    this.look = look === 'bones' ? 'bones' : 'body';
+    this.colouredFor = null;
+    this.measuredFor = null;
+  }
+
   /** The skeleton of `scene.joints`: [{name, parent}], parents before children. */
   setSkeleton(joints) {
+    this.skeleton = joints;
     this.jointCount = joints.length;
     this.bonePairs = [];
     this.boneRadii = [];
+    this.thinRadii = [];
     joints.forEach((joint, j) => {
       if (joint.parent < 0) return;
       this.bonePairs.push(joint.parent, j);
       const hand = /hand|finger|thumb|toe/i.test(joint.name);
-      this.boneRadii.push(hand ? kHandBoneRadius : kBoneRadius);
+      this.thinRadii.push(hand ? kHandBoneRadius : kBoneRadius);
     });
-    this.boneCount = this.boneRadii.length;
+    this.boneCount = this.thinRadii.length;
+    this.boneRadii = this.thinRadii.slice();
+    this.jointRadii = new Float32Array(joints.length).fill(kBodyMinRadius);
+    this.sphereJoints = [];
+    // A joint's kind passes down to its children: a hand's fingers are glove too.
+    this.kinds = [];
+    joints.forEach((joint, j) => {
+      const own = jointKind(joint.name);
+      this.kinds.push(own || (joint.parent >= 0 && this.kinds[joint.parent] === 'glove' ? 'glove' : ''));
+    });
     // The head sphere sits past the head joint, along neck -> head (the BVH's head joint
     // is where the skull meets the neck; its end site is not a joint).
     this.head = joints.findIndex((joint) => /^head$/i.test(joint.name));
     if (this.head < 0) this.head = joints.findIndex((joint) => /head/i.test(joint.name));
     this.headParent = this.head >= 0 ? joints[this.head].parent : -1;
     this.colouredFor = null;
+    this.measuredFor = null;
+    this.struck = [];
   }
 
   /** Sparring partners of `scene.partners`, for the colours. */
@@ -133,26 +194,83 @@ export class Avatars {
     this.colouredFor = null;
   }
 
+  /** A hit message: the struck avatar's part flashes (a partner's head, chest or spine). */
+  strike(hit, now) {
+    if (!Number.isInteger(hit?.target) || hit.target < 0) return;
+    const joints = struckJoints(hit.part, this.skeleton);
+    if (joints.length === 0) return;
+    this.struck = this.struck.filter((s) => s.until > now && s.avatar !== hit.target);
+    this.struck.push({avatar: hit.target, joints, until: now + kStruckSeconds * 1000});
+    this.colouredFor = null;
+  }
+
+  // Body radii from the bone lengths of avatar 0 in `p` (lengths do not change).
+  measure(p) {
+    this.jointRadii.fill(kBodyMinRadius);
+    for (let b = 0; b < this.boneCount; ++b) {
+      const a = this.bonePairs[2 * b] * 3, c = this.bonePairs[2 * b + 1] * 3;
+      const length = Math.hypot(p[c] - p[a], p[c + 1] - p[a + 1], p[c + 2] - p[a + 2]);
+      const parent = this.bonePairs[2 * b];
+      const name = this.skeleton[parent].name;
+      // The trunk wider than the limbs, as the glTF export's body (app/simulate_command.cpp).
+      const r = kTrunk.test(name) ? kTrunkRadius :
+          /neck/i.test(name)      ? kNeckRadius :
+                                    Math.min(kBodyMaxRadius, Math.max(kBodyMinRadius, kBodyRadiusPerLength * length));
+      // The tiny bones (a zero-length hip joint, fingers) get none.
+      this.boneRadii[b] = length < 0.01 ? 0 : r;
+      this.jointRadii[parent] = Math.max(this.jointRadii[parent], this.boneRadii[b]);
+      this.jointRadii[this.bonePairs[2 * b + 1]] =
+          Math.max(this.jointRadii[this.bonePairs[2 * b + 1]], Math.min(r, this.boneRadii[b]));
+    }
+    for (let j = 0; j < this.jointCount; ++j) {
+      if (this.kinds[j] === 'glove' &&
+          (j + 1 >= this.jointCount || this.kinds[j + 1] !== 'glove' || this.skeleton[j + 1].parent !== j)) {
+        this.jointRadii[j] = Math.max(this.jointRadii[j], kGloveRadius);  // the fist: a glove
+      }
+    }
+    // Spheres only where they show: joints wider than the thinnest capsule, and the fists.
+    this.sphereJoints = [];
+    for (let j = 0; j < this.jointCount; ++j)
+      if (this.jointRadii[j] > kBodyMinRadius) this.sphereJoints.push(j);
+    this.measuredFor = this.jointCount;
+  }
+
   /** Draws `frame` (a PoseFrame whose joint count matches the skeleton). */
-  update(frame) {
+  update(frame, now = performance.now()) {
     const N = frame.avatars, J = frame.joints;
     if (J !== this.jointCount) return;
     if (this.positions.length < N * J * 3) this.positions = new Float32Array(N * J * 3);
     frame.jointPositions(this.positions);
     const p = this.positions;
+    const body = this.look === 'body';
+    if (body && N > 0 && this.measuredFor !== J) this.measure(p);
+    const radii = body ? this.boneRadii : this.thinRadii;
 
     const grewBones = this.bones.ensure(N * this.boneCount);
     const grewHeads = this.heads.ensure(N);
+    const S = body ? this.sphereJoints.length : 0;
+    const grewJoints = this.joints.ensure(N * S);
     const bones = this.bones.matrices;
     let at = 0;
     for (let i = 0; i < N; ++i) {
       const base = i * J * 3;
       for (let b = 0; b < this.boneCount; ++b, at += 16) {
         const pa = base + this.bonePairs[2 * b] * 3, pb = base + this.bonePairs[2 * b + 1] * 3;
-        writeSegment(bones, at, p[pa], p[pa + 1], p[pa + 2], p[pb], p[pb + 1], p[pb + 2], this.boneRadii[b]);
+        writeSegment(bones, at, p[pa], p[pa + 1], p[pa + 2], p[pb], p[pb + 1], p[pb + 2], radii[b]);
       }
     }
     this.bones.commit(N * this.boneCount);
+    if (S > 0) {
+      const spheres = this.joints.matrices;
+      for (let i = 0, k = 0; i < N; ++i) {
+        for (const j of this.sphereJoints) {
+          const q = (i * J + j) * 3;
+          writeSphere(spheres, k * 16, p[q], p[q + 1], p[q + 2], this.jointRadii[j]);
+          ++k;
+        }
+      }
+    }
+    this.joints.commit(N * S);
 
     const heads = this.heads.matrices;
     const headCount = this.head >= 0 ? N : 0;
@@ -169,18 +287,43 @@ export class Avatars {
     }
     this.heads.commit(headCount);
 
-    if (grewBones || grewHeads || this.colouredFor !== N) this.colour(N);
+    if (this.struck.length > 0 && this.struck.every((s) => s.until <= now)) {
+      this.struck = [];
+      this.colouredFor = null;
+    }
+    if (grewBones || grewHeads || grewJoints || this.colouredFor !== N) this.colour(N, now);
   }
 
-  colour(N) {
-    const colour = new THREE.Color();
+  colour(N, now) {
+    const colour = new THREE.Color(), part = new THREE.Color();
+    const body = this.look === 'body';
+    const struck = new Map();  // avatar -> set of joints flashing
+    for (const s of this.struck)
+      if (s.until > now && s.avatar < N) struck.set(s.avatar, new Set(s.joints));
+    const jointColour = (j, flashing) => {
+      if (flashing?.has(j)) return part.copy(kStruck);
+      if (body && this.kinds[j] === 'glove') return part.copy(kGlove);
+      if (body && this.kinds[j] === 'shoe') return part.copy(kShoe);
+      return part.copy(colour);
+    };
     for (let i = 0; i < N; ++i) {
       avatarColour(i, this.partners, colour);
-      for (let b = 0; b < this.boneCount; ++b) this.bones.mesh.setColorAt(i * this.boneCount + b, colour);
-      this.heads.mesh.setColorAt(i, colour);
+      const flashing = struck.get(i);
+      for (let b = 0; b < this.boneCount; ++b) {
+        // A bone takes its lower joint's kind (the forearm into the glove stays the body's).
+        const child = this.bonePairs[2 * b + 1], parent = this.bonePairs[2 * b];
+        const j = this.kinds[parent] === this.kinds[child] ? child : parent;
+        this.bones.mesh.setColorAt(i * this.boneCount + b, jointColour(j, flashing));
+      }
+      if (body) {
+        const S = this.sphereJoints?.length ?? 0;
+        this.sphereJoints?.forEach((j, k) => this.joints.mesh.setColorAt(i * S + k, jointColour(j, flashing)));
+      }
+      this.heads.mesh.setColorAt(i, flashing?.has(this.head) ? kStruck : colour);
     }
     this.bones.mesh.instanceColor.needsUpdate = true;
     this.heads.mesh.instanceColor.needsUpdate = true;
+    if (this.joints.mesh.instanceColor) this.joints.mesh.instanceColor.needsUpdate = true;
     this.colouredFor = N;
   }
 }

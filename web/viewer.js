@@ -60,6 +60,12 @@ controls.enableDamping = true;
 controls.maxPolarAngle = Math.PI * 0.495;   // stay above the floor
 
 const avatars = new Avatars(scene3d);
+// Bodies by default; bones only for teaching (every joint visible).
+document.getElementById('bones-look').addEventListener('change', (event) => {
+  avatars.setLook(event.target.checked ? 'bones' : 'body');
+  if (drawn !== null) avatars.update(drawn);
+  dirty = true;
+});
 const targets = new Targets(scene3d);
 const flashes = new HitFlashes(scene3d);
 const valuesView = new ValuesView(scene3d);
@@ -143,6 +149,7 @@ function onMessage(message) {
       if (state.hits.length >= kKeptHits) state.hits.splice(0, kKeptHits / 2);
       state.hits.push(message);
       flashes.add(message, performance.now());
+      avatars.strike(message, performance.now());
       hud.addHit(message);
       if (performance.now() - hudAt > 100) renderHud();   // the line shows with its flash
       break;
@@ -348,6 +355,17 @@ window.mgrl = {
     const rect = renderer.domElement.getBoundingClientRect();
     return {x: rect.left + (v.x + 1) / 2 * rect.width, y: rect.top + (1 - v.y) / 2 * rect.height};
   },
+  /**
+   * The bodies as drawn: the look ('body' or 'bones'), bone and joint-sphere instances, and
+   * how many avatars have a struck part flashing now.
+   */
+  bodies: () => ({
+    look: avatars.look,
+    bones: avatars.bones.mesh.count,
+    joints: avatars.joints.mesh.count,
+    heads: avatars.heads.mesh.count,
+    struck: avatars.struck.filter((s) => s.until > performance.now()).length
+  }),
   /** Avatar i's root joint [x, y, z] (m) in the newest frame, or null. */
   rootOf: (i) => latest?.root(i) ?? null,
   /** The centre [x, y, z] (m) of avatar i's own target in the newest frame, or null. */
@@ -394,9 +412,15 @@ window.mgrl = {
     points: state.values.last?.points.length ?? null,
     pathPoints: state.values.last?.path?.length ?? null,
     pathTriangles: valuesView.group.visible ? (valuesView.path.geometry.index?.count ?? 0) / 3 : 0,
-    legend: {min: document.getElementById('legend-min').textContent, max: document.getElementById('legend-max').textContent,
-             caption: document.getElementById('legend-caption').textContent, shown: !document.getElementById('teach-hud').hidden},
+    legend: {
+      min: document.getElementById('legend-min').textContent,
+      max: document.getElementById('legend-max').textContent,
+      caption: document.getElementById('legend-caption').textContent,
+      shown: !document.getElementById('teach-hud').hidden
+    },
     stateLine: document.getElementById('teach-state').textContent,
   }),
-  fit: () => { if (latest) fit(latest); },
+  fit: () => {
+    if (latest) fit(latest);
+  },
 };

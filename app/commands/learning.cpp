@@ -119,6 +119,9 @@ class Simulate final : public Command {
     sub_->add_option("--seconds", options_.seconds, "Simulated seconds")->default_val(10);
     sub_->add_option("--seed", seed_, "Random seed (the same seed, the same events and BVH bytes)")->default_val(1);
     sub_->add_option("--bvh-out", options_.bvhOut, "Write one BVH per avatar into this folder");
+    sub_->add_option("--gltf-out", options_.gltfOut,
+                     "Write one binary glTF 2.0 (.glb: skeleton, animation, skinned body) per avatar into this "
+                     "folder (may be --bvh-out's)");
     sub_->add_option("--events-out", options_.eventsOut, "Write the hits as JSON lines to this file");
     sub_->add_option("--policy", options_.policy, "Policy bundle folder (default: the one mgrl train writes)");
     sub_->add_option("--partner-policy", options_.partnerPolicy,
@@ -133,7 +136,7 @@ class Simulate final : public Command {
     sub_->add_option("--top-k", options_.topK, "Variety: draw among the k best actions (default: world.top_k)");
     sub_->add_flag("--poses", options_.poses,
                    "Compute every joint's pose each frame (blending, forward kinematics, reactions); implied by "
-                   "--bvh-out");
+                   "--bvh-out and --gltf-out");
     sub_->add_option("--threads", options_.threads, "Worker threads (default: all cores)");
     sub_->add_option("--set", options_.sets, "Override a scenario key (repeatable)");
     sub_->add_flag("--json", common.json, "Print one JSON object on stdout");

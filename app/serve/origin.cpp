@@ -21,7 +21,7 @@ std::string lower(std::string_view text) {
 }
 
 // A header value as a log line shows it: printable, cut short.
-std::string shown(std::string_view text) {
+std::string shownHeader(std::string_view text) {
   std::string out;
   for (char c : text.substr(0, 60)) out += (c >= 0x20 && c < 0x7f) ? c : '?';
   if (text.size() > 60) out += "...";
@@ -109,9 +109,10 @@ OriginPolicy::OriginPolicy(std::string_view listenHost, std::uint16_t port, cons
     if (!text.empty() && text.back() == '/') text.remove_suffix(1);  // as a browser's address bar shows it
     const auto origin = parseOrigin(text);
     if (!origin)
-      throw Error(fmt::format("--allow-origin {}: expected an origin such as http://mybox.lan:8080 (http or https, a "
-                              "host name and an optional port, no path), found {}",
-                              value, shown(value)));
+      throw Error(
+          fmt::format("--allow-origin {}: expected an origin such as http://mybox.lan:8080 (http or https, a "
+                      "host name and an optional port, no path), found {}",
+                      value, shownHeader(value)));
     extra_.push_back(origin->normalised());
     extraHosts_.push_back({origin->authority.name, origin->authority.port});
   }
@@ -141,7 +142,7 @@ std::optional<std::string> OriginPolicy::refuseHost(std::string_view host) const
       return std::nullopt;
   }
   return fmt::format("expected a Host header naming this server ({}; --allow-origin adds others), found {}", hosts(),
-                     shown(host));
+                     shownHeader(host));
 }
 
 std::optional<std::string> OriginPolicy::refuseOrigin(bool present, std::string_view origin) const {
@@ -154,7 +155,7 @@ std::optional<std::string> OriginPolicy::refuseOrigin(bool present, std::string_
   for (const Authority& a : own_) origins.push_back(fmt::format("http://{}:{}", a.name, a.port));
   for (const std::string& e : extra_) origins.push_back(e);
   return fmt::format("expected a page of this server ({}; --allow-origin adds others), found Origin {}",
-                     fmt::join(origins, ", "), shown(origin));
+                     fmt::join(origins, ", "), shownHeader(origin));
 }
 
 }  // namespace mgrl::serve

@@ -90,20 +90,20 @@ class Registry {
   /// defaults of `fallbackType`.
   nlohmann::json blockJson(const ConfigNode& block, const std::string& fallbackType) const {
     const std::string type = block.isNull() ? fallbackType : block.child("type").asString();
-    nlohmann::json json = nlohmann::json::object();
-    json["type"] = type;
+    nlohmann::json out = nlohmann::json::object();
+    out["type"] = type;
     const Entry* entry = find(type);
-    if (!entry) return json;
+    if (!entry) return out;
     const Params params = block.isNull() ? Params::defaults(entry->params) : check(block);
     // Named, not iterated as temporaries: items() would outlive them (C++20 extends only
     // the range's own lifetime).
     const nlohmann::json values = params.toJson();
-    for (const auto& item : values.items()) json[item.key()] = item.value();
+    for (const auto& item : values.items()) out[item.key()] = item.value();
     if (entry->readBlock && !block.isNull()) {
       const nlohmann::json extra = entry->readBlock(block);
-      for (const auto& item : extra.items()) json[item.key()] = item.value();
+      for (const auto& item : extra.items()) out[item.key()] = item.value();
     }
-    return json;
+    return out;
   }
 
   const std::vector<Entry>& entries() const { return entries_; }
