@@ -8,8 +8,18 @@
 # JOINTS is the skeleton's joint count and SECONDS the animation's length (the time of the
 # last key: (frames - 1) / fps); both are in the file's manifest.json and mgrl's report.
 import sys
+import warnings
 
 import bpy  # only inside Blender
+import numpy
+
+# Debian 12's Blender 3.4 glTF importer still says numpy.bool, an alias NumPy 1.24 (Debian's)
+# removed; without it the import fails in the importer itself ("module 'numpy' has no
+# attribute 'bool'"). The alias was the builtin bool.
+with warnings.catch_warnings():
+    warnings.simplefilter("ignore", FutureWarning)
+    if not hasattr(numpy, "bool"):
+        numpy.bool = bool
 
 arguments = sys.argv[sys.argv.index("--") + 1:] if "--" in sys.argv else []
 if len(arguments) != 3:

@@ -68,13 +68,15 @@ const std::string kHit = std::string(" --behavior hit ") +
 // spar_learned.yaml on 2 x 2 x 2 positions, one phase: 8 positions x 117 opponent states,
 // two self-play rounds (the second plays the first's table, which every rank must have).
 // Under AddressSanitizer one round on 2 ranks: the rounds took 164 s there, mostly
-// tabulating and scoring them; Release runs cover the rounds and 3 ranks.
+// tabulating and scoring them; Release runs cover the rounds.
 // The tolerance is the scenario's: another learner type starts from its own defaults.
 const std::string kSpar = std::string(" --set behaviors.spar.discretizer.sectors=2 ") +
                           "--set behaviors.spar.discretizer.rings=2 --set behaviors.spar.discretizer.headings=2 "
                           "--set behaviors.spar.environment.phases=1 --set behaviors.spar.environment.rounds=" +
                           (test::kAddressSanitizer ? "1" : "2") + " --set behaviors.spar.learner.type=";
-const std::vector<int> kSparRanks = test::kAddressSanitizer ? std::vector<int>{2} : std::vector<int>{2, 3};
+// Three ranks (an uneven split, one rank more than cores) are covered by the hit behaviour;
+// the learned opponent's rounds run on two (issue 38: the suite's time).
+const std::vector<int> kSparRanks = {2};
 std::string sparLearner(const std::string& type) {
   return kSpar + type + " --set behaviors.spar.learner.tolerance=0.01";
 }

@@ -85,12 +85,14 @@ class GlbBuilder {
   std::string binary;
 };
 
-json minMax(const std::vector<float>& values, int width, const char* key) {
+// Each component's smallest (`largest` false) or largest value of `values`, `width` floats
+// an element: what an accessor's "min" or "max" must say.
+json bound(const std::vector<float>& values, int width, bool largest) {
   json out = json::array();
   for (int c = 0; c < width; ++c) {
-    float v = key[1] == 'i' ? std::numeric_limits<float>::max() : std::numeric_limits<float>::lowest();
+    float v = largest ? std::numeric_limits<float>::lowest() : std::numeric_limits<float>::max();
     for (std::size_t i = static_cast<std::size_t>(c); i < values.size(); i += static_cast<std::size_t>(width))
-      v = key[1] == 'i' ? std::min(v, values[i]) : std::max(v, values[i]);
+      v = largest ? std::max(v, values[i]) : std::min(v, values[i]);
     out.push_back(v);
   }
   return out;
@@ -263,7 +265,7 @@ std::string writeGlb(const Motion& motion, const GltfWriteOptions& options) {
   const std::size_t vertices = body.positions.size() / 3;
   json attributes = {
       {"POSITION", glb.add(body.positions, kFloat, "VEC3", vertices, kArrayBuffer,
-                           {{"min", minMax(body.positions, 3, "min")}, {"max", minMax(body.positions, 3, "max")}})},
+                           {{"min", bound(body.positions, 3, false)}, {"max", bound(body.positions, 3, true)}})},
       {"NORMAL", glb.add(body.normals, kFloat, "VEC3", vertices, kArrayBuffer)},
       {"COLOR_0", glb.add(body.colors, kFloat, "VEC3", vertices, kArrayBuffer)},
       {"JOINTS_0", glb.add(body.joints, kUnsignedShort, "VEC4", vertices, kArrayBuffer)},
