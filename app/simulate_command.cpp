@@ -560,6 +560,12 @@ json runSimulate(const SimulateOptions& options) {
     report["partner_policy"] = session->partnerPolicyDir.string();
     if (options.partnerRound > 0) report["partner_round"] = options.partnerRound;
     report["hits_by_side"] = {{"policy", first}, {"partner_policy", second}};
+  } else if (params.mode == "sparring" && !session->partnerName().empty()) {
+    // An `opponent` scene: the second of each pair is the scripted opponent (issue 45).
+    std::size_t first = 0, second = 0;
+    for (const HitEvent& e : world.events()) (e.attacker % 2 == 0 ? first : second) += 1;
+    report["partner"] = session->partnerName();
+    report["hits_by_side"] = {{"avatars", first}, {"opponents", second}};
   }
   if (!written.bvh.empty()) {
     report["bvh_files"] = written.bvh;
@@ -586,7 +592,11 @@ std::string simulateText(const json& r) {
       r["hits_per_avatar_minute"].get<double>(), r["hits_by_part"]["head"].get<std::size_t>(),
       r["hits_by_part"]["chest"].get<std::size_t>(), r["hits_by_part"]["spine"].get<std::size_t>(),
       r["hits_by_part"]["target"].get<std::size_t>());
-  if (r.contains("hits_by_side"))
+  if (r.contains("partner"))
+    text += fmt::format("sides: the avatars landed {}, their scripted opponents ({}) landed {}\n",
+                        r["hits_by_side"]["avatars"].get<std::size_t>(), r["partner"].get<std::string>(),
+                        r["hits_by_side"]["opponents"].get<std::size_t>());
+  else if (r.contains("hits_by_side"))
     text += fmt::format("sides: {} landed {}, {} (the partners) landed {}\n", r["policy"].get<std::string>(),
                         r["hits_by_side"]["policy"].get<std::size_t>(), r["partner_policy"].get<std::string>(),
                         r["hits_by_side"]["partner_policy"].get<std::size_t>());

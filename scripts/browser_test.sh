@@ -19,6 +19,10 @@ mkdir -p "$work"
 "$mgrl" train "$root/scenarios/boxing.yaml" --set behaviors.approach.learner.type=value_iteration \
   --set behaviors.hit.learner.type=value_iteration --out "$work/policy" --cache "$work/cache" --data "$data" \
   >"$work/train.out" 2>"$work/train.err" || { cat "$work/train.err" >&2; exit 1; }
+# The dodge scene's page (issue 45) plays a bundle of scenarios/dodge.yaml (value iteration,
+# a few seconds).
+"$mgrl" train "$root/scenarios/dodge.yaml" --out "$work/dodge-policy" --cache "$work/cache" --data "$data" \
+  >"$work/train-dodge.out" 2>"$work/train-dodge.err" || { cat "$work/train-dodge.err" >&2; exit 1; }
 cd "$root"
 node --test "$root/tests/web/protocol_test.mjs" "$root/tests/web/hud_test.mjs" >"$work/protocol.out" 2>&1 || { cat "$work/protocol.out" >&2; exit 1; }
 echo "browser_test: the page's frame reader and HUD count passed (tests/web/protocol_test.mjs, hud_test.mjs)" >&2
@@ -35,4 +39,5 @@ rm -rf "$work/export"
   2>"$work/export.err" || { cat "$work/export.err" >&2; exit 1; }
 node "$root/tests/web/gltf_test.mjs" "$work/export" "$shots/gltf-bodies.png"
 MGRL_BINARY="$mgrl" MGRL_SERVE_ARGS="--policy $work/policy --cache $work/cache --data $data" \
+  MGRL_DODGE_POLICY="$work/dodge-policy" \
   MGRL_SCREENSHOT_DIR="$shots" node "$root/tests/web/browser_test.mjs"

@@ -12,7 +12,6 @@
 #include "mgrl/motion/gltf.hpp"
 #include "mgrl/motion/kinematics.hpp"
 #include "mgrl/motion/motion_io.hpp"
-#include "mgrl/motion/roles.hpp"
 #include "test_support.hpp"
 
 using namespace mgrl;
@@ -257,4 +256,29 @@ TEST_CASE("splitGlb refuses what is not a binary glTF 2.0, saying what and where
   wrong = good;
   wrong[16] = 'X';
   refuses(wrong, "expected the first chunk to be JSON");
+}
+
+TEST_CASE("writeGlb refuses a skeleton a skin cannot index and a body of too few segments", "[gltf][errors]") {
+  // 65,536 joints in a chain, one frame: a skin's JOINTS_0 indices are 16 bits.
+  std::vector<Joint> chain(65536);
+  for (std::size_t j = 0; j < chain.size(); ++j) {
+    chain[j].name = "j" + std::to_string(j);
+    chain[j].parent = static_cast<int>(j) - 1;
+    chain[j].offset = Eigen::Vector3d(0, 0.01, 0);
+  }
+  chain[0].channels = {
+      {Channel::Kind::Position, Axis::X}, {Channel::Kind::Position, Axis::Y}, {Channel::Kind::Position, Axis::Z}};
+  auto skeleton = std::make_shared<const Skeleton>(std::move(chain));
+  const Motion big(skeleton, 1.0 / 30, std::vector<Eigen::Quaterniond>(65536, Eigen::Quaterniond::Identity()),
+                   {Eigen::Vector3d::Zero()});
+  REQUIRE_THROWS_WITH(writeGlb(big),
+                      "glTF: expected at most 65535 joints (a skin's joint indices are 16 bits), found "
+                      "65536");
+  GltfWriteOptions flat;
+  flat.segments = 2;
+  REQUIRE_THROWS_WITH(
+      writeGlb(tinyMotion(), flat),
+      "glTF: expected at least 3 segments and 1 ring per capsule cap, found 2 and " + std::to_string(flat.capRings));
+  // (The 2 GB limit is checked before anything grows with the motion; a motion that reaches
+  // it holds twice that in quaternions, so it is not built here.)
 }

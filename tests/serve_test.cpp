@@ -321,6 +321,40 @@ TEST_CASE("a page counts successes by the scenario's criterion: out_boxing's kee
   CHECK(stats["successes"].get<int>() <= stats["decisions"].get<int>());
 }
 
+// Issue 45: a dodge scene opens on the avatar and the scripted opponent it was trained
+// against, a body of the same graph (the blue corner), in sparring and crowd modes.
+TEST_CASE("a dodge page opens on the avatar and its scripted opponent, in sparring and crowd modes",
+          "[serve][data][opponent]") {
+  const BoxingAssets dodge(true, "dodge.yaml", {});
+  serve::ViewerSession session(dodge.assets);
+  json scene = json::parse(session.takeOutbox().at(0));
+  CHECK(scene["mode"] == "sparring");
+  CHECK(scene["avatars"] == 2);
+  CHECK(scene["partners"] == json::array({1, 0}));
+  CHECK(scene["opponent"] == "pursue");
+  CHECK(scene["controller"] == "policy");
+  for (int f = 0; f < static_cast<int>(30 / session.frameTime()); ++f) session.advance(1.0);
+  session.takeOutbox();
+  const json stats = json::parse(session.stats(0, 0));
+  INFO(stats.dump());
+  // The avatar keeps clear of the opponent for 6 s at a time.
+  CHECK(stats["successes"].get<int>() >= 1);
+  session.handle(R"({"type": "mode", "mode": "target"})");
+  scene = json::parse(session.takeOutbox().at(0));
+  CHECK(scene["avatars"] == 1);
+  CHECK(scene["opponent"].is_null());
+  session.handle(R"({"type": "mode", "mode": "crowd", "avatars": 6})");
+  scene = json::parse(session.takeOutbox().at(0));
+  CHECK(scene["partners"] == json::array({1, 0, 3, 2, 5, 4}));
+  CHECK(scene["opponent"] == "pursue");
+  // Boxing has no opponent: it opens on the boxer and its target.
+  const BoxingAssets boxing(/*withPolicy=*/false);
+  serve::ViewerSession paper(boxing.assets);
+  scene = json::parse(paper.takeOutbox().at(0));
+  CHECK(scene["mode"] == "target");
+  CHECK(scene["opponent"].is_null());
+}
+
 TEST_CASE("with no policy bundle, the page is told and the online search runs", "[serve][data]") {
   const BoxingAssets boxing(/*withPolicy=*/false);
   serve::ViewerSession session(boxing.assets);

@@ -618,6 +618,7 @@ TEST_CASE("controllers choose among the allowed actions only", "[world][data]") 
   PolicyController three(b.model(), b.parts, {3, 0});
   RandomController random(b.model());
   OnlineSearchController search(b.model(), b.environment, b.searchParts, 1, 0.97);
+  PursueController pursue(b.model(), 0.7);
   Rng rng(3);
   std::size_t checked = 0;
   for (std::uint32_t s = 0; s < b.model().stateCount(); ++s) {
@@ -639,7 +640,9 @@ TEST_CASE("controllers choose among the allowed actions only", "[world][data]") 
       REQUIRE(random.choose(s, e, rng, only) == begin + n - 1);
     }
     REQUIRE(search.choose(s, e, rng, only) == begin + n - 1);
+    REQUIRE(pursue.choose(s, e, rng, only) == begin + n - 1);
     const std::vector<std::uint8_t> none(n, 0);
+    REQUIRE_THROWS_WITH(pursue.choose(s, e, rng, none), Catch::Contains("expected an allowed action"));
     REQUIRE_THROWS_WITH(greedy.choose(s, e, rng, none), Catch::Contains("expected an allowed action"));
     REQUIRE_THROWS_WITH(random.choose(s, e, rng, none), Catch::Contains("expected an allowed action"));
     REQUIRE_THROWS_WITH(search.choose(s, e, rng, none), Catch::Contains("expected an allowed action"));
@@ -675,6 +678,82 @@ TEST_CASE("an opponent's facing reaches the controller: a partner's own, a targe
   const double partnerFacing = std::remainder(world.lastDecision(1).frame.dyaw - d.frame.dyaw, 2 * M_PI);
   CHECK(d.target.heading == Approx(partnerFacing).margin(1e-12));
   CHECK(std::abs(d.target.heading) > M_PI - 45 * M_PI / 180);
+}
+
+TEST_CASE("the scripted opponent closes in, faces its target, and throws the punch that reaches it",
+          "[world][data][opponent]") {
+  const Boxing& b = boxing();
+  const StateActionModel& m = b.model();
+  PursueController pursue(m, 0.7);
+  Rng rng(5);
+  REQUIRE_THROWS_WITH(PursueController(m, -1), Catch::Contains("expected a stop distance of at least 0 m, found -1"));
+  // From every state, the target 3 m ahead: the chosen action ends nearer it than the state's
+  // actions do on average; the target where one of the state's punches lands: a punch is
+  // thrown that reaches it.
+  std::size_t states = 0, closer = 0, punches = 0, punchable = 0;
+  double chosenGaps = 0, meanGaps = 0;
+  for (std::uint32_t s = 0; s < m.stateCount(); ++s) {
+    const std::uint32_t begin = m.stateActionBegin[s], n = m.stateActionBegin[s + 1] - begin;
+    const Eigen::Vector3d far(0, 1.5, 3.0);
+    auto gapAfter = [&](std::size_t a, const Eigen::Vector3d& e) {
+      const Eigen::Vector3d q = inverseTransformPoint(m.displacement(a), e);
+      return std::hypot(q.x(), q.z());
+    };
+    double mean = 0;
+    for (std::uint32_t j = 0; j < n; ++j) mean += gapAfter(begin + j, far) / n;
+    ++states;
+    const double chosen = gapAfter(pursue.choose(s, far, rng), far);
+    closer += chosen <= mean;
+    chosenGaps += chosen;
+    meanGaps += mean;
+    // A target where one of the state's punches lands.
+    for (std::uint32_t j = 0; j < n; ++j) {
+      const auto hits = m.hitsOf(begin + j);
+      if (hits.empty()) continue;
+      const Eigen::Vector3d aim(hits[0].x, hits[0].y, hits[0].z);
+      ++punchable;
+      punches += PursueController::punchScore(m.hitsOf(pursue.choose(s, aim, rng)), aim) >= 0.8;
+      break;
+    }
+  }
+  CAPTURE(states, closer, chosenGaps / states, meanGaps / states);
+  CHECK(closer >= states * 3 / 4);
+  CHECK(chosenGaps / states < meanGaps / states - 0.02);  // measured: 2.948 against 2.985 m
+  REQUIRE(punchable > 10);
+  CHECK(punches >= punchable * 9 / 10);
+  CHECK(PursueController::punchScore({}, Eigen::Vector3d::Zero()) == 0);
+
+  // In a bout against an avatar that plays random actions, the pursuer keeps close and lands
+  // far more punches than a random partner does; standing, it lets the distance be.
+  auto bout = [&](const std::string& partner) {
+    WorldSetup s = b.setup(2, "random");
+    s.params.mode = "sparring";
+    s.opponent = true;
+    s.makePartnerController = [&m, partner]() -> std::unique_ptr<Controller> {
+      if (partner == "random") return std::make_unique<RandomController>(m);
+      return std::make_unique<PursueController>(m, 0.7, partner == "stand");
+    };
+    World world(s);
+    std::vector<double> gaps;
+    for (int k = 0; k < 60 * 10; ++k) {
+      world.run(3);
+      const GroundMotion a = world.avatarFrame(0), o = world.avatarFrame(1);
+      gaps.push_back(std::hypot(a.dx - o.dx, a.dz - o.dz));
+    }
+    std::sort(gaps.begin(), gaps.end());
+    std::size_t landed = 0;
+    for (const HitEvent& e : world.events()) landed += e.attacker == 1;
+    return std::pair{gaps[gaps.size() / 2], landed};
+  };
+  const auto [pursuedGap, pursuedHits] = bout("pursue");
+  const auto [randomGap, randomHits] = bout("random");
+  CAPTURE(pursuedGap, pursuedHits, randomGap, randomHits);
+  CHECK(pursuedGap < 1.0);
+  CHECK(pursuedGap < randomGap);
+  CHECK(pursuedHits >= 3 * std::max<std::size_t>(1, randomHits));
+  const auto [standGap, standHits] = bout("stand");
+  CAPTURE(standGap, standHits);
+  CHECK(standGap > pursuedGap);
 }
 
 namespace {

@@ -104,6 +104,7 @@ const kBodyMaxRadius = 0.075;  // m
 const kGloveRadius = 0.055;    // m: the fist's sphere, a glove's size
 const kTrunkRadius = 0.085;    // m: bones from the pelvis and spine joints
 const kNeckRadius = 0.05;      // m
+const kSphereMinRadius = 0.045; // m: narrower joints get no sphere of their own
 const kTrunk = /hips|pelvis|spine|chest|back/i;
 const kGlove = new THREE.Color(0.93, 0.92, 0.88);  // white gloves: seen on either corner's colour
 const kShoe = new THREE.Color(0.12, 0.12, 0.12);
@@ -139,7 +140,7 @@ export class Avatars {
     // (SwiftShader) pays for each. Bones are open tubes: their ends hide in the joints.
     this.bones = new GrowingInstances(scene, new THREE.CylinderGeometry(1, 1, 1, 6, 1, true), material, true);
     this.heads = new GrowingInstances(scene, new THREE.SphereGeometry(1, 8, 6), material, true);
-    this.joints = new GrowingInstances(scene, new THREE.SphereGeometry(1, 5, 3), material, true);
+    this.joints = new GrowingInstances(scene, new THREE.SphereGeometry(1, 5, 2), material, true);
     this.positions = new Float32Array(0);
     this.look = 'body';
     this.struck = [];  // {avatar, joints, until}
@@ -228,10 +229,14 @@ export class Avatars {
         this.jointRadii[j] = Math.max(this.jointRadii[j], kGloveRadius);  // the fist: a glove
       }
     }
-    // Spheres only where they show: joints wider than the thinnest capsule, and the fists.
+    // Spheres only where they show: the limbs' joints where a wide capsule bends
+    // (kSphereMinRadius and up; the trunk's capsules run on nearly straight), and the fists.
+    // Vertices set a software renderer's cost: a sphere at every joint made bodies a third
+    // dearer to draw than bones.
     this.sphereJoints = [];
     for (let j = 0; j < this.jointCount; ++j)
-      if (this.jointRadii[j] > kBodyMinRadius) this.sphereJoints.push(j);
+      if (this.kinds[j] === 'glove' ? this.jointRadii[j] >= kGloveRadius :
+          this.jointRadii[j] >= kSphereMinRadius && !kTrunk.test(this.skeleton[j].name)) this.sphereJoints.push(j);
     this.measuredFor = this.jointCount;
   }
 

@@ -12,6 +12,16 @@ const successText = (behaviors) => {
   return declared.length ? declared.map((b) => `${b.name}: ${b.success}`).join('; ') : '–';
 };
 
+/** Who the blue corner is when the server plays it (scene.opponent), as a sentence. */
+export function opponentText(opponent) {
+  if (opponent === 'pursue') {
+    return 'Blue: the scripted opponent the policy was trained against, walking in with the capture\'s steps and ' +
+        'throwing its punches; red: the trained avatar.';
+  }
+  if (opponent === 'stand') return 'Blue: the scripted opponent, standing and punching; red: the trained avatar.';
+  return '';
+}
+
 export class Hud {
   constructor() {
     this.scene = null;
@@ -47,7 +57,8 @@ export class Hud {
   /** The scene's note (no policy bundle, a lowered horizon) and, while the server slows this
    * page's world to share its time with the others, the stats' reason. */
   noteText() {
-    return [this.scene?.note, this.stats?.slowed].filter((t) => typeof t === 'string' && t.length > 0).join(' ');
+    return [this.scene?.note, opponentText(this.scene?.opponent), this.stats?.slowed]
+        .filter((t) => typeof t === 'string' && t.length > 0).join(' ');
   }
 
   showNote() {

@@ -106,7 +106,12 @@ ViewerSession::ViewerSession(std::shared_ptr<const ViewerAssets> assets)
   state_->policy = assets_->session->policy;
   state_->retrained.resize(assets_->session->behaviors.size());
   state_->controller = assets_->session->policy.empty() ? "online_search" : "policy";
-  rebuild(Mode::Target, 1);
+  // An opponent scene (dodge) opens on the avatar and the opponent it was trained against;
+  // the others on the paper's boxer and its target.
+  if (assets_->session->partnerName().empty())
+    rebuild(Mode::Target, 1);
+  else
+    rebuild(Mode::Sparring, 2);
 }
 
 ViewerSession::~ViewerSession() = default;
@@ -223,6 +228,10 @@ std::string ViewerSession::scene() const {
               {"fps", 1.0 / a.model().frameTime},
               {"joints", joints},
               {"partners", partners},
+              // What the second avatar of each pair plays when it is not the page's
+              // controller: the scenario's scripted opponent (a dodge scene), or null.
+              {"opponent", mode_ != Mode::Target && !a.session->partnerName().empty() ? json(a.session->partnerName())
+                                                                                      : json(nullptr)},
               {"controller", s.controller},
               {"controllers", controllers},
               {"horizon", s.horizon},
@@ -334,7 +343,9 @@ void ViewerSession::followSuccess() {
   State& s = *state_;
   const World& world = *s.world;
   const StateActionModel& model = assets_->model();
+  const bool scripted = !assets_->session->partnerName().empty();
   for (std::size_t i = 0; i < world.avatarCount(); ++i) {
+    if (scripted && world.partner(i) >= 0 && i % 2 == 1) continue;  // a scripted opponent: not the behaviour's
     const World::Decision d = world.lastDecision(i);
     if (d.count == s.decisionsFollowed[i]) continue;
     s.decisionsFollowed[i] = d.count;

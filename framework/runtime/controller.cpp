@@ -25,6 +25,48 @@ std::size_t RandomController::choose(std::uint32_t s, const TargetState&, Rng& r
     if (allowed[j] != 0 && draw-- == 0) return begin + j;
 }
 
+PursueController::PursueController(const StateActionModel& model, double stopDistance, bool stand)
+    : model_(model), stopDistance_(stopDistance), stand_(stand) {
+  if (!(stopDistance >= 0 && std::isfinite(stopDistance)))
+    throw Error(fmt::format("pursue controller: expected a stop distance of at least 0 m, found {}", stopDistance));
+}
+
+double PursueController::punchScore(std::span<const ActionHit> hits, const Eigen::Vector3d& aim) {
+  double punch = 0;
+  for (const ActionHit& h : hits)
+    punch = std::max(punch, 1 - std::min(1.0, (Eigen::Vector3d(h.x, h.y, h.z) - aim).norm() / kPunchReach));
+  return punch;
+}
+
+std::size_t PursueController::choose(std::uint32_t s, const TargetState& e, Rng& rng) {
+  thread_local std::vector<std::uint8_t> all;
+  all.assign(model_.stateActionBegin[s + 1] - model_.stateActionBegin[s], 1);
+  return choose(s, e, rng, all);
+}
+
+std::size_t PursueController::choose(std::uint32_t s, const TargetState& e, Rng&,
+                                     std::span<const std::uint8_t> allowed) {
+  const std::uint32_t begin = model_.stateActionBegin[s];
+  const std::uint32_t n = model_.stateActionBegin[s + 1] - begin;
+  const double wanted = stand_ ? std::hypot(e.position.x(), e.position.z()) : stopDistance_;
+  std::int64_t best = -1;
+  double bestCost = std::numeric_limits<double>::infinity();
+  for (std::uint32_t j = 0; j < n; ++j) {
+    if (allowed[j] == 0) continue;
+    const std::size_t a = begin + j;
+    const Eigen::Vector3d q = inverseTransformPoint(model_.displacement(a), e.position);  // from the action's end
+    const double facing = std::abs(std::atan2(q.x(), q.z()));
+    const double place = std::abs(std::hypot(q.x(), q.z()) - wanted);
+    if (const double cost = place + kTurnCost * facing - kPunchWeight * punchScore(model_.hitsOf(a), e.position);
+        cost < bestCost) {
+      bestCost = cost;
+      best = static_cast<std::int64_t>(a);
+    }
+  }
+  if (best < 0) throw Error(fmt::format("controller: expected an allowed action at state {}, found none", s));
+  return static_cast<std::size_t>(best);
+}
+
 PolicyController::PolicyController(const StateActionModel& model, std::vector<PolicyPart> parts, Variety variety)
     : model_(model), parts_(std::move(parts)), variety_(variety) {
   variety_.topK = std::max(1, variety_.topK);

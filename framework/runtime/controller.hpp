@@ -47,6 +47,37 @@ class RandomController final : public Controller {
   const StateActionModel& model_;
 };
 
+/// The `opponent` environment model's scripted pursuer (environments/opponent.cpp, issue 17)
+/// played with the graph's own actions, so that a dodge scene's opponent is a body that
+/// moves and strikes (issue 45). The same rule as eval's trials against an avatar
+/// (framework/session/trials.cpp), greedy over the out-actions: with its target (the
+/// avatar it pursues: that avatar's head) at e, the lowest cost
+///   place + kTurnCost x |facing error at the action's end| - kPunchWeight x punch,
+/// where place is how far the action ends from `stopDistance` to the target on the ground
+/// (`stand`: from the distance it has now), and punch (punchScore) how near one of the
+/// action's effective fist tips (paper sec. 6.2) comes to the target. Walking speed is the
+/// capture's, not the model's `speed`: the model is this avatar's abstraction for the tables.
+class PursueController final : public Controller {
+ public:
+  /// Throws mgrl::Error for a stopDistance that is negative or not finite.
+  PursueController(const StateActionModel& model, double stopDistance, bool stand = false);
+  std::size_t choose(std::uint32_t s, const TargetState& e, Rng& rng) override;
+  /// The same among the allowed actions; ties go to the lowest action index.
+  std::size_t choose(std::uint32_t s, const TargetState& e, Rng& rng, std::span<const std::uint8_t> allowed) override;
+
+  /// 1 - (the nearest fist tip's distance to `aim`) / kPunchReach, at least 0: how well one
+  /// of `hits` (in the decision's frame, as `aim`) strikes it.
+  static double punchScore(std::span<const ActionHit> hits, const Eigen::Vector3d& aim);
+  static constexpr double kTurnCost = 0.5;    ///< m of place a radian of facing error costs
+  static constexpr double kPunchWeight = 2;   ///< m of place a perfect punch is worth
+  static constexpr double kPunchReach = 0.5;  ///< m: a fist tip this far from the aim scores 0
+
+ private:
+  const StateActionModel& model_;
+  double stopDistance_;
+  bool stand_;
+};
+
 /// Variety at run time (paper sec. 5: "pick at random among a few top candidates"): the
 /// candidates are the `topK` best-scoring actions, less those scoring below
 /// best - margin * |best| when margin > 0; one is drawn uniformly. topK = 1 is greedy.

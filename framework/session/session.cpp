@@ -38,8 +38,22 @@ WorldSetup Session::worldSetup(std::size_t avatars, std::uint64_t seed, const Co
     partner.policy = partnerPolicy;
     const ControllerChoice greedy{.name = "policy"};
     setup.makePartnerController = [greedy, partner] { return makeController(greedy, partner); };
+  } else if (task.scriptedOpponent) {
+    // An `opponent` scene (dodge): the partner is the opponent the tables were trained
+    // against, played with graph actions, so that it is a body that moves and strikes.
+    const StateActionModel* model = &graph.model;
+    const Task::ScriptedOpponent o = *task.scriptedOpponent;
+    setup.makePartnerController = [model, o] {
+      return std::make_unique<PursueController>(*model, o.stopDistance, o.stand);
+    };
   }
   return setup;
+}
+
+std::string Session::partnerName() const {
+  if (!partnerPolicy.empty()) return "partner_policy";
+  if (task.scriptedOpponent) return task.scriptedOpponent->stand ? "stand" : "pursue";
+  return "";
 }
 
 void Session::loadPartnerPolicy(const std::filesystem::path& dir, int round) {

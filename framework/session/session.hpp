@@ -82,13 +82,18 @@ class Session {
   ControllerParts controllerParts(Variety variety = {}) const;
   /// A world of `avatars` on this session's graph and task (mode, spacing ... from
   /// `world:`), each avatar run by a controller of `choice` with the world's variety. One
-  /// thread, no poses: set WorldSetup::threads, poses and record as needed.
+  /// thread, no poses: set WorldSetup::threads, poses and record as needed. In sparring,
+  /// the second avatar of each pair plays the partner bundle if one is loaded, else the
+  /// scenario's scripted opponent if it has one (partnerName()), else `choice` too.
   WorldSetup worldSetup(std::size_t avatars, std::uint64_t seed, const ControllerChoice& choice) const;
   /// Loads `dir`, a bundle trained on this graph with tables for every behaviour (checked
   /// as the main one is), for the partners: worldSetup() then gives the second avatar of
   /// each pair a policy controller on it. Throws mgrl::Error naming the bundle's problem.
   /// `round` > 0: the tables of that self-play round (NAME-roundK) instead of the final ones.
   void loadPartnerPolicy(const std::filesystem::path& dir, int round = 0);
+  /// What the second avatar of a sparring pair plays, for reports and the viewer: "" (the
+  /// same as the first), "partner_policy" or "pursue" / "stand" (the scripted opponent).
+  std::string partnerName() const;
 };
 
 /// Opens the scenario of `options` for `needs`: the scenario checked, the bundle looked up

@@ -4,6 +4,7 @@
 /// were trained for (the environment model that moves the target, the discount of returns,
 /// whether the target is an opponent that faces the avatar) and the `world:` section's
 /// parameters. Built once per session, with one clear error when behaviours disagree.
+#include <optional>
 #include <vector>
 
 #include "mgrl/learning/behavior.hpp"
@@ -22,6 +23,15 @@ struct Task {
   bool opponent = false;
   /// A learned opponent's phases per graph state (EnvironmentModel::opponentPhases()), 0 for none.
   int opponentPhases = 0;
+  /// The environment's scripted opponent as the world plays it with graph actions (an
+  /// `opponent` model): the second avatar of each sparring pair pursues the first
+  /// (PursueController) to `stopDistance`, or keeps its distance (`stand`). Unset for other
+  /// models.
+  struct ScriptedOpponent {
+    bool stand = false;
+    double stopDistance = 0;
+  };
+  std::optional<ScriptedOpponent> scriptedOpponent;
   /// The scenario's `world:` section (defaults where absent), parsed once here.
   WorldParams world;
 

@@ -190,7 +190,8 @@ TrialStats Trials::runAgainstAvatar(const ChooseAction& choose, std::size_t coun
   // The opponent's choice, greedy over its out-actions: a punch of the action landing near
   // the avatar's point where it is now (the paper's hit, sec. 6.4) first, then ending
   // nearest stop_distance from the avatar (or its own start, standing) and facing it; the
-  // capture is all it can play.
+  // capture is all it can play. The world's scripted opponent (PursueController) plays the
+  // same rule and weights.
   auto opponentChoice = [&](const Player& o, const Eigen::Vector3d& avatar, const Eigen::Vector3d& target,
                             const Eigen::Vector3d& home) {
     const std::size_t first = model.stateActionBegin[o.state], last = model.stateActionBegin[o.state + 1];
@@ -204,10 +205,9 @@ TrialStats Trials::runAgainstAvatar(const ChooseAction& choose, std::size_t coun
       const double place = opponentModel->pursues()
                                ? std::abs(std::hypot(q.x(), q.z()) - opponentModel->stopDistance())
                                : std::hypot(end.dx - home.x(), end.dz - home.z());
-      double punch = 0;
-      for (const ActionHit& h : model.hitsOf(a))
-        punch = std::max(punch, 1 - std::min(1.0, (Eigen::Vector3d(h.x, h.y, h.z) - aim).norm() / 0.5));
-      if (const double cost = place + 0.5 * facing - 2 * punch; cost < bestCost) {
+      const double punch = PursueController::punchScore(model.hitsOf(a), aim);
+      if (const double cost = place + PursueController::kTurnCost * facing - PursueController::kPunchWeight * punch;
+          cost < bestCost) {
         bestCost = cost;
         best = a;
       }

@@ -58,3 +58,13 @@ test('the note shows the scene\'s note and, while the server slows this world, w
   hud.setScene({mode: 'target', note: ''}, true);
   assert.equal(hud.noteText(), '');
 });
+
+test('the note says who the blue corner is when the server plays a scripted opponent', () => {
+  const hud = new Hud();
+  hud.setScene({note: '', opponent: null});
+  assert.equal(hud.noteText(), '');
+  hud.setScene({note: 'No policy bundle.', opponent: 'pursue'});
+  assert.match(hud.noteText(), /^No policy bundle\. Blue: the scripted opponent .*red: the trained avatar\.$/);
+  hud.setScene({note: '', opponent: 'stand'});
+  assert.match(hud.noteText(), /standing/);
+});
