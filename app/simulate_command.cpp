@@ -560,7 +560,7 @@ json runSimulate(const SimulateOptions& options) {
     report["partner_policy"] = session->partnerPolicyDir.string();
     if (options.partnerRound > 0) report["partner_round"] = options.partnerRound;
     report["hits_by_side"] = {{"policy", first}, {"partner_policy", second}};
-  } else if (params.mode == "sparring" && !session->partnerName().empty()) {
+  } else if (params.mode == "sparring" && avatars >= 2 && !session->partnerName().empty()) {
     // An `opponent` scene: the second of each pair is the scripted opponent (issue 45).
     std::size_t first = 0, second = 0;
     for (const HitEvent& e : world.events()) (e.attacker % 2 == 0 ? first : second) += 1;

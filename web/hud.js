@@ -12,14 +12,14 @@ const successText = (behaviors) => {
   return declared.length ? declared.map((b) => `${b.name}: ${b.success}`).join('; ') : '–';
 };
 
-/** Who the blue corner is when the server plays it (scene.opponent), as a sentence. */
-export function opponentText(opponent) {
-  if (opponent === 'pursue') {
-    return 'Blue: the scripted opponent the policy was trained against, walking in with the capture\'s steps and ' +
-        'throwing its punches; red: the trained avatar.';
-  }
-  if (opponent === 'stand') return 'Blue: the scripted opponent, standing and punching; red: the trained avatar.';
-  return '';
+/** Who the blue corner is when the server plays it (scene.opponent), as a sentence; red
+ * plays the page's controller (the trained policy, or the search or random actions). */
+export function opponentText(opponent, controller) {
+  if (opponent !== 'pursue' && opponent !== 'stand') return '';
+  const red = controller === 'policy' ? 'the trained avatar' : `the page's controller (${controller ?? '?'})`;
+  const blue = opponent === 'pursue' ? "walking in with the capture's steps and throwing its punches"
+                                     : 'standing, turning to face the avatar and punching';
+  return `Blue: the scripted opponent the behaviours were trained against, ${blue}; red: ${red}.`;
 }
 
 export class Hud {
@@ -57,7 +57,7 @@ export class Hud {
   /** The scene's note (no policy bundle, a lowered horizon) and, while the server slows this
    * page's world to share its time with the others, the stats' reason. */
   noteText() {
-    return [this.scene?.note, opponentText(this.scene?.opponent), this.stats?.slowed]
+    return [this.scene?.note, opponentText(this.scene?.opponent, this.scene?.controller), this.stats?.slowed]
         .filter((t) => typeof t === 'string' && t.length > 0).join(' ');
   }
 

