@@ -25,8 +25,8 @@ struct Task {
   int opponentPhases = 0;
   /// The environment's scripted opponent as the world plays it with graph actions (an
   /// `opponent` model): the second avatar of each sparring pair pursues the first
-  /// (PursueController) to `stopDistance`, or keeps its distance (`stand`). Unset for other
-  /// models.
+  /// (PursueController) to `stopDistance`, or takes the actions that move it least
+  /// (`stand`). Unset for other models.
   struct ScriptedOpponent {
     bool stand = false;
     double stopDistance = 0;
