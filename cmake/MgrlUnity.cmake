@@ -12,8 +12,10 @@
 #
 # A source with its own compile options or definitions, or SKIP_UNITY_BUILD_INCLUSION,
 # stays on its own (tuned kernels such as learning/problem.cpp keep their flags). Names at
-# file scope must then be unique within a target: tests/layout checks nothing here; a
-# clash shows as a compile error (a redefinition, an ambiguous call).
+# file scope must then be unique within a target; a clash shows as a compile error (a
+# redefinition, an ambiguous call). The test files keep theirs in a namespace named after
+# the file (tests/layout/test_namespaces.cmake checks it), so that any of them may share a
+# batch.
 #
 #   mgrl_unity(TARGET...)   after the targets' sources are final; MGRL_UNITY=OFF leaves
 #                           every target as it is.

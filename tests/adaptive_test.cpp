@@ -19,7 +19,7 @@
 #include "mgrl/learning/reward.hpp"
 #include "test_support.hpp"
 
-namespace mgrl {
+namespace mgrl::adaptive_test {
 namespace {
 
 using Catch::Contains;
@@ -665,9 +665,9 @@ TEST_CASE("adaptive_value_iteration and kd_tree refuse bad parameters with one l
   REQUIRE_THROWS_WITH(q->train({problem, g, nullptr, nullptr, 1}), Contains("hanging"));
 }
 
-}  // namespace mgrl
+}  // namespace mgrl::adaptive_test
 
-namespace mgrl {
+namespace mgrl::adaptive_test {
 
 // Issue 16: initial cells of any count, so that a tree can start from the shape of the uniform
 // grid it is compared with. n cells are n's odd part as root boxes, split down by its
@@ -760,9 +760,9 @@ TEST_CASE("a refined forest kd_tree round-trips through a policy bundle, bad roo
   }
 }
 
-}  // namespace mgrl
+}  // namespace mgrl::adaptive_test
 
-namespace mgrl {
+namespace mgrl::adaptive_test {
 
 // Issue 16: "the policy bundle stores the tree as .npy arrays ... so that NumPy can rebuild
 // it". scripts/tree_value.py does, from the arrays alone; here it must find the leaf and the
@@ -823,9 +823,9 @@ TEST_CASE("NumPy rebuilds a saved kd_tree forest: scripts/tree_value.py finds mg
   CHECK(!std::getline(lines, extra));
 }
 
-}  // namespace mgrl
+}  // namespace mgrl::adaptive_test
 
-namespace mgrl {
+namespace mgrl::adaptive_test {
 
 namespace {
 
@@ -991,4 +991,4 @@ TEST_CASE("kd_tree withInitialCells: a tree from other initial cells round-trips
   }
 }
 
-}  // namespace mgrl
+}  // namespace mgrl::adaptive_test

@@ -7,6 +7,9 @@
 #include "mgrl/motion/kinematics.hpp"
 #include "test_support.hpp"
 
+// A namespace of its own: the suite compiles in unity batches (tests/CMakeLists.txt).
+namespace all_data_test {
+
 using namespace mgrl;
 
 TEST_CASE("every motion file in the data folder loads, annotates and survives a BVH round trip", "[.slow][data]") {
@@ -38,3 +41,5 @@ TEST_CASE("every motion file in the data folder loads, annotates and survives a 
     CHECK(worst < 1e-6);
   }
 }
+
+}  // namespace all_data_test

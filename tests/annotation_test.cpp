@@ -10,6 +10,9 @@
 #include "mgrl/core/files.hpp"
 #include "test_support.hpp"
 
+// A namespace of its own: the suite compiles in unity batches (tests/CMakeLists.txt).
+namespace annotation_test {
+
 using namespace mgrl;
 
 namespace {
@@ -462,3 +465,5 @@ TEST_CASE("Otsu's threshold splits two groups between them and refuses a histogr
   CHECK_THROWS_WITH(otsuThreshold(values, 1, 1, 400), Catch::Contains("expected at least 2 bins over lo < hi"));
   CHECK_THROWS_WITH(otsuThreshold(values, 0, 4, 1), Catch::Contains("found 1 over [0, 4]"));
 }
+
+}  // namespace annotation_test

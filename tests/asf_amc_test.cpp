@@ -6,6 +6,9 @@
 #include "mgrl/motion/kinematics.hpp"
 #include "test_support.hpp"
 
+// A namespace of its own: the suite compiles in unity batches (tests/CMakeLists.txt).
+namespace asf_amc_test {
+
 using namespace mgrl;
 
 namespace {
@@ -71,3 +74,5 @@ TEST_CASE("ASF bones become joints ordered parent before child with end sites on
   CHECK_FALSE(s.joint(static_cast<std::size_t>(s.find("lfemur"))).endSite.has_value());
   CHECK(asf.lengthPerInch == Approx(0.45));
 }
+
+}  // namespace asf_amc_test

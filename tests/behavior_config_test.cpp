@@ -17,6 +17,9 @@
 #include "mgrl/motion/roles.hpp"
 #include "test_support.hpp"
 
+// A namespace of its own: the suite compiles in unity batches (tests/CMakeLists.txt).
+namespace behavior_config_test {
+
 using namespace mgrl;
 using Catch::Contains;
 using Catch::Equals;
@@ -785,3 +788,5 @@ TEST_CASE("a body point names a skeleton role or joint, one the skeleton lacks l
                                "200 printable characters, no spaces), found 'Left Hand'"));
   }
 }
+
+}  // namespace behavior_config_test

@@ -13,7 +13,7 @@
 #include "sanitizer.hpp"
 #include "test_support.hpp"
 
-namespace mgrl {
+namespace mgrl::boxing_learning_test {
 namespace {
 
 namespace fs = std::filesystem;
@@ -129,4 +129,4 @@ TEST_CASE("on boxing, Q-learning with a generous budget agrees with value iterat
   REQUIRE(agree > chance + 0.3);
 }
 
-}  // namespace mgrl
+}  // namespace mgrl::boxing_learning_test

@@ -20,7 +20,7 @@
 #include "mgrl/core/files.hpp"
 #include "test_support.hpp"
 
-namespace mgrl {
+namespace mgrl::bundle_write_test {
 namespace {
 
 namespace fs = std::filesystem;
@@ -209,4 +209,4 @@ TEST_CASE("a writability probe a dead process left is removed, a live process's 
 }
 
 }  // namespace
-}  // namespace mgrl
+}  // namespace mgrl::bundle_write_test

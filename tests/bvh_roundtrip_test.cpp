@@ -7,6 +7,9 @@
 #include "mgrl/core/text_scanner.hpp"
 #include "test_support.hpp"
 
+// A namespace of its own: the suite compiles in unity batches (tests/CMakeLists.txt).
+namespace bvh_roundtrip_test {
+
 using namespace mgrl;
 
 namespace {
@@ -95,3 +98,5 @@ TEST_CASE("an ASF/AMC motion exports to BVH with the same joint positions", "[bv
   CHECK(reread.skeleton().jointCount() == m.skeleton().jointCount());
   CHECK(largestJointDistance(m, reread) < 1e-6);
 }
+
+}  // namespace bvh_roundtrip_test

@@ -22,6 +22,9 @@
 #include "mgrl/session/compare_report.hpp"
 #include "test_support.hpp"
 
+// A namespace of its own: the suite compiles in unity batches (tests/CMakeLists.txt).
+namespace cli_compare_test {
+
 namespace fs = std::filesystem;
 using Catch::Contains;
 using nlohmann::json;
@@ -420,3 +423,5 @@ TEST_CASE("the compare report writes numbers for people: units, prefixes, three 
   CHECK(reportNumber("value_rmse", 2.5e-5) == "2.50e-05");
   CHECK(reportNumber("value_rmse", -0.5) == "-0.500");
 }
+
+}  // namespace cli_compare_test

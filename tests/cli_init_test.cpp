@@ -9,6 +9,9 @@
 
 #include "cli_support.hpp"
 
+// A namespace of its own: the suite compiles in unity batches (tests/CMakeLists.txt).
+namespace cli_init_test {
+
 using namespace mgrl::test;
 using Catch::Contains;
 
@@ -119,3 +122,5 @@ TEST_CASE("mgrl init refuses what it cannot use and leaves no file behind", "[cl
   CHECK_THAT(run.lastErrorLine(), Contains("no/such/dir"));
   CHECK_FALSE(std::filesystem::exists(box.path("no")));
 }
+
+}  // namespace cli_init_test

@@ -7,6 +7,9 @@
 
 #include "test_support.hpp"
 
+// A namespace of its own: the suite compiles in unity batches (tests/CMakeLists.txt).
+namespace cli_json_test {
+
 namespace {
 
 struct Run {
@@ -99,3 +102,5 @@ TEST_CASE("mgrl graph --json reports the contract keys and reuses its cache", "[
   }
   std::filesystem::remove_all(cache);
 }
+
+}  // namespace cli_json_test

@@ -21,6 +21,9 @@
 #include "mgrl/core/bundle.hpp"
 #include "test_support.hpp"
 
+// A namespace of its own: the suite compiles in unity batches (tests/CMakeLists.txt).
+namespace cli_learn_test {
+
 namespace fs = std::filesystem;
 using Catch::Contains;
 using Catch::StartsWith;
@@ -660,3 +663,5 @@ TEST_CASE("mgrl train --resume ignores a checkpoint whose learner state is out o
   REQUIRE(box.train(kCheckpointed + " --out " + shellWord(straight)).status == 0);
   CHECK(readText(out / "approach.q.npy") == readText(straight / "approach.q.npy"));
 }
+
+}  // namespace cli_learn_test

@@ -10,6 +10,9 @@
 
 #include "cli_support.hpp"
 
+// A namespace of its own: the suite compiles in unity batches (tests/CMakeLists.txt).
+namespace cli_motion_test {
+
 using namespace mgrl::test;
 using Catch::Contains;
 
@@ -123,3 +126,5 @@ TEST_CASE("mgrl inspect --punch-min-speed auto chooses and reports each file's t
                                      bad + "'"));
   }
 }
+
+}  // namespace cli_motion_test

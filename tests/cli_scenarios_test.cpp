@@ -16,6 +16,9 @@
 #include "mgrl/motion/bvh.hpp"
 #include "test_support.hpp"
 
+// A namespace of its own: the suite compiles in unity batches (tests/CMakeLists.txt).
+namespace cli_scenarios_test {
+
 namespace fs = std::filesystem;
 using nlohmann::json;
 using mgrl::test::readText;
@@ -248,3 +251,5 @@ TEST_CASE("sparring.yaml spars like the SNU capture: distance, strike rate, bodi
   CHECK(synthetic["kicks"].get<int>() > 0);
   CHECK(synthetic["landed"].get<int>() > 0);
 }
+
+}  // namespace cli_scenarios_test

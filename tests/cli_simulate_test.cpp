@@ -31,6 +31,9 @@
 #include "mgrl/motion/gltf.hpp"
 #include "test_support.hpp"
 
+// A namespace of its own: the suite compiles in unity batches (tests/CMakeLists.txt).
+namespace cli_simulate_test {
+
 namespace fs = std::filesystem;
 using Catch::Contains;
 using Catch::StartsWith;
@@ -710,3 +713,5 @@ TEST_CASE("mgrl simulate killed at any moment leaves --bvh-out whole, old or new
   CHECK(requireWholeOutput(dir)["run"]["seed"] == 2);
   CHECK(scratchLeft(box.dir()).empty());
 }
+
+}  // namespace cli_simulate_test

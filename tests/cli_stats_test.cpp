@@ -8,6 +8,9 @@
 
 #include "cli_support.hpp"
 
+// A namespace of its own: the suite compiles in unity batches (tests/CMakeLists.txt).
+namespace cli_stats_test {
+
 using mgrl::test::shellWord;
 using nlohmann::json;
 
@@ -58,3 +61,5 @@ TEST_CASE("mgrl stats reads a simulate --bvh-out folder", "[stats][cli][data]") 
   CHECK(c["wasserstein1"]["distance_m"].get<double>() >= 0);
   CHECK(c["wasserstein1"]["facing_deg"].get<double>() >= 0);
 }
+
+}  // namespace cli_stats_test

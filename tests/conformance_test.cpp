@@ -19,7 +19,7 @@
 #include "rewards/term.hpp"
 #include "synthetic_model.hpp"
 
-namespace mgrl {
+namespace mgrl::conformance_test {
 namespace {
 
 const StateActionModel& model() {
@@ -227,4 +227,4 @@ TEST_CASE("every reward term gives a signal in [0, 1], the same for the same fra
   CHECK(onCapture.size() < kinds.size());
 }
 
-}  // namespace mgrl
+}  // namespace mgrl::conformance_test

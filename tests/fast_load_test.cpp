@@ -24,6 +24,9 @@
 #include "mgrl/scenario/scenario.hpp"
 #include "test_support.hpp"
 
+// A namespace of its own: the suite compiles in unity batches (tests/CMakeLists.txt).
+namespace fast_load_test {
+
 namespace fs = std::filesystem;
 using Catch::Contains;
 
@@ -299,3 +302,5 @@ TEST_CASE("a cached graph poses avatars from the capture it keeps, exactly as pa
     requireSameDatabase(rebuilt.db, built.db);
   }
 }
+
+}  // namespace fast_load_test

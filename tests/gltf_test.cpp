@@ -14,6 +14,9 @@
 #include "mgrl/motion/motion_io.hpp"
 #include "test_support.hpp"
 
+// A namespace of its own: the suite compiles in unity batches (tests/CMakeLists.txt).
+namespace gltf_test {
+
 using namespace mgrl;
 using json = nlohmann::json;
 
@@ -282,3 +285,5 @@ TEST_CASE("writeGlb refuses a skeleton a skin cannot index and a body of too few
   // (The 2 GB limit is checked before anything grows with the motion; a motion that reaches
   // it holds twice that in quaternions, so it is not built here.)
 }
+
+}  // namespace gltf_test

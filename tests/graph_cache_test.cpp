@@ -29,6 +29,9 @@
 #include "mgrl/core/npy.hpp"
 #include "test_support.hpp"
 
+// A namespace of its own: the suite compiles in unity batches (tests/CMakeLists.txt).
+namespace graph_cache_test {
+
 namespace fs = std::filesystem;
 using Catch::Contains;
 using mgrl::GraphBundleLoad;
@@ -927,3 +930,5 @@ TEST_CASE("a bundle whose kept motion is inconsistent is damaged, with the membe
   REQUIRE_THAT(load.reason, Contains(reason));
   CHECK(load.motions.empty());
 }
+
+}  // namespace graph_cache_test

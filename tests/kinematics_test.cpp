@@ -5,6 +5,9 @@
 #include "mgrl/motion/kinematics.hpp"
 #include "test_support.hpp"
 
+// A namespace of its own: the suite compiles in unity batches (tests/CMakeLists.txt).
+namespace kinematics_test {
+
 using namespace mgrl;
 
 namespace {
@@ -103,3 +106,5 @@ TEST_CASE("redoing one subtree's kinematics gives what the full pass gives", "[k
   }
   CHECK((positions[static_cast<std::size_t>(leg.back())] - before[static_cast<std::size_t>(leg.back())]).norm() > 0.05);
 }
+
+}  // namespace kinematics_test

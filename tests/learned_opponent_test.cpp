@@ -23,7 +23,7 @@
 #include "mgrl/scenario/scenario.hpp"
 #include "test_support.hpp"
 
-namespace mgrl {
+namespace mgrl::learned_opponent_test {
 
 namespace fs = std::filesystem;
 
@@ -366,4 +366,4 @@ TEST_CASE(
                                      "targets") != std::string::npos);
 }
 
-}  // namespace mgrl
+}  // namespace mgrl::learned_opponent_test

@@ -32,7 +32,7 @@
 #include "learners/q_learning_steps.hpp"
 #include "test_support.hpp"
 
-namespace mgrl {
+namespace mgrl::learning_test {
 namespace {
 
 // An action for hand-made models: frames, a straight root path to (dx, dz, dyaw), hits.
@@ -1173,11 +1173,11 @@ TEST_CASE("a compact model trains the same tables as the tabulated one in a fift
   }
 }
 
-}  // namespace mgrl
+}  // namespace mgrl::learning_test
 
 // ---- Moving targets (issue 17): moving_target, polar_velocity's speed layers ----
 
-namespace mgrl {
+namespace mgrl::learning_test {
 namespace {
 
 // One state; the action walks 0.5 m forward over 15 frames (0.5 s) turning 0.3 rad left.
@@ -1197,9 +1197,6 @@ class SlowingTarget final : public EnvironmentModel {
 };
 
 }  // namespace
-}  // namespace mgrl
-
-using namespace mgrl;
 
 TEST_CASE("moving_target: the target moves along its velocity, its heading turns with the avatar, its speed is kept",
           "[learning][moving]") {
@@ -1582,3 +1579,5 @@ TEST_CASE("trials against an avatar need an opponent environment and an avoid co
   CHECK_THROWS_WITH(withoutAvoid.runAgainstAvatar(nullptr, 1, 1, 1),
                     "trials against an avatar: expected a success criterion with an avoid condition, found none");
 }
+
+}  // namespace mgrl::learning_test

@@ -14,6 +14,9 @@
 #include "mgrl/core/rotation.hpp"
 #include "test_support.hpp"
 
+// A namespace of its own: the suite compiles in unity batches (tests/CMakeLists.txt).
+namespace loader_errors_test {
+
 using Catch::Contains;
 using mgrl::ParseError;
 
@@ -994,3 +997,5 @@ TEST_CASE("asf rejects an implausible length unit", "[loader][errors]") {
   }
   CHECK_NOTHROW(asf(withLine(kAsf, 5, "  length 1")));
 }
+
+}  // namespace loader_errors_test

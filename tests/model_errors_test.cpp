@@ -11,6 +11,9 @@
 #include "mgrl/motion/roles.hpp"
 #include "test_support.hpp"
 
+// A namespace of its own: the suite compiles in unity batches (tests/CMakeLists.txt).
+namespace model_errors_test {
+
 using namespace mgrl;
 using Catch::Contains;
 
@@ -101,3 +104,5 @@ TEST_CASE("annotation rejects a glitch threshold below the punch threshold", "[a
   p.punchMaxSpeed_mps = 1.0;
   CHECK_THROWS_WITH(p.validate(), Contains("punch_max_speed_mps: expected a value above punch_min_speed_mps (2), found 1"));
 }
+
+}  // namespace model_errors_test

@@ -20,6 +20,9 @@
 #include "mgrl/scenario/scenario.hpp"
 #include "test_support.hpp"
 
+// A namespace of its own: the suite compiles in unity batches (tests/CMakeLists.txt).
+namespace motion_graph_test {
+
 using namespace mgrl;
 
 namespace {
@@ -670,3 +673,5 @@ TEST_CASE("graph.joint_weights must name joints of the skeleton", "[graph][data]
                       Catch::Contains("graph.joint_weights: expected a joint of the skeleton") &&
                           Catch::Contains("found 'LeftElbow'"));
 }
+
+}  // namespace motion_graph_test

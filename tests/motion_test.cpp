@@ -6,6 +6,9 @@
 #include "mgrl/core/error.hpp"
 #include "test_support.hpp"
 
+// A namespace of its own: the suite compiles in unity batches (tests/CMakeLists.txt).
+namespace motion_test {
+
 using namespace mgrl;
 
 namespace {
@@ -101,3 +104,5 @@ TEST_CASE("loading with --fps resamples and reports the file's own rate", "[moti
   CHECK(loaded.motion.fps() == Approx(30));
   CHECK(loaded.motion.duration() == Approx(25.0).margin(1.0 / 30));
 }
+
+}  // namespace motion_test

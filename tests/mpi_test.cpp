@@ -17,6 +17,9 @@
 #include "sanitizer.hpp"
 #include "test_support.hpp"
 
+// A namespace of its own: the suite compiles in unity batches (tests/CMakeLists.txt).
+namespace mpi_test {
+
 using namespace mgrl;
 
 namespace {
@@ -250,3 +253,5 @@ TEST_CASE("mpi_value_iteration --resume ignores a checkpoint whose sweep count i
   REQUIRE(box.run(train + test::shellWord(box.path("straight"))).status == 0);
   CHECK(compareTables(box.table("bundle", "hit"), box.table("straight", "hit")) == "identical");
 }
+
+}  // namespace mpi_test

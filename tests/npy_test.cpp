@@ -15,6 +15,9 @@
 #include "mgrl/core/npy.hpp"
 #include "test_support.hpp"
 
+// A namespace of its own: the suite compiles in unity batches (tests/CMakeLists.txt).
+namespace npy_test {
+
 using Catch::Contains;
 using mgrl::npyDecode;
 using mgrl::npyEncode;
@@ -263,3 +266,5 @@ TEST_CASE("npyDecode refuses a header that is not the expected dict", "[npy]") {
   // Control bytes from a damaged file are shown escaped.
   REQUIRE_PARSE_ERROR(decode(std::string_view("{\x01\x02}", 4)), "found '\\x01\\x02}'");
 }
+
+}  // namespace npy_test

@@ -29,6 +29,9 @@
 #include "mgrl/learning/policy_bundle.hpp"
 #include "test_support.hpp"
 
+// A namespace of its own: the suite compiles in unity batches (tests/CMakeLists.txt).
+namespace policy_bundle_test {
+
 namespace fs = std::filesystem;
 using Catch::Contains;
 using mgrl::PolicyBehavior;
@@ -691,3 +694,5 @@ TEST_CASE("a checkpointer leaves a directory that is not a checkpoint alone", "[
   REQUIRE_THROWS_WITH(checkpointer.save({}, QTable(model, 5)),
                       Contains("expected a Q table of 3 actions x 6 vertices, found 3 x 5"));
 }
+
+}  // namespace policy_bundle_test

@@ -15,6 +15,9 @@
 #include "mgrl/motion/motion_io.hpp"
 #include "test_support.hpp"
 
+// A namespace of its own: the suite compiles in unity batches (tests/CMakeLists.txt).
+namespace robustness_test {
+
 namespace {
 
 constexpr std::uint64_t kRootSeed = 20040827;  // any fixed value; printed on failure
@@ -123,3 +126,5 @@ TEST_CASE("asf and amc loaders survive every truncation and seeded byte mutation
   CAPTURE(kRootSeed, failures.first);
   CHECK(failures.count == 0);
 }
+
+}  // namespace robustness_test

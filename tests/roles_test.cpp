@@ -4,6 +4,9 @@
 #include "mgrl/motion/roles.hpp"
 #include "test_support.hpp"
 
+// A namespace of its own: the suite compiles in unity batches (tests/CMakeLists.txt).
+namespace roles_test {
+
 using namespace mgrl;
 
 namespace {
@@ -145,3 +148,5 @@ TEST_CASE("a zero-length head end site is continued along the neck by a head in 
   const SkeletonRoles shortNeck = findRoles(Skeleton(joints));
   CHECK(shortNeck.restHeight == Approx(1.7516));
 }
+
+}  // namespace roles_test

@@ -11,6 +11,9 @@
 #include "mgrl/motion/root_motion.hpp"
 #include "test_support.hpp"
 
+// A namespace of its own: the suite compiles in unity batches (tests/CMakeLists.txt).
+namespace root_motion_test {
+
 using namespace mgrl;
 
 namespace {
@@ -162,3 +165,5 @@ TEST_CASE("a head without a head top measures the person in proportion, and CMU'
   CHECK(withTop.restHeight == Approx(1.63).margin(0.02));
   CHECK(stand.headTopOffset.norm() > joints[static_cast<std::size_t>(withTop.head)].offset.norm());
 }
+
+}  // namespace root_motion_test

@@ -6,6 +6,9 @@
 
 #include "mgrl/core/rotation.hpp"
 
+// A namespace of its own: the suite compiles in unity batches (tests/CMakeLists.txt).
+namespace rotation_test {
+
 using namespace mgrl;
 
 namespace {
@@ -68,3 +71,5 @@ TEST_CASE("decomposeEuler stays continuous with the previous frame", "[rotation]
   }
   CHECK(previous[0] == Approx(8.0).margin(1e-9));
 }
+
+}  // namespace rotation_test

@@ -10,6 +10,9 @@
 #include "mgrl/scenario/scenario.hpp"
 #include "test_support.hpp"
 
+// A namespace of its own: the suite compiles in unity batches (tests/CMakeLists.txt).
+namespace scenario_test {
+
 using namespace mgrl;
 using Catch::Contains;
 
@@ -226,3 +229,5 @@ TEST_CASE("punch_min_speed_mps: auto reaches the annotation and the graph cache 
   CHECK(db.clips[0].annotation.hits.size() == annotate(db.clips[0].motion, db.roles, at).hits.size());
   CHECK_FALSE(loadMotionDatabase(given.motion).autoPunchSpeed.has_value());
 }
+
+}  // namespace scenario_test

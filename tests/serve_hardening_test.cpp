@@ -15,7 +15,7 @@
 #include "sanitizer.hpp"
 #include "serve_support.hpp"
 
-namespace mgrl {
+namespace mgrl::serve_hardening_test {
 namespace {
 
 using namespace test::serving;
@@ -398,4 +398,4 @@ TEST_CASE("a whole-number grid parameter refuses 3.0 from the page, as avatars d
 }
 
 }  // namespace
-}  // namespace mgrl
+}  // namespace mgrl::serve_hardening_test

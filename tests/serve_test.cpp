@@ -22,7 +22,7 @@
 #include "serve_support.hpp"
 #include "test_support.hpp"
 
-namespace mgrl {
+namespace mgrl::serve_test {
 namespace {
 
 // fs, beast, http, websocket, net, tcp and json come with the helpers' namespace.
@@ -595,4 +595,4 @@ TEST_CASE("hostile pages get an error or a closed socket while a good page keeps
 }
 
 }  // namespace
-}  // namespace mgrl
+}  // namespace mgrl::serve_test

@@ -13,7 +13,7 @@
 #include "mgrl/session/session.hpp"
 #include "test_support.hpp"
 
-namespace mgrl {
+namespace mgrl::session_test {
 namespace {
 
 namespace fs = std::filesystem;
@@ -237,4 +237,4 @@ TEST_CASE("a hit reads the same in the events file and the viewer's protocol", "
   CHECK(hitEventJson(e)["hand"] == "left");
 }
 
-}  // namespace mgrl
+}  // namespace mgrl::session_test

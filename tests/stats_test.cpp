@@ -12,6 +12,9 @@
 #include "stats_command.hpp"
 #include "test_support.hpp"
 
+// A namespace of its own: the suite compiles in unity batches (tests/CMakeLists.txt).
+namespace stats_test {
+
 namespace fs = std::filesystem;
 using Catch::Contains;
 using Catch::Matchers::WithinAbs;
@@ -220,3 +223,5 @@ TEST_CASE("stats: the real SNU sparring bouts pooled match the issue's figures l
   CHECK(reversals < 0.05);
   CHECK(p.closeFrames < p.pairFrames / 100);
 }
+
+}  // namespace stats_test

@@ -17,6 +17,9 @@
 #include "mgrl/graph/motion_graph.hpp"
 #include "synthetic_model.hpp"
 
+// A namespace of its own: the suite compiles in unity batches (tests/CMakeLists.txt).
+namespace synthetic_model_test {
+
 using namespace mgrl;
 using Catch::Contains;
 
@@ -342,3 +345,5 @@ TEST_CASE("an impossible synthetic spec is refused with the member it breaks", "
   REQUIRE_THROWS_AS(makeSyntheticModel(spec), Error);
   REQUIRE_THROWS_WITH(makeSyntheticModel(spec), Contains(message));
 }
+
+}  // namespace synthetic_model_test

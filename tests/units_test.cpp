@@ -4,6 +4,9 @@
 #include "mgrl/motion/units.hpp"
 #include "test_support.hpp"
 
+// A namespace of its own: the suite compiles in unity batches (tests/CMakeLists.txt).
+namespace units_test {
+
 using namespace mgrl;
 
 TEST_CASE("units are detected from a plausible standing height", "[units]") {
@@ -35,3 +38,5 @@ TEST_CASE("real files load in metres with the right detected units", "[units][da
   CHECK(raw.motion.skeleton().joint(2).offset.norm() ==
         Approx(cmu.motion.skeleton().joint(2).offset.norm() / metresPer(LengthUnit::Cmu)));
 }
+
+}  // namespace units_test

@@ -20,7 +20,7 @@
 #include "mgrl/runtime/world.hpp"
 #include "test_support.hpp"
 
-namespace mgrl {
+namespace mgrl::world_test {
 namespace {
 
 namespace fs = std::filesystem;
@@ -830,4 +830,4 @@ TEST_CASE("a learned opponent's state reaches the controller: what the partner i
   CHECK(other.lastDecision(0).target.opponent == -1);
 }
 
-}  // namespace mgrl
+}  // namespace mgrl::world_test
