@@ -14,7 +14,7 @@ SOURCE = pathlib.Path(os.environ.get("MGRL_SOURCE", pathlib.Path(__file__).resol
 
 
 def main(argv):
-    notebooks = [pathlib.Path(a) for a in argv] or sorted((SOURCE / "notebooks").glob("*.ipynb"))
+    notebooks = [pathlib.Path(a).resolve() for a in argv] or sorted((SOURCE / "notebooks").glob("*.ipynb"))
     if not notebooks:
         print(f"notebooks_check: expected notebooks in {SOURCE / 'notebooks'}, found none", file=sys.stderr)
         return 1
