@@ -254,9 +254,13 @@ BoutStats measureBout(const Bout& bout, const StatsParams& params) {
     for (int side = 0; side < 2; ++side) {
       const auto ankle = static_cast<std::size_t>(me.roles.ankle[side]);
       const auto toe = static_cast<std::size_t>(me.roles.toe[side]);
-      for (std::size_t f = 0; f < me.frames; ++f)
-        if (me.annotation.contact[side][f])
-          s.plantedFootSpeed_mps.push_back(std::min(groundSpeed(me, f, ankle), groundSpeed(me, f, toe)));
+      for (std::size_t f = 0; f < me.frames; ++f) {
+        if (!me.annotation.contact[side][f]) continue;
+        const double ankleSpeed = groundSpeed(me, f, ankle), toeSpeed = groundSpeed(me, f, toe);
+        s.plantedFootSpeed_mps.push_back(std::min(ankleSpeed, toeSpeed));
+        s.plantedAnkleSpeed_mps.push_back(ankleSpeed);
+        s.plantedToeSpeed_mps.push_back(toeSpeed);
+      }
     }
     // 5: reversals. The direction of travel is that of the last step faster than the
     // threshold; a reversal is a step faster than the threshold whose velocity points
@@ -298,6 +302,10 @@ BoutStats pool(const std::vector<BoutStats>& bouts, const std::string& name) {
     p.facing_deg.insert(p.facing_deg.end(), b.facing_deg.begin(), b.facing_deg.end());
     p.plantedFootSpeed_mps.insert(p.plantedFootSpeed_mps.end(), b.plantedFootSpeed_mps.begin(),
                                   b.plantedFootSpeed_mps.end());
+    p.plantedAnkleSpeed_mps.insert(p.plantedAnkleSpeed_mps.end(), b.plantedAnkleSpeed_mps.begin(),
+                                   b.plantedAnkleSpeed_mps.end());
+    p.plantedToeSpeed_mps.insert(p.plantedToeSpeed_mps.end(), b.plantedToeSpeed_mps.begin(),
+                                 b.plantedToeSpeed_mps.end());
     p.jointStep_m.insert(p.jointStep_m.end(), b.jointStep_m.begin(), b.jointStep_m.end());
     p.jointSpeed_mps.insert(p.jointSpeed_mps.end(), b.jointSpeed_mps.begin(), b.jointSpeed_mps.end());
     p.rootSteps += b.rootSteps;

@@ -98,6 +98,10 @@ struct BoutStats {
   std::vector<double> distance_m, facing_deg;
   /// Per foot and contact frame: the slower of ankle and toe on the ground plane (m/s).
   std::vector<double> plantedFootSpeed_mps;
+  /// The same frames, each foot joint on its own: the ankle's and the toe's ground speed
+  /// (m/s). A foot held by its ankle while its toe sweeps round shows only here (issue 46:
+  /// the world's foot lock pinned the ankle, and the slower of the two read 0).
+  std::vector<double> plantedAnkleSpeed_mps, plantedToeSpeed_mps;
   /// Per joint and frame-to-frame step: the joint's displacement (m), and that over the
   /// frame time (m/s: comparable across frame rates).
   std::vector<double> jointStep_m, jointSpeed_mps;

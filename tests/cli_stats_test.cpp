@@ -35,7 +35,8 @@ TEST_CASE("mgrl stats reads a simulate --bvh-out folder", "[stats][cli][data]") 
   CHECK(bout["files"].size() == 2);      // manifest.json is not a fighter
   CHECK(bout["fps"][0].get<double>() == Approx(30).epsilon(1e-3));
   CHECK(bout["seconds"].get<double>() == Approx(10).margin(0.1));
-  for (const char* key : {"distance_m", "facing_deg", "planted_foot_speed_mps"}) {
+  for (const char* key :
+       {"distance_m", "facing_deg", "planted_foot_speed_mps", "planted_ankle_speed_mps", "planted_toe_speed_mps"}) {
     INFO(key);
     REQUIRE(bout[key]["median"].is_number());
     CHECK(bout[key]["deciles"].size() == 11);

@@ -54,7 +54,33 @@ TEST_CASE("stats: two fighters standing 1 m apart face to face", "[stats]") {
   // Feet flat on the floor, still: planted every frame, at speed 0; nothing moves.
   CHECK(s.plantedFootSpeed_mps.size() == 2 * 2 * 30);
   CHECK_THAT(mgrl::app::quantile(s.plantedFootSpeed_mps, 1.0), WithinAbs(0.0, 1e-9));
+  CHECK(s.plantedAnkleSpeed_mps.size() == s.plantedFootSpeed_mps.size());
+  CHECK(s.plantedToeSpeed_mps.size() == s.plantedFootSpeed_mps.size());
   CHECK_THAT(mgrl::app::quantile(s.jointStep_m, 1.0), WithinAbs(0.0, 1e-9));
+}
+
+TEST_CASE("stats: a foot pivoting on its still ankle skates at the toe, which each foot joint's speed shows",
+          "[stats]") {
+  // pivot/: fighter 1 of stand/ turns its left foot about the ankle, 3 degrees a frame at
+  // 30 fps (1.57 rad/s); the toe, 10 cm in front of the ankle on the ground, sweeps round
+  // at 0.157 m/s. The slower of ankle and toe reads 0 throughout: it cannot see this.
+  const BoutStats s = measureFolder("pivot");
+  REQUIRE(s.plantedFootSpeed_mps.size() == 2 * 2 * 30);  // every foot planted every frame
+  REQUIRE(s.plantedAnkleSpeed_mps.size() == s.plantedFootSpeed_mps.size());
+  REQUIRE(s.plantedToeSpeed_mps.size() == s.plantedFootSpeed_mps.size());
+  CHECK_THAT(mgrl::app::quantile(s.plantedFootSpeed_mps, 1.0), WithinAbs(0.0, 1e-9));
+  CHECK_THAT(mgrl::app::quantile(s.plantedAnkleSpeed_mps, 1.0), WithinAbs(0.0, 1e-9));
+  // One foot of the four turns: a quarter of the samples, its inner frames at the circle's
+  // speed (a central difference over 6 degrees: 0.157 x sin(3 deg) / (3 deg) = 0.1570).
+  std::size_t moving = 0;
+  for (const double v : s.plantedToeSpeed_mps)
+    if (v > 0.01) {
+      ++moving;
+      CHECK_THAT(v, WithinAbs(0.157, 0.003));
+    }
+  CHECK(moving >= 28);
+  CHECK(moving <= 30);
+  CHECK_THAT(mgrl::app::quantile(s.plantedToeSpeed_mps, 1.0), WithinAbs(0.157, 0.003));
 }
 
 TEST_CASE("stats: a fighter walking back and forth reverses three times", "[stats]") {
