@@ -135,6 +135,57 @@ TEST_CASE("foot contacts do not flicker when the foot hovers between the thresho
   CHECK(transitions(b.contact[0]) == 1);
 }
 
+// The humanoid standing, its left foot pitched by `pitch[f]` radians about the ankle's x
+// (positive: the toe down, the heel up) and the body raised so that the toe stays at the
+// floor when the pitch is positive; a negative pitch lifts the toe off a still ankle.
+Motion rollingFoot(const std::vector<double>& pitch, double fps) {
+  auto skeleton = std::make_shared<const Skeleton>([] {
+    Skeleton s = test::humanoid(test::humanoidNames());
+    std::vector<Joint> joints(s.joints().begin(), s.joints().end());
+    joints[0].channels = {
+        {Channel::Kind::Position, Axis::X}, {Channel::Kind::Position, Axis::Y}, {Channel::Kind::Position, Axis::Z}};
+    return Skeleton(joints);
+  }());
+  const std::size_t joints = skeleton->jointCount(), ankle = 8;  // LeftFoot (test_support.cpp)
+  REQUIRE(skeleton->joint(ankle).name == "LeftFoot");
+  const Eigen::Vector3d toe = skeleton->joint(ankle + 1).offset;
+  std::vector<Eigen::Quaterniond> rotations(pitch.size() * joints, Eigen::Quaterniond::Identity());
+  std::vector<Eigen::Vector3d> translations;
+  for (std::size_t f = 0; f < pitch.size(); ++f) {
+    const Eigen::Quaterniond q(Eigen::AngleAxisd(pitch[f], Eigen::Vector3d::UnitX()));
+    rotations[f * joints + ankle] = q;
+    const double drop = toe.y() - (q * toe).y();  // how much lower the toe is than at rest
+    translations.emplace_back(0, 1 + std::max(0.0, drop), 0);
+  }
+  return Motion(skeleton, 1.0 / fps, rotations, translations);
+}
+
+TEST_CASE("footPivot says which part of the foot it rests on: flat, on the ball, on the heel", "[annotation]") {
+  // 1.3 s flat, 0.3 s on the ball (heel 5 cm up), 1.3 s flat, 0.3 s on the heel (toe 7 cm
+  // up), 1.3 s flat, at 30 fps: short enough that each foot joint's planted level (its 10th
+  // percentile within +-1 s) stays the flat foot's.
+  const double up = 30 * M_PI / 180;
+  std::vector<double> pitch(40, 0.0);
+  pitch.insert(pitch.end(), 9, up);
+  pitch.insert(pitch.end(), 40, 0.0);
+  pitch.insert(pitch.end(), 9, -up);
+  pitch.insert(pitch.end(), 40, 0.0);
+  const Motion m = rollingFoot(pitch, 30);
+  const Annotation a = annotate(m, findRoles(m.skeleton()));
+  const std::vector<float>& left = a.footPivot[0];
+  REQUIRE(left.size() == pitch.size());
+  REQUIRE(a.footPivot[1].size() == pitch.size());
+  for (std::size_t f = 0; f < pitch.size(); ++f) {
+    CAPTURE(f, pitch[f]);
+    if (pitch[f] > 0)
+      CHECK(left[f] == 1.0f);  // on the ball
+    else if (pitch[f] < 0)
+      CHECK(left[f] == 0.0f);  // on the heel
+    else
+      CHECK(left[f] == Approx(0.5).margin(1e-6));  // flat
+  }
+}
+
 TEST_CASE("a capture glitch in the hand is not an effective hit", "[annotation][data]") {
   // SNU 16_28_1 has a one-frame right-hand jump of about 23 m/s at frames 1-2 (DATA.md).
   const Annotation a = annotateFile("snu_martial_arts/motion/16_28_1.bvh");

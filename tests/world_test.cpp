@@ -187,16 +187,20 @@ TEST_CASE("a posed crowd's joint positions are its poses' forward kinematics, th
 }
 
 // The world poses its avatars with planted feet held (WorldParams::plantFeet, on unless a
-// scenario turns it off): a planted ankle stays where it landed in world space. Deleting
-// the world's call of ActionPlayback::setFootLock would leave the lock off and the feet
-// sliding as the capture's do, which no other test sees.
+// scenario turns it off): a planted foot, ankle and toe, stays where it landed in world
+// space. Deleting the world's call of ActionPlayback::setFootLock would leave the lock off
+// and the feet sliding as the capture's do, which no other test sees.
 TEST_CASE("a posed avatar's planted feet stay still in the world unless plant_feet is off", "[world][data]") {
   const Boxing& b = boxing();
   REQUIRE(WorldParams{}.plantFeet);  // the default
   const StateActionModel& model = b.model();
   const MotionDatabase& db = b.db();
-  // Horizontal ankle speeds (m/s) over frame pairs with the foot planted in both, for one
-  // avatar with a target of its own (no partner to push it or to strike it) for a minute.
+  // Horizontal ankle and toe speeds (m/s) over frame pairs with the foot planted in both,
+  // for one avatar with a target of its own (no partner to push it or to strike it) for a
+  // minute.
+  struct Speeds {
+    std::vector<double> ankle, toe;
+  };
   auto plantedSpeeds = [&](bool plantFeet) {
     WorldSetup s = b.setup(1);
     s.poses = true;
@@ -206,9 +210,12 @@ TEST_CASE("a posed avatar's planted feet stay still in the world unless plant_fe
     // action's first frame, one frame per run(1).
     std::size_t decisions = 0;
     std::uint32_t step = 0;
-    std::array<Eigen::Vector3d, 2> before{Eigen::Vector3d::Zero(), Eigen::Vector3d::Zero()};
+    std::array<Eigen::Vector3d, 2> ankleBefore{}, toeBefore{};
     std::array<bool, 2> wasDown{false, false};
-    std::vector<double> speeds;
+    Speeds speeds;
+    auto speed = [&](const Eigen::Vector3d& from, const Eigen::Vector3d& to) {
+      return std::hypot(to.x() - from.x(), to.z() - from.z()) / model.frameTime;
+    };
     const std::size_t frames = framesFor(b, 60);
     for (std::size_t f = 0; f < frames; ++f) {
       world.run(1);
@@ -221,23 +228,32 @@ TEST_CASE("a posed avatar's planted feet stay still in the world unless plant_fe
       for (std::size_t side = 0; side < 2; ++side) {
         const bool down = db.clips[c].annotation.contact[side][v - db.offsets[c]] != 0;
         const Eigen::Vector3d ankle = world.jointPositions(0)[static_cast<std::size_t>(db.roles.ankle[side])];
-        if (down && wasDown[side])
-          speeds.push_back(std::hypot(ankle.x() - before[side].x(), ankle.z() - before[side].z()) / model.frameTime);
-        before[side] = ankle;
+        const Eigen::Vector3d toe = world.jointPositions(0)[static_cast<std::size_t>(db.roles.toe[side])];
+        if (down && wasDown[side]) {
+          speeds.ankle.push_back(speed(ankleBefore[side], ankle));
+          speeds.toe.push_back(speed(toeBefore[side], toe));
+        }
+        ankleBefore[side] = ankle;
+        toeBefore[side] = toe;
         wasDown[side] = down;
       }
     }
-    std::sort(speeds.begin(), speeds.end());
+    std::sort(speeds.ankle.begin(), speeds.ankle.end());
+    std::sort(speeds.toe.begin(), speeds.toe.end());
     return speeds;
   };
-  const std::vector<double> held = plantedSpeeds(true), sliding = plantedSpeeds(false);
-  REQUIRE(held.size() == sliding.size());  // the same bout: poses never change what happens
-  REQUIRE(held.size() > 500);
-  const double heldMedian = held[held.size() / 2], slidingMedian = sliding[sliding.size() / 2];
-  INFO(held.size() << " planted frame pairs; median planted ankle speed " << heldMedian << " m/s held, "
-                   << slidingMedian << " m/s with plant_feet off");
-  CHECK(heldMedian < 0.01);
-  CHECK(slidingMedian > 0.05);  // what the lock removes is there without it
+  const Speeds held = plantedSpeeds(true), sliding = plantedSpeeds(false);
+  REQUIRE(held.ankle.size() == sliding.ankle.size());  // the same bout: poses never change what happens
+  REQUIRE(held.ankle.size() > 500);
+  auto median = [](const std::vector<double>& v) { return v[v.size() / 2]; };
+  INFO(held.ankle.size() << " planted frame pairs; median planted ankle speed " << median(held.ankle) << " m/s held, "
+                         << median(sliding.ankle) << " m/s with plant_feet off; toe " << median(held.toe) << " and "
+                         << median(sliding.toe) << " m/s");
+  // At most the SNU sparring capture's (ankles 0.078 m/s, toes 0.029; issue 46).
+  CHECK(median(held.ankle) < 0.078);
+  CHECK(median(held.toe) < 0.029);
+  CHECK(median(sliding.ankle) > 0.1);  // what the lock removes is there without it
+  CHECK(median(sliding.toe) > 0.1);
 }
 
 TEST_CASE("in a two-avatar bout both boxers land hits, far more than random controllers", "[world][data]") {

@@ -23,6 +23,25 @@ double fade(int b, int frames) {
 // Frames over which a lifted foot goes from where it was held back to the motion's.
 constexpr int kRelease = 4;
 
+// How far a held foot's heading may stay behind the motion's before the foot pivots about
+// the point it rests on (radians): within the hip's range of inward and outward rotation (about 40 degrees
+// each way in adults), with room for the motion's own.
+constexpr double kMaxFootTwist = 25 * M_PI / 180;
+
+// How much of the motion's change of a held foot's pitch and roll since it landed playback
+// keeps (the rest is the landing's). The CMU boxer's feet roll and twist on the floor far
+// more than fighters' do: with all of it, its planted ankles moved 0.13 to 0.16 m/s about
+// the held ball against the SNU sparring capture's 0.078; with half, 0.07 to 0.09, the toes
+// 0.02 to 0.03 (the SNU's: 0.029). Issue 46, measured with mgrl stats on 120 s bouts.
+constexpr double kFootRoll = 0.5;
+
+// The foot's heading: the angle of its global rotation's twist about the vertical (the
+// swing-twist split), defined whatever the foot's pitch and roll (a toe pointing down has
+// no horizontal direction, but its rotation still has a twist).
+double twistAboutVertical(const Eigen::Quaterniond& q) { return 2 * std::atan2(q.y(), q.w()); }
+
+double wrapAngle(double a) { return std::remainder(a, 2 * M_PI); }
+
 // Frame k of `clip` with the avatar factored out of its root (paper sec. 3: the avatar
 // frame is the root's ground projection and yaw): the root's rotation without the yaw,
 // its height above the ground and its ground offset from the avatar origin (x, z). The
@@ -271,7 +290,12 @@ bool ActionPlayback::next(Pose& pose) {
     }
     if (footLock_) {
       // Each lock turns one leg only: redo the kinematics of that leg, not of the body.
-      const std::array<bool, 2> locked = {lockFoot(0, down[0], pose), lockFoot(1, down[1], pose)};
+      const auto& pivots = db_.clips[c].annotation.footPivot;
+      auto pivot = [&](int side) {  // 0.5 (flat) for an annotation made without it
+        const auto& p = pivots[static_cast<std::size_t>(side)];
+        return k < p.size() ? double(p[k]) : 0.5;
+      };
+      const std::array<bool, 2> locked = {lockFoot(0, down[0], pivot(0), pose), lockFoot(1, down[1], pivot(1), pose)};
       for (int side = 0; side < 2; ++side)
         if (locked[side])
           forwardKinematicsOf(skeleton, leg_[static_cast<std::size_t>(side)], pose.rotations, pose.translations,
@@ -295,24 +319,42 @@ bool ActionPlayback::next(Pose& pose) {
   return true;
 }
 
-// Holds foot `side` (issue 18). A foot that comes down is anchored where its ankle is (on
-// the floor plane: x and z; the height stays the motion's, which rolls heel to toe); while
-// down, hip and knee turn so the ankle reaches the anchor (two-bone IK: the knee's angle by
-// the law of cosines, about the leg's bending axis, then the hip turns the leg onto the
-// anchor); once lifted, the anchor fades into the motion's ankle over kRelease frames. The
-// ankle's world orientation is kept, so the foot stays as flat as it was. Uses and updates
-// fkRotations_ / fkPositions_ of the leg only; returns whether it turned the leg, and then
-// the caller redoes forward kinematics.
-bool ActionPlayback::lockFoot(int side, bool down, Pose& pose) {
+// Holds foot `side` (issues 18 and 46): the whole foot, not the ankle alone. A foot that
+// comes down is held at its heading (its twist about the vertical) and its pitch and roll
+// move only kFootRoll of the way the motion's do; the point it rests on (the motion's
+// Annotation::footPivot, `pivot`: heel, ball or between) stays where it was on the floor
+// and keeps the motion's height, and the ankle goes where that foot puts it. So a heel
+// that rises turns the foot about the ball, as fighters stand: the SNU sparring capture's
+// planted toes move 0.029 m/s, its ankles 0.078 (with the ankle alone held, the toes swept
+// about it at 0.24 m/s as the body turned). Hip and knee turn so the ankle reaches its
+// target (two-bone IK: the knee's angle by the law of cosines, about the leg's bending
+// axis, then the hip turns the leg onto the target), and the leg turns about the hip-ankle
+// line as much as the foot's heading was turned back, as a hip rotates, so the knee keeps
+// pointing over the foot. A body that turns the foot more than kMaxFootTwist away from the
+// motion's heading pivots it. Once lifted, position and rotation fade into the motion's
+// over kRelease frames. A skeleton without a toe joint rests on the ankle. Rotations only,
+// so bone lengths never change. Uses and updates fkRotations_ / fkPositions_ of the leg
+// only; returns whether it turned the leg, and then the caller redoes forward kinematics.
+bool ActionPlayback::lockFoot(int side, bool down, double pivot, Pose& pose) {
   const auto s = static_cast<std::size_t>(side);
-  const int ankleJoint = db_.roles.ankle[s], kneeJoint = knee_[s], hipJoint = hip_[s];
+  const int ankleJoint = db_.roles.ankle[s], kneeJoint = knee_[s], hipJoint = hip_[s], toeJoint = db_.roles.toe[s];
   if (ankleJoint <= 0 || kneeJoint <= 0 || hipJoint <= 0) return false;
   const auto a = static_cast<std::size_t>(ankleJoint), k = static_cast<std::size_t>(kneeJoint),
              h = static_cast<std::size_t>(hipJoint);
   const Eigen::Vector3d ankle = fkPositions_[a];
+  const Eigen::Quaterniond& footNow = fkRotations_[a];
+  // The ball in the foot's own frame (from the ankle), as the motion has it.
+  const Eigen::Vector3d ball = toeJoint > 0 ? fkPositions_[static_cast<std::size_t>(toeJoint)] : ankle;
+  const Eigen::Vector3d footLocal = footNow.conjugate() * (ball - ankle);
+  const double heading = twistAboutVertical(footNow);
   double weight = 1;
   if (down) {
-    if (!held_[s]) anchor_[s] = ankle;
+    if (!held_[s]) {
+      anchor_[s] = ankle;
+      anchorHeading_[s] = heading;
+      heldRotation_[s] = footNow;
+      heldFoot_[s] = Eigen::Vector2d(ball.x() - ankle.x(), ball.z() - ankle.z());
+    }
     held_[s] = true;
     releasing_[s] = 1 << 30;
   } else {
@@ -322,36 +364,81 @@ bool ActionPlayback::lockFoot(int side, bool down, Pose& pose) {
     ++releasing_[s];
     weight = 0.5 * (1 + std::cos(M_PI * releasing_[s] / (kRelease + 1)));
   }
+  double turn = wrapAngle(anchorHeading_[s] - heading);  // what keeps the foot's heading
+  if (held_[s] && std::abs(turn) > kMaxFootTwist) {      // the body turned the foot: it pivots
+    const double excess = turn - std::copysign(kMaxFootTwist, turn);
+    anchorHeading_[s] = wrapAngle(anchorHeading_[s] - excess);
+    heldRotation_[s] = Eigen::Quaterniond(Eigen::AngleAxisd(-excess, Eigen::Vector3d::UnitY())) * heldRotation_[s];
+    turn -= excess;
+  }
+  // The held foot: the motion's at the held heading, its pitch and roll moved only
+  // kFootRoll of the way from the landing's.
+  const Eigen::Quaterniond turned = Eigen::Quaterniond(Eigen::AngleAxisd(turn, Eigen::Vector3d::UnitY())) * footNow;
+  const Eigen::Quaterniond heldFoot = heldRotation_[s].slerp(kFootRoll, turned);
+  const Eigen::Vector3d heldBall = heldFoot * footLocal;  // from the ankle
+  // The resting point keeps the motion's height and stays where the last frame's held
+  // foot had it on the floor.
+  double ankleY = ankle.y() + pivot * ((ball.y() - ankle.y()) - heldBall.y());
+  if (held_[s]) {
+    const Eigen::Vector2d now(heldBall.x(), heldBall.z());
+    const Eigen::Vector2d shift = pivot * (heldFoot_[s] - now);
+    anchor_[s].x() += shift.x();
+    anchor_[s].z() += shift.y();
+    heldFoot_[s] = now;
+    lastAnkleY_[s] = ankleY - ankle.y();
+  } else {
+    ankleY = ankle.y() + lastAnkleY_[s];
+  }
+  const Eigen::Quaterniond footGlobal = footNow.slerp(weight, heldFoot);
+  turn *= weight;
+  const Eigen::Vector3d target = ankle + weight * (Eigen::Vector3d(anchor_[s].x(), ankleY, anchor_[s].z()) - ankle);
   const Eigen::Vector3d hip = fkPositions_[h], knee = fkPositions_[k];
   const double upper = (knee - hip).norm(), lower = (ankle - knee).norm();
-  Eigen::Vector3d target(anchor_[s].x(), ankle.y(), anchor_[s].z());
-  target = ankle + weight * (target - ankle);
-  if ((target - ankle).squaredNorm() < 1e-10 || upper < 1e-6 || lower < 1e-6) return false;
+  if (upper < 1e-6 || lower < 1e-6) return false;
   if ((target - hip).norm() > 0.995 * (upper + lower)) {  // out of reach: plant it again here
-    if (held_[s]) anchor_[s] = ankle;
+    if (held_[s]) {
+      anchor_[s] = ankle;
+      anchorHeading_[s] = heading;
+      heldRotation_[s] = footNow;
+      heldFoot_[s] = Eigen::Vector2d(ball.x() - ankle.x(), ball.z() - ankle.z());
+    }
     return false;
   }
-  const double reach = std::clamp((target - hip).norm(), std::abs(upper - lower) + 1e-6, upper + lower - 1e-6);
-  // The knee: from its current angle to the one that puts the ankle `reach` from the hip.
-  const Eigen::Vector3d toHip = (hip - knee) / upper, toAnkle = (ankle - knee) / lower;
-  Eigen::Vector3d axis = toHip.cross(toAnkle);
-  if (axis.norm() < 1e-6) axis = fkRotations_[k] * Eigen::Vector3d::UnitX();  // a straight leg bends about the knee's x
-  axis.normalize();
-  const double now = std::acos(std::clamp(toHip.dot(toAnkle), -1.0, 1.0));
-  const double wanted = std::acos(std::clamp((upper * upper + lower * lower - reach * reach) / (2 * upper * lower), -1.0, 1.0));
-  const Eigen::Quaterniond bend(Eigen::AngleAxisd(wanted - now, axis));
-  const Eigen::Vector3d bentAnkle = knee + bend * (ankle - knee);
-  // The hip: turn the leg so the ankle lies on the target.
-  const Eigen::Quaterniond swing = Eigen::Quaterniond::FromTwoVectors(bentAnkle - hip, target - hip);
+  const bool moves = (target - ankle).squaredNorm() >= 1e-10;
+  if (!moves && footGlobal.angularDistance(footNow) < 1e-9) return false;
+  Eigen::Quaterniond hipGlobal = fkRotations_[h], kneeGlobal = fkRotations_[k];
+  if (moves) {
+    const double reach = std::clamp((target - hip).norm(), std::abs(upper - lower) + 1e-6, upper + lower - 1e-6);
+    // The knee: from its current angle to the one that puts the ankle `reach` from the hip.
+    const Eigen::Vector3d toHip = (hip - knee) / upper, toAnkle = (ankle - knee) / lower;
+    Eigen::Vector3d axis = toHip.cross(toAnkle);
+    if (axis.norm() < 1e-6)
+      axis = fkRotations_[k] * Eigen::Vector3d::UnitX();  // a straight leg bends about the knee's x
+    axis.normalize();
+    const double now = std::acos(std::clamp(toHip.dot(toAnkle), -1.0, 1.0));
+    const double wanted =
+        std::acos(std::clamp((upper * upper + lower * lower - reach * reach) / (2 * upper * lower), -1.0, 1.0));
+    const Eigen::Quaterniond bend(Eigen::AngleAxisd(wanted - now, axis));
+    const Eigen::Vector3d bentAnkle = knee + bend * (ankle - knee);
+    // The hip: turn the leg so the ankle lies on the target.
+    const Eigen::Quaterniond swing = Eigen::Quaterniond::FromTwoVectors(bentAnkle - hip, target - hip);
+    hipGlobal = swing * hipGlobal;
+    kneeGlobal = swing * bend * kneeGlobal;
+  }
+  // The leg turns with the foot's heading about the hip-ankle line (the ankle stays on the
+  // target), so the knee keeps pointing over the foot.
+  if (turn != 0) {
+    const Eigen::Quaterniond roll(Eigen::AngleAxisd(turn, (target - hip).normalized()));
+    hipGlobal = roll * hipGlobal;
+    kneeGlobal = roll * kneeGlobal;
+  }
   const Skeleton& skeleton = *db_.skeleton;
   const int hipParent = skeleton.joint(h).parent;
   const Eigen::Quaterniond parentGlobal =
       hipParent >= 0 ? fkRotations_[static_cast<std::size_t>(hipParent)] : Eigen::Quaterniond::Identity();
-  const Eigen::Quaterniond hipGlobal = swing * fkRotations_[h];
-  const Eigen::Quaterniond kneeGlobal = swing * bend * fkRotations_[k];
   pose.rotations[h] = (parentGlobal.conjugate() * hipGlobal).normalized();
   pose.rotations[k] = (hipGlobal.conjugate() * kneeGlobal).normalized();
-  pose.rotations[a] = (kneeGlobal.conjugate() * fkRotations_[a]).normalized();  // the foot as it was
+  pose.rotations[a] = (kneeGlobal.conjugate() * footGlobal).normalized();
   return true;
 }
 

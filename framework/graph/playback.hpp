@@ -83,10 +83,13 @@ class ActionPlayback {
   std::span<Eigen::Quaterniond> globalRotations() { return fkRotations_; }
 
   std::uint32_t state() const { return state_; }
-  /// Planted feet (issue 18): while the annotation has a foot on the ground, its ankle is
-  /// held where it landed (its height follows the motion) by two-bone inverse kinematics
-  /// of hip, knee and ankle, and let go over a few frames when it lifts. Rotations only,
-  /// so bone lengths never change; the foot keeps its animated orientation. Off by default.
+  /// Planted feet (issues 18 and 46): while the annotation has a foot on the ground, the
+  /// whole foot is held: the point it rests on (Annotation::footPivot: heel, ball or
+  /// between) stays where it landed on the floor (its height follows the motion), the
+  /// foot keeps its heading (up to a pivot when the body turns far) and half of the
+  /// motion's roll from heel to toe, by two-bone inverse kinematics of hip, knee and ankle;
+  /// it is let go over a few frames when it lifts. Rotations only, so bone lengths never
+  /// change. Off by default.
   void setFootLock(bool on) { footLock_ = on; }
   /// Poses frames outside a blend from `poses` (made by makeSourcePoses() from this
   /// playback's database; it must outlive the playback), which gives the same poses as
@@ -140,10 +143,15 @@ class ActionPlayback {
   std::array<bool, 2> previousDown_{false, false};
   bool havePrevious_ = false;
   // Foot locking by IK: per foot, whether it is held, where, and the release's progress.
-  bool lockFoot(int side, bool down, Pose& pose);
+  bool lockFoot(int side, bool down, double pivot, Pose& pose);
   bool footLock_ = false;
   std::array<bool, 2> held_{false, false};
   std::array<Eigen::Vector3d, 2> anchor_;
+  std::array<double, 2> anchorHeading_{0.0, 0.0};  ///< the held foot's twist about the vertical (rad)
+  /// The held foot's ankle-to-ball vector on the floor plane (x, z) at the last frame.
+  std::array<Eigen::Vector2d, 2> heldFoot_{Eigen::Vector2d::Zero(), Eigen::Vector2d::Zero()};
+  std::array<Eigen::Quaterniond, 2> heldRotation_{Eigen::Quaterniond::Identity(), Eigen::Quaterniond::Identity()};
+  std::array<double, 2> lastAnkleY_{0.0, 0.0};
   std::array<int, 2> releasing_{1 << 30, 1 << 30};
   std::array<int, 2> knee_{-1, -1}, hip_{-1, -1};
   /// Per leg, the hip and every joint below it: what a foot lock changes.

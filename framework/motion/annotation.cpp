@@ -225,6 +225,16 @@ Annotation annotate(const Motion& motion, const SkeletonRoles& roles, const Anno
              near(toe, params.contactHeightEnter_m, params.contactSpeedEnter_mps);
       contact[f] = on ? 1 : 0;
     }
+    // Where the foot rests: on its heel or its ball, by which of ankle and toe stands
+    // higher above its own planted level (issue 46: playback holds that point still).
+    auto& pivot = result.footPivot[s];
+    pivot.resize(frames);
+    const std::size_t ankle = static_cast<std::size_t>(s), toe = 2 + static_cast<std::size_t>(s);
+    for (std::size_t f = 0; f < frames; ++f) {
+      const double heelRise = points[f * kPoints + ankle].y() - planted[ankle][f];
+      const double ballRise = points[f * kPoints + toe].y() - planted[toe][f];
+      pivot[f] = static_cast<float>(std::clamp(0.5 + 0.5 * (heelRise - ballRise) / kPivotRise_m, 0.0, 1.0));
+    }
   }
 
   // Standing height from the motion: the head top above the lower foot while both feet

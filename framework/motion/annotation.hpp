@@ -95,10 +95,19 @@ struct EffectiveHit {
   double alongForearm_mps = 0;                          ///< its component along the forearm axis
 };
 
+/// A heel this much higher above its planted level than the ball (m) stands on the ball
+/// alone, and the other way round (Annotation::footPivot).
+inline constexpr double kPivotRise_m = 0.03;
+
 struct Annotation {
   double groundY = 0;  ///< estimated floor height (m)
   /// contact[side][frame] is 1 while that foot is on the ground.
   std::array<std::vector<std::uint8_t>, 2> contact;
+  /// footPivot[side][frame]: where on the foot it rests, 0 on the heel (the ankle), 1 on
+  /// the ball (the toe joint), 0.5 flat: 0.5 plus half of how much higher the ankle stands
+  /// above its planted level than the toe above its own, in kPivotRise_m, held in [0, 1].
+  /// Every frame, down or not; playback's foot lock holds that point (issue 46).
+  std::array<std::vector<float>, 2> footPivot;
   /// Effective hitting points in frame order.
   std::vector<EffectiveHit> hits;
   /// Punches per hand: runs of consecutive effective frames.
