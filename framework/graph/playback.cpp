@@ -27,20 +27,41 @@ constexpr int kRelease = 4;
 // the point it rests on (radians): within the hip's range of inward and outward rotation (about 40 degrees
 // each way in adults), with room for the motion's own.
 constexpr double kMaxFootTwist = 25 * M_PI / 180;
+const double kMaxHalfTwistSin = std::sin(0.5 * kMaxFootTwist);
 
-// How much of the motion's change of a held foot's pitch and roll since it landed playback
-// keeps (the rest is the landing's). The CMU boxer's feet roll and twist on the floor far
-// more than fighters' do: with all of it, its planted ankles moved 0.13 to 0.16 m/s about
-// the held ball against the SNU sparring capture's 0.078; with half, 0.07 to 0.09, the toes
-// 0.02 to 0.03 (the SNU's: 0.029). Issue 46, measured with mgrl stats on 120 s bouts.
-constexpr double kFootRoll = 0.5;
+// A held foot keeps half of the motion's change of pitch and roll since it landed (the rest
+// is the landing's): the rotation halfway between the two. The CMU boxer's feet roll and
+// twist on the floor far more than fighters' do: with all of it, its planted ankles moved
+// 0.13 to 0.16 m/s about the held ball against the SNU sparring capture's 0.078; with half,
+// 0.07 to 0.09, the toes 0.02 to 0.03 (the SNU's: 0.029); with 0.3, 0.05 to 0.07 and 0.01
+// to 0.02. Issue 46, measured with mgrl stats on 120 s bouts. Halfway is slerp at 1/2,
+// which is the normalized sum of the two (no acos or sine in the posing loop).
+Eigen::Quaterniond halfway(const Eigen::Quaterniond& a, const Eigen::Quaterniond& b) {
+  const double sign = a.coeffs().dot(b.coeffs()) < 0 ? -1.0 : 1.0;
+  return Eigen::Quaterniond((a.coeffs() + sign * b.coeffs()).normalized());
+}
 
-// The foot's heading: the angle of its global rotation's twist about the vertical (the
-// swing-twist split), defined whatever the foot's pitch and roll (a toe pointing down has
-// no horizontal direction, but its rotation still has a twist).
-double twistAboutVertical(const Eigen::Quaterniond& q) { return 2 * std::atan2(q.y(), q.w()); }
+// The foot's heading as its global rotation's twist about the vertical (the swing-twist
+// split): the unit (w, y) of a rotation about y, defined whatever the foot's pitch and roll
+// (a toe pointing down has no horizontal direction, but its rotation still has a twist).
+// Kept as half-angle cosine and sine, so holding a heading needs no atan2, sine or cosine.
+Eigen::Vector2d twistAboutVertical(const Eigen::Quaterniond& q) {
+  const Eigen::Vector2d t(q.w(), q.y());
+  const double n = t.norm();
+  return n > 1e-12 ? Eigen::Vector2d(t / n) : Eigen::Vector2d(1, 0);
+}
 
-double wrapAngle(double a) { return std::remainder(a, 2 * M_PI); }
+// The rotation about y from twist `from` to twist `to`, its w made non-negative (the
+// shorter way round: an angle in [-pi, pi]).
+Eigen::Vector2d twistBetween(const Eigen::Vector2d& from, const Eigen::Vector2d& to) {
+  const Eigen::Vector2d r(to.x() * from.x() + to.y() * from.y(), to.y() * from.x() - to.x() * from.y());
+  return r.x() < 0 ? Eigen::Vector2d(-r) : r;
+}
+
+// Twist `b` after twist `a` (both rotations about y).
+Eigen::Vector2d twistAfter(const Eigen::Vector2d& b, const Eigen::Vector2d& a) {
+  return {b.x() * a.x() - b.y() * a.y(), b.y() * a.x() + b.x() * a.y()};
+}
 
 // Frame k of `clip` with the avatar factored out of its root (paper sec. 3: the avatar
 // frame is the root's ground projection and yaw): the root's rotation without the yaw,
@@ -321,7 +342,7 @@ bool ActionPlayback::next(Pose& pose) {
 
 // Holds foot `side` (issues 18 and 46): the whole foot, not the ankle alone. A foot that
 // comes down is held at its heading (its twist about the vertical) and its pitch and roll
-// move only kFootRoll of the way the motion's do; the point it rests on (the motion's
+// move only half of the way the motion's do (halfway()); the point it rests on (the motion's
 // Annotation::footPivot, `pivot`: heel, ball or between) stays where it was on the floor
 // and keeps the motion's height, and the ankle goes where that foot puts it. So a heel
 // that rises turns the foot about the ball, as fighters stand: the SNU sparring capture's
@@ -346,7 +367,7 @@ bool ActionPlayback::lockFoot(int side, bool down, double pivot, Pose& pose) {
   // The ball in the foot's own frame (from the ankle), as the motion has it.
   const Eigen::Vector3d ball = toeJoint > 0 ? fkPositions_[static_cast<std::size_t>(toeJoint)] : ankle;
   const Eigen::Vector3d footLocal = footNow.conjugate() * (ball - ankle);
-  const double heading = twistAboutVertical(footNow);
+  const Eigen::Vector2d heading = twistAboutVertical(footNow);
   double weight = 1;
   if (down) {
     if (!held_[s]) {
@@ -364,17 +385,21 @@ bool ActionPlayback::lockFoot(int side, bool down, double pivot, Pose& pose) {
     ++releasing_[s];
     weight = 0.5 * (1 + std::cos(M_PI * releasing_[s] / (kRelease + 1)));
   }
-  double turn = wrapAngle(anchorHeading_[s] - heading);  // what keeps the foot's heading
-  if (held_[s] && std::abs(turn) > kMaxFootTwist) {      // the body turned the foot: it pivots
-    const double excess = turn - std::copysign(kMaxFootTwist, turn);
-    anchorHeading_[s] = wrapAngle(anchorHeading_[s] - excess);
-    heldRotation_[s] = Eigen::Quaterniond(Eigen::AngleAxisd(-excess, Eigen::Vector3d::UnitY())) * heldRotation_[s];
-    turn -= excess;
+  // What turns the foot back to its held heading, as (cos, sin) of half its angle.
+  Eigen::Vector2d turn = twistBetween(heading, anchorHeading_[s]);
+  if (held_[s] && std::abs(turn.y()) > kMaxHalfTwistSin) {  // the body turned the foot: it pivots
+    const Eigen::Vector2d limit(std::sqrt(1 - kMaxHalfTwistSin * kMaxHalfTwistSin),
+                                std::copysign(kMaxHalfTwistSin, turn.y()));
+    const Eigen::Vector2d excess = twistBetween(turn, limit);  // turns the held foot onto the limit
+    anchorHeading_[s] = twistAfter(excess, anchorHeading_[s]);
+    heldRotation_[s] = Eigen::Quaterniond(excess.x(), 0, excess.y(), 0) * heldRotation_[s];
+    turn = limit;
   }
-  // The held foot: the motion's at the held heading, its pitch and roll moved only
-  // kFootRoll of the way from the landing's.
-  const Eigen::Quaterniond turned = Eigen::Quaterniond(Eigen::AngleAxisd(turn, Eigen::Vector3d::UnitY())) * footNow;
-  const Eigen::Quaterniond heldFoot = heldRotation_[s].slerp(kFootRoll, turned);
+  // The held foot: the motion's at the held heading, its pitch and roll moved half of the
+  // way from the landing's.
+  const double halfCos = turn.x(), halfSin = turn.y();
+  const Eigen::Quaterniond turned = Eigen::Quaterniond(halfCos, 0, halfSin, 0) * footNow;
+  const Eigen::Quaterniond heldFoot = halfway(heldRotation_[s], turned);
   const Eigen::Vector3d heldBall = heldFoot * footLocal;  // from the ankle
   // The resting point keeps the motion's height and stays where the last frame's held
   // foot had it on the floor.
@@ -389,8 +414,7 @@ bool ActionPlayback::lockFoot(int side, bool down, double pivot, Pose& pose) {
   } else {
     ankleY = ankle.y() + lastAnkleY_[s];
   }
-  const Eigen::Quaterniond footGlobal = footNow.slerp(weight, heldFoot);
-  turn *= weight;
+  const Eigen::Quaterniond footGlobal = weight == 1 ? heldFoot : footNow.slerp(weight, heldFoot);
   const Eigen::Vector3d target = ankle + weight * (Eigen::Vector3d(anchor_[s].x(), ankleY, anchor_[s].z()) - ankle);
   const Eigen::Vector3d hip = fkPositions_[h], knee = fkPositions_[k];
   const double upper = (knee - hip).norm(), lower = (ankle - knee).norm();
@@ -405,7 +429,7 @@ bool ActionPlayback::lockFoot(int side, bool down, double pivot, Pose& pose) {
     return false;
   }
   const bool moves = (target - ankle).squaredNorm() >= 1e-10;
-  if (!moves && footGlobal.angularDistance(footNow) < 1e-9) return false;
+  if (!held_[s] && !moves && footGlobal.angularDistance(footNow) < 1e-9) return false;
   Eigen::Quaterniond hipGlobal = fkRotations_[h], kneeGlobal = fkRotations_[k];
   if (moves) {
     const double reach = std::clamp((target - hip).norm(), std::abs(upper - lower) + 1e-6, upper + lower - 1e-6);
@@ -427,8 +451,11 @@ bool ActionPlayback::lockFoot(int side, bool down, double pivot, Pose& pose) {
   }
   // The leg turns with the foot's heading about the hip-ankle line (the ankle stays on the
   // target), so the knee keeps pointing over the foot.
-  if (turn != 0) {
-    const Eigen::Quaterniond roll(Eigen::AngleAxisd(turn, (target - hip).normalized()));
+  if (halfSin != 0) {
+    const Eigen::Vector3d line = (target - hip).normalized();
+    const Eigen::Quaterniond roll =
+        weight == 1 ? Eigen::Quaterniond(halfCos, halfSin * line.x(), halfSin * line.y(), halfSin * line.z())
+                    : Eigen::Quaterniond(Eigen::AngleAxisd(weight * 2 * std::atan2(halfSin, halfCos), line));
     hipGlobal = roll * hipGlobal;
     kneeGlobal = roll * kneeGlobal;
   }

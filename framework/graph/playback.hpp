@@ -147,7 +147,8 @@ class ActionPlayback {
   bool footLock_ = false;
   std::array<bool, 2> held_{false, false};
   std::array<Eigen::Vector3d, 2> anchor_;
-  std::array<double, 2> anchorHeading_{0.0, 0.0};  ///< the held foot's twist about the vertical (rad)
+  /// The held foot's twist about the vertical: cosine and sine of half its angle.
+  std::array<Eigen::Vector2d, 2> anchorHeading_{Eigen::Vector2d(1, 0), Eigen::Vector2d(1, 0)};
   /// The held foot's ankle-to-ball vector on the floor plane (x, z) at the last frame.
   std::array<Eigen::Vector2d, 2> heldFoot_{Eigen::Vector2d::Zero(), Eigen::Vector2d::Zero()};
   std::array<Eigen::Quaterniond, 2> heldRotation_{Eigen::Quaterniond::Identity(), Eigen::Quaterniond::Identity()};
