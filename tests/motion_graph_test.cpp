@@ -449,14 +449,24 @@ void walkInLockstep(const StateActionModel& model, ActionPlayback& one, ActionPl
   }
 }
 
+// Two playbacks of the boxing graph at state 0, the second with the foot lock on, for
+// walkInLockstep.
+struct FreeAndLocked {
+  ActionPlayback unlocked, locked;
+  explicit FreeAndLocked(const Boxing& b)
+      : unlocked(b.db, b.model, b.scenario.graph.blendFrames, false),
+        locked(b.db, b.model, b.scenario.graph.blendFrames, false) {
+    locked.setFootLock(true);
+    unlocked.reset(0);
+    locked.reset(0);
+  }
+};
+
 TEST_CASE("a locked foot follows the motion again once its contact ends", "[graph][data]") {
   const Boxing& b = boxing();
-  ActionPlayback unlocked(b.db, b.model, b.scenario.graph.blendFrames, false),
-      locked(b.db, b.model, b.scenario.graph.blendFrames, false);
-  locked.setFootLock(true);
-  unlocked.reset(0);
-  locked.reset(0);
-  // "Let go over a few frames when it lifts" (playback.hpp); playback.cpp takes 4, so from
+  FreeAndLocked walks(b);
+  ActionPlayback &unlocked = walks.unlocked, &locked = walks.locked;
+  // "Let go over a few frames when it lifts" (playback.hpp); foot_lock.cpp takes 4, so from
   // the 8th lifted frame on the lock must have no effect left.
   constexpr int kReleased = 8;
   Pose unlockedPose, lockedPose;
@@ -494,17 +504,14 @@ TEST_CASE("a locked foot follows the motion again once its contact ends", "[grap
 }
 
 // A held foot keeps its heading while the body turns above it, but not without limit: a
-// foot turned more than 25 degrees (playback.cpp's kMaxFootTwist) away from the motion's
+// foot turned more than 25 degrees (foot_lock.cpp's kMaxFootTwist) away from the motion's
 // heading pivots, as a hip can rotate only so far. Without the limit the legs would twist
 // through each other in a long turn; without the heading kept, the toes would sweep about
 // the ankle (the test above).
 TEST_CASE("a held foot turns at most 25 degrees away from the motion's heading", "[graph][data]") {
   const Boxing& b = boxing();
-  ActionPlayback unlocked(b.db, b.model, b.scenario.graph.blendFrames, false),
-      locked(b.db, b.model, b.scenario.graph.blendFrames, false);
-  locked.setFootLock(true);
-  unlocked.reset(0);
-  locked.reset(0);
+  FreeAndLocked walks(b);
+  ActionPlayback &unlocked = walks.unlocked, &locked = walks.locked;
   auto heading = [](const Eigen::Quaterniond& q) { return 2 * std::atan2(q.y(), q.w()); };
   Pose unlockedPose, lockedPose;
   double widest = 0;

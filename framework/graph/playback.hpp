@@ -150,7 +150,7 @@ class ActionPlayback {
   /// The held foot's twist about the vertical: cosine and sine of half its angle.
   std::array<Eigen::Vector2d, 2> anchorHeading_{Eigen::Vector2d(1, 0), Eigen::Vector2d(1, 0)};
   /// The held foot's ankle-to-ball vector on the floor plane (x, z) at the last frame.
-  std::array<Eigen::Vector2d, 2> heldFoot_{Eigen::Vector2d::Zero(), Eigen::Vector2d::Zero()};
+  std::array<Eigen::Vector2d, 2> lastHeldBall_{Eigen::Vector2d::Zero(), Eigen::Vector2d::Zero()};
   std::array<Eigen::Quaterniond, 2> heldRotation_{Eigen::Quaterniond::Identity(), Eigen::Quaterniond::Identity()};
   std::array<double, 2> lastAnkleY_{0.0, 0.0};
   std::array<int, 2> releasing_{1 << 30, 1 << 30};
