@@ -1,9 +1,11 @@
 #!/usr/bin/env bash
 # The main job: set up, build the `mgrl` program, inspect the CMU shadow-boxing capture,
 # build the boxing scenario's motion graph (cached after the first run), train its
-# approach and hit behaviours with the paper's Q-learning, evaluate the combined policy,
-# then run a two-boxer bout (BVH files and hits in build/demo/) and the paper's 30-boxer
-# crowd.
+# approach and hit behaviours with the paper's Q-learning, evaluate the combined policy
+# against a random controller, then train boxing_spar.yaml's sparring behaviour (value
+# iteration, seconds) and run a two-boxer bout at a fighting distance (BVH files and hits
+# in build/demo/), measure it against the SNU sparring capture (mgrl stats), and run the
+# paper's 30-boxer crowd with the paper's behaviours.
 #
 # Usage: scripts/demo.sh [--quick] [--serve] [extra `mgrl graph` arguments]
 #   --quick   small training budgets and short runs (about 1 minute after the build): the
@@ -63,7 +65,7 @@ crowd=33.3
 if ((quick)); then
   train_sets=(--set behaviors.approach.learner.budget=200000 --set behaviors.hit.learner.budget=400000)
   trials=20
-  bout=5
+  bout=10
   crowd=3
 fi
 
@@ -76,9 +78,21 @@ step "train: approach and hit (Q-learning, paper sec. 4)"
 "$mgrl" train "$root/scenarios/boxing.yaml" --data "$data" "${train_sets[@]}"
 step "eval: the combined policy against a random controller"
 "$mgrl" eval "$root/scenarios/boxing.yaml" --data "$data" --trials "$trials" "${train_sets[@]}"
-step "simulate: a two-boxer bout of $bout s (BVH and hits in $out)"
-"$mgrl" simulate "$root/scenarios/boxing.yaml" --data "$data" --avatars 2 --seconds "$bout" \
-  --bvh-out "$out" --events-out "$out/hits.jsonl" "${train_sets[@]}"
+# The bout: the paper's behaviours, made for a target, close in until the boxers stand
+# chest to chest (pelvises about 0.66 m apart); boxing_spar.yaml's one behaviour keeps a
+# fighting distance (about 1.1 m) and punches from it, on the same graph (issue 46).
+step "train: boxing_spar's sparring behaviour (value iteration, paper sec. 4.2)"
+"$mgrl" train "$root/scenarios/boxing_spar.yaml" --data "$data"
+step "simulate: a two-boxer bout of $bout s at a fighting distance (BVH and hits in $out)"
+"$mgrl" simulate "$root/scenarios/boxing_spar.yaml" --data "$data" --avatars 2 --seconds "$bout" \
+  --bvh-out "$out" --events-out "$out/hits.jsonl"
+if [ -d "$data/snu_martial_arts/motion" ]; then
+  step "stats: the bout against the SNU sparring capture (real fighters, issue 46)"
+  "$mgrl" stats --data "$data" --compare --snu -- "$out"
+else
+  step "stats: the bout (no SNU capture in $data to compare it with)"
+  "$mgrl" stats --data "$data" "$out"
+fi
 step "simulate: the paper's crowd of 30 sparring boxers"
 "$mgrl" simulate "$root/scenarios/boxing.yaml" --data "$data" --avatars 30 --seconds "$crowd" "${train_sets[@]}"
 step "done: BVH files and hits in $out"
