@@ -15,7 +15,18 @@ namespace mgrl::app {
 namespace {
 
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
-enum BodyPoint { kPelvis = 0, kChest = 1, kNeck = 2, kHead = 3, kHeadTop = 4, kBodyPoints = 5 };
+enum BodyPoint {
+  kPelvis = 0,
+  kChest = 1,
+  kNeck = 2,
+  kHead = 3,
+  kHeadTop = 4,
+  kLeftElbow = 5,
+  kLeftFist = 6,
+  kRightElbow = 7,
+  kRightFist = 8,
+  kBodyPoints = 9
+};
 
 struct Capsule {
   int from, to;
@@ -80,6 +91,13 @@ double capsuleGap(const Fighter& target, std::size_t f, const Eigen::Vector3d& t
   return gap;
 }
 
+// Distance from `tip` to the nearer of `target`'s forearms (elbow to fist tip) at frame `f`.
+double guardGap(const Fighter& target, std::size_t f, const Eigen::Vector3d& tip) {
+  const Eigen::Vector3d* body = target.body.data() + f * kBodyPoints;
+  return std::min(segmentsDistance(tip, tip, body[kLeftElbow], body[kLeftFist]),
+                  segmentsDistance(tip, tip, body[kRightElbow], body[kRightFist]));
+}
+
 bool capsulesOverlap(const Fighter& a, const Fighter& b, std::size_t f, const StatsParams& params) {
   const Eigen::Vector3d* pa = a.body.data() + f * kBodyPoints;
   const Eigen::Vector3d* pb = b.body.data() + f * kBodyPoints;
@@ -90,30 +108,41 @@ bool capsulesOverlap(const Fighter& a, const Fighter& b, std::size_t f, const St
 }
 
 // Strikes of one kind (punches or kicks) of fighter `i`: runs of consecutive effective
-// frames per limb, as the annotation counts them; a run lands once if any of its tips
-// comes within the land radius of an opponent's capsules.
+// frames per limb, as the annotation counts them. Frame by frame, a run is blocked when its
+// tip first comes within the block radius of an opponent's forearm (elbow to fist tip), and
+// lands when it first comes within the land radius of an opponent's capsules (a frame that
+// does both is a block: the glove stands in front of what it guards); else it missed.
 void countStrikes(const Bout& bout, std::size_t i, const std::vector<EffectiveHit>& hits, const StatsParams& params,
-                  std::size_t& strikes, std::size_t& landed) {
+                  std::size_t& strikes, std::size_t& landed, std::size_t& blocked) {
+  enum class Outcome { Open, Landed, Blocked };
   for (const Side side : {Side::Left, Side::Right}) {
-    bool inRun = false, runLanded = false;
+    bool inRun = false;
+    Outcome outcome = Outcome::Open;
+    auto close = [&] {
+      if (inRun && outcome == Outcome::Landed) ++landed;
+      if (inRun && outcome == Outcome::Blocked) ++blocked;
+    };
     std::uint32_t previous = 0;
     for (const EffectiveHit& hit : hits) {
       if (hit.hand != side) continue;
       if (!inRun || hit.frame != previous + 1) {
-        if (inRun && runLanded) ++landed;
+        close();
         inRun = true;
-        runLanded = false;
+        outcome = Outcome::Open;
         ++strikes;
       }
       previous = hit.frame;
-      if (runLanded) continue;
-      for (std::size_t j = 0; j < bout.fighters.size(); ++j) {
+      if (outcome != Outcome::Open) continue;
+      for (std::size_t j = 0; j < bout.fighters.size() && outcome != Outcome::Blocked; ++j) {
         if (j == i) continue;
         if (bout.pairing == Pairing::Partners && static_cast<int>(j) != opponent(bout, i, hit.frame)) continue;
-        if (capsuleGap(bout.fighters[j], hit.frame, hit.tipWorld, params) <= params.landRadius_m) runLanded = true;
+        if (params.blockRadius_m > 0 && guardGap(bout.fighters[j], hit.frame, hit.tipWorld) <= params.blockRadius_m)
+          outcome = Outcome::Blocked;
+        else if (capsuleGap(bout.fighters[j], hit.frame, hit.tipWorld, params) <= params.landRadius_m)
+          outcome = Outcome::Landed;
       }
     }
-    if (inRun && runLanded) ++landed;
+    close();
   }
 }
 
@@ -126,6 +155,8 @@ void StatsParams::validate() const {
   };
   if (!(landRadius_m >= 0) || !std::isfinite(landRadius_m))
     throw Error(fmt::format("--land-radius: expected a distance >= 0 (m), found {}", landRadius_m));
+  if (!(blockRadius_m >= 0) || !std::isfinite(blockRadius_m))
+    throw Error(fmt::format("--block-radius: expected a distance >= 0 (m), found {}", blockRadius_m));
   positive(closeDistance_m, "--close-distance");
   if (!(reversalMinSpeed_mps >= 0) || !std::isfinite(reversalMinSpeed_mps))
     throw Error(fmt::format("--reversal-min-speed: expected a speed >= 0 (m/s), found {}", reversalMinSpeed_mps));
@@ -170,6 +201,12 @@ Fighter makeFighter(const Motion& motion, std::string source, const StatsParams&
     body[kNeck] = positions[static_cast<std::size_t>(neck)];
     body[kHead] = positions[head];
     body[kHeadTop] = pointOnJoint(rotations, positions, head, fighter.roles.headTopOffset);
+    for (int side = 0; side < 2; ++side) {
+      body[side == 0 ? kLeftElbow : kRightElbow] = positions[static_cast<std::size_t>(fighter.roles.forearm[side])];
+      body[side == 0 ? kLeftFist : kRightFist] =
+          pointOnJoint(rotations, positions, static_cast<std::size_t>(fighter.roles.fistTipJoint[side]),
+                       fighter.roles.fistTipOffset[side]);
+    }
     const double yaw = fighter.annotation.frames[f].yaw;  // atan2(x, z) of the facing axis
     fighter.facing[f] = {std::sin(yaw), std::cos(yaw)};
   }
@@ -248,8 +285,8 @@ BoutStats measureBout(const Bout& bout, const StatsParams& params) {
       if (capsulesOverlap(me, other, f, params)) ++s.overlapFrames;
     }
     // 3: strikes and landed strikes.
-    countStrikes(bout, i, me.annotation.hits, params, s.punches, s.landed);
-    countStrikes(bout, i, me.annotation.kicks, params, s.kicks, s.landed);
+    countStrikes(bout, i, me.annotation.hits, params, s.punches, s.landed, s.blocked);
+    countStrikes(bout, i, me.annotation.kicks, params, s.kicks, s.landed, s.blocked);
     // 4: planted feet.
     for (int side = 0; side < 2; ++side) {
       const auto ankle = static_cast<std::size_t>(me.roles.ankle[side]);
@@ -314,6 +351,7 @@ BoutStats pool(const std::vector<BoutStats>& bouts, const std::string& name) {
     p.punches += b.punches;
     p.kicks += b.kicks;
     p.landed += b.landed;
+    p.blocked += b.blocked;
     p.pairFrames += b.pairFrames;
     p.closeFrames += b.closeFrames;
     p.overlapFrames += b.overlapFrames;

@@ -26,6 +26,10 @@ struct StatsParams {
   /// A strike lands when its fist or toe tip comes within this distance of the surface of
   /// one of the opponent's body capsules (m).
   double landRadius_m = 0.15;
+  /// A strike is blocked when its tip comes within this distance of the axis of one of the
+  /// opponent's forearms (elbow to fist tip) before it lands (m; 0: nothing blocks). The
+  /// runtime world's guard radius plus its fist radius (WorldParams: 0.06 + 0.05).
+  double blockRadius_m = 0.11;
   /// Pelvises closer than this on the ground count as interpenetrating (m).
   double closeDistance_m = 0.35;
   /// Root ground speeds below this are standing still for the reversal count (m/s).
@@ -60,7 +64,8 @@ struct Fighter {
   std::size_t joints = 0;
   /// Every joint's world position, frame-major: positions[f * joints + j].
   std::vector<Eigen::Vector3d> positions;
-  /// Capsule points per frame: pelvis, chest, neck, head, head top (5 per frame).
+  /// Capsule points per frame: pelvis, chest, neck, head, head top, and each forearm's elbow
+  /// and fist tip (9 per frame).
   std::vector<Eigen::Vector3d> body;
   /// The facing direction on the ground (unit, x and z) per frame, from the annotation's
   /// avatar frame (DESIGN.md sec. 3: the root's forward axis projected on the ground).
@@ -107,7 +112,7 @@ struct BoutStats {
   std::vector<double> jointStep_m, jointSpeed_mps;
   /// Per fighter and frame-to-frame step: root ground speed (m/s); reversals among them.
   std::size_t rootSteps = 0, reversals = 0;
-  std::size_t punches = 0, kicks = 0, landed = 0;
+  std::size_t punches = 0, kicks = 0, landed = 0, blocked = 0;
   /// Fighter-frames with an opponent; those with pelvises close; those with capsules overlapping.
   std::size_t pairFrames = 0, closeFrames = 0, overlapFrames = 0;
   /// Seconds of the frame-to-frame steps (sum over fighters), for reversals per second.

@@ -143,7 +143,13 @@ json runSimulate(const SimulateOptions& options) {
 
   std::vector<std::size_t> byAvatar(avatars, 0);
   std::map<std::string, std::size_t> byPart = {{"head", 0}, {"chest", 0}, {"spine", 0}, {"target", 0}};
+  // Landed hits only; blocked strikes are counted apart (and are in the events file).
+  std::vector<std::size_t> blockedBy(avatars, 0);
   for (const HitEvent& e : world.events()) {
+    if (e.blocked) {
+      ++blockedBy[e.attacker];
+      continue;
+    }
     ++byAvatar[e.attacker];
     ++byPart[struckName(e)];
   }
@@ -159,10 +165,11 @@ json runSimulate(const SimulateOptions& options) {
                  {"startup_seconds", startup},
                  {"avatar_frames_per_second", static_cast<double>(frames * avatars) / std::max(wall, 1e-9)},
                  {"poses", poses},
-                 {"hits", world.events().size()},
+                 {"hits", world.landedCount()},
                  {"hits_per_avatar_minute",
-                  static_cast<double>(world.events().size()) / static_cast<double>(avatars) / (simulated / 60)},
+                  static_cast<double>(world.landedCount()) / static_cast<double>(avatars) / (simulated / 60)},
                  {"hits_by_part", byPart},
+                 {"blocked", world.blockedCount()},
                  {"decisions", world.decisions()},
                  {"bytes_per_avatar", world.bytesPerAvatar()},
                  {"bodies",
@@ -171,20 +178,25 @@ json runSimulate(const SimulateOptions& options) {
                    {"pushes", world.bodyStats().pushes}}},
                  {"seed", options.seed},
                  {"world", worldParamsJson(params)}};
-  if (avatars <= 1000) report["hits_by_avatar"] = byAvatar;
+  if (avatars <= 1000) {
+    report["hits_by_avatar"] = byAvatar;
+    report["blocked_by_avatar"] = blockedBy;
+  }
   if (options.controller == "policy") report["policy"] = policyDir.string();
   if (!options.partnerPolicy.empty()) {
     // Two policies spar: the hits each side landed (the first avatar of each pair plays
     // --policy, the second --partner-policy).
     std::size_t first = 0, second = 0;
-    for (const HitEvent& e : world.events()) (e.attacker % 2 == 0 ? first : second) += 1;
+    for (const HitEvent& e : world.events())
+      if (!e.blocked) (e.attacker % 2 == 0 ? first : second) += 1;
     report["partner_policy"] = session->partnerPolicyDir.string();
     if (options.partnerRound > 0) report["partner_round"] = options.partnerRound;
     report["hits_by_side"] = {{"policy", first}, {"partner_policy", second}};
   } else if (params.mode == "sparring" && avatars >= 2 && !session->partnerName().empty()) {
     // An `opponent` scene: the second of each pair is the scripted opponent (issue 45).
     std::size_t first = 0, second = 0;
-    for (const HitEvent& e : world.events()) (e.attacker % 2 == 0 ? first : second) += 1;
+    for (const HitEvent& e : world.events())
+      if (!e.blocked) (e.attacker % 2 == 0 ? first : second) += 1;
     report["partner"] = session->partnerName();
     report["hits_by_side"] = {{"avatars", first}, {"opponents", second}};
   }
@@ -205,14 +217,14 @@ json runSimulate(const SimulateOptions& options) {
 std::string simulateText(const json& r) {
   std::string text = fmt::format(
       "simulate ({} controller, {}): {} x {} ({:.1f} s) in {}: {}avatar-frames/s\n"
-      "hits: {} ({:.1f} per avatar-minute; head {}, chest {}, spine {}, targets {})\n",
+      "hits: {} ({:.1f} per avatar-minute; head {}, chest {}, spine {}, targets {}); blocked {}\n",
       r["controller"].get<std::string>(), r["mode"].get<std::string>(),
       counted(r["avatars"].get<std::size_t>(), "avatar"), counted(r["frames"].get<std::size_t>(), "frame"),
       r["seconds"].get<double>(), humanSeconds(r["wall_seconds"].get<double>()),
       humanCount(r["avatar_frames_per_second"].get<double>()), r["hits"].get<std::size_t>(),
       r["hits_per_avatar_minute"].get<double>(), r["hits_by_part"]["head"].get<std::size_t>(),
       r["hits_by_part"]["chest"].get<std::size_t>(), r["hits_by_part"]["spine"].get<std::size_t>(),
-      r["hits_by_part"]["target"].get<std::size_t>());
+      r["hits_by_part"]["target"].get<std::size_t>(), r["blocked"].get<std::size_t>());
   if (r.contains("partner"))
     text += fmt::format("sides: the avatars landed {}, their scripted opponents ({}) landed {}\n",
                         r["hits_by_side"]["avatars"].get<std::size_t>(), r["partner"].get<std::string>(),

@@ -69,6 +69,7 @@ json groupJson(const std::vector<Bout>& bouts, const StatsParams& params, const 
 
 json paramsJson(const StatsParams& p) {
   return {{"land_radius_m", p.landRadius_m},
+          {"block_radius_m", p.blockRadius_m},
           {"close_distance_m", p.closeDistance_m},
           {"reversal_min_speed_mps", p.reversalMinSpeed_mps},
           {"capsule_radii_m", {{"spine", p.spineRadius_m}, {"chest", p.chestRadius_m}, {"head", p.headRadius_m}}}};
@@ -111,6 +112,8 @@ std::vector<Row> rows() {
       {"  punches / fighter-min", [](const json& g) { return number(g["punches_per_fighter_minute"], "{:.1f}"); }},
       {"  kicks / fighter-min", [](const json& g) { return number(g["kicks_per_fighter_minute"], "{:.1f}"); }},
       {"landed / fighter-min", [](const json& g) { return number(g["landed_per_fighter_minute"], "{:.1f}"); }},
+      {"blocked / fighter-min", [](const json& g) { return number(g["blocked_per_fighter_minute"], "{:.1f}"); }},
+      {"blocked or missed (share)", [](const json& g) { return percent(g["unlanded_share"]); }},
       {"planted foot speed, median (m/s)",
        [](const json& g) { return number(g["planted_foot_speed_mps"]["median"], "{:.3f}"); }, "planted_foot_speed_mps"},
       {"  ankles alone, median (m/s)",
@@ -168,11 +171,13 @@ std::string table(const std::vector<std::pair<std::string, const json*>>& column
 
 std::string notes(const json& report) {
   const json& p = report["params"];
-  return fmt::format("distance and facing per fighter-frame against the opponent (simulate's partners 2k and 2k+1, "
-                     "else the nearest fighter); landed: a fist or toe tip within {} m of an opponent's capsule; "
-                     "pelvises closer than {} m; reversals: steps faster than {} m/s (docs/stats.md)\n",
-                     p["land_radius_m"].get<double>(), p["close_distance_m"].get<double>(),
-                     p["reversal_min_speed_mps"].get<double>());
+  return fmt::format(
+      "distance and facing per fighter-frame against the opponent (simulate's partners 2k and 2k+1, "
+      "else the nearest fighter); landed: a fist or toe tip within {} m of an opponent's capsule, "
+      "unless it came within {} m of a forearm first (blocked); pelvises closer than {} m; "
+      "reversals: steps faster than {} m/s (docs/stats.md)\n",
+      p["land_radius_m"].get<double>(), p["block_radius_m"].get<double>(), p["close_distance_m"].get<double>(),
+      p["reversal_min_speed_mps"].get<double>());
 }
 
 }  // namespace
@@ -273,6 +278,10 @@ json statsJson(const BoutStats& s) {
       {"kicks_per_fighter_minute", rounded(ratio(static_cast<double>(s.kicks), minutes), 3)},
       {"landed_per_fighter_minute", rounded(ratio(static_cast<double>(s.landed), minutes), 3)},
       {"landed_share", rounded(ratio(static_cast<double>(s.landed), static_cast<double>(strikes)), 4)},
+      {"blocked", s.blocked},
+      {"blocked_per_fighter_minute", rounded(ratio(static_cast<double>(s.blocked), minutes), 3)},
+      {"unlanded_share",
+       rounded(ratio(static_cast<double>(strikes - std::min(s.landed, strikes)), static_cast<double>(strikes)), 4)},
       {"planted_foot_speed_mps", distribution(s.plantedFootSpeed_mps, 4)},
       {"planted_ankle_speed_mps", distribution(s.plantedAnkleSpeed_mps, 4)},
       {"planted_toe_speed_mps", distribution(s.plantedToeSpeed_mps, 4)},

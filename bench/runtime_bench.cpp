@@ -92,7 +92,7 @@ int main(int argc, char** argv) {
         const auto start = Clock::now();
         world.run(frames);
         samples.push_back(static_cast<double>(avatars * frames) / since(start));
-        if (hits) *hits = world.events().size();
+        if (hits) *hits = world.landedCount();
       }
       return mgrl::bench::median(samples);
     };

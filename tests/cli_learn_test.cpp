@@ -115,7 +115,7 @@ TEST_CASE("mgrl list names every plugin, as text and as JSON", "[cli]") {
   CHECK_THAT(text.out, Contains("  term: contact  ") && Contains("success (behaviors.NAME.success"));
   CHECK(list["controllers"] == json::array({"policy", "online_search", "random"}));
   REQUIRE(list["world"].is_array());
-  CHECK(list["world"].size() == 25);
+  CHECK(list["world"].size() == 26);
   for (const json& p : list["world"])
     for (const char* key : {"name", "default", "range", "unit", "help"}) CHECK(p.contains(key));
   for (const auto& [seam, names] : seams) {

@@ -134,7 +134,9 @@ void requireAbsent(const fs::path& p) {
 // The keys every event line has, with their types.
 void checkEventShape(const json& e) {
   INFO(e.dump());
-  for (const char* key : {"time", "attacker", "target", "hand", "speed", "part", "point"}) CHECK(e.contains(key));
+  for (const char* key : {"time", "attacker", "target", "hand", "speed", "part", "blocked", "point"})
+    CHECK(e.contains(key));
+  CHECK(e["blocked"].is_boolean());
   CHECK(e["time"].is_number());
   CHECK(e["attacker"].is_number_integer());
   CHECK(e["target"].is_number_integer());
@@ -207,14 +209,17 @@ TEST_CASE("mgrl simulate --events-out writes one JSON line per hit", "[cli][data
   Sandbox box("events");
   box.trainPolicy();
 
-  {  // sparring: every punch lands on the partner
+  {  // sparring: every punch lands on the partner or is blocked by a forearm of his
     const fs::path file = box.path("hits.jsonl");
     const json r = box.simulate("--json --avatars 2 --seconds 60 --seed 2 --events-out " + shellWord(file)).report();
     CHECK(r["events_file"] == file.string());
     const auto hits = r["hits"].get<std::size_t>();
+    const auto blocked = r["blocked"].get<std::size_t>();
     REQUIRE(hits > 0);
+    REQUIRE(blocked > 0);  // the boxers' guards meet punches (issue 46)
     const std::vector<json> events = readEvents(file);
-    REQUIRE(events.size() == hits);
+    REQUIRE(events.size() == hits + blocked);
+    std::vector<long long> blockedBy(2, 0);
 
     const double seconds = r["seconds"].get<double>();
     double previous = 0;
@@ -231,13 +236,19 @@ TEST_CASE("mgrl simulate --events-out writes one JSON line per hit", "[cli][data
       const auto attacker = e["attacker"].get<long long>();
       REQUIRE(attacker >= 0);
       REQUIRE(attacker < 2);
-      ++byAttacker[static_cast<std::size_t>(attacker)];
       CHECK(e["target"].get<long long>() == 1 - attacker);  // the pair's other boxer, never -1 here
       const std::string part = e["part"].get<std::string>();
+      if (e["blocked"].get<bool>()) {
+        CHECK((part == "left_arm" || part == "right_arm"));
+        ++blockedBy[static_cast<std::size_t>(attacker)];
+        continue;
+      }
       CHECK((part == "head" || part == "chest" || part == "spine"));
+      ++byAttacker[static_cast<std::size_t>(attacker)];
       ++byPart[part];
     }
     CHECK(json(byAttacker) == r["hits_by_avatar"]);
+    CHECK(json(blockedBy) == r["blocked_by_avatar"]);
     for (const char* part : {"head", "chest", "spine"}) CHECK(byPart[part] == r["hits_by_part"][part].get<long long>());
   }
   {  // targets mode: every punch lands on the boxer's own target
@@ -249,6 +260,7 @@ TEST_CASE("mgrl simulate --events-out writes one JSON line per hit", "[cli][data
     const auto hits = r["hits"].get<std::size_t>();
     REQUIRE(hits > 0);
     CHECK(r["hits_by_part"]["target"] == hits);
+    CHECK(r["blocked"] == 0);  // a target has no guard
     const std::vector<json> events = readEvents(file);
     REQUIRE(events.size() == hits);
     double previous = 0;

@@ -33,3 +33,5 @@ mgrl_cli_test(stats_option_after_dash ARGS stats --compare stats/stand -- stats/
   MESSAGE "--compare: expected options before '--', found '--json' after it")
 mgrl_cli_test(stats_negative_land_radius ARGS stats stats/stand --land-radius=-1 EXIT 1
   MESSAGE "--land-radius: expected a distance >= 0 (m), found -1")
+mgrl_cli_test(stats_negative_block_radius ARGS stats stats/stand --block-radius=-0.1 EXIT 1
+  MESSAGE "--block-radius: expected a distance >= 0 (m), found -0.1")

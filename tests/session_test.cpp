@@ -227,8 +227,14 @@ TEST_CASE("a hit reads the same in the events file and the viewer's protocol", "
   e.speed = 4.25;
   e.point = Eigen::Vector3d(0.1, 1.3, -0.2);
   const nlohmann::json j = hitEventJson(e);
-  CHECK(j.dump() ==
-        R"({"attacker":3,"hand":"right","limb":"fist","part":"chest","point":[0.1,1.3,-0.2],"speed":4.25,"target":2,"time":1.5})");
+  CHECK(
+      j.dump() ==
+      R"({"attacker":3,"blocked":false,"hand":"right","limb":"fist","part":"chest","point":[0.1,1.3,-0.2],"speed":4.25,"target":2,"time":1.5})");
+  e.blocked = true;  // met the partner's left forearm
+  e.part = BodyPart::LeftArm;
+  CHECK(hitEventJson(e)["part"] == "left_arm");
+  CHECK(hitEventJson(e)["blocked"] == true);
+  e.blocked = false;
   e.target = -1;  // the attacker's own target
   e.kick = true;
   e.hand = 0;

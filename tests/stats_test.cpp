@@ -122,6 +122,29 @@ TEST_CASE("stats: a lunging left fist is one effective punch, landed only when t
   CHECK_THAT(mgrl::app::quantile(near.facing_deg, 1.0), WithinAbs(90.0, 1e-3));
 }
 
+TEST_CASE("stats: a punch that meets the opponent's forearm first is blocked, not landed", "[stats]") {
+  // punch_near with fighter 2's left forearm across the front of its chest (the README).
+  StatsParams carried;
+  carried.annotation.punchMinBodySpeed_mps = 0;
+  const BoutStats guarded = measureFolder("punch_guarded", carried);
+  CHECK(guarded.punches == 1);
+  CHECK(guarded.blocked == 1);
+  CHECK(guarded.landed == 0);
+  // Nothing blocks the same punch without the guard, nor with blocks turned off.
+  const BoutStats open = measureFolder("punch_near", carried);
+  CHECK(open.blocked == 0);
+  CHECK(open.landed == 1);
+  StatsParams noBlocks = carried;
+  noBlocks.blockRadius_m = 0;
+  const BoutStats through = measureFolder("punch_guarded", noBlocks);
+  CHECK(through.blocked == 0);
+  CHECK(through.landed == 1);
+  // The fist passes 7 cm from the forearm's axis: a 5 cm block radius lets it land.
+  StatsParams thin = carried;
+  thin.blockRadius_m = 0.05;
+  CHECK(measureFolder("punch_guarded", thin).landed == 1);
+}
+
 TEST_CASE("stats: bodies 20 cm apart interpenetrate every frame", "[stats]") {
   const BoutStats s = measureFolder("overlap");
   CHECK(s.pairFrames == 60);

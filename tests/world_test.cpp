@@ -95,7 +95,8 @@ bool sameEvents(const std::vector<HitEvent>& a, const std::vector<HitEvent>& b) 
   if (a.size() != b.size()) return false;
   for (std::size_t i = 0; i < a.size(); ++i)
     if (a[i].time != b[i].time || a[i].attacker != b[i].attacker || a[i].target != b[i].target ||
-        a[i].hand != b[i].hand || a[i].part != b[i].part || a[i].speed != b[i].speed || a[i].point != b[i].point)
+        a[i].hand != b[i].hand || a[i].part != b[i].part || a[i].speed != b[i].speed || a[i].point != b[i].point ||
+        a[i].blocked != b[i].blocked)
       return false;
   return true;
 }
@@ -363,9 +364,11 @@ TEST_CASE("a struck boxer's body part gives way within reaction_max and recovers
   const Skeleton& skeleton = *b.db().skeleton;
   const std::size_t joints = skeleton.jointCount();
   for (std::size_t victim = 0; victim < 2; ++victim) {
+    // A boxer reacts when struck, and when a punch of his is blocked (the fist rebounds).
     std::vector<double> hitTimes;
     for (const HitEvent& e : moved->events())
-      if (e.target == static_cast<std::int32_t>(victim)) hitTimes.push_back(e.time);
+      if (e.target == static_cast<std::int32_t>(victim) || (e.blocked && !e.kick && e.attacker == victim))
+        hitTimes.push_back(e.time);
     REQUIRE_FALSE(hitTimes.empty());
     const std::vector<Eigen::Vector3d> a =
         jointPositions(motionFromPoses(b.db().skeleton, still->recorded(victim), dt));
@@ -391,6 +394,50 @@ TEST_CASE("a struck boxer's body part gives way within reaction_max and recovers
     // chain's rotation, in proportion to their distance from it: an arm stretched out moves
     // up to about three times as far (measured: 0.13 to 0.25 m for reaction_max 0.08).
     REQUIRE(peak < 4 * limit);
+  }
+}
+
+TEST_CASE("a punch that meets the partner's forearm is blocked, and lands without guards", "[world][data]") {
+  // Blocks change reactions and events, never where the boxers go or what they throw, so
+  // the same strikes are thrown with and without guards: each one either lands at the
+  // frame it would without guards or is blocked at that frame or earlier.
+  const Boxing& b = boxing();
+  const std::size_t frames = framesFor(b, 60);
+  auto runWith = [&](double guardRadius) {
+    WorldSetup s = b.setup(2);
+    s.params.guardRadius = guardRadius;
+    auto world = std::make_unique<World>(s);
+    world->run(frames);
+    return world;
+  };
+  const auto open = runWith(0);
+  const auto guarded = runWith(b.setup(2).params.guardRadius);
+  CHECK(open->blockedCount() == 0);
+  CHECK(open->landedCount() == open->events().size());
+  REQUIRE(guarded->blockedCount() > 0);
+  CHECK(guarded->landedCount() + guarded->blockedCount() == guarded->events().size());
+  CHECK(guarded->landedCount() < open->landedCount());
+  auto sameStrike = [](const HitEvent& x, const HitEvent& y) {
+    return x.attacker == y.attacker && x.hand == y.hand && x.kick == y.kick && x.target == y.target;
+  };
+  for (const HitEvent& e : guarded->events()) {
+    INFO("t " << e.time << " attacker " << e.attacker << " part " << bodyPartName(e.part));
+    CHECK(e.blocked == (e.part == BodyPart::LeftArm || e.part == BodyPart::RightArm));
+    if (e.blocked) continue;
+    // A landed hit lands exactly as it does without guards: same frame, part and point.
+    const bool same = std::any_of(open->events().begin(), open->events().end(), [&](const HitEvent& o) {
+      return sameStrike(e, o) && o.time == e.time && o.part == e.part && o.point == e.point;
+    });
+    CHECK(same);
+  }
+  // Every landed hit without guards is, with them, landed then or blocked at most a strike's
+  // length (0.5 s) before.
+  for (const HitEvent& o : open->events()) {
+    const bool accounted = std::any_of(guarded->events().begin(), guarded->events().end(), [&](const HitEvent& e) {
+      return sameStrike(e, o) && e.time <= o.time + 1e-9 && e.time > o.time - 0.5;
+    });
+    INFO("t " << o.time << " attacker " << o.attacker);
+    CHECK(accounted);
   }
 }
 

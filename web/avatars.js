@@ -126,6 +126,14 @@ function struckJoints(part, joints) {
   if (part === 'head') return trunk.filter(({name}) => /head|neck/i.test(name)).map(({k}) => k);
   if (part === 'chest') return trunk.filter(({name}) => /chest|spine[1-9]|neck/i.test(name)).map(({k}) => k);
   if (part === 'spine') return trunk.filter(({name}) => /spine|hips|pelvis|root|back/i.test(name)).map(({k}) => k);
+  // A blocking arm: its forearm, hand and fingers (a guard that met a strike).
+  const arm = /^(left|right)_arm$/.exec(part ?? '');
+  if (arm) {
+    const side = new RegExp(`^${arm[1]}|^${arm[1][0]}(?=[A-Z_])`, 'i');
+    return joints.map((j, k) => ({name: j.name, k}))
+        .filter(({name}) => side.test(name) && /forearm|lowerarm|hand|wrist|finger|thumb|fist/i.test(name))
+        .map(({k}) => k);
+  }
   return [];
 }
 
@@ -195,7 +203,8 @@ export class Avatars {
     this.colouredFor = null;
   }
 
-  /** A hit message: the struck avatar's part flashes (a partner's head, chest or spine). */
+  /** A hit message: the struck avatar's part flashes (a partner's head, chest or spine, or
+   * the arm that blocked). */
   strike(hit, now) {
     if (!Number.isInteger(hit?.target) || hit.target < 0) return;
     const joints = struckJoints(hit.part, this.skeleton);

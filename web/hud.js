@@ -33,6 +33,7 @@ export class Hud {
     // to their time, a hit message comes at once; the HUD adds the two so that the count
     // never trails the hit lines it shows.
     this.hitsAhead = 0;
+    this.blockedAhead = 0;  // the same for blocked strikes
   }
 
   setConnection(text) { $('connection').textContent = text; }
@@ -44,6 +45,7 @@ export class Hud {
       this.stats = null;
       this.hitLines = [];
       this.hitsAhead = 0;
+      this.blockedAhead = 0;
     }
     this.showNote();
   }
@@ -51,6 +53,7 @@ export class Hud {
   setStats(stats) {
     this.stats = stats;
     this.hitsAhead = 0;   // it counts every hit sent before it
+    this.blockedAhead = 0;
     this.showNote();
   }
 
@@ -80,12 +83,23 @@ export class Hud {
     return this.hitsAhead > 0 ? this.hitsAhead : null;
   }
 
-  /** A `hit` message: one line "hit 4.1 m/s" with who hit what. */
+  /** Blocked strikes so far in this world, as hitCount() counts hits. */
+  blockedCount() {
+    if (Number.isFinite(this.stats?.blocked)) return this.stats.blocked + this.blockedAhead;
+    return this.blockedAhead > 0 ? this.blockedAhead : null;
+  }
+
+  /** A `hit` message: one line "hit 4.1 m/s" (or "blocked 4.1 m/s": it met a guarding
+   * forearm) with who hit what. */
   addHit(hit) {
     // A hit at a time the last stats had not reached is not in their count yet.
-    if (this.stats === null || !(hit.time <= this.stats.time)) this.hitsAhead += 1;
-    const who = hit.target === -1 ? 'target' : `avatar ${hit.target} ${hit.part ?? ''}`;
-    const line = `hit ${fixed(hit.speed, 1)} m/s — ${hit.hand ?? '?'} ${hit.limb === 'foot' ? 'foot' : 'hand'} of ${hit.attacker} on ${who} (t ${fixed(hit.time, 1)} s)`;
+    if (this.stats === null || !(hit.time <= this.stats.time)) {
+      if (hit.blocked) this.blockedAhead += 1;
+      else this.hitsAhead += 1;
+    }
+    const part = String(hit.part ?? '').replace('_', ' ');
+    const who = hit.target === -1 ? 'target' : `avatar ${hit.target} ${part}`;
+    const line = `${hit.blocked ? 'blocked' : 'hit'} ${fixed(hit.speed, 1)} m/s — ${hit.hand ?? '?'} ${hit.limb === 'foot' ? 'foot' : 'hand'} of ${hit.attacker} ${hit.blocked ? 'by' : 'on'} ${who} (t ${fixed(hit.time, 1)} s)`;
     this.hitLines.unshift({line, at: performance.now()});
     this.hitLines.length = Math.min(this.hitLines.length, kHitLines);
   }
@@ -107,6 +121,7 @@ export class Hud {
       ['frames dropped', s.frames_dropped ?? '–'],
       ['hits', this.hitCount() ?? '–'],
       ['hits per minute', fixed(s.hits_per_minute, 1)],
+      ['blocked', this.blockedCount() ?? '–'],
       ['success', successText(c.behaviors)],
       ['successes', s.successes === undefined ? '–' : `${s.successes} (${fixed(s.successes_per_minute, 1)} /min)`],
       ['bytes per avatar-frame', s.bytes_per_avatar_frame ?? '–'],

@@ -69,6 +69,10 @@ class Stats final : public Command {
     sub_->add_option("--land-radius", p.landRadius_m,
                      "A strike lands within this distance of the opponent's body capsules (m)")
         ->default_val(p.landRadius_m);
+    sub_->add_option("--block-radius", p.blockRadius_m,
+                     "A strike is blocked when it comes within this distance of an opponent's forearm (elbow to fist "
+                     "tip) before it lands (m; 0: nothing blocks)")
+        ->default_val(p.blockRadius_m);
     sub_->add_option("--close-distance", p.closeDistance_m, "Pelvises closer than this count as interpenetrating (m)")
         ->default_val(p.closeDistance_m);
     sub_->add_option("--reversal-min-speed", p.reversalMinSpeed_mps,

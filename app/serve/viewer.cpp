@@ -395,7 +395,7 @@ bool ViewerSession::advance(double frames, double sliceSeconds) {
   std::size_t sent = 0;
   for (; s.eventsSeen < events.size(); ++s.eventsSeen) {
     const HitEvent& e = events[s.eventsSeen];
-    s.hitTimes.push_back(e.time);
+    if (!e.blocked) s.hitTimes.push_back(e.time);
     if (sent++ >= kHitMessagesPerAdvance) continue;
     json hit = hitEventJson(e);
     hit["type"] = "hit";
@@ -441,37 +441,38 @@ std::string ViewerSession::stats(std::size_t framesSent, std::size_t framesDropp
   State& s = *state_;
   const World& world = *s.world;
   const double window = std::min(30.0, std::max(world.time(), 1.0));
-  json j = {{"type", "stats"},
-            {"time", world.time()},
-            {"frame", world.frame()},
-            {"paused", s.paused},
-            {"speed", s.speed},
-            {"hits", world.events().size()},
-            {"hits_per_minute", static_cast<double>(s.hitTimes.size()) / window * 60.0},
-            {"successes", s.successes},
-            {"successes_per_minute", static_cast<double>(s.successTimes.size()) / window * 60.0},
-            {"decisions", world.decisions()},
-            {"decision_us", s.decisions.count ? s.decisions.seconds / static_cast<double>(s.decisions.count) * 1e6 : 0.0},
-            {"server_ms_per_frame", s.busyFrames ? s.busySeconds / static_cast<double>(s.busyFrames) * 1e3 : 0.0},
-            {"frames_sent", framesSent},
-            {"frames_dropped", framesDropped},
-            {"bytes_per_avatar_frame",
-             avatarRecordBytes(assets_->session->graph.db.skeleton->jointCount())},
-            {"share_ms_per_s", round3(share.secondsPerSecond * 1e3)},
-            {"steps_skipped", share.ticksSkipped},
-            {"frames_shed", s.framesShed},
-            {"slowed", share.ticksSkipped == 0 && s.framesShed == 0
-                           ? json(nullptr)
-                           : json(fmt::format("The server shares its time among {} page{}, {:.0f} ms a second each; this "
-                                              "world asks for more ({} avatars, {}{} at speed {}), so {} of its last {} "
-                                              "steps were skipped{} and it runs slower.",
-                                              share.pages, share.pages == 1 ? "" : "s", share.secondsPerSecond * 1e3,
-                                              world.avatarCount(), s.controller,
-                                              s.controller == "online_search" ? fmt::format(" ({} actions ahead)", s.horizon)
-                                                                              : std::string(),
-                                              s.speed, share.ticksSkipped, share.ticks,
-                                              s.framesShed == 0 ? std::string()
-                                                                : fmt::format(", {} frames were cut short", s.framesShed)))}};
+  json j = {
+      {"type", "stats"},
+      {"time", world.time()},
+      {"frame", world.frame()},
+      {"paused", s.paused},
+      {"speed", s.speed},
+      {"hits", world.landedCount()},
+      {"blocked", world.blockedCount()},
+      {"hits_per_minute", static_cast<double>(s.hitTimes.size()) / window * 60.0},
+      {"successes", s.successes},
+      {"successes_per_minute", static_cast<double>(s.successTimes.size()) / window * 60.0},
+      {"decisions", world.decisions()},
+      {"decision_us", s.decisions.count ? s.decisions.seconds / static_cast<double>(s.decisions.count) * 1e6 : 0.0},
+      {"server_ms_per_frame", s.busyFrames ? s.busySeconds / static_cast<double>(s.busyFrames) * 1e3 : 0.0},
+      {"frames_sent", framesSent},
+      {"frames_dropped", framesDropped},
+      {"bytes_per_avatar_frame", avatarRecordBytes(assets_->session->graph.db.skeleton->jointCount())},
+      {"share_ms_per_s", round3(share.secondsPerSecond * 1e3)},
+      {"steps_skipped", share.ticksSkipped},
+      {"frames_shed", s.framesShed},
+      {"slowed",
+       share.ticksSkipped == 0 && s.framesShed == 0
+           ? json(nullptr)
+           : json(fmt::format(
+                 "The server shares its time among {} page{}, {:.0f} ms a second each; this "
+                 "world asks for more ({} avatars, {}{} at speed {}), so {} of its last {} "
+                 "steps were skipped{} and it runs slower.",
+                 share.pages, share.pages == 1 ? "" : "s", share.secondsPerSecond * 1e3, world.avatarCount(),
+                 s.controller,
+                 s.controller == "online_search" ? fmt::format(" ({} actions ahead)", s.horizon) : std::string(),
+                 s.speed, share.ticksSkipped, share.ticks,
+                 s.framesShed == 0 ? std::string() : fmt::format(", {} frames were cut short", s.framesShed)))}};
   s.decisions = {};
   s.framesShed = 0;
   s.busySeconds = 0;

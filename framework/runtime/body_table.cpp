@@ -1,5 +1,5 @@
 // The body parts a punch can land on (paper sec. 6.6): capsules on the skeleton's spine,
-// chest and head, found once per motion database.
+// chest and head, and the forearms that block it (issue 46), found once per motion database.
 #include <algorithm>
 #include <cmath>
 
@@ -31,6 +31,20 @@ BodyTable makeBodyTable(const MotionDatabase& db) {
   table.neckJoint = chain.size() > 2 ? chain[1] : chain[0];
   table.chestJoint = chain.size() > 3 ? chain[(1 + (chain.size() - 1)) / 2] : table.neckJoint;
 
+  // Each arm: the fist joint and up to 3 joints above it, up to the shoulder, shoulder side
+  // first (what a blocked strike turns).
+  for (int side = 0; side < 2; ++side) {
+    table.fistJoint[side] = db.roles.fist[side];
+    std::vector<int>& arm = table.armJoints[side];
+    for (int j = skeleton.joint(static_cast<std::size_t>(db.roles.fist[side])).parent; j > 0 && arm.size() < 3;
+         j = skeleton.joint(static_cast<std::size_t>(j)).parent) {
+      if (std::find(chain.begin(), chain.end(), j) != chain.end()) break;  // the spine: not the arm's
+      arm.push_back(j);
+      if (j == db.roles.shoulder[side]) break;
+    }
+    std::reverse(arm.begin(), arm.end());
+  }
+
   const std::size_t joints = skeleton.jointCount();
   const auto head = static_cast<std::size_t>(table.headJoint);
   // Head top: the head's end site, else one head length (neck to head) above the head.
@@ -50,9 +64,19 @@ BodyTable makeBodyTable(const MotionDatabase& db) {
         const Eigen::Vector3d up = positions[head] - positions[static_cast<std::size_t>(table.neckJoint)];
         top = positions[head] + (up.norm() > 1e-6 ? up : Eigen::Vector3d(0, 0.2, 0));
       }
-      const Eigen::Vector3d world[BodyTable::kPoints] = {
-          positions[static_cast<std::size_t>(table.pelvisJoint)], positions[static_cast<std::size_t>(table.chestJoint)],
-          positions[static_cast<std::size_t>(table.neckJoint)], positions[head], top};
+      auto fistTip = [&](int side) {
+        return pointOnJoint(rotations, positions, static_cast<std::size_t>(db.roles.fistTipJoint[side]),
+                            db.roles.fistTipOffset[side]);
+      };
+      const Eigen::Vector3d world[BodyTable::kPoints] = {positions[static_cast<std::size_t>(table.pelvisJoint)],
+                                                         positions[static_cast<std::size_t>(table.chestJoint)],
+                                                         positions[static_cast<std::size_t>(table.neckJoint)],
+                                                         positions[head],
+                                                         top,
+                                                         positions[static_cast<std::size_t>(db.roles.forearm[0])],
+                                                         fistTip(0),
+                                                         positions[static_cast<std::size_t>(db.roles.forearm[1])],
+                                                         fistTip(1)};
       float* out = table.points.data() + (static_cast<std::size_t>(db.offsets[c] + k) * BodyTable::kPoints) * 3;
       for (const Eigen::Vector3d& p : world) {
         Eigen::Vector3d local = frame.toAvatar(p);

@@ -7,6 +7,7 @@
 #include <exception>
 #include <limits>
 #include <mutex>
+#include <span>
 #include <thread>
 #include <utility>
 
@@ -58,6 +59,13 @@ World::World(WorldSetup setup)
     // Each struck part's reaction chain: up to 3 joints below the struck one and above the
     // pelvis, lowest first, and the joints each one's turn moves.
     const Skeleton& skeleton = *setup_.db->skeleton;
+    for (int side = 0; side < 2; ++side) {  // a blocking arm turns at its own joints
+      ReactionChain& chain =
+          reactionChains_[static_cast<std::size_t>(side == 0 ? BodyPart::LeftArm : BodyPart::RightArm)];
+      chain.struck = body_.fistJoint[side];
+      chain.joints = body_.armJoints[side];
+      for (const int j : chain.joints) chain.below.push_back(subtreeJoints(skeleton, j));
+    }
     for (const BodyPart part : {BodyPart::Spine, BodyPart::Chest, BodyPart::Head}) {
       ReactionChain& chain = reactionChains_[static_cast<std::size_t>(part)];
       chain.struck = part == BodyPart::Head ? body_.headJoint : part == BodyPart::Chest ? body_.neckJoint : body_.chestJoint;
@@ -269,18 +277,29 @@ void World::collide(std::size_t begin, std::size_t end, std::vector<HitEvent>& o
             int from, to;
             double radius;
           };
+          // The partner's forearms first: a strike that meets one is blocked there, even if
+          // it also reaches the body (the glove stands in front of what it guards).
+          const Capsule guards[] = {{BodyPart::LeftArm, BodyTable::LeftElbow, BodyTable::LeftFist, p.guardRadius},
+                                    {BodyPart::RightArm, BodyTable::RightElbow, BodyTable::RightFist, p.guardRadius}};
           const Capsule capsules[] = {{BodyPart::Head, BodyTable::Head, BodyTable::HeadTop, p.headRadius},
                                       {BodyPart::Chest, BodyTable::Chest, BodyTable::Neck, p.chestRadius},
                                       {BodyPart::Spine, BodyTable::Pelvis, BodyTable::Chest, p.spineRadius}};
-          double deepest = 0;
-          for (const Capsule& c : capsules) {
-            const double depth = c.radius + radius - segmentsDistance(tip, tip, bodyPoint(j, c.from), bodyPoint(j, c.to));
-            if (depth >= 0 && (!struck || depth > deepest)) {
-              struck = true;
-              deepest = depth;
-              event.part = c.part;
+          auto deepest = [&](std::span<const Capsule> parts) {
+            double most = 0;
+            bool met = false;
+            for (const Capsule& c : parts) {
+              const double depth =
+                  c.radius + radius - segmentsDistance(tip, tip, bodyPoint(j, c.from), bodyPoint(j, c.to));
+              if (depth >= 0 && (!met || depth > most)) {
+                met = true;
+                most = depth;
+                event.part = c.part;
+              }
             }
-          }
+            return met;
+          };
+          event.blocked = p.guardRadius > 0 && deepest(guards);
+          struck = event.blocked || deepest(capsules);
         }
         if (!struck) continue;
         landed = frame_;
@@ -314,6 +333,13 @@ void World::react(const HitEvent& event) {
     victim.part = event.part;
     victim.push = std::min(p.reactionPerSpeed * event.speed, p.reactionMax) * direction;
     victim.reactionStart = event.time;
+    if (event.blocked && !event.kick) {
+      // The blocked fist rebounds off the guard as much as the guard gives way.
+      Avatar& striker = avatars_[event.attacker];
+      striker.part = event.hand == 0 ? BodyPart::LeftArm : BodyPart::RightArm;
+      striker.push = -victim.push;
+      striker.reactionStart = event.time;
+    }
   }
 }
 
@@ -377,6 +403,7 @@ void World::run(std::size_t frames) {
     for (auto& list : found) {
       for (const HitEvent& e : list) {
         events_.push_back(e);
+        blocked_ += e.blocked ? 1 : 0;
         react(e);
       }
       list.clear();

@@ -48,6 +48,10 @@ struct WorldParams {
   /// sparring: the point of the partner each avatar aims at, "head" or "chest".
   std::string aim = "head";
   double headRadius = 0.11, chestRadius = 0.16, spineRadius = 0.14;  ///< m, body capsules
+  /// Each forearm and glove is a capsule from the elbow to the fist tip of this radius: a
+  /// strike whose fist or toe meets the partner's before it reaches the head or body is
+  /// blocked (issue 46). 0: nothing blocks, every strike that reaches the body lands.
+  double guardRadius = 0.06;  ///< m
   /// Bodies collide: each avatar's torso is a capsule from the pelvis to the head of this
   /// radius; a decision rules out actions whose root path would bring it into another's
   /// within `avoidSeconds`, and overlaps left are pushed apart at `separationSpeed`.
@@ -72,19 +76,36 @@ WorldParams readWorldParams(const ConfigNode& node);
 /// The block as JSON (for reports).
 nlohmann::json worldParamsJson(const WorldParams& params);
 
-/// Body parts the opponent's fists collide with (paper sec. 6.6), as capsules.
-enum class BodyPart : std::uint8_t { Spine = 0, Chest = 1, Head = 2 };
+/// Body parts the opponent's fists collide with (paper sec. 6.6), as capsules, and the arms
+/// that block them (issue 46: a strike meeting a forearm or glove first is blocked).
+enum class BodyPart : std::uint8_t { Spine = 0, Chest = 1, Head = 2, LeftArm = 3, RightArm = 4 };
+inline constexpr std::size_t kBodyParts = 5;
 const char* bodyPartName(BodyPart part);
 
 /// Per source frame, the upper-body points of the capsules in that frame's avatar frame:
-/// pelvis, chest, neck, head, head top (float, 15 per frame). Built once from the capture.
+/// pelvis, chest, neck, head, head top, and each forearm's elbow and fist tip (float, 27
+/// per frame). Built once from the capture.
 struct BodyTable {
-  static constexpr int kPoints = 5;
-  enum Point { Pelvis = 0, Chest = 1, Neck = 2, Head = 3, HeadTop = 4 };
+  static constexpr int kPoints = 9;
+  enum Point {
+    Pelvis = 0,
+    Chest = 1,
+    Neck = 2,
+    Head = 3,
+    HeadTop = 4,
+    LeftElbow = 5,
+    LeftFist = 6,
+    RightElbow = 7,
+    RightFist = 8
+  };
   std::vector<float> points;  ///< frameCount * kPoints * 3
   /// Joints of the chain used by reactions: the chest and neck joints found from the head
   /// up to the pelvis.
   int chestJoint = -1, neckJoint = -1, headJoint = -1, pelvisJoint = -1;
+  /// Per side, the fist joint and the arm joints above it that a blocked strike turns
+  /// (shoulder side first): the reaction chain of BodyPart::LeftArm and RightArm.
+  std::array<int, 2> fistJoint{-1, -1};
+  std::array<std::vector<int>, 2> armJoints;
 
   Eigen::Vector3d point(std::uint32_t frame, int which) const {
     const float* p = points.data() + (static_cast<std::size_t>(frame) * kPoints + which) * 3;
@@ -96,14 +117,16 @@ struct BodyTable {
 /// points. Throws mgrl::Error if the head is not below the pelvis in the hierarchy.
 BodyTable makeBodyTable(const MotionDatabase& db);
 
-/// One landed punch or kick.
+/// One landed punch or kick, or one blocked: it met a forearm or glove of the opponent
+/// before reaching the head or body (`blocked`, `part` the arm).
 struct HitEvent {
   double time = 0;              ///< s since the start
   std::uint32_t attacker = 0;   ///< avatar index
   std::int32_t target = -1;     ///< avatar index, or -1 for the attacker's own target
   std::uint8_t hand = 0;        ///< 0 left, 1 right (the foot, for a kick)
   bool kick = false;            ///< a toe's effective kick, not a fist's punch
-  BodyPart part = BodyPart::Head;  ///< what was struck (Head for a target)
+  BodyPart part = BodyPart::Head;  ///< what was struck (Head for a target; an arm when blocked)
+  bool blocked = false;            ///< met the opponent's guard: not a landed hit
   double speed = 0;             ///< fist speed, m/s
   Eigen::Vector3d point = Eigen::Vector3d::Zero();  ///< fist tip, world (m)
 };
@@ -170,7 +193,11 @@ class World {
   std::size_t avatarCount() const;
   std::size_t frame() const { return frame_; }
   double time() const { return static_cast<double>(frame_) * model_.frameTime; }
+  /// Landed and blocked strikes in the order they happened (HitEvent::blocked).
   const std::vector<HitEvent>& events() const { return events_; }
+  /// How many of events() landed (the rest were blocked).
+  std::size_t landedCount() const { return events_.size() - blocked_; }
+  std::size_t blockedCount() const { return blocked_; }
   std::size_t decisions() const;
   /// The avatar frame (ground position and facing) of avatar i now, in the world.
   GroundMotion avatarFrame(std::size_t i) const;
@@ -245,11 +272,12 @@ class World {
     std::vector<int> joints;
     std::vector<std::vector<int>> below;
   };
-  std::array<ReactionChain, 3> reactionChains_;
+  std::array<ReactionChain, kBodyParts> reactionChains_;
   std::vector<Avatar> avatars_;
   std::vector<Target> targets_;
   std::vector<Eigen::Vector3d> heads_;  ///< every avatar's aim point (head or chest) at the end of the last frame
   std::vector<HitEvent> events_;
+  std::size_t blocked_ = 0;  ///< events_ with `blocked`
   std::vector<std::unique_ptr<Controller>> controllers_;
   std::vector<std::unique_ptr<Controller>> partnerControllers_;  ///< one per worker, if makePartnerController
   std::size_t frame_ = 0;

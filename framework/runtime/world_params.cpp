@@ -12,22 +12,28 @@ const ParamSpecs& worldParamSpecs() {
                         "target, moved every target_hold seconds"),
       ParamSpec::choice("aim", "head", {"head", "chest"}, "sparring: the point of the partner an avatar aims at"),
       ParamSpec::integer("top_k", 3, 1, 64, "actions", "variety: draw among this many best actions (1: greedy)"),
-      ParamSpec::number("margin", 0.1, 0, 1, "", "variety: drop candidates scoring below best - margin * |best| (0: keep all k)"),
+      ParamSpec::number("margin", 0.1, 0, 1, "",
+                        "variety: drop candidates scoring below best - margin * |best| (0: keep all k)"),
       ParamSpec::number("spacing", 4.0, 0.5, 100, "m", "distance between neighbouring pairs on the floor"),
       ParamSpec::number("start_distance", 1.6, 0.3, 20, "m", "distance between sparring partners at the start"),
       ParamSpec::number("target_hold", 3.0, 0.1, 3600, "s", "targets mode: a target stays this long, then moves"),
-      ParamSpec::number("target_height", -1, -1, 5, "m", "targets mode: target height (-1: the hitting points' centroid)"),
+      ParamSpec::number("target_height", -1, -1, 5, "m",
+                        "targets mode: target height (-1: the hitting points' centroid)"),
       ParamSpec::number("target_radius", 0.12, 0.01, 2, "m", "radius of a target sphere"),
       ParamSpec::number("fist_radius", 0.05, 0.005, 0.5, "m", "radius of the fist sphere"),
       ParamSpec::number("foot_radius", 0.06, 0.005, 0.5, "m", "radius of the toe sphere (kicks)"),
       ParamSpec::number("head_radius", 0.11, 0.01, 1, "m", "radius of the head capsule (head to head top)"),
       ParamSpec::number("chest_radius", 0.16, 0.01, 1, "m", "radius of the chest capsule (chest to neck)"),
       ParamSpec::number("spine_radius", 0.14, 0.01, 1, "m", "radius of the spine capsule (pelvis to chest)"),
+      ParamSpec::number("guard_radius", 0.06, 0, 0.5, "m",
+                        "radius of each forearm-and-glove capsule (elbow to fist tip): a strike that meets the "
+                        "partner's before reaching the head or body is blocked, not landed (0: nothing blocks)"),
       ParamSpec::number("body_radius", 0.2, 0, 1, "m",
                         "radius of the torso capsule (pelvis to head) that keeps bodies apart: actions whose root path "
                         "runs into another body are ruled out and overlaps are pushed apart (0: bodies pass through "
                         "each other, as in the paper)"),
-      ParamSpec::number("avoid_seconds", 1.0, 0.1, 10, "s", "how far ahead an action's root path is checked against other bodies"),
+      ParamSpec::number("avoid_seconds", 1.0, 0.1, 10, "s",
+                        "how far ahead an action's root path is checked against other bodies"),
       ParamSpec::number("separation_speed", 1.5, 0.1, 20, "m/s", "how fast overlapping bodies are pushed apart"),
       ParamSpec::boolean("plant_feet", true,
                          "poses: hold a foot where it landed while the capture has it on the ground (two-bone IK of "
@@ -36,7 +42,8 @@ const ParamSpecs& worldParamSpecs() {
       ParamSpec::number("bend_max", 0.35, 0, 2, "m", "largest target bend"),
       ParamSpec::number("bend_frequency", 1.5, 0.1, 20, "Hz", "natural frequency of the target's spring"),
       ParamSpec::number("bend_damping", 0.25, 0, 2, "", "damping ratio of the target's spring"),
-      ParamSpec::number("reaction_per_speed", 0.012, 0, 0.1, "m per m/s", "hit body part displacement per unit of fist speed"),
+      ParamSpec::number("reaction_per_speed", 0.012, 0, 0.1, "m per m/s",
+                        "hit body part displacement per unit of fist speed"),
       ParamSpec::number("reaction_max", 0.08, 0, 0.3, "m", "largest body part displacement"),
       ParamSpec::number("reaction_seconds", 0.5, 0.05, 5, "s", "time for a hit reaction to fade (to under 10 %)"),
   };
@@ -58,6 +65,7 @@ WorldParams readWorldParams(const ConfigNode& node) {
   w.aim = p.choice("aim");
   w.headRadius = p.number("head_radius");
   w.chestRadius = p.number("chest_radius");
+  w.guardRadius = p.number("guard_radius");
   w.spineRadius = p.number("spine_radius");
   w.bodyRadius = p.number("body_radius");
   w.avoidSeconds = p.number("avoid_seconds");
@@ -89,6 +97,7 @@ nlohmann::json worldParamsJson(const WorldParams& w) {
           {"head_radius", w.headRadius},
           {"chest_radius", w.chestRadius},
           {"spine_radius", w.spineRadius},
+          {"guard_radius", w.guardRadius},
           {"body_radius", w.bodyRadius},
           {"avoid_seconds", w.avoidSeconds},
           {"separation_speed", w.separationSpeed},
@@ -107,6 +116,10 @@ const char* bodyPartName(BodyPart part) {
     case BodyPart::Spine: return "spine";
     case BodyPart::Chest: return "chest";
     case BodyPart::Head: return "head";
+    case BodyPart::LeftArm:
+      return "left_arm";
+    case BodyPart::RightArm:
+      return "right_arm";
   }
   return "?";
 }

@@ -124,6 +124,7 @@ nlohmann::json hitEventJson(const HitEvent& e) {
           {"hand", e.hand == 0 ? "left" : "right"},
           {"limb", e.kick ? "foot" : "fist"},
           {"speed", e.speed},
+          {"blocked", e.blocked},
           {"point", {e.point.x(), e.point.y(), e.point.z()}}};
 }
 

@@ -103,7 +103,8 @@ class Session {
 std::unique_ptr<Session> openSession(const SessionOptions& options, const SessionNeeds& needs = {});
 
 /// A hit as the events file and the viewer's protocol carry it: {"time", "attacker",
-/// "target", "part" (head, chest, spine, or target), "hand", "limb", "speed", "point"}.
+/// "target", "part" (head, chest, spine, or target; left_arm or right_arm when blocked),
+/// "hand", "limb", "speed", "blocked", "point"}.
 nlohmann::json hitEventJson(const HitEvent& event);
 
 }  // namespace mgrl

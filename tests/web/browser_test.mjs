@@ -982,6 +982,18 @@ async function main() {
   // Issue 45: a landed punch makes the struck part of the partner flash.
   await waitInPage(page, () => mgrl.bodies().struck > 0, null, 20000, 'a struck body part flashing in sparring');
   check(true, 'sparring: a landed punch flashes the struck part of the partner\'s body');
+  // Issue 46: a punch that meets the partner's forearm is blocked: its message says so, the
+  // HUD lists it as "blocked ... by avatar N left arm" and counts it apart from the hits.
+  await waitInPage(page, () => mgrl.state.hits.some((h) => h.blocked === true), null, 30000, 'a blocked punch in sparring');
+  const blockedHit = await page.evaluate(() => mgrl.state.hits.find((h) => h.blocked === true));
+  check(blockedHit.part === 'left_arm' || blockedHit.part === 'right_arm', 'sparring: a blocked punch names the arm that blocked it',
+        JSON.stringify(blockedHit));
+  await waitInPage(page, () => [...document.querySelectorAll('#hits li')].some((li) => /^blocked .* by avatar \d (left|right) arm/.test(li.textContent)),
+                   null, 5000, 'a "blocked" line in the HUD');
+  const blockedRow = await page.evaluate(() => [...document.querySelectorAll('#hud-table tr')]
+    .map((tr) => [tr.cells[0].textContent, tr.cells[1].textContent]).find(([name]) => name === 'blocked'));
+  check(blockedRow !== undefined && Number(blockedRow[1]) >= 1, 'the HUD counts blocked punches apart from hits',
+        JSON.stringify(blockedRow));
   await screenshot(page, 'viewer-sparring.png');
 
   // Follow: the camera keeps looking at avatar 0 (its root, at 1 m) as it moves.
