@@ -980,6 +980,37 @@ TEST_CASE("each reward term gives its hand-computed value", "[learning][terms]")
           Approx(g * std::exp(-3.0)));
     CHECK(termsReward(m, "{type: terms, gamma: 0.9, terms: [{term: facing}]}", 1, {0, 0, 2}) == Approx(g));
   }
+  SECTION("facing as the capture's own strikes stand to it (prefer: hits)") {
+    // The model's strikes, at their frames: the punch straight ahead (0 degrees), the kick
+    // at atan(0.2 / 0.4) = 26.6 degrees to the left. One sample each: two equal peaks.
+    const std::string hits = "{type: terms, gamma: 0.9, terms: [{term: facing, prefer: hits, sigma_deg: 1}]}";
+    auto bound = [&](const std::string& block, const Eigen::Vector3d& e) {
+      const auto reward = app::plugins().rewards.create(yaml(block));
+      reward->bind(m);
+      return reward->evaluate(m, 1, e);  // standing: the angle is the same at every frame
+    };
+    auto at = [](double degrees) {  // 2 m away, that far to the left (negative: right)
+      return Eigen::Vector3d(2 * std::sin(degrees * M_PI / 180), 0, 2 * std::cos(degrees * M_PI / 180));
+    };
+    CHECK(bound(hits, at(0)) == Approx(g));
+    CHECK(bound(hits, at(27)) == Approx(g).epsilon(1e-3));
+    CHECK(bound(hits, at(-27)) < 1e-6);  // signed: the kick landed to the left, not the right
+    CHECK(bound(hits, at(90)) < 1e-6);
+    CHECK(bound(hits, at(13.5)) < 1e-6);  // between the peaks, with a 1-degree kernel
+    // A wider kernel fills the gap.
+    CHECK(bound("{type: terms, gamma: 0.9, terms: [{term: facing, prefer: hits, sigma_deg: 20}]}", at(13.5)) > 0.5 * g);
+    // Unbound, it refuses to answer instead of reading an empty table.
+    const auto unbound = app::plugins().rewards.create(yaml(hits));
+    CHECK_THROWS_AS(unbound->evaluate(m, 1, at(0)), std::logic_error);
+    // A capture without strikes has no stance to learn: one error at the term.
+    StateActionModel still = m;
+    still.hits.clear();
+    still.kicks.clear();
+    still.actionHitBegin.assign(still.actionHitBegin.size(), 0);
+    still.actionKickBegin.assign(still.actionKickBegin.size(), 0);
+    const auto none = app::plugins().rewards.create(yaml(hits));
+    CHECK_THROWS_WITH(none->bind(still), Catch::Contains("prefer: ") && Catch::Contains("found none"));
+  }
   SECTION("contact by a chosen effector") {
     const Eigen::Vector3d kick(0.2, 0.9, 0.7), punch(0, 1.3, 0.6);
     const std::string feet = "{type: terms, gamma: 0.9, terms: [{term: contact, effector: feet, radius: 0.1}]}";

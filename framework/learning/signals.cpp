@@ -95,14 +95,16 @@ double bodySpeed(const StateActionModel& m, std::size_t frame, const BodyPoint& 
   return sum / static_cast<double>(joints);
 }
 
-double facingError(const StateActionModel& m, std::size_t frame, const Eigen::Vector3d& e) {
+double signedFacing(const StateActionModel& m, std::size_t frame, const Eigen::Vector3d& e) {
   const double* r = &m.frameRoot[3 * frame];
   const double dx = e.x() - r[0], dz = e.z() - r[1];
   if (dx == 0 && dz == 0) return 0;
   // Angles from +Z towards +X, as the avatar's yaw (DESIGN.md sec. 3).
-  double angle = std::atan2(dx, dz) - r[2];
-  angle = std::remainder(angle, 2 * std::numbers::pi);
-  return std::abs(angle);
+  return std::remainder(std::atan2(dx, dz) - r[2], 2 * std::numbers::pi);
+}
+
+double facingError(const StateActionModel& m, std::size_t frame, const Eigen::Vector3d& e) {
+  return std::abs(signedFacing(m, frame, e));
 }
 
 double rootSpeed(const StateActionModel& m, std::size_t a, std::size_t t) {

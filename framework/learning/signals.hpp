@@ -78,6 +78,9 @@ double bodySpeed(const StateActionModel& m, std::size_t frame, const BodyPoint& 
 /// The unsigned angle (radians, [0, pi]) between the avatar's facing at `frame` and the
 /// ground direction from it to the target; 0 when the target is straight ahead.
 double facingError(const StateActionModel& m, std::size_t frame, const Eigen::Vector3d& e);
+/// The same angle signed (radians, (-pi, pi]): positive with the target to the avatar's
+/// left (+X of its frame), negative to its right.
+double signedFacing(const StateActionModel& m, std::size_t frame, const Eigen::Vector3d& e);
 
 /// The avatar's ground speed at offset t of action a (m/s): its root's displacement from
 /// frame t - 1 (the decision at t = 1) to frame t, over the frame time.
