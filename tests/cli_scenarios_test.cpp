@@ -241,8 +241,9 @@ TEST_CASE("sparring.yaml spars like the SNU capture: distance, strike rate, bodi
           .report();
   const json& real = stats["real"]["pooled"];
   const json& synthetic = stats["synthetic"]["pooled"];
-  // Measured (scenarios/README.md): W1 0.27 m (medians 1.67 real, 1.49 synthesized),
-  // strikes 45.3 against 45.4 per fighter-minute, no pelvises under 0.35 m.
+  // Measured (scenarios/README.md, issue 46): W1 0.33 m (medians 1.67 real, 1.29
+  // synthesized; an earlier table said 1.49), strikes 57.2 against 48.2 per fighter-minute,
+  // no pelvises under 0.35 m.
   CHECK(stats["wasserstein1"]["distance_m"].get<double>() <= 0.35);
   const double ratio = synthetic["strikes_per_fighter_minute"].get<double>() / real["strikes_per_fighter_minute"].get<double>();
   CHECK(ratio >= 0.5);
