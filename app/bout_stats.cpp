@@ -10,23 +10,15 @@
 
 #include "mgrl/motion/kinematics.hpp"
 #include "mgrl/motion/motion_io.hpp"
+#include "mgrl/runtime/world.hpp"
 
 namespace mgrl::app {
 namespace {
 
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
-enum BodyPoint {
-  kPelvis = 0,
-  kChest = 1,
-  kNeck = 2,
-  kHead = 3,
-  kHeadTop = 4,
-  kLeftElbow = 5,
-  kLeftFist = 6,
-  kRightElbow = 7,
-  kRightFist = 8,
-  kBodyPoints = 9
-};
+// The body's points per frame in the runtime world's order (BodyTable), so the stats judge
+// bodies and guards as the world does.
+constexpr int kBodyPoints = BodyTable::kPoints;
 
 struct Capsule {
   int from, to;
@@ -34,7 +26,9 @@ struct Capsule {
 };
 
 std::array<Capsule, 3> capsules(const StatsParams& p) {
-  return {{{kPelvis, kChest, p.spineRadius_m}, {kChest, kNeck, p.chestRadius_m}, {kHead, kHeadTop, p.headRadius_m}}};
+  return {{{BodyTable::Pelvis, BodyTable::Chest, p.spineRadius_m},
+           {BodyTable::Chest, BodyTable::Neck, p.chestRadius_m},
+           {BodyTable::Head, BodyTable::HeadTop, p.headRadius_m}}};
 }
 
 // Chest and neck on the chain from the head down to the pelvis, as the runtime's body
@@ -94,8 +88,8 @@ double capsuleGap(const Fighter& target, std::size_t f, const Eigen::Vector3d& t
 // Distance from `tip` to the nearer of `target`'s forearms (elbow to fist tip) at frame `f`.
 double guardGap(const Fighter& target, std::size_t f, const Eigen::Vector3d& tip) {
   const Eigen::Vector3d* body = target.body.data() + f * kBodyPoints;
-  return std::min(segmentsDistance(tip, tip, body[kLeftElbow], body[kLeftFist]),
-                  segmentsDistance(tip, tip, body[kRightElbow], body[kRightFist]));
+  return std::min(segmentsDistance(tip, tip, body[BodyTable::LeftElbow], body[BodyTable::LeftFist]),
+                  segmentsDistance(tip, tip, body[BodyTable::RightElbow], body[BodyTable::RightFist]));
 }
 
 bool capsulesOverlap(const Fighter& a, const Fighter& b, std::size_t f, const StatsParams& params) {
@@ -169,7 +163,7 @@ void StatsParams::validate() const {
 const char* pairingName(Pairing pairing) { return pairing == Pairing::Partners ? "partners" : "nearest"; }
 
 Eigen::Vector2d Fighter::ground(std::size_t frame) const {
-  const Eigen::Vector3d& p = body[frame * kBodyPoints + kPelvis];
+  const Eigen::Vector3d& p = body[frame * kBodyPoints + BodyTable::Pelvis];
   return {p.x(), p.z()};
 }
 
@@ -196,14 +190,15 @@ Fighter makeFighter(const Motion& motion, std::string source, const StatsParams&
     const std::span<Eigen::Vector3d> positions(fighter.positions.data() + f * fighter.joints, fighter.joints);
     forwardKinematics(motion, f, rotations, positions);
     Eigen::Vector3d* body = fighter.body.data() + f * kBodyPoints;
-    body[kPelvis] = positions[pelvis];
-    body[kChest] = positions[static_cast<std::size_t>(chest)];
-    body[kNeck] = positions[static_cast<std::size_t>(neck)];
-    body[kHead] = positions[head];
-    body[kHeadTop] = pointOnJoint(rotations, positions, head, fighter.roles.headTopOffset);
+    body[BodyTable::Pelvis] = positions[pelvis];
+    body[BodyTable::Chest] = positions[static_cast<std::size_t>(chest)];
+    body[BodyTable::Neck] = positions[static_cast<std::size_t>(neck)];
+    body[BodyTable::Head] = positions[head];
+    body[BodyTable::HeadTop] = pointOnJoint(rotations, positions, head, fighter.roles.headTopOffset);
     for (int side = 0; side < 2; ++side) {
-      body[side == 0 ? kLeftElbow : kRightElbow] = positions[static_cast<std::size_t>(fighter.roles.forearm[side])];
-      body[side == 0 ? kLeftFist : kRightFist] =
+      body[side == 0 ? BodyTable::LeftElbow : BodyTable::RightElbow] =
+          positions[static_cast<std::size_t>(fighter.roles.forearm[side])];
+      body[side == 0 ? BodyTable::LeftFist : BodyTable::RightFist] =
           pointOnJoint(rotations, positions, static_cast<std::size_t>(fighter.roles.fistTipJoint[side]),
                        fighter.roles.fistTipOffset[side]);
     }

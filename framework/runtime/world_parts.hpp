@@ -1,6 +1,7 @@
 #pragma once
 // The world's internals shared by the files that implement it (world.hpp): world.cpp
-// (stepping, strikes, reactions, poses) and world_bodies.cpp (body collisions). Not for
+// (stepping, poses), world_strikes.cpp (strikes, blocks, reactions) and world_bodies.cpp
+// (body collisions). Not for
 // other code: include mgrl/runtime/world.hpp.
 #include <array>
 #include <cmath>
