@@ -97,7 +97,7 @@ step "simulate: the paper's crowd of 30 sparring boxers"
 "$mgrl" simulate "$root/scenarios/boxing.yaml" --data "$data" --avatars 30 --seconds "$crowd" "${train_sets[@]}"
 step "done: BVH files and hits in $out"
 if ((serve)); then
-  step "serve: the viewer (drag the target, sparring, crowds); Ctrl-C stops it"
+  step "serve: the viewer (drag the target; sparring and crowds play boxing_spar.yaml); Ctrl-C stops it"
   exec "$mgrl" serve "$root/scenarios/boxing.yaml" --data "$data" "${train_sets[@]}"
 fi
 say "watch it in the browser: scripts/demo.sh --serve, or $mgrl serve scenarios/boxing.yaml$(

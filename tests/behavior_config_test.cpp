@@ -482,7 +482,7 @@ TEST_CASE("scenario overrides (--set) replace, create and reset keys", "[behavio
     REQUIRE_CONFIG_ERROR(build(both, {"grpah=0.3"}),
                          std::string("--set grpah=0.3") +
                              ": grpah: unknown key (expected one of: name, description, motion, graph, "
-                             "behaviors, world)");
+                             "behaviors, world, sparring_scenario)");
     REQUIRE_THROWS_WITH(build(both, {"behaviors.hit=3"}),
                         Contains("behaviors.hit: expected a map with discretizer, reward and learner sections"));
   }
@@ -557,7 +557,7 @@ TEST_CASE("an override (--set) creates missing sections along its path", "[behav
   CHECK(all.size() == 3);
   REQUIRE_THROWS_WITH(build(both, {"grpah.threshold=0.3"}),
                       Equals(kSource.string() + ": grpah: unknown key (expected one of: name, description, motion, "
-                                                "graph, behaviors, world)"));
+                                                "graph, behaviors, world, sparring_scenario)"));
 }
 
 // The help of `mgrl train --set` shows `--set behaviors.hit.learner.budget=1e6`; budget is a

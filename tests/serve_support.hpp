@@ -15,6 +15,7 @@
 #include <nlohmann/json.hpp>
 
 #include "learn_commands.hpp"
+#include "mgrl/scenario/scenario.hpp"
 #include "serve/server.hpp"
 #include "serve/viewer.hpp"
 #include "test_support.hpp"
@@ -40,9 +41,13 @@ struct BoxingAssets {
   std::shared_ptr<const serve::ViewerAssets> assets;
   app::TrainOptions train;  ///< what made the policy bundle (train.out)
 
+  /// `sparring`: the scenario's own `sparring_scenario` plays sparring and crowds (its
+  /// default bundle trained beside, in the same cache); else `--sparring-scenario none`,
+  /// so that these tests see the scenario's own behaviours in every mode.
   explicit BoxingAssets(bool withPolicy = true, const std::string& scenario = "boxing.yaml",
                         std::vector<std::string> sets = {"behaviors.approach.learner.type=value_iteration",
-                                                         "behaviors.hit.learner.type=value_iteration"}) {
+                                                         "behaviors.hit.learner.type=value_iteration"},
+                        bool sparring = false) {
     train.scenario = fs::path(MGRL_SOURCE_DIR) / "scenarios" / scenario;
     train.dataDir = test::mocap();
     train.cacheDir = temp.path / "cache";
@@ -53,12 +58,21 @@ struct BoxingAssets {
       // test the viewer, the learning tests the training.
       std::string name = fs::path(scenario).stem().string();
       for (const std::string& set : train.sets) name += "," + set;
+      if (sparring) name += ",sparring";
       const fs::path shared = test::sharedResult(fmt::format("serve-{:016x}", std::hash<std::string>{}(name)),
                                                  [&](const fs::path& d) {
                                                    app::TrainOptions t = train;
                                                    t.cacheDir = d / "cache";
                                                    t.out = d / "policy";
                                                    app::runTrain(t);
+                                                   if (sparring) {  // its default bundle, where serve looks
+                                                     app::TrainOptions spar = t;
+                                                     spar.scenario =
+                                                         loadScenario(t.scenario, t.dataDir).sparringScenario;
+                                                     spar.sets.clear();
+                                                     spar.out.clear();
+                                                     app::runTrain(spar);
+                                                   }
                                                  });
       train.cacheDir = shared / "cache";
       train.out = shared / "policy";
@@ -66,6 +80,7 @@ struct BoxingAssets {
     serve::ServeOptions options;
     static_cast<app::LearnOptions&>(options) = train;
     if (withPolicy) options.policy = train.out;
+    options.sparringScenario = sparring ? "" : "none";
     assets = serve::loadViewerAssets(options);
   }
 };

@@ -14,6 +14,7 @@
 #include <nlohmann/json.hpp>
 
 #include "learn_commands.hpp"
+#include "mgrl/core/files.hpp"
 #include "serve/protocol.hpp"
 #include "serve/serve_command.hpp"
 #include "serve/server.hpp"
@@ -353,6 +354,133 @@ TEST_CASE("a dodge page opens on the avatar and its scripted opponent, in sparri
   scene = json::parse(paper.takeOutbox().at(0));
   CHECK(scene["mode"] == "target");
   CHECK(scene["opponent"].is_null());
+}
+
+// Issue 46: boxing.yaml's sparring and crowds play boxing_spar.yaml's behaviour, which keeps
+// a fighting distance; target mode keeps the paper's two behaviours.
+TEST_CASE("boxing's sparring plays boxing_spar's behaviour at a fighting distance and its target mode the paper's",
+          "[serve][data]") {
+  const BoxingAssets boxing(
+      true, "boxing.yaml",
+      {"behaviors.approach.learner.type=value_iteration", "behaviors.hit.learner.type=value_iteration"},
+      /*sparring=*/true);
+  serve::ViewerSession session(boxing.assets);
+  json scene = json::parse(session.takeOutbox().at(0));
+  auto names = [](const json& scene) {
+    std::vector<std::string> out;
+    for (const json& b : scene["behaviors"]) out.push_back(b["name"]);
+    return out;
+  };
+  CHECK(scene["mode"] == "target");
+  CHECK(scene["scenario"] == "boxing");
+  CHECK(names(scene) == std::vector<std::string>{"approach", "hit"});
+  // A lesson on the paper's hit, then sparring: the lesson ends (its behaviour is not
+  // sparring's), the scene is boxing_spar's, played by its own trained table.
+  session.handle(R"({"type": "learn", "command": "start", "behavior": "hit", "budget": 1000})");
+  CHECK(json::parse(session.takeOutbox().at(0))["type"] == "lesson");
+  session.handle(R"({"type": "mode", "mode": "sparring"})");
+  std::vector<std::string> out = session.takeOutbox();
+  REQUIRE(out.size() == 2);
+  CHECK(json::parse(out[0]) == json{{"type", "lesson"}, {"behavior", nullptr}});
+  scene = json::parse(out[1]);
+  CHECK(scene["mode"] == "sparring");
+  CHECK(scene["scenario"] == "boxing_spar");
+  CHECK(names(scene) == std::vector<std::string>{"spar"});
+  CHECK(scene["controller"] == "policy");
+  CHECK(scene["behaviors"][0]["vertices"].get<int>() > 0);  // the bundle's table, not a search
+  CHECK(scene["note"].get<std::string>().find("Sparring plays") != std::string::npos);
+  session.handle(R"({"type": "weights", "weights": {"hit": 2}})");
+  CHECK(json::parse(session.takeOutbox().at(0))["message"].get<std::string>().find(
+            "expected behaviour names from spar, found \"hit\"") != std::string::npos);
+  session.handle(R"({"type": "values", "behavior": "spar"})");
+  CHECK(json::parse(session.takeOutbox().at(0))["behavior"] == "spar");
+  // 20 s of sparring: the pelvises stay a fighting distance apart (the paper's behaviours
+  // close in to 0.66 m, boxing_spar's bouts measure 1.10 m), and values of spar follow.
+  auto medianDistance = [](serve::ViewerSession& page, double seconds, int* valuesMessages) {
+    std::vector<double> d;
+    for (int f = 0; f < static_cast<int>(seconds / page.frameTime()); ++f) {
+      page.advance(1.0);
+      for (const std::string& m : page.takeOutbox())
+        if (valuesMessages && json::parse(m)["type"] == "values") ++*valuesMessages;
+      const serve::DecodedFrame frame = serve::decodeFrame(page.frame());
+      if (f * page.frameTime() < 2) continue;  // from the start's 2 m spacing
+      const Eigen::Vector3d a = frame.avatars.at(0).at(0), b = frame.avatars.at(1).at(0);
+      d.push_back(std::hypot(a.x() - b.x(), a.z() - b.z()));
+    }
+    std::nth_element(d.begin(), d.begin() + static_cast<std::ptrdiff_t>(d.size() / 2), d.end());
+    return d[d.size() / 2];
+  };
+  int values = 0;
+  const double spar = medianDistance(session, 20, &values);
+  CHECK(spar >= 0.9);
+  CHECK(values >= 10);
+  // A crowd plays it too; back in target mode, the paper's two behaviours and no values.
+  session.handle(R"({"type": "mode", "mode": "crowd", "avatars": 4})");
+  scene = json::parse(session.takeOutbox().at(0));
+  CHECK(scene["scenario"] == "boxing_spar");
+  session.handle(R"({"type": "mode", "mode": "target"})");
+  scene = json::parse(session.takeOutbox().at(0));
+  CHECK(scene["scenario"] == "boxing");
+  CHECK(names(scene) == std::vector<std::string>{"approach", "hit"});
+  CHECK(scene["controller"] == "policy");
+  for (int f = 0; f < 30; ++f) {
+    session.advance(1.0);
+    for (const std::string& m : session.takeOutbox()) CHECK(json::parse(m)["type"] != "values");
+  }
+  // --sparring-scenario none: the paper's behaviours spar, and close in.
+  const BoxingAssets own;
+  serve::ViewerSession paper(own.assets);
+  paper.handle(R"({"type": "mode", "mode": "sparring"})");
+  paper.takeOutbox();
+  const double close = medianDistance(paper, 20, nullptr);
+  INFO("median pelvis distance: boxing_spar " << spar << " m, the paper's behaviours " << close << " m");
+  CHECK(close < spar - 0.2);
+}
+
+// A sparring scenario that cannot be used is refused at start, in one line.
+TEST_CASE("serve refuses a sparring scenario it cannot use, naming it", "[serve][data]") {
+  test::TempDir dir("serve-sparring");
+  const std::string boxing = readFile(fs::path(MGRL_SOURCE_DIR) / "scenarios" / "boxing.yaml");
+  auto scenarioWith = [&](const std::string& name, const std::string& line) {
+    std::string text = boxing;
+    text.replace(text.find("sparring_scenario: boxing_spar.yaml"),
+                 std::string("sparring_scenario: boxing_spar.yaml").size(), line);
+    writeFile(dir.path / name, text);
+    return dir.path / name;
+  };
+  auto refusal = [&](const fs::path& scenario, const std::string& flag) {
+    serve::ServeOptions options;
+    options.scenario = scenario;
+    options.dataDir = test::mocap();
+    options.cacheDir = dir.path / "cache";
+    options.sparringScenario = flag;
+    try {
+      serve::loadViewerAssets(options);
+    } catch (const Error& e) {
+      return std::string(e.what());
+    }
+    return std::string("no error");
+  };
+  CHECK_THAT(refusal(scenarioWith("missing.yaml", "sparring_scenario: nope.yaml"), ""),
+             Catch::Contains("missing.yaml:") && Catch::Contains("sparring_scenario: expected a scenario file") &&
+                 Catch::Contains("found \"nope.yaml\" (no file at "));
+  CHECK_THAT(refusal(scenarioWith("empty.yaml", "sparring_scenario: ''"), "none"),
+             Catch::Contains("empty.yaml:") && Catch::Contains("sparring_scenario: expected a scenario file") &&
+                 Catch::Contains("found an empty string"));
+  // Other commands do not open it: a copy of boxing.yaml without its companion still loads.
+  CHECK(loadScenario(scenarioWith("copy.yaml", "sparring_scenario: nope.yaml"), test::mocap()).sparringScenario ==
+        dir.path / "nope.yaml");
+  CHECK_THAT(refusal(scenarioWith("self.yaml", "sparring_scenario: self.yaml"), ""),
+             Catch::Contains("sparring_scenario: expected another scenario than this one"));
+  const fs::path scenarios = fs::path(MGRL_SOURCE_DIR) / "scenarios";
+  // A scene with a scripted opponent spars with it; a companion with one is no sparring partner.
+  CHECK_THAT(refusal(scenarios / "dodge.yaml", (scenarios / "boxing_spar.yaml").string()),
+             Catch::Contains("--sparring-scenario: expected a scenario without a scripted opponent"));
+  CHECK_THAT(refusal(scenarios / "boxing.yaml", (scenarios / "dodge.yaml").string()),
+             Catch::Contains("sparring scenario ") &&
+                 Catch::Contains("dodge.yaml: expected a scenario without a scripted opponent"));
+  CHECK_THAT(refusal(scenarios / "boxing.yaml", (dir.path / "absent.yaml").string()),
+             Catch::Contains("sparring scenario ") && Catch::Contains("absent.yaml"));
 }
 
 TEST_CASE("with no policy bundle, the page is told and the online search runs", "[serve][data]") {

@@ -121,7 +121,8 @@ export class Hud {
       ['frames dropped', s.frames_dropped ?? '–'],
       ['hits', this.hitCount() ?? '–'],
       ['hits per minute', fixed(s.hits_per_minute, 1)],
-      ['blocked', this.blockedCount() ?? '–'],
+      // A target has no guard: blocks are counted where fighters face each other.
+      ...(c.mode === 'target' ? [] : [['blocked', this.blockedCount() ?? '–']]),
       ['success', successText(c.behaviors)],
       ['successes', s.successes === undefined ? '–' : `${s.successes} (${fixed(s.successes_per_minute, 1)} /min)`],
       ['bytes per avatar-frame', s.bytes_per_avatar_frame ?? '–'],

@@ -32,6 +32,9 @@ class Serve final : public Command {
     sub_->add_option("--allow-origin", options_.allowOrigins,
                      "Also answer pages of this origin, e.g. http://mybox.lan:8080 (repeatable; by default only the "
                      "server's own address, localhost, 127.0.0.1 and [::1] at its port)");
+    sub_->add_option("--sparring-scenario", options_.sparringScenario,
+                     "Scenario whose behaviours play sparring and crowds (default: the scenario's sparring_scenario, "
+                     "e.g. boxing.yaml's boxing_spar.yaml; none: the scenario's own behaviours)");
     sub_->add_option("--web", options_.web, "The viewer's folder (default: MGRL_WEB, else the repository's web/)");
     sub_->add_option("--set", options_.sets, "Override a scenario key (repeatable)");
     addDataAndCache(sub_, common.dataDir, common.cacheDir);

@@ -6,6 +6,7 @@
 #include <mutex>
 #include <optional>
 #include <thread>
+#include <utility>
 
 #include <fmt/format.h>
 #include <fmt/ranges.h>
@@ -75,7 +76,10 @@ constexpr std::size_t kHitMessagesPerAdvance = 30;
 
 }  // namespace
 
-std::shared_ptr<const ViewerAssets> loadViewerAssets(const ServeOptions& options) {
+namespace {
+
+// One scenario's assets; `graphFrom`: a graph already loaded that it may share.
+std::shared_ptr<ViewerAssets> loadAssets(const ServeOptions& options, const GraphResult* graphFrom) {
   auto assets = std::make_shared<ViewerAssets>();
   assets->options = options;
   assets->options.log = {};  // never called from a retraining thread
@@ -84,6 +88,7 @@ std::shared_ptr<const ViewerAssets> loadViewerAssets(const ServeOptions& options
   SessionNeeds needs;
   needs.policy = options.policy.empty() ? PolicyNeed::IfAvailable : PolicyNeed::Required;
   needs.policyDir = options.policy;
+  needs.graphFrom = graphFrom;
   assets->session = openSession(options, needs);
   const Session& session = *assets->session;
   if (!session.policyNote.empty())
@@ -100,18 +105,89 @@ std::shared_ptr<const ViewerAssets> loadViewerAssets(const ServeOptions& options
   return assets;
 }
 
+}  // namespace
+
+std::shared_ptr<const ViewerAssets> loadViewerAssets(const ServeOptions& options) {
+  std::shared_ptr<ViewerAssets> assets = loadAssets(options, nullptr);
+  // Sparring and crowds play another scenario's behaviours when the scenario (or
+  // --sparring-scenario) names one (issue 46: the paper's approach and hit close in to
+  // 0.66 m; boxing_spar.yaml keeps a fighting distance). A scene with a scripted opponent
+  // (dodge) spars with its own.
+  const Session& main = *assets->session;
+  fs::path other;
+  if (options.sparringScenario.empty()) {
+    checkSparringScenario(main.scenario);
+    other = main.scenario.sparringScenario;
+  } else if (options.sparringScenario != "none")
+    other = options.sparringScenario;
+  if (other.empty()) return assets;
+  if (!main.partnerName().empty())
+    throw Error(
+        fmt::format("--sparring-scenario: expected a scenario without a scripted opponent ({} spars with its "
+                    "own: {}), found {}",
+                    options.scenario.string(), main.partnerName(), other.string()));
+  ServeOptions companion = options;
+  companion.scenario = other;
+  companion.policy.clear();
+  companion.sparringScenario = "none";
+  companion.sets.clear();
+  for (const std::string& set : options.sets)
+    if (set.rfind("world.", 0) == 0) companion.sets.push_back(set);
+  if (options.log) options.log(fmt::format("serve: sparring plays {}", other.string()));
+  try {
+    std::shared_ptr<ViewerAssets> sparring = loadAssets(companion, &main.graph);
+    if (!sparring->session->partnerName().empty())
+      throw Error(fmt::format("expected a scenario without a scripted opponent, found one ({})",
+                              sparring->session->partnerName()));
+    sparring->note =
+        fmt::format("Sparring plays {}'s behaviours ({}); target mode plays {}'s.{}{}", other.string(),
+                    options.sparringScenario.empty() ? fmt::format("{}'s sparring_scenario", options.scenario.string())
+                                                     : std::string("--sparring-scenario"),
+                    options.scenario.string(), sparring->note.empty() ? "" : " ", sparring->note);
+    assets->sparring = std::move(sparring);
+  } catch (const Error& e) {
+    throw Error(fmt::format("sparring scenario {}: {}", other.string(), e.what()));
+  }
+  return assets;
+}
+
 ViewerSession::ViewerSession(std::shared_ptr<const ViewerAssets> assets)
-    : assets_(std::move(assets)), state_(std::make_unique<State>()) {
-  for (const Behavior& b : assets_->session->behaviors) state_->weights.push_back(b.weight);
-  state_->policy = assets_->session->policy;
-  state_->retrained.resize(assets_->session->behaviors.size());
-  state_->controller = assets_->session->policy.empty() ? "online_search" : "policy";
+    : root_(std::move(assets)), state_(std::make_unique<State>()) {
+  adopt(root_);
   // An opponent scene (dodge) opens on the avatar and the opponent it was trained against;
   // the others on the paper's boxer and its target.
-  if (assets_->session->partnerName().empty())
+  if (root_->session->partnerName().empty())
     rebuild(Mode::Target, 1);
   else
     rebuild(Mode::Sparring, 2);
+}
+
+void ViewerSession::adopt(std::shared_ptr<const ViewerAssets> assets) {
+  State& s = *state_;
+  const std::shared_ptr<const ViewerAssets> old = std::exchange(assets_, std::move(assets));
+  const Session& session = *assets_->session;
+  s.weights.clear();
+  for (const Behavior& b : session.behaviors) s.weights.push_back(b.weight);
+  s.policy = session.policy;
+  s.retrained.assign(session.behaviors.size(), nullptr);
+  // The page's choice stays where the new scenario offers it.
+  if (s.controller.empty() || (s.controller == "policy" && session.policy.empty()))
+    s.controller = session.policy.empty() ? "online_search" : "policy";
+  s.shown = -1;
+  s.valuesSent.clear();
+  if (s.lesson) {
+    s.lesson.reset();
+    outbox_.push_back(json{{"type", "lesson"}, {"behavior", nullptr}}.dump());
+  }
+  if (s.job) {  // its behaviour is the other scenario's: it is told to stop, and forgotten
+    s.job->stop = true;
+    outbox_.push_back(json{{"type", "retrain"},
+                           {"behavior", old->session->behaviors[static_cast<std::size_t>(s.job->behavior)].name},
+                           {"status", "failed"},
+                           {"message", "stopped: the page switched to a mode that plays another scenario's behaviours"}}
+                          .dump());
+    s.job.reset();
+  }
 }
 
 ViewerSession::~ViewerSession() = default;
@@ -150,6 +226,9 @@ void ViewerSession::applyController() {
 }
 
 void ViewerSession::rebuild(Mode mode, int avatars) {
+  // Sparring and crowds may play another scenario's behaviours (ViewerAssets::sparring).
+  if (const auto& want = mode != Mode::Target && root_->sparring ? root_->sparring : root_; want != assets_)
+    adopt(want);
   const ViewerAssets& a = *assets_;
   State& s = *state_;
   WorldSetup setup = a.session->worldSetup(static_cast<std::size_t>(avatars), 1, {"random"});  // replaced below

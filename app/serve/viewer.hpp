@@ -23,6 +23,11 @@ namespace mgrl::serve {
 
 struct ServeOptions : app::LearnOptions {
   std::filesystem::path policy;  ///< "" the scenario's default bundle, if trained
+  /// The scenario whose behaviours play sparring and crowds (issue 46): "" the scenario's
+  /// own `sparring_scenario:` if it names one, "none" the scenario's own behaviours, else
+  /// a scenario file. Its default bundle is used; of the --set flags only `world.` ones
+  /// apply to it.
+  std::string sparringScenario;
 };
 
 /// Everything the sessions share, loaded once: the graph, the behaviours, the policy
@@ -97,7 +102,12 @@ class ViewerSession {
   std::string lessonMessage() const;
   std::string stepMessage(const learners::QStep& step, std::size_t taken) const;
 
-  std::shared_ptr<const ViewerAssets> assets_;
+  /// Makes `assets` the ones the page plays (the scenario's, or its sparring scenario's):
+  /// weights, policy, controller and teaching views start again from them.
+  void adopt(std::shared_ptr<const ViewerAssets> assets);
+
+  std::shared_ptr<const ViewerAssets> root_;    ///< the scenario `mgrl serve` opened
+  std::shared_ptr<const ViewerAssets> assets_;  ///< what the page plays now: root_ or root_->sparring
   std::unique_ptr<State> state_;
   Mode mode_ = Mode::Target;
   std::vector<std::string> outbox_;

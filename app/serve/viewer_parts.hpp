@@ -34,6 +34,9 @@ struct ViewerAssets {
   /// its text ("contact of the fists within 0.15 m").
   std::vector<SuccessCriterion> criteria;
   std::string criteriaText;
+  /// The scenario whose behaviours play sparring and crowds (ServeOptions::sparringScenario),
+  /// loaded beside this one at start; null: this scenario's own play every mode.
+  std::shared_ptr<const ViewerAssets> sparring;
 
   const StateActionModel& model() const { return session->model(); }
 };

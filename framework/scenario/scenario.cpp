@@ -299,6 +299,15 @@ std::string scenarioName(const ConfigNode& root, const std::filesystem::path& so
   return name;
 }
 
+// `sparring_scenario:` names another scenario file, relative to this one's folder (or
+// absolute). Only `mgrl serve` opens it (checkSparringScenario()): a scenario copied
+// elsewhere without it still builds, trains and simulates.
+std::filesystem::path sparringScenarioPath(const ConfigNode& node, const std::filesystem::path& dir) {
+  const std::string text = node.asString();
+  if (text.empty()) node.fail("expected a scenario file (relative to this scenario's folder), found an empty string");
+  return std::filesystem::path(text).is_absolute() ? std::filesystem::path(text) : dir / text;
+}
+
 }  // namespace
 
 Scenario parseScenario(std::string_view text, const std::filesystem::path& source,
@@ -315,7 +324,7 @@ Scenario parseScenario(std::string_view text, const std::filesystem::path& sourc
   for (const std::string& o : overrides)
     if (!switchesType(o)) applyOverride(root.yaml(), o, source.string());
   for (const std::string& o : overrides) root.noteOverride(o.substr(0, o.find('=')), "--set " + o);
-  root.allowOnly({"name", "description", "motion", "graph", "behaviors", "world"});
+  root.allowOnly({"name", "description", "motion", "graph", "behaviors", "world", "sparring_scenario"});
   // The world section is read where a world is made (readWorldParams(worldNode(s))); it
   // is checked here so that a mistake in it fails every command at once.
   if (root.has("world")) readWorldParams(root.child("world"));
@@ -327,7 +336,19 @@ Scenario parseScenario(std::string_view text, const std::filesystem::path& sourc
              readGraph(root.section("graph")),
              readBehaviors(root),
              root};
+  if (root.has("sparring_scenario")) s.sparringScenario = sparringScenarioPath(root.child("sparring_scenario"), dir);
   return s;
+}
+
+void checkSparringScenario(const Scenario& s) {
+  if (s.sparringScenario.empty()) return;
+  const ConfigNode node = s.root.child("sparring_scenario");
+  std::error_code ec;
+  if (!std::filesystem::is_regular_file(s.sparringScenario, ec))
+    node.fail(fmt::format("expected a scenario file (relative to this scenario's folder), found \"{}\" (no file at {})",
+                          node.asString(), s.sparringScenario.string()));
+  if (std::filesystem::equivalent(s.sparringScenario, s.path, ec))
+    node.fail("expected another scenario than this one (its behaviours spar already), found this file");
 }
 
 Scenario loadScenario(const std::filesystem::path& path, const std::filesystem::path& dataDir,

@@ -22,6 +22,9 @@ struct Scenario {
   GraphParams graph;
   std::vector<BehaviorSpec> behaviors;  ///< `behaviors:` in document order (may be empty)
   ConfigNode root;             ///< the whole document, for sections read elsewhere
+  /// `sparring_scenario:` resolved against this file's folder: the scenario whose
+  /// behaviours the viewer's sparring and crowd modes play (issue 46); "" none.
+  std::filesystem::path sparringScenario = {};
 };
 
 /// Parses and validates a scenario. `dataDir` resolves motion paths that are not found
@@ -38,6 +41,12 @@ struct Scenario {
 /// parameters). A malformed override is a ConfigError naming it.
 Scenario loadScenario(const std::filesystem::path& path, const std::filesystem::path& dataDir,
                       const std::vector<std::string>& overrides = {});
+/// Throws ConfigError (at the key) unless `sparring_scenario:` is absent or names an
+/// existing file other than the scenario itself; what opens it (`mgrl serve`) calls this.
+void checkSparringScenario(const Scenario& scenario);
+/// Throws ConfigError (at the key) unless `sparring_scenario:` is absent or names an
+/// existing file other than the scenario itself; what opens it (`mgrl serve`) calls this.
+void checkSparringScenario(const Scenario& scenario);
 /// The same from YAML text; `source` names it in messages and its folder anchors relative paths.
 Scenario parseScenario(std::string_view text, const std::filesystem::path& source,
                        const std::filesystem::path& dataDir, const std::vector<std::string>& overrides = {});

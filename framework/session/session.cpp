@@ -98,7 +98,20 @@ std::unique_ptr<Session> openSession(const SessionOptions& options, const Sessio
   graphOptions.cacheDir = options.cacheDir;
   graphOptions.log = options.log;
   graphOptions.motion = needs.motion;
-  GraphResult graph = obtainGraph(scenario, graphOptions);
+  if (needs.graphFrom && graphOptions.key.empty()) graphOptions.key = graphCacheKey(scenario);
+  GraphResult graph;
+  if (needs.graphFrom && needs.graphFrom->key == graphOptions.key && (!needs.motion || needs.graphFrom->db.skeleton)) {
+    graph = *needs.graphFrom;
+    // The capture's travel is the same; the grids' reaches are this scenario's.
+    CaptureTravel clips = graph.travel;
+    clips.reaches.clear();
+    clips.warnings.clear();
+    graph.travel = measureTravel(scenario, std::move(clips), graph.model);
+    if (options.log)
+      options.log(fmt::format("graph: shared with the scenario already open ({})", graph.bundle.string()));
+  } else {
+    graph = obtainGraph(scenario, graphOptions);
+  }
 
   auto session = std::make_unique<Session>(std::move(scenario));
   session->options = options;

@@ -47,6 +47,10 @@ struct SessionNeeds {
   /// Called with the final scenario after every check that needs no graph and before the
   /// graph is loaded (a command's own checks, so that their message is the only one).
   std::function<void(const Scenario&)> beforeGraph = nullptr;
+  /// A graph another session already holds: copied instead of loaded when it was made from
+  /// the same capture and graph parameters (equal keys) and has what `motion` asks for (the
+  /// viewer's sparring scenario on the paper's boxer's capture). Null: loaded as usual.
+  const GraphResult* graphFrom = nullptr;
 };
 
 class Session {

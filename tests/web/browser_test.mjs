@@ -497,22 +497,46 @@ async function teachViews(page) {
         `${after.count - countBefore} more messages, ${after.teach.instances} cells, legend shown ${after.teach.legend.shown}`);
 }
 
-// A new world (mode change) while values are shown: the page asks again and the new
-// world's values arrive at once.
+// A new world (mode change) while values are shown. boxing.yaml names boxing_spar.yaml as
+// its sparring_scenario (issue 46), so sparring plays that scenario's one behaviour: the
+// values of approach stop and the select offers spar. Between sparring and crowd (the same
+// scenario) the page asks again and the new world's values arrive at once. Target mode
+// brings the paper's two behaviours back.
 async function valuesAcrossModeChange(page) {
   await page.selectOption('#values-behavior', 'approach');
   await waitInPage(page, () => mgrl.teach().instances > 0, null, 10000, 'approach values before the mode change');
   await page.click('#mode-sparring');
   await waitForWorld(page, 'sparring', 2);
+  await waitInPage(page, () => mgrl.state.scene.scenario === 'boxing_spar', null, 5000, 'the sparring scene of boxing_spar');
+  await sleep(300);
+  const spar = await page.evaluate(() => ({
+    names: mgrl.state.scene.behaviors.map((b) => b.name).join(),
+    options: [...document.querySelectorAll('#values-behavior option')].map((o) => o.value).join(),
+    selected: document.querySelector('#values-behavior').value,
+    cells: mgrl.teach().instances,
+    note: mgrl.state.scene.note}));
+  check(spar.names === 'spar' && spar.options === ',spar' && spar.selected === '' && spar.cells === 0 &&
+        spar.note.includes('Sparring plays'),
+        'sparring plays boxing_spar.yaml\'s spar (its note says so); approach\'s values stop and the select offers spar',
+        JSON.stringify(spar));
+  await page.selectOption('#values-behavior', 'spar');
+  await waitInPage(page, () => mgrl.teach().instances > 0, null, 10000, 'spar values in sparring');
+  await page.click('#mode-crowd');
+  await waitInPage(page, () => mgrl.state.scene?.mode === 'crowd', null, 10000, 'the crowd scene');
   const from = await frameTime(page);
-  await waitSimulated(page, from, kValuesWithinSimSeconds + 0.3, `${kValuesWithinSimSeconds} s of sparring`);
-  const count = await valuesBetween(page, 'approach', from, kValuesWithinSimSeconds);
+  await waitSimulated(page, from, kValuesWithinSimSeconds + 0.3, `${kValuesWithinSimSeconds} s of the crowd`);
+  const count = await valuesBetween(page, 'spar', from, kValuesWithinSimSeconds);
   const cells = await page.evaluate(() => mgrl.teach().instances);
   check(count >= kMinValuesMessages && cells > 0,
-        `values of approach keep coming after a switch to sparring (${kMinValuesMessages} or more within ${kValuesWithinSimSeconds} s simulated)`,
+        `values of spar keep coming after a switch from sparring to a crowd (${kMinValuesMessages} or more within ${kValuesWithinSimSeconds} s simulated)`,
         `${count} messages from simulated ${from.toFixed(2)} s, ${cells} cells`);
   await page.selectOption('#values-behavior', '');
   await waitInPage(page, () => mgrl.teach().instances === 0, null, 5000, 'the heat map gone after none');
+  await page.click('#mode-target');
+  await waitForWorld(page, 'target', 1);
+  await waitInPage(page, () => mgrl.state.scene.behaviors.map((b) => b.name).join() === 'approach,hit', null, 5000,
+                   'target mode plays the paper\'s approach and hit again');
+  ok('target mode plays the paper\'s approach and hit again');
 }
 
 /** Sets a range input as a user's drag would end: its value, then `input` and `change`. */
@@ -969,12 +993,17 @@ async function main() {
   await openPanelSections(page);
 
   const target = await targetMode(page);
+  const targetRows = await page.evaluate(() => [...document.querySelectorAll('#hud-table tr')].map((tr) => tr.cells[0].textContent));
+  check(targetRows.includes('hits') && !targetRows.includes('blocked'), 'target mode: the HUD has no "blocked" row (a target has no guard)',
+        targetRows.join(', '));
 
   await page.click('#mode-sparring');
   await waitForWorld(page, 'sparring', 2);
   const sparring = await measured(page, 2);
   check(sparring.fps >= kMinFramesPerSecond, `sparring: frames keep arriving (>= ${kMinFramesPerSecond}/s over 3 s)`,
         `${sparring.fps.toFixed(1)}/s`);
+  const sparScene = await page.evaluate(() => mgrl.state.scene.scenario);
+  check(sparScene === 'boxing_spar', 'sparring plays boxing.yaml\'s sparring_scenario, boxing_spar (a fighting distance)', sparScene);
   // A new world: the target mode's hit lines are gone (sparring has no target).
   const oldLines = await page.evaluate(() => [...document.querySelectorAll('#hits li')]
     .map((li) => li.textContent).filter((t) => t.includes(' on target ')));
