@@ -133,12 +133,18 @@ std::shared_ptr<const ViewerAssets> loadViewerAssets(const ServeOptions& options
   companion.sets.clear();
   for (const std::string& set : options.sets)
     if (set.rfind("world.", 0) == 0) companion.sets.push_back(set);
-  if (options.log) options.log(fmt::format("serve: sparring plays {}", other.string()));
+  if (options.log) options.log(fmt::format("serve: sparring and crowds play {}", other.string()));
   try {
     std::shared_ptr<ViewerAssets> sparring = loadAssets(companion, &main.graph);
     if (!sparring->session->partnerName().empty())
       throw Error(fmt::format("expected a scenario without a scripted opponent, found one ({})",
                               sparring->session->partnerName()));
+    if (options.log)
+      options.log(
+          sparring->session->policy.empty()
+              ? fmt::format("serve: {} has no usable policy bundle ({}); the online search plays it", other.string(),
+                            sparring->session->policyNote)
+              : fmt::format("serve: {} plays policy bundle {}", other.string(), sparring->session->policyDir.string()));
     sparring->note =
         fmt::format("Sparring plays {}'s behaviours ({}); target mode plays {}'s.{}{}", other.string(),
                     options.sparringScenario.empty() ? fmt::format("{}'s sparring_scenario", options.scenario.string())
