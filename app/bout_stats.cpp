@@ -279,9 +279,12 @@ BoutStats measureBout(const Bout& bout, const StatsParams& params) {
       if (distance < params.closeDistance_m) ++s.closeFrames;
       if (capsulesOverlap(me, other, f, params)) ++s.overlapFrames;
     }
-    // 3: strikes and landed strikes.
+    // 3: strikes and landed strikes, for the bout and for this fighter.
+    const std::size_t punches = s.punches, kicks = s.kicks, landed = s.landed, blocked = s.blocked;
     countStrikes(bout, i, me.annotation.hits, params, s.punches, s.landed, s.blocked);
     countStrikes(bout, i, me.annotation.kicks, params, s.kicks, s.landed, s.blocked);
+    s.sides.push_back(
+        {me.source, s.punches - punches + s.kicks - kicks, s.landed - landed, s.blocked - blocked, s.seconds});
     // 4: planted feet.
     for (int side = 0; side < 2; ++side) {
       const auto ankle = static_cast<std::size_t>(me.roles.ankle[side]);
@@ -317,6 +320,14 @@ BoutStats measureBout(const Bout& bout, const StatsParams& params) {
         s.jointSpeed_mps.push_back(step / dt);
       }
   }
+  // 3, each way: the pairs are simulate's partners, or the two fighters of a two-fighter
+  // bout (with more, nearest-opponent pairing has no fixed pairs).
+  const std::size_t pairs = bout.pairing == Pairing::Partners ? s.sides.size() / 2 : s.sides.size() == 2 ? 1 : 0;
+  for (std::size_t k = 0; k < pairs; ++k) {
+    const std::size_t a = s.sides[2 * k].landed, b = s.sides[2 * k + 1].landed;
+    s.landedByMore += std::max(a, b);
+    s.landedInPairs += a + b;
+  }
   return s;
 }
 
@@ -347,6 +358,9 @@ BoutStats pool(const std::vector<BoutStats>& bouts, const std::string& name) {
     p.kicks += b.kicks;
     p.landed += b.landed;
     p.blocked += b.blocked;
+    p.sides.insert(p.sides.end(), b.sides.begin(), b.sides.end());
+    p.landedByMore += b.landedByMore;
+    p.landedInPairs += b.landedInPairs;
     p.pairFrames += b.pairFrames;
     p.closeFrames += b.closeFrames;
     p.overlapFrames += b.overlapFrames;

@@ -113,6 +113,19 @@ struct BoutStats {
   /// Per fighter and frame-to-frame step: root ground speed (m/s); reversals among them.
   std::size_t rootSteps = 0, reversals = 0;
   std::size_t punches = 0, kicks = 0, landed = 0, blocked = 0;
+  /// Each fighter's own strikes, in the bout's file order (issue 43: strikes thrown, landed
+  /// and blocked each way).
+  struct Side {
+    std::string source;
+    std::size_t strikes = 0, landed = 0, blocked = 0;
+    double seconds = 0;
+  };
+  std::vector<Side> sides;
+  /// Over the pairs of the bout (simulate's partners 2k and 2k+1, or the two fighters of a
+  /// two-fighter bout): the landed strikes of the side of each pair that landed more, and
+  /// of both sides. Their ratio is the share the stronger side lands: 50 % an even bout,
+  /// 100 % a one-sided one.
+  std::size_t landedByMore = 0, landedInPairs = 0;
   /// Fighter-frames with an opponent; those with pelvises close; those with capsules overlapping.
   std::size_t pairFrames = 0, closeFrames = 0, overlapFrames = 0;
   /// Seconds of the frame-to-frame steps (sum over fighters), for reversals per second.

@@ -10,6 +10,7 @@
 #include <map>
 
 #include <fmt/format.h>
+#include <fmt/ranges.h>
 
 #include "numbers.hpp"
 #include "plural.hpp"
@@ -77,13 +78,14 @@ json paramsJson(const StatsParams& p) {
 
 // --- Text ---------------------------------------------------------------------------------
 
+// "-" for what a bout has none of (a share of nothing, the quantile of no samples).
 std::string number(const json& value, const char* format) {
-  if (!value.is_number()) return "-";
+  if (!value.is_number() || !std::isfinite(value.get<double>())) return "-";
   return fmt::format(fmt::runtime(format), value.get<double>());
 }
 
 std::string percent(const json& value) {
-  if (!value.is_number()) return "-";
+  if (!value.is_number() || !std::isfinite(value.get<double>())) return "-";
   return fmt::format("{:.1f} %", 100 * value.get<double>());
 }
 
@@ -114,6 +116,7 @@ std::vector<Row> rows() {
       {"landed / fighter-min", [](const json& g) { return number(g["landed_per_fighter_minute"], "{:.1f}"); }},
       {"blocked / fighter-min", [](const json& g) { return number(g["blocked_per_fighter_minute"], "{:.1f}"); }},
       {"blocked or missed (share)", [](const json& g) { return percent(g["unlanded_share"]); }},
+      {"landed by the stronger side", [](const json& g) { return percent(g["landed_by_stronger_share"]); }},
       {"planted foot speed, median (m/s)",
        [](const json& g) { return number(g["planted_foot_speed_mps"]["median"], "{:.3f}"); }, "planted_foot_speed_mps"},
       {"  ankles alone, median (m/s)",
@@ -165,6 +168,21 @@ std::string table(const std::vector<std::pair<std::string, const json*>>& column
     for (std::size_t c = 0; c < cells[r].size(); ++c) line += fmt::format("  {:>{}}", cells[r][c], widths[c]);
     line.erase(line.find_last_not_of(' ') + 1);
     out += line + '\n';
+  }
+  return out;
+}
+
+// Strikes each way, one line per bout: "each way, NAME: a.bvh 45 thrown, 20 landed, 12
+// blocked | b.bvh ...".
+std::string eachWay(const json& bouts) {
+  std::string out;
+  for (const json& b : bouts) {
+    std::vector<std::string> sides;
+    for (const json& f : b["by_fighter"])
+      sides.push_back(fmt::format("{} {} thrown, {} landed, {} blocked", f["file"].get<std::string>(),
+                                  f["strikes"].get<std::size_t>(), f["landed"].get<std::size_t>(),
+                                  f["blocked"].get<std::size_t>()));
+    out += fmt::format("each way, {}: {}\n", b["name"].get<std::string>(), fmt::join(sides, " | "));
   }
   return out;
 }
@@ -251,6 +269,25 @@ std::vector<BoutFiles> snuBouts(const fs::path& dataDir) {
   return bouts;
 }
 
+namespace {
+
+// Each fighter's strikes: its file's name (the folder is the bout's), counts and rates.
+json sidesJson(const std::vector<BoutStats::Side>& sides) {
+  json list = json::array();
+  for (const BoutStats::Side& side : sides) {
+    const double minutes = side.seconds / 60;
+    list.push_back({{"file", fs::path(side.source).filename().string()},
+                    {"strikes", side.strikes},
+                    {"landed", side.landed},
+                    {"blocked", side.blocked},
+                    {"strikes_per_minute", rounded(ratio(static_cast<double>(side.strikes), minutes), 3)},
+                    {"landed_per_minute", rounded(ratio(static_cast<double>(side.landed), minutes), 3)}});
+  }
+  return list;
+}
+
+}  // namespace
+
 json statsJson(const BoutStats& s) {
   const double minutes = s.fighterSeconds / 60;
   const std::size_t strikes = s.punches + s.kicks;
@@ -280,6 +317,9 @@ json statsJson(const BoutStats& s) {
       {"landed_share", rounded(ratio(static_cast<double>(s.landed), static_cast<double>(strikes)), 4)},
       {"blocked", s.blocked},
       {"blocked_per_fighter_minute", rounded(ratio(static_cast<double>(s.blocked), minutes), 3)},
+      {"by_fighter", sidesJson(s.sides)},
+      {"landed_by_stronger_share",
+       rounded(ratio(static_cast<double>(s.landedByMore), static_cast<double>(s.landedInPairs)), 4)},
       {"unlanded_share",
        rounded(ratio(static_cast<double>(strikes - std::min(s.landed, strikes)), static_cast<double>(strikes)), 4)},
       {"planted_foot_speed_mps", distribution(s.plantedFootSpeed_mps, 4)},
@@ -357,6 +397,7 @@ std::string statsText(const json& report) {
     if (bouts.size() > 1) columns.emplace_back("pooled", &report["pooled"]);
     out += fmt::format("stats: {}\n", counted(bouts.size(), "bout"));
     out += table(columns, nullptr);
+    out += eachWay(bouts);
   }
   out += notes(report);
   return out;

@@ -145,6 +145,44 @@ TEST_CASE("stats: a punch that meets the opponent's forearm first is blocked, no
   CHECK(measureFolder("punch_guarded", thin).landed == 1);
 }
 
+TEST_CASE("stats: strikes are counted each way, per fighter and for the stronger side of each pair", "[stats]") {
+  StatsParams carried;
+  carried.annotation.punchMinBodySpeed_mps = 0;
+  // punch_near: fighter 1 lands its one punch, fighter 2 throws none.
+  const BoutStats near = measureFolder("punch_near", carried);
+  REQUIRE(near.sides.size() == 2);
+  CHECK(fs::path(near.sides[0].source).filename() == "fighter_1.bvh");
+  CHECK(near.sides[0].strikes == 1);
+  CHECK(near.sides[0].landed == 1);
+  CHECK(near.sides[0].blocked == 0);
+  CHECK(near.sides[1].strikes == 0);
+  CHECK(near.sides[1].landed == 0);
+  CHECK_THAT(near.sides[0].seconds, WithinAbs(near.seconds, 1e-12));
+  CHECK(near.landedByMore == 1);
+  CHECK(near.landedInPairs == 1);
+  // The guard takes it: blocked on fighter 1's side, nothing landed in the pair.
+  const BoutStats guarded = measureFolder("punch_guarded", carried);
+  CHECK(guarded.sides[0].blocked == 1);
+  CHECK(guarded.sides[0].landed == 0);
+  CHECK(guarded.landedInPairs == 0);
+  const nlohmann::json j = mgrl::app::statsJson(near);
+  CHECK(j["by_fighter"][0]["file"] == "fighter_1.bvh");
+  CHECK(j["by_fighter"][0]["landed"] == 1);
+  CHECK(j["by_fighter"][1]["strikes"] == 0);
+  CHECK(j["landed_by_stronger_share"] == 1.0);
+  CHECK(mgrl::app::statsJson(guarded)["landed_by_stronger_share"].dump() == "null");  // nothing landed: no share
+  // Four fighters paired by nearness have no fixed pairs; simulate's partners do.
+  CHECK(measureFolder("four").sides.size() == 4);
+  const BoutStats partners = measureFolder("partners");
+  CHECK(partners.sides.size() == 4);
+  CHECK(partners.landedInPairs == 0);
+  // Pooled: every side kept, the pairs' counts summed.
+  const BoutStats p = mgrl::app::pool({near, guarded, near}, "pooled");
+  CHECK(p.sides.size() == 6);
+  CHECK(p.landedByMore == 2);
+  CHECK(p.landedInPairs == 2);
+}
+
 TEST_CASE("stats: bodies 20 cm apart interpenetrate every frame", "[stats]") {
   const BoutStats s = measureFolder("overlap");
   CHECK(s.pairFrames == 60);
