@@ -9,7 +9,7 @@
 
 #include <nlohmann/json.hpp>
 
-#include "bout_stats.hpp"
+#include "mgrl/runtime/bout_stats.hpp"
 
 namespace mgrl::app {
 

@@ -66,14 +66,15 @@ class Cylindrical3d final : public Discretizer {
     const Bounds b = p.choice("bounds") == "hits" ? boundsOfHits(p, m) : givenBounds(p);
     const bool wrap = b.angle[1] - b.angle[0] >= 2 * M_PI - 1e-9;
     const auto angles = static_cast<std::size_t>(p.integer("angles"));
-    setAxes({GridAxis{"angle", "rad", evenVertices(b.angle[0], wrap ? b.angle[0] + 2 * M_PI : b.angle[1], angles, wrap),
-                      wrap},
-             GridAxis{"distance", "m", evenVertices(b.distance[0], b.distance[1],
-                                                    static_cast<std::size_t>(p.integer("distances")), false),
-                      false},
-             GridAxis{"height", "m", evenVertices(b.height[0], b.height[1],
-                                                  static_cast<std::size_t>(p.integer("heights")), false),
-                      false}});
+    setAxes(
+        {GridAxis{AxisRole::Angle, evenVertices(b.angle[0], wrap ? b.angle[0] + 2 * M_PI : b.angle[1], angles, wrap),
+                  wrap},
+         GridAxis{AxisRole::Distance,
+                  evenVertices(b.distance[0], b.distance[1], static_cast<std::size_t>(p.integer("distances")), false),
+                  false},
+         GridAxis{AxisRole::Height,
+                  evenVertices(b.height[0], b.height[1], static_cast<std::size_t>(p.integer("heights")), false),
+                  false}});
   }
   std::string type() const override { return "cylindrical3d"; }
   std::array<double, 3> coordinates(const TargetState& state) const override {

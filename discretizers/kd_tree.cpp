@@ -57,7 +57,7 @@ class KdTree final : public Discretizer {
     std::vector<GridAxis> axes;
     std::array<long long, 3> cells{1, 1, 1};  // the power-of-two part of each axis's cells
     const long long angleCells = initial[0], distanceCells = initial[1], heightCells = initial[2];
-    auto add = [&](std::string name, double lo, double hi, bool wraps, long long n, std::string_view key) {
+    auto add = [&](AxisRole role, double lo, double hi, bool wraps, long long n, std::string_view key) {
       if (n <= 0) p.fail(key, fmt::format("expected at least 1 cell, found {}", n));
       const int i = static_cast<int>(axes.size());
       lo_[i] = lo;
@@ -66,16 +66,15 @@ class KdTree final : public Discretizer {
       cells[i] = n & -n;  // the largest power of two dividing n
       roots_[i] = static_cast<std::uint64_t>(n / cells[i]);
       // A wrapping axis is shown by its start and half a turn (setAxes needs a span < 2 pi).
-      axes.push_back(GridAxis{std::move(name), i == 0 && dimension_ > 1 ? "rad" : "m",
-                              {lo, wraps ? lo + M_PI : hi}, wraps});
+      axes.push_back(GridAxis{role, {lo, wraps ? lo + M_PI : hi}, wraps});
     };
     if (dimension_ == 1) {
-      add("distance", b.distance[0], b.distance[1], false, distanceCells, "distance_cells");
+      add(AxisRole::Distance, b.distance[0], b.distance[1], false, distanceCells, "distance_cells");
     } else {
       const bool wrap = b.angle[1] - b.angle[0] >= kTwoPi - 1e-9;
-      add("angle", b.angle[0], wrap ? b.angle[0] + kTwoPi : b.angle[1], wrap, angleCells, "angle_cells");
-      add("distance", b.distance[0], b.distance[1], false, distanceCells, "distance_cells");
-      if (dimension_ == 3) add("height", b.height[0], b.height[1], false, heightCells, "height_cells");
+      add(AxisRole::Angle, b.angle[0], wrap ? b.angle[0] + kTwoPi : b.angle[1], wrap, angleCells, "angle_cells");
+      add(AxisRole::Distance, b.distance[0], b.distance[1], false, distanceCells, "distance_cells");
+      if (dimension_ == 3) add(AxisRole::Height, b.height[0], b.height[1], false, heightCells, "height_cells");
     }
     // Issue 19: the initial tree's vertices are checked before any node is made.
     double initialVertices = 1;
@@ -130,7 +129,7 @@ class KdTree final : public Discretizer {
     for (int i = 0; i < dimension_; ++i)
       if (levels_[i] > kMaxAxisSplits)
         p.fail("max_depth", fmt::format("expected at most {} halvings of the {} axis, found {}; lower max_depth",
-                                        kMaxAxisSplits, axes[i].name, levels_[i]));
+                                        kMaxAxisSplits, axes[i].name(), levels_[i]));
     setAxes(std::move(axes));
     // The initial tree: the roots, every leaf split down to the initial depth.
     axis_.assign(rootCount_, -1);

@@ -31,8 +31,8 @@ class Polar2d final : public Discretizer {
     const bool wrap = to - from >= 2 * M_PI - 1e-9;
     const auto sectors = static_cast<std::size_t>(p.integer("sectors"));
     const auto rings = static_cast<std::size_t>(p.integer("rings"));
-    setAxes({GridAxis{"angle", "rad", evenVertices(from, wrap ? from + 2 * M_PI : to, sectors, wrap), wrap},
-             GridAxis{"distance", "m", evenVertices(minRadius, radius, rings, false), false}});
+    setAxes({GridAxis{AxisRole::Angle, evenVertices(from, wrap ? from + 2 * M_PI : to, sectors, wrap), wrap},
+             GridAxis{AxisRole::Distance, evenVertices(minRadius, radius, rings, false), false}});
   }
   std::string type() const override { return "polar2d"; }
   std::array<double, 3> coordinates(const TargetState& state) const override {

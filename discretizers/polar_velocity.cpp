@@ -39,15 +39,16 @@ class PolarVelocity final : public Discretizer {
     const auto speeds = static_cast<std::size_t>(p.integer("speeds"));
     const double top = p.number("max_speed");
     std::vector<double> layers = speeds == 1 ? std::vector<double>{0.0} : evenVertices(0, top, speeds, false);
-    setAxes({GridAxis{"angle", "rad",
-                      evenVertices(angle[0], wrap ? angle[0] + 2 * M_PI : angle[1],
-                                   static_cast<std::size_t>(p.integer("sectors")), wrap),
-                      wrap},
-             GridAxis{"distance", "m", evenVertices(distance[0], distance[1], static_cast<std::size_t>(p.integer("rings")), false),
-                      false},
-             GridAxis{"heading", "rad",
-                      evenVertices(-M_PI, M_PI, static_cast<std::size_t>(p.integer("headings")), true), true}});
-    setLayers(GridAxis{"speed", "m/s", std::move(layers), false});
+    setAxes(
+        {GridAxis{AxisRole::Angle,
+                  evenVertices(angle[0], wrap ? angle[0] + 2 * M_PI : angle[1],
+                               static_cast<std::size_t>(p.integer("sectors")), wrap),
+                  wrap},
+         GridAxis{AxisRole::Distance,
+                  evenVertices(distance[0], distance[1], static_cast<std::size_t>(p.integer("rings")), false), false},
+         GridAxis{AxisRole::Heading, evenVertices(-M_PI, M_PI, static_cast<std::size_t>(p.integer("headings")), true),
+                  true}});
+    setLayers(GridAxis{AxisRole::Speed, std::move(layers), false});
   }
   std::string type() const override { return "polar_velocity"; }
   std::array<double, 3> coordinates(const TargetState& e) const override {

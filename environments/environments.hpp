@@ -6,7 +6,7 @@
 #include <string>
 #include <vector>
 
-#include "mgrl/learning/reward.hpp"
+#include "mgrl/learning/environment_model.hpp"
 
 namespace mgrl::environments {
 
@@ -35,8 +35,9 @@ class Opponent final : public EnvironmentModel {
   bool keepsSpeed() const override { return true; }  // always 0: the layer of a polar_velocity grid with speeds: 1
   TargetState draw(const Eigen::Vector3d& position, Rng&) const override;
   bool faces() const override { return true; }
-  bool pursues() const { return pursue_; }
-  double stopDistance() const { return stopDistance_; }
+  std::optional<ScriptedOpponent> scriptedOpponent() const override {
+    return ScriptedOpponent{!pursue_, stopDistance_};
+  }
 
  private:
   bool pursue_;

@@ -41,7 +41,7 @@ class PyEpisodes {
   }
   std::vector<std::string> axisNames() const {
     std::vector<std::string> names;
-    for (const GridAxis& a : episodes_->behavior().discretizer->axes()) names.push_back(a.name);
+    for (const GridAxis& a : episodes_->behavior().discretizer->axes()) names.emplace_back(a.name());
     return names;
   }
 

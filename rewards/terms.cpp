@@ -12,6 +12,7 @@
 
 #include <fmt/format.h>
 
+#include "mgrl/learning/environment_model.hpp"
 #include "rewards.hpp"
 #include "term.hpp"
 

@@ -14,6 +14,7 @@
 #include "app/plugins.hpp"
 #include "mgrl/core/config.hpp"
 #include "mgrl/core/error.hpp"
+#include "mgrl/learning/environment_model.hpp"
 #include "mgrl/learning/policy_bundle.hpp"
 #include "mgrl/learning/problem.hpp"
 #include "mgrl/learning/reward.hpp"

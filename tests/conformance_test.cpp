@@ -12,6 +12,7 @@
 
 #include "mgrl/core/random.hpp"
 #include "mgrl/learning/discretizer.hpp"
+#include "mgrl/learning/environment_model.hpp"
 #include "mgrl/learning/learner.hpp"
 #include "mgrl/learning/problem.hpp"
 #include "mgrl/learning/reward.hpp"

@@ -7,8 +7,8 @@
 
 #include <catch2/catch.hpp>
 
-#include "bout_stats.hpp"
 #include "mgrl/motion/kinematics.hpp"
+#include "mgrl/runtime/bout_stats.hpp"
 #include "stats_command.hpp"
 #include "test_support.hpp"
 
@@ -18,8 +18,8 @@ namespace stats_test {
 namespace fs = std::filesystem;
 using Catch::Contains;
 using Catch::Matchers::WithinAbs;
-using mgrl::app::BoutStats;
-using mgrl::app::StatsParams;
+using mgrl::BoutStats;
+using mgrl::StatsParams;
 
 namespace {
 
@@ -28,13 +28,13 @@ fs::path statsData() { return mgrl::test::testData() / "stats"; }
 BoutStats measureFolder(const std::string& folder, const StatsParams& params = {},
                         std::vector<std::string>* warnings = nullptr) {
   const mgrl::app::BoutFiles files = mgrl::app::resolveBout((statsData() / folder).string(), {});
-  const mgrl::app::Bout bout = mgrl::app::loadBout(files.name, files.files, params, [&](const std::string& m) {
+  const mgrl::Bout bout = mgrl::loadBout(files.name, files.files, params, [&](const std::string& m) {
     if (warnings) warnings->push_back(m);
   });
-  return mgrl::app::measureBout(bout, params);
+  return mgrl::measureBout(bout, params);
 }
 
-double median(const std::vector<double>& v) { return mgrl::app::quantile(v, 0.5); }
+double median(const std::vector<double>& v) { return mgrl::quantile(v, 0.5); }
 
 }  // namespace
 
@@ -45,7 +45,7 @@ TEST_CASE("stats: two fighters standing 1 m apart face to face", "[stats]") {
   CHECK_THAT(s.seconds, WithinAbs(1.0, 1e-4));
   REQUIRE(s.distance_m.size() == 60);  // per fighter-frame
   CHECK_THAT(median(s.distance_m), WithinAbs(1.0, 1e-9));
-  CHECK_THAT(mgrl::app::quantile(s.facing_deg, 1.0), WithinAbs(0.0, 1e-3));
+  CHECK_THAT(mgrl::quantile(s.facing_deg, 1.0), WithinAbs(0.0, 1e-3));
   CHECK(s.reversals == 0);
   CHECK(s.rootSteps == 58);
   CHECK(s.punches + s.kicks == 0);
@@ -53,10 +53,10 @@ TEST_CASE("stats: two fighters standing 1 m apart face to face", "[stats]") {
   CHECK(s.overlapFrames == 0);
   // Feet flat on the floor, still: planted every frame, at speed 0; nothing moves.
   CHECK(s.plantedFootSpeed_mps.size() == 2 * 2 * 30);
-  CHECK_THAT(mgrl::app::quantile(s.plantedFootSpeed_mps, 1.0), WithinAbs(0.0, 1e-9));
+  CHECK_THAT(mgrl::quantile(s.plantedFootSpeed_mps, 1.0), WithinAbs(0.0, 1e-9));
   CHECK(s.plantedAnkleSpeed_mps.size() == s.plantedFootSpeed_mps.size());
   CHECK(s.plantedToeSpeed_mps.size() == s.plantedFootSpeed_mps.size());
-  CHECK_THAT(mgrl::app::quantile(s.jointStep_m, 1.0), WithinAbs(0.0, 1e-9));
+  CHECK_THAT(mgrl::quantile(s.jointStep_m, 1.0), WithinAbs(0.0, 1e-9));
 }
 
 TEST_CASE("stats: a foot pivoting on its still ankle skates at the toe, which each foot joint's speed shows",
@@ -68,8 +68,8 @@ TEST_CASE("stats: a foot pivoting on its still ankle skates at the toe, which ea
   REQUIRE(s.plantedFootSpeed_mps.size() == 2 * 2 * 30);  // every foot planted every frame
   REQUIRE(s.plantedAnkleSpeed_mps.size() == s.plantedFootSpeed_mps.size());
   REQUIRE(s.plantedToeSpeed_mps.size() == s.plantedFootSpeed_mps.size());
-  CHECK_THAT(mgrl::app::quantile(s.plantedFootSpeed_mps, 1.0), WithinAbs(0.0, 1e-9));
-  CHECK_THAT(mgrl::app::quantile(s.plantedAnkleSpeed_mps, 1.0), WithinAbs(0.0, 1e-9));
+  CHECK_THAT(mgrl::quantile(s.plantedFootSpeed_mps, 1.0), WithinAbs(0.0, 1e-9));
+  CHECK_THAT(mgrl::quantile(s.plantedAnkleSpeed_mps, 1.0), WithinAbs(0.0, 1e-9));
   // One foot of the four turns: a quarter of the samples, its inner frames at the circle's
   // speed (a central difference over 6 degrees: 0.157 x sin(3 deg) / (3 deg) = 0.1570).
   std::size_t moving = 0;
@@ -80,7 +80,7 @@ TEST_CASE("stats: a foot pivoting on its still ankle skates at the toe, which ea
     }
   CHECK(moving >= 28);
   CHECK(moving <= 30);
-  CHECK_THAT(mgrl::app::quantile(s.plantedToeSpeed_mps, 1.0), WithinAbs(0.157, 0.003));
+  CHECK_THAT(mgrl::quantile(s.plantedToeSpeed_mps, 1.0), WithinAbs(0.157, 0.003));
 }
 
 TEST_CASE("stats: a fighter walking back and forth reverses three times", "[stats]") {
@@ -90,8 +90,8 @@ TEST_CASE("stats: a fighter walking back and forth reverses three times", "[stat
   CHECK(s.reversals == 3);
   CHECK(s.rootSteps == 2 * 39);
   // The largest joint step is the walker's 5 cm per frame.
-  CHECK_THAT(mgrl::app::quantile(s.jointStep_m, 1.0), WithinAbs(0.05, 1e-6));
-  CHECK_THAT(mgrl::app::quantile(s.jointSpeed_mps, 1.0), WithinAbs(1.5, 1e-4));  // at 30 fps
+  CHECK_THAT(mgrl::quantile(s.jointStep_m, 1.0), WithinAbs(0.05, 1e-6));
+  CHECK_THAT(mgrl::quantile(s.jointSpeed_mps, 1.0), WithinAbs(1.5, 1e-4));  // at 30 fps
   // Below the jitter threshold, nothing counts.
   StatsParams slowOnly;
   slowOnly.reversalMinSpeed_mps = 2.0;
@@ -118,8 +118,8 @@ TEST_CASE("stats: a lunging left fist is one effective punch, landed only when t
   tight.landRadius_m = 0.02;
   CHECK(measureFolder("punch_near", tight).landed == 0);
   // Facing: fighter 1 looks along +Z at an opponent along +X (90 deg), fighter 2 at it (0).
-  CHECK_THAT(mgrl::app::quantile(near.facing_deg, 0.0), WithinAbs(0.0, 1e-3));
-  CHECK_THAT(mgrl::app::quantile(near.facing_deg, 1.0), WithinAbs(90.0, 1e-3));
+  CHECK_THAT(mgrl::quantile(near.facing_deg, 0.0), WithinAbs(0.0, 1e-3));
+  CHECK_THAT(mgrl::quantile(near.facing_deg, 1.0), WithinAbs(90.0, 1e-3));
 }
 
 TEST_CASE("stats: a punch that meets the opponent's forearm first is blocked, not landed", "[stats]") {
@@ -177,7 +177,7 @@ TEST_CASE("stats: strikes are counted each way, per fighter and for the stronger
   CHECK(partners.sides.size() == 4);
   CHECK(partners.landedInPairs == 0);
   // Pooled: every side kept, the pairs' counts summed.
-  const BoutStats p = mgrl::app::pool({near, guarded, near}, "pooled");
+  const BoutStats p = mgrl::pool({near, guarded, near}, "pooled");
   CHECK(p.sides.size() == 6);
   CHECK(p.landedByMore == 2);
   CHECK(p.landedInPairs == 2);
@@ -200,16 +200,16 @@ TEST_CASE("stats: each capture fighter faces the nearest other, simulate's avata
   CHECK(four.fighters == 4);
   CHECK(four.distance_m.size() == 4 * 30);
   CHECK_THAT(median(four.distance_m), WithinAbs(1.1, 1e-9));
-  CHECK_THAT(mgrl::app::quantile(four.distance_m, 1.0), WithinAbs(1.2, 1e-9));
+  CHECK_THAT(mgrl::quantile(four.distance_m, 1.0), WithinAbs(1.2, 1e-9));
   // avatar_000..003: partners 3 m apart, although avatar 2 stands 1 m from avatar 0.
   const BoutStats partners = measureFolder("partners");
-  CHECK_THAT(mgrl::app::quantile(partners.distance_m, 0.0), WithinAbs(3.0, 1e-9));
-  CHECK_THAT(mgrl::app::quantile(partners.distance_m, 1.0), WithinAbs(3.0, 1e-9));
+  CHECK_THAT(mgrl::quantile(partners.distance_m, 0.0), WithinAbs(3.0, 1e-9));
+  CHECK_THAT(mgrl::quantile(partners.distance_m, 1.0), WithinAbs(3.0, 1e-9));
 }
 
 TEST_CASE("stats: pooling sums counts and times and keeps every sample", "[stats]") {
   const BoutStats a = measureFolder("stand"), b = measureFolder("walk");
-  const BoutStats p = mgrl::app::pool({a, b}, "pooled");
+  const BoutStats p = mgrl::pool({a, b}, "pooled");
   CHECK(p.bouts == 2);
   CHECK(p.fighters == 4);
   CHECK_THAT(p.fighterSeconds, WithinAbs(a.fighterSeconds + b.fighterSeconds, 1e-12));
@@ -221,22 +221,22 @@ TEST_CASE("stats: pooling sums counts and times and keeps every sample", "[stats
 }
 
 TEST_CASE("stats: quantiles interpolate between order statistics", "[stats]") {
-  CHECK(mgrl::app::quantile({3, 1, 2, 4}, 0.5) == 2.5);
-  CHECK(mgrl::app::quantile({3, 1, 2, 4}, 0.0) == 1);
-  CHECK(mgrl::app::quantile({3, 1, 2, 4}, 1.0) == 4);
-  CHECK_THAT(mgrl::app::quantile({0, 10}, 0.25), WithinAbs(2.5, 1e-12));
-  CHECK(std::isnan(mgrl::app::quantile({}, 0.5)));
+  CHECK(mgrl::quantile({3, 1, 2, 4}, 0.5) == 2.5);
+  CHECK(mgrl::quantile({3, 1, 2, 4}, 0.0) == 1);
+  CHECK(mgrl::quantile({3, 1, 2, 4}, 1.0) == 4);
+  CHECK_THAT(mgrl::quantile({0, 10}, 0.25), WithinAbs(2.5, 1e-12));
+  CHECK(std::isnan(mgrl::quantile({}, 0.5)));
 }
 
 TEST_CASE("stats: Wasserstein-1 of known samples", "[stats]") {
   // A shift moves every unit of mass by the shift.
-  CHECK_THAT(mgrl::app::wasserstein1({0, 1, 2}, {1, 2, 3}), WithinAbs(1.0, 1e-12));
+  CHECK_THAT(mgrl::wasserstein1({0, 1, 2}, {1, 2, 3}), WithinAbs(1.0, 1e-12));
   // {0, 1} against {0.5}: |F_a - F_b| = 1/2 on [0, 1): 0.5.
-  CHECK_THAT(mgrl::app::wasserstein1({0, 1}, {0.5}), WithinAbs(0.5, 1e-12));
+  CHECK_THAT(mgrl::wasserstein1({0, 1}, {0.5}), WithinAbs(0.5, 1e-12));
   // {0, 0, 3} against {1, 2}: 2/3 on [0, 1), 1/6 on [1, 2), 1/3 on [2, 3) -> 7/6.
-  CHECK_THAT(mgrl::app::wasserstein1({0, 0, 3}, {1, 2}), WithinAbs(7.0 / 6.0, 1e-12));
-  CHECK_THAT(mgrl::app::wasserstein1({2, 5, 1}, {5, 1, 2}), WithinAbs(0.0, 1e-12));
-  CHECK(std::isnan(mgrl::app::wasserstein1({}, {1})));
+  CHECK_THAT(mgrl::wasserstein1({0, 0, 3}, {1, 2}), WithinAbs(7.0 / 6.0, 1e-12));
+  CHECK_THAT(mgrl::wasserstein1({2, 5, 1}, {5, 1, 2}), WithinAbs(0.0, 1e-12));
+  CHECK(std::isnan(mgrl::wasserstein1({}, {1})));
 }
 
 TEST_CASE("stats: segment distances", "[stats]") {
@@ -260,7 +260,7 @@ TEST_CASE("stats: bad bouts are refused with where, what was expected and what w
   const StatsParams params;
   auto load = [&](const std::string& argument) {
     const mgrl::app::BoutFiles files = mgrl::app::resolveBout(argument, data);
-    return mgrl::app::loadBout(files.name, files.files, params);
+    return mgrl::loadBout(files.name, files.files, params);
   };
   REQUIRE_THROWS_WITH(load("nowhere"), Contains("nowhere: expected a folder of BVH files or a quoted file pattern, "
                                                 "found no such folder or file"));
@@ -289,11 +289,10 @@ TEST_CASE("stats: the real SNU sparring bouts pooled match the issue's figures l
   CHECK(fighters == 20);
   const StatsParams params;
   std::vector<BoutStats> measured;
-  for (const auto& g : groups)
-    measured.push_back(mgrl::app::measureBout(mgrl::app::loadBout(g.name, g.files, params), params));
+  for (const auto& g : groups) measured.push_back(mgrl::measureBout(mgrl::loadBout(g.name, g.files, params), params));
   // 408 fighter-seconds at 30 fps (DATA.md).
-  CHECK_THAT(mgrl::app::pool(measured, "pooled").fighterSeconds, WithinAbs(408, 1));
-  const BoutStats p = mgrl::app::pool(measured, "pooled");
+  CHECK_THAT(mgrl::pool(measured, "pooled").fighterSeconds, WithinAbs(408, 1));
+  const BoutStats p = mgrl::pool(measured, "pooled");
   const double minutes = p.fighterSeconds / 60;
   const double strikes = static_cast<double>(p.punches + p.kicks) / minutes;
   const double reversals = static_cast<double>(p.reversals) / static_cast<double>(p.rootSteps);

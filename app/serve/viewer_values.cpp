@@ -49,11 +49,16 @@ std::string ViewerSession::values() const {
   // the heading nearest the decision's (a moving target's heading changes nothing at speed
   // 0; an opponent's facing, issue 17, does).
   const Discretizer& grid = *s.policy[shown].grid;
-  const std::size_t vertices =
-      grid.layerAxis() ? grid.axes()[0].vertices.size() * grid.axes()[1].vertices.size() : q.vertexCount();
+  const GridAxis* heading = grid.axis(AxisRole::Heading);
+  std::size_t vertices = q.vertexCount();
+  if (grid.layerAxis()) {  // the positions of one heading and layer
+    vertices = 1;
+    for (const GridAxis& axis : grid.axes())
+      if (axis.role != AxisRole::Heading) vertices *= axis.vertices.size();
+  }
   std::size_t offset = 0;
-  if (grid.layerAxis() && grid.axes().size() == 3) {
-    const std::vector<double>& headings = grid.axes()[2].vertices;
+  if (grid.layerAxis() && heading) {
+    const std::vector<double>& headings = heading->vertices;
     double nearest = 10;
     for (std::size_t h = 0; h < headings.size(); ++h)
       if (const double gap = std::abs(std::remainder(headings[h] - d.target.heading, 2 * M_PI)); gap < nearest) {

@@ -48,9 +48,7 @@ namespace {
 // an opponent to read strikes from: refuse either half alone, at the key that asks for it.
 void checkOpponent(const BehaviorSpec& spec, const Behavior& b) {
   if (b.environment->faces()) {
-    bool heading = false;
-    for (const GridAxis& axis : b.discretizer->axes()) heading |= axis.name == "heading";
-    if (!heading)
+    if (!b.discretizer->axis(AxisRole::Heading))
       spec.environment.child("type").fail(fmt::format(
           "expected a grid with a heading axis to hold the opponent's facing (polar_velocity with speeds: 1), found {}",
           b.discretizer->type()));

@@ -10,10 +10,11 @@
 
 #include <nlohmann/json.hpp>
 
+#include "mgrl/learning/behavior_spec.hpp"
 #include "mgrl/learning/discretizer.hpp"
+#include "mgrl/learning/environment_model.hpp"
 #include "mgrl/learning/learner.hpp"
 #include "mgrl/learning/reward.hpp"
-#include "mgrl/learning/behavior_spec.hpp"
 #include "mgrl/learning/success.hpp"
 
 namespace mgrl {

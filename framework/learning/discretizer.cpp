@@ -10,6 +10,46 @@
 
 namespace mgrl {
 
+std::string_view GridAxis::name() const {
+  switch (role) {
+    case AxisRole::Angle:
+      return "angle";
+    case AxisRole::Distance:
+      return "distance";
+    case AxisRole::Height:
+      return "height";
+    case AxisRole::Heading:
+      return "heading";
+    case AxisRole::Speed:
+      return "speed";
+    case AxisRole::Opponent:
+      return "opponent";
+  }
+  return "axis";
+}
+
+std::string_view GridAxis::unit() const {
+  switch (role) {
+    case AxisRole::Angle:
+    case AxisRole::Heading:
+      return "rad";
+    case AxisRole::Distance:
+    case AxisRole::Height:
+      return "m";
+    case AxisRole::Speed:
+      return "m/s";
+    case AxisRole::Opponent:
+      return "state";
+  }
+  return "";
+}
+
+const GridAxis* Discretizer::axis(AxisRole role) const {
+  for (const GridAxis& a : axes_)
+    if (a.role == role) return &a;
+  return layers_.role == role && !layers_.vertices.empty() ? &layers_ : nullptr;
+}
+
 namespace {
 
 constexpr double kTwoPi = 2 * M_PI;
@@ -61,17 +101,17 @@ void Discretizer::setAxes(std::vector<GridAxis> axes) {
   for (std::size_t i = 0; i < axes.size(); ++i) {
     const GridAxis& axis = axes[i];
     if (axis.vertices.size() < 2)
-      throw Error(fmt::format("{}: {}: expected at least 2 vertices, found {}", type(), axis.name,
-                              axis.vertices.size()));
+      throw Error(
+          fmt::format("{}: {}: expected at least 2 vertices, found {}", type(), axis.name(), axis.vertices.size()));
     for (std::size_t k = 0; k < axis.vertices.size(); ++k) {
       if (!std::isfinite(axis.vertices[k]))
-        throw Error(fmt::format("{}: {}: expected finite vertex coordinates", type(), axis.name));
+        throw Error(fmt::format("{}: {}: expected finite vertex coordinates", type(), axis.name()));
       if (k > 0 && !(axis.vertices[k] > axis.vertices[k - 1]))
-        throw Error(fmt::format("{}: {}: expected ascending vertex coordinates, found {} after {}", type(), axis.name,
+        throw Error(fmt::format("{}: {}: expected ascending vertex coordinates, found {} after {}", type(), axis.name(),
                                 axis.vertices[k], axis.vertices[k - 1]));
     }
     if (axis.wraps && !(axis.vertices.back() - axis.vertices.front() < kTwoPi))
-      throw Error(fmt::format("{}: {}: a wrapping axis must span less than 360 degrees", type(), axis.name));
+      throw Error(fmt::format("{}: {}: a wrapping axis must span less than 360 degrees", type(), axis.name()));
     cellsPerAxis_[i] = axis.wraps ? axis.vertices.size() : axis.vertices.size() - 1;
     const std::size_t n = axis.vertices.size();
     const double step = (axis.vertices.back() - axis.vertices.front()) / static_cast<double>(n - 1);
@@ -86,7 +126,7 @@ void Discretizer::setAxes(std::vector<GridAxis> axes) {
   // grid spent 30 s and 3 GB before anything said no).
   if (vertexCount_ > kMaxGridVertices) {
     std::vector<std::string> sizes;
-    for (const GridAxis& axis : axes) sizes.push_back(fmt::format("{} {}", axis.vertices.size(), axis.name));
+    for (const GridAxis& axis : axes) sizes.push_back(fmt::format("{} {}", axis.vertices.size(), axis.name()));
     throw Error(fmt::format("{}: expected a grid of at most {} vertices, found {} ({})", type(), kMaxGridVertices,
                             vertexCount_, fmt::join(sizes, " x ")));
   }
@@ -133,16 +173,16 @@ void Discretizer::setCells(std::size_t vertexCount, std::size_t cellCount, std::
 
 void Discretizer::setLayers(GridAxis layer) {
   if (layer.vertices.empty() || layer.wraps)
-    throw Error(fmt::format("{}: {}: expected at least 1 layer and no wrap", type(), layer.name));
+    throw Error(fmt::format("{}: {}: expected at least 1 layer and no wrap", type(), layer.name()));
   for (std::size_t k = 0; k < layer.vertices.size(); ++k) {
     if (!std::isfinite(layer.vertices[k]) || (k > 0 && !(layer.vertices[k] > layer.vertices[k - 1])))
-      throw Error(fmt::format("{}: {}: expected finite ascending layer coordinates", type(), layer.name));
+      throw Error(fmt::format("{}: {}: expected finite ascending layer coordinates", type(), layer.name()));
   }
   const std::size_t count = layer.vertices.size();
   if (!hanging_.empty()) throw Error(fmt::format("{}: a grid with hanging vertices cannot have layers", type()));
   if (layerVertices_ * count > kMaxGridVertices)
     throw Error(fmt::format("{}: expected a grid of at most {} vertices, found {} ({} per layer x {} {})", type(),
-                            kMaxGridVertices, layerVertices_ * count, layerVertices_, count, layer.name));
+                            kMaxGridVertices, layerVertices_ * count, layerVertices_, count, layer.name()));
   const std::size_t perCell = std::size_t{1} << dimension();
   std::vector<std::uint32_t> corners(layerCells_ * count * perCell);
   for (std::size_t l = 0; l < count; ++l)
@@ -163,7 +203,7 @@ void Discretizer::setOpponentLayers(std::size_t count) {
     throw Error(fmt::format("{}: expected 1 to {} opponent states, found {}", type(), kMaxGridVertices, count));
   std::vector<double> layers(count);
   for (std::size_t l = 0; l < count; ++l) layers[l] = static_cast<double>(l);
-  setLayers(GridAxis{"opponent", "state", std::move(layers), false});
+  setLayers(GridAxis{AxisRole::Opponent, std::move(layers), false});
   opponentLayers_ = true;
 }
 
@@ -306,10 +346,14 @@ TargetState Discretizer::sample(Rng& rng) const {
 nlohmann::json Discretizer::describe() const {
   nlohmann::json axes = nlohmann::json::array();
   for (const GridAxis& axis : axes_)
-    axes.push_back({{"name", axis.name}, {"unit", axis.unit}, {"vertices", axis.vertices}, {"wraps", axis.wraps}});
+    axes.push_back({{"name", std::string(axis.name())},
+                    {"unit", std::string(axis.unit())},
+                    {"vertices", axis.vertices},
+                    {"wraps", axis.wraps}});
   nlohmann::json out = {{"type", type()}, {"axes", axes}, {"vertex_count", vertexCount_}, {"cell_count", cellCount_}};
   if (!layers_.vertices.empty())
-    out["layers"] = {{"name", layers_.name}, {"unit", layers_.unit}, {"vertices", layers_.vertices}};
+    out["layers"] = {
+        {"name", std::string(layers_.name())}, {"unit", std::string(layers_.unit())}, {"vertices", layers_.vertices}};
   return out;
 }
 

@@ -13,6 +13,7 @@
 #include <cstdint>
 #include <memory>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include <Eigen/Core>
@@ -44,12 +45,26 @@ struct Stencil {
   int size = 0;
 };
 
+/// What a grid axis measures of the environment state (TargetState in the avatar frame).
+/// Code that needs an axis asks for its role (Discretizer::axis()), never for its name.
+enum class AxisRole {
+  Angle,     ///< the target's bearing, atan2(x, z), rad
+  Distance,  ///< its ground distance, m (the one axis of a 1-D grid: straight ahead)
+  Height,    ///< its height, m
+  Heading,   ///< where it moves or faces, rad (polar_velocity)
+  Speed,     ///< its ground speed, m/s (a layer axis)
+  Opponent,  ///< a learned opponent's discrete state (a layer axis)
+};
+
 /// One axis of a product grid.
 struct GridAxis {
-  std::string name;          ///< "angle", "distance", "height"
-  std::string unit;          ///< "rad", "m"
+  AxisRole role = AxisRole::Distance;
   std::vector<double> vertices;  ///< ascending coordinates
-  bool wraps = false;        ///< the axis is periodic with period 2 pi (angles only)
+  bool wraps = false;            ///< the axis is periodic with period 2 pi (angles only)
+  /// "angle", "distance", "height", "heading", "speed", "opponent": in messages and describe().
+  std::string_view name() const;
+  /// "rad", "m", "m/s" or "state".
+  std::string_view unit() const;
 };
 
 /// Vertices whose value is not free but the interpolation of other vertices' values
@@ -100,6 +115,8 @@ class Discretizer {
   /// The axes, first varying fastest in the vertex numbering:
   /// vertex = i0 + n0 * (i1 + n1 * i2).
   const std::vector<GridAxis>& axes() const { return axes_; }
+  /// The axis (or the layer axis) with that role, null if the grid has none.
+  const GridAxis* axis(AxisRole role) const;
   int dimension() const { return static_cast<int>(axes_.size()); }
   std::size_t vertexCount() const { return vertexCount_; }
   std::size_t cellCount() const { return cellCount_; }

@@ -12,10 +12,11 @@
 #include <vector>
 
 #include "mgrl/core/huge_pages.hpp"
+#include "mgrl/graph/state_action_model.hpp"
 #include "mgrl/learning/discretizer.hpp"
+#include "mgrl/learning/environment_model.hpp"
 #include "mgrl/learning/q_table.hpp"
 #include "mgrl/learning/reward.hpp"
-#include "mgrl/graph/state_action_model.hpp"
 
 namespace mgrl {
 

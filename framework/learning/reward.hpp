@@ -10,15 +10,14 @@
 #include <string>
 #include <vector>
 
-#include <Eigen/Core>
-
-#include "mgrl/core/random.hpp"
 #include "mgrl/core/registry.hpp"
 #include "mgrl/graph/state_action_model.hpp"
 #include "mgrl/learning/signals.hpp"
 #include "mgrl/learning/target_state.hpp"
 
 namespace mgrl {
+
+class EnvironmentModel;
 
 class Reward {
  public:
@@ -35,98 +34,9 @@ class Reward {
   /// The behaviour's environment model (it outlives the reward), before any evaluate(): a
   /// reward whose terms read a learned opponent's actual body and strikes asks it for them
   /// (EnvironmentModel::track).
-  virtual void bindEnvironment(const class EnvironmentModel*) {}
+  virtual void bindEnvironment(const EnvironmentModel*) {}
 };
 
 using RewardRegistry = Registry<Reward>;
-
-class QTable;
-class Discretizer;
-
-/// The EnvironmentModel seam: the environment state in the avatar frame at the end of an
-/// action, given the state at the decision.
-class EnvironmentModel {
- public:
-  virtual ~EnvironmentModel() = default;
-  virtual std::string type() const = 0;
-  virtual TargetState next(const StateActionModel& model, std::size_t action, const TargetState& e) const = 0;
-  /// True if next() is exactly inverseTransformPoint(model.displacement(action), e.position)
-  /// with speed 0, so learners may apply it from precomputed sines and cosines.
-  virtual bool rigid() const { return false; }
-  /// True if next() keeps the speed bit for bit, as a grid with speed layers requires.
-  virtual bool keepsSpeed() const { return false; }
-  /// The state of an evaluation trial's target placed at `position` (eval, compare): the
-  /// position alone for a static target; a moving one draws its motion from `rng`.
-  virtual TargetState draw(const Eigen::Vector3d& position, Rng&) const { return position; }
-  /// The most a draw() may ask of a grid's layer axis (its top speed), m/s.
-  virtual double maxSpeed() const { return 0; }
-  /// True if the state's heading is which way the target faces (an `opponent`), not where
-  /// it moves: its grid must hold a heading, the world supplies it (a sparring partner's
-  /// facing, a dragged target's toward the avatar), and trials report the spacing to it.
-  virtual bool faces() const { return false; }
-
-  // A learned opponent (issue 43): an avatar of the same graph playing a policy table, whose
-  // discrete state (graph state and phase) is TargetState::opponent, one grid layer each.
-
-  /// Prepares the model for `model` before any next(); throws mgrl::Error.
-  virtual void bind(const StateActionModel&) {}
-  /// The number of discrete opponent states (layers the grid gets), 0 for none.
-  virtual std::size_t opponentStates() const { return 0; }
-  /// The phase buckets per graph state of those (opponentStateIndex()), 0 for none: what the
-  /// runtime world needs to tell a controller what a sparring partner is doing.
-  virtual int opponentPhases() const { return 0; }
-  /// What the opponent does at frames 1..L of action a from e (out[t - 1] for frame t, L
-  /// entries); false (out untouched) for a model without a learned opponent.
-  virtual bool track(const StateActionModel&, std::size_t /*action*/, const TargetState&,
-                     std::vector<OpponentFrame>& /*out*/) const {
-    return false;
-  }
-  /// Makes the opponent play `table` on `grid` (the same grid, opponent layers included, as
-  /// the behaviour's own: self-play; it must outlive this model); a null table: its scripted
-  /// policy. `key` names the
-  /// table for the behaviour's key. Throws mgrl::Error for a model without one, or a table
-  /// of another shape.
-  virtual void playPolicy(const Discretizer* grid, std::shared_ptr<const QTable> table, const std::string& key);
-  /// Self-play rounds `mgrl train` runs (round k's opponent plays round k - 1's table).
-  virtual int rounds() const { return 1; }
-  /// What the opponent plays, for messages and records: "" without a learned opponent.
-  virtual std::string policyKey() const { return ""; }
-  /// The policy bundle directory the scenario asks the opponent to play, "" for none (a
-  /// scripted opponent, or none at all); buildBehavior() loads it and calls playPolicy().
-  virtual std::string policySource() const { return ""; }
-};
-
-using EnvironmentRegistry = Registry<EnvironmentModel>;
-
-/// `static_target`: the target stays put in the world, so its new avatar-frame position is
-/// the old one seen from the action's end, exactly (DESIGN.md sec. 3): the inverse of the
-/// action's root displacement applied to e. Height is unchanged.
-class StaticTarget final : public EnvironmentModel {
- public:
-  std::string type() const override { return "static_target"; }
-  TargetState next(const StateActionModel& model, std::size_t action, const TargetState& e) const override;
-  bool rigid() const override { return true; }
-};
-
-/// `moving_target`: the target moves on the ground in a straight line at a constant velocity
-/// for the episode (what TargetState::at() predicts); after an action of T seconds it is at
-/// p + v T seen from the action's end, its heading turned back by the avatar's yaw. The
-/// speed is kept bit for bit, so it can be a grid's layer axis.
-class MovingTarget final : public EnvironmentModel {
- public:
-  MovingTarget(double minSpeed, double maxSpeed) : minSpeed_(minSpeed), maxSpeed_(maxSpeed) {}
-  std::string type() const override { return "moving_target"; }
-  TargetState next(const StateActionModel& model, std::size_t action, const TargetState& e) const override;
-  bool keepsSpeed() const override { return true; }
-  TargetState draw(const Eigen::Vector3d& position, Rng& rng) const override;
-  double maxSpeed() const override { return maxSpeed_; }
-
- private:
-  double minSpeed_, maxSpeed_;
-};
-
-/// The inverse of transformPoint(): a point of the frame `motion` starts from, seen from
-/// the frame it leads to.
-Eigen::Vector3d inverseTransformPoint(const GroundMotion& motion, const Eigen::Vector3d& point);
 
 }  // namespace mgrl

@@ -10,7 +10,7 @@
 
 #include "mgrl/core/error.hpp"
 #include "mgrl/graph/motion_graph.hpp"
-#include "mgrl/learning/reward.hpp"
+#include "mgrl/learning/environment_model.hpp"
 #include "mgrl/motion/roles.hpp"
 
 namespace mgrl {

@@ -12,11 +12,12 @@
 
 #include <Eigen/Core>
 
-#include "mgrl/learning/discretizer.hpp"
-#include "mgrl/learning/q_table.hpp"
 #include "mgrl/core/random.hpp"
-#include "mgrl/learning/reward.hpp"
 #include "mgrl/learning/behavior_spec.hpp"
+#include "mgrl/learning/discretizer.hpp"
+#include "mgrl/learning/environment_model.hpp"
+#include "mgrl/learning/q_table.hpp"
+#include "mgrl/learning/reward.hpp"
 
 namespace mgrl {
 

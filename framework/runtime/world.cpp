@@ -13,9 +13,9 @@
 
 #include <fmt/format.h>
 
-#include "mgrl/motion/kinematics.hpp"
 #include "mgrl/graph/motion_graph.hpp"
-#include "mgrl/learning/reward.hpp"
+#include "mgrl/learning/environment_model.hpp"
+#include "mgrl/motion/kinematics.hpp"
 
 namespace mgrl {
 

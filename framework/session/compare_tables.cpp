@@ -69,10 +69,11 @@ void requireCovers(const Discretizer& reference, const Discretizer& grid, const 
       if (axis.wraps) continue;
       constexpr double kRoundOff = 1e-6;
       if (c[i] < axis.vertices.front() - kRoundOff || c[i] > axis.vertices.back() + kRoundOff)
-        throw Error(fmt::format("--reference-set: expected a reference grid that covers behaviors.{}'s grid, found "
-                                "its vertex {} at {} {:.4g} {}, outside the reference's {} range [{:.4g}, {:.4g}] {}",
-                                behavior, v, axis.name, c[i], axis.unit, axis.name, axis.vertices.front(),
-                                axis.vertices.back(), axis.unit));
+        throw Error(
+            fmt::format("--reference-set: expected a reference grid that covers behaviors.{}'s grid, found "
+                        "its vertex {} at {} {:.4g} {}, outside the reference's {} range [{:.4g}, {:.4g}] {}",
+                        behavior, v, axis.name(), c[i], axis.unit(), axis.name(), axis.vertices.front(),
+                        axis.vertices.back(), axis.unit()));
     }
   }
 }

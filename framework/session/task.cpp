@@ -5,8 +5,7 @@
 
 #include <fmt/format.h>
 
-#include "environments/environments.hpp"
-#include "mgrl/learning/reward.hpp"
+#include "mgrl/learning/environment_model.hpp"
 
 namespace mgrl {
 
@@ -57,8 +56,7 @@ Task taskOf(const Behavior& first) {
   task.gamma = first.reward->gamma();
   task.opponent = first.environment->faces();
   task.opponentPhases = first.environment->opponentPhases();
-  if (const auto* o = dynamic_cast<const environments::Opponent*>(first.environment.get()))
-    task.scriptedOpponent = Task::ScriptedOpponent{!o->pursues(), o->stopDistance()};
+  task.scriptedOpponent = first.environment->scriptedOpponent();
   return task;
 }
 

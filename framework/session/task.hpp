@@ -27,10 +27,7 @@ struct Task {
   /// `opponent` model): the second avatar of each sparring pair pursues the first
   /// (PursueController) to `stopDistance`, or takes the actions that move it least
   /// (`stand`). Unset for other models.
-  struct ScriptedOpponent {
-    bool stand = false;
-    double stopDistance = 0;
-  };
+  using ScriptedOpponent = mgrl::ScriptedOpponent;
   std::optional<ScriptedOpponent> scriptedOpponent;
   /// The scenario's `world:` section (defaults where absent), parsed once here.
   WorldParams world;

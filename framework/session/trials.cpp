@@ -10,9 +10,8 @@
 
 #include "mgrl/core/error.hpp"
 #include "mgrl/core/random.hpp"
-#include "mgrl/learning/signals.hpp"
-#include "environments/environments.hpp"
 #include "mgrl/graph/motion_graph.hpp"
+#include "mgrl/learning/signals.hpp"
 #include "mgrl/runtime/controller.hpp"
 
 namespace mgrl {
@@ -26,8 +25,7 @@ Trials::Trials(const StateActionModel& model, const std::vector<Behavior>& behav
   const auto region = std::find_if(behaviors.begin(), behaviors.end(),
                                    [](const Behavior& b) { return b.activation == Activation::Always; });
   region_ = (region != behaviors.end() ? region : behaviors.begin())->discretizer.get();
-  for (const GridAxis& axis : region_->axes())
-    if (axis.name == "distance") reach_ = axis.vertices.back();
+  if (const GridAxis* distance = region_->axis(AxisRole::Distance)) reach_ = distance->vertices.back();
   if (!(reach_ > 0))
     throw Error(fmt::format("{}: expected a behaviour whose grid has a distance axis to place targets in, found none",
                             source));
@@ -146,14 +144,12 @@ std::pair<const SuccessCondition*, double> Trials::avoidCondition() const {
   return {nullptr, 0};
 }
 
-bool Trials::hasAvatarOpponent() const {
-  return dynamic_cast<const environments::Opponent*>(environment_) && avoidCondition().first;
-}
+bool Trials::hasAvatarOpponent() const { return environment_->scriptedOpponent() && avoidCondition().first; }
 
 TrialStats Trials::runAgainstAvatar(const ChooseAction& choose, std::size_t count, double seconds,
                                     std::uint64_t seed) const {
   const StateActionModel& model = model_;
-  const auto* opponentModel = dynamic_cast<const environments::Opponent*>(environment_);
+  const std::optional<ScriptedOpponent> opponentModel = environment_->scriptedOpponent();
   if (!opponentModel)
     throw Error(fmt::format("trials against an avatar: expected an opponent environment, found {}", environment_->type()));
   // Not a structured binding: the lambdas below capture it (clang before 16 cannot).
@@ -202,9 +198,8 @@ TrialStats Trials::runAgainstAvatar(const ChooseAction& choose, std::size_t coun
       const GroundMotion end = compose(o.decision, model.displacement(a));
       const Eigen::Vector3d q = inverseTransformPoint(end, avatar);
       const double facing = std::abs(std::atan2(q.x(), q.z()));
-      const double place = opponentModel->pursues()
-                               ? std::abs(std::hypot(q.x(), q.z()) - opponentModel->stopDistance())
-                               : std::hypot(end.dx - home.x(), end.dz - home.z());
+      const double place = !opponentModel->stand ? std::abs(std::hypot(q.x(), q.z()) - opponentModel->stopDistance)
+                                                 : std::hypot(end.dx - home.x(), end.dz - home.z());
       const double punch = PursueController::punchScore(model.hitsOf(a), aim);
       if (const double cost = place + PursueController::kTurnCost * facing - PursueController::kPunchWeight * punch;
           cost < bestCost) {

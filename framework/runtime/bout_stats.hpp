@@ -19,7 +19,7 @@
 #include "mgrl/motion/motion.hpp"
 #include "mgrl/motion/roles.hpp"
 
-namespace mgrl::app {
+namespace mgrl {
 
 /// Thresholds of the measures, SI units.
 struct StatsParams {
@@ -95,9 +95,9 @@ Bout loadBout(const std::string& name, const std::vector<std::filesystem::path>&
 struct BoutStats {
   std::string name;
   std::size_t bouts = 0, fighters = 0, frames = 0;
-  double seconds = 0;           ///< bout time (sum over bouts)
-  double fighterSeconds = 0;    ///< fighters x time
-  std::vector<double> fps;      ///< frame rate of each bout
+  double seconds = 0;         ///< bout time (sum over bouts)
+  double fighterSeconds = 0;  ///< fighters x time
+  std::vector<double> fps;    ///< frame rate of each bout
   /// Per fighter-frame with an opponent: pelvis distance on the ground (m) and the angle
   /// between the facing direction and the direction to the opponent's pelvis (deg, 0-180).
   std::vector<double> distance_m, facing_deg;
@@ -144,4 +144,4 @@ double quantile(std::vector<double> values, double q);
 /// samples: the integral of |F_a - F_b|. NaN if either is empty.
 double wasserstein1(std::vector<double> a, std::vector<double> b);
 
-}  // namespace mgrl::app
+}  // namespace mgrl

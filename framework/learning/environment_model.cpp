@@ -1,4 +1,4 @@
-#include "mgrl/learning/reward.hpp"
+#include "mgrl/learning/environment_model.hpp"
 
 #include <cmath>
 

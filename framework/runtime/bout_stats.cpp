@@ -1,4 +1,4 @@
-#include "bout_stats.hpp"
+#include "mgrl/runtime/bout_stats.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -12,7 +12,7 @@
 #include "mgrl/motion/motion_io.hpp"
 #include "mgrl/runtime/world.hpp"
 
-namespace mgrl::app {
+namespace mgrl {
 namespace {
 
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
@@ -40,10 +40,11 @@ std::pair<int, int> chestAndNeck(const Skeleton& skeleton, const SkeletonRoles& 
     if (j == roles.pelvis) break;
   }
   if (chain.size() < 2 || chain.back() != roles.pelvis)
-    throw Error(fmt::format("{}: expected the head joint '{}' below the pelvis joint '{}' in the hierarchy, found it "
-                            "elsewhere",
-                            source, skeleton.joint(static_cast<std::size_t>(roles.head)).name,
-                            skeleton.joint(static_cast<std::size_t>(roles.pelvis)).name));
+    throw Error(
+        fmt::format("{}: expected the head joint '{}' below the pelvis joint '{}' in the hierarchy, found it "
+                    "elsewhere",
+                    source, skeleton.joint(static_cast<std::size_t>(roles.head)).name,
+                    skeleton.joint(static_cast<std::size_t>(roles.pelvis)).name));
   const int neck = chain.size() > 2 ? chain[1] : chain[0];
   const int chest = chain.size() > 3 ? chain[chain.size() / 2] : neck;
   return {chest, neck};
@@ -223,9 +224,10 @@ Bout loadBout(const std::string& name, const std::vector<std::filesystem::path>&
   for (std::size_t i = 0; i < loaded.size(); ++i) {
     const double t0 = loaded[0].motion.frameTime(), t = loaded[i].motion.frameTime();
     if (std::abs(t - t0) > 1e-6 * t0)
-      throw Error(fmt::format("bout {}: expected one frame time for all fighters, found {:.6g} s in {} and {:.6g} s "
-                              "in {}",
-                              name, t0, files[0].string(), t, files[i].string()));
+      throw Error(
+          fmt::format("bout {}: expected one frame time for all fighters, found {:.6g} s in {} and {:.6g} s "
+                      "in {}",
+                      name, t0, files[0].string(), t, files[i].string()));
     if (loaded[i].motion.frameCount() < loaded[shortest].motion.frameCount()) shortest = i;
   }
   const std::size_t frames = loaded[shortest].motion.frameCount();
@@ -243,8 +245,8 @@ Bout loadBout(const std::string& name, const std::vector<std::filesystem::path>&
     if (motion.frameCount() != frames && warn)
       warn(fmt::format("bout {}: {} has {} frames, {} only {}: measuring the first {} frames of each", name,
                        files[i].string(), motion.frameCount(), files[shortest].string(), frames, frames));
-    bout.fighters.push_back(makeFighter(motion.frameCount() == frames ? motion : motion.slice(0, frames),
-                                        files[i].string(), params));
+    bout.fighters.push_back(
+        makeFighter(motion.frameCount() == frames ? motion : motion.slice(0, frames), files[i].string(), params));
   }
   return bout;
 }
@@ -399,4 +401,4 @@ double wasserstein1(std::vector<double> a, std::vector<double> b) {
   return total;
 }
 
-}  // namespace mgrl::app
+}  // namespace mgrl
