@@ -129,8 +129,70 @@ json successCurve(const json& runs, const std::string& learner) {
 
 }  // namespace
 
-json runCompare(const CompareOptions& options) {
-  // Every mistake in the options, before anything is trained.
+// One run's row of the report: its evaluation, training record and comparison with the
+// reference's table.
+json runJson(const Run& run, const PolicyBehavior& trained, const json& evaluated, const Comparison& c,
+             bool snapshots) {
+  const double perSecond = evaluated["decisions_per_second"].get<double>();
+  json r = {{"learner", run.learner},
+            {"seed", run.seeded ? json(run.seed) : json(nullptr)},
+            {"policy", run.dir.string()},
+            {"success_rate", evaluated["success_rate"]},
+            {"mean_time_to_hit_s", evaluated["mean_time_to_hit_s"]},
+            {"mean_return", evaluated["mean_return"]},
+            {"train_seconds", recorded(trained.record, "seconds")},
+            {"updates", recorded(trained.record, "updates")},
+            {"table_bytes", trained.table.bytes()},
+            {"final_residual", recorded(trained.record, "final_residual")},
+            {"decision_us", perSecond > 0 ? json(1e6 / perSecond) : json(nullptr)},
+            {"value_rmse", c.rmse},
+            {"greedy_agreement", c.agreement},
+            {"reference_interpolated", c.interpolated},
+            {"nonzero_share", nonzeroShare(trained.table)},
+            {"cell_coverage",
+             trained.record.contains("stats") ? trained.record["stats"].value("cell_coverage", json()) : json()},
+            {"curve", trained.record.value("curve", json::array())},
+            {"snapshots", json(nullptr)}};
+  if (trained.record.contains("snapshots") && snapshots) {
+    const json& taken = trained.record["snapshots"];
+    r["snapshots"] = {{"columns", taken["columns"]}, {"points", taken["points"]}};
+  }
+  return r;
+}
+
+// Per learner, the mean and standard deviation of each metric over its runs (null where a
+// run lacks it), and its success curve.
+json learnerSummaries(const json& runs, const std::vector<std::string>& learners) {
+  json out = json::object();
+  for (const std::string& learner : learners) {
+    json mean = json::object(), sd = json::object();
+    for (const auto& [key, label] : compareMetrics()) {
+      std::vector<double> xs;
+      bool missing = false;
+      for (const json& r : runs)
+        if (r["learner"] == learner) {
+          if (r[key].is_number())
+            xs.push_back(r[key].get<double>());
+          else
+            missing = true;
+        }
+      mean[key] = missing || xs.empty() ? json(nullptr) : json(meanOf(xs));
+      sd[key] = missing || xs.empty() ? json(nullptr) : json(sdOf(xs));
+    }
+    out[learner] = {{"mean", mean}, {"sd", sd}, {"success_curve", successCurve(runs, learner)}};
+  }
+  return out;
+}
+
+// Every mistake in the options, before anything is trained: the --learner-set and
+// --reference-set flags as --set keys, and the snapshot trials.
+struct CheckedFlags {
+  std::map<std::string, std::vector<std::string>> learnerSets;
+  std::vector<std::string> referenceSets;
+  std::size_t snapshotTrials = 0;
+};
+
+CheckedFlags checkFlags(const CompareOptions& options) {
   if (options.learners.empty()) throw Error("--learners: expected a comma-separated list of learners, found none");
   std::set<std::string> seen;
   for (const std::string& learner : options.learners) {
@@ -148,7 +210,8 @@ json runCompare(const CompareOptions& options) {
     throw Error(fmt::format("--seeds: expected each seed once, found {}", fmt::join(options.seeds, ",")));
   if (options.trials < 1 || options.trials > 100000)
     throw Error(fmt::format("--trials: expected a number of trials in [1, 100000], found {}", options.trials));
-  std::map<std::string, std::vector<std::string>> learnerSets;
+  CheckedFlags flags;
+  auto& learnerSets = flags.learnerSets;
   for (const std::string& set : options.learnerSets) {
     const auto colon = set.find(':'), eq = set.find('=');
     if (colon == std::string::npos || colon == 0 || eq == std::string::npos || eq < colon + 2)
@@ -162,13 +225,13 @@ json runCompare(const CompareOptions& options) {
   if (options.snapshots > 1000)
     throw Error(fmt::format("--snapshots: expected a number of snapshots per run in [0, 1000], found {}",
                             options.snapshots));
-  const std::size_t snapshotTrials =
+  const std::size_t snapshotTrials = flags.snapshotTrials =
       options.snapshotTrials > 0 ? options.snapshotTrials : std::min(kDefaultSnapshotTrials, options.trials);
   if (snapshotTrials > options.trials)
     throw Error(fmt::format("--snapshot-trials: expected at most --trials ({}): snapshots are evaluated on the first "
                             "of the same trial starts, found {}",
                             options.trials, snapshotTrials));
-  std::vector<std::string> referenceSets;
+  auto& referenceSets = flags.referenceSets;
   for (const std::string& set : options.referenceSets) {
     const auto eq = set.find('=');
     if (eq == std::string::npos || eq == 0 || set.find('.') < eq)
@@ -177,6 +240,127 @@ json runCompare(const CompareOptions& options) {
                               options.behavior, quoteToken(set)));
     referenceSets.push_back(fmt::format("behaviors.{}.discretizer.{}", options.behavior, set));
   }
+  return flags;
+}
+
+// The --set keys of a run of `learner`: the scenario's, the learner, its --learner-set's.
+std::vector<std::string> runSets(const CompareOptions& options,
+                                 std::map<std::string, std::vector<std::string>>& learnerSets,
+                                 const std::string& learner) {
+  std::vector<std::string> sets = options.sets;
+  sets.push_back(fmt::format("behaviors.{}.learner.type={}", options.behavior, learner));
+  for (const std::string& s : learnerSets[learner]) sets.push_back(s);
+  return sets;
+}
+
+// The runs of the comparison: each learner once per seed (once if it has no seed), with
+// its --learner-set keys, and where its bundle goes.
+std::vector<Run> planRuns(const CompareOptions& options, std::map<std::string, std::vector<std::string>>& learnerSets,
+                          const fs::path& compareCache) {
+  std::vector<Run> runs;
+  for (const std::string& learner : options.learners) {
+    const ParamSpecs& params = plugins().learners.find(learner)->params;
+    const bool seeded = std::any_of(params.begin(), params.end(), [](const ParamSpec& p) { return p.name == "seed"; });
+    // A learner with no seed is deterministic: one run stands for every seed.
+    for (std::size_t k = 0; k < (seeded ? options.seeds.size() : 1); ++k) {
+      Run run{learner, seeded ? options.seeds[k] : 0, seeded, runSets(options, learnerSets, learner), {}, nullptr};
+      if (seeded) run.sets.push_back(fmt::format("behaviors.{}.learner.seed={}", options.behavior, run.seed));
+      const Scenario checked = loadChecked(options, run.sets, fmt::format("--learners {}", learner));
+      run.dir = defaultPolicyDirectory(compareCache, checked);
+      run.scenario = std::make_shared<Scenario>(checked);
+      runs.push_back(std::move(run));
+    }
+  }
+  return runs;
+}
+
+// The reference: value iteration on the behaviour's grid, or on the grid --reference-set
+// asks for.
+Run planReference(const CompareOptions& options, CheckedFlags& flags, const fs::path& compareCache) {
+  Run reference{"value_iteration", 0, false, runSets(options, flags.learnerSets, "value_iteration"), {}, nullptr};
+  if (flags.learnerSets.count("value_iteration") == 0) {
+    reference.sets = options.sets;
+    reference.sets.push_back(fmt::format("behaviors.{}.learner.type=value_iteration", options.behavior));
+  }
+  reference.sets.insert(reference.sets.end(), flags.referenceSets.begin(), flags.referenceSets.end());
+  reference.scenario = std::make_shared<Scenario>(
+      loadChecked(options, reference.sets, flags.referenceSets.empty() ? "reference" : "--reference-set"));
+  reference.dir = defaultPolicyDirectory(compareCache, *reference.scenario);
+  return reference;
+}
+
+// Every run's grid checked before anything is trained (and, with --reference-set, covered
+// by the reference's); returns the behaviour's grid size.
+std::size_t checkRunGrids(const CompareOptions& options, const std::vector<Run>& runs, const Discretizer& referenceGrid,
+                          bool referenceSet, const StateActionModel& model, const std::string& graphKey) {
+  std::size_t behaviorVertices = 0;
+  for (const Run& run : runs) {
+    for (const Behavior& b : buildBehaviors(*run.scenario, plugins(), model, graphKey))
+      if (b.name == options.behavior) {
+        try {
+          b.learner->checkGrid(*b.discretizer);
+        } catch (const Error& e) {
+          throw Error(fmt::format("--learners {}: behaviors.{}: {}", run.learner, b.name, e.what()));
+        }
+        if (referenceSet) requireCovers(referenceGrid, *b.discretizer, b.name);
+        behaviorVertices = b.discretizer->vertexCount();
+      }
+  }
+  return behaviorVertices;
+}
+
+// Trains one run (resuming its cached bundle), the shared behaviours seeded from `base`.
+// A run with snapshots wanted and a cached bundle without them (trained before they were
+// recorded, or with other --snapshots, --snapshot-trials or --seconds) is trained again:
+// the same table, now with its learning curve.
+void trainCompareRun(const CompareOptions& options, const Run& run, const std::string& label, bool snapshots,
+                     const fs::path& base, bool shared, std::size_t snapshotTrials) {
+  if (shared) seedBundle(base, run.dir);
+  TrainOptions train;
+  static_cast<LearnOptions&>(train) = options;
+  train.sets = run.sets;
+  train.behavior = options.behavior;
+  train.out = run.dir;
+  train.resume = true;
+  if (options.log) options.log(fmt::format("compare: {}", label));
+  if (snapshots) {
+    if (lacksSnapshots(run.dir, options.behavior, options.snapshots, snapshotTrials, options.seconds)) {
+      if (options.log)
+        options.log(fmt::format(
+            "compare: {}: the cached bundle has no snapshots taken with these settings; training again to take them",
+            label));
+      train.resume = false;
+    }
+    train.listen = [&options, base, snapshotTrials](const Behavior& trained, const std::vector<Behavior>& all,
+                                                    const GraphResult& graph) {
+      return std::make_unique<SnapshotEvaluator>(trained, all, graph, base, options, options.snapshots, snapshotTrials);
+    };
+  }
+  runTrain(train);
+}
+
+// The report's "reference" entry: what it is, where its bundle is, how long it trained.
+json referenceReport(const CompareOptions& options, const Run& reference, const PolicyBehavior& referenceTrained,
+                     const Discretizer& referenceGrid, std::size_t behaviorVertices) {
+  json out = {{"learner", "value_iteration"},  {"policy", reference.dir.string()},
+              {"grid", referenceGrid.type()},  {"vertices", referenceGrid.vertexCount()},
+              {"sets", options.referenceSets}, {"train_seconds", recorded(referenceTrained.record, "seconds")}};
+  out["description"] = options.referenceSets.empty()
+                           ? fmt::format("value iteration on the behaviour's grid ({}, {} vertices)",
+                                         referenceGrid.type(), referenceGrid.vertexCount())
+                           : fmt::format(
+                                 "value iteration on a grid set by --reference-set {} ({}, {} vertices against the "
+                                 "behaviour's {}), interpolated at each table's vertices",
+                                 fmt::join(options.referenceSets, " "), referenceGrid.type(),
+                                 referenceGrid.vertexCount(), behaviorVertices);
+  return out;
+}
+
+json runCompare(const CompareOptions& options) {
+  CheckedFlags flags = checkFlags(options);
+  auto& learnerSets = flags.learnerSets;
+  const auto& referenceSets = flags.referenceSets;
+  const std::size_t snapshotTrials = flags.snapshotTrials;
 
   Scenario scenario = checkedScenario(options);
   requireBehavior(scenario, options.behavior);
@@ -185,36 +369,8 @@ json runCompare(const CompareOptions& options) {
 
   const fs::path cacheDir = options.cacheDir.empty() ? defaultCacheDirectory() : options.cacheDir;
   const fs::path compareCache = cacheDir / "compare";
-  std::vector<Run> runs;
-  auto runSets = [&](const std::string& learner) {
-    std::vector<std::string> sets = options.sets;
-    sets.push_back(fmt::format("behaviors.{}.learner.type={}", options.behavior, learner));
-    for (const std::string& s : learnerSets[learner]) sets.push_back(s);
-    return sets;
-  };
-  for (const std::string& learner : options.learners) {
-    const ParamSpecs& params = plugins().learners.find(learner)->params;
-    const bool seeded = std::any_of(params.begin(), params.end(), [](const ParamSpec& p) { return p.name == "seed"; });
-    // A learner with no seed is deterministic: one run stands for every seed.
-    for (std::size_t k = 0; k < (seeded ? options.seeds.size() : 1); ++k) {
-      Run run{learner, seeded ? options.seeds[k] : 0, seeded, runSets(learner), {}, nullptr};
-      if (seeded) run.sets.push_back(fmt::format("behaviors.{}.learner.seed={}", options.behavior, run.seed));
-      const Scenario checked = loadChecked(options, run.sets, fmt::format("--learners {}", learner));
-      run.dir = defaultPolicyDirectory(compareCache, checked);
-      run.scenario = std::make_shared<Scenario>(checked);
-      runs.push_back(std::move(run));
-    }
-  }
-  // The reference: value iteration on the behaviour's grid.
-  Run reference{"value_iteration", 0, false, runSets("value_iteration"), {}, nullptr};
-  if (learnerSets.count("value_iteration") == 0) {
-    reference.sets = options.sets;
-    reference.sets.push_back(fmt::format("behaviors.{}.learner.type=value_iteration", options.behavior));
-  }
-  reference.sets.insert(reference.sets.end(), referenceSets.begin(), referenceSets.end());
-  reference.scenario = std::make_shared<Scenario>(
-      loadChecked(options, reference.sets, referenceSets.empty() ? "reference" : "--reference-set"));
-  reference.dir = defaultPolicyDirectory(compareCache, *reference.scenario);
+  std::vector<Run> runs = planRuns(options, learnerSets, compareCache);
+  const Run reference = planReference(options, flags, compareCache);
   if (!options.report.empty()) {
     std::error_code ec;
     fs::create_directories(options.report, ec);
@@ -242,19 +398,8 @@ json runCompare(const CompareOptions& options) {
     throw Error(fmt::format("{}: behaviors.{}: {}", referenceSets.empty() ? "reference" : "--reference-set",
                             options.behavior, e.what()));
   }
-  std::size_t behaviorVertices = 0;
-  for (const Run& run : runs) {
-    for (const Behavior& b : buildBehaviors(*run.scenario, plugins(), model, loaded.graph.key))
-      if (b.name == options.behavior) {
-        try {
-          b.learner->checkGrid(*b.discretizer);
-        } catch (const Error& e) {
-          throw Error(fmt::format("--learners {}: behaviors.{}: {}", run.learner, b.name, e.what()));
-        }
-        if (!referenceSets.empty()) requireCovers(*referenceBehavior.discretizer, *b.discretizer, b.name);
-        behaviorVertices = b.discretizer->vertexCount();
-      }
-  }
+  const std::size_t behaviorVertices =
+      checkRunGrids(options, runs, *referenceBehavior.discretizer, !referenceSets.empty(), model, loaded.graph.key);
 
   // The shared behaviours, trained once with the scenario's settings.
   for (const std::string& name : names) {
@@ -268,31 +413,8 @@ json runCompare(const CompareOptions& options) {
     runTrain(train);
   }
 
-  // A run with snapshots wanted and a cached bundle without them (trained before they were
-  // recorded, or with other --snapshots, --snapshot-trials or --seconds) is trained again:
-  // the same table, now with its learning curve.
   auto trainRun = [&](const Run& run, const std::string& label, bool snapshots) {
-    if (names.size() > 1) seedBundle(base, run.dir);
-    TrainOptions train;
-    static_cast<LearnOptions&>(train) = options;
-    train.sets = run.sets;
-    train.behavior = options.behavior;
-    train.out = run.dir;
-    train.resume = true;
-    log(fmt::format("compare: {}", label));
-    if (snapshots) {
-      if (lacksSnapshots(run.dir, options.behavior, options.snapshots, snapshotTrials, options.seconds)) {
-        log(fmt::format("compare: {}: the cached bundle has no snapshots taken with these settings; training again "
-                        "to take them",
-                        label));
-        train.resume = false;
-      }
-      train.listen = [&](const Behavior& trained, const std::vector<Behavior>& all, const GraphResult& graph) {
-        return std::make_unique<SnapshotEvaluator>(trained, all, graph, base, options, options.snapshots,
-                                                   snapshotTrials);
-      };
-    }
-    runTrain(train);
+    trainCompareRun(options, run, label, snapshots, base, names.size() > 1, snapshotTrials);
   };
   // The reference takes snapshots when it is one of the runs too (the same bundle).
   const bool referenceIsRun =
@@ -301,20 +423,7 @@ json runCompare(const CompareOptions& options) {
   const PolicyBundle referenceBundle = loadPolicyBundle(reference.dir, model, loaded.graph.key);
   const PolicyBehavior& referenceTrained = referenceBundle.behaviors.at(options.behavior);
   const Discretizer& referenceGrid = *referenceBehavior.discretizer;
-  json referenceJson = {{"learner", "value_iteration"},
-                        {"policy", reference.dir.string()},
-                        {"grid", referenceGrid.type()},
-                        {"vertices", referenceGrid.vertexCount()},
-                        {"sets", options.referenceSets},
-                        {"train_seconds", recorded(referenceTrained.record, "seconds")}};
-  referenceJson["description"] =
-      referenceSets.empty()
-          ? fmt::format("value iteration on the behaviour's grid ({}, {} vertices)", referenceGrid.type(),
-                        referenceGrid.vertexCount())
-          : fmt::format("value iteration on a grid set by --reference-set {} ({}, {} vertices against the "
-                        "behaviour's {}), interpolated at each table's vertices",
-                        fmt::join(options.referenceSets, " "), referenceGrid.type(), referenceGrid.vertexCount(),
-                        behaviorVertices);
+  const json referenceJson = referenceReport(options, reference, referenceTrained, referenceGrid, behaviorVertices);
 
   json report = {{"scenario", loaded.scenario.path.string()},
                  {"scenario_name", loaded.scenario.name},
@@ -341,37 +450,16 @@ json runCompare(const CompareOptions& options) {
     eval.seconds = options.seconds;
     eval.seed = 1;  // the same trial starts for every run
     const json evaluated = runEval(eval);
-    PolicyBundle bundle = loadPolicyBundle(run.dir, model, loaded.graph.key);
+    const PolicyBundle bundle = loadPolicyBundle(run.dir, model, loaded.graph.key);
     const PolicyBehavior& trained = bundle.behaviors.at(options.behavior);
     const Comparison c =
         compareTables(trained.table, trained.vertices, referenceTrained.table, referenceTrained.vertices, referenceGrid);
-    const double perSecond = evaluated["decisions_per_second"].get<double>();
-    json r = {{"learner", run.learner},
-              {"seed", run.seeded ? json(run.seed) : json(nullptr)},
-              {"policy", run.dir.string()},
-              {"success_rate", evaluated["success_rate"]},
-              {"mean_time_to_hit_s", evaluated["mean_time_to_hit_s"]},
-              {"mean_return", evaluated["mean_return"]},
-              {"train_seconds", recorded(trained.record, "seconds")},
-              {"updates", recorded(trained.record, "updates")},
-              {"table_bytes", trained.table.bytes()},
-              {"final_residual", recorded(trained.record, "final_residual")},
-              {"decision_us", perSecond > 0 ? json(1e6 / perSecond) : json(nullptr)},
-              {"value_rmse", c.rmse},
-              {"greedy_agreement", c.agreement},
-              {"reference_interpolated", c.interpolated},
-              {"nonzero_share", nonzeroShare(trained.table)},
-              {"cell_coverage", trained.record.contains("stats") ? trained.record["stats"].value("cell_coverage", json())
-                                                                 : json()},
-              {"curve", trained.record.value("curve", json::array())},
-              {"snapshots", json(nullptr)}};
-    if (trained.record.contains("snapshots") && options.snapshots > 0) {
-      const json& taken = trained.record["snapshots"];
-      r["snapshots"] = {{"columns", taken["columns"]}, {"points", taken["points"]}};
+    const json r = runJson(run, trained, evaluated, c, options.snapshots > 0);
+    if (!r["snapshots"].is_null()) {
       std::string rates;
-      for (const json& p : taken["points"]) rates += fmt::format(" {:.0f}", 100 * p[3].get<double>());
+      for (const json& p : r["snapshots"]["points"]) rates += fmt::format(" {:.0f}", 100 * p[3].get<double>());
       log(fmt::format("compare: {}: success % along training ({} snapshots of {} trials):{}", label,
-                      taken["points"].size(), snapshotTrials, rates));
+                      r["snapshots"]["points"].size(), snapshotTrials, rates));
     }
     if (c.agreement < kAgreementFlag)
       report["flags"].push_back(fmt::format(
@@ -380,23 +468,7 @@ json runCompare(const CompareOptions& options) {
           label, 100 * c.agreement, c.rmse, 100 * r["nonzero_share"].get<double>()));
     report["runs"].push_back(r);
   }
-  for (const std::string& learner : options.learners) {
-    json mean = json::object(), sd = json::object();
-    for (const auto& [key, label] : compareMetrics()) {
-      std::vector<double> xs;
-      bool missing = false;
-      for (const json& r : report["runs"])
-        if (r["learner"] == learner) {
-          if (r[key].is_number())
-            xs.push_back(r[key].get<double>());
-          else
-            missing = true;
-        }
-      mean[key] = missing || xs.empty() ? json(nullptr) : json(meanOf(xs));
-      sd[key] = missing || xs.empty() ? json(nullptr) : json(sdOf(xs));
-    }
-    report["learners"][learner] = {{"mean", mean}, {"sd", sd}, {"success_curve", successCurve(report["runs"], learner)}};
-  }
+  report["learners"] = learnerSummaries(report["runs"], options.learners);
   if (!options.report.empty()) {
     writeCompareReport(options.report, report);
     report["report"] = (options.report / "index.html").string();

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cctype>
 #include <cmath>
+#include <functional>
 
 #include <fmt/format.h>
 #include <fmt/ranges.h>
@@ -109,6 +110,157 @@ std::string quoted(const std::string& text) {
 
 double roundUpTo(double value, double step) { return std::ceil(value / step - 1e-9) * step; }
 
+// The graphs tried, from the paper's threshold and contact event up, until one is usable.
+std::vector<GraphTry> tryGraphs(const MotionDatabase& db, const std::function<void(const std::string&)>& log) {
+  std::vector<GraphTry> tries;
+  for (const ContactEvent event : kEvents) {
+    for (const double threshold : kThresholds) {
+      tries.push_back(tryGraph(db, threshold, event));
+      const GraphTry& t = tries.back();
+      log(fmt::format("init: graph at threshold {:g}, {}: {:.0f} % of frames kept, {} states, {} actions", threshold,
+                      contactEventName(event), 100 * t.share(db.frameCount()), t.states, t.actions));
+      if (t.usable(db.frameCount())) return tries;
+    }
+  }
+  return tries;
+}
+
+// The usable graph tried last, else the one that kept most frames; throws when none has
+// two states.
+const GraphTry* chooseGraph(const MotionDatabase& db, const std::vector<GraphTry>& tries) {
+  if (tries.back().usable(db.frameCount())) return &tries.back();
+  const auto best = std::max_element(tries.begin(), tries.end(), [&](const GraphTry& a, const GraphTry& b) {
+    return a.share(db.frameCount()) < b.share(db.frameCount());
+  });
+  if (best->states < 2)
+    throw Error(
+        fmt::format("init: expected a graph of at least {} states from these files, found at most {} at "
+                    "any threshold up to {:g} ({} frames, {:.1f} s: too little capture, or poses too unalike "
+                    "to join); add more capture of one person",
+                    kMinStates, best->states, kThresholds[std::size(kThresholds) - 1], db.frameCount(),
+                    db.frameCount() * db.frameTime));
+  return &*best;
+}
+
+// The behaviours section for what the capture can do: the paper's two behaviours for
+// punches, a kick, or walking to a goal.
+std::string behaviorsYaml(const std::string& kind, const GraphTry& chosen, double approachRadius, double goalRadius) {
+  std::string y;
+  y += "behaviors:\n";
+  if (kind == "punch") {
+    y += fmt::format(
+        "  # The paper's two behaviours (sec. 6.4). The graph's actions hold {} effective hitting\n"
+        "  # points (sec. 6.2). Approach's grid reaches three of the longer actions ({:.2f} m each).\n",
+        chosen.hits, chosen.p90ActionTravel);
+    y += "  approach:\n"
+         "    description: bring the effective hitting points' centroid to the target\n"
+         "    weight: 1\n"
+         "    activation: always\n";
+    y += fmt::format("    discretizer: {{type: polar2d, radius: {:g}, rings: 5, sectors: 13}}\n", approachRadius);
+    y += "    reward: {type: approach, sigma: 0.10, gamma: 0.97}\n"
+         "    learner: {type: value_iteration}\n"
+         "  # Weighted 5: approach pays every action, hit once per landed punch (boxing.yaml).\n"
+         "  hit:\n"
+         "    description: land an effective punch on the target\n"
+         "    weight: 5\n"
+         "    activation: target_inside\n"
+         "    # Over the volume where this capture's punches land.\n"
+         "    discretizer: {type: cylindrical3d, angles: 20, distances: 16, heights: 6, bounds: hits}\n"
+         "    reward: {type: hit, contact_radius: 0.15, gamma: 0.97}\n"
+         "    learner: {type: value_iteration}\n";
+  } else if (kind == "kick") {
+    y += fmt::format("  # The graph's actions hold {} effective kick frames and too few punches.\n", chosen.kicks);
+    y += "  kick:\n"
+         "    description: land an effective kick of either foot within 0.3 m of the target\n"
+         "    discretizer: {type: cylindrical3d, bounds: given, angles: 16, angle_min: -180, angle_max: 180,\n"
+         "                  distances: 10, distance_min: 0.3, distance_max: 2.5, heights: 4, height_min: 0.4,\n"
+         "                  height_max: 1.3}\n"
+         "    reward:\n"
+         "      type: terms\n"
+         "      gamma: 0.97\n"
+         "      terms:\n"
+         "        - {term: contact, effector: feet, radius: 0.3}\n"
+         "    learner: {type: value_iteration}\n"
+         "    success: {term: contact}\n\n"
+         "# Where eval and simulate put targets: 0.6 m above the ground.\n"
+         "world:\n"
+         "  mode: targets\n"
+         "  target_height: 0.6\n";
+  } else {
+    y += "  # The capture has too few effective punches or kicks to learn striking: walk to a goal.\n";
+    y += "  goal:\n"
+         "    description: pelvis on the goal point, then stay\n";
+    y += fmt::format("    discretizer: {{type: polar2d, radius: {:g}, rings: 9, sectors: 13}}\n", goalRadius);
+    y += "    reward:\n"
+         "      type: terms\n"
+         "      combine: sum\n"
+         "      gamma: 0.97\n"
+         "      terms:\n"
+         "        - {term: distance, point: pelvis, sigma: 0.3}\n"
+         "    learner: {type: value_iteration}\n"
+         "    success: {term: distance, within: 0.3, hold_s: 1}\n";
+  }
+  return y;
+}
+
+// Writes the scenario text to `out` only once it loads as a scenario (and its behaviours
+// check out): staged beside it, then renamed into place.
+void writeCheckedScenario(const fs::path& out, const std::string& y, const fs::path& dataDir) {
+  const fs::path staging = out.parent_path() / (out.filename().string() + ".init-check.yaml");
+  writeFileAtomically(staging, y);
+  try {
+    const Scenario scenario = loadScenario(staging, dataDir);
+    checkBehaviors(scenario, plugins());
+  } catch (const Error& e) {
+    std::error_code ec;
+    fs::remove(staging, ec);
+    throw Error(fmt::format("init: internal error: the scenario written for these files does not load: {}", e.what()));
+  }
+  std::error_code ec;
+  fs::rename(staging, out, ec);
+  if (ec) {
+    fs::remove(staging, ec);
+    throw Error(fmt::format("init: cannot write {}: {}", out.string(), ec.message()));
+  }
+}
+
+// The roles found, as comments the user can uncomment to set one.
+std::string rolesYaml(const MotionDatabase& db, const RoleOverrides& setRoles) {
+  std::string y;
+  y += "  # Roles, found by joint name (uncomment a line to set one yourself):\n";
+  const std::vector<std::string> roleList = roleNames();
+  const std::vector<int> roleJoints = roleJointIndices(db.roles);
+  y += "  # roles:\n";
+  for (std::size_t r = 0; r < roleList.size(); ++r) {
+    const bool set = setRoles.count(roleList[r]) > 0;
+    const std::string joint = db.skeleton->joint(static_cast<std::size_t>(roleJoints[r])).name;
+    std::string note = set ? "set with --role" : "found by name";
+    if ((r == 0 || r == 1) && roleJoints[r] == roleJoints[r + 2] && !set)
+      note = "guessed: no fist or finger joint, the wrist stands in (its end site is the fist tip)";
+    if (roleList[r] == "pelvis" && db.rootMotion.joint != 0) note += "; carries the root motion";
+    const std::string line = fmt::format("  #   {}: {}", roleList[r], joint);
+    y += fmt::format("{:<40} # {}\n", line, note);
+  }
+  return y;
+}
+
+// The graph section, with the settings tried as comments.
+std::string graphYaml(const MotionDatabase& db, const std::vector<GraphTry>& tries, const GraphTry& chosen) {
+  std::string y;
+  y += "# Chosen by trying thresholds from the paper's 0.45 up, with the paper's contact event\n";
+  y += fmt::format("# first, until the largest component kept {:.0f} % of the frames in {} states or more:\n",
+                   100 * kKeepShare, kMinStates);
+  for (const GraphTry& t : tries)
+    y += fmt::format("#   threshold {:<4g} {:<18} {}\n", t.threshold, contactEventName(t.event),
+                     t.failure.empty() ? fmt::format("{:3.0f} % kept, {} states, {} actions",
+                                                     100 * t.share(db.frameCount()), t.states, t.actions)
+                                       : std::string("no graph"));
+  y += "graph:\n";
+  y += fmt::format("  threshold: {:g}\n  contact_event: {}\n  min_states: {}\n\n", chosen.threshold,
+                   contactEventName(chosen.event), std::min<std::size_t>(kMinStates, chosen.states));
+  return y;
+}
+
 }  // namespace
 
 nlohmann::json runInit(const InitOptions& options) {
@@ -162,33 +314,8 @@ nlohmann::json runInit(const InitOptions& options) {
                   db.frameCount() * db.frameTime, strikes, kicks));
 
   // The graph: the first setting that keeps most frames in enough states.
-  std::vector<GraphTry> tries;
-  const GraphTry* chosen = nullptr;
-  for (const ContactEvent event : kEvents) {
-    for (const double threshold : kThresholds) {
-      tries.push_back(tryGraph(db, threshold, event));
-      const GraphTry& t = tries.back();
-      log(fmt::format("init: graph at threshold {:g}, {}: {:.0f} % of frames kept, {} states, {} actions", threshold,
-                      contactEventName(event), 100 * t.share(db.frameCount()), t.states, t.actions));
-      if (t.usable(db.frameCount())) {
-        chosen = &t;
-        break;
-      }
-    }
-    if (chosen) break;
-  }
-  if (!chosen) {
-    const auto best = std::max_element(tries.begin(), tries.end(), [&](const GraphTry& a, const GraphTry& b) {
-      return a.share(db.frameCount()) < b.share(db.frameCount());
-    });
-    if (best->states < 2)
-      throw Error(fmt::format("init: expected a graph of at least {} states from these files, found at most {} at "
-                              "any threshold up to {:g} ({} frames, {:.1f} s: too little capture, or poses too unalike "
-                              "to join); add more capture of one person",
-                              kMinStates, best->states, kThresholds[std::size(kThresholds) - 1], db.frameCount(),
-                              db.frameCount() * db.frameTime));
-    chosen = &*best;
-  }
+  const std::vector<GraphTry> tries = tryGraphs(db, log);
+  const GraphTry* chosen = chooseGraph(db, tries);
 
   // Behaviours the capture can do.
   const std::string kind = chosen->hits >= kMinStrikes    ? "punch"
@@ -224,106 +351,12 @@ nlohmann::json runInit(const InitOptions& options) {
                                         ? distinctUnits.front()
                                         : std::string(lengthUnitName(options.units)));
   y += fmt::format("  # {}.\n", db.rootMotion.sentence);
-  y += "  # Roles, found by joint name (uncomment a line to set one yourself):\n";
-  const std::vector<std::string> roleList = roleNames();
-  const std::vector<int> roleJoints = roleJointIndices(db.roles);
-  y += "  # roles:\n";
-  for (std::size_t r = 0; r < roleList.size(); ++r) {
-    const bool set = options.roles.count(roleList[r]) > 0;
-    const std::string joint = db.skeleton->joint(static_cast<std::size_t>(roleJoints[r])).name;
-    std::string note = set ? "set with --role" : "found by name";
-    if ((r == 0 || r == 1) && roleJoints[r] == roleJoints[r + 2] && !set)
-      note = "guessed: no fist or finger joint, the wrist stands in (its end site is the fist tip)";
-    if (roleList[r] == "pelvis" && db.rootMotion.joint != 0) note += "; carries the root motion";
-    const std::string line = fmt::format("  #   {}: {}", roleList[r], joint);
-    y += fmt::format("{:<40} # {}\n", line, note);
-  }
+  y += rolesYaml(db, options.roles);
   y += "\n";
-  y += "# Chosen by trying thresholds from the paper's 0.45 up, with the paper's contact event\n";
-  y += fmt::format("# first, until the largest component kept {:.0f} % of the frames in {} states or more:\n",
-                   100 * kKeepShare, kMinStates);
-  for (const GraphTry& t : tries)
-    y += fmt::format("#   threshold {:<4g} {:<18} {}\n", t.threshold, contactEventName(t.event),
-                     t.failure.empty() ? fmt::format("{:3.0f} % kept, {} states, {} actions", 100 * t.share(db.frameCount()),
-                                                     t.states, t.actions)
-                                       : std::string("no graph"));
-  y += "graph:\n";
-  y += fmt::format("  threshold: {:g}\n  contact_event: {}\n  min_states: {}\n\n", chosen->threshold,
-                   contactEventName(chosen->event), std::min<std::size_t>(kMinStates, chosen->states));
+  y += graphYaml(db, tries, *chosen);
+  y += behaviorsYaml(kind, *chosen, approachRadius, goalRadius);
 
-  y += "behaviors:\n";
-  if (kind == "punch") {
-    y += fmt::format(
-        "  # The paper's two behaviours (sec. 6.4). The graph's actions hold {} effective hitting\n"
-        "  # points (sec. 6.2). Approach's grid reaches three of the longer actions ({:.2f} m each).\n",
-        chosen->hits, chosen->p90ActionTravel);
-    y += "  approach:\n"
-         "    description: bring the effective hitting points' centroid to the target\n"
-         "    weight: 1\n"
-         "    activation: always\n";
-    y += fmt::format("    discretizer: {{type: polar2d, radius: {:g}, rings: 5, sectors: 13}}\n", approachRadius);
-    y += "    reward: {type: approach, sigma: 0.10, gamma: 0.97}\n"
-         "    learner: {type: value_iteration}\n"
-         "  # Weighted 5: approach pays every action, hit once per landed punch (boxing.yaml).\n"
-         "  hit:\n"
-         "    description: land an effective punch on the target\n"
-         "    weight: 5\n"
-         "    activation: target_inside\n"
-         "    # Over the volume where this capture's punches land.\n"
-         "    discretizer: {type: cylindrical3d, angles: 20, distances: 16, heights: 6, bounds: hits}\n"
-         "    reward: {type: hit, contact_radius: 0.15, gamma: 0.97}\n"
-         "    learner: {type: value_iteration}\n";
-  } else if (kind == "kick") {
-    y += fmt::format("  # The graph's actions hold {} effective kick frames and too few punches.\n",
-                     chosen->kicks);
-    y += "  kick:\n"
-         "    description: land an effective kick of either foot within 0.3 m of the target\n"
-         "    discretizer: {type: cylindrical3d, bounds: given, angles: 16, angle_min: -180, angle_max: 180,\n"
-         "                  distances: 10, distance_min: 0.3, distance_max: 2.5, heights: 4, height_min: 0.4,\n"
-         "                  height_max: 1.3}\n"
-         "    reward:\n"
-         "      type: terms\n"
-         "      gamma: 0.97\n"
-         "      terms:\n"
-         "        - {term: contact, effector: feet, radius: 0.3}\n"
-         "    learner: {type: value_iteration}\n"
-         "    success: {term: contact}\n\n"
-         "# Where eval and simulate put targets: 0.6 m above the ground.\n"
-         "world:\n"
-         "  mode: targets\n"
-         "  target_height: 0.6\n";
-  } else {
-    y += "  # The capture has too few effective punches or kicks to learn striking: walk to a goal.\n";
-    y += "  goal:\n"
-         "    description: pelvis on the goal point, then stay\n";
-    y += fmt::format("    discretizer: {{type: polar2d, radius: {:g}, rings: 9, sectors: 13}}\n", goalRadius);
-    y += "    reward:\n"
-         "      type: terms\n"
-         "      combine: sum\n"
-         "      gamma: 0.97\n"
-         "      terms:\n"
-         "        - {term: distance, point: pelvis, sigma: 0.3}\n"
-         "    learner: {type: value_iteration}\n"
-         "    success: {term: distance, within: 0.3, hold_s: 1}\n";
-  }
-
-  // Written only once it loads as a scenario (and its behaviours check out).
-  const fs::path staging = out.parent_path() / (out.filename().string() + ".init-check.yaml");
-  writeFileAtomically(staging, y);
-  try {
-    const Scenario scenario = loadScenario(staging, options.dataDir);
-    checkBehaviors(scenario, plugins());
-  } catch (const Error& e) {
-    std::error_code ec;
-    fs::remove(staging, ec);
-    throw Error(fmt::format("init: internal error: the scenario written for these files does not load: {}", e.what()));
-  }
-  std::error_code ec;
-  fs::rename(staging, out, ec);
-  if (ec) {
-    fs::remove(staging, ec);
-    throw Error(fmt::format("init: cannot write {}: {}", out.string(), ec.message()));
-  }
+  writeCheckedScenario(out, y, options.dataDir);
 
   nlohmann::json report;
   report["scenario"] = out.string();

@@ -73,6 +73,58 @@ void checkSimulateOptions(const SimulateOptions& options) {
     throw Error(fmt::format("--threads: expected at most 256 threads, found {}", options.threads));
 }
 
+namespace {
+
+// Runs the world `frames` frames in slices of a second, so that long runs report progress
+// (every 5 s); returns the wall time.
+double runWorld(World& world, std::size_t frames, double frameTime, const WarningSink& log) {
+  const auto start = Clock::now();
+  auto lastReport = start;
+  const std::size_t slice = std::max<std::size_t>(1, static_cast<std::size_t>(std::round(1.0 / frameTime)));
+  for (std::size_t done = 0; done < frames;) {
+    const std::size_t now = std::min(slice, frames - done);
+    world.run(now);
+    done += now;
+    if (log && since(lastReport) >= 5 && done < frames) {
+      lastReport = Clock::now();
+      log(fmt::format("simulate: {:.0f} % ({:.1f} of {:.1f} s simulated), {}avatar-frames/s", 100.0 * done / frames,
+                      done * frameTime, frames * frameTime,
+                      humanCount(static_cast<double>(done * world.avatarCount()) / since(start))));
+    }
+  }
+  return since(start);
+}
+
+// Landed hits by body part and, for up to 1000 avatars, by avatar; blocked strikes apart
+// (both are in the events file).
+void countHits(const World& world, std::size_t avatars, json& report) {
+  std::vector<std::size_t> byAvatar(avatars, 0), blockedBy(avatars, 0);
+  std::map<std::string, std::size_t> byPart = {{"head", 0}, {"chest", 0}, {"spine", 0}, {"target", 0}};
+  for (const HitEvent& e : world.events()) {
+    if (e.blocked) {
+      ++blockedBy[e.attacker];
+      continue;
+    }
+    ++byAvatar[e.attacker];
+    ++byPart[struckName(e)];
+  }
+  report["hits_by_part"] = byPart;
+  if (avatars <= 1000) {
+    report["hits_by_avatar"] = byAvatar;
+    report["blocked_by_avatar"] = blockedBy;
+  }
+}
+
+// Hits landed by the first and by the second avatar of each sparring pair.
+std::pair<std::size_t, std::size_t> landedBySide(const World& world) {
+  std::size_t first = 0, second = 0;
+  for (const HitEvent& e : world.events())
+    if (!e.blocked) (e.attacker % 2 == 0 ? first : second) += 1;
+  return {first, second};
+}
+
+}  // namespace
+
 json runSimulate(const SimulateOptions& options) {
   checkSimulateOptions(options);
   const ControllerChoice choice{options.controller, options.horizon, options.horizonSeconds};
@@ -122,37 +174,10 @@ json runSimulate(const SimulateOptions& options) {
   World world(setup);
   const double startup = secondsSinceStart();
 
-  // Run in slices so that long runs report progress (stderr, every 5 s).
-  const auto start = Clock::now();
-  auto lastReport = start;
-  const std::size_t slice = std::max<std::size_t>(1, static_cast<std::size_t>(std::round(1.0 / model.frameTime)));
-  for (std::size_t done = 0; done < frames;) {
-    const std::size_t now = std::min(slice, frames - done);
-    world.run(now);
-    done += now;
-    if (options.log && since(lastReport) >= 5 && done < frames) {
-      lastReport = Clock::now();
-      options.log(fmt::format("simulate: {:.0f} % ({:.1f} of {:.1f} s simulated), {}avatar-frames/s", 100.0 * done / frames,
-                              done * model.frameTime, frames * model.frameTime,
-                              humanCount(static_cast<double>(done * avatars) / since(start))));
-    }
-  }
-  const double wall = since(start);
+  const double wall = runWorld(world, frames, model.frameTime, options.log);
 
   const WrittenFiles written = writeOutputs(out, options, *session, world, frames);
 
-  std::vector<std::size_t> byAvatar(avatars, 0);
-  std::map<std::string, std::size_t> byPart = {{"head", 0}, {"chest", 0}, {"spine", 0}, {"target", 0}};
-  // Landed hits only; blocked strikes are counted apart (and are in the events file).
-  std::vector<std::size_t> blockedBy(avatars, 0);
-  for (const HitEvent& e : world.events()) {
-    if (e.blocked) {
-      ++blockedBy[e.attacker];
-      continue;
-    }
-    ++byAvatar[e.attacker];
-    ++byPart[struckName(e)];
-  }
   const double simulated = static_cast<double>(frames) * model.frameTime;
   json report = {{"scenario", scenario.path.string()},
                  {"controller", options.controller},
@@ -168,7 +193,7 @@ json runSimulate(const SimulateOptions& options) {
                  {"hits", world.landedCount()},
                  {"hits_per_avatar_minute",
                   static_cast<double>(world.landedCount()) / static_cast<double>(avatars) / (simulated / 60)},
-                 {"hits_by_part", byPart},
+                 {"hits_by_part", json::object()},
                  {"blocked", world.blockedCount()},
                  {"decisions", world.decisions()},
                  {"bytes_per_avatar", world.bytesPerAvatar()},
@@ -178,25 +203,18 @@ json runSimulate(const SimulateOptions& options) {
                    {"pushes", world.bodyStats().pushes}}},
                  {"seed", options.seed},
                  {"world", worldParamsJson(params)}};
-  if (avatars <= 1000) {
-    report["hits_by_avatar"] = byAvatar;
-    report["blocked_by_avatar"] = blockedBy;
-  }
+  countHits(world, avatars, report);
   if (options.controller == "policy") report["policy"] = policyDir.string();
   if (!options.partnerPolicy.empty()) {
     // Two policies spar: the hits each side landed (the first avatar of each pair plays
     // --policy, the second --partner-policy).
-    std::size_t first = 0, second = 0;
-    for (const HitEvent& e : world.events())
-      if (!e.blocked) (e.attacker % 2 == 0 ? first : second) += 1;
+    const auto [first, second] = landedBySide(world);
     report["partner_policy"] = session->partnerPolicyDir.string();
     if (options.partnerRound > 0) report["partner_round"] = options.partnerRound;
     report["hits_by_side"] = {{"policy", first}, {"partner_policy", second}};
   } else if (params.mode == "sparring" && avatars >= 2 && !session->partnerName().empty()) {
     // An `opponent` scene: the second of each pair is the scripted opponent (issue 45).
-    std::size_t first = 0, second = 0;
-    for (const HitEvent& e : world.events())
-      if (!e.blocked) (e.attacker % 2 == 0 ? first : second) += 1;
+    const auto [first, second] = landedBySide(world);
     report["partner"] = session->partnerName();
     report["hits_by_side"] = {{"avatars", first}, {"opponents", second}};
   }

@@ -2,6 +2,7 @@
 #include <atomic>
 #include <csignal>
 #include <cstdlib>
+#include <functional>
 #include <iostream>
 #include <map>
 
@@ -66,6 +67,314 @@ namespace {
                                 where, keptText, command));
 }
 
+using Log = std::function<void(const std::string&)>;
+
+// The bundle's folder, --out or the scenario's default in the cache; fails before hours of
+// training, not after, when it cannot be created or written.
+fs::path bundleFolder(const TrainOptions& options, const Scenario& scenario) {
+  const fs::path cacheDir = options.cacheDir.empty() ? defaultCacheDirectory() : options.cacheDir;
+  fs::path out = options.out.empty() ? defaultPolicyDirectory(cacheDir, scenario) : options.out;
+  if (!out.has_filename()) out = out.parent_path();
+  std::error_code ec;
+  if (out.has_parent_path()) fs::create_directories(out.parent_path(), ec);
+  if (ec)
+    throw Error(fmt::format("--out {}: cannot create {}: {}", out.string(), out.parent_path().string(), ec.message()));
+  if (fs::exists(out, ec) && !fs::is_directory(out, ec))
+    throw Error(fmt::format("--out {}: expected a policy bundle directory or nothing, found a file", out.string()));
+  // The bundle is written beside `out` and renamed into place: that folder must take a
+  // new file now, not after training (issue 19). The probe is `.<name>.probe-PID`.
+  const fs::path parent = out.has_parent_path() ? out.parent_path() : fs::path(".");
+  if (!folderTakesNewFiles(parent, fmt::format(".{}.probe-", out.filename().string())))
+    throw Error(fmt::format("--out {}: expected a folder where files can be written, found {} is not writable",
+                            out.string(), parent.string()));
+  return out;
+}
+
+// Tables already in the bundle at `out` that are still current (same key: the same
+// settings on the same graph, so the same table) go into `bundle`: those of other
+// behaviours when training one, those a stopped run finished when resuming, and all of them
+// until replaced. Returns the behaviours a resumed run has finished.
+std::set<std::string> keepCurrentTables(const fs::path& out, bool resume, const std::vector<Behavior>& all,
+                                        const StateActionModel& model, const std::string& graphKey,
+                                        PolicyBundle& bundle, const Log& log) {
+  std::set<std::string> finished;
+  if (!fs::exists(out / "manifest.json")) return finished;
+  try {
+    PolicyBundle previous = loadPolicyBundle(out, model, graphKey);
+    // A stopped run's bundle holds only finished tables (its unfinished ones are absent).
+    for (auto& item : previous.behaviors) {
+      // Named, not a structured binding: clang before 16 cannot capture one in the lambda.
+      const std::string& name = item.first;
+      auto& entry = item.second;
+      // A self-play round's table (NAME-roundK) belongs to behaviour NAME.
+      std::string base = name;
+      if (const auto cut = name.rfind("-round"); cut != std::string::npos && cut > 0) base = name.substr(0, cut);
+      const auto match = std::find_if(all.begin(), all.end(), [&](const Behavior& b) {
+        return b.name == name || (b.name == base && b.environment->rounds() > 1);
+      });
+      if (match != all.end() && match->key == entry.key) {
+        bundle.behaviors.emplace(name, std::move(entry));
+        if (resume && match->name == name) finished.insert(name);
+      } else {
+        log(fmt::format("warning: dropping {}'s table from {}: the scenario {}", name, out.string(),
+                        match == all.end() ? "no longer has this behaviour" : "now asks for other settings"));
+      }
+    }
+  } catch (const Error& e) {
+    log(fmt::format("warning: not keeping the behaviours already in {}: {}", out.string(), e.what()));
+  }
+  return finished;
+}
+
+// Issue 19: a behaviour's size is checked before anything is allocated or trained, not
+// found by bad_alloc, nor after training the others. Issue 20: the tabulated model when it
+// fits (or is asked for), else the compact one. Returns true for the compact model.
+bool choosesCompactModel(const Behavior& behavior, const StateActionModel& model, const TrainOptions& options,
+                         const Log& log) {
+  try {
+    behavior.learner->checkGrid(*behavior.discretizer);
+  } catch (const Error& e) {
+    throw Error(fmt::format("behaviors.{}: {}", behavior.name, e.what()));
+  }
+  // A refining learner's tables grow to its vertex budget (adaptive_value_iteration).
+  const std::size_t vertices = behavior.learner->trainingVertices(*behavior.discretizer);
+  const double extra = static_cast<double>(behavior.learner->extraTables()) * static_cast<double>(vertices) *
+                       static_cast<double>(model.actionCount()) * sizeof(float);
+  // A distributed learner knows its share (issue 44).
+  const double share = behavior.learner->bytesPerProcess(model.actionCount(), vertices);
+  const double tabulatedBytes =
+      (share >= 0 ? share : GridModel::trainingBytes(model.actionCount(), vertices, false)) + extra;
+  const double compactBytes = GridModel::trainingBytes(model.actionCount(), vertices, true) + extra;
+  const bool canCompact = behavior.learner->takesCompactModel();
+  if (options.model == "compact" && !canCompact)
+    throw Error(
+        fmt::format("behaviors.{}: --model compact: expected a learner that takes a compact model "
+                    "(q_learning, value_iteration), found {}; use --model tabulated or auto",
+                    behavior.name, behavior.learner->type()));
+  const bool compact =
+      options.model == "compact" || (options.model == "auto" && tabulatedBytes > options.maxMemoryBytes && canCompact);
+  const double needed = compact ? compactBytes : tabulatedBytes;
+  // A learned opponent's states multiply the grid (issue 43): say by how much.
+  const std::size_t opponentStates = behavior.environment->opponentStates();
+  const std::string opponentNote = opponentStates > 0
+                                       ? fmt::format(
+                                             " (a learned opponent's {} states times {} positions: fewer phases or a "
+                                             "coarser grid shrink it; a table larger than one machine trains with "
+                                             "mpi_value_iteration across machines, docs/distributed.md)",
+                                             opponentStates, behavior.discretizer->layerVertexCount())
+                                       : std::string();
+  if (needed > options.maxMemoryBytes)
+    throw Error(fmt::format(
+        "behaviors.{}: training on a {} grid of {}{} vertices{} x {} actions needs about {} "
+        "({} model and Q tables{}); expected at most {} (--max-memory): use a coarser grid{}, or "
+        "raise --max-memory",
+        behavior.name, behavior.discretizer->type(), vertices > behavior.discretizer->vertexCount() ? "up to " : "",
+        vertices, opponentNote, model.actionCount(), humanBytes(needed), compact ? "compact" : "tabulated",
+        extra > 0 ? fmt::format(", {} more tables held", behavior.learner->extraTables()) : "",
+        humanBytes(options.maxMemoryBytes),
+        !compact && canCompact && compactBytes <= options.maxMemoryBytes
+            ? fmt::format(", --model compact (about {})", humanBytes(compactBytes))
+            : ""));
+  if (compact && options.model == "auto")
+    log(fmt::format(
+        "train {}: the tabulated model and tables would need about {}, over --max-memory {}: using "
+        "the compact model (about {}; same tables, slower backups)",
+        behavior.name, humanBytes(tabulatedBytes), humanBytes(options.maxMemoryBytes), humanBytes(compactBytes)));
+  return compact;
+}
+
+// One `mgrl train`: the session, the bundle being filled, and the report.
+class TrainRun {
+ public:
+  TrainRun(const TrainOptions& options, const Session& session, fs::path out, bool writes)
+      : options_(options),
+        session_(session),
+        model_(session.model()),
+        out_(std::move(out)),
+        writes_(writes),
+        log_([&options](const std::string& m) {
+          if (options.log) options.log(m);
+        }) {}
+
+  json run(std::vector<Behavior>& all) {
+    const GraphResult& graph = session_.graph;
+    bundle_.graphKey = graph.key;
+    bundle_.provenance = {{"scenario", session_.scenario.path.string()},
+                          {"scenario_name", session_.scenario.name},
+                          {"tool", fmt::format("mgrl {}", kVersion)},
+                          {"sets", options_.sets}};
+    const std::set<std::string> finished =
+        keepCurrentTables(out_, options_.resume, all, model_, graph.key, bundle_, log_);
+    report_ = {{"scenario", session_.scenario.path.string()},
+               {"policy", out_.string()},
+               {"graph_key", graph.key},
+               {"behaviors", json::object()}};
+    for (const Behavior& behavior : all)
+      if (options_.behavior.empty() || behavior.name == options_.behavior) wanted_.push_back(behavior.name);
+    // Every behaviour's size is checked before any is trained.
+    for (const Behavior& behavior : all)
+      if (isWanted(behavior)) compactModel_[behavior.name] = choosesCompactModel(behavior, model_, options_, log_);
+    const StopSignals signals;
+    for (Behavior& behavior : all) {
+      if (!isWanted(behavior)) continue;
+      if (finished.count(behavior.name) != 0) {
+        log_(fmt::format("resume: {}: already trained in {}, kept", behavior.name, out_.string()));
+        report_["kept"].push_back(behavior.name);
+        // A run killed after its bundle was in place may have left its checkpoints.
+        checkpoints_.push_back(checkpointDirectory(out_, behavior.name));
+        continue;
+      }
+      trainBehavior(behavior, all);
+    }
+    if (bundle_.provenance.contains("unfinished")) bundle_.provenance.erase("unfinished");
+    if (!writes_) return report_;
+    savePolicyBundle(out_, bundle_);
+    for (const fs::path& dir : checkpoints_) removeCheckpoint(dir);
+    log_(fmt::format("policy: {}", out_.string()));
+    return report_;
+  }
+
+ private:
+  bool isWanted(const Behavior& behavior) const {
+    return std::find(wanted_.begin(), wanted_.end(), behavior.name) != wanted_.end();
+  }
+
+  // Self-play rounds (issue 43): round 1 against the opponent the scenario names, round k
+  // against round k - 1's table; each round's table is kept, the last under the
+  // behaviour's own name, the others as NAME-roundK.
+  void trainBehavior(Behavior& behavior, const std::vector<Behavior>& all) {
+    const int rounds = behavior.environment->rounds();
+    std::shared_ptr<const QTable> previous;
+    json roundsReport = json::array();
+    for (int round = 1; round <= rounds; ++round) {
+      const std::string label = round < rounds ? fmt::format("{}-round{}", behavior.name, round) : behavior.name;
+      if (rounds > 1) {
+        if (previous)
+          behavior.environment->playPolicy(behavior.discretizer.get(), previous, fmt::format("round {}", round - 1));
+        log_(fmt::format("train {}: self-play round {} of {}, against {}", behavior.name, round, rounds,
+                         previous ? fmt::format("round {}'s table", round - 1)
+                                  : fmt::format("the {} opponent", behavior.environment->policyKey())));
+      }
+      TrainResult result = trainRound(behavior, all, label, round, rounds);
+      // An adaptive learner returns the grid it refined: the table's vertices are its.
+      const Discretizer& tableGrid = result.grid ? *result.grid : *behavior.discretizer;
+      json& record = lastRecord_;
+      if (rounds > 1) {
+        // Scoring the round is reporting: rank 0's (issue 44).
+        if (writes_) roundsReport.push_back(selfPlayRound(behavior, model_, round, result.table, previous.get(), log_));
+        record["round"] = round;
+        record["rounds"] = roundsReport;
+        report_["behaviors"][behavior.name]["rounds"] = roundsReport;
+        if (round < rounds) previous = std::make_shared<const QTable>(result.table);
+      }
+      bundle_.behaviors[round == rounds ? behavior.name : label] = PolicyBehavior{
+          behavior.key,          record, std::move(result.table), vertexPositions(tableGrid), tableGrid.type(),
+          tableGrid.structure(), nullptr};
+    }
+  }
+
+  // Tabulates the problem and trains one table (one round of self-play); its record for the
+  // bundle is left in lastRecord_, its summary in the report when it is the last round.
+  TrainResult trainRound(Behavior& behavior, const std::vector<Behavior>& all, const std::string& label, int round,
+                         int rounds) {
+    const std::string roundKey = rounds > 1 ? fmt::format("{}-round{}", behavior.key, round) : behavior.key;
+    const Problem problem = behavior.problem(model_);
+    const auto tabulateStart = Clock::now();
+    const bool compact = compactModel_.at(behavior.name);
+    // A learner that tabulates itself (each MPI rank its share) gets the model's frame only.
+    const bool itself = !compact && behavior.learner->tabulatesItself();
+    if (const int ranks = launchedProcess().size; ranks > 1 && !behavior.learner->tabulatesItself())
+      log_(
+          fmt::format("train {}: {} runs in one process: the other {} ranks of this MPI job repeat it and keep "
+                      "nothing (mpi_value_iteration shares the work)",
+                      label, behavior.learner->type(), ranks - 1));
+    const GridModel grid = compact  ? GridModel::buildCompact(problem, threads_)
+                           : itself ? GridModel::frame(problem)
+                                    : GridModel::build(problem, threads_);
+    const double tabulateSeconds = since(tabulateStart);
+    if (itself)
+      log_(fmt::format("train {}: {} on a {} grid ({} vertices) x {} actions, tabulated by the learner", label,
+                       behavior.learner->type(), behavior.discretizer->type(), behavior.discretizer->vertexCount(),
+                       model_.actionCount()));
+    else
+      log_(fmt::format("train {}: {} on a {} grid ({} vertices) x {} actions, {} tabulated in {:.2f} s ({} MB)", label,
+                       behavior.learner->type(), behavior.discretizer->type(), behavior.discretizer->vertexCount(),
+                       model_.actionCount(), compact ? "rewards (compact model)" : "problem", tabulateSeconds,
+                       grid.bytes() / 1000000));
+
+    DirectoryCheckpointer directory(checkpointDirectory(out_, label), roundKey, model_,
+                                    behavior.discretizer->vertexCount(), options_.log);
+    if (!options_.resume && writes_) directory.remove();
+    CrashTestCheckpointer checkpointer(directory, behavior.name, options_.log);
+    checkpoints_.push_back(directory.directory());
+    std::optional<TrainResult> trained;
+    std::unique_ptr<TrainListener> listener =
+        options_.listen ? options_.listen(behavior, all, session_.graph) : nullptr;
+    {
+      ProgressReporter progress(label, options_.progressBar, options_.log, listener.get());
+      try {
+        trained = behavior.learner->train(
+            {problem, grid, &progress, writes_ ? &checkpointer : nullptr, threads_, &stopRequested, round < rounds});
+      } catch (const TrainInterrupted& stop) {
+        if (!writes_) throw;
+        interrupted(options_, out_, bundle_, wanted_, behavior.name, stop, directory.directory());
+      }
+    }
+    if (options_.resume && !checkpointer.resumed())
+      log_(fmt::format("resume: {}: no checkpoint to continue from, trained from the start", behavior.name));
+    TrainResult& result = *trained;
+
+    const Discretizer& tableGrid = result.grid ? *result.grid : *behavior.discretizer;
+    json curve = json::array();
+    for (const CurvePoint& p : result.curve) curve.push_back({p.updates, p.seconds, p.residual, p.meanResidual});
+    const double rate = result.seconds > 0 ? static_cast<double>(result.updates) / result.seconds : 0;
+    json summary = {{"learner", behavior.learner->type()},
+                    {"updates", result.updates},
+                    {"seconds", result.seconds},
+                    {"updates_per_second", rate},
+                    {"final_residual", result.finalResidual},
+                    {"table_bytes", result.table.bytes()},
+                    {"vertices", tableGrid.vertexCount()},
+                    {"actions", model_.actionCount()},
+                    {"tabulate_seconds", tabulateSeconds},
+                    {"stats", result.stats}};
+    if (round == rounds) {
+      report_["behaviors"][behavior.name] = summary;
+      report_["behaviors"][behavior.name]["model"] = compact ? "compact" : "tabulated";
+      report_["behaviors"][behavior.name]["model_bytes"] = grid.bytes();
+    }
+    json record = summary;
+    record["config"] = behavior.config;
+    record["weight"] = behavior.weight;
+    record["activation"] = std::string(activationName(behavior.activation));
+    record["grid"] = tableGrid.describe();
+    record["curve_columns"] = {"updates", "seconds", "residual", "mean_residual"};
+    record["curve"] = curve;
+    if (listener) {
+      json snapshots = listener->record();
+      if (!snapshots.is_null()) record["snapshots"] = std::move(snapshots);
+    }
+    log_(fmt::format("train {}: {} updates in {:.2f} s ({}updates/s), Bellman residual {:.3g}", label, result.updates,
+                     result.seconds, humanCount(rate), result.finalResidual));
+    lastRecord_ = std::move(record);
+    return std::move(result);
+  }
+
+  const TrainOptions& options_;
+  const Session& session_;
+  const StateActionModel& model_;
+  const fs::path out_;
+  const bool writes_;
+  const Log log_;
+  const unsigned threads_ = defaultThreadCount();
+  PolicyBundle bundle_;
+  json report_;
+  json lastRecord_;
+  std::vector<std::string> wanted_;
+  std::map<std::string, bool> compactModel_;
+  std::vector<fs::path> checkpoints_;
+};
+
 }  // namespace
 
 json runTrain(const TrainOptions& given) {
@@ -79,9 +388,6 @@ json runTrain(const TrainOptions& given) {
     options.progressBar = false;
     options.listen = nullptr;
   }
-  const auto log = [&](const std::string& m) {
-    if (options.log) options.log(m);
-  };
   // The scenario, its graph and behaviours, and the task they share (behaviours that do not
   // share one world are refused here, not after training); the model is enough: no poses.
   fs::path out;
@@ -89,255 +395,11 @@ json runTrain(const TrainOptions& given) {
   needs.motion = false;
   needs.beforeGraph = [&](const Scenario& scenario) {
     if (!options.behavior.empty()) requireBehavior(scenario, options.behavior);
-    const fs::path cacheDir = options.cacheDir.empty() ? defaultCacheDirectory() : options.cacheDir;
-    out = options.out.empty() ? defaultPolicyDirectory(cacheDir, scenario) : options.out;
-    if (!out.has_filename()) out = out.parent_path();
-    {
-      // Fail before hours of training, not after: the bundle's folder must be creatable.
-      std::error_code ec;
-      if (out.has_parent_path()) fs::create_directories(out.parent_path(), ec);
-      if (ec) throw Error(fmt::format("--out {}: cannot create {}: {}", out.string(), out.parent_path().string(), ec.message()));
-      if (fs::exists(out, ec) && !fs::is_directory(out, ec))
-        throw Error(fmt::format("--out {}: expected a policy bundle directory or nothing, found a file", out.string()));
-      // The bundle is written beside `out` and renamed into place: that folder must take a
-      // new file now, not after training (issue 19). The probe is `.<name>.probe-PID`.
-      const fs::path parent = out.has_parent_path() ? out.parent_path() : fs::path(".");
-      if (!folderTakesNewFiles(parent, fmt::format(".{}.probe-", out.filename().string())))
-        throw Error(fmt::format("--out {}: expected a folder where files can be written, found {} is not writable",
-                                out.string(), parent.string()));
-    }
+    out = bundleFolder(options, scenario);
   };
   const std::unique_ptr<Session> session = openSession(options, needs);
-  const Scenario& scenario = session->scenario;
-  const GraphResult& graph = session->graph;
-  const StateActionModel& model = session->model();
-  std::vector<Behavior>& all = session->behaviors;
-
-  PolicyBundle bundle;
-  bundle.graphKey = graph.key;
-  bundle.provenance = {{"scenario", scenario.path.string()},
-                       {"scenario_name", scenario.name},
-                       {"tool", fmt::format("mgrl {}", kVersion)},
-                       {"sets", options.sets}};
-  // Tables already in the bundle that are still current (same key: the same settings on
-  // the same graph, so the same table) are kept: those of other behaviours when training
-  // one, those a stopped run finished when resuming, and all of them until replaced.
-  std::set<std::string> finished;
-  if (fs::exists(out / "manifest.json")) {
-    try {
-      PolicyBundle previous = loadPolicyBundle(out, model, graph.key);
-      // A stopped run's bundle holds only finished tables (its unfinished ones are absent).
-      for (auto& item : previous.behaviors) {
-        // Named, not a structured binding: clang before 16 cannot capture one in the lambda.
-        const std::string& name = item.first;
-        auto& entry = item.second;
-        // A self-play round's table (NAME-roundK) belongs to behaviour NAME.
-        std::string base = name;
-        if (const auto cut = name.rfind("-round"); cut != std::string::npos && cut > 0) base = name.substr(0, cut);
-        const auto match = std::find_if(all.begin(), all.end(), [&](const Behavior& b) {
-          return b.name == name || (b.name == base && b.environment->rounds() > 1);
-        });
-        if (match != all.end() && match->key == entry.key) {
-          bundle.behaviors.emplace(name, std::move(entry));
-          if (options.resume && match->name == name) finished.insert(name);
-        } else {
-          log(fmt::format("warning: dropping {}'s table from {}: the scenario {}", name, out.string(),
-                          match == all.end() ? "no longer has this behaviour" : "now asks for other settings"));
-        }
-      }
-    } catch (const Error& e) {
-      log(fmt::format("warning: not keeping the behaviours already in {}: {}", out.string(), e.what()));
-    }
-  }
-
-  const unsigned threads = defaultThreadCount();
-  json report = {{"scenario", scenario.path.string()},
-                 {"policy", out.string()},
-                 {"graph_key", graph.key},
-                 {"behaviors", json::object()}};
-  std::vector<std::string> wanted;
-  for (const Behavior& behavior : all)
-    if (options.behavior.empty() || behavior.name == options.behavior) wanted.push_back(behavior.name);
-  // Issue 19: every behaviour's size is checked before anything is allocated or trained,
-  // not found by bad_alloc, nor after training the others.
-  std::map<std::string, bool> compactModel;
-  for (const Behavior& behavior : all) {
-    if (std::find(wanted.begin(), wanted.end(), behavior.name) == wanted.end()) continue;
-    try {
-      behavior.learner->checkGrid(*behavior.discretizer);
-    } catch (const Error& e) {
-      throw Error(fmt::format("behaviors.{}: {}", behavior.name, e.what()));
-    }
-    // Issue 20: the tabulated model when it fits (or is asked for), else the compact one.
-    // A refining learner's tables grow to its vertex budget (adaptive_value_iteration).
-    const std::size_t vertices = behavior.learner->trainingVertices(*behavior.discretizer);
-    const double extra = static_cast<double>(behavior.learner->extraTables()) * static_cast<double>(vertices) *
-                         static_cast<double>(model.actionCount()) * sizeof(float);
-    // A distributed learner knows its share (issue 44).
-    const double share = behavior.learner->bytesPerProcess(model.actionCount(), vertices);
-    const double tabulatedBytes =
-        (share >= 0 ? share : GridModel::trainingBytes(model.actionCount(), vertices, false)) + extra;
-    const double compactBytes = GridModel::trainingBytes(model.actionCount(), vertices, true) + extra;
-    const bool canCompact = behavior.learner->takesCompactModel();
-    if (options.model == "compact" && !canCompact)
-      throw Error(fmt::format("behaviors.{}: --model compact: expected a learner that takes a compact model "
-                              "(q_learning, value_iteration), found {}; use --model tabulated or auto",
-                              behavior.name, behavior.learner->type()));
-    const bool compact = options.model == "compact" ||
-                         (options.model == "auto" && tabulatedBytes > options.maxMemoryBytes && canCompact);
-    const double needed = compact ? compactBytes : tabulatedBytes;
-    // A learned opponent's states multiply the grid (issue 43): say by how much.
-    const std::size_t opponentStates = behavior.environment->opponentStates();
-    const std::string opponentNote = opponentStates > 0
-                                         ? fmt::format(
-                                               " (a learned opponent's {} states times {} positions: fewer phases or a "
-                                               "coarser grid shrink it; a table larger than one machine trains with "
-                                               "mpi_value_iteration across machines, docs/distributed.md)",
-                                               opponentStates, behavior.discretizer->layerVertexCount())
-                                         : std::string();
-    if (needed > options.maxMemoryBytes)
-      throw Error(fmt::format(
-          "behaviors.{}: training on a {} grid of {}{} vertices{} x {} actions needs about {} "
-          "({} model and Q tables{}); expected at most {} (--max-memory): use a coarser grid{}, or "
-          "raise --max-memory",
-          behavior.name, behavior.discretizer->type(), vertices > behavior.discretizer->vertexCount() ? "up to " : "",
-          vertices, opponentNote, model.actionCount(), humanBytes(needed), compact ? "compact" : "tabulated",
-          extra > 0 ? fmt::format(", {} more tables held", behavior.learner->extraTables()) : "",
-          humanBytes(options.maxMemoryBytes),
-          !compact && canCompact && compactBytes <= options.maxMemoryBytes
-              ? fmt::format(", --model compact (about {})", humanBytes(compactBytes))
-              : ""));
-    compactModel[behavior.name] = compact;
-    if (compact && options.model == "auto")
-      log(fmt::format("train {}: the tabulated model and tables would need about {}, over --max-memory {}: using "
-                      "the compact model (about {}; same tables, slower backups)",
-                      behavior.name, humanBytes(tabulatedBytes), humanBytes(options.maxMemoryBytes),
-                      humanBytes(compactBytes)));
-  }
-  std::vector<fs::path> checkpoints;
-  const StopSignals signals;
-  for (Behavior& behavior : all) {
-    if (std::find(wanted.begin(), wanted.end(), behavior.name) == wanted.end()) continue;
-    if (finished.count(behavior.name) != 0) {
-      log(fmt::format("resume: {}: already trained in {}, kept", behavior.name, out.string()));
-      report["kept"].push_back(behavior.name);
-      // A run killed after its bundle was in place may have left its checkpoints.
-      checkpoints.push_back(checkpointDirectory(out, behavior.name));
-      continue;
-    }
-    // Self-play rounds (issue 43): round 1 against the opponent the scenario names, round k
-    // against round k - 1's table; each round's table is kept, the last under the
-    // behaviour's own name, the others as NAME-roundK.
-    const int rounds = behavior.environment->rounds();
-    std::shared_ptr<const QTable> previous;
-    json roundsReport = json::array();
-    for (int round = 1; round <= rounds; ++round) {
-      const std::string label = round < rounds ? fmt::format("{}-round{}", behavior.name, round) : behavior.name;
-      const std::string roundKey = rounds > 1 ? fmt::format("{}-round{}", behavior.key, round) : behavior.key;
-      if (rounds > 1) {
-        if (previous)
-          behavior.environment->playPolicy(behavior.discretizer.get(), previous, fmt::format("round {}", round - 1));
-        log(fmt::format("train {}: self-play round {} of {}, against {}", behavior.name, round, rounds,
-                        previous ? fmt::format("round {}'s table", round - 1)
-                                 : fmt::format("the {} opponent", behavior.environment->policyKey())));
-      }
-      const Problem problem = behavior.problem(model);
-      const auto tabulateStart = Clock::now();
-      const bool compact = compactModel.at(behavior.name);
-      // A learner that tabulates itself (each MPI rank its share) gets the model's frame only.
-      const bool itself = !compact && behavior.learner->tabulatesItself();
-      if (const int ranks = launchedProcess().size; ranks > 1 && !behavior.learner->tabulatesItself())
-        log(
-            fmt::format("train {}: {} runs in one process: the other {} ranks of this MPI job repeat it and keep "
-                        "nothing (mpi_value_iteration shares the work)",
-                        label, behavior.learner->type(), ranks - 1));
-      const GridModel grid = compact  ? GridModel::buildCompact(problem, threads)
-                             : itself ? GridModel::frame(problem)
-                                      : GridModel::build(problem, threads);
-      const double tabulateSeconds = since(tabulateStart);
-      if (itself)
-        log(fmt::format("train {}: {} on a {} grid ({} vertices) x {} actions, tabulated by the learner", label,
-                        behavior.learner->type(), behavior.discretizer->type(), behavior.discretizer->vertexCount(),
-                        model.actionCount()));
-      else
-        log(fmt::format("train {}: {} on a {} grid ({} vertices) x {} actions, {} tabulated in {:.2f} s ({} MB)", label,
-                        behavior.learner->type(), behavior.discretizer->type(), behavior.discretizer->vertexCount(),
-                        model.actionCount(), compact ? "rewards (compact model)" : "problem", tabulateSeconds,
-                        grid.bytes() / 1000000));
-
-      DirectoryCheckpointer directory(checkpointDirectory(out, label), roundKey, model,
-                                      behavior.discretizer->vertexCount(), options.log);
-      if (!options.resume && writes) directory.remove();
-      CrashTestCheckpointer checkpointer(directory, behavior.name, options.log);
-      checkpoints.push_back(directory.directory());
-      std::optional<TrainResult> trained;
-      std::unique_ptr<TrainListener> listener = options.listen ? options.listen(behavior, all, graph) : nullptr;
-      {
-        ProgressReporter progress(label, options.progressBar, options.log, listener.get());
-        try {
-          trained = behavior.learner->train(
-              {problem, grid, &progress, writes ? &checkpointer : nullptr, threads, &stopRequested, round < rounds});
-        } catch (const TrainInterrupted& stop) {
-          if (!writes) throw;
-          interrupted(options, out, bundle, wanted, behavior.name, stop, directory.directory());
-        }
-      }
-      if (options.resume && !checkpointer.resumed())
-        log(fmt::format("resume: {}: no checkpoint to continue from, trained from the start", behavior.name));
-      TrainResult& result = *trained;
-
-      // An adaptive learner returns the grid it refined: the table's vertices are its.
-      const Discretizer& tableGrid = result.grid ? *result.grid : *behavior.discretizer;
-      json curve = json::array();
-      for (const CurvePoint& p : result.curve) curve.push_back({p.updates, p.seconds, p.residual, p.meanResidual});
-      const double rate = result.seconds > 0 ? static_cast<double>(result.updates) / result.seconds : 0;
-      json summary = {{"learner", behavior.learner->type()},
-                      {"updates", result.updates},
-                      {"seconds", result.seconds},
-                      {"updates_per_second", rate},
-                      {"final_residual", result.finalResidual},
-                      {"table_bytes", result.table.bytes()},
-                      {"vertices", tableGrid.vertexCount()},
-                      {"actions", model.actionCount()},
-                      {"tabulate_seconds", tabulateSeconds},
-                      {"stats", result.stats}};
-      if (round == rounds) {
-        report["behaviors"][behavior.name] = summary;
-        report["behaviors"][behavior.name]["model"] = compact ? "compact" : "tabulated";
-        report["behaviors"][behavior.name]["model_bytes"] = grid.bytes();
-      }
-      json record = summary;
-      record["config"] = behavior.config;
-      record["weight"] = behavior.weight;
-      record["activation"] = std::string(activationName(behavior.activation));
-      record["grid"] = tableGrid.describe();
-      record["curve_columns"] = {"updates", "seconds", "residual", "mean_residual"};
-      record["curve"] = curve;
-      if (listener) {
-        json snapshots = listener->record();
-        if (!snapshots.is_null()) record["snapshots"] = std::move(snapshots);
-      }
-      log(fmt::format("train {}: {} updates in {:.2f} s ({}updates/s), Bellman residual {:.3g}", label, result.updates,
-                      result.seconds, humanCount(rate), result.finalResidual));
-      if (rounds > 1) {
-        // Scoring the round is reporting: rank 0's (issue 44).
-        if (writes) roundsReport.push_back(selfPlayRound(behavior, model, round, result.table, previous.get(), log));
-        record["round"] = round;
-        record["rounds"] = roundsReport;
-        report["behaviors"][behavior.name]["rounds"] = roundsReport;
-        if (round < rounds) previous = std::make_shared<const QTable>(result.table);
-      }
-      bundle.behaviors[round == rounds ? behavior.name : label] = PolicyBehavior{
-          behavior.key,          record, std::move(result.table), vertexPositions(tableGrid), tableGrid.type(),
-          tableGrid.structure(), nullptr};
-    }
-  }
-  if (bundle.provenance.contains("unfinished")) bundle.provenance.erase("unfinished");
-  if (!writes) return report;
-  savePolicyBundle(out, bundle);
-  for (const fs::path& dir : checkpoints) removeCheckpoint(dir);
-  log(fmt::format("policy: {}", out.string()));
-  return report;
+  TrainRun run(options, *session, out, writes);
+  return run.run(session->behaviors);
 }
 
 std::string trainText(const json& report) {

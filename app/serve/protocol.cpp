@@ -91,6 +91,63 @@ class Fields {
   std::vector<std::string> taken_{"type"};
 };
 
+// {"type": "learn", "command": "start" | "step" | "run" | "stop", ...}
+Learn parseLearn(Fields& fields) {
+  Learn m;
+  const std::string command = fields.word(fields.required("command"), "command", {"start", "step", "run", "stop"});
+  if (command == "start") {
+    m.command = Learn::Command::Start;
+    const json& b = fields.required("behavior");
+    if (!b.is_string() || b.get<std::string>().empty() || b.get<std::string>().size() > 64)
+      throw Error(fmt::format("learn.behavior: expected a behaviour name, found {}", shown(b)));
+    m.behavior = b.get<std::string>();
+    if (const json* seed = fields.optional("seed"))
+      m.seed = static_cast<std::uint64_t>(fields.whole(*seed, "seed", 0, 2'147'483'647));
+    if (const json* budget = fields.optional("budget"))
+      m.budget = static_cast<std::uint64_t>(fields.whole(*budget, "budget", 1, Limits::kLearnBudgetMax));
+  } else if (command == "step") {
+    m.command = Learn::Command::Step;
+    if (const json* steps = fields.optional("steps"))
+      m.steps = fields.whole(*steps, "steps", 1, Limits::kLearnStepsMax);
+  } else if (command == "run") {
+    m.command = Learn::Command::Run;
+    m.rate = fields.number(fields.required("rate"), "rate", 0, Limits::kLearnRateMax);
+  } else {
+    m.command = Learn::Command::Stop;
+  }
+  return m;
+}
+
+// {"type": "retrain", "behavior": NAME, "set": {"reward.NAME" | "discretizer.NAME": number}}
+Retrain parseRetrain(Fields& fields) {
+  Retrain m;
+  const json& b = fields.required("behavior");
+  if (!b.is_string() || b.get<std::string>().empty() || b.get<std::string>().size() > 64)
+    throw Error(fmt::format("retrain.behavior: expected a behaviour name, found {}", shown(b)));
+  m.behavior = b.get<std::string>();
+  const json& set = fields.required("set");
+  if (!set.is_object() || set.size() > static_cast<std::size_t>(Limits::kRetrainKeysMax))
+    throw Error(
+        fmt::format("retrain.set: expected an object of at most {} parameters and numbers (e.g. "
+                    "{{\"reward.sigma\": 0.2}}), found {}",
+                    Limits::kRetrainKeysMax, shown(set)));
+  for (const auto& [key, value] : set.items()) {
+    // reward.NAME or discretizer.NAME, NAME in lower case and underscores.
+    const std::size_t dot = key.find('.');
+    const std::string section = key.substr(0, dot);
+    const bool named = dot != std::string::npos && dot + 1 < key.size() && key.size() <= 64 &&
+                       std::all_of(key.begin() + static_cast<std::ptrdiff_t>(dot) + 1, key.end(),
+                                   [](char c) { return (c >= 'a' && c <= 'z') || c == '_' || (c >= '0' && c <= '9'); });
+    if (!named || (section != "reward" && section != "discretizer"))
+      throw Error(fmt::format("retrain.set: expected parameters named reward.NAME or discretizer.NAME, found \"{}\"",
+                              key.size() > 40 ? key.substr(0, 37) + "..." : key));
+    const std::string field = fmt::format("set[\"{}\"]", key);
+    m.set[key] = fields.number(value, field.c_str(), -1e9, 1e9);
+    if (value.is_number_float()) m.fractional[key] = value.dump();
+  }
+  return m;
+}
+
 }  // namespace
 
 ClientMessage parseClientMessage(std::string_view text) {
@@ -167,54 +224,9 @@ ClientMessage parseClientMessage(std::string_view text) {
       throw Error(fmt::format("values.behavior: expected a behaviour name or null, found {}", shown(b)));
     result = ShowValues{b.is_null() ? std::string() : b.get<std::string>()};
   } else if (type == "learn") {
-    Learn m;
-    const std::string command = fields.word(fields.required("command"), "command", {"start", "step", "run", "stop"});
-    if (command == "start") {
-      m.command = Learn::Command::Start;
-      const json& b = fields.required("behavior");
-      if (!b.is_string() || b.get<std::string>().empty() || b.get<std::string>().size() > 64)
-        throw Error(fmt::format("learn.behavior: expected a behaviour name, found {}", shown(b)));
-      m.behavior = b.get<std::string>();
-      if (const json* seed = fields.optional("seed"))
-        m.seed = static_cast<std::uint64_t>(fields.whole(*seed, "seed", 0, 2'147'483'647));
-      if (const json* budget = fields.optional("budget"))
-        m.budget = static_cast<std::uint64_t>(fields.whole(*budget, "budget", 1, Limits::kLearnBudgetMax));
-    } else if (command == "step") {
-      m.command = Learn::Command::Step;
-      if (const json* steps = fields.optional("steps")) m.steps = fields.whole(*steps, "steps", 1, Limits::kLearnStepsMax);
-    } else if (command == "run") {
-      m.command = Learn::Command::Run;
-      m.rate = fields.number(fields.required("rate"), "rate", 0, Limits::kLearnRateMax);
-    } else {
-      m.command = Learn::Command::Stop;
-    }
-    result = m;
+    result = parseLearn(fields);
   } else if (type == "retrain") {
-    Retrain m;
-    const json& b = fields.required("behavior");
-    if (!b.is_string() || b.get<std::string>().empty() || b.get<std::string>().size() > 64)
-      throw Error(fmt::format("retrain.behavior: expected a behaviour name, found {}", shown(b)));
-    m.behavior = b.get<std::string>();
-    const json& set = fields.required("set");
-    if (!set.is_object() || set.size() > static_cast<std::size_t>(Limits::kRetrainKeysMax))
-      throw Error(fmt::format("retrain.set: expected an object of at most {} parameters and numbers (e.g. "
-                              "{{\"reward.sigma\": 0.2}}), found {}",
-                              Limits::kRetrainKeysMax, shown(set)));
-    for (const auto& [key, value] : set.items()) {
-      // reward.NAME or discretizer.NAME, NAME in lower case and underscores.
-      const std::size_t dot = key.find('.');
-      const std::string section = key.substr(0, dot);
-      const bool named = dot != std::string::npos && dot + 1 < key.size() && key.size() <= 64 &&
-                         std::all_of(key.begin() + static_cast<std::ptrdiff_t>(dot) + 1, key.end(),
-                                     [](char c) { return (c >= 'a' && c <= 'z') || c == '_' || (c >= '0' && c <= '9'); });
-      if (!named || (section != "reward" && section != "discretizer"))
-        throw Error(fmt::format("retrain.set: expected parameters named reward.NAME or discretizer.NAME, found \"{}\"",
-                                key.size() > 40 ? key.substr(0, 37) + "..." : key));
-      const std::string field = fmt::format("set[\"{}\"]", key);
-      m.set[key] = fields.number(value, field.c_str(), -1e9, 1e9);
-      if (value.is_number_float()) m.fractional[key] = value.dump();
-    }
-    result = m;
+    result = parseRetrain(fields);
   } else {
     throw Error(fmt::format(
         "message.type: expected one of mode, move_target, controller, weights, pause, step, speed, values, learn, "

@@ -48,6 +48,54 @@ constexpr double kRetrainTrialSeconds = 10;
 // The tabulated problem and two tables of a retraining, at most.
 constexpr double kRetrainBytes = 1e9;
 
+// The retraining thread's work: value iteration on the retrained behaviour, then both
+// policies (`before`, and `before` with the new table) on the same trials. Checks the job's
+// stop flag between stages (TrainInterrupted) and passes it to the learner.
+void trainAndEvaluate(std::atomic<bool>& stop, const ViewerAssets& assets, const std::vector<PolicyPart>& before,
+                      Retrained& result, std::size_t index) {
+  auto stopped = [&] {
+    if (stop) throw TrainInterrupted(0, 0, false);
+  };
+  const StateActionModel& model = assets.model();
+  const unsigned threads = std::max(1u, std::thread::hardware_concurrency());
+  const auto start = Clock::now();
+  const Problem problem = result.behavior.problem(model);
+  stopped();
+  const GridModel grid = GridModel::build(problem, threads, &stop);
+  stopped();
+  const auto learner = app::plugins().learners.create(ConfigNode::parse("{type: value_iteration}", "retrain"));
+  TrainResult trained = learner->train({problem, grid, nullptr, nullptr, threads, &stop});
+  result.trainSeconds = std::chrono::duration<double>(Clock::now() - start).count();
+  result.table = std::move(trained.table);
+  result.refined = trained.grid;
+  result.updates = trained.updates;
+  for (const CurvePoint& p : trained.curve) result.curve.push_back({p.updates, p.seconds, p.residual, p.meanResidual});
+  const Discretizer& g = result.grid();
+  for (std::size_t v = 0; v < g.vertexCount(); ++v) {
+    const Eigen::Vector3d p = g.vertexPosition(v);
+    result.vertices.insert(result.vertices.end(), {p.x(), p.y(), p.z()});
+  }
+  // Success as the scenario defines it (its contact radius), on the same starts.
+  // Targets at the scenario's world.target_height when it gives one, as eval's.
+  const double height = assets.session->task.targetHeight(std::numeric_limits<double>::quiet_NaN());
+  const Trials trials(model, assets.session->behaviors, assets.session->task, height,
+                      assets.session->scenario.path.string());
+  std::vector<PolicyPart> after = before;
+  after[index].grid = &g;
+  after[index].table = &result.table;
+  auto evaluate = [&](const std::vector<PolicyPart>& parts) {
+    PolicyController controller(model, parts);
+    return Trials::summary(
+        trials.run([&](std::uint32_t node, const TargetState& e) { return controller.choose(node, e); }, kRetrainTrials,
+                   kRetrainTrialSeconds, 1));
+  };
+  stopped();
+  result.before = evaluate(before);
+  stopped();
+  result.after = evaluate(after);
+  result.totalSeconds = std::chrono::duration<double>(Clock::now() - start).count();
+}
+
 }  // namespace
 
 // Live retraining (issue 15): value iteration on one behaviour with some of its reward's or
@@ -126,46 +174,8 @@ void ViewerSession::retrain(const Retrain& message) {
     ++gRunning;
   }
   std::thread([j = job, assets, before, keep = std::move(keep), result, index]() mutable {
-    auto stopped = [&] {
-      if (j->stop) throw TrainInterrupted(0, 0, false);
-    };
     try {
-      const StateActionModel& model = assets->model();
-      const unsigned threads = std::max(1u, std::thread::hardware_concurrency());
-      const auto start = Clock::now();
-      const Problem problem = result->behavior.problem(model);
-      stopped();
-      const GridModel grid = GridModel::build(problem, threads, &j->stop);
-      stopped();
-      const auto learner = app::plugins().learners.create(ConfigNode::parse("{type: value_iteration}", "retrain"));
-      TrainResult trained = learner->train({problem, grid, nullptr, nullptr, threads, &j->stop});
-      result->trainSeconds = std::chrono::duration<double>(Clock::now() - start).count();
-      result->table = std::move(trained.table);
-      result->refined = trained.grid;
-      result->updates = trained.updates;
-      for (const CurvePoint& p : trained.curve) result->curve.push_back({p.updates, p.seconds, p.residual, p.meanResidual});
-      const Discretizer& g = result->grid();
-      for (std::size_t v = 0; v < g.vertexCount(); ++v) {
-        const Eigen::Vector3d p = g.vertexPosition(v);
-        result->vertices.insert(result->vertices.end(), {p.x(), p.y(), p.z()});
-      }
-      // Success as the scenario defines it (its contact radius), on the same starts.
-      // Targets at the scenario's world.target_height when it gives one, as eval's.
-      const double height = assets->session->task.targetHeight(std::numeric_limits<double>::quiet_NaN());
-      const Trials trials(model, assets->session->behaviors, assets->session->task, height, assets->session->scenario.path.string());
-      std::vector<PolicyPart> after = before;
-      after[index].grid = &g;
-      after[index].table = &result->table;
-      auto evaluate = [&](const std::vector<PolicyPart>& parts) {
-        PolicyController controller(model, parts);
-        return Trials::summary(trials.run([&](std::uint32_t node, const TargetState& e) { return controller.choose(node, e); },
-                                               kRetrainTrials, kRetrainTrialSeconds, 1));
-      };
-      stopped();
-      result->before = evaluate(before);
-      stopped();
-      result->after = evaluate(after);
-      result->totalSeconds = std::chrono::duration<double>(Clock::now() - start).count();
+      trainAndEvaluate(j->stop, *assets, before, *result, index);
     } catch (const TrainInterrupted&) {
       j->failure = "interrupted";
     } catch (const std::exception& e) {

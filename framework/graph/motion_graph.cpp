@@ -134,6 +134,47 @@ std::vector<std::uint32_t> stronglyConnected(const FrameGraph& g, std::size_t* c
   return component;
 }
 
+// The strikes of one kind (Annotation::hits or ::kicks) by global frame: begin[f] to
+// begin[f + 1] index `list`. Raises `fastest` to their top speed and, if asked, leaves
+// their mean tip (avatar frame) in *centroidSum.
+struct StrikeIndex {
+  std::vector<std::uint32_t> begin;  // per global frame
+  std::vector<const EffectiveHit*> list;
+};
+
+StrikeIndex indexStrikes(const MotionDatabase& db, std::vector<EffectiveHit> Annotation::*member, double& fastest,
+                         Eigen::Vector3d* centroidSum) {
+  const std::uint32_t n = db.frameCount();
+  StrikeIndex index;
+  index.begin.assign(n + 1, 0);
+  std::size_t count = 0;
+  for (std::size_t c = 0; c < db.clips.size(); ++c)
+    for (const EffectiveHit& h : db.clips[c].annotation.*member) {
+      ++index.begin[db.offsets[c] + h.frame + 1];
+      if (centroidSum) *centroidSum += h.tipAvatar;
+      ++count;
+      fastest = std::max(fastest, h.speed_mps);
+    }
+  if (centroidSum && count) *centroidSum /= static_cast<double>(count);
+  for (std::uint32_t f = 0; f < n; ++f) index.begin[f + 1] += index.begin[f];
+  index.list.resize(index.begin[n]);
+  std::vector<std::uint32_t> fill(index.begin.begin(), index.begin.end() - 1);
+  for (std::size_t c = 0; c < db.clips.size(); ++c)
+    for (const EffectiveHit& h : db.clips[c].annotation.*member) index.list[fill[db.offsets[c] + h.frame]++] = &h;
+  return index;
+}
+
+// The strikes at frame v, carried into the decision's avatar frame by `root`.
+void addStrikes(const StrikeIndex& index, std::uint32_t v, const GroundMotion& root, std::uint32_t a,
+                std::uint32_t offset, double fastest, std::vector<ActionHit>& into) {
+  for (std::uint32_t h = index.begin[v]; h < index.begin[v + 1]; ++h) {
+    const EffectiveHit& hit = *index.list[h];
+    const Eigen::Vector3d p = transformPoint(root, hit.tipAvatar);
+    into.push_back({a, offset, static_cast<std::uint8_t>(hit.hand), static_cast<float>(p.x()),
+                    static_cast<float>(p.y()), static_cast<float>(p.z()), static_cast<float>(hit.speed_mps / fastest)});
+  }
+}
+
 }  // namespace
 
 StateActionModel buildStateActionModel(const MotionDatabase& db, const GraphParams& params, GraphBuildReport* report) {
@@ -204,44 +245,10 @@ StateActionModel buildStateActionModel(const MotionDatabase& db, const GraphPara
   // Effective hitting points of the data: their centroid (the paper's p(t) follows it) and
   // the fastest one (the hit reward's w(t) is normalised by it). Kicks the same way, apart:
   // they leave the centroid and the paper's hit reward as they were.
-  struct StrikeIndex {
-    std::vector<std::uint32_t> begin;  // per global frame
-    std::vector<const EffectiveHit*> list;
-  };
-  auto indexStrikes = [&](auto member, double& fastest, Eigen::Vector3d* centroidSum) {
-    StrikeIndex index;
-    index.begin.assign(n + 1, 0);
-    std::size_t count = 0;
-    for (std::size_t c = 0; c < db.clips.size(); ++c)
-      for (const EffectiveHit& h : db.clips[c].annotation.*member) {
-        ++index.begin[db.offsets[c] + h.frame + 1];
-        if (centroidSum) *centroidSum += h.tipAvatar;
-        ++count;
-        fastest = std::max(fastest, h.speed_mps);
-      }
-    if (centroidSum && count) *centroidSum /= static_cast<double>(count);
-    for (std::uint32_t f = 0; f < n; ++f) index.begin[f + 1] += index.begin[f];
-    index.list.resize(index.begin[n]);
-    std::vector<std::uint32_t> fill(index.begin.begin(), index.begin.end() - 1);
-    for (std::size_t c = 0; c < db.clips.size(); ++c)
-      for (const EffectiveHit& h : db.clips[c].annotation.*member) index.list[fill[db.offsets[c] + h.frame]++] = &h;
-    return index;
-  };
   Eigen::Vector3d sum = Eigen::Vector3d::Zero();
-  const StrikeIndex punches = indexStrikes(&Annotation::hits, m.maxHitSpeed_mps, &sum);
+  const StrikeIndex punches = indexStrikes(db, &Annotation::hits, m.maxHitSpeed_mps, &sum);
   for (int i = 0; i < 3; ++i) m.centroid[i] = sum[i];
-  const StrikeIndex kicks = indexStrikes(&Annotation::kicks, m.maxKickSpeed_mps, nullptr);
-  // The strikes at frame v, carried into the decision's avatar frame by `root`.
-  auto addStrikes = [](const StrikeIndex& index, std::uint32_t v, const GroundMotion& root, std::uint32_t a,
-                       std::uint32_t offset, double fastest, std::vector<ActionHit>& into) {
-    for (std::uint32_t h = index.begin[v]; h < index.begin[v + 1]; ++h) {
-      const EffectiveHit& hit = *index.list[h];
-      const Eigen::Vector3d p = transformPoint(root, hit.tipAvatar);
-      into.push_back({a, offset, static_cast<std::uint8_t>(hit.hand), static_cast<float>(p.x()),
-                     static_cast<float>(p.y()), static_cast<float>(p.z()), static_cast<float>(hit.speed_mps / fastest)});
-    }
-  };
-
+  const StrikeIndex kicks = indexStrikes(db, &Annotation::kicks, m.maxKickSpeed_mps, nullptr);
   // Collapse: every out-edge of a state starts an action that runs until the next state.
   m.stateActionBegin.push_back(0);
   m.actionFrameBegin.push_back(0);

@@ -59,9 +59,8 @@ void requireFinite(std::string_view source, std::string_view field, const std::v
     if (!std::isfinite(v[i])) fail(source, fmt::format("{}[{}]", field, i), "a finite number", fmt::format("{}", v[i]));
 }
 
-}  // namespace
-
-void checkModel(const StateActionModel& m, std::string_view source) {
+// Frame time, centroid and top speeds.
+void checkScalars(const StateActionModel& m, std::string_view source) {
   if (!(m.frameTime > 0) || !std::isfinite(m.frameTime))
     fail(source, "frameTime", "a finite number of seconds above 0", fmt::format("{}", m.frameTime));
   for (int i = 0; i < 3; ++i)
@@ -71,7 +70,9 @@ void checkModel(const StateActionModel& m, std::string_view source) {
     fail(source, "maxHitSpeed_mps", "a finite speed of at least 0", fmt::format("{}", m.maxHitSpeed_mps));
   if (!(m.maxKickSpeed_mps >= 0) || !std::isfinite(m.maxKickSpeed_mps))
     fail(source, "maxKickSpeed_mps", "a finite speed of at least 0", fmt::format("{}", m.maxKickSpeed_mps));
+}
 
+void checkSizes(const StateActionModel& m, std::string_view source) {
   // Sizes first, so the checks after them index safely.
   if (m.clipOffset.empty()) fail(source, "clipOffset", "at least one entry", "none");
   if (m.transitions.size() % 2 != 0)
@@ -99,7 +100,12 @@ void checkModel(const StateActionModel& m, std::string_view source) {
   requireOffsets(source, "actionHitBegin", m.actionHitBegin, m.hits.size(), "the number of hits");
   if (!m.actionKickBegin.empty())
     requireOffsets(source, "actionKickBegin", m.actionKickBegin, m.kicks.size(), "the number of kicks");
+}
 
+// Transitions, states and actions: in range, sorted, each action ending at its end state.
+void checkGraph(const StateActionModel& m, std::string_view source) {
+  const std::size_t states = m.stateCount();
+  const std::size_t actions = m.actionCount();
   requireBelow(source, "componentFrames", m.componentFrames, m.framesTotal, "a frame", "framesTotal");
   requireAscending(source, "componentFrames", m.componentFrames);
   requireBelow(source, "transitions", m.transitions, m.framesTotal, "a frame", "framesTotal");
@@ -145,7 +151,10 @@ void checkModel(const StateActionModel& m, std::string_view source) {
   requireFinite(source, "actionDisplacement", m.actionDisplacement);
   requireFinite(source, "frameRoot", m.frameRoot);
   requireFinite(source, "frameCentroid", m.frameCentroid);
+}
 
+void checkJoints(const StateActionModel& m, std::string_view source) {
+  const std::size_t frames = m.actionFrames.size();
   // The skeleton's joints: none at all, or every array sized by them.
   const std::size_t joints = m.jointNames.size();
   requireSize(source, "sourceJoint", m.sourceJoint.size(), 3 * std::size_t{m.framesTotal} * joints,
@@ -167,40 +176,51 @@ void checkModel(const StateActionModel& m, std::string_view source) {
     if (m.frameEntersTransition[i] > 1)
       fail(source, fmt::format("frameEntersTransition[{}]", i), "0 or 1",
            fmt::format("{}", m.frameEntersTransition[i]));
+}
 
-  // Strikes (punches and kicks): each belongs to its action, sorted by (offset, side) there.
-  auto checkStrikes = [&](std::string_view name, const std::vector<ActionHit>& list,
-                          const std::vector<std::uint32_t>& begin, std::string_view beginName) {
-    for (std::size_t a = 0; a < actions; ++a) {
-      for (std::size_t h = begin[a]; h < begin[a + 1]; ++h) {
-        const ActionHit& hit = list[h];
-        if (hit.action != a)
-          fail(source, fmt::format("{}[{}].action", name, h), fmt::format("{} ({})", a, beginName),
-               fmt::format("{}", hit.action));
-        if (hit.offset < 1 || hit.offset > m.actionLength(a))
-          fail(source, fmt::format("{}[{}].offset", name, h),
-               fmt::format("an offset in [1, {}] (the length of action {})", m.actionLength(a), a),
-               fmt::format("{}", hit.offset));
-        if (hit.hand > 1)
-          fail(source, fmt::format("{}[{}].hand", name, h), "0 (left) or 1 (right)", fmt::format("{}", hit.hand));
-        if (h > begin[a]) {
-          const ActionHit& previous = list[h - 1];
-          if (hit.offset < previous.offset || (hit.offset == previous.offset && hit.hand < previous.hand))
-            fail(source, fmt::format("{}[{}]", name, h),
-                 fmt::format("sorted by (offset, side), at least ({}, {})", previous.offset, previous.hand),
-                 fmt::format("({}, {})", hit.offset, hit.hand));
-        }
-        const float values[3] = {hit.x, hit.y, hit.z};
-        for (int k = 0; k < 3; ++k)
-          if (!std::isfinite(values[k]))
-            fail(source, fmt::format("{}[{}].{}", name, h, "xyz"[k]), "a finite number", fmt::format("{}", values[k]));
-        if (!(hit.weight > 0 && hit.weight <= 1))
-          fail(source, fmt::format("{}[{}].weight", name, h), "a weight in (0, 1]", fmt::format("{}", hit.weight));
+// Strikes (punches or kicks): each belongs to its action, sorted by (offset, side) there.
+void checkStrikes(const StateActionModel& m, std::string_view source, std::string_view name,
+                  const std::vector<ActionHit>& list, const std::vector<std::uint32_t>& begin,
+                  std::string_view beginName) {
+  const std::size_t actions = m.actionCount();
+  for (std::size_t a = 0; a < actions; ++a) {
+    for (std::size_t h = begin[a]; h < begin[a + 1]; ++h) {
+      const ActionHit& hit = list[h];
+      if (hit.action != a)
+        fail(source, fmt::format("{}[{}].action", name, h), fmt::format("{} ({})", a, beginName),
+             fmt::format("{}", hit.action));
+      if (hit.offset < 1 || hit.offset > m.actionLength(a))
+        fail(source, fmt::format("{}[{}].offset", name, h),
+             fmt::format("an offset in [1, {}] (the length of action {})", m.actionLength(a), a),
+             fmt::format("{}", hit.offset));
+      if (hit.hand > 1)
+        fail(source, fmt::format("{}[{}].hand", name, h), "0 (left) or 1 (right)", fmt::format("{}", hit.hand));
+      if (h > begin[a]) {
+        const ActionHit& previous = list[h - 1];
+        if (hit.offset < previous.offset || (hit.offset == previous.offset && hit.hand < previous.hand))
+          fail(source, fmt::format("{}[{}]", name, h),
+               fmt::format("sorted by (offset, side), at least ({}, {})", previous.offset, previous.hand),
+               fmt::format("({}, {})", hit.offset, hit.hand));
       }
+      const float values[3] = {hit.x, hit.y, hit.z};
+      for (int k = 0; k < 3; ++k)
+        if (!std::isfinite(values[k]))
+          fail(source, fmt::format("{}[{}].{}", name, h, "xyz"[k]), "a finite number", fmt::format("{}", values[k]));
+      if (!(hit.weight > 0 && hit.weight <= 1))
+        fail(source, fmt::format("{}[{}].weight", name, h), "a weight in (0, 1]", fmt::format("{}", hit.weight));
     }
-  };
-  checkStrikes("hits", m.hits, m.actionHitBegin, "actionHitBegin");
-  if (!m.actionKickBegin.empty()) checkStrikes("kicks", m.kicks, m.actionKickBegin, "actionKickBegin");
+  }
+}
+
+}  // namespace
+
+void checkModel(const StateActionModel& m, std::string_view source) {
+  checkScalars(m, source);
+  checkSizes(m, source);  // first, so the checks after them index safely
+  checkGraph(m, source);
+  checkJoints(m, source);
+  checkStrikes(m, source, "hits", m.hits, m.actionHitBegin, "actionHitBegin");
+  if (!m.actionKickBegin.empty()) checkStrikes(m, source, "kicks", m.kicks, m.actionKickBegin, "actionKickBegin");
 }
 
 }  // namespace mgrl

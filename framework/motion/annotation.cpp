@@ -145,22 +145,27 @@ std::size_t Annotation::hitCount(Side side) const {
   return static_cast<std::size_t>(std::count_if(hits.begin(), hits.end(), [side](const EffectiveHit& h) { return h.hand == side; }));
 }
 
-Annotation annotate(const Motion& motion, const SkeletonRoles& roles, const AnnotationParams& params) {
-  if (params.punchMinSpeedAuto) {
-    const Motion* const one[] = {&motion};
-    AnnotationParams chosen = params;
-    chosen.punchMinSpeed_mps = autoPunchMinSpeed(one, roles, params).speed_mps;
-    chosen.punchMinSpeedAuto = false;
-    return annotate(motion, roles, chosen);
-  }
-  params.validate();
+namespace {
+
+// The points annotate() follows, per frame (kPoints of them; see trackPoints()), their
+// velocities, and the root's position and facing.
+struct Tracked {
+  static constexpr std::size_t kPoints = 15;
+  std::size_t frames = 0;
+  double frameTime = 0;
+  std::vector<Eigen::Vector3d> points, velocity, rootPosition, facing;
+};
+
+// Tracked points per frame: ankle L/R, toe L/R, fist tip L/R, wrist L/R, forearm L/R,
+// toe tip L/R, head top, knee L/R (the ankle's parent).
+Tracked trackPoints(const Motion& motion, const SkeletonRoles& roles) {
   const Skeleton& skeleton = motion.skeleton();
   const std::size_t frames = motion.frameCount();
   const std::size_t n = skeleton.jointCount();
-
-  // Tracked points per frame: ankle L/R, toe L/R, fist tip L/R, wrist L/R, forearm L/R,
-  // toe tip L/R, head top, knee L/R (the ankle's parent).
-  constexpr std::size_t kPoints = 15;
+  constexpr std::size_t kPoints = Tracked::kPoints;
+  Tracked t;
+  t.frames = frames;
+  t.frameTime = motion.frameTime();
   std::vector<Eigen::Vector3d> points(frames * kPoints);
   std::vector<Eigen::Vector3d> rootPosition(frames), facing(frames);
   std::vector<Eigen::Quaterniond> rotations(n);
@@ -184,14 +189,25 @@ Annotation annotate(const Motion& motion, const SkeletonRoles& roles, const Anno
     rootPosition[f] = positions[0];
     facing[f] = rotations[0] * roles.forward;
   }
-  const auto velocity = velocities(points, kPoints, motion.frameTime());
+  t.velocity = velocities(points, kPoints, motion.frameTime());
+  t.points = std::move(points);
+  t.rootPosition = std::move(rootPosition);
+  t.facing = std::move(facing);
+  return t;
+}
 
-  Annotation result;
+// The ground, foot contacts and where each planted foot rests; returns each frame's lowest
+// foot point.
+std::vector<double> findContacts(const Tracked& t, const AnnotationParams& params, Annotation& result) {
+  const std::size_t frames = t.frames;
+  constexpr std::size_t kPoints = Tracked::kPoints;
+  const std::vector<Eigen::Vector3d>& points = t.points;
+  const std::vector<Eigen::Vector3d>& velocity = t.velocity;
   // Planted level of each foot joint at each frame: the height it rests at when down
   // nearby in time (10th percentile within +-1 s). Local, because capture floors tilt and
   // drift (CMU 07_05 rises 5 cm over its 4 m walk); a percentile, because some frames dip
   // through the floor (SNU s_019_2_1).
-  const std::size_t window = std::max<std::size_t>(1, static_cast<std::size_t>(std::lround(1.0 / motion.frameTime())));
+  const std::size_t window = std::max<std::size_t>(1, static_cast<std::size_t>(std::lround(1.0 / t.frameTime)));
   std::array<std::vector<double>, 4> planted;
   std::vector<double> heights(frames), lowest(frames);
   for (std::size_t k = 0; k < 4; ++k) {
@@ -237,6 +253,15 @@ Annotation annotate(const Motion& motion, const SkeletonRoles& roles, const Anno
     }
   }
 
+  return lowest;
+}
+
+// Standing height from the motion; returns the head top's height above the lower foot,
+// per frame.
+std::vector<double> measureStanding(const Tracked& t, const std::vector<double>& lowest, Annotation& result) {
+  const std::size_t frames = t.frames;
+  constexpr std::size_t kPoints = Tracked::kPoints;
+  const std::vector<Eigen::Vector3d>& points = t.points;
   // Standing height from the motion: the head top above the lower foot while both feet
   // are down. A high percentile, because boxers stand in a crouch most of the time.
   std::vector<double> headAbove(frames), standing;
@@ -249,14 +274,18 @@ Annotation annotate(const Motion& motion, const SkeletonRoles& roles, const Anno
   }
   result.standingFrames = standing.size();
   result.standingHeight = percentile(standing, 0.99);
+
+  return headAbove;
+}
+
+void findPunches(const Tracked& t, const Skeleton& skeleton, const SkeletonRoles& roles, const AnnotationParams& params,
+                 const std::vector<double>& headAbove, Annotation& result) {
+  const std::size_t frames = t.frames;
+  constexpr std::size_t kPoints = Tracked::kPoints;
+  const std::vector<Eigen::Vector3d>& points = t.points;
+  const std::vector<Eigen::Vector3d>& velocity = t.velocity;
+  const std::vector<Eigen::Vector3d>& rootPosition = t.rootPosition;
   const double knockdownBelow = params.knockdownHeadRatio * result.standingHeight;
-
-  result.frames.resize(frames);
-  for (std::size_t f = 0; f < frames; ++f) {
-    result.frames[f].origin = {rootPosition[f].x(), result.groundY, rootPosition[f].z()};
-    result.frames[f].yaw = std::atan2(facing[f].x(), facing[f].z());
-  }
-
   // Effective punches (sec. 6.2): fist velocity projected on the forearm axis above a
   // threshold, and not opposed to it, by a boxer on his feet. Then each punch (a run of
   // such frames of one hand) must drive the fist out from the body: at one of its frames at
@@ -289,7 +318,7 @@ Annotation annotate(const Motion& motion, const SkeletonRoles& roles, const Anno
     // The pelvis's velocity, by the same central difference as the fists'.
     const std::size_t fa = f > 0 ? f - 1 : f, fb = f + 1 < frames ? f + 1 : f;
     const Eigen::Vector3d pelvisVelocity =
-        fb > fa ? Eigen::Vector3d((rootPosition[fb] - rootPosition[fa]) / (static_cast<double>(fb - fa) * motion.frameTime()))
+        fb > fa ? Eigen::Vector3d((rootPosition[fb] - rootPosition[fa]) / (static_cast<double>(fb - fa) * t.frameTime))
                 : Eigen::Vector3d::Zero();
     for (int s = 0; s < 2; ++s) {
       const std::size_t base = f * kPoints;
@@ -298,8 +327,9 @@ Annotation annotate(const Motion& motion, const SkeletonRoles& roles, const Anno
       const double speed = v.norm();
       // A one-frame capture glitch is halved by the central difference; the one-sided
       // speeds on either side show it whole.
-      const double before = f > 0 ? (points[base + 4 + s] - points[base - kPoints + 4 + s]).norm() / motion.frameTime() : 0;
-      const double after = f + 1 < frames ? (points[base + kPoints + 4 + s] - points[base + 4 + s]).norm() / motion.frameTime() : 0;
+      const double before = f > 0 ? (points[base + 4 + s] - points[base - kPoints + 4 + s]).norm() / t.frameTime : 0;
+      const double after =
+          f + 1 < frames ? (points[base + kPoints + 4 + s] - points[base + 4 + s]).norm() / t.frameTime : 0;
       if (std::max({speed, before, after}) > params.punchMaxSpeed_mps) {
         ++result.glitchFrames;
       } else if (!down && axis.norm() > 1e-9) {
@@ -339,7 +369,15 @@ Annotation annotate(const Motion& motion, const SkeletonRoles& roles, const Anno
   std::stable_sort(result.hits.begin(), result.hits.end(), [](const EffectiveHit& x, const EffectiveHit& y) {
     return x.frame != y.frame ? x.frame < y.frame : static_cast<int>(x.hand) < static_cast<int>(y.hand);
   });
+}
 
+void findKicks(const Tracked& t, const AnnotationParams& params, const std::vector<double>& headAbove,
+               Annotation& result) {
+  const std::size_t frames = t.frames;
+  constexpr std::size_t kPoints = Tracked::kPoints;
+  const std::vector<Eigen::Vector3d>& points = t.points;
+  const std::vector<Eigen::Vector3d>& velocity = t.velocity;
+  const double knockdownBelow = params.knockdownHeadRatio * result.standingHeight;
   // Effective kicks, by analogy with the punches: a fast toe tip, high enough off the floor
   // not to be a step, by a fighter on his feet, moving along the shin (knee to ankle) by at
   // least kick_min_alignment of its speed. Unlike a punch's fist, a kicking foot swings
@@ -354,8 +392,8 @@ Annotation annotate(const Motion& motion, const SkeletonRoles& roles, const Anno
       Eigen::Vector3d axis = points[base + s] - points[base + 13 + s];
       const Eigen::Vector3d& v = velocity[base + 10 + s];
       const double speed = v.norm();
-      const double before = f > 0 ? (tip - points[base - kPoints + 10 + s]).norm() / motion.frameTime() : 0;
-      const double after = f + 1 < frames ? (points[base + kPoints + 10 + s] - tip).norm() / motion.frameTime() : 0;
+      const double before = f > 0 ? (tip - points[base - kPoints + 10 + s]).norm() / t.frameTime : 0;
+      const double after = f + 1 < frames ? (points[base + kPoints + 10 + s] - tip).norm() / t.frameTime : 0;
       bool effective = false;
       if (!down && axis.norm() > 1e-9 && std::max({speed, before, after}) <= params.kickMaxSpeed_mps &&
           tip.y() - result.groundY >= params.kickMinHeight_m) {
@@ -377,6 +415,32 @@ Annotation annotate(const Motion& motion, const SkeletonRoles& roles, const Anno
       kicking[s] = effective;
     }
   }
+}
+
+}  // namespace
+
+Annotation annotate(const Motion& motion, const SkeletonRoles& roles, const AnnotationParams& params) {
+  if (params.punchMinSpeedAuto) {
+    const Motion* const one[] = {&motion};
+    AnnotationParams chosen = params;
+    chosen.punchMinSpeed_mps = autoPunchMinSpeed(one, roles, params).speed_mps;
+    chosen.punchMinSpeedAuto = false;
+    return annotate(motion, roles, chosen);
+  }
+  params.validate();
+  const Tracked t = trackPoints(motion, roles);
+  const std::size_t frames = t.frames;
+  Annotation result;
+  const std::vector<double> lowest = findContacts(t, params, result);
+  const std::vector<double> headAbove = measureStanding(t, lowest, result);
+  result.frames.resize(frames);
+  for (std::size_t f = 0; f < frames; ++f) {
+    result.frames[f].origin = {t.rootPosition[f].x(), result.groundY, t.rootPosition[f].z()};
+    result.frames[f].yaw = std::atan2(t.facing[f].x(), t.facing[f].z());
+  }
+
+  findPunches(t, motion.skeleton(), roles, params, headAbove, result);
+  findKicks(t, params, headAbove, result);
   return result;
 }
 

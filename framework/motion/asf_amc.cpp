@@ -74,243 +74,298 @@ int parseDof(std::string_view token) {
 
 }  // namespace
 
-AsfSkeleton parseAsf(std::string_view text, std::string_view source) {
-  TextScanner in(text, source);
-  AsfSkeleton result;
-  std::vector<Axis> rootOrderApplied;  // rotation axes in the order the root applies them
-  std::vector<int> rootDofs;
-  Eigen::Vector3d rootPosition = Eigen::Vector3d::Zero(), rootOrientation = Eigen::Vector3d::Zero();
-  std::vector<Axis> rootAxis{Axis::X, Axis::Y, Axis::Z};
-  std::vector<RawBone> bones;
-  std::unordered_map<std::string, std::size_t> boneIndex;
-  std::vector<std::vector<std::size_t>> children;  // index bones.size() is the root
-  std::vector<long> parentOf;
-  std::vector<std::size_t> parentLine;
-  bool sawRoot = false, sawBones = false, sawHierarchy = false;
-  double angleScale = kDegToRad;
+namespace {
 
-  std::string_view token = in.next();
-  while (!token.empty()) {
-    if (token.front() == '#') {
-      in.nextLine();
-      token = in.next();
-      continue;
+// parseAsf's state across the file's sections: one method per section, each starting at
+// its keyword's next token and returning the token that ends it (the next section's).
+class AsfReader {
+ public:
+  AsfReader(std::string_view text, std::string_view source) : in_(text, source), text_(text), source_(source) {}
+
+  AsfSkeleton read() {
+    std::string_view token = in_.next();
+    while (!token.empty()) {
+      if (token.front() == '#') {
+        in_.nextLine();
+        token = in_.next();
+        continue;
+      }
+      if (token == ":version" || token == ":name") {
+        in_.nextLine();
+        token = in_.next();
+      } else if (token == ":documentation") {
+        // Free text up to the next section keyword.
+        do token = in_.next();
+        while (!token.empty() && !startsSection(token));
+      } else if (token == ":units") {
+        token = units();
+      } else if (token == ":root") {
+        token = root();
+      } else if (token == ":bonedata") {
+        token = bonedata();
+      } else if (token == ":hierarchy") {
+        hierarchy();
+        token = in_.next();
+      } else {
+        in_.fail(":version, :name, :units, :documentation, :root, :bonedata or :hierarchy", quoteToken(token));
+      }
     }
-    if (token == ":version" || token == ":name") {
-      in.nextLine();
-      token = in.next();
-    } else if (token == ":documentation") {
-      // Free text up to the next section keyword.
-      do token = in.next();
-      while (!token.empty() && !startsSection(token));
-    } else if (token == ":units") {
-      for (token = in.next(); !token.empty() && !startsSection(token); token = in.next()) {
-        if (token == "mass") {
-          in.number("a mass unit");
-        } else if (token == "length") {
-          result.lengthPerInch = in.number("a length unit");
-          // CMU writes 0.45; a unit far outside [0.001, 1000] makes skeletons of nanometres or
-          // of millions of metres (issue 19), never a person.
-          if (!(result.lengthPerInch >= 1e-3 && result.lengthPerInch <= 1e3))
-            in.fail("a length unit in [0.001, 1000] (CMU: 0.45)", fmt::format("{}", result.lengthPerInch));
-        } else if (token == "angle") {
-          const std::string_view unit = in.require("deg or rad");
-          if (unit == "deg") angleScale = kDegToRad;
-          else if (unit == "rad") angleScale = 1.0;
-          else in.fail("deg or rad", quoteToken(unit));
-        } else {
-          in.fail("mass, length or angle", quoteToken(token));
-        }
+    if (!sawRoot_) in_.fail("a :root section", "end of file");
+    if (!sawBones_) in_.fail("a :bonedata section", "end of file");
+    if (!sawHierarchy_) in_.fail("a :hierarchy section", "end of file");
+    if (rootOrderApplied_.empty()) rootOrderApplied_ = {Axis::X, Axis::Y, Axis::Z};
+    std::vector<int> jointOf;
+    const std::vector<std::size_t> order = depthFirstOrder(jointOf);
+    return build(order, jointOf);
+  }
+
+ private:
+  std::string_view units() {
+    std::string_view token;
+    for (token = in_.next(); !token.empty() && !startsSection(token); token = in_.next()) {
+      if (token == "mass") {
+        in_.number("a mass unit");
+      } else if (token == "length") {
+        result_.lengthPerInch = in_.number("a length unit");
+        // CMU writes 0.45; a unit far outside [0.001, 1000] makes skeletons of nanometres or
+        // of millions of metres (issue 19), never a person.
+        if (!(result_.lengthPerInch >= 1e-3 && result_.lengthPerInch <= 1e3))
+          in_.fail("a length unit in [0.001, 1000] (CMU: 0.45)", fmt::format("{}", result_.lengthPerInch));
+      } else if (token == "angle") {
+        const std::string_view unit = in_.require("deg or rad");
+        if (unit == "deg")
+          angleScale_ = kDegToRad;
+        else if (unit == "rad")
+          angleScale_ = 1.0;
+        else
+          in_.fail("deg or rad", quoteToken(unit));
+      } else {
+        in_.fail("mass, length or angle", quoteToken(token));
       }
-    } else if (token == ":root") {
-      sawRoot = true;
-      for (token = in.next(); !token.empty() && !startsSection(token); token = in.next()) {
-        if (token == "order") {
-          in.skipBlanks();
-          for (std::string_view dof : splitBlanks(in.nextLine())) {
-            const int d = parseDof(dof);
-            if (d < 0 || std::find(rootDofs.begin(), rootDofs.end(), d) != rootDofs.end())
-              in.fail("root order channels TX TY TZ RX RY RZ, each once", quoteToken(dof));
-            rootDofs.push_back(d);
-            if (d < 3) rootOrderApplied.push_back(static_cast<Axis>(d));
-          }
-        } else if (token == "axis") {
-          rootAxis = parseAxisOrder(in, in.require("an axis order"));
-        } else if (token == "position") {
-          for (int i = 0; i < 3; ++i) rootPosition[i] = in.number("a root position coordinate");
-        } else if (token == "orientation") {
-          for (int i = 0; i < 3; ++i) rootOrientation[i] = in.number("a root orientation angle");
-        } else {
-          in.fail("order, axis, position or orientation", quoteToken(token));
+    }
+    return token;
+  }
+
+  std::string_view root() {
+    sawRoot_ = true;
+    std::string_view token;
+    for (token = in_.next(); !token.empty() && !startsSection(token); token = in_.next()) {
+      if (token == "order") {
+        in_.skipBlanks();
+        for (std::string_view dof : splitBlanks(in_.nextLine())) {
+          const int d = parseDof(dof);
+          if (d < 0 || std::find(rootDofs_.begin(), rootDofs_.end(), d) != rootDofs_.end())
+            in_.fail("root order channels TX TY TZ RX RY RZ, each once", quoteToken(dof));
+          rootDofs_.push_back(d);
+          if (d < 3) rootOrderApplied_.push_back(static_cast<Axis>(d));
         }
+      } else if (token == "axis") {
+        rootAxis_ = parseAxisOrder(in_, in_.require("an axis order"));
+      } else if (token == "position") {
+        for (int i = 0; i < 3; ++i) rootPosition_[i] = in_.number("a root position coordinate");
+      } else if (token == "orientation") {
+        for (int i = 0; i < 3; ++i) rootOrientation_[i] = in_.number("a root orientation angle");
+      } else {
+        in_.fail("order, axis, position or orientation", quoteToken(token));
       }
-    } else if (token == ":bonedata") {
-      // :hierarchy sized its tables by the bones before it.
-      if (sawHierarchy) in.fail(":bonedata before :hierarchy", "':bonedata' after it");
-      sawBones = true;
-      for (token = in.next(); token == "begin"; token = in.next()) {
-        RawBone bone;
-        bone.line = in.line();
-        bool sawName = false;
-        for (token = in.next(); token != "end"; token = in.next()) {
-          if (token.empty()) in.fail("'end' of the bone", "end of file");
-          if (token == "id") {
-            in.require("a bone id");
-          } else if (token == "name") {
-            bone.name = std::string(in.require("a bone name"));
-            bone.line = in.line();
-            sawName = true;
-          } else if (token == "direction") {
-            for (int i = 0; i < 3; ++i) bone.direction[i] = in.number("a direction coordinate");
-          } else if (token == "length") {
-            bone.length = in.number("a bone length");
-            if (bone.length < 0) in.fail("a non-negative bone length", fmt::format("{}", bone.length));
-          } else if (token == "axis") {
-            for (int i = 0; i < 3; ++i) bone.axisAngles[i] = in.number("an axis angle");
-            bone.axisOrder = parseAxisOrder(in, in.require("an axis order"));
-          } else if (token == "dof") {
-            in.skipBlanks();
-            for (std::string_view dof : splitBlanks(in.nextLine())) {
-              const int d = parseDof(dof);
-              if (d < 0 || d > 2 || std::find(bone.dofs.begin(), bone.dofs.end(), d) != bone.dofs.end())
-                in.fail("rotational degrees of freedom rx, ry, rz, each once", quoteToken(dof));
-              bone.dofs.push_back(d);
-            }
-          } else if (token == "limits") {
-            // One "(min max)" pair per degree of freedom; mgrl does not enforce them.
-            for (std::size_t k = 0; k < bone.dofs.size(); ++k) {
-              std::string_view t;
-              do {
-                t = in.require("a limits pair such as (-10.0 170.0)");
-                if (startsSection(t) || t == "end") in.fail("a limits pair such as (-10.0 170.0)", quoteToken(t));
-              } while (t.back() != ')');
-            }
-          } else if (token == "bodymass" || token == "cofmass") {
-            in.number("a mass value");
-          } else {
-            in.fail("id, name, direction, length, axis, dof, limits or end", TextScanner::describe(token));
-          }
+    }
+    return token;
+  }
+
+  std::string_view bonedata() {
+    // :hierarchy sized its tables by the bones before it.
+    if (sawHierarchy_) in_.fail(":bonedata before :hierarchy", "':bonedata' after it");
+    sawBones_ = true;
+    std::string_view token;
+    for (token = in_.next(); token == "begin"; token = in_.next()) {
+      RawBone bone = this->bone();
+      if (bone.name == "root") throw ParseError(source_, bone.line, "a bone name other than root", "'root'");
+      if (bone.direction.norm() > 0) bone.direction.normalize();
+      if (auto [it, fresh] = boneIndex_.emplace(bone.name, bones_.size()); !fresh)
+        throw ParseError(source_, bone.line, "a unique bone name", fmt::format("'{}' again", bone.name));
+      bones_.push_back(std::move(bone));
+    }
+    return token;
+  }
+
+  // One bone's "begin ... end" block, "begin" read.
+  RawBone bone() {
+    RawBone bone;
+    bone.line = in_.line();
+    bool sawName = false;
+    for (std::string_view token = in_.next(); token != "end"; token = in_.next()) {
+      if (token.empty()) in_.fail("'end' of the bone", "end of file");
+      if (token == "id") {
+        in_.require("a bone id");
+      } else if (token == "name") {
+        bone.name = std::string(in_.require("a bone name"));
+        bone.line = in_.line();
+        sawName = true;
+      } else if (token == "direction") {
+        for (int i = 0; i < 3; ++i) bone.direction[i] = in_.number("a direction coordinate");
+      } else if (token == "length") {
+        bone.length = in_.number("a bone length");
+        if (bone.length < 0) in_.fail("a non-negative bone length", fmt::format("{}", bone.length));
+      } else if (token == "axis") {
+        for (int i = 0; i < 3; ++i) bone.axisAngles[i] = in_.number("an axis angle");
+        bone.axisOrder = parseAxisOrder(in_, in_.require("an axis order"));
+      } else if (token == "dof") {
+        in_.skipBlanks();
+        for (std::string_view dof : splitBlanks(in_.nextLine())) {
+          const int d = parseDof(dof);
+          if (d < 0 || d > 2 || std::find(bone.dofs.begin(), bone.dofs.end(), d) != bone.dofs.end())
+            in_.fail("rotational degrees of freedom rx, ry, rz, each once", quoteToken(dof));
+          bone.dofs.push_back(d);
         }
-        if (!sawName) in.fail("a bone name before 'end'", "none");
-        if (bone.name == "root") throw ParseError(source, bone.line, "a bone name other than root", "'root'");
-        if (bone.direction.norm() > 0) bone.direction.normalize();
-        if (auto [it, fresh] = boneIndex.emplace(bone.name, bones.size()); !fresh)
-          throw ParseError(source, bone.line, "a unique bone name", fmt::format("'{}' again", bone.name));
-        bones.push_back(std::move(bone));
-      }
-    } else if (token == ":hierarchy") {
-      if (sawHierarchy) in.fail("one :hierarchy section", "a second ':hierarchy'");
-      sawHierarchy = true;
-      children.assign(bones.size() + 1, {});
-      parentOf.assign(bones.size(), -2);
-      parentLine.assign(bones.size(), 0);
-      in.expect("begin");
-      in.nextLine();
-      while (true) {
-        if (in.offset() >= text.size()) in.fail("'end' of the hierarchy", "end of file");
-        const auto names = splitBlanks(in.nextLine());
-        if (names.empty()) continue;
-        if (names[0] == "end") break;
-        auto lookup = [&](std::string_view name) -> long {
-          if (name == "root") return static_cast<long>(bones.size());
-          const auto it = boneIndex.find(std::string(name));
-          if (it == boneIndex.end()) in.fail("a bone defined in :bonedata", quoteToken(name));
-          return static_cast<long>(it->second);
-        };
-        const long parent = lookup(names[0]);
-        if (names.size() < 2) in.fail("a parent followed by its children", "a line with one name");
-        for (std::size_t k = 1; k < names.size(); ++k) {
-          const long child = lookup(names[k]);
-          if (child == static_cast<long>(bones.size()))
-            in.fail("a tree rooted at root", fmt::format("a cycle: root listed as a child of {}", quoteToken(names[0])));
-          if (parentOf[static_cast<std::size_t>(child)] != -2)
-            in.fail("one parent per bone", fmt::format("{} given a second parent {}", quoteToken(names[k]), quoteToken(names[0])));
-          parentOf[static_cast<std::size_t>(child)] = parent;
-          parentLine[static_cast<std::size_t>(child)] = in.line();
-          children[static_cast<std::size_t>(parent)].push_back(static_cast<std::size_t>(child));
+      } else if (token == "limits") {
+        // One "(min max)" pair per degree of freedom; mgrl does not enforce them.
+        for (std::size_t k = 0; k < bone.dofs.size(); ++k) {
+          std::string_view t;
+          do {
+            t = in_.require("a limits pair such as (-10.0 170.0)");
+            if (startsSection(t) || t == "end") in_.fail("a limits pair such as (-10.0 170.0)", quoteToken(t));
+          } while (t.back() != ')');
         }
+      } else if (token == "bodymass" || token == "cofmass") {
+        in_.number("a mass value");
+      } else {
+        in_.fail("id, name, direction, length, axis, dof, limits or end", TextScanner::describe(token));
       }
-      token = in.next();
-    } else {
-      in.fail(":version, :name, :units, :documentation, :root, :bonedata or :hierarchy", quoteToken(token));
+    }
+    if (!sawName) in_.fail("a bone name before 'end'", "none");
+    return bone;
+  }
+
+  void hierarchy() {
+    if (sawHierarchy_) in_.fail("one :hierarchy section", "a second ':hierarchy'");
+    sawHierarchy_ = true;
+    children_.assign(bones_.size() + 1, {});
+    parentOf_.assign(bones_.size(), -2);
+    parentLine_.assign(bones_.size(), 0);
+    in_.expect("begin");
+    in_.nextLine();
+    auto lookup = [&](std::string_view name) -> long {
+      if (name == "root") return static_cast<long>(bones_.size());
+      const auto it = boneIndex_.find(std::string(name));
+      if (it == boneIndex_.end()) in_.fail("a bone defined in :bonedata", quoteToken(name));
+      return static_cast<long>(it->second);
+    };
+    while (true) {
+      if (in_.offset() >= text_.size()) in_.fail("'end' of the hierarchy", "end of file");
+      const auto names = splitBlanks(in_.nextLine());
+      if (names.empty()) continue;
+      if (names[0] == "end") break;
+      const long parent = lookup(names[0]);
+      if (names.size() < 2) in_.fail("a parent followed by its children", "a line with one name");
+      for (std::size_t k = 1; k < names.size(); ++k) {
+        const long child = lookup(names[k]);
+        if (child == static_cast<long>(bones_.size()))
+          in_.fail("a tree rooted at root", fmt::format("a cycle: root listed as a child of {}", quoteToken(names[0])));
+        if (parentOf_[static_cast<std::size_t>(child)] != -2)
+          in_.fail("one parent per bone",
+                   fmt::format("{} given a second parent {}", quoteToken(names[k]), quoteToken(names[0])));
+        parentOf_[static_cast<std::size_t>(child)] = parent;
+        parentLine_[static_cast<std::size_t>(child)] = in_.line();
+        children_[static_cast<std::size_t>(parent)].push_back(static_cast<std::size_t>(child));
+      }
     }
   }
-  if (!sawRoot) in.fail("a :root section", "end of file");
-  if (!sawBones) in.fail("a :bonedata section", "end of file");
-  if (!sawHierarchy) in.fail("a :hierarchy section", "end of file");
-  if (rootOrderApplied.empty()) rootOrderApplied = {Axis::X, Axis::Y, Axis::Z};
 
-  // Depth-first from the root gives parent-before-child order. Bones it never reaches
-  // hang off a cycle or off nothing.
-  std::vector<std::size_t> order;
-  std::vector<int> jointOf(bones.size(), -1);
-  {
-    std::vector<std::size_t> stack(children[bones.size()].rbegin(), children[bones.size()].rend());
+  // Depth-first from the root gives parent-before-child order (jointOf: each bone's joint).
+  // Bones it never reaches hang off a cycle or off nothing.
+  std::vector<std::size_t> depthFirstOrder(std::vector<int>& jointOf) const {
+    std::vector<std::size_t> order;
+    jointOf.assign(bones_.size(), -1);
+    std::vector<std::size_t> stack(children_[bones_.size()].rbegin(), children_[bones_.size()].rend());
     while (!stack.empty()) {
       const std::size_t b = stack.back();
       stack.pop_back();
       jointOf[b] = static_cast<int>(order.size() + 1);
       order.push_back(b);
-      stack.insert(stack.end(), children[b].rbegin(), children[b].rend());
+      stack.insert(stack.end(), children_[b].rbegin(), children_[b].rend());
     }
-  }
-  for (std::size_t b = 0; b < bones.size(); ++b) {
-    if (jointOf[b] >= 0) continue;
-    if (parentOf[b] == -2)
-      throw ParseError(source, bones[b].line, "every bone in :hierarchy", fmt::format("'{}' missing from it", bones[b].name));
-    // Walk up the parents: if we come back to a bone, it is a cycle.
-    std::vector<bool> seen(bones.size(), false);
-    std::size_t walk = b;
-    while (parentOf[walk] >= 0 && parentOf[walk] < static_cast<long>(bones.size()) && !seen[walk]) {
-      seen[walk] = true;
-      walk = static_cast<std::size_t>(parentOf[walk]);
+    for (std::size_t b = 0; b < bones_.size(); ++b) {
+      if (jointOf[b] >= 0) continue;
+      if (parentOf_[b] == -2)
+        throw ParseError(source_, bones_[b].line, "every bone in :hierarchy",
+                         fmt::format("'{}' missing from it", bones_[b].name));
+      // Walk up the parents: if we come back to a bone, it is a cycle.
+      std::vector<bool> seen(bones_.size(), false);
+      std::size_t walk = b;
+      while (parentOf_[walk] >= 0 && parentOf_[walk] < static_cast<long>(bones_.size()) && !seen[walk]) {
+        seen[walk] = true;
+        walk = static_cast<std::size_t>(parentOf_[walk]);
+      }
+      throw ParseError(source_, parentLine_[walk], "a tree rooted at root",
+                       fmt::format("a cycle through '{}'", bones_[walk].name));
     }
-    throw ParseError(source, parentLine[walk], "a tree rooted at root",
-                     fmt::format("a cycle through '{}'", bones[walk].name));
+    return order;
   }
 
-  // Root joint: BVH-style position then rotation channels (composition order = reverse
-  // of application order).
-  std::vector<Joint> joints;
-  Joint root;
-  root.name = "root";
-  root.offset = rootPosition;
-  for (Axis a : {Axis::X, Axis::Y, Axis::Z}) root.channels.push_back({Channel::Kind::Position, a});
-  result.rootRotationOrder.assign(rootOrderApplied.rbegin(), rootOrderApplied.rend());
-  for (Axis a : result.rootRotationOrder) root.channels.push_back({Channel::Kind::Rotation, a});
-  joints.push_back(root);
-  AsfSkeleton::Bone rootBone;
-  rootBone.name = "root";
-  rootBone.dofs = rootDofs;
-  rootBone.axis = appliedInOrder(rootAxis, rootOrientation * angleScale);
-  rootBone.axisInverse = rootBone.axis.conjugate();
-  result.bones.push_back(rootBone);
+  AsfSkeleton build(const std::vector<std::size_t>& order, const std::vector<int>& jointOf) {
+    AsfSkeleton& result = result_;
+    // Root joint: BVH-style position then rotation channels (composition order = reverse
+    // of application order).
+    std::vector<Joint> joints;
+    Joint root;
+    root.name = "root";
+    root.offset = rootPosition_;
+    for (Axis a : {Axis::X, Axis::Y, Axis::Z}) root.channels.push_back({Channel::Kind::Position, a});
+    result.rootRotationOrder.assign(rootOrderApplied_.rbegin(), rootOrderApplied_.rend());
+    for (Axis a : result.rootRotationOrder) root.channels.push_back({Channel::Kind::Rotation, a});
+    joints.push_back(root);
+    AsfSkeleton::Bone rootBone;
+    rootBone.name = "root";
+    rootBone.dofs = rootDofs_;
+    rootBone.axis = appliedInOrder(rootAxis_, rootOrientation_ * angleScale_);
+    rootBone.axisInverse = rootBone.axis.conjugate();
+    result.bones.push_back(rootBone);
 
-  for (std::size_t b : order) {
-    const RawBone& bone = bones[b];
-    Joint joint;
-    joint.name = bone.name;
-    const long parent = parentOf[b];
-    const bool parentIsRoot = parent == static_cast<long>(bones.size());
-    joint.parent = parentIsRoot ? 0 : jointOf[static_cast<std::size_t>(parent)];
-    joint.offset = parentIsRoot ? Eigen::Vector3d::Zero()
-                                : Eigen::Vector3d(bones[static_cast<std::size_t>(parent)].direction *
-                                                  bones[static_cast<std::size_t>(parent)].length);
-    if (children[b].empty()) joint.endSite = bone.direction * bone.length;
-    if (!bone.dofs.empty())
-      for (Axis a : {Axis::Z, Axis::Y, Axis::X}) joint.channels.push_back({Channel::Kind::Rotation, a});
-    joints.push_back(std::move(joint));
-    AsfSkeleton::Bone info;
-    info.name = bone.name;
-    info.dofs = bone.dofs;
-    info.axis = appliedInOrder(bone.axisOrder, bone.axisAngles * angleScale);
-    info.axisInverse = info.axis.conjugate();
-    result.bones.push_back(std::move(info));
+    for (std::size_t b : order) {
+      const RawBone& bone = bones_[b];
+      Joint joint;
+      joint.name = bone.name;
+      const long parent = parentOf_[b];
+      const bool parentIsRoot = parent == static_cast<long>(bones_.size());
+      joint.parent = parentIsRoot ? 0 : jointOf[static_cast<std::size_t>(parent)];
+      joint.offset = parentIsRoot ? Eigen::Vector3d::Zero()
+                                  : Eigen::Vector3d(bones_[static_cast<std::size_t>(parent)].direction *
+                                                    bones_[static_cast<std::size_t>(parent)].length);
+      if (children_[b].empty()) joint.endSite = bone.direction * bone.length;
+      if (!bone.dofs.empty())
+        for (Axis a : {Axis::Z, Axis::Y, Axis::X}) joint.channels.push_back({Channel::Kind::Rotation, a});
+      joints.push_back(std::move(joint));
+      AsfSkeleton::Bone info;
+      info.name = bone.name;
+      info.dofs = bone.dofs;
+      info.axis = appliedInOrder(bone.axisOrder, bone.axisAngles * angleScale_);
+      info.axisInverse = info.axis.conjugate();
+      result.bones.push_back(std::move(info));
+    }
+    result.degrees = angleScale_ != 1.0;
+    result.skeleton = std::make_shared<const Skeleton>(std::move(joints));
+    return std::move(result);
   }
-  result.degrees = angleScale != 1.0;
-  result.skeleton = std::make_shared<const Skeleton>(std::move(joints));
-  return result;
-}
+
+  TextScanner in_;
+  std::string_view text_, source_;
+  AsfSkeleton result_;
+  std::vector<Axis> rootOrderApplied_;  // rotation axes in the order the root applies them
+  std::vector<int> rootDofs_;
+  Eigen::Vector3d rootPosition_ = Eigen::Vector3d::Zero(), rootOrientation_ = Eigen::Vector3d::Zero();
+  std::vector<Axis> rootAxis_{Axis::X, Axis::Y, Axis::Z};
+  std::vector<RawBone> bones_;
+  std::unordered_map<std::string, std::size_t> boneIndex_;
+  std::vector<std::vector<std::size_t>> children_;  // index bones_.size() is the root
+  std::vector<long> parentOf_;
+  std::vector<std::size_t> parentLine_;
+  bool sawRoot_ = false, sawBones_ = false, sawHierarchy_ = false;
+  double angleScale_ = kDegToRad;
+};
+
+}  // namespace
+
+AsfSkeleton parseAsf(std::string_view text, std::string_view source) { return AsfReader(text, source).read(); }
 
 AsfSkeleton readAsf(std::istream& in, std::string_view source) {
   const std::string text = readAll(in);

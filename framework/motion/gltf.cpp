@@ -171,6 +171,99 @@ std::vector<float> floats(std::initializer_list<double> values) {
   return out;
 }
 
+// The body mesh, in the bind pose (`rest`: each joint's position): a capsule per bone.
+void addBodyMesh(GlbBuilder& glb, const Skeleton& skeleton, const std::vector<Eigen::Vector3d>& rest,
+                 const GltfWriteOptions& options) {
+  json& doc = glb.doc;
+  const std::size_t jointCount = skeleton.jointCount();
+  BodyMesh body;
+  std::vector<Eigen::Vector3f> color(jointCount, options.bodyColor);
+  for (const auto& [j, c] : options.jointColors)
+    if (j >= 0 && static_cast<std::size_t>(j) < jointCount) color[static_cast<std::size_t>(j)] = c;
+  auto bone = [&](const Eigen::Vector3d& a, const Eigen::Vector3d& b, std::size_t joint) {
+    const double length = (b - a).norm();
+    if (!(length >= options.minBoneLength)) return;
+    const auto own = options.jointRadii.find(static_cast<int>(joint));
+    const double radius = own != options.jointRadii.end() && own->second > 0
+                              ? own->second
+                              : std::clamp(options.radiusPerLength * length, options.minRadius, options.maxRadius);
+    body.capsule(a, b, radius, static_cast<int>(joint), color[joint], options.segments, options.capRings);
+  };
+  for (std::size_t j = 1; j < jointCount; ++j) {
+    const auto parent = static_cast<std::size_t>(skeleton.joint(j).parent);
+    bone(rest[parent], rest[j], parent);
+  }
+  for (std::size_t j = 0; j < jointCount; ++j)
+    if (skeleton.joint(j).endSite) bone(rest[j], rest[j] + *skeleton.joint(j).endSite, j);
+  if (body.positions.empty())  // a skeleton of one joint, or of bones too short: a ball at the root
+    body.capsule(rest[0], rest[0] + Eigen::Vector3d(0, options.minBoneLength, 0), options.maxRadius, 0,
+                 options.bodyColor, options.segments, options.capRings);
+  const std::size_t vertices = body.positions.size() / 3;
+  json attributes = {
+      {"POSITION", glb.add(body.positions, kFloat, "VEC3", vertices, kArrayBuffer,
+                           {{"min", bound(body.positions, 3, false)}, {"max", bound(body.positions, 3, true)}})},
+      {"NORMAL", glb.add(body.normals, kFloat, "VEC3", vertices, kArrayBuffer)},
+      {"COLOR_0", glb.add(body.colors, kFloat, "VEC3", vertices, kArrayBuffer)},
+      {"JOINTS_0", glb.add(body.joints, kUnsignedShort, "VEC4", vertices, kArrayBuffer)},
+      {"WEIGHTS_0", glb.add(body.weights, kFloat, "VEC4", vertices, kArrayBuffer)}};
+  int indices;
+  if (vertices <= 65535) {
+    std::vector<std::uint16_t> shortIndices(body.indices.begin(), body.indices.end());
+    indices = glb.add(shortIndices, kUnsignedShort, "SCALAR", shortIndices.size(), kElementArrayBuffer);
+  } else {
+    indices = glb.add(body.indices, kUnsignedInt, "SCALAR", body.indices.size(), kElementArrayBuffer);
+  }
+  doc["materials"] =
+      json::array({{{"name", "body"},
+                    {"pbrMetallicRoughness",
+                     {{"baseColorFactor", {1.0, 1.0, 1.0, 1.0}}, {"metallicFactor", 0.0}, {"roughnessFactor", 0.8}}}}});
+  doc["meshes"] = json::array(
+      {{{"name", options.name},
+        {"primitives", json::array({{{"attributes", attributes}, {"indices", indices}, {"material", 0}}})}}});
+}
+
+// The animation: one key per frame, LINEAR; a rotation channel per joint and a
+// translation channel per translated joint.
+void addAnimation(GlbBuilder& glb, const Motion& motion, const GltfWriteOptions& options) {
+  json& doc = glb.doc;
+  const Skeleton& skeleton = motion.skeleton();
+  const std::size_t jointCount = skeleton.jointCount();
+  const std::size_t frames = motion.frameCount();
+  std::vector<float> times(frames);
+  for (std::size_t f = 0; f < frames; ++f) times[f] = static_cast<float>(static_cast<double>(f) * motion.frameTime());
+  const int input = glb.add(times, kFloat, "SCALAR", frames, 0,
+                            {{"min", json::array({times.front()})}, {"max", json::array({times.back()})}});
+  json samplers = json::array(), channels = json::array();
+  auto channel = [&](int output, std::size_t joint, const char* path) {
+    samplers.push_back({{"input", input}, {"output", output}, {"interpolation", "LINEAR"}});
+    channels.push_back({{"sampler", samplers.size() - 1}, {"target", {{"node", joint + 1}, {"path", path}}}});
+  };
+  std::vector<float> values;
+  for (std::size_t j = 0; j < jointCount; ++j) {
+    values.clear();
+    values.reserve(4 * frames);
+    Eigen::Quaterniond previous = Eigen::Quaterniond::Identity();
+    for (std::size_t f = 0; f < frames; ++f) {
+      Eigen::Quaterniond q = motion.rotation(f, j).normalized();
+      // The same hemisphere as the frame before, so that interpolation takes the short way.
+      if (f > 0 && q.coeffs().dot(previous.coeffs()) < 0) q.coeffs() = -q.coeffs();
+      previous = q;
+      values.insert(values.end(), {static_cast<float>(q.x()), static_cast<float>(q.y()), static_cast<float>(q.z()),
+                                   static_cast<float>(q.w())});
+    }
+    channel(glb.add(values, kFloat, "VEC4", frames, 0), j, "rotation");
+    if (skeleton.translationSlot(j) >= 0) {
+      values.clear();
+      for (std::size_t f = 0; f < frames; ++f) {
+        const Eigen::Vector3d t = motion.localTranslation(f, j);
+        values.insert(values.end(), {static_cast<float>(t.x()), static_cast<float>(t.y()), static_cast<float>(t.z())});
+      }
+      channel(glb.add(values, kFloat, "VEC3", frames, 0), j, "translation");
+    }
+  }
+  doc["animations"] = json::array({{{"name", options.name}, {"samplers", samplers}, {"channels", channels}}});
+}
+
 }  // namespace
 
 std::string writeGlb(const Motion& motion, const GltfWriteOptions& options) {
@@ -239,86 +332,8 @@ std::string writeGlb(const Motion& motion, const GltfWriteOptions& options) {
   doc["skins"] =
       json::array({{{"name", options.name}, {"joints", skinJoints}, {"skeleton", 1}, {"inverseBindMatrices", ibm}}});
 
-  // The body mesh, in the bind pose.
-  BodyMesh body;
-  std::vector<Eigen::Vector3f> color(jointCount, options.bodyColor);
-  for (const auto& [j, c] : options.jointColors)
-    if (j >= 0 && static_cast<std::size_t>(j) < jointCount) color[static_cast<std::size_t>(j)] = c;
-  auto bone = [&](const Eigen::Vector3d& a, const Eigen::Vector3d& b, std::size_t joint) {
-    const double length = (b - a).norm();
-    if (!(length >= options.minBoneLength)) return;
-    const auto own = options.jointRadii.find(static_cast<int>(joint));
-    const double radius = own != options.jointRadii.end() && own->second > 0
-                              ? own->second
-                              : std::clamp(options.radiusPerLength * length, options.minRadius, options.maxRadius);
-    body.capsule(a, b, radius, static_cast<int>(joint), color[joint], options.segments, options.capRings);
-  };
-  for (std::size_t j = 1; j < jointCount; ++j) {
-    const auto parent = static_cast<std::size_t>(skeleton.joint(j).parent);
-    bone(rest[parent], rest[j], parent);
-  }
-  for (std::size_t j = 0; j < jointCount; ++j)
-    if (skeleton.joint(j).endSite) bone(rest[j], rest[j] + *skeleton.joint(j).endSite, j);
-  if (body.positions.empty())  // a skeleton of one joint, or of bones too short: a ball at the root
-    body.capsule(rest[0], rest[0] + Eigen::Vector3d(0, options.minBoneLength, 0), options.maxRadius, 0,
-                 options.bodyColor, options.segments, options.capRings);
-  const std::size_t vertices = body.positions.size() / 3;
-  json attributes = {
-      {"POSITION", glb.add(body.positions, kFloat, "VEC3", vertices, kArrayBuffer,
-                           {{"min", bound(body.positions, 3, false)}, {"max", bound(body.positions, 3, true)}})},
-      {"NORMAL", glb.add(body.normals, kFloat, "VEC3", vertices, kArrayBuffer)},
-      {"COLOR_0", glb.add(body.colors, kFloat, "VEC3", vertices, kArrayBuffer)},
-      {"JOINTS_0", glb.add(body.joints, kUnsignedShort, "VEC4", vertices, kArrayBuffer)},
-      {"WEIGHTS_0", glb.add(body.weights, kFloat, "VEC4", vertices, kArrayBuffer)}};
-  int indices;
-  if (vertices <= 65535) {
-    std::vector<std::uint16_t> shortIndices(body.indices.begin(), body.indices.end());
-    indices = glb.add(shortIndices, kUnsignedShort, "SCALAR", shortIndices.size(), kElementArrayBuffer);
-  } else {
-    indices = glb.add(body.indices, kUnsignedInt, "SCALAR", body.indices.size(), kElementArrayBuffer);
-  }
-  doc["materials"] =
-      json::array({{{"name", "body"},
-                    {"pbrMetallicRoughness",
-                     {{"baseColorFactor", {1.0, 1.0, 1.0, 1.0}}, {"metallicFactor", 0.0}, {"roughnessFactor", 0.8}}}}});
-  doc["meshes"] = json::array(
-      {{{"name", options.name},
-        {"primitives", json::array({{{"attributes", attributes}, {"indices", indices}, {"material", 0}}})}}});
-
-  // The animation: one key per frame, LINEAR.
-  std::vector<float> times(frames);
-  for (std::size_t f = 0; f < frames; ++f) times[f] = static_cast<float>(static_cast<double>(f) * motion.frameTime());
-  const int input = glb.add(times, kFloat, "SCALAR", frames, 0,
-                            {{"min", json::array({times.front()})}, {"max", json::array({times.back()})}});
-  json samplers = json::array(), channels = json::array();
-  auto channel = [&](int output, std::size_t joint, const char* path) {
-    samplers.push_back({{"input", input}, {"output", output}, {"interpolation", "LINEAR"}});
-    channels.push_back({{"sampler", samplers.size() - 1}, {"target", {{"node", joint + 1}, {"path", path}}}});
-  };
-  std::vector<float> values;
-  for (std::size_t j = 0; j < jointCount; ++j) {
-    values.clear();
-    values.reserve(4 * frames);
-    Eigen::Quaterniond previous = Eigen::Quaterniond::Identity();
-    for (std::size_t f = 0; f < frames; ++f) {
-      Eigen::Quaterniond q = motion.rotation(f, j).normalized();
-      // The same hemisphere as the frame before, so that interpolation takes the short way.
-      if (f > 0 && q.coeffs().dot(previous.coeffs()) < 0) q.coeffs() = -q.coeffs();
-      previous = q;
-      values.insert(values.end(), {static_cast<float>(q.x()), static_cast<float>(q.y()), static_cast<float>(q.z()),
-                                   static_cast<float>(q.w())});
-    }
-    channel(glb.add(values, kFloat, "VEC4", frames, 0), j, "rotation");
-    if (skeleton.translationSlot(j) >= 0) {
-      values.clear();
-      for (std::size_t f = 0; f < frames; ++f) {
-        const Eigen::Vector3d t = motion.localTranslation(f, j);
-        values.insert(values.end(), {static_cast<float>(t.x()), static_cast<float>(t.y()), static_cast<float>(t.z())});
-      }
-      channel(glb.add(values, kFloat, "VEC3", frames, 0), j, "translation");
-    }
-  }
-  doc["animations"] = json::array({{{"name", options.name}, {"samplers", samplers}, {"channels", channels}}});
+  addBodyMesh(glb, skeleton, rest, options);
+  addAnimation(glb, motion, options);
   return glb.finish();
 }
 
