@@ -165,8 +165,9 @@ std::string toText(const std::vector<FileReport>& reports) {
                          "near it, which moves slower than knuckles (scaled by {:.2f} / {:.2f})\n",
                          r.punchMinSpeed_mps[0], r.punchMinSpeed_mps[1], r.punchScale[0], r.punchScale[1]);
     if (r.swings[0] + r.swings[1] > 0)
-      out += fmt::format("  {} not counted as punches (the fist did not drive out from the body)\n",
-                         counted(static_cast<std::size_t>(r.swings[0] + r.swings[1]), "arm swing"));
+      out += fmt::format(
+          "  {} not counted as punches (the fist did not drive out from the body)\n",
+          counted(static_cast<std::size_t>(r.swings[0]) + static_cast<std::size_t>(r.swings[1]), "arm swing"));
     if (r.glitchFrames > 0)
       out += fmt::format("  {} ignored (faster than the glitch threshold)\n",
                          counted(static_cast<std::size_t>(r.glitchFrames), "fist-speed glitch frame"));

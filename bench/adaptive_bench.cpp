@@ -255,7 +255,8 @@ int main(int argc, char** argv) {
       };
       for (const Budget& b : budgets) {
         const auto [a, d, h] = b.uniform;
-        const std::size_t vertices = static_cast<std::size_t>(a * d * h);
+        const std::size_t vertices =
+            static_cast<std::size_t>(a) * static_cast<std::size_t>(d) * static_cast<std::size_t>(h);
         row(solve(fmt::format("uniform {}x{}x{}", a, d, h), model, *reward, uniform(a, d, h), vi, threads));
         for (const Variant& v : variants) {
           // Unless the variant says, the tree starts as the uniform grid's cells scaled down to
@@ -265,7 +266,10 @@ int main(int argc, char** argv) {
           const std::string cells = v.grid.find("_cells") != std::string::npos ? ""
                                     : pow2Start ? startCells(vertices, startShare)
                                                 : scaledStartCells(b.uniform, startShare);
-          const std::string grid = "{" + kdBase + cells + (v.grid.empty() ? "" : ", " + v.grid) + "}";
+          std::string grid = "{" + kdBase;
+          grid += cells;
+          if (!v.grid.empty()) grid += ", " + v.grid;
+          grid += "}";
           // The start cells in the name ("8x6x4"), so that a row can be trained again by hand.
           std::string shape;
           for (const char* key : {"angle_cells: ", "distance_cells: ", "height_cells: "})

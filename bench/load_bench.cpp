@@ -65,12 +65,14 @@ int main(int argc, char** argv) {
     // Whole load from disk, as `mgrl inspect` does it (read, parse, convert units).
     const auto t0 = Clock::now();
     std::vector<Motion> motions;
+    motions.reserve(files.size());
     for (const auto& f : files) motions.push_back(loadMotion(f).motion);
     const auto t1 = Clock::now();
     loadTimes.push_back(seconds(t0, t1));
 
     // Parsing alone, from memory.
     std::vector<std::string> texts;
+    texts.reserve(files.size());
     for (const auto& f : files) texts.push_back(readFile(f));
     const auto p0 = Clock::now();
     for (std::size_t i = 0; i < files.size(); ++i) {

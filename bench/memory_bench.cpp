@@ -109,6 +109,7 @@ int main(int argc, char** argv) {
     constexpr std::size_t kBlockWords = (std::size_t{128} << 10) / sizeof(std::uint64_t), kRepeats = 20000;
     for (const unsigned threads : {1u, 2u}) {
       std::vector<double> samples;
+      samples.reserve(static_cast<std::size_t>(runs));
       for (int r = 0; r < runs; ++r)
         samples.push_back(timed(threads, [&](unsigned t) {
           const std::uint64_t* block = &words[t * 4 * kBlockWords];

@@ -234,10 +234,13 @@ struct LastTrack {
 };
 thread_local LastTrack lastTrack;
 
+// Bit for bit, on purpose (the cache must not take -0 for 0 or hide a NaN), so memcmp.
 bool same(const TargetState& a, const TargetState& b) {
+  // NOLINTNEXTLINE(bugprone-suspicious-memory-comparison)
   return std::memcmp(a.position.data(), b.position.data(), 3 * sizeof(double)) == 0 &&
-         std::memcmp(&a.speed, &b.speed, sizeof(double)) == 0 &&
-         std::memcmp(&a.heading, &b.heading, sizeof(double)) == 0 && a.opponent == b.opponent;
+         std::memcmp(&a.speed, &b.speed, sizeof(double)) == 0 &&      // NOLINT(bugprone-suspicious-memory-comparison)
+         std::memcmp(&a.heading, &b.heading, sizeof(double)) == 0 &&  // NOLINT(bugprone-suspicious-memory-comparison)
+         a.opponent == b.opponent;
 }
 
 }  // namespace

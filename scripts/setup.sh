@@ -17,10 +17,11 @@ command -v node >/dev/null 2>&1 || packages+=(nodejs)
 command -v npm >/dev/null 2>&1 || packages+=(npm)
 # libclang-rt-dev holds libFuzzer and clang's sanitizer runtimes; clang only recommends
 # it, and recommends are not installed below.
-# clang-format: the quick tier holds changed lines to .clang-format (scripts/format_check.sh).
+# clang-format, clang-tidy: the quick tier holds changed lines to .clang-format
+# (scripts/format_check.sh) and changed sources to .clang-tidy (scripts/tidy_check.sh).
 # openmpi-bin, libopenmpi-dev: mpirun and MPI's headers (issue 44; without them the build
 # still works and mpi_value_iteration runs as one process).
-[ "${1:-}" = "--test" ] && packages+=(chromium clang libclang-rt-dev clang-format openmpi-bin libopenmpi-dev)
+[ "${1:-}" = "--test" ] && packages+=(chromium clang libclang-rt-dev clang-format clang-tidy openmpi-bin libopenmpi-dev)
 case "${1:-}" in --test | --python) packages+=(python3-matplotlib jupyter-nbconvert python3-ipykernel) ;; esac
 
 missing=()

@@ -145,6 +145,7 @@ sanitizer_tests() {
 if ((quick)); then
   stage "set-up" "$root/scripts/setup.sh" --test
   stage "format of the C++ lines changed since HEAD (scripts/format_check.sh)" "$root/scripts/format_check.sh"
+  stage "clang-tidy on the C++ sources changed since HEAD (scripts/tidy_check.sh)" "$root/scripts/tidy_check.sh"
   stage "Release build (incremental)" "$root/scripts/build.sh" "$root/build"
   stage "Release tests not labelled slow" release_tests
   exit 0

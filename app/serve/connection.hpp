@@ -60,6 +60,7 @@ struct Shared {
 
 /// Takes over `socket`, whose HTTP `request` asks for the WebSocket upgrade on /ws (its
 /// Host, Origin and the page limit checked), and runs the page until it closes.
-void startPageSession(tcp::socket socket, std::shared_ptr<Shared> server, http::request<http::empty_body> request);
+void startPageSession(tcp::socket socket, std::shared_ptr<Shared> server,
+                      const http::request<http::empty_body>& request);
 
 }  // namespace mgrl::serve

@@ -53,7 +53,7 @@ class PageSession : public std::enable_shared_from_this<PageSession> {
   }
   ~PageSession() { --server_.sessions; }
 
-  void start(http::request<http::empty_body> request) {
+  void start(const http::request<http::empty_body>& request) {
     ws_.set_option(websocket::stream_base::timeout::suggested(beast::role_type::server));
     ws_.read_message_max(Limits::kMessageBytes);
     // RFC 6455 sec. 7.4.2 defines close codes up to 4999; Beast takes 5000-65535 too and
@@ -308,8 +308,9 @@ class PageSession : public std::enable_shared_from_this<PageSession> {
 
 }  // namespace
 
-void startPageSession(tcp::socket socket, std::shared_ptr<Shared> server, http::request<http::empty_body> request) {
-  std::make_shared<PageSession>(std::move(socket), std::move(server))->start(std::move(request));
+void startPageSession(tcp::socket socket, std::shared_ptr<Shared> server,
+                      const http::request<http::empty_body>& request) {
+  std::make_shared<PageSession>(std::move(socket), std::move(server))->start(request);
 }
 
 }  // namespace mgrl::serve

@@ -73,7 +73,7 @@ class Fields {
   std::string word(const json& value, const char* name, const std::vector<std::string>& choices) {
     const auto list = fmt::format("{}", fmt::join(choices, ", "));
     if (!value.is_string()) throw Error(fmt::format("{}.{}: expected one of {}, found {}", type_, name, list, shown(value)));
-    const std::string text = value.get<std::string>();
+    std::string text = value.get<std::string>();
     if (choices.size() > 0 && std::none_of(choices.begin(), choices.end(), [&](const std::string& c) { return text == c; }))
       throw Error(fmt::format("{}.{}: expected one of {}, found {}", type_, name, list, shown(value)));
     return text;

@@ -41,7 +41,8 @@ void openBrowser(const std::string& url, const WarningSink& log) {
 void runServe(const ServeCommandOptions& options) {
   if (options.port < 0 || options.port > 65535)
     throw Error(fmt::format("--port: expected a port in [0, 65535] (0: any free one), found {}", options.port));
-  OriginPolicy(options.host, 0, options.allowOrigins);  // a malformed --allow-origin: refused before anything loads
+  // A malformed --allow-origin: refused before anything loads.
+  [[maybe_unused]] const OriginPolicy checked(options.host, 0, options.allowOrigins);
   const fs::path web = webDirectory(options.web);
   if (options.log) options.log(fmt::format("serve: loading {} (graph and policy, once)", options.scenario.string()));
   std::shared_ptr<const ViewerAssets> assets = loadViewerAssets(options);

@@ -86,7 +86,7 @@ class HttpConnection : public std::enable_shared_from_this<HttpConnection> {
         return;
       }
       stream_.expires_never();  // the WebSocket has its own timeouts
-      startPageSession(stream_.release_socket(), server_, std::move(request));
+      startPageSession(stream_.release_socket(), server_, request);
       return;
     }
     if (request.method() != http::verb::get && request.method() != http::verb::head) {
