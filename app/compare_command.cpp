@@ -5,6 +5,10 @@
 // snapshots of it along training (learning curves of success rate); tables are compared
 // with the reference, value iteration on the same grid (paper sec. 4.2: both solve the
 // same Bellman equation on the grid's vertices) or on a finer one (--reference-set).
+//
+// Why about 500 lines: one command's flags, run plans, training, trials and report rows;
+// the report's page is framework/session/compare_report.cpp and the learning-curve snapshots
+// compare_snapshots.cpp.
 #include "compare_command.hpp"
 
 #include <algorithm>

@@ -19,6 +19,11 @@
 // cells of one uniform grid (r_i 2^(halvings of axis i by depth k) cells along axis i), and
 // G_k still refines every G_j, so the argument above holds unchanged. Power-of-two counts
 // give one root: the tree and its bundle arrays are what they were before roots existed.
+//
+// Why one file of about 800 lines: the tree's split sequence, its locate, its hanging
+// vertices and its rebuild keep one invariant together (the two sides of every face agree),
+// on node arrays nothing else reads; apart, they would share those arrays through a header
+// that only this plug-in uses.
 #include <algorithm>
 #include <cmath>
 #include <map>

@@ -14,6 +14,9 @@
 // Each solve is value_iteration's (the same framework sweep and backup), warm-started from
 // the previous tree's solution interpolated onto the new vertices. Nothing is random: the
 // same problem and parameters give the same tree and table.
+//
+// Why one file of about 650 lines: the refinement loop, the splitting criteria and the
+// influence field are one algorithm from one paper, and the criteria are private to it.
 #include <algorithm>
 #include <chrono>
 #include <cmath>
