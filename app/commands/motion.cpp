@@ -4,12 +4,12 @@
 #include "command.hpp"
 #include "command_line.hpp"
 #include "graph_command.hpp"
-#include "init_command.hpp"
 #include "inspect.hpp"
-#include "plugins.hpp"
 #include "mgrl/core/data_paths.hpp"
 #include "mgrl/core/error.hpp"
 #include "mgrl/scenario/behaviors.hpp"
+#include "mgrl/session/starter.hpp"
+#include "plugins.hpp"
 
 namespace mgrl::app::cli {
 namespace {

@@ -1,6 +1,6 @@
 #pragma once
 /// \file
-/// `mgrl init FILE... [--out SCENARIO]` (issue 42): inspects motion files and writes a
+/// What `mgrl init FILE... [--out SCENARIO]` does (issue 42): inspects motion files and writes a
 /// commented starter scenario for them. It loads and annotates the capture as `graph`
 /// would, tries graph settings until the largest component keeps most frames, sizes the
 /// grids to the capture's travel and hitting points, and picks behaviours the capture can
@@ -17,7 +17,7 @@
 #include "mgrl/motion/roles.hpp"
 #include "mgrl/motion/units.hpp"
 
-namespace mgrl::app {
+namespace mgrl {
 
 struct InitOptions {
   std::vector<std::filesystem::path> files;  ///< motion files, as the user named them
@@ -37,4 +37,4 @@ struct InitOptions {
 nlohmann::json runInit(const InitOptions& options);
 std::string initText(const nlohmann::json& report);
 
-}  // namespace mgrl::app
+}  // namespace mgrl

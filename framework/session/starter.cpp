@@ -1,4 +1,4 @@
-#include "init_command.hpp"
+#include "mgrl/session/starter.hpp"
 
 #include <algorithm>
 #include <cctype>
@@ -15,9 +15,9 @@
 #include "mgrl/motion/motion_io.hpp"
 #include "mgrl/scenario/behaviors.hpp"
 #include "mgrl/scenario/scenario.hpp"
-#include "plugins.hpp"
+#include "mgrl/session/plugins.hpp"
 
-namespace mgrl::app {
+namespace mgrl {
 namespace {
 
 namespace fs = std::filesystem;
@@ -94,7 +94,8 @@ std::string scenarioPathOf(const fs::path& file, const fs::path& scenarioDir, co
 std::string defaultName(const fs::path& file) {
   std::string name;
   for (const char c : file.stem().string())
-    name += std::isalnum(static_cast<unsigned char>(c)) ? static_cast<char>(std::tolower(static_cast<unsigned char>(c))) : '_';
+    name += std::isalnum(static_cast<unsigned char>(c)) ? static_cast<char>(std::tolower(static_cast<unsigned char>(c)))
+                                                        : '_';
   return name.empty() ? std::string("capture") : name;
 }
 
@@ -210,7 +211,7 @@ void writeCheckedScenario(const fs::path& out, const std::string& y, const fs::p
   writeFileAtomically(staging, y);
   try {
     const Scenario scenario = loadScenario(staging, dataDir);
-    checkBehaviors(scenario, plugins());
+    checkBehaviors(scenario, builtinPlugins());
   } catch (const Error& e) {
     std::error_code ec;
     fs::remove(staging, ec);
@@ -268,7 +269,7 @@ nlohmann::json runInit(const InitOptions& options) {
   const auto log = [&](const std::string& message) {
     if (options.log) options.log(message);
   };
-  const std::string name = !options.name.empty() ? options.name
+  const std::string name = !options.name.empty()  ? options.name
                            : !options.out.empty() ? defaultName(options.out)
                                                   : defaultName(options.files.front());
   const fs::path out = options.out.empty() ? fs::path(name + ".yaml") : options.out;
@@ -276,8 +277,8 @@ nlohmann::json runInit(const InitOptions& options) {
     throw Error(fmt::format("init: {} already exists; expected a new file (--force replaces it)", out.string()));
   // Before any work: the folder it goes into must be there.
   if (const fs::path folder = fs::absolute(out).parent_path(); !fs::is_directory(folder))
-    throw Error(fmt::format("init: --out {}: expected an existing folder to write into, found no folder {}", out.string(),
-                            folder.string()));
+    throw Error(fmt::format("init: --out {}: expected an existing folder to write into, found no folder {}",
+                            out.string(), folder.string()));
   if (!(options.fps > 0 && options.fps <= 1000))
     throw Error(fmt::format("--fps: expected a frame rate in (0, 1000], found {}", options.fps));
 
@@ -318,9 +319,7 @@ nlohmann::json runInit(const InitOptions& options) {
   const GraphTry* chosen = chooseGraph(db, tries);
 
   // Behaviours the capture can do.
-  const std::string kind = chosen->hits >= kMinStrikes    ? "punch"
-                           : chosen->kicks >= kMinStrikes ? "kick"
-                                                          : "goal";
+  const std::string kind = chosen->hits >= kMinStrikes ? "punch" : chosen->kicks >= kMinStrikes ? "kick" : "goal";
   // Approach's grid: three of the longer actions (their 90th percentile), 2 to 4 m (the paper's is 2 m).
   const double approachRadius = std::clamp(roundUpTo(3 * chosen->p90ActionTravel, 0.5), 2.0, 4.0);
   const double goalRadius = std::clamp(roundUpTo(6 * chosen->p90ActionTravel, 0.5), 2.0, 6.0);
@@ -333,10 +332,9 @@ nlohmann::json runInit(const InitOptions& options) {
   y += fmt::format("# Starter scenario written by `mgrl init` for {}.\n", fmt::join(names, ", "));
   y += "# Every key is explained in scenarios/README.md; docs/own-capture.md says what init detects.\n";
   y += fmt::format("name: {}\n", name);
-  y += fmt::format("description: {}\n\n",
-                   quoted(fmt::format("{} s of capture in {} file{}, started by mgrl init",
-                                      fmt::format("{:.0f}", db.frameCount() * db.frameTime), db.clips.size(),
-                                      db.clips.size() == 1 ? "" : "s")));
+  y += fmt::format("description: {}\n\n", quoted(fmt::format("{} s of capture in {} file{}, started by mgrl init",
+                                                             fmt::format("{:.0f}", db.frameCount() * db.frameTime),
+                                                             db.clips.size(), db.clips.size() == 1 ? "" : "s")));
   y += "motion:\n  files:\n";
   for (const fs::path& file : options.files)
     y += fmt::format("    - {}\n", quoted(scenarioPathOf(file, scenarioDir, options.dataDir)));
@@ -345,8 +343,8 @@ nlohmann::json runInit(const InitOptions& options) {
   std::sort(distinctUnits.begin(), distinctUnits.end());
   distinctUnits.erase(std::unique(distinctUnits.begin(), distinctUnits.end()), distinctUnits.end());
   if (options.units == LengthUnit::Auto && distinctUnits.size() == 1)
-    y += fmt::format("  # Detected from the skeleton's size: standing heights {:.2f} to {:.2f} m in {}.\n",
-                     minHeight, maxHeight, distinctUnits.front());
+    y += fmt::format("  # Detected from the skeleton's size: standing heights {:.2f} to {:.2f} m in {}.\n", minHeight,
+                     maxHeight, distinctUnits.front());
   y += fmt::format("  units: {}\n", options.units == LengthUnit::Auto && distinctUnits.size() == 1
                                         ? distinctUnits.front()
                                         : std::string(lengthUnitName(options.units)));
@@ -377,7 +375,7 @@ nlohmann::json runInit(const InitOptions& options) {
                      {"punches_in_actions", chosen->hits},
                      {"kicks_in_actions", chosen->kicks},
                      {"usable", chosen->usable(db.frameCount())}};
-  report["behaviors"] = kind == "punch" ? nlohmann::json{"approach", "hit"}
+  report["behaviors"] = kind == "punch"  ? nlohmann::json{"approach", "hit"}
                         : kind == "kick" ? nlohmann::json{"kick"}
                                          : nlohmann::json{"goal"};
   report["warnings"] = warnings;
@@ -397,11 +395,10 @@ std::string initText(const nlohmann::json& r) {
                      r["standing_height_m"][0].get<double>(), r["standing_height_m"][1].get<double>(),
                      r["effective_punches"].get<std::size_t>(), r["effective_kicks"].get<std::size_t>());
   const nlohmann::json& g = r["graph"];
-  out += fmt::format("  graph: threshold {:g}, {}: {:.0f} % of frames kept, {} states, {} actions{}\n",
-                     g["threshold"].get<double>(), g["contact_event"].get<std::string>(),
-                     100 * g["kept_share"].get<double>(), g["states"].get<std::size_t>(),
-                     g["actions"].get<std::size_t>(),
-                     g["usable"].get<bool>() ? "" : " (the best found; more capture would help)");
+  out += fmt::format(
+      "  graph: threshold {:g}, {}: {:.0f} % of frames kept, {} states, {} actions{}\n", g["threshold"].get<double>(),
+      g["contact_event"].get<std::string>(), 100 * g["kept_share"].get<double>(), g["states"].get<std::size_t>(),
+      g["actions"].get<std::size_t>(), g["usable"].get<bool>() ? "" : " (the best found; more capture would help)");
   out += fmt::format("  behaviours: {}\n", fmt::join(r["behaviors"].get<std::vector<std::string>>(), ", "));
   for (const auto& w : r["warnings"]) out += fmt::format("  warning: {}\n", w.get<std::string>());
   out += "next:\n";
@@ -409,4 +406,4 @@ std::string initText(const nlohmann::json& r) {
   return out;
 }
 
-}  // namespace mgrl::app
+}  // namespace mgrl
