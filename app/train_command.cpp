@@ -255,10 +255,9 @@ class TrainRun {
                          previous ? fmt::format("round {}'s table", round - 1)
                                   : fmt::format("the {} opponent", behavior.environment->policyKey())));
       }
-      TrainResult result = trainRound(behavior, all, label, round, rounds);
+      auto [result, record] = trainRound(behavior, all, label, round, rounds);
       // An adaptive learner returns the grid it refined: the table's vertices are its.
       const Discretizer& tableGrid = result.grid ? *result.grid : *behavior.discretizer;
-      json& record = lastRecord_;
       if (rounds > 1) {
         // Scoring the round is reporting: rank 0's (issue 44).
         if (writes_) roundsReport.push_back(selfPlayRound(behavior, model_, round, result.table, previous.get(), log_));
@@ -273,9 +272,9 @@ class TrainRun {
     }
   }
 
-  // Tabulates the problem and trains one table (one round of self-play); its record for the
-  // bundle is left in lastRecord_, its summary in the report when it is the last round.
-  TrainResult trainRound(Behavior& behavior, const std::vector<Behavior>& all, const std::string& label, int round,
+  // Tabulates the problem and trains one table (one round of self-play): the result and
+  // its record for the bundle; its summary goes in the report when it is the last round.
+  std::pair<TrainResult, json> trainRound(Behavior& behavior, const std::vector<Behavior>& all, const std::string& label, int round,
                          int rounds) {
     const std::string roundKey = rounds > 1 ? fmt::format("{}-round{}", behavior.key, round) : behavior.key;
     const Problem problem = behavior.problem(model_);
@@ -356,8 +355,7 @@ class TrainRun {
     }
     log_(fmt::format("train {}: {} updates in {:.2f} s ({}updates/s), Bellman residual {:.3g}", label, result.updates,
                      result.seconds, humanCount(rate), result.finalResidual));
-    lastRecord_ = std::move(record);
-    return std::move(result);
+    return {std::move(result), std::move(record)};
   }
 
   const TrainOptions& options_;
@@ -369,7 +367,6 @@ class TrainRun {
   const unsigned threads_ = defaultThreadCount();
   PolicyBundle bundle_;
   json report_;
-  json lastRecord_;
   std::vector<std::string> wanted_;
   std::map<std::string, bool> compactModel_;
   std::vector<fs::path> checkpoints_;

@@ -10,39 +10,17 @@
 
 namespace mgrl {
 
-std::string_view GridAxis::name() const {
-  switch (role) {
-    case AxisRole::Angle:
-      return "angle";
-    case AxisRole::Distance:
-      return "distance";
-    case AxisRole::Height:
-      return "height";
-    case AxisRole::Heading:
-      return "heading";
-    case AxisRole::Speed:
-      return "speed";
-    case AxisRole::Opponent:
-      return "opponent";
-  }
-  return "axis";
-}
+namespace {
 
-std::string_view GridAxis::unit() const {
-  switch (role) {
-    case AxisRole::Angle:
-    case AxisRole::Heading:
-      return "rad";
-    case AxisRole::Distance:
-    case AxisRole::Height:
-      return "m";
-    case AxisRole::Speed:
-      return "m/s";
-    case AxisRole::Opponent:
-      return "state";
-  }
-  return "";
-}
+// Each AxisRole's name and unit, in the enum's order.
+constexpr std::string_view kAxisNames[][2] = {{"angle", "rad"},   {"distance", "m"}, {"height", "m"},
+                                              {"heading", "rad"}, {"speed", "m/s"},  {"opponent", "state"}};
+
+}  // namespace
+
+std::string_view GridAxis::name() const { return kAxisNames[static_cast<int>(role)][0]; }
+
+std::string_view GridAxis::unit() const { return kAxisNames[static_cast<int>(role)][1]; }
 
 const GridAxis* Discretizer::axis(AxisRole role) const {
   for (const GridAxis& a : axes_)
