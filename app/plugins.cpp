@@ -37,13 +37,6 @@ nlohmann::json toJson(const Registry& registry) {
   return list;
 }
 
-nlohmann::json termsJson() {
-  nlohmann::json list = nlohmann::json::array();
-  for (const rewards::TermKind& k : rewards::termKinds())
-    list.push_back({{"name", k.name}, {"summary", k.summary}, {"parameters", paramsJson(k.params)}});
-  return list;
-}
-
 }  // namespace
 
 std::string listText(const Plugins& p) {
@@ -57,13 +50,13 @@ std::string listText(const Plugins& p) {
   describe(text, p.learners, "learners (behaviors.NAME.learner.type)");
   text += "Behaviour keys: description, weight (default 1), activation (always | target_inside), discretizer, "
           "reward, environment, learner, success. See scenarios/README.md.\n";
-  text += "success (behaviors.NAME.success; eval's trials stop when one behaviour's is met):\n"
-          "  {term: contact, effector: E, radius: R}          an effective strike lands (default: the reward's contact)\n"
-          "  {term: distance, point: P, d0: D, within: W}     |distance - d0| <= within (m)\n"
-          "  {term: facing, angle_deg: A, within_deg: W}      |facing error - angle| <= within (deg)\n"
-          "  {term: avoid, point: P, effector: E, clear: C}   P at least C m from the opponent's strikes (opponent)\n"
-          "  hold_s: S beside one condition, or {all: [conditions], hold_s: S}: held S seconds\n"
-          "  left out: the behaviour's contact reward (the paper's hit), else an effective punch within 0.15 m\n\n";
+  text +=
+      "success (behaviors.NAME.success; eval's trials stop when one behaviour's is met):\n"
+      "  {term: NAME, ...}: a reward term's measure against a threshold; keys left out come from the\n"
+      "  behaviour's reward term of that kind. hold_s: S beside one condition, or {all: [conditions],\n"
+      "  hold_s: S}: held S seconds. No success: the behaviour's contact reward (the paper's hit), else an\n"
+      "  effective punch within 0.15 m.\n";
+  describe(text, p.conditions, "success terms (behaviors.NAME.success.term)");
   text += "controllers (mgrl eval / simulate --controller):\n";
   for (const ControllerSpec& spec : controllerSpecs()) text += fmt::format("  {}: {}\n", spec.name, spec.summary);
   text += "\n";
@@ -73,13 +66,10 @@ std::string listText(const Plugins& p) {
 }
 
 nlohmann::json listJson(const Plugins& p) {
-  return {{"discretizers", toJson(p.discretizers)},
-          {"rewards", toJson(p.rewards)},
-          {"reward_terms", termsJson()},
-          {"environments", toJson(p.environments)},
-          {"learners", toJson(p.learners)},
-          {"controllers", mgrl::controllerNames()},
-          {"world", paramsJson(worldParamSpecs())}};
+  return {{"discretizers", toJson(p.discretizers)},          {"rewards", toJson(p.rewards)},
+          {"reward_terms", toJson(rewards::termRegistry())}, {"success_terms", toJson(p.conditions)},
+          {"environments", toJson(p.environments)},          {"learners", toJson(p.learners)},
+          {"controllers", mgrl::controllerNames()},          {"world", paramsJson(worldParamSpecs())}};
 }
 
 }  // namespace mgrl::app

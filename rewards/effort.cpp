@@ -33,15 +33,15 @@ class Effort final : public Term {
 
 }  // namespace
 
-void registerEffort(TermRegistry& registry) {
-  registry.add({"effort",
-                "exp(-v / speed_mps), v the avatar's ground speed or a joint's speed: economy, standing still earns 1",
-                {ParamSpec::number("speed_mps", 1, 1e-3, 100, "m/s", "speed scale of the exponential"),
-                 ParamSpec::choiceOrName("point", "pelvis", {"pelvis", "body"}, "a skeleton role or joint",
-                                         "pelvis: the root's ground speed; body: the mean speed of every joint in the "
-                                         "capture; a role or a joint's name: that joint's speed"),
-                 weightSpec()},
-                [](const Params& p) { return std::make_unique<Effort>(p); }});
+void registerEffort(Vocabulary& v) {
+  v.terms.add({"effort",
+               "exp(-v / speed_mps), v the avatar's ground speed or a joint's speed: economy, standing still earns 1",
+               {ParamSpec::number("speed_mps", 1, 1e-3, 100, "m/s", "speed scale of the exponential"),
+                ParamSpec::choiceOrName("point", "pelvis", {"pelvis", "body"}, "a skeleton role or joint",
+                                        "pelvis: the root's ground speed; body: the mean speed of every joint in the "
+                                        "capture; a role or a joint's name: that joint's speed"),
+                weightSpec()},
+               [](const Params& p) { return std::make_unique<Effort>(p); }});
 }
 
 }  // namespace mgrl::rewards

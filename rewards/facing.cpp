@@ -2,7 +2,8 @@
 // exp(-|angle - angle0| / sigma) about a given angle, or (prefer: hits) the capture's own
 // stance: how often the source's effective strikes land at that signed angle from the
 // facing, a density normalised to 1 at its mode (issue 46: a boxer whose punches land 30
-// degrees to his left stands with his target there, not straight ahead).
+// degrees to his left stands with his target there, not straight ahead). As a success
+// condition: |angle - angle0| <= within_deg.
 #include <algorithm>
 #include <array>
 #include <cmath>
@@ -30,6 +31,24 @@ class Facing final : public Term {
 
  private:
   double angle_, sigma_;  // rad
+};
+
+class FacingCondition final : public SuccessCondition {
+ public:
+  explicit FacingCondition(const Params& p)
+      : angle_(p.number("angle_deg") * kDegree), within_(p.number("within_deg") * kDegree) {}
+  bool holds(const ConditionFrame& f) const override {
+    return std::abs(facingError(f.model, f.frame, f.target.position) - angle_) <= within_;
+  }
+  nlohmann::json toJson() const override {
+    return {{"term", "facing"}, {"angle_deg", angle_ / kDegree}, {"within_deg", within_ / kDegree}};
+  }
+  std::string describe() const override {
+    return fmt::format("facing within {:g} deg of {:g} deg off the target", within_ / kDegree, angle_ / kDegree);
+  }
+
+ private:
+  double angle_, within_;  // rad
 };
 
 // The density of the signed angle, on the ground, from the avatar's facing to its own
@@ -91,21 +110,29 @@ class HitFacing final : public Term {
 
 }  // namespace
 
-void registerFacing(TermRegistry& registry) {
-  registry.add(
+void registerFacing(Vocabulary& v) {
+  const ParamSpec angle =
+      ParamSpec::number("angle_deg", 0, 0, 180, "deg", "preferred angle (0: target straight ahead)");
+  v.terms.add(
       {"facing",
        "exp(-|angle - angle0| / sigma), angle between the avatar's facing and the target's direction; or "
        "(prefer: hits) how often the capture's own strikes land at that signed angle",
        {ParamSpec::choice("prefer", "angle", {"angle", "hits"},
                           "angle: about angle_deg; hits: the capture's distribution of the signed angle from "
                           "the facing to its effective hitting points (its own stance), smoothed by sigma_deg"),
-        ParamSpec::number("angle_deg", 0, 0, 180, "deg", "preferred angle (0: target straight ahead)"),
-        ParamSpec::number("sigma_deg", 30, 0.1, 360, "deg", "angle scale of the exponential (of the smoothing)"),
+        angle, ParamSpec::number("sigma_deg", 30, 0.1, 360, "deg", "angle scale of the exponential (of the smoothing)"),
         weightSpec()},
        [](const Params& p) -> std::unique_ptr<Term> {
          if (p.choice("prefer") == "hits") return std::make_unique<HitFacing>(p);
          return std::make_unique<Facing>(p);
        }});
+  ConditionRegistry::Entry entry{
+      "facing",
+      "|angle - angle0| <= within_deg, angle between the avatar's facing and the target's direction",
+      {angle, ParamSpec::number("within_deg", 30, 0, 180, "deg", "the threshold on |angle - angle0|")},
+      [](const Params& p) { return std::make_unique<FacingCondition>(p); }};
+  entry.inherited = {"angle_deg"};
+  v.conditions.add(std::move(entry));
 }
 
 }  // namespace mgrl::rewards

@@ -5,14 +5,17 @@
 
 namespace mgrl::rewards {
 
-void registerAll(RewardRegistry& registry) {
+void registerAll(RewardRegistry& registry, ConditionRegistry& conditions) {
   registerPaperRewards(registry);
   registerTerms(registry);
+  for (const ConditionRegistry::Entry& kind : conditionRegistry().entries()) conditions.add(kind);
 }
 
-const TermRegistry& termRegistry() {
-  static const TermRegistry registry = [] {
-    TermRegistry terms("reward term");
+namespace {
+
+const Vocabulary& vocabulary() {
+  static const Vocabulary v = [] {
+    Vocabulary terms;
     registerDistance(terms);
     registerFacing(terms);
     registerContact(terms);
@@ -21,7 +24,12 @@ const TermRegistry& termRegistry() {
     registerAvoid(terms);
     return terms;
   }();
-  return registry;
+  return v;
 }
+
+}  // namespace
+
+const TermRegistry& termRegistry() { return vocabulary().terms; }
+const ConditionRegistry& conditionRegistry() { return vocabulary().conditions; }
 
 }  // namespace mgrl::rewards

@@ -26,6 +26,10 @@ class Approach final : public Reward {
     }
     return best;
   }
+  // The centroid's ground distance to the target (sec. 6.4) as a distance term.
+  nlohmann::json terms() const override {
+    return nlohmann::json::array({{{"term", "distance"}, {"point", "centroid"}, {"dims", 2}, {"d0", 0}}});
+  }
 
  private:
   double sigma_, gamma_;
@@ -48,6 +52,9 @@ class Hit final : public Reward {
       best = std::max(best, std::pow(gamma_, h.offset) * (useSpeed_ ? h.weight : 1.0));
     }
     return best;
+  }
+  nlohmann::json terms() const override {
+    return nlohmann::json::array({{{"term", "contact"}, {"effector", "fists"}, {"radius", radius_}}});
   }
 
  private:

@@ -10,8 +10,9 @@
 
 namespace mgrl::rewards {
 
-/// Adds approach, hit (the paper's, as named presets) and terms (the vocabulary).
-void registerAll(RewardRegistry& registry);
+/// Adds approach, hit (the paper's, as named presets) and terms (the vocabulary), and the
+/// terms' success conditions.
+void registerAll(RewardRegistry& registry, ConditionRegistry& conditions);
 
 /// Adds approach and hit (rewards/rewards.cpp).
 void registerPaperRewards(RewardRegistry& registry);

@@ -3,7 +3,8 @@
 /// One term of the `terms` reward (rewards/terms.cpp; scenarios/README.md, "reward
 /// terms"): a signal s_k(t) in [0, 1] at each frame t of an action, which the reward
 /// weighs and combines over the frames. A term kind is one file here (distance.cpp,
-/// facing.cpp, ...) with its register function, called in register.cpp.
+/// facing.cpp, ...) with its register function, called in register.cpp; a term that
+/// success criteria can test registers its condition (a measure against a threshold) there too.
 #include <cstddef>
 #include <string>
 
@@ -13,6 +14,7 @@
 #include "mgrl/core/registry.hpp"
 #include "mgrl/learning/reward.hpp"
 #include "mgrl/learning/signals.hpp"
+#include "mgrl/learning/success.hpp"
 #include "mgrl/learning/target_state.hpp"
 
 namespace mgrl::rewards {
@@ -47,10 +49,7 @@ class Term {
 
 /// A term's binding failed at one of its keys ("point", "effector"): the reward reports
 /// it there.
-struct TermError : Error {
-  TermError(std::string key_, const std::string& message) : Error(message), key(std::move(key_)) {}
-  std::string key;
-};
+using TermError = KeyError;
 
 /// The term kinds: `term: NAME` and the parameters it reads (a factory's Params also hold
 /// `weight`, which the reward reads). A factory may refuse a combination of parameters
@@ -58,20 +57,29 @@ struct TermError : Error {
 using TermRegistry = Registry<Term>;
 using TermKind = TermRegistry::Entry;
 
+/// What the term files register: their term kinds and, for those that have one, their
+/// success condition (mgrl/learning/success.hpp) under the same name.
+struct Vocabulary {
+  TermRegistry terms{"reward term"};
+  ConditionRegistry conditions{"success term"};
+};
+
 /// Every term kind, in the order `mgrl list` shows them (register.cpp).
 const std::vector<TermKind>& termKinds();
 const TermRegistry& termRegistry();
+/// Every success condition kind, in the same order.
+const ConditionRegistry& conditionRegistry();
 
 /// The parameter every term has: its weight w_k in the frame's signal.
 ParamSpec weightSpec();
 
 /// The term files' register functions (register.cpp calls them in order).
-void registerDistance(TermRegistry& registry);
-void registerFacing(TermRegistry& registry);
-void registerContact(TermRegistry& registry);
-void registerTravel(TermRegistry& registry);
-void registerEffort(TermRegistry& registry);
-void registerAvoid(TermRegistry& registry);
+void registerDistance(Vocabulary& v);
+void registerFacing(Vocabulary& v);
+void registerContact(Vocabulary& v);
+void registerTravel(Vocabulary& v);
+void registerEffort(Vocabulary& v);
+void registerAvoid(Vocabulary& v);
 
 /// Binds `point` to `m`, or throws TermError at "point" saying which roles and joints `m` has.
 void bindPoint(const StateActionModel& m, BodyPoint& point);

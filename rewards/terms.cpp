@@ -74,6 +74,7 @@ class Terms final : public Reward {
     if (p.block()) block_ = *p.block();
     for (ReadTerm& t : terms) {
       if (t.term->readsJoints()) joints_ = -1;
+      params_.push_back(std::move(t.params));
       terms_.push_back({t.weight, std::move(t.term)});
     }
   }
@@ -96,6 +97,7 @@ class Terms final : public Reward {
     head_ = bindBodyPoint(m, head, nullptr) ? head.joint : -1;
   }
   void bindEnvironment(const EnvironmentModel* environment) override { environment_ = environment; }
+  nlohmann::json terms() const override { return params_; }
 
   double evaluate(const StateActionModel& m, std::size_t a, const TargetState& state) const override {
     // Joint indices are the bound model's: a model with another joint count (or none) would
@@ -139,6 +141,7 @@ class Terms final : public Reward {
   double gamma_;
   bool sum_;
   std::vector<Weighted> terms_;
+  json params_ = json::array();      ///< each term as written, defaults filled in
   std::optional<ConfigNode> block_;  ///< the reward's YAML block, for bind()'s messages
   /// 0 if no term names a joint; else the bound model's joint count, -1 before bind().
   std::int64_t joints_ = 0;

@@ -25,12 +25,12 @@ class Travel final : public Term {
 
 }  // namespace
 
-void registerTravel(TermRegistry& registry) {
-  registry.add({"travel",
-                "clamp(progress / scale_m, 0, 1): ground progress toward (or away from) the target since the decision",
-                {ParamSpec::choice("direction", "toward", {"toward", "away"}, "which way counts as progress"),
-                 ParamSpec::number("scale_m", 1, 1e-3, 100, "m", "progress that earns the full signal"), weightSpec()},
-                [](const Params& p) { return std::make_unique<Travel>(p); }});
+void registerTravel(Vocabulary& v) {
+  v.terms.add({"travel",
+               "clamp(progress / scale_m, 0, 1): ground progress toward (or away from) the target since the decision",
+               {ParamSpec::choice("direction", "toward", {"toward", "away"}, "which way counts as progress"),
+                ParamSpec::number("scale_m", 1, 1e-3, 100, "m", "progress that earns the full signal"), weightSpec()},
+               [](const Params& p) { return std::make_unique<Travel>(p); }});
 }
 
 }  // namespace mgrl::rewards

@@ -107,12 +107,17 @@ TEST_CASE("mgrl list names every plugin, as text and as JSON", "[cli]") {
       {"rewards", {"approach", "hit"}},
       {"environments", {"static_target"}},
       {"learners", {"q_learning", "value_iteration"}}};
-  CHECK(list.size() == seams.size() + 3);  // plus the reward terms, the controllers and the world section
+  CHECK(list.size() == seams.size() + 4);  // plus the reward and success terms, the controllers and the world section
   REQUIRE(list["reward_terms"].is_array());
   std::vector<std::string> terms;
   for (const json& term : list["reward_terms"]) terms.push_back(term["name"]);
   CHECK(terms == std::vector<std::string>{"distance", "facing", "contact", "travel", "effort", "avoid"});
   CHECK_THAT(text.out, Contains("  term: contact  ") && Contains("success (behaviors.NAME.success"));
+  // The success terms are the reward terms that register a condition, with its threshold.
+  std::vector<std::string> conditions;
+  for (const json& condition : list["success_terms"]) conditions.push_back(condition["name"]);
+  CHECK(conditions == std::vector<std::string>{"distance", "facing", "contact", "avoid"});
+  CHECK_THAT(text.out, Contains("success terms (behaviors.NAME.success.term):") && Contains("within_deg"));
   CHECK(list["controllers"] == json::array({"policy", "online_search", "random"}));
   REQUIRE(list["world"].is_array());
   CHECK(list["world"].size() == 26);

@@ -228,4 +228,49 @@ TEST_CASE("every reward term gives a signal in [0, 1], the same for the same fra
   CHECK(onCapture.size() < kinds.size());
 }
 
+TEST_CASE(
+    "every success term is a reward term's condition: built from its defaults, it names itself and holds "
+    "the same way twice",
+    "[conformance]") {
+  // Every registered success condition (mgrl/learning/success.hpp), registered beside its
+  // reward term of the same name. Those that need a skeleton or strikes the synthetic model
+  // lacks are checked on the capture by the success tests.
+  const ConditionRegistry& kinds = builtinPlugins().conditions;
+  REQUIRE(kinds.entries().size() >= 4);
+  const std::unique_ptr<Discretizer> grid = builtinPlugins().discretizers.create(
+      ConfigNode::parse("{type: polar2d, radius: 2, rings: 4, sectors: 8}", "c"), model());
+  std::vector<std::string> onCapture;
+  for (const auto& kind : kinds.entries()) {
+    INFO("success term " << kind.name);
+    CHECK(rewards::termRegistry().find(kind.name) != nullptr);
+    for (const std::string& key : kind.inherited) {  // an inherited key is one of the term's own
+      const auto& termParams = rewards::termRegistry().find(kind.name)->params;
+      CHECK(std::any_of(termParams.begin(), termParams.end(), [&](const ParamSpec& p) { return p.name == key; }));
+    }
+    SuccessCriterion criterion = SuccessCriterion::read(ConfigNode::parse(fmt::format("{{term: {}}}", kind.name), "c"),
+                                                        nlohmann::json::array(), kinds);
+    CHECK(criterion.toJson()["all"][0]["term"] == kind.name);
+    CHECK_FALSE(criterion.describe().empty());
+    try {
+      criterion.bind(model());
+    } catch (const Error&) {
+      onCapture.push_back(kind.name);
+      continue;
+    }
+    std::size_t held = 0, tried = 0;
+    for (std::size_t a = 0; a < model().actionCount(); a += 11)
+      for (std::size_t v = 0; v < grid->vertexCount(); v += 5)
+        for (std::uint32_t t = 1; t <= model().actionLength(a); t += 3) {
+          const TargetState e = grid->vertexState(v);
+          const bool holds = criterion.holdsAt(model(), a, t, e);
+          REQUIRE(criterion.holdsAt(model(), a, t, e) == holds);
+          held += holds;
+          ++tried;
+        }
+    WARN(kind.name << " with its defaults holds at " << held << " of " << tried << " frames");
+  }
+  WARN("success terms that need the capture: " << fmt::format("{}", fmt::join(onCapture, ", ")));
+  CHECK(onCapture.size() < kinds.entries().size());
+}
+
 }  // namespace mgrl::conformance_test

@@ -8,6 +8,7 @@
 #include <stdexcept>
 #include <string>
 #include <string_view>
+#include <utility>
 
 namespace mgrl {
 
@@ -30,6 +31,14 @@ class ParseError : public Error {
  private:
   std::string source_;
   std::size_t line_;
+};
+
+/// A plug-in's check failed at one of its keys ("point", "effector"), found when it is
+/// bound to a model, after its block was read: the caller, which holds the block, reports it
+/// at the key (or at the block if the key was left out).
+struct KeyError : Error {
+  KeyError(std::string key_, const std::string& message) : Error(message), key(std::move(key_)) {}
+  std::string key;
 };
 
 /// Receives non-fatal problems found in an input (one message each, no trailing newline).

@@ -36,6 +36,9 @@ class Registry {
     /// A block that builds a working instance, for the seam's conformance suite
     /// (tests/conformance_test.cpp); "" means `{type: NAME}` with the defaults.
     std::string example = {};
+    /// Parameters that default to a related block's values instead of their specs' (a
+    /// success condition's: those of the behaviour's reward term of its kind).
+    std::vector<std::string> inherited = {};
   };
 
   /// `seam` names the kind of plugin in messages: "discretizer", "reward", ...

@@ -62,9 +62,7 @@ void checkOpponent(const BehaviorSpec& spec, const Behavior& b) {
     for (std::size_t i = 0; i < terms.size(); ++i)
       if (terms[i].has("term") && terms[i].child("term").asString() == "avoid") terms[i].child("term").fail(why);
   }
-  if (b.success)
-    for (const SuccessCondition& c : b.success->conditions())
-      if (c.kind == SuccessCondition::Kind::Avoid) spec.success.fail(why);  // only a declared criterion has one
+  if (b.success && b.success->clearance()) spec.success.fail(why);  // only a declared criterion has one
 }
 
 // A learned opponent (issue 43): the model binds to the graph, the grid gets one layer per
@@ -134,8 +132,9 @@ Behavior buildBehavior(const BehaviorSpec& spec, const Plugins& plugins, const S
   b.learner = plugins.learners.create(spec.learner);
   std::tie(b.config, b.key) = behaviorConfigAndKey(spec, plugins, graphKey);
   b.successDeclared = !spec.success.isNull();
-  b.success = b.successDeclared ? SuccessCriterion::read(spec.success, b.config["reward"])
-                                : SuccessCriterion::implied(b.config["reward"]);
+  const nlohmann::json rewardTerms = b.reward->terms();
+  b.success = b.successDeclared ? SuccessCriterion::read(spec.success, rewardTerms, plugins.conditions)
+                                : SuccessCriterion::implied(rewardTerms, plugins.conditions);
   if (b.success) b.success->bind(model);
   checkOpponent(spec, b);
   return b;

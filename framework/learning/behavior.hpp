@@ -25,6 +25,7 @@ struct Plugins {
   RewardRegistry rewards{"reward"};
   EnvironmentRegistry environments{"environment model"};
   LearnerRegistry learners{"learner"};
+  ConditionRegistry conditions{"success term"};  ///< registered by the reward terms (rewards/)
 };
 
 struct Behavior {

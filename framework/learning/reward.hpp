@@ -10,6 +10,8 @@
 #include <string>
 #include <vector>
 
+#include <nlohmann/json.hpp>
+
 #include "mgrl/core/registry.hpp"
 #include "mgrl/graph/state_action_model.hpp"
 #include "mgrl/learning/signals.hpp"
@@ -35,6 +37,10 @@ class Reward {
   /// reward whose terms read a learned opponent's actual body and strikes asks it for them
   /// (EnvironmentModel::track).
   virtual void bindEnvironment(const EnvironmentModel*) {}
+  /// The reward as reward terms, a JSON list of {"term": NAME, parameters...}: a success
+  /// condition takes what it leaves out from the reward's term of its kind (success.hpp).
+  /// A preset lists what it amounts to; a reward with no such terms, an empty list.
+  virtual nlohmann::json terms() const { return nlohmann::json::array(); }
 };
 
 using RewardRegistry = Registry<Reward>;

@@ -13,7 +13,8 @@ void checkBehaviors(const Scenario& scenario, const Plugins& plugins) {
     plugins.rewards.check(spec.reward);
     if (!spec.environment.isNull()) plugins.environments.check(spec.environment);
     plugins.learners.check(spec.learner);
-    if (!spec.success.isNull()) SuccessCriterion::read(spec.success, plugins.rewards.blockJson(spec.reward, ""));
+    if (!spec.success.isNull())
+      SuccessCriterion::read(spec.success, plugins.rewards.create(spec.reward)->terms(), plugins.conditions);
   }
 }
 

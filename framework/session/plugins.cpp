@@ -11,7 +11,7 @@ const Plugins& builtinPlugins() {
   static const Plugins instance = [] {
     Plugins p;
     discretizers::registerAll(p.discretizers);
-    rewards::registerAll(p.rewards);
+    rewards::registerAll(p.rewards, p.conditions);
     environments::registerAll(p.environments);
     learners::registerAll(p.learners);
     return p;

@@ -13,6 +13,7 @@
 #include "mgrl/graph/motion_graph.hpp"
 #include "mgrl/learning/signals.hpp"
 #include "mgrl/runtime/controller.hpp"
+#include "mgrl/session/plugins.hpp"
 
 namespace mgrl {
 
@@ -58,7 +59,7 @@ std::pair<std::vector<SuccessCriterion>, std::string> trialCriteria(const std::v
   if (!criteria.empty()) return {std::move(criteria), "declared"};
   for (const Behavior& b : behaviors)
     if (b.success) return {{*b.success}, "implied"};
-  return {{SuccessCriterion::punch(0.15)}, "fallback"};
+  return {{SuccessCriterion::punch(0.15, builtinPlugins().conditions)}, "fallback"};
 }
 
 // A target uniform by area in the approach region's square of side 2 reach, at the target
@@ -137,14 +138,15 @@ TrialStats Trials::run(const ChooseAction& choose, std::size_t count, double sec
   return stats;
 }
 
-std::pair<const SuccessCondition*, double> Trials::avoidCondition() const {
+std::pair<std::optional<Clearance>, double> Trials::avoidCondition() const {
   for (const SuccessCriterion& c : criteria_)
-    for (const SuccessCondition& k : c.conditions())
-      if (k.kind == SuccessCondition::Kind::Avoid) return {&k, c.holdSeconds()};
-  return {nullptr, 0};
+    if (std::optional<Clearance> found = c.clearance()) return {found, c.holdSeconds()};
+  return {std::nullopt, 0};
 }
 
-bool Trials::hasAvatarOpponent() const { return environment_->scriptedOpponent() && avoidCondition().first; }
+bool Trials::hasAvatarOpponent() const {
+  return environment_->scriptedOpponent() && avoidCondition().first.has_value();
+}
 
 TrialStats Trials::runAgainstAvatar(const ChooseAction& choose, std::size_t count, double seconds,
                                     std::uint64_t seed) const {
@@ -153,8 +155,8 @@ TrialStats Trials::runAgainstAvatar(const ChooseAction& choose, std::size_t coun
   if (!opponentModel)
     throw Error(fmt::format("trials against an avatar: expected an opponent environment, found {}", environment_->type()));
   // Not a structured binding: the lambdas below capture it (clang before 16 cannot).
-  const std::pair<const SuccessCondition*, double> found = avoidCondition();
-  const SuccessCondition* avoid = found.first;
+  const std::pair<std::optional<Clearance>, double> found = avoidCondition();
+  const std::optional<Clearance> avoid = found.first;
   const double hold = found.second;
   if (!avoid) throw Error("trials against an avatar: expected a success criterion with an avoid condition, found none");
   const auto needed = std::max<std::size_t>(1, static_cast<std::size_t>(std::lround(hold / model.frameTime)));
@@ -233,7 +235,7 @@ TrialStats Trials::runAgainstAvatar(const ChooseAction& choose, std::size_t coun
         if (!first) finish(opponent);
         const GroundMotion a = rootAt(avatar);
         const std::size_t f = model.actionFrameBegin[avatar.action] + std::max<std::uint32_t>(avatar.played, 1) - 1;
-        const Eigen::Vector3d target = transformPoint(avatar.decision, jointAt(model, f, avoid->point.joint));
+        const Eigen::Vector3d target = transformPoint(avatar.decision, jointAt(model, f, avoid->joint));
         start(opponent, opponentChoice(opponent, {a.dx, 0, a.dz}, target, home));
       }
       first = false;
@@ -241,7 +243,7 @@ TrialStats Trials::runAgainstAvatar(const ChooseAction& choose, std::size_t coun
       ++opponent.played;
       const std::size_t f = model.actionFrameBegin[avatar.action] + avatar.played - 1;
       const GroundMotion me = rootAt(avatar), them = rootAt(opponent);
-      const Eigen::Vector3d point = transformPoint(avatar.decision, jointAt(model, f, avoid->point.joint));
+      const Eigen::Vector3d point = transformPoint(avatar.decision, jointAt(model, f, avoid->joint));
       const double gap = std::hypot(me.dx - them.dx, me.dz - them.dz);  // pelvis to pelvis, on the ground
       bool reached = gap - 2 * avoid->bodyRadius < avoid->clear;
       auto strikes = [&](std::span<const ActionHit> list, std::uint8_t leftBit) {

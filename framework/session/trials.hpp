@@ -11,6 +11,7 @@
 #include <cstddef>
 #include <cstdint>
 #include <functional>
+#include <optional>
 #include <string>
 #include <utility>
 #include <vector>
@@ -93,8 +94,8 @@ class Trials {
 
  private:
   TargetState placeTarget(Rng& starts) const;
-  /// The first avoid condition of the criteria and its criterion's hold_s; null if none.
-  std::pair<const SuccessCondition*, double> avoidCondition() const;
+  /// The first avoid condition's clearance and its criterion's hold_s; none if no criterion has one.
+  std::pair<std::optional<Clearance>, double> avoidCondition() const;
   /// The first behaviour's environment model: how trial targets move (all behaviours see
   /// the same target).
   const EnvironmentModel* environment_ = nullptr;
