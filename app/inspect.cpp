@@ -5,7 +5,7 @@
 #include <fmt/format.h>
 #include <fmt/ranges.h>
 
-#include "numbers.hpp"
+#include "mgrl/core/numbers.hpp"
 #include "plural.hpp"
 
 namespace mgrl::app {

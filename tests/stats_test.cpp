@@ -27,7 +27,7 @@ fs::path statsData() { return mgrl::test::testData() / "stats"; }
 
 BoutStats measureFolder(const std::string& folder, const StatsParams& params = {},
                         std::vector<std::string>* warnings = nullptr) {
-  const mgrl::app::BoutFiles files = mgrl::app::resolveBout((statsData() / folder).string(), {});
+  const mgrl::BoutFiles files = mgrl::resolveBout((statsData() / folder).string(), {});
   const mgrl::Bout bout = mgrl::loadBout(files.name, files.files, params, [&](const std::string& m) {
     if (warnings) warnings->push_back(m);
   });
@@ -165,12 +165,12 @@ TEST_CASE("stats: strikes are counted each way, per fighter and for the stronger
   CHECK(guarded.sides[0].blocked == 1);
   CHECK(guarded.sides[0].landed == 0);
   CHECK(guarded.landedInPairs == 0);
-  const nlohmann::json j = mgrl::app::statsJson(near);
+  const nlohmann::json j = mgrl::statsJson(near);
   CHECK(j["by_fighter"][0]["file"] == "fighter_1.bvh");
   CHECK(j["by_fighter"][0]["landed"] == 1);
   CHECK(j["by_fighter"][1]["strikes"] == 0);
   CHECK(j["landed_by_stronger_share"] == 1.0);
-  CHECK(mgrl::app::statsJson(guarded)["landed_by_stronger_share"].dump() == "null");  // nothing landed: no share
+  CHECK(mgrl::statsJson(guarded)["landed_by_stronger_share"].dump() == "null");  // nothing landed: no share
   // Four fighters paired by nearness have no fixed pairs; simulate's partners do.
   CHECK(measureFolder("four").sides.size() == 4);
   const BoutStats partners = measureFolder("partners");
@@ -215,7 +215,7 @@ TEST_CASE("stats: pooling sums counts and times and keeps every sample", "[stats
   CHECK_THAT(p.fighterSeconds, WithinAbs(a.fighterSeconds + b.fighterSeconds, 1e-12));
   CHECK(p.distance_m.size() == a.distance_m.size() + b.distance_m.size());
   CHECK(p.reversals == 3);
-  const nlohmann::json j = mgrl::app::statsJson(p);
+  const nlohmann::json j = mgrl::statsJson(p);
   CHECK(j["fighters"] == 4);
   CHECK(j["distance_m"]["deciles"].size() == 11);
 }
@@ -259,7 +259,7 @@ TEST_CASE("stats: bad bouts are refused with where, what was expected and what w
   const fs::path data = statsData();
   const StatsParams params;
   auto load = [&](const std::string& argument) {
-    const mgrl::app::BoutFiles files = mgrl::app::resolveBout(argument, data);
+    const mgrl::BoutFiles files = mgrl::resolveBout(argument, data);
     return mgrl::loadBout(files.name, files.files, params);
   };
   REQUIRE_THROWS_WITH(load("nowhere"), Contains("nowhere: expected a folder of BVH files or a quoted file pattern, "
@@ -275,13 +275,13 @@ TEST_CASE("stats: bad bouts are refused with where, what was expected and what w
                                               Contains("0.0166667 s in"));
   REQUIRE_THROWS_AS(load("broken"), mgrl::ParseError);
   REQUIRE_THROWS_WITH(load("broken"), Contains("fighter_2.bvh:100: expected 6 channel values, found 5"));
-  REQUIRE_THROWS_WITH(mgrl::app::snuBouts(data), Contains("--snu: expected the SNU sparring capture s_TTT_K_P.bvh in"));
+  REQUIRE_THROWS_WITH(mgrl::snuBouts(data), Contains("--snu: expected the SNU sparring capture s_TTT_K_P.bvh in"));
   // Patterns resolve against the data folder (here: tests/data/stats) when not found locally.
-  CHECK(mgrl::app::resolveBout("punch_near/fighter_*.bvh", data).files.size() == 2);
+  CHECK(mgrl::resolveBout("punch_near/fighter_*.bvh", data).files.size() == 2);
 }
 
 TEST_CASE("stats: the real SNU sparring bouts pooled match the issue's figures loosely", "[stats][data]") {
-  const auto groups = mgrl::app::snuBouts(mgrl::test::mocap());
+  const auto groups = mgrl::snuBouts(mgrl::test::mocap());
   // Nine takes-and-clips: eight of two fighters, s_024_2 of four.
   REQUIRE(groups.size() == 9);
   std::size_t fighters = 0;

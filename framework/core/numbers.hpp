@@ -3,7 +3,7 @@
 /// Numbers as the reports print them.
 #include <cmath>
 
-namespace mgrl::app {
+namespace mgrl {
 
 /// Rounds to `decimals` places for JSON: dividing by an exact power of ten yields the double
 /// nearest the decimal, so JSON shows 0.5679 rather than 0.5679000000000001. NaN and
@@ -14,4 +14,4 @@ inline double rounded(double value, int decimals) {
   return std::round(value * scale) / scale;
 }
 
-}  // namespace mgrl::app
+}  // namespace mgrl
