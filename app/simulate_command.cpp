@@ -2,7 +2,7 @@
 // avatars in sparring pairs or with targets, controlled by the trained policy (or the
 // online search, or at random), collisions at effective punches, reactions. Reports speed
 // and hits; writes one BVH per avatar and the hits as JSON lines, atomically
-// (simulate_outputs.cpp).
+// (mgrl/session/exports.hpp).
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -33,10 +33,10 @@
 #include "mgrl/runtime/controller.hpp"
 #include "mgrl/runtime/world.hpp"
 #include "mgrl/scenario/behaviors.hpp"
+#include "mgrl/session/exports.hpp"
 #include "mgrl/session/session.hpp"
 #include "plugins.hpp"
 #include "plural.hpp"
-#include "simulate_outputs.hpp"
 
 namespace mgrl::app {
 
@@ -130,11 +130,13 @@ json runSimulate(const SimulateOptions& options) {
   const ControllerChoice choice{options.controller, options.horizon, options.horizonSeconds};
   const bool record = !options.bvhOut.empty() || !options.gltfOut.empty();
   const bool poses = options.poses || record;
+  const ExportRequest exports{options.bvhOut,  options.gltfOut,    options.eventsOut, options.avatars,
+                              options.seconds, options.controller, options.seed};
   Outputs out;
   SessionNeeds needs;
   needs.policy = choice.name == "policy" ? PolicyNeed::Required : PolicyNeed::None;
   needs.policyDir = options.policy;
-  needs.beforeGraph = [&](const Scenario& scenario) { out = prepareOutputs(options, scenario); };
+  needs.beforeGraph = [&](const Scenario& scenario) { out = prepareOutputs(exports, scenario); };
   const std::unique_ptr<Session> session = openSession(options, needs);
   if (options.topK > 0) session->task.world.variety.topK = static_cast<int>(options.topK);
   const WorldParams& params = session->task.world;
@@ -176,7 +178,7 @@ json runSimulate(const SimulateOptions& options) {
 
   const double wall = runWorld(world, frames, model.frameTime, options.log);
 
-  const WrittenFiles written = writeOutputs(out, options, *session, world, frames);
+  const WrittenFiles written = writeOutputs(out, exports, *session, world, frames);
 
   const double simulated = static_cast<double>(frames) * model.frameTime;
   json report = {{"scenario", scenario.path.string()},

@@ -1,4 +1,4 @@
-#include "simulate_outputs.hpp"
+#include "mgrl/session/exports.hpp"
 
 #include <chrono>
 #include <ctime>
@@ -18,9 +18,8 @@
 #include "mgrl/motion/bvh.hpp"
 #include "mgrl/motion/gltf.hpp"
 #include "mgrl/motion/motion_io.hpp"
-#include "plural.hpp"
 
-namespace mgrl::app {
+namespace mgrl {
 
 using json = nlohmann::json;
 
@@ -215,7 +214,7 @@ double recordingBytes(double avatarFrames, double joints) {
   return avatarFrames * (joints * (sizeof(Eigen::Quaterniond) + sizeof(Eigen::Vector3d)) + 64);
 }
 
-Outputs prepareOutputs(const SimulateOptions& options, const Scenario& scenario) {
+Outputs prepareOutputs(const ExportRequest& options, const Scenario& scenario) {
   Outputs out;
   if (!options.bvhOut.empty()) {
     OutputFolder& folder = out.folders.emplace_back();
@@ -276,7 +275,7 @@ Outputs prepareOutputs(const SimulateOptions& options, const Scenario& scenario)
   return out;
 }
 
-WrittenFiles writeOutputs(Outputs& out, const SimulateOptions& options, const Session& session, const World& world,
+WrittenFiles writeOutputs(Outputs& out, const ExportRequest& options, const Session& session, const World& world,
                           std::size_t frames) {
   const StateActionModel& model = session.model();
   const std::size_t avatars = world.avatarCount();
@@ -359,4 +358,4 @@ WrittenFiles writeOutputs(Outputs& out, const SimulateOptions& options, const Se
   return written;
 }
 
-}  // namespace mgrl::app
+}  // namespace mgrl

@@ -1,20 +1,22 @@
 #pragma once
 /// \file
-/// `mgrl simulate`'s output folders (--bvh-out, --gltf-out, --events-out): checked and
-/// their scratch folders made before anything is simulated, then written and swapped in
-/// whole, each folder one unit with its manifest; a failed run leaves nothing behind.
+/// A world run's exports (`mgrl simulate --bvh-out, --gltf-out, --events-out`; a library
+/// call for other front ends): one BVH and/or binary glTF per avatar and the hit events,
+/// each output folder checked and its scratch folder made before anything is simulated,
+/// then written and swapped in whole with its manifest; a failed run leaves nothing behind.
+/// Messages name the command line's options, which Python's keywords mirror.
+#include <cstdint>
 #include <filesystem>
 #include <memory>
 #include <string>
 #include <vector>
 
-#include "learn_commands.hpp"
 #include "mgrl/core/bundle.hpp"
 #include "mgrl/runtime/world.hpp"
 #include "mgrl/scenario/scenario.hpp"
 #include "mgrl/session/session.hpp"
 
-namespace mgrl::app {
+namespace mgrl {
 
 namespace fs = std::filesystem;
 
@@ -55,6 +57,17 @@ struct Outputs {
   std::unique_ptr<ScratchDirectory> eventsScratch;  ///< --events-out outside every output folder
 };
 
+/// What to export and the run's facts for the manifests.
+struct ExportRequest {
+  std::filesystem::path bvhOut;     ///< one BVH per avatar here ("" none)
+  std::filesystem::path gltfOut;    ///< one binary glTF (.glb) per avatar here ("" none)
+  std::filesystem::path eventsOut;  ///< hits as JSON lines ("" none)
+  long long avatars = 2;
+  double seconds = 10;  ///< simulated time
+  std::string controller = "policy";
+  std::uint64_t seed = 1;
+};
+
 struct WrittenFiles {
   std::vector<std::string> bvh, gltf;
   std::string bvhFolder, gltfFolder;
@@ -67,12 +80,12 @@ double recordingBytes(double avatarFrames, double joints);
 
 /// Checks the output options against what is on disk and makes each folder's scratch
 /// space (removed again if the run fails). Throws mgrl::Error naming the option.
-Outputs prepareOutputs(const SimulateOptions& options, const Scenario& scenario);
+Outputs prepareOutputs(const ExportRequest& options, const Scenario& scenario);
 
 /// Writes the run's outputs into the bundles' temporaries and the scratch folder, then puts
 /// them in place: each output folder whole (with the events if they belong to it), then the
 /// events. Returns the motion files written.
-WrittenFiles writeOutputs(Outputs& out, const SimulateOptions& options, const Session& session, const World& world,
+WrittenFiles writeOutputs(Outputs& out, const ExportRequest& options, const Session& session, const World& world,
                           std::size_t frames);
 
-}  // namespace mgrl::app
+}  // namespace mgrl
