@@ -1,6 +1,9 @@
 // mgrl.Session's graph views and its registration with the module (session.hpp).
 #include "session.hpp"
 
+#include "mgrl/core/data_paths.hpp"
+#include "mgrl/runtime/bout_report.hpp"
+
 namespace mgrl::python {
 namespace {
 
@@ -90,6 +93,21 @@ void bindSession(py::module_& m) {
       },
       py::arg("name"), "The parameter names of a registered C++ learner");
   m.def("snapshot_columns", [] { return mgrl::snapshotColumns(); });
+  m.def(
+      "_bout_stats",
+      [](const std::vector<std::string>& bouts, bool snu, const std::vector<std::string>& against,
+         const py::object& data) {
+        mgrl::StatsOptions options;
+        options.bouts = bouts;
+        options.snu = snu;
+        options.compare = !against.empty();
+        options.synthetic = against;
+        options.dataDir =
+            mgrl::dataDirectory(data.is_none() ? std::filesystem::path() : data.cast<std::filesystem::path>());
+        return mgrl::runStats(options).dump();
+      },
+      py::arg("bouts"), py::arg("snu"), py::arg("against"), py::arg("data"),
+      "mgrl stats --json's report as JSON text (mgrl.bout_stats parses it)");
 }
 
 }  // namespace mgrl::python

@@ -47,9 +47,30 @@ Session:
                      behaviours from the scenario's trained bundle, else trained first
     save_policy(path, tables, learner="python")
                      a complete policy bundle mgrl eval/simulate/serve/compare accept
+
+bout_stats(bouts=(), snu=False, against=(), data=None)
+                     mgrl stats --json's report (docs/stats.md) as a dict: bouts are
+                     folders of BVH files (one per fighter) or quoted patterns, looked
+                     up in the working folder, then in data; snu adds the SNU sparring
+                     capture; against (bouts) compares the two groups
 """
+import json as _json
+from . import _core
 from ._core import Error, Problem, Session  # noqa: F401
 from .compare import Observer, compare  # noqa: F401
 from .env import MotionGraphEnv, MotionGraphVectorEnv  # noqa: F401
 
-__all__ = ["Error", "Problem", "Session", "MotionGraphEnv", "MotionGraphVectorEnv", "Observer", "compare"]
+__all__ = ["Error", "Problem", "Session", "MotionGraphEnv", "MotionGraphVectorEnv", "Observer", "compare",
+           "bout_stats"]
+
+
+def bout_stats(bouts=(), snu=False, against=(), data=None):
+    """Distance, facing, strikes, foot skate and more of bouts, real or synthesized, as
+    `mgrl stats --json` reports them (docs/stats.md): {"params", "bouts", "pooled"}, or with
+    `against` {"params", "real", "synthetic", "wasserstein1"}. Raises mgrl.Error naming the
+    bout at fault."""
+    if isinstance(bouts, (str, bytes)) or isinstance(against, (str, bytes)):
+        raise TypeError("bout_stats: expected bouts and against as lists of folders or patterns, found a string")
+    bouts = [str(b) for b in bouts]
+    against = [str(b) for b in against]
+    return _json.loads(_core._bout_stats(bouts, bool(snu), against, None if data is None else str(data)))
