@@ -2,6 +2,7 @@
 #include "session.hpp"
 
 #include "mgrl/core/data_paths.hpp"
+#include "mgrl/motion/capture_report.hpp"
 #include "mgrl/runtime/bout_report.hpp"
 
 namespace mgrl::python {
@@ -108,6 +109,18 @@ void bindSession(py::module_& m) {
       },
       py::arg("bouts"), py::arg("snu"), py::arg("against"), py::arg("data"),
       "mgrl stats --json's report as JSON text (mgrl.bout_stats parses it)");
+  m.def(
+      "_inspect",
+      [](const std::vector<std::filesystem::path>& files) {
+        mgrl::InspectOptions options;
+        std::vector<std::string> warnings;
+        options.load.warn = [&](const std::string& line) { warnings.push_back(line); };
+        options.annotation.validate();
+        std::vector<mgrl::FileReport> reports;  // every file read before any is reported
+        for (const std::filesystem::path& file : files) reports.push_back(mgrl::inspectFile(file, options));
+        return nlohmann::json{{"report", mgrl::inspectJson(reports)}, {"warnings", warnings}}.dump();
+      },
+      py::arg("files"), "mgrl inspect --json's report and the warnings, as JSON text (mgrl.inspect parses it)");
 }
 
 }  // namespace mgrl::python

@@ -55,7 +55,7 @@ class Inspect final : public Command {
     // Read everything first: on any error, stdout stays empty.
     std::vector<FileReport> reports;
     for (const std::string& file : files_) reports.push_back(inspectFile(file, options_));
-    print(common, toJson(reports), common.json ? std::string() : toText(reports));
+    print(common, inspectJson(reports), common.json ? std::string() : inspectText(reports));
   }
 
  private:

@@ -48,6 +48,9 @@ Session:
     save_policy(path, tables, learner="python")
                      a complete policy bundle mgrl eval/simulate/serve/compare accept
 
+inspect(files)       mgrl inspect --json's report on motion files (BVH, ASF/AMC) as a
+                     dict: joints, roles, frames, height, contacts, effective punches
+                     and kicks; the loader's warnings as Python warnings
 bout_stats(bouts=(), snu=False, against=(), data=None)
                      mgrl stats --json's report (docs/stats.md) as a dict: bouts are
                      folders of BVH files (one per fighter) or quoted patterns, looked
@@ -55,13 +58,27 @@ bout_stats(bouts=(), snu=False, against=(), data=None)
                      capture; against (bouts) compares the two groups
 """
 import json as _json
+import warnings as _warnings
 from . import _core
 from ._core import Error, Problem, Session  # noqa: F401
 from .compare import Observer, compare  # noqa: F401
 from .env import MotionGraphEnv, MotionGraphVectorEnv  # noqa: F401
 
 __all__ = ["Error", "Problem", "Session", "MotionGraphEnv", "MotionGraphVectorEnv", "Observer", "compare",
-           "bout_stats"]
+           "bout_stats", "inspect"]
+
+
+def inspect(files):
+    """What is in motion files, as `mgrl inspect --json` reports it with its defaults:
+    {"files": [{"path", "joints", "joint_names", "roles", "frames", "fps", "height_m",
+    "punches", "kicks", ...}]}. `files` is one path or a list; every file is read before
+    any is reported. Raises mgrl.Error naming the file, line and what was expected."""
+    if isinstance(files, (str, bytes)) or hasattr(files, "__fspath__"):
+        files = [files]
+    result = _json.loads(_core._inspect([str(f) for f in files]))
+    for line in result["warnings"]:
+        _warnings.warn(line, stacklevel=2)
+    return result["report"]
 
 
 def bout_stats(bouts=(), snu=False, against=(), data=None):
