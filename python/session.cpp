@@ -82,6 +82,13 @@ void bindSession(py::module_& m) {
       py::arg("dir"), py::arg("report_json"), "Writes mgrl compare's results.json, results.csv, curves.csv, index.html");
   m.def("compare_metrics", [] { return mgrl::compareMetrics(); });
   m.def(
+      "learner_summaries",
+      [](const std::string& runs, const std::vector<std::string>& learners) {
+        return mgrl::learnerSummaries(nlohmann::json::parse(runs), learners).dump();
+      },
+      py::arg("runs_json"), py::arg("learners"),
+      "mgrl compare's per-learner mean, sd and success curve over the runs, as JSON text");
+  m.def(
       "learner_parameters",
       [](const std::string& name) {
         const auto* entry = mgrl::builtinPlugins().learners.find(name);

@@ -27,6 +27,12 @@ const std::vector<std::string>& snapshotColumns();
 /// share in percentage points without the sign, a time in seconds however short.
 std::string reportNumber(std::string_view key, double value, bool delta = false);
 
+/// Per learner, the mean and standard deviation of each compareMetrics() figure over its
+/// runs (null where a run lacks it) and its success curve ([[updates, seconds, success
+/// mean, success sd], ...] over its seeds, point by point; empty unless every run has as
+/// many snapshots): the report's "learners", for `mgrl compare` and Python's mgrl.compare.
+nlohmann::json learnerSummaries(const nlohmann::json& runs, const std::vector<std::string>& learners);
+
 /// Writes the four files into `dir` (each atomically). Throws mgrl::Error on I/O failure.
 void writeCompareReport(const std::filesystem::path& dir, const nlohmann::json& report);
 

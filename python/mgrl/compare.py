@@ -20,6 +20,7 @@ with `report=DIR` the same results.json, results.csv, curves.csv and index.html 
 written there. A Python learner that raises stops the comparison with its traceback
 (the exception propagates, nothing is written).
 """
+import json
 import time
 
 import numpy as np
@@ -56,11 +57,11 @@ def _name(learner):
     return str(getattr(learner, "name", type(learner).__name__))
 
 
-def _stats(values):
-    if not values or any(v is None for v in values):
-        return None, None
-    xs = np.asarray(values, dtype=np.float64)
-    return float(xs.mean()), float(xs.std(ddof=1)) if len(xs) > 1 else 0.0
+def _plain(x):
+    """NumPy scalars (a Python learner's observer may report them) as plain numbers for JSON."""
+    if isinstance(x, np.generic):
+        return x.item()
+    raise TypeError(f"compare: expected numbers, lists and dicts in a run, found {type(x).__name__}")
 
 
 def compare(session, behavior, learners, seeds=(1,), trials=100, seconds=10.0, snapshots=10, snapshot_trials=None,
@@ -190,27 +191,18 @@ def compare(session, behavior, learners, seeds=(1,), trials=100, seconds=10.0, s
         "learners": {},
         "flags": [],
     }
+    # The same summaries as mgrl compare's (one C++ function): mean and sd per metric, null
+    # where a run lacks it, and the success curve over seeds.
+    result["learners"] = json.loads(_core.learner_summaries(json.dumps(runs, default=_plain), names))
     for name in names:
         mine = [r for r in runs if r["learner"] == name]
-        mean, sd = {}, {}
-        for key, _ in _core.compare_metrics():
-            mean[key], sd[key] = _stats([r[key] for r in mine])
-        curve = []
-        if all(r["snapshots"] for r in mine) and len({len(r["snapshots"]["points"]) for r in mine}) == 1:
-            for i in range(len(mine[0]["snapshots"]["points"])):
-                points = [r["snapshots"]["points"][i] for r in mine]
-                rates = [p[3] for p in points]
-                curve.append([float(np.mean([p[0] for p in points])), float(np.mean([p[1] for p in points])),
-                              float(np.mean(rates)), float(np.std(rates, ddof=1)) if len(rates) > 1 else 0.0])
-        result["learners"][name] = {"mean": mean, "sd": sd, "success_curve": curve}
         for r in mine:
             if r["greedy_agreement"] < 0.9:  # as mgrl compare flags
                 result["flags"].append(
                     f"{name}{' seed ' + str(r['seed']) if r['seed'] is not None else ''}: its greedy policy agrees "
                     f"with the reference's on {100 * r['greedy_agreement']:.1f} % of (state, vertex) pairs")
     if report is not None:
-        import json
-        _core.write_compare_report(str(report), json.dumps(result))
+        _core.write_compare_report(str(report), json.dumps(result, default=_plain))
         result["report"] = str(report) + "/index.html"
     say(text(result).rstrip())
     return result
