@@ -18,26 +18,6 @@ namespace mgrl::app {
 namespace fs = std::filesystem;
 using json = nlohmann::json;
 
-std::string humanCount(double n) {
-  if (n >= 1e9) return fmt::format("{:.2f} G", n / 1e9);
-  if (n >= 1e6) return fmt::format("{:.2f} M", n / 1e6);
-  if (n >= 1e3) return fmt::format("{:.1f} k", n / 1e3);
-  return fmt::format("{:.0f} ", n);
-}
-
-std::string humanBytes(double bytes) {
-  if (bytes >= 1e9) return fmt::format("{:.2f} GB", bytes / 1e9);
-  return fmt::format("{:.1f} MB", bytes / 1e6);
-}
-
-std::string humanSeconds(double seconds) {
-  if (seconds >= 0.1) return fmt::format("{:.2f} s", seconds);
-  if (seconds >= 0.001) return fmt::format("{:.1f} ms", seconds * 1e3);
-  return fmt::format("{:.2f} ms", seconds * 1e3);
-}
-
-
-
 namespace {
 const std::chrono::steady_clock::time_point programStart = std::chrono::steady_clock::now();
 }  // namespace

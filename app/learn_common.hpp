@@ -7,9 +7,10 @@
 
 #include "graph_command.hpp"
 #include "learn_commands.hpp"
+#include "mgrl/core/numbers.hpp"
 #include "mgrl/learning/behavior.hpp"
-#include "mgrl/runtime/controller.hpp"
 #include "mgrl/learning/policy_bundle.hpp"
+#include "mgrl/runtime/controller.hpp"
 #include "mgrl/scenario/scenario.hpp"
 #include "mgrl/session/policy_source.hpp"
 
@@ -24,15 +25,6 @@ using mgrl::resolvePolicy;
 using mgrl::setFlags;
 
 using Clock = std::chrono::steady_clock;
-
-/// "4.17 M", "850.0 k": counts and rates for people (with a trailing space for units).
-std::string humanCount(double n);
-
-/// "88.3 MB", "47.40 GB".
-std::string humanBytes(double bytes);
-
-/// A duration for people: "12.31 s", "4.2 ms", "0.3 ms" (never "0.00 s").
-std::string humanSeconds(double seconds);
 
 /// Seconds since the program started (its static initialisation): eval and simulate
 /// report it at their first decision as "startup_seconds" (issue 20: <= 0.05 s with a

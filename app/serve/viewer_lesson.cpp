@@ -47,10 +47,11 @@ void ViewerSession::learn(const Learn& message) {
     const Problem problem = b.problem(a.model());
     const double bytes = learners::QLearningSteps::tableBytes(problem);
     if (bytes > Limits::kLessonBytes)
-      throw Error(fmt::format("learn: expected a lesson table of at most {} for one page, found {} for {} ({} vertices "
-                              "x {} actions); choose a behaviour with a smaller grid",
-                              app::humanBytes(Limits::kLessonBytes), app::humanBytes(bytes), b.name,
-                              b.discretizer->vertexCount(), a.model().actionCount()));
+      throw Error(
+          fmt::format("learn: expected a lesson table of at most {} for one page, found {} for {} ({} vertices "
+                      "x {} actions); choose a behaviour with a smaller grid",
+                      humanBytes(Limits::kLessonBytes), humanBytes(bytes), b.name, b.discretizer->vertexCount(),
+                      a.model().actionCount()));
     lesson->steps = std::make_unique<learners::QLearningSteps>(problem, message.budget, message.seed);
     s.lesson = std::move(lesson);
     outbox_.push_back(lessonMessage());

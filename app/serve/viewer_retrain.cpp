@@ -151,10 +151,11 @@ void ViewerSession::retrain(const Retrain& message) {
   result->set = set;
   const double bytes = GridModel::trainingBytes(a.model().actionCount(), result->behavior.discretizer->vertexCount());
   if (bytes > kRetrainBytes)
-    throw Error(fmt::format("retrain: expected training to need at most {}, found {} for {} vertices x {} actions; "
-                            "choose a coarser grid",
-                            app::humanBytes(kRetrainBytes), app::humanBytes(bytes),
-                            result->behavior.discretizer->vertexCount(), a.model().actionCount()));
+    throw Error(
+        fmt::format("retrain: expected training to need at most {}, found {} for {} vertices x {} actions; "
+                    "choose a coarser grid",
+                    humanBytes(kRetrainBytes), humanBytes(bytes), result->behavior.discretizer->vertexCount(),
+                    a.model().actionCount()));
   bool idle = false;
   if (!gRetraining.compare_exchange_strong(idle, true))
     throw Error("retrain: expected the server's one retraining slot to be free, found another page's retraining "

@@ -1,0 +1,206 @@
+// A world run headless on an open session (mgrl/session/simulate.hpp).
+#include "mgrl/session/simulate.hpp"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <map>
+#include <string>
+#include <vector>
+
+#include <fmt/format.h>
+
+#include "mgrl/core/numbers.hpp"
+#include "mgrl/core/parallel.hpp"
+#include "mgrl/runtime/world.hpp"
+#include "mgrl/session/graph_source.hpp"
+
+namespace mgrl {
+
+namespace fs = std::filesystem;
+using json = nlohmann::json;
+using Clock = std::chrono::steady_clock;
+
+namespace {
+
+constexpr long long kMaxAvatars = 1'000'000;
+constexpr long long kMaxAvatarsWithPoses = 200'000;
+
+// What a hit struck: the partner's body part, or the attacker's own target.
+const char* struckName(const HitEvent& e) { return e.target < 0 ? "target" : bodyPartName(e.part); }
+
+}  // namespace
+
+// Every mistake in the command line, found before anything is loaded.
+void checkSimulateSettings(const SimulateSettings& options) {
+  checkControllerChoice(options.controller);
+  if (options.avatars < 1 || options.avatars > kMaxAvatars)
+    throw Error(
+        fmt::format("--avatars: expected a number of avatars in [1, {}], found {}", kMaxAvatars, options.avatars));
+  if ((options.poses || options.records()) && options.avatars > kMaxAvatarsWithPoses)
+    throw Error(
+        fmt::format("--avatars: expected at most {} avatars with poses (--poses, --bvh-out or --gltf-out), "
+                    "found {}",
+                    kMaxAvatarsWithPoses, options.avatars));
+  if (!(options.seconds > 0 && options.seconds <= 86400))
+    throw Error(fmt::format("--seconds: expected simulated seconds in (0, 86400], found {}", options.seconds));
+  if (options.topK < 0 || options.topK > 64)
+    throw Error(
+        fmt::format("--top-k: expected a number of candidates in [1, 64] (0: world.top_k), found {}", options.topK));
+  if (options.threads > 256)
+    throw Error(fmt::format("--threads: expected at most 256 threads, found {}", options.threads));
+}
+
+namespace {
+
+// Runs the world `frames` frames in slices of a second, so that long runs report progress
+// (every 5 s); returns the wall time.
+double runWorld(World& world, std::size_t frames, double frameTime, const WarningSink& log) {
+  const auto start = Clock::now();
+  auto lastReport = start;
+  const std::size_t slice = std::max<std::size_t>(1, static_cast<std::size_t>(std::round(1.0 / frameTime)));
+  for (std::size_t done = 0; done < frames;) {
+    const std::size_t now = std::min(slice, frames - done);
+    world.run(now);
+    done += now;
+    if (log && since(lastReport) >= 5 && done < frames) {
+      lastReport = Clock::now();
+      log(fmt::format("simulate: {:.0f} % ({:.1f} of {:.1f} s simulated), {}avatar-frames/s", 100.0 * done / frames,
+                      done * frameTime, frames * frameTime,
+                      humanCount(static_cast<double>(done * world.avatarCount()) / since(start))));
+    }
+  }
+  return since(start);
+}
+
+// Landed hits by body part and, for up to 1000 avatars, by avatar; blocked strikes apart
+// (both are in the events file).
+void countHits(const World& world, std::size_t avatars, json& report) {
+  std::vector<std::size_t> byAvatar(avatars, 0), blockedBy(avatars, 0);
+  std::map<std::string, std::size_t> byPart = {{"head", 0}, {"chest", 0}, {"spine", 0}, {"target", 0}};
+  for (const HitEvent& e : world.events()) {
+    if (e.blocked) {
+      ++blockedBy[e.attacker];
+      continue;
+    }
+    ++byAvatar[e.attacker];
+    ++byPart[struckName(e)];
+  }
+  report["hits_by_part"] = byPart;
+  if (avatars <= 1000) {
+    report["hits_by_avatar"] = byAvatar;
+    report["blocked_by_avatar"] = blockedBy;
+  }
+}
+
+// Hits landed by the first and by the second avatar of each sparring pair.
+std::pair<std::size_t, std::size_t> landedBySide(const World& world) {
+  std::size_t first = 0, second = 0;
+  for (const HitEvent& e : world.events())
+    if (!e.blocked) (e.attacker % 2 == 0 ? first : second) += 1;
+  return {first, second};
+}
+
+}  // namespace
+
+json simulate(Session& session, const SimulateSettings& settings, Outputs& outputs) {
+  const bool record = settings.records();
+  const bool poses = settings.poses || record;
+  if (settings.topK > 0) session.task.world.variety.topK = static_cast<int>(settings.topK);
+  const WorldParams& params = session.task.world;
+  if (!settings.partnerPolicy.empty()) {
+    if (params.mode != "sparring")
+      throw Error(
+          fmt::format("--partner-policy: expected a sparring world (world.mode: sparring), found {}", params.mode));
+    if (settings.controller.name != "policy")
+      throw Error(
+          fmt::format("--partner-policy: expected --controller policy (the first avatar of each pair plays "
+                      "--policy), found {}",
+                      settings.controller.name));
+    session.loadPartnerPolicy(settings.partnerPolicy, settings.partnerRound);
+  } else if (settings.partnerRound > 0) {
+    throw Error("--partner-round: expected --partner-policy DIR as well (the bundle whose round the partner plays)");
+  }
+  const fs::path& policyDir = session.policyDir;
+  const Scenario& scenario = session.scenario;
+  const GraphResult& graph = session.graph;
+  const StateActionModel& model = session.model();
+  const auto frames = static_cast<std::size_t>(std::max(1.0, std::round(settings.seconds / model.frameTime)));
+  const auto avatars = static_cast<std::size_t>(settings.avatars);
+  const std::size_t joints = graph.db.skeleton->jointCount();
+  if (record) {
+    const double bytes =
+        recordingBytes(static_cast<double>(avatars) * static_cast<double>(frames), static_cast<double>(joints));
+    if (bytes > kMaxRecordingBytes)
+      throw Error(
+          fmt::format("{}: recording {} avatars for {} frames needs about {:.1f} GB of memory; expected "
+                      "at most {:.0f} GB: use fewer --avatars or --seconds",
+                      settings.bvhOut.empty() ? "--gltf-out" : "--bvh-out", avatars, frames, bytes / 1e9,
+                      kMaxRecordingBytes / 1e9));
+  }
+  WorldSetup setup = session.worldSetup(avatars, settings.seed, settings.controller);
+  setup.threads = settings.threads > 0 ? settings.threads : defaultThreadCount();
+  setup.poses = poses;
+  setup.record = record;
+  World world(setup);
+  const double startup = settings.startup ? settings.startup() : -1;
+
+  const double wall = runWorld(world, frames, model.frameTime, settings.log);
+
+  const WrittenFiles written = writeOutputs(outputs, settings.exportRequest(), session, world, frames);
+
+  const double simulated = static_cast<double>(frames) * model.frameTime;
+  json report = {{"scenario", scenario.path.string()},
+                 {"controller", settings.controller.name},
+                 {"mode", params.mode},
+                 {"avatars", avatars},
+                 {"frames", frames},
+                 {"seconds", simulated},
+                 {"fps", 1.0 / model.frameTime},
+                 {"wall_seconds", wall},
+                 {"avatar_frames_per_second", static_cast<double>(frames * avatars) / std::max(wall, 1e-9)},
+                 {"poses", poses},
+                 {"hits", world.landedCount()},
+                 {"hits_per_avatar_minute",
+                  static_cast<double>(world.landedCount()) / static_cast<double>(avatars) / (simulated / 60)},
+                 {"hits_by_part", json::object()},
+                 {"blocked", world.blockedCount()},
+                 {"decisions", world.decisions()},
+                 {"bytes_per_avatar", world.bytesPerAvatar()},
+                 {"bodies",
+                  {{"restricted_decisions", world.bodyStats().restricted},
+                   {"cornered_decisions", world.bodyStats().cornered},
+                   {"pushes", world.bodyStats().pushes}}},
+                 {"seed", settings.seed},
+                 {"world", worldParamsJson(params)}};
+  if (startup >= 0) report["startup_seconds"] = startup;
+  countHits(world, avatars, report);
+  if (settings.controller.name == "policy") report["policy"] = policyDir.string();
+  if (!settings.partnerPolicy.empty()) {
+    // Two policies spar: the hits each side landed (the first avatar of each pair plays
+    // --policy, the second --partner-policy).
+    const auto [first, second] = landedBySide(world);
+    report["partner_policy"] = session.partnerPolicyDir.string();
+    if (settings.partnerRound > 0) report["partner_round"] = settings.partnerRound;
+    report["hits_by_side"] = {{"policy", first}, {"partner_policy", second}};
+  } else if (params.mode == "sparring" && avatars >= 2 && !session.partnerName().empty()) {
+    // An `opponent` scene: the second of each pair is the scripted opponent (issue 45).
+    const auto [first, second] = landedBySide(world);
+    report["partner"] = session.partnerName();
+    report["hits_by_side"] = {{"avatars", first}, {"opponents", second}};
+  }
+  if (!written.bvh.empty()) {
+    report["bvh_files"] = written.bvh;
+    report["bvh_folder"] = written.bvhFolder;
+    report["bvh_manifest"] = (settings.bvhOut / "manifest.json").string();
+  }
+  if (!written.gltf.empty()) {
+    report["gltf_files"] = written.gltf;
+    report["gltf_folder"] = written.gltfFolder;
+    report["gltf_manifest"] = (settings.gltfOut / "manifest.json").string();
+  }
+  if (!settings.eventsOut.empty()) report["events_file"] = settings.eventsOut.string();
+  return report;
+}
+
+}  // namespace mgrl
