@@ -15,6 +15,7 @@
 #include "mgrl/learning/learner.hpp"
 #include "mgrl/scenario/scenario.hpp"
 #include "mgrl/session/policy_source.hpp"
+#include "mgrl/session/simulate.hpp"
 
 namespace mgrl {
 struct Behavior;
@@ -78,22 +79,8 @@ nlohmann::json runEval(const EvalOptions& options);
 std::string evalText(const nlohmann::json& report);
 
 struct SimulateOptions : LearnOptions {
-  std::filesystem::path policy;       ///< "" the default bundle of the scenario
-  std::string controller = "policy";  ///< policy | online_search | random
-  int horizon = 3;                    ///< online_search: depth in actions
-  double horizonSeconds = 0;          ///< online_search: > 0 searches this much motion instead
-  /// A second bundle the second avatar of each sparring pair plays ("" none: all play `policy`).
-  std::filesystem::path partnerPolicy;
-  int partnerRound = 0;  ///< > 0: the partner plays that self-play round's tables
-  long long avatars = 2;
-  double seconds = 10;                ///< simulated time
-  std::uint64_t seed = 1;
-  long long topK = 0;                 ///< > 0 overrides world.top_k
-  std::filesystem::path bvhOut;       ///< one BVH per avatar here ("" none)
-  std::filesystem::path gltfOut;      ///< one binary glTF (.glb) per avatar here ("" none)
-  std::filesystem::path eventsOut;    ///< hits as JSON lines ("" none)
-  bool poses = false;                 ///< forward kinematics of every joint each frame
-  unsigned threads = 0;               ///< 0: the hardware's
+  std::filesystem::path policy;  ///< "" the default bundle of the scenario
+  SimulateSettings run;          ///< the command line's flags (mgrl/session/simulate.hpp)
 };
 /// Runs the world headless and returns {"avatars", "frames", "avatar_frames_per_second",
 /// "hits", "hits_per_avatar_minute", ...}; writes the BVH files and events atomically.

@@ -44,25 +44,13 @@ namespace fs = std::filesystem;
 using json = nlohmann::json;
 
 json runSimulate(const SimulateOptions& options) {
-  SimulateSettings settings;
-  settings.controller = {options.controller, options.horizon, options.horizonSeconds};
-  settings.avatars = options.avatars;
-  settings.seconds = options.seconds;
-  settings.seed = options.seed;
-  settings.topK = options.topK;
-  settings.partnerPolicy = options.partnerPolicy;
-  settings.partnerRound = options.partnerRound;
-  settings.bvhOut = options.bvhOut;
-  settings.gltfOut = options.gltfOut;
-  settings.eventsOut = options.eventsOut;
-  settings.poses = options.poses;
-  settings.threads = options.threads;
+  SimulateSettings settings = options.run;
   settings.log = options.log;
   settings.startup = secondsSinceStart;
   checkSimulateSettings(settings);
   Outputs out;
   SessionNeeds needs;
-  needs.policy = options.controller == "policy" ? PolicyNeed::Required : PolicyNeed::None;
+  needs.policy = settings.controller.name == "policy" ? PolicyNeed::Required : PolicyNeed::None;
   needs.policyDir = options.policy;
   needs.beforeGraph = [&](const Scenario& scenario) { out = prepareOutputs(settings.exportRequest(), scenario); };
   const std::unique_ptr<Session> session = openSession(options, needs);

@@ -124,6 +124,7 @@ void bindSession(py::module_& m) {
         options.load.warn = [&](const std::string& line) { warnings.push_back(line); };
         options.annotation.validate();
         std::vector<mgrl::FileReport> reports;  // every file read before any is reported
+        reports.reserve(files.size());
         for (const std::filesystem::path& file : files) reports.push_back(mgrl::inspectFile(file, options));
         return nlohmann::json{{"report", mgrl::inspectJson(reports)}, {"warnings", warnings}}.dump();
       },

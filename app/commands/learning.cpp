@@ -114,30 +114,33 @@ class Simulate final : public Command {
                         "controlled by the trained policy, collisions at effective punches, reactions; report speed "
                         "and hits, optionally write BVH and hit events.")) {
     sub_->add_option("SCENARIO", common.scenario, "Scenario YAML file")->required();
-    sub_->add_option("--avatars", options_.avatars, "Number of avatars (pairs spar; an odd one punches a target)")
+    sub_->add_option("--avatars", options_.run.avatars, "Number of avatars (pairs spar; an odd one punches a target)")
         ->default_val(2);
-    sub_->add_option("--seconds", options_.seconds, "Simulated seconds")->default_val(10);
+    sub_->add_option("--seconds", options_.run.seconds, "Simulated seconds")->default_val(10);
     sub_->add_option("--seed", seed_, "Random seed (the same seed, the same events and BVH bytes)")->default_val(1);
-    sub_->add_option("--bvh-out", options_.bvhOut, "Write one BVH per avatar into this folder");
-    sub_->add_option("--gltf-out", options_.gltfOut,
+    sub_->add_option("--bvh-out", options_.run.bvhOut, "Write one BVH per avatar into this folder");
+    sub_->add_option("--gltf-out", options_.run.gltfOut,
                      "Write one binary glTF 2.0 (.glb: skeleton, animation, skinned body) per avatar into this "
                      "folder (may be --bvh-out's)");
-    sub_->add_option("--events-out", options_.eventsOut, "Write the hits as JSON lines to this file");
+    sub_->add_option("--events-out", options_.run.eventsOut, "Write the hits as JSON lines to this file");
     sub_->add_option("--policy", options_.policy, "Policy bundle folder (default: the one mgrl train writes)");
-    sub_->add_option("--partner-policy", options_.partnerPolicy,
+    sub_->add_option("--partner-policy", options_.run.partnerPolicy,
                      "Sparring: the second avatar of each pair plays this bundle instead (two policies spar)");
-    sub_->add_option("--partner-round", options_.partnerRound,
+    sub_->add_option("--partner-round", options_.run.partnerRound,
                      "With --partner-policy: the partner plays that self-play round's tables (mgrl train keeps every "
                      "round)")
         ->check(CLI::Range(1, 1000));
-    sub_->add_option("--controller", options_.controller, "policy, online_search or random")->default_str("policy");
-    sub_->add_option("--horizon", options_.horizon, "online_search: search depth in actions")->default_val(3);
-    sub_->add_option("--horizon-seconds", options_.horizonSeconds, "online_search: search this much motion instead (s)");
-    sub_->add_option("--top-k", options_.topK, "Variety: draw among the k best actions (default: world.top_k)");
-    sub_->add_flag("--poses", options_.poses,
+    sub_->add_option("--controller", options_.run.controller.name, "policy, online_search or random")
+        ->default_str("policy");
+    sub_->add_option("--horizon", options_.run.controller.horizon, "online_search: search depth in actions")
+        ->default_val(3);
+    sub_->add_option("--horizon-seconds", options_.run.controller.horizonSeconds,
+                     "online_search: search this much motion instead (s)");
+    sub_->add_option("--top-k", options_.run.topK, "Variety: draw among the k best actions (default: world.top_k)");
+    sub_->add_flag("--poses", options_.run.poses,
                    "Compute every joint's pose each frame (blending, forward kinematics, reactions); implied by "
                    "--bvh-out and --gltf-out");
-    sub_->add_option("--threads", options_.threads, "Worker threads (default: all cores)");
+    sub_->add_option("--threads", options_.run.threads, "Worker threads (default: all cores)");
     sub_->add_option("--set", options_.sets, "Override a scenario key (repeatable)");
     sub_->add_flag("--json", common.json, "Print one JSON object on stdout");
     addDataAndCache(sub_, common.dataDir, common.cacheDir);
@@ -146,7 +149,7 @@ class Simulate final : public Command {
   void run(const Common& common) override {
     fillSession(options_, common);
     if (seed_ < 0) throw Error(fmt::format("--seed: expected a whole number >= 0, found {}", seed_));
-    options_.seed = static_cast<std::uint64_t>(seed_);
+    options_.run.seed = static_cast<std::uint64_t>(seed_);
     const nlohmann::json report = runSimulate(options_);
     print(common, report, common.json ? std::string() : simulateText(report));
   }
