@@ -66,12 +66,17 @@ void bindSession(py::module_& m) {
       .def_property_readonly("scenario", [](const PySession& s) { return s.session().scenario.path; })
       .def_property_readonly("graph", &graphArrays)
       .def("problem", &PySession::problem, py::arg("behavior"))
-      .def("train", &PySession::train, py::arg("behavior"), py::arg("learner") = py::none(), py::arg("sets") = py::none(),
-           py::arg("progress") = py::none(), py::arg("snapshots") = 0, py::arg("on_snapshot") = py::none())
+      .def("train", &PySession::train, py::arg("behavior"), py::arg("learner") = py::none(),
+           py::arg("sets") = py::none(), py::arg("progress") = py::none(), py::arg("snapshots") = 0,
+           py::arg("on_snapshot") = py::none())
       .def_property_readonly("last_train", &PySession::lastTrain)
       .def("compare_tables", &PySession::compareTables, py::arg("behavior"), py::arg("table"), py::arg("reference"))
       .def("evaluate", &PySession::evaluate, py::arg("tables") = py::none(), py::arg("trials") = 300,
            py::arg("seed") = 1, py::arg("controller") = "policy", py::arg("seconds") = 10.0, py::arg("horizon") = 3)
+      .def("simulate", &PySession::simulate, py::arg("tables") = py::none(), py::arg("avatars") = 2,
+           py::arg("seconds") = 10.0, py::arg("seed") = 1, py::arg("controller") = "policy", py::arg("horizon") = 3,
+           py::arg("bvh_out") = py::none(), py::arg("gltf_out") = py::none(), py::arg("events_out") = py::none(),
+           py::arg("poses") = false)
       .def("save_policy", &PySession::savePolicy, py::arg("path"), py::arg("tables"), py::arg("learner") = "python");
 
   m.def(

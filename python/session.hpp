@@ -24,17 +24,18 @@
 #include "mgrl/core/config.hpp"
 #include "mgrl/core/error.hpp"
 #include "mgrl/core/parallel.hpp"
+#include "mgrl/core/version.hpp"
 #include "mgrl/learning/behavior.hpp"
 #include "mgrl/learning/learner.hpp"
 #include "mgrl/learning/policy_bundle.hpp"
 #include "mgrl/learning/problem.hpp"
+#include "mgrl/session/compare_report.hpp"
+#include "mgrl/session/compare_tables.hpp"
 #include "mgrl/session/episodes.hpp"
 #include "mgrl/session/evaluate.hpp"
 #include "mgrl/session/plugins.hpp"
 #include "mgrl/session/session.hpp"
-#include "mgrl/core/version.hpp"
-#include "mgrl/session/compare_report.hpp"
-#include "mgrl/session/compare_tables.hpp"
+#include "mgrl/session/simulate.hpp"
 #include "support.hpp"
 #include "train_watch.hpp"
 
@@ -353,6 +354,41 @@ class PySession {
     {
       py::gil_scoped_release release;
       report = mgrl::evaluate(*session_, t.parts, settings);
+    }
+    return py::module_::import("json").attr("loads")(report.dump());
+  }
+
+  // The world run headless (mgrl::simulate) on `tables` (as evaluate's) or the scenario's
+  // bundle; exports as `mgrl simulate`'s. The session's own policy is put back afterwards.
+  py::object simulate(const py::object& tables, long long avatars, double seconds, std::uint64_t seed,
+                      const std::string& controller, int horizon, const py::object& bvhOut, const py::object& gltfOut,
+                      const py::object& eventsOut, bool poses) {
+    SimulateSettings settings;
+    settings.controller = {controller, horizon, 0};
+    settings.avatars = avatars;
+    settings.seconds = seconds;
+    settings.seed = seed;
+    settings.poses = poses;
+    auto path = [](const py::object& p) {
+      return p.is_none() ? std::filesystem::path() : p.cast<std::filesystem::path>();
+    };
+    settings.bvhOut = path(bvhOut);
+    settings.gltfOut = path(gltfOut);
+    settings.eventsOut = path(eventsOut);
+    checkSimulateSettings(settings);
+    Tables t;
+    if (controller == "policy") t = tablesFor(tables.is_none() ? py::dict() : tables, "python");
+    Outputs outputs = prepareOutputs(settings.exportRequest(), session_->scenario);
+    nlohmann::json report;
+    {
+      struct Restore {  // the session's bundle parts, whatever happens
+        Session& session;
+        std::vector<PolicyPart> saved;
+        ~Restore() { session.policy = std::move(saved); }
+      } restore{*session_, session_->policy};
+      if (controller == "policy") session_->policy = t.parts;
+      py::gil_scoped_release release;
+      report = mgrl::simulate(*session_, settings, outputs);
     }
     return py::module_::import("json").attr("loads")(report.dump());
   }

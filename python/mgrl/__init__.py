@@ -45,6 +45,11 @@ Session:
     evaluate(tables=None, trials=300, seed=1, controller="policy", seconds=10, horizon=3)
                      mgrl eval's trials: tables {behaviour: float32 (A, V)}; the other
                      behaviours from the scenario's trained bundle, else trained first
+    simulate(tables=None, avatars=2, seconds=10, seed=1, controller="policy", horizon=3,
+             bvh_out=None, gltf_out=None, events_out=None, poses=False)
+                     mgrl simulate --json's report as a dict: the world run headless on
+                     the tables (as evaluate's), hits by part and side; BVH, glTF and
+                     hit events written as the command line writes them
     save_policy(path, tables, learner="python")
                      a complete policy bundle mgrl eval/simulate/serve/compare accept
 

@@ -59,7 +59,29 @@ class EvaluateTest(unittest.TestCase):
                     self.cache] + command[command.index("--set"):]
         run = subprocess.run(simulate, capture_output=True, text=True, check=False)
         self.assertEqual(run.returncode, 0, run.stderr)
-        self.assertEqual(json.loads(run.stdout)["avatars"], 2)
+        theirs = json.loads(run.stdout)
+        self.assertEqual(theirs["avatars"], 2)
+        # Session.simulate plays the same tables in the same world: the same run, hit for hit.
+        ours = self.session.simulate({"approach": self.approach}, seconds=2)
+        for key in ("avatars", "frames", "hits", "blocked", "decisions", "hits_by_part", "hits_by_avatar", "bodies"):
+            self.assertEqual(ours[key], theirs[key], key)
+
+    def test_simulate_writes_what_the_command_line_writes_and_refuses_bad_settings(self):
+        out = pathlib.Path(tempfile.mkdtemp(prefix="mgrl-python-simulate-"))
+        r = self.session.simulate({"approach": self.approach}, avatars=3, seconds=1, seed=2, bvh_out=out / "bvh",
+                                  events_out=out / "bvh" / "hits.jsonl")
+        self.assertEqual(len(r["bvh_files"]), 3)
+        self.assertTrue(all(pathlib.Path(f).is_file() for f in r["bvh_files"]))
+        self.assertTrue((out / "bvh" / "manifest.json").is_file())
+        self.assertTrue((out / "bvh" / "hits.jsonl").is_file())
+        # The same seed gives the same run; the session's own bundle is untouched afterwards.
+        again = self.session.simulate({"approach": self.approach}, avatars=3, seconds=1, seed=2)
+        self.assertEqual((again["hits"], again["decisions"]), (r["hits"], r["decisions"]))
+        with self.assertRaisesRegex(mgrl.Error, r"--avatars: expected a number of avatars in \[1, "):
+            self.session.simulate({"approach": self.approach}, avatars=0)
+        with self.assertRaisesRegex(mgrl.Error, r"expected a file name, found a folder"):
+            self.session.simulate({"approach": self.approach}, seconds=1, events_out=out)
+        self.assertEqual(self.session.simulate(controller="random", seconds=1)["controller"], "random")
 
     def test_other_controllers_need_no_tables(self):
         r = self.session.evaluate(controller="random", trials=50, seed=2)
