@@ -52,9 +52,10 @@ std::string listText(const Plugins& p) {
           "reward, environment, learner, success. See scenarios/README.md.\n";
   text +=
       "success (behaviors.NAME.success; eval's trials stop when one behaviour's is met):\n"
-      "  {term: NAME, ...}: a reward term's measure against a threshold; keys left out come from the\n"
-      "  behaviour's reward term of that kind. hold_s: S beside one condition, or {all: [conditions],\n"
-      "  hold_s: S}: held S seconds. No success: the behaviour's contact reward (the paper's hit), else an\n"
+      "  {term: NAME, ...}: a reward term's measure against a threshold; the keys it shares with the term\n"
+      "  (all but the threshold) default to the behaviour's reward term of that kind. hold_s: S beside one\n"
+      "  condition, or {all: [conditions], hold_s: S}: held S seconds. No success: the behaviour's contact reward (the "
+      "paper's hit), else an\n"
       "  effective punch within 0.15 m.\n";
   describe(text, p.conditions, "success terms (behaviors.NAME.success.term)");
   text += "controllers (mgrl eval / simulate --controller):\n";

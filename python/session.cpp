@@ -117,10 +117,12 @@ void bindSession(py::module_& m) {
         options.synthetic = against;
         options.dataDir =
             mgrl::dataDirectory(data.is_none() ? std::filesystem::path() : data.cast<std::filesystem::path>());
-        return mgrl::runStats(options).dump();
+        std::vector<std::string> warnings;
+        options.warn = [&](const std::string& line) { warnings.push_back(line); };
+        return nlohmann::json{{"report", mgrl::runStats(options)}, {"warnings", warnings}}.dump();
       },
       py::arg("bouts"), py::arg("snu"), py::arg("against"), py::arg("data"),
-      "mgrl stats --json's report as JSON text (mgrl.bout_stats parses it)");
+      "mgrl stats --json's report and the warnings, as JSON text (mgrl.bout_stats parses it)");
   m.def(
       "_inspect",
       [](const std::vector<std::filesystem::path>& files) {

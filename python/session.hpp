@@ -358,8 +358,8 @@ class PySession {
     return py::module_::import("json").attr("loads")(report.dump());
   }
 
-  // The world run headless (mgrl::simulate) on `tables` (as evaluate's) or the scenario's
-  // bundle; exports as `mgrl simulate`'s. The session's own policy is put back afterwards.
+  // The world run headless (mgrl::simulate) on `tables` (as evaluate's); exports as `mgrl
+  // simulate`'s. A session opened on a cached graph parses the capture at the first call.
   py::object simulate(const py::object& tables, long long avatars, double seconds, std::uint64_t seed,
                       const std::string& controller, int horizon, const py::object& bvhOut, const py::object& gltfOut,
                       const py::object& eventsOut, bool poses) {
@@ -381,14 +381,8 @@ class PySession {
     Outputs outputs = prepareOutputs(settings.exportRequest(), session_->scenario);
     nlohmann::json report;
     {
-      struct Restore {  // the session's bundle parts, whatever happens
-        Session& session;
-        std::vector<PolicyPart> saved;
-        ~Restore() { session.policy = std::move(saved); }
-      } restore{*session_, session_->policy};
-      if (controller == "policy") session_->policy = t.parts;
       py::gil_scoped_release release;
-      report = mgrl::simulate(*session_, settings, outputs);
+      report = mgrl::simulate(*session_, settings, outputs, controller == "policy" ? &t.parts : nullptr);
     }
     return py::module_::import("json").attr("loads")(report.dump());
   }

@@ -84,7 +84,7 @@ class AvoidCondition final : public SuccessCondition {
     const Guard& g = guard_;
     if (!g.reach || g.point.joint < 0 || static_cast<std::size_t>(g.point.joint) >= f.model.jointNames.size())
       throw std::logic_error("an avoid success condition used before bind()");
-    return opponentClearance(f.model, f.frame, g.point.joint, *g.reach, f.target, g.bodyRadius) >= g.clear;
+    return !(opponentClearance(f.model, f.frame, g.point.joint, *g.reach, f.target, g.bodyRadius) < g.clear);
   }
   nlohmann::json toJson() const override {
     return {{"term", "avoid"},

@@ -2,6 +2,7 @@
 // weighted by its speed (the paper's hit reward, sec. 6.4, as a term); as a success
 // condition: such a strike lands (the paper's hit).
 #include <iterator>
+#include <utility>
 
 #include <fmt/format.h>
 

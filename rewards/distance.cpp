@@ -61,7 +61,7 @@ class DistanceCondition final : public SuccessCondition {
     if (point.kind == BodyPoint::Kind::Joint &&
         (point.joint < 0 || static_cast<std::size_t>(point.joint) >= f.model.jointNames.size()))
       throw std::logic_error("a success condition naming a joint used before bind()");
-    return measure_.error(f.model, f.frame, f.target.position) <= within_;
+    return !(measure_.error(f.model, f.frame, f.target.position) > within_);  // as the enum did (NaN holds)
   }
   nlohmann::json toJson() const override {
     return {{"term", "distance"},

@@ -38,7 +38,7 @@ class FacingCondition final : public SuccessCondition {
   explicit FacingCondition(const Params& p)
       : angle_(p.number("angle_deg") * kDegree), within_(p.number("within_deg") * kDegree) {}
   bool holds(const ConditionFrame& f) const override {
-    return std::abs(facingError(f.model, f.frame, f.target.position) - angle_) <= within_;
+    return !(std::abs(facingError(f.model, f.frame, f.target.position) - angle_) > within_);
   }
   nlohmann::json toJson() const override {
     return {{"term", "facing"}, {"angle_deg", angle_ / kDegree}, {"within_deg", within_ / kDegree}};

@@ -21,6 +21,8 @@
 
 namespace mgrl {
 
+namespace fs = std::filesystem;
+
 using json = nlohmann::json;
 
 namespace {

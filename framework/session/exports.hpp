@@ -18,27 +18,26 @@
 
 namespace mgrl {
 
-namespace fs = std::filesystem;
-
 // A scratch folder for output, removed again with everything in it. If the output folder
 // around it was made for this run, that goes too unless the run keeps its results
 // (keep()): what a failed run leaves behind is nothing.
 class ScratchDirectory {
  public:
-  ScratchDirectory(fs::path path, fs::path created) : path_(std::move(path)), created_(std::move(created)) {}
+  ScratchDirectory(std::filesystem::path path, std::filesystem::path created)
+      : path_(std::move(path)), created_(std::move(created)) {}
   ~ScratchDirectory() {
     std::error_code ec;
-    fs::remove_all(path_, ec);
-    if (!created_.empty()) fs::remove_all(created_, ec);
+    std::filesystem::remove_all(path_, ec);
+    if (!created_.empty()) std::filesystem::remove_all(created_, ec);
   }
   ScratchDirectory(const ScratchDirectory&) = delete;
   ScratchDirectory& operator=(const ScratchDirectory&) = delete;
-  const fs::path& path() const { return path_; }
+  const std::filesystem::path& path() const { return path_; }
   void keep() { created_.clear(); }
 
  private:
-  fs::path path_;
-  fs::path created_;  ///< the outermost folder this run created ("" none)
+  std::filesystem::path path_;
+  std::filesystem::path created_;  ///< the outermost folder this run created ("" none)
 };
 
 // Where the run's outputs go: checked, and their scratch folders made, before anything is
@@ -47,7 +46,7 @@ class ScratchDirectory {
 // unit, written beside it and swapped in whole with its manifest.
 struct OutputFolder {
   std::string option;  ///< "--bvh-out", "--gltf-out" or "--bvh-out and --gltf-out"
-  fs::path dir;        ///< as given
+  std::filesystem::path dir;  ///< as given
   bool bvh = false, gltf = false, events = false;
   std::unique_ptr<ScratchDirectory> created;
   std::unique_ptr<BundleWriter> bundle;

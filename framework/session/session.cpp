@@ -2,6 +2,7 @@
 
 #include <fmt/format.h>
 
+#include "mgrl/motion/motion_database.hpp"
 #include "mgrl/scenario/behaviors.hpp"
 #include "mgrl/session/plugins.hpp"
 
@@ -18,7 +19,17 @@ ControllerParts Session::controllerParts(Variety variety) const {
   return parts;
 }
 
-WorldSetup Session::worldSetup(std::size_t avatars, std::uint64_t seed, const ControllerChoice& choice) const {
+void Session::loadMotion() {
+  if (graph.db.skeleton) return;
+  const WarningSink& log = options.log;
+  graph.db = loadMotionDatabase(scenario.motion, [&log](const std::string& w) {
+    if (log) log(fmt::format("graph: warning: {}", w));
+  });
+  body = makeBodyTable(graph.db);
+}
+
+WorldSetup Session::worldSetup(std::size_t avatars, std::uint64_t seed, const ControllerChoice& choice,
+                               const std::vector<PolicyPart>& policyParts) const {
   checkControllerChoice(choice);
   WorldSetup setup;
   setup.model = &graph.model;
@@ -30,7 +41,8 @@ WorldSetup Session::worldSetup(std::size_t avatars, std::uint64_t seed, const Co
   setup.seed = seed;
   setup.opponent = task.opponent;
   setup.opponentPhases = task.opponentPhases;
-  const ControllerParts parts = controllerParts(task.world.variety);
+  ControllerParts parts = controllerParts(task.world.variety);
+  parts.policy = policyParts;
   requireParts(choice, parts);  // now, not at the world's first decision
   setup.makeController = [choice, parts] { return makeController(choice, parts); };
   if (!partnerPolicy.empty()) {

@@ -89,7 +89,17 @@ class Session {
   /// thread, no poses: set WorldSetup::threads, poses and record as needed. In sparring,
   /// the second avatar of each pair plays the partner bundle if one is loaded, else the
   /// scenario's scripted opponent if it has one (partnerName()), else `choice` too.
-  WorldSetup worldSetup(std::size_t avatars, std::uint64_t seed, const ControllerChoice& choice) const;
+  WorldSetup worldSetup(std::size_t avatars, std::uint64_t seed, const ControllerChoice& choice) const {
+    return worldSetup(avatars, seed, choice, policy);
+  }
+  /// The same, the policy controllers playing `parts` (tables that outlive the world, e.g.
+  /// Python's) instead of the session's bundle.
+  WorldSetup worldSetup(std::size_t avatars, std::uint64_t seed, const ControllerChoice& choice,
+                        const std::vector<PolicyPart>& parts) const;
+  /// Parses the capture if the session was opened without it (SessionNeeds::motion false, a
+  /// cached graph) and makes the body capsules: what a world with poses and bodies needs.
+  /// The graph's arrays stay where they are. Nothing to do if the capture is there.
+  void loadMotion();
   /// Loads `dir`, a bundle trained on this graph with tables for every behaviour (checked
   /// as the main one is), for the partners: worldSetup() then gives the second avatar of
   /// each pair a policy controller on it. Throws mgrl::Error naming the bundle's problem.

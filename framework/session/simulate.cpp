@@ -6,6 +6,7 @@
 #include <cmath>
 #include <map>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include <fmt/format.h>
@@ -103,7 +104,9 @@ std::pair<std::size_t, std::size_t> landedBySide(const World& world) {
 
 }  // namespace
 
-json simulate(Session& session, const SimulateSettings& settings, Outputs& outputs) {
+json simulate(Session& session, const SimulateSettings& settings, Outputs& outputs,
+              const std::vector<PolicyPart>* policy) {
+  session.loadMotion();  // poses and bodies need the capture
   const bool record = settings.records();
   const bool poses = settings.poses || record;
   if (settings.topK > 0) session.task.world.variety.topK = static_cast<int>(settings.topK);
@@ -138,7 +141,7 @@ json simulate(Session& session, const SimulateSettings& settings, Outputs& outpu
                       settings.bvhOut.empty() ? "--gltf-out" : "--bvh-out", avatars, frames, bytes / 1e9,
                       kMaxRecordingBytes / 1e9));
   }
-  WorldSetup setup = session.worldSetup(avatars, settings.seed, settings.controller);
+  WorldSetup setup = session.worldSetup(avatars, settings.seed, settings.controller, policy ? *policy : session.policy);
   setup.threads = settings.threads > 0 ? settings.threads : defaultThreadCount();
   setup.poses = poses;
   setup.record = record;
@@ -175,7 +178,7 @@ json simulate(Session& session, const SimulateSettings& settings, Outputs& outpu
                  {"world", worldParamsJson(params)}};
   if (startup >= 0) report["startup_seconds"] = startup;
   countHits(world, avatars, report);
-  if (settings.controller.name == "policy") report["policy"] = policyDir.string();
+  if (settings.controller.name == "policy" && !policy) report["policy"] = policyDir.string();
   if (!settings.partnerPolicy.empty()) {
     // Two policies spar: the hits each side landed (the first avatar of each pair plays
     // --policy, the second --partner-policy).

@@ -8,6 +8,7 @@
 #include <cstdint>
 #include <filesystem>
 #include <functional>
+#include <vector>
 
 #include <nlohmann/json.hpp>
 
@@ -46,6 +47,10 @@ void checkSimulateSettings(const SimulateSettings& settings);
 /// (prepareOutputs(settings.exportRequest(), ...), made before the graph so that a bad
 /// output place fails first); returns {"avatars", "frames", "avatar_frames_per_second",
 /// "hits", "hits_per_avatar_minute", "hits_by_part", ...} (docs in README.md).
-nlohmann::json simulate(Session& session, const SimulateSettings& settings, Outputs& outputs);
+/// The capture is parsed first if the session was opened without it (Session::loadMotion).
+/// `policy`: the tables the policy controllers play instead of the session's bundle (null:
+/// the bundle); the report then names no policy folder.
+nlohmann::json simulate(Session& session, const SimulateSettings& settings, Outputs& outputs,
+                        const std::vector<PolicyPart>* policy = nullptr);
 
 }  // namespace mgrl

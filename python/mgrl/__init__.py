@@ -63,6 +63,7 @@ bout_stats(bouts=(), snu=False, against=(), data=None)
                      capture; against (bouts) compares the two groups
 """
 import json as _json
+import os as _os
 import warnings as _warnings
 from . import _core
 from ._core import Error, Problem, Session  # noqa: F401
@@ -70,7 +71,7 @@ from .compare import Observer, compare  # noqa: F401
 from .env import MotionGraphEnv, MotionGraphVectorEnv  # noqa: F401
 
 __all__ = ["Error", "Problem", "Session", "MotionGraphEnv", "MotionGraphVectorEnv", "Observer", "compare",
-           "bout_stats", "inspect"]
+           "bout_stats"]  # mgrl.inspect too, left out here not to hide the standard library's inspect
 
 
 def inspect(files):
@@ -80,7 +81,7 @@ def inspect(files):
     any is reported. Raises mgrl.Error naming the file, line and what was expected."""
     if isinstance(files, (str, bytes)) or hasattr(files, "__fspath__"):
         files = [files]
-    result = _json.loads(_core._inspect([str(f) for f in files]))
+    result = _json.loads(_core._inspect([_os.fsdecode(f) for f in files]))
     for line in result["warnings"]:
         _warnings.warn(line, stacklevel=2)
     return result["report"]
@@ -93,6 +94,9 @@ def bout_stats(bouts=(), snu=False, against=(), data=None):
     bout at fault."""
     if isinstance(bouts, (str, bytes)) or isinstance(against, (str, bytes)):
         raise TypeError("bout_stats: expected bouts and against as lists of folders or patterns, found a string")
-    bouts = [str(b) for b in bouts]
-    against = [str(b) for b in against]
-    return _json.loads(_core._bout_stats(bouts, bool(snu), against, None if data is None else str(data)))
+    bouts = [_os.fsdecode(b) for b in bouts]
+    against = [_os.fsdecode(b) for b in against]
+    result = _json.loads(_core._bout_stats(bouts, bool(snu), against, None if data is None else _os.fsdecode(data)))
+    for line in result["warnings"]:
+        _warnings.warn(line, stacklevel=2)
+    return result["report"]
