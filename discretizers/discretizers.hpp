@@ -18,6 +18,10 @@ void registerAll(DiscretizerRegistry& registry);
 /// Evenly spaced vertices from `from` to `to`; with `wrap`, the last one stops a step
 /// short of `to` (which is `from` again, a full turn on).
 std::vector<double> evenVertices(double from, double to, std::size_t count, bool wrap);
+/// An angle axis of `count` even vertices from `from` to `to` (radians); a full turn wraps.
+GridAxis angleAxis(double from, double to, std::size_t count);
+/// An axis of `count` even vertices from `from` to `to` that does not wrap.
+GridAxis evenAxis(AxisRole role, double from, double to, long long count);
 
 /// A box in (angle, distance, height): radians, metres.
 struct Bounds {
@@ -25,10 +29,27 @@ struct Bounds {
 };
 /// The bounding volume of the model's effective hitting points as seen from their
 /// decisions, widened by the parameters `margin` and `angle_margin` (deg); throws the
-/// parameters' ConfigError if there are fewer than 2 hits or they span no volume.
-Bounds boundsOfHits(const Params& p, const StateActionModel& m);
-/// The box of the parameters angle_min ... height_max (deg and m), checked.
-Bounds givenBounds(const Params& p);
+/// parameters' ConfigError if there are fewer than 2 hits or they span no volume (no area
+/// in angle and distance when not `heights`).
+Bounds boundsOfHits(const Params& p, const StateActionModel& m, bool heights = true);
+/// The box of the parameters angle_min ... height_max (deg and m; without the heights
+/// when not `heights`: then the box's height is [0, 0]), checked.
+Bounds givenBounds(const Params& p, bool heights = true);
+/// The box the parameter `bounds` chooses: `hits` or `given`.
+Bounds chosenBounds(const Params& p, const StateActionModel& m, bool heights = true);
+
+/// The defaults of the box parameters of a grid plug-in (withBounds()).
+struct BoundsDefaults {
+  const char* bounds = "given";   ///< "hits" or "given"
+  double angle[2] = {-180, 180};  ///< deg
+  double distance[2] = {0, 2};    ///< m
+  double height[2] = {0.8, 1.8};  ///< m
+  bool heights = true;            ///< the box has a height axis
+  double lowestDistance = 0;      ///< the least distance_min and distance_max allowed
+};
+/// `own` followed by the box parameters that chosenBounds() reads: bounds, margin,
+/// angle_margin, angle_min ... distance_max and, with heights, height_min and height_max.
+std::vector<ParamSpec> withBounds(std::vector<ParamSpec> own, const BoundsDefaults& d);
 
 }  // namespace mgrl::discretizers
 

@@ -47,7 +47,7 @@ using Key = std::array<std::uint64_t, 3>;
 class KdTree final : public Discretizer {
  public:
   KdTree(const Params& p, const StateActionModel& m)
-      : KdTree(p, p.choice("bounds") == "hits" ? boundsOfHits(p, m) : givenBounds(p),
+      : KdTree(p, chosenBounds(p, m),
                {p.integer("angle_cells"), p.integer("distance_cells"), p.integer("height_cells")}) {}
 
   // The tree over bounds `b` starting from `initial` cells (angle, distance, height; the
@@ -391,6 +391,12 @@ class KdTree final : public Discretizer {
 
   // Leaves whose closed box holds integer point k, with their depth, into `out`.
   void containing(const Key& k, std::vector<std::int32_t>& out) const;
+  // Whether integer point k is a corner of `leaf`'s box.
+  bool isCorner(const Key& k, std::int32_t leaf) const {
+    for (int i = 0; i < dimension_; ++i)
+      if (k[i] != leafLoKey_[leaf][i] && k[i] != leafHiKey_[leaf][i]) return false;
+    return true;
+  }
 
   // Splits, level by level, every leaf that holds one of `keys` inside its box without
   // having it as a corner, until each key is a corner of every leaf around it (or those
@@ -539,10 +545,7 @@ void KdTree::rebuild(const std::string& source) {
       found.clear();
       containing(image, found);
       for (std::int32_t leaf : found) {
-        bool corner = true;
-        for (int i = 0; i < d; ++i)
-          corner = corner && (image[i] == leafLoKey_[leaf][i] || image[i] == leafHiKey_[leaf][i]);
-        if (corner) continue;
+        if (isCorner(image, leaf)) continue;
         const int depth = depth_[static_cast<std::size_t>(leafNode_[leaf])];
         if (best < 0 || depth < depth_[static_cast<std::size_t>(leafNode_[best])] ||
             (depth == depth_[static_cast<std::size_t>(leafNode_[best])] && leaf < best)) {
@@ -658,11 +661,8 @@ void KdTree::freeCorners(const std::vector<Key>& keys) {
       found.clear();
       containing(image, found);
       for (std::int32_t leaf : found) {
-        bool corner = true;
-        for (int i = 0; i < dimension_; ++i)
-          corner = corner && (image[i] == leafLoKey_[leaf][i] || image[i] == leafHiKey_[leaf][i]);
         const auto node = static_cast<std::size_t>(leafNode_[leaf]);
-        if (!corner && nodeDepth(node) < maxDepth_) nodes.push_back(node);
+        if (!isCorner(image, leaf) && nodeDepth(node) < maxDepth_) nodes.push_back(node);
       }
     }
     std::sort(nodes.begin(), nodes.end());
@@ -793,36 +793,30 @@ void registerKdTree(DiscretizerRegistry& registry) {
        "adaptive grid (Munos & Moore 2002's kd-trie): boxes split at their midpoints, values at box corners, "
        "multilinear inside a box and continuous across faces (hanging corners tied to the coarse face); refined by "
        "adaptive_value_iteration",
-       {ParamSpec::choice("coordinates", "cylindrical", {"distance", "polar", "cylindrical"},
-                          "distance: ground distance straight ahead (1-D); polar: angle x distance as polar2d; "
-                          "cylindrical: angle x distance x height as cylindrical3d"),
-        ParamSpec::integer("angle_cells", 4, 1, 1024, "cells",
-                           "initial cells along the angle (n = r x 2^p, r odd: r root boxes split p times)"),
-        ParamSpec::integer("distance_cells", 4, 1, 1024, "cells", "initial cells along the distance (as angle_cells)"),
-        ParamSpec::integer("height_cells", 2, 1, 1024, "cells", "initial cells along the height (as angle_cells)"),
-        ParamSpec::integer("max_depth", 24, 0, 90, "splits", "no leaf is split more often than this below its root "
-                                                              "box (initial splits included)"),
-        ParamSpec::choice("split_axes", "round_robin", {"round_robin", "longest"},
-                          "the axis each depth past the initial cells halves: round_robin: every axis in turn; "
-                          "longest: the axis whose cells are then longest in metres (angles as the arc at the middle "
-                          "distance)"),
-        ParamSpec::choice("refinement", "local", {"local", "conforming"},
-                          "how a leaf is split when refined: local: that leaf only (the corners of its new face hang "
-                          "on its coarser neighbours and add no free value); conforming: also the neighbours around "
-                          "the new face's corners, down to the leaf's new depth, so that those corners are free"),
-        ParamSpec::number("height", 0.0, -10, 10, "m", "distance, polar: the height of the target's position"),
-        ParamSpec::choice("bounds", "given", {"hits", "given"},
-                          "hits: the bounding volume of the graph's effective hitting points; given: the *_min/*_max "
-                          "parameters"),
-        ParamSpec::number("margin", 0.0, 0, 10, "m", "bounds: hits: widen distance and height by this much"),
-        ParamSpec::number("angle_margin", 0.0, 0, 180, "deg", "bounds: hits: widen the angle range by this much"),
-        ParamSpec::number("angle_min", -180, -360, 360, "deg",
-                          "bounds: given: first angle (0 ahead, + left); 360 degrees wrap around"),
-        ParamSpec::number("angle_max", 180, -360, 360, "deg", "bounds: given: last angle"),
-        ParamSpec::number("distance_min", 0.0, -100, 100, "m", "bounds: given: nearest ground distance"),
-        ParamSpec::number("distance_max", 2.0, -100, 100, "m", "bounds: given: farthest ground distance"),
-        ParamSpec::number("height_min", 0.8, -10, 10, "m", "bounds: given: lowest height"),
-        ParamSpec::number("height_max", 1.8, -10, 10, "m", "bounds: given: highest height")},
+       withBounds(
+           {ParamSpec::choice("coordinates", "cylindrical", {"distance", "polar", "cylindrical"},
+                              "distance: ground distance straight ahead (1-D); polar: angle x distance as polar2d; "
+                              "cylindrical: angle x distance x height as cylindrical3d"),
+            ParamSpec::integer("angle_cells", 4, 1, 1024, "cells",
+                               "initial cells along the angle (n = r x 2^p, r odd: r root boxes split p times)"),
+            ParamSpec::integer("distance_cells", 4, 1, 1024, "cells",
+                               "initial cells along the distance (as angle_cells)"),
+            ParamSpec::integer("height_cells", 2, 1, 1024, "cells", "initial cells along the height (as angle_cells)"),
+            ParamSpec::integer("max_depth", 24, 0, 90, "splits",
+                               "no leaf is split more often than this below its root "
+                               "box (initial splits included)"),
+            ParamSpec::choice(
+                "split_axes", "round_robin", {"round_robin", "longest"},
+                "the axis each depth past the initial cells halves: round_robin: every axis in turn; "
+                "longest: the axis whose cells are then longest in metres (angles as the arc at the middle "
+                "distance)"),
+            ParamSpec::choice(
+                "refinement", "local", {"local", "conforming"},
+                "how a leaf is split when refined: local: that leaf only (the corners of its new face hang "
+                "on its coarser neighbours and add no free value); conforming: also the neighbours around "
+                "the new face's corners, down to the leaf's new depth, so that those corners are free"),
+            ParamSpec::number("height", 0.0, -10, 10, "m", "distance, polar: the height of the target's position")},
+           {.lowestDistance = -100}),
        [](const Params& p, const StateActionModel& m) { return std::make_unique<KdTree>(p, m); }});
 }
 

@@ -7,14 +7,6 @@
 
 namespace mgrl::discretizers {
 
-std::vector<double> evenVertices(double from, double to, std::size_t count, bool wrap) {
-  std::vector<double> v(count);
-  const double steps = static_cast<double>(wrap ? count : count - 1);
-  for (std::size_t i = 0; i < count; ++i) v[i] = from + (to - from) * static_cast<double>(i) / steps;
-  if (!wrap) v.back() = to;  // exactly: a point on the bound is inside
-  return v;
-}
-
 namespace {
 
 /// Axes: angle theta = atan2(x, z) (0 straight ahead, positive to the left), then ground
@@ -28,11 +20,8 @@ class Polar2d final : public Discretizer {
       p.fail("min_radius", fmt::format("expected less than radius ({} m), found {} m", radius, minRadius));
     const double from = p.number("angle_min") * kDeg, to = p.number("angle_max") * kDeg;
     if (!(from < to)) p.fail("angle_max", "expected more than angle_min");
-    const bool wrap = to - from >= 2 * M_PI - 1e-9;
-    const auto sectors = static_cast<std::size_t>(p.integer("sectors"));
-    const auto rings = static_cast<std::size_t>(p.integer("rings"));
-    setAxes({GridAxis{AxisRole::Angle, evenVertices(from, wrap ? from + 2 * M_PI : to, sectors, wrap), wrap},
-             GridAxis{AxisRole::Distance, evenVertices(minRadius, radius, rings, false), false}});
+    setAxes({angleAxis(from, to, static_cast<std::size_t>(p.integer("sectors"))),
+             evenAxis(AxisRole::Distance, minRadius, radius, p.integer("rings"))});
   }
   std::string type() const override { return "polar2d"; }
   std::array<double, 3> coordinates(const TargetState& state) const override {

@@ -17,37 +17,15 @@ namespace {
 class PolarVelocity final : public Discretizer {
  public:
   PolarVelocity(const Params& p, const StateActionModel& m) {
-    double angle[2], distance[2];
-    if (p.choice("bounds") == "hits") {
-      const Bounds b = boundsOfHits(p, m);
-      angle[0] = b.angle[0];
-      angle[1] = b.angle[1];
-      distance[0] = b.distance[0];
-      distance[1] = b.distance[1];
-    } else {
-      angle[0] = p.number("angle_min") * kDeg;
-      angle[1] = p.number("angle_max") * kDeg;
-      distance[0] = p.number("distance_min");
-      distance[1] = p.number("distance_max");
-      if (!(angle[0] < angle[1])) p.fail("angle_max", "expected more than angle_min");
-      if (angle[1] - angle[0] > 2 * M_PI + 1e-9) p.fail("angle_max", "expected at most 360 degrees above angle_min");
-      if (!(distance[0] < distance[1]))
-        p.fail("distance_max", fmt::format("expected more than distance_min ({} m), found {} m", distance[0], distance[1]));
-    }
+    const Bounds b = chosenBounds(p, m, false);
     height_ = p.choice("height_from") == "centroid" ? static_cast<double>(m.centroid[1]) : p.number("height");
-    const bool wrap = angle[1] - angle[0] >= 2 * M_PI - 1e-9;
     const auto speeds = static_cast<std::size_t>(p.integer("speeds"));
     const double top = p.number("max_speed");
     std::vector<double> layers = speeds == 1 ? std::vector<double>{0.0} : evenVertices(0, top, speeds, false);
-    setAxes(
-        {GridAxis{AxisRole::Angle,
-                  evenVertices(angle[0], wrap ? angle[0] + 2 * M_PI : angle[1],
-                               static_cast<std::size_t>(p.integer("sectors")), wrap),
-                  wrap},
-         GridAxis{AxisRole::Distance,
-                  evenVertices(distance[0], distance[1], static_cast<std::size_t>(p.integer("rings")), false), false},
-         GridAxis{AxisRole::Heading, evenVertices(-M_PI, M_PI, static_cast<std::size_t>(p.integer("headings")), true),
-                  true}});
+    setAxes({angleAxis(b.angle[0], b.angle[1], static_cast<std::size_t>(p.integer("sectors"))),
+             evenAxis(AxisRole::Distance, b.distance[0], b.distance[1], p.integer("rings")),
+             GridAxis{AxisRole::Heading,
+                      evenVertices(-M_PI, M_PI, static_cast<std::size_t>(p.integer("headings")), true), true}});
     setLayers(GridAxis{AxisRole::Speed, std::move(layers), false});
   }
   std::string type() const override { return "polar_velocity"; }
@@ -75,24 +53,17 @@ void registerPolarVelocity(DiscretizerRegistry& registry) {
       {"polar_velocity",
        "a moving target: its ground position (angle x distance, as polar2d) and the heading of its velocity in the "
        "avatar frame, multilinear, in one layer per speed (a moving_target keeps its speed, so learning stays 3-D)",
-       {ParamSpec::integer("sectors", 13, 2, 10000, "vertices", "angle vertices; wrap around over 360 deg"),
-        ParamSpec::integer("rings", 5, 2, 10000, "vertices", "distance vertices"),
-        ParamSpec::integer("headings", 8, 2, 10000, "vertices", "velocity heading vertices over the full circle"),
-        ParamSpec::integer("speeds", 3, 1, 1000, "layers", "speed layers from 0 to max_speed (1: speed 0 only)"),
-        ParamSpec::number("max_speed", 1.0, 0.01, 20, "m/s", "the top speed layer"),
-        ParamSpec::choice("bounds", "given", {"hits", "given"},
-                          "hits: angle and distance of the graph's effective hitting points; given: angle_min ... "
-                          "distance_max"),
-        ParamSpec::number("margin", 0.0, 0, 10, "m", "bounds: hits: widen the distances by this much"),
-        ParamSpec::number("angle_margin", 0.0, 0, 180, "deg", "bounds: hits: widen the angle range by this much"),
-        ParamSpec::number("angle_min", -180, -360, 360, "deg", "bounds: given: first angle (0 ahead, + left)"),
-        ParamSpec::number("angle_max", 180, -360, 360, "deg", "bounds: given: last angle; 360 above angle_min wraps"),
-        ParamSpec::number("distance_min", 0.0, 0, 100, "m", "bounds: given: nearest ground distance"),
-        ParamSpec::number("distance_max", 2.0, 0, 100, "m", "bounds: given: farthest ground distance"),
-        ParamSpec::choice("height_from", "centroid", {"centroid", "given"},
-                          "the target's height at the vertices: centroid: the effective hitting points' centroid "
-                          "(the height eval places targets at); given: `height`"),
-        ParamSpec::number("height", 1.5, -10, 10, "m", "height_from: given: the target's height")},
+       withBounds(
+           {ParamSpec::integer("sectors", 13, 2, 10000, "vertices", "angle vertices; wrap around over 360 deg"),
+            ParamSpec::integer("rings", 5, 2, 10000, "vertices", "distance vertices"),
+            ParamSpec::integer("headings", 8, 2, 10000, "vertices", "velocity heading vertices over the full circle"),
+            ParamSpec::integer("speeds", 3, 1, 1000, "layers", "speed layers from 0 to max_speed (1: speed 0 only)"),
+            ParamSpec::number("max_speed", 1.0, 0.01, 20, "m/s", "the top speed layer"),
+            ParamSpec::choice("height_from", "centroid", {"centroid", "given"},
+                              "the target's height at the vertices: centroid: the effective hitting points' "
+                              "centroid (the height eval places targets at); given: `height`"),
+            ParamSpec::number("height", 1.5, -10, 10, "m", "height_from: given: the target's height")},
+           {.heights = false}),
        [](const Params& p, const StateActionModel& m) { return std::make_unique<PolarVelocity>(p, m); }});
 }
 

@@ -331,11 +331,17 @@ TEST_CASE("behaviour mistakes name the file, line, column and key", "[behaviors]
     const std::string hitHead = "  hit:\n    discretizer: {type: cylindrical3d, bounds: given, ";
     const std::string hitTail = "}\n    reward: {type: hit}\n    learner: {type: value_iteration}\n";
     REQUIRE_CONFIG_ERROR(build(kApproach + hitHead + "distance_min: 0.8, distance_max: 0.5" + hitTail),
-                         at(25, 88, "behaviors.hit.discretizer.distance_max: expected more than distance_min"));
+                         at(25, 88,
+                            "behaviors.hit.discretizer.distance_max: expected more than distance_min (0.8 m), "
+                            "found 0.5 m"));
     REQUIRE_CONFIG_ERROR(build(kApproach + hitHead + "distance_min: 1.5" + hitTail),
-                         at(25, 18, "behaviors.hit.discretizer: distance_max: expected more than distance_min"));
+                         at(25, 18,
+                            "behaviors.hit.discretizer: distance_max: expected more than distance_min (1.5 m), "
+                            "found 1 m"));
     REQUIRE_CONFIG_ERROR(build(kApproach + hitHead + "height_min: 1.8" + hitTail),
-                         at(25, 18, "behaviors.hit.discretizer: height_max: expected more than height_min"));
+                         at(25, 18,
+                            "behaviors.hit.discretizer: height_max: expected more than height_min (1.8 m), "
+                            "found 1.8 m"));
     REQUIRE_CONFIG_ERROR(build(kApproach + hitHead + "angle_min: -200, angle_max: 170" + hitTail),
                          at(25, 83,
                             "behaviors.hit.discretizer.angle_max: expected at most 360 degrees above "

@@ -1322,6 +1322,34 @@ TEST_CASE("moving_target: the target moves along its velocity, its heading turns
   }
 }
 
+TEST_CASE("bounds: hits takes the box of the effective hitting points: an area for ground grids, a volume for 3-D",
+          "[learning][discretizer]") {
+  SyntheticModelSpec spec;
+  spec.states = 10;
+  spec.actions = 200;
+  StateActionModel m = makeSyntheticModel(spec);
+  REQUIRE(m.hits.size() >= 2);
+  // The box is the hits' own, widened by the margins; the axes span it exactly.
+  double lo = INFINITY, hi = -INFINITY;
+  for (const ActionHit& h : m.hits) {
+    lo = std::min(lo, std::hypot(static_cast<double>(h.x), static_cast<double>(h.z)));
+    hi = std::max(hi, std::hypot(static_cast<double>(h.x), static_cast<double>(h.z)));
+  }
+  const auto cylinder = makeGrid("{type: cylindrical3d, bounds: hits, margin: 0.05, angles: 4, distances: 3}", m);
+  const GridAxis* distance = cylinder->axis(AxisRole::Distance);
+  REQUIRE(distance != nullptr);
+  CHECK(distance->vertices.front() == Approx(std::max(0.0, lo - 0.05)));
+  CHECK(distance->vertices.back() == Approx(hi + 0.05));
+  // Every hit at one height: polar_velocity (no height axis) still has an area to take;
+  // cylindrical3d has no volume and says so.
+  for (ActionHit& h : m.hits) h.y = 1.4f;
+  const auto ground = makeGrid("{type: polar_velocity, bounds: hits, sectors: 4, rings: 3, headings: 4}", m);
+  CHECK(ground->axis(AxisRole::Distance)->vertices.back() == Approx(hi));
+  REQUIRE_THROWS_WITH(makeGrid("{type: cylindrical3d, bounds: hits}", m),
+                      Catch::Contains("bounds: expected the effective hitting points to span a volume, found them "
+                                      "all on one plane; set bounds: given"));
+}
+
 TEST_CASE("polar_velocity: vertices sit on speed layers, backups stay on them, decisions interpolate across two",
           "[learning][moving]") {
   const StateActionModel m = turningWalk();
