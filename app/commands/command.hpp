@@ -43,6 +43,24 @@ class Command {
   CLI::App* sub_;
 };
 
+/// A command on a scenario that opens a session (train, eval, simulate, compare, serve).
+/// The constructor adds SCENARIO; the subclass adds its own options, then calls
+/// addSessionOptions() for --set, --json (when it prints a report), --data and --cache.
+/// run() fills the session's options from the shared ones and calls runSession().
+class SessionCommand : public Command {
+ public:
+  void run(const Common& common) final;
+
+ protected:
+  SessionCommand(CLI::App* sub, Common& common, const std::string& scenarioHelp = "Scenario YAML file");
+  void addSessionOptions(LearnOptions& options, Common& common, bool json,
+                         const std::string& setHelp = "Override a scenario key (repeatable)");
+  virtual void runSession(const Common& common) = 0;
+
+ private:
+  LearnOptions* session_ = nullptr;
+};
+
 /// Every command, in the order `mgrl --help` lists them.
 std::vector<std::unique_ptr<Command>> makeCommands(CLI::App& app, Common& common);
 

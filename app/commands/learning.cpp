@@ -17,16 +17,15 @@
 namespace mgrl::app::cli {
 namespace {
 
-class Train final : public Command {
+class Train final : public SessionCommand {
  public:
   Train(CLI::App& app, Common& common)
-      : Command(app.add_subcommand("train", "Train the scenario's behaviours (paper sec. 4) on its motion graph and "
-                                            "save a policy bundle.")) {
-    sub_->add_option("SCENARIO", common.scenario, "Scenario YAML file with a behaviors: section")->required();
+      : SessionCommand(app.add_subcommand("train",
+                                          "Train the scenario's behaviours (paper sec. 4) on its motion graph and "
+                                          "save a policy bundle."),
+                       common, "Scenario YAML file with a behaviors: section") {
     sub_->add_option("--behavior,--behaviour", options_.behavior,
                      "Train only this behaviour (others in the bundle are kept)");
-    sub_->add_option("--set", options_.sets,
-                     "Override a scenario key, e.g. --set behaviors.hit.learner.budget=1e6 (repeatable)");
     sub_->add_option("--out", options_.out, "Policy bundle folder (default: <cache>/policies/<scenario>-<hash>)");
     sub_->add_flag("--resume", options_.resume, "Continue from the checkpoints of an interrupted run");
     sub_->add_option("--max-memory", maxMemoryGb_,
@@ -38,12 +37,11 @@ class Train final : public Command {
                      "only, about a fifth of the memory, a grid lookup per backup; the same tables), or auto "
                      "(tabulated when it fits in --max-memory, else compact)")
         ->default_str("auto");
-    sub_->add_flag("--json", common.json, "Print one JSON object on stdout");
-    addDataAndCache(sub_, common.dataDir, common.cacheDir);
+    addSessionOptions(options_, common, true,
+                      "Override a scenario key, e.g. --set behaviors.hit.learner.budget=1e6 (repeatable)");
   }
 
-  void run(const Common& common) override {
-    fillSession(options_, common);
+  void runSession(const Common& common) override {
     options_.progressBar = ::isatty(2) != 0;
     if (!(maxMemoryGb_ > 0 && maxMemoryGb_ <= 1e6))
       throw Error(fmt::format("--max-memory: expected gigabytes in (0, 1000000], found {}", maxMemoryGb_));
@@ -61,14 +59,15 @@ class Train final : public Command {
   double maxMemoryGb_ = defaultMaxMemoryGb();
 };
 
-class Eval final : public Command {
+class Eval final : public SessionCommand {
  public:
   Eval(CLI::App& app, Common& common)
-      : Command(app.add_subcommand(
-            "eval", "Evaluate a trained policy: random starts, a static target in the approach region, up to "
-                    "--seconds of motion each; success is what the behaviours' success: keys say (default: an "
-                    "effective hit on the target).")) {
-    sub_->add_option("SCENARIO", common.scenario, "Scenario YAML file")->required();
+      : SessionCommand(app.add_subcommand(
+                           "eval",
+                           "Evaluate a trained policy: random starts, a static target in the approach region, up to "
+                           "--seconds of motion each; success is what the behaviours' success: keys say (default: an "
+                           "effective hit on the target)."),
+                       common) {
     sub_->add_option("--policy", options_.policy, "Policy bundle folder (default: the one mgrl train writes)");
     sub_->add_option("--controller", options_.controller,
                      "policy (the trained one), online_search (depth-limited search of the graph for the best "
@@ -84,13 +83,10 @@ class Eval final : public Command {
     sub_->add_option("--target-height", options_.targetHeight,
                      "Height of the target (m; default: the scenario's world.target_height, else that of the "
                      "effective hitting points' centroid)");
-    sub_->add_option("--set", options_.sets, "Override a scenario key (repeatable)");
-    sub_->add_flag("--json", common.json, "Print one JSON object on stdout");
-    addDataAndCache(sub_, common.dataDir, common.cacheDir);
+    addSessionOptions(options_, common, true);
   }
 
-  void run(const Common& common) override {
-    fillSession(options_, common);
+  void runSession(const Common& common) override {
     if (trials_ < 1 || trials_ > 10'000'000)
       throw Error(fmt::format("--trials: expected a number of trials in [1, 10000000], found {}", trials_));
     if (seed_ < 0) throw Error(fmt::format("--seed: expected a whole number >= 0, found {}", seed_));
@@ -106,14 +102,15 @@ class Eval final : public Command {
   long long seed_ = static_cast<long long>(options_.seed);
 };
 
-class Simulate final : public Command {
+class Simulate final : public SessionCommand {
  public:
   Simulate(CLI::App& app, Common& common)
-      : Command(app.add_subcommand(
-            "simulate", "Run the world headless (paper sec. 5, 6.6): avatars in sparring pairs (or with targets) "
-                        "controlled by the trained policy, collisions at effective punches, reactions; report speed "
-                        "and hits, optionally write BVH and hit events.")) {
-    sub_->add_option("SCENARIO", common.scenario, "Scenario YAML file")->required();
+      : SessionCommand(app.add_subcommand(
+                           "simulate",
+                           "Run the world headless (paper sec. 5, 6.6): avatars in sparring pairs (or with targets) "
+                           "controlled by the trained policy, collisions at effective punches, reactions; report speed "
+                           "and hits, optionally write BVH and hit events."),
+                       common) {
     sub_->add_option("--avatars", options_.run.avatars, "Number of avatars (pairs spar; an odd one punches a target)")
         ->default_val(2);
     sub_->add_option("--seconds", options_.run.seconds, "Simulated seconds")->default_val(10);
@@ -141,13 +138,10 @@ class Simulate final : public Command {
                    "Compute every joint's pose each frame (blending, forward kinematics, reactions); implied by "
                    "--bvh-out and --gltf-out");
     sub_->add_option("--threads", options_.run.threads, "Worker threads (default: all cores)");
-    sub_->add_option("--set", options_.sets, "Override a scenario key (repeatable)");
-    sub_->add_flag("--json", common.json, "Print one JSON object on stdout");
-    addDataAndCache(sub_, common.dataDir, common.cacheDir);
+    addSessionOptions(options_, common, true);
   }
 
-  void run(const Common& common) override {
-    fillSession(options_, common);
+  void runSession(const Common& common) override {
     if (seed_ < 0) throw Error(fmt::format("--seed: expected a whole number >= 0, found {}", seed_));
     options_.run.seed = static_cast<std::uint64_t>(seed_);
     const nlohmann::json report = runSimulate(options_);
@@ -159,15 +153,17 @@ class Simulate final : public Command {
   long long seed_ = 1;
 };
 
-class Compare final : public Command {
+class Compare final : public SessionCommand {
  public:
   Compare(CLI::App& app, Common& common)
-      : Command(app.add_subcommand(
-            "compare", "Compare learners on one behaviour: train each with each seed on the same graph, evaluate "
-                       "every policy on the same trials (and snapshots of it along training, for learning curves of "
-                       "success rate), and measure each table against value iteration's on the same grid or a "
-                       "finer one (--reference-set).")) {
-    sub_->add_option("SCENARIO", common.scenario, "Scenario YAML file")->required();
+      : SessionCommand(
+            app.add_subcommand(
+                "compare",
+                "Compare learners on one behaviour: train each with each seed on the same graph, evaluate "
+                "every policy on the same trials (and snapshots of it along training, for learning curves of "
+                "success rate), and measure each table against value iteration's on the same grid or a "
+                "finer one (--reference-set)."),
+            common) {
     sub_->add_option("--behavior,--behaviour", options_.behavior, "The behaviour whose learner varies")->required();
     sub_->add_option("--learners", learners_, "Comma-separated learners (see mgrl list)")->required();
     sub_->add_option("--seeds", seeds_, "Comma-separated seeds for seeded learners")->default_str("1");
@@ -187,13 +183,10 @@ class Compare final : public Command {
                      "e.g. angles=40: value iteration on that grid, interpolated at each table's vertices");
     sub_->add_option("--report", options_.report,
                      "Write index.html (plots, learning curves), results.json, results.csv and curves.csv here");
-    sub_->add_option("--set", options_.sets, "Override a scenario key (repeatable)");
-    sub_->add_flag("--json", common.json, "Print one JSON object on stdout");
-    addDataAndCache(sub_, common.dataDir, common.cacheDir);
+    addSessionOptions(options_, common, true);
   }
 
-  void run(const Common& common) override {
-    fillSession(options_, common);
+  void runSession(const Common& common) override {
     options_.learners = splitList(learners_);
     options_.seeds.clear();
     for (const std::string& word : splitList(seeds_)) {

@@ -14,14 +14,16 @@
 namespace mgrl::app::cli {
 namespace {
 
-class Serve final : public Command {
+class Serve final : public SessionCommand {
  public:
   Serve(CLI::App& app, Common& common)
-      : Command(app.add_subcommand(
-            "serve", "Serve the interactive viewer (paper sec. 6.6, 6.7) in the browser: drag a target for a boxer, "
-                     "watch two boxers spar or a crowd of them; switch controllers and weights live "
-                     "(docs/viewer-protocol.md).")) {
-    sub_->add_option("SCENARIO", common.scenario, "Scenario YAML file")->required();
+      : SessionCommand(
+            app.add_subcommand(
+                "serve",
+                "Serve the interactive viewer (paper sec. 6.6, 6.7) in the browser: drag a target for a boxer, "
+                "watch two boxers spar or a crowd of them; switch controllers and weights live "
+                "(docs/viewer-protocol.md)."),
+            common) {
     sub_->add_option("--policy", options_.policy,
                      "Policy bundle folder (default: the one mgrl train writes; none: the online search runs)");
     sub_->add_option("--host", options_.host,
@@ -36,12 +38,10 @@ class Serve final : public Command {
                      "Scenario whose behaviours play sparring and crowds (default: the scenario's sparring_scenario, "
                      "e.g. boxing.yaml's boxing_spar.yaml; none: the scenario's own behaviours)");
     sub_->add_option("--web", options_.web, "The viewer's folder (default: MGRL_WEB, else the repository's web/)");
-    sub_->add_option("--set", options_.sets, "Override a scenario key (repeatable)");
-    addDataAndCache(sub_, common.dataDir, common.cacheDir);
+    addSessionOptions(options_, common, false);
   }
 
-  void run(const Common& common) override {
-    fillSession(options_, common);
+  void runSession(const Common& common) override {
     const std::string scenario = common.scenario;
     options_.announce = [scenario](const std::string& url) {
       std::cout << fmt::format("serving {} at {} (Ctrl-C stops)", scenario, url) << std::endl;
