@@ -137,12 +137,9 @@ CheckedFlags checkFlags(const CompareOptions& options) {
   if (options.learners.empty()) throw Error("--learners: expected a comma-separated list of learners, found none");
   std::set<std::string> seen;
   for (const std::string& learner : options.learners) {
-    if (!plugins().learners.find(learner)) {
-      std::vector<std::string> known;
-      for (const auto& entry : plugins().learners.entries()) known.push_back(entry.name);
-      throw Error(fmt::format("--learners: expected registered learners ({}), found {}", fmt::join(known, ", "),
-                              quoteToken(learner)));
-    }
+    if (!plugins().learners.find(learner))
+      throw Error(fmt::format("--learners: expected registered learners ({}), found {}",
+                              plugins().learners.describeKnown(), quoteToken(learner)));
     if (!seen.insert(learner).second)
       throw Error(fmt::format("--learners: expected each learner once, found {} twice", quoteToken(learner)));
   }

@@ -51,11 +51,8 @@ std::vector<ReadTerm> readTerms(const ConfigNode& block) {
   const TermRegistry& registry = termRegistry();
   std::vector<ReadTerm> terms;
   for (const ConfigNode& element : elements) {
-    if (!element.isMap() || !element.has("term")) {
-      std::vector<std::string> names;
-      for (const TermKind& k : registry.entries()) names.push_back(k.name);
-      element.fail(fmt::format("expected a map with 'term: <{}>'", fmt::join(names, "|")));
-    }
+    if (!element.isMap() || !element.has("term"))
+      element.fail(fmt::format("expected a map with 'term: <{}>'", fmt::join(registry.names(), "|")));
     const ConfigNode termNode = element.child("term");
     const std::string name = termNode.asString();
     const TermKind* kind = registry.find(name);

@@ -218,12 +218,7 @@ function fit(frame) {
   // A crowd fills the middle of the view; one or two boxers leave room around them to
   // drag the target to.
   const distance = radius / Math.sin(THREE.MathUtils.degToRad(camera.fov / 2)) * (frame.avatars > 2 ? 0.75 : 0.9);
-  controls.target.copy(centre);
-  camera.position.copy(centre).addScaledVector(direction, distance);
-  scene3d.fog.near = distance * 1.2;
-  scene3d.fog.far = distance * 2.5;
-  controls.update();
-  dirty = true;
+  aim(centre, direction.multiplyScalar(distance), [1.2, 2.5]);
 }
 
 /** Looks down on avatar 0 from 60 degrees up, near enough to read the teaching view's grids. */
@@ -234,11 +229,16 @@ function lookDown(frame) {
   if (direction.lengthSq() < 1e-8) direction.set(0, 0, 1);
   direction.normalize();
   const elevation = THREE.MathUtils.degToRad(60), distance = 6;
-  controls.target.set(root[0], 0.5, root[2]);
-  camera.position.copy(controls.target).addScaledVector(direction, distance * Math.cos(elevation));
-  camera.position.y += distance * Math.sin(elevation);
-  scene3d.fog.near = distance * 1.5;
-  scene3d.fog.far = distance * 3;
+  const offset = direction.multiplyScalar(distance * Math.cos(elevation)).setY(distance * Math.sin(elevation));
+  aim(new THREE.Vector3(root[0], 0.5, root[2]), offset, [1.5, 3]);
+}
+
+/** Looks at `target` from `target + offset`; the fog starts and ends at `fog` times that distance. */
+function aim(target, offset, fog) {
+  controls.target.copy(target);
+  camera.position.copy(target).add(offset);
+  scene3d.fog.near = offset.length() * fog[0];
+  scene3d.fog.far = offset.length() * fog[1];
   controls.update();
   dirty = true;
 }

@@ -111,10 +111,16 @@ class Registry {
 
   const std::vector<Entry>& entries() const { return entries_; }
 
+  /// The registered names, in registration order.
+  std::vector<std::string> names() const {
+    std::vector<std::string> out;
+    for (const Entry& e : entries_) out.push_back(e.name);
+    return out;
+  }
+
+  /// "a, b, c", or "none registered".
   std::string describeKnown() const {
-    std::vector<std::string> names;
-    for (const Entry& e : entries_) names.push_back(e.name);
-    return names.empty() ? std::string("none registered") : fmt::format("{}", fmt::join(names, ", "));
+    return entries_.empty() ? std::string("none registered") : fmt::format("{}", fmt::join(names(), ", "));
   }
 
  private:

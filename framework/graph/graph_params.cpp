@@ -7,25 +7,19 @@
 
 #include <fmt/format.h>
 
+#include "mgrl/core/enum_words.hpp"
 #include "mgrl/core/error.hpp"
 
 namespace mgrl {
 
-ContactEvent parseContactEvent(std::string_view text) {
-  if (text == "left_foot_liftoff") return ContactEvent::LeftFootLiftoff;
-  if (text == "any_contact_change") return ContactEvent::AnyContactChange;
-  if (text == "none") return ContactEvent::None;
-  throw Error(fmt::format("expected one of left_foot_liftoff, any_contact_change, none, found '{}'", text));
-}
+namespace {
+constexpr std::array<EnumWord<ContactEvent>, 3> kContactEvents{{{ContactEvent::LeftFootLiftoff, "left_foot_liftoff"},
+                                                                {ContactEvent::AnyContactChange, "any_contact_change"},
+                                                                {ContactEvent::None, "none"}}};
+}  // namespace
 
-std::string_view contactEventName(ContactEvent event) {
-  switch (event) {
-    case ContactEvent::LeftFootLiftoff: return "left_foot_liftoff";
-    case ContactEvent::AnyContactChange: return "any_contact_change";
-    case ContactEvent::None: return "none";
-  }
-  return "?";
-}
+ContactEvent parseContactEvent(std::string_view text) { return parseWord(kContactEvents, text); }
+std::string_view contactEventName(ContactEvent event) { return wordOf(kContactEvents, event); }
 
 void GraphParams::validate() const {
   auto check = [](bool ok, std::string_view key, std::string_view expected, double found) {

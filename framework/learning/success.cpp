@@ -45,13 +45,7 @@ std::shared_ptr<SuccessCondition> readCondition(const ConfigNode& node, const js
                                                 const ConditionRegistry& kinds, bool hold) {
   if (!node.isMap() || !node.has("term"))
     node.fail(fmt::format("expected a map with 'term: <{}>', e.g. {{term: distance, within: 0.2}}",
-                          fmt::join(
-                              [&] {
-                                std::vector<std::string> names;
-                                for (const auto& k : kinds.entries()) names.push_back(k.name);
-                                return names;
-                              }(),
-                              "|")));
+                          fmt::join(kinds.names(), "|")));
   const ConfigNode termNode = node.child("term");
   const std::string term = termNode.asString();
   const ConditionRegistry::Entry* kind = kinds.find(term);

@@ -4,29 +4,21 @@
 
 #include <fmt/format.h>
 
+#include "mgrl/core/enum_words.hpp"
 #include "mgrl/core/error.hpp"
 
 namespace mgrl {
 
-LengthUnit parseLengthUnit(std::string_view text) {
-  if (text == "auto") return LengthUnit::Auto;
-  if (text == "m") return LengthUnit::Metre;
-  if (text == "cm") return LengthUnit::Centimetre;
-  if (text == "inch") return LengthUnit::Inch;
-  if (text == "cmu") return LengthUnit::Cmu;
-  throw Error(fmt::format("expected one of auto, m, cm, inch, cmu, found '{}'", text));
-}
+namespace {
+constexpr std::array<EnumWord<LengthUnit>, 5> kLengthUnits{{{LengthUnit::Auto, "auto"},
+                                                            {LengthUnit::Metre, "m"},
+                                                            {LengthUnit::Centimetre, "cm"},
+                                                            {LengthUnit::Inch, "inch"},
+                                                            {LengthUnit::Cmu, "cmu"}}};
+}  // namespace
 
-std::string_view lengthUnitName(LengthUnit unit) {
-  switch (unit) {
-    case LengthUnit::Auto: return "auto";
-    case LengthUnit::Metre: return "m";
-    case LengthUnit::Centimetre: return "cm";
-    case LengthUnit::Inch: return "inch";
-    case LengthUnit::Cmu: return "cmu";
-  }
-  return "?";
-}
+LengthUnit parseLengthUnit(std::string_view text) { return parseWord(kLengthUnits, text); }
+std::string_view lengthUnitName(LengthUnit unit) { return wordOf(kLengthUnits, unit); }
 
 double metresPer(LengthUnit unit) {
   switch (unit) {

@@ -336,23 +336,21 @@ BoutStats measureBout(const Bout& bout, const StatsParams& params) {
 BoutStats pool(const std::vector<BoutStats>& bouts, const std::string& name) {
   BoutStats p;
   p.name = name;
+  const auto append = [](auto& into, const auto& from) { into.insert(into.end(), from.begin(), from.end()); };
   for (const BoutStats& b : bouts) {
     p.bouts += b.bouts;
     p.fighters += b.fighters;
     p.frames += b.frames;
     p.seconds += b.seconds;
     p.fighterSeconds += b.fighterSeconds;
-    p.fps.insert(p.fps.end(), b.fps.begin(), b.fps.end());
-    p.distance_m.insert(p.distance_m.end(), b.distance_m.begin(), b.distance_m.end());
-    p.facing_deg.insert(p.facing_deg.end(), b.facing_deg.begin(), b.facing_deg.end());
-    p.plantedFootSpeed_mps.insert(p.plantedFootSpeed_mps.end(), b.plantedFootSpeed_mps.begin(),
-                                  b.plantedFootSpeed_mps.end());
-    p.plantedAnkleSpeed_mps.insert(p.plantedAnkleSpeed_mps.end(), b.plantedAnkleSpeed_mps.begin(),
-                                   b.plantedAnkleSpeed_mps.end());
-    p.plantedToeSpeed_mps.insert(p.plantedToeSpeed_mps.end(), b.plantedToeSpeed_mps.begin(),
-                                 b.plantedToeSpeed_mps.end());
-    p.jointStep_m.insert(p.jointStep_m.end(), b.jointStep_m.begin(), b.jointStep_m.end());
-    p.jointSpeed_mps.insert(p.jointSpeed_mps.end(), b.jointSpeed_mps.begin(), b.jointSpeed_mps.end());
+    append(p.fps, b.fps);
+    append(p.distance_m, b.distance_m);
+    append(p.facing_deg, b.facing_deg);
+    append(p.plantedFootSpeed_mps, b.plantedFootSpeed_mps);
+    append(p.plantedAnkleSpeed_mps, b.plantedAnkleSpeed_mps);
+    append(p.plantedToeSpeed_mps, b.plantedToeSpeed_mps);
+    append(p.jointStep_m, b.jointStep_m);
+    append(p.jointSpeed_mps, b.jointSpeed_mps);
     p.rootSteps += b.rootSteps;
     p.reversals += b.reversals;
     p.stepSeconds += b.stepSeconds;
@@ -360,7 +358,7 @@ BoutStats pool(const std::vector<BoutStats>& bouts, const std::string& name) {
     p.kicks += b.kicks;
     p.landed += b.landed;
     p.blocked += b.blocked;
-    p.sides.insert(p.sides.end(), b.sides.begin(), b.sides.end());
+    append(p.sides, b.sides);
     p.landedByMore += b.landedByMore;
     p.landedInPairs += b.landedInPairs;
     p.pairFrames += b.pairFrames;
