@@ -7,7 +7,10 @@
 #   REV    a commit, tag or branch (built in a temporary worktree, removed afterwards)
 #   BENCH  a benchmark target of bench/: learn, runtime, graph, load, memory, adaptive, serve
 #   ARGS   passed to both, e.g. --approach-actions 10000000 --hit-actions 10000000 --runs 1 --no-growth
-# Environment: BENCH_ROUNDS=N alternations (default 3); MGRL_DATA as for the benchmarks.
+# Environment: BENCH_ROUNDS=N alternations (default 3); MGRL_DATA as for the benchmarks;
+#   BENCH_CMAKE_ARGS="-DMGRL_UNITY=OFF ..." configure options for both builds (this checkout is
+#   then built in a scratch folder, so build/ keeps its own configuration): code layout
+#   apart from unity batches, say, to tell a real slowdown from a moved one.
 # Prints, for every output line whose text (numbers aside) both builds print, the median of
 # each number over the rounds for REV and for this checkout and their ratio (this / REV),
 # then where both outputs are kept.
@@ -46,12 +49,16 @@ build() {  # SOURCE BUILD_DIR LOG
   if [ "${MGRL_CCACHE:-1}" != 0 ] && command -v ccache >/dev/null 2>&1; then
     launcher=(-DCMAKE_CXX_COMPILER_LAUNCHER=ccache)
   fi
-  CCACHE_BASEDIR="$1" cmake -S "$1" -B "$2" -G Ninja -DCMAKE_BUILD_TYPE=Release "${launcher[@]}" >"$3" 2>&1 &&
+  local extra=()
+  read -r -a extra <<<"${BENCH_CMAKE_ARGS:-}"
+  CCACHE_BASEDIR="$1" cmake -S "$1" -B "$2" -G Ninja -DCMAKE_BUILD_TYPE=Release "${launcher[@]}" "${extra[@]}" >"$3" 2>&1 &&
     CCACHE_BASEDIR="$1" cmake --build "$2" -j "$(nproc)" --target "$target" >>"$3" 2>&1
 }
 build "$worktree" "$worktree/build" "$scratch/build-rev.log" ||
   { tail -30 "$scratch/build-rev.log" >&2; echo "bench_compare.sh: $target does not build at $rev" >&2; exit 1; }
-build "$root" "$root/build" "$scratch/build-now.log" ||
+now_build="$root/build"
+[ -n "${BENCH_CMAKE_ARGS:-}" ] && now_build="$scratch/now"
+build "$root" "$now_build" "$scratch/build-now.log" ||
   { tail -30 "$scratch/build-now.log" >&2; echo "bench_compare.sh: $target does not build here" >&2; exit 1; }
 
 out="$root/build/bench-compare"
@@ -59,7 +66,7 @@ mkdir -p "$out"
 for ((r = 1; r <= rounds; r++)); do
   echo "bench_compare: round $r of $rounds" >&2
   "$worktree/build/bench/$target" "$@" >"$out/rev-$r.txt" 2>&1 || { cat "$out/rev-$r.txt" >&2; exit 1; }
-  "$root/build/bench/$target" "$@" >"$out/now-$r.txt" 2>&1 || { cat "$out/now-$r.txt" >&2; exit 1; }
+  "$now_build/bench/$target" "$@" >"$out/now-$r.txt" 2>&1 || { cat "$out/now-$r.txt" >&2; exit 1; }
 done
 
 python3 - "$out" "$rounds" "${commit:0:12}" <<'EOF'

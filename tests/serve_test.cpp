@@ -366,9 +366,9 @@ TEST_CASE("boxing's sparring plays boxing_spar's behaviour at a fighting distanc
       /*sparring=*/true);
   serve::ViewerSession session(boxing.assets);
   json scene = json::parse(session.takeOutbox().at(0));
-  auto names = [](const json& scene) {
+  auto names = [](const json& message) {
     std::vector<std::string> out;
-    for (const json& b : scene["behaviors"]) out.push_back(b["name"]);
+    for (const json& b : message["behaviors"]) out.push_back(b["name"]);
     return out;
   };
   CHECK(scene["mode"] == "target");
