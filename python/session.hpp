@@ -375,6 +375,7 @@ class PySession {
     settings.bvhOut = path(bvhOut);
     settings.gltfOut = path(gltfOut);
     settings.eventsOut = path(eventsOut);
+    settings.fields = SimulateFields::keywords();
     checkSimulateSettings(settings);
     Tables t;
     if (controller == "policy") t = tablesFor(tables.is_none() ? py::dict() : tables, "python");

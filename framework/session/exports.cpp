@@ -220,17 +220,17 @@ Outputs prepareOutputs(const ExportRequest& options, const Scenario& scenario) {
   Outputs out;
   if (!options.bvhOut.empty()) {
     OutputFolder& folder = out.folders.emplace_back();
-    folder.option = "--bvh-out";
+    folder.option = options.fields.bvhOut;
     folder.dir = options.bvhOut;
     folder.bvh = true;
   }
   if (!options.gltfOut.empty()) {
     if (!out.folders.empty() && folderOf(options.gltfOut) == folderOf(options.bvhOut)) {
       out.folders.front().gltf = true;  // one folder, one unit, both formats
-      out.folders.front().option = "--bvh-out and --gltf-out";
+      out.folders.front().option = fmt::format("{} and {}", options.fields.bvhOut, options.fields.gltfOut);
     } else {
       OutputFolder& folder = out.folders.emplace_back();
-      folder.option = "--gltf-out";
+      folder.option = options.fields.gltfOut;
       folder.dir = options.gltfOut;
       folder.gltf = true;
     }
@@ -247,7 +247,8 @@ Outputs prepareOutputs(const ExportRequest& options, const Scenario& scenario) {
   // what can be checked without creating anything.
   if (!options.eventsOut.empty()) {
     if (fs::is_directory(options.eventsOut))
-      throw Error(fmt::format("--events-out {}: expected a file name, found a folder", options.eventsOut.string()));
+      throw Error(fmt::format("{} {}: expected a file name, found a folder", options.fields.eventsOut,
+                              options.eventsOut.string()));
     // A missing folder is made, as for --bvh-out (prepareFolder and prepareBundle below).
   }
   if (!out.folders.empty()) {
@@ -255,23 +256,23 @@ Outputs prepareOutputs(const ExportRequest& options, const Scenario& scenario) {
     const double avatarFrames =
         static_cast<double>(options.avatars) * std::round(options.seconds * scenario.motion.fps);
     if (recordingBytes(avatarFrames, 20) > kMaxRecordingBytes)
-      throw Error(
-          fmt::format("{}: recording {} avatars for {} s needs more than {:.1f} GB of memory; expected "
-                      "at most {:.0f} GB: use fewer --avatars or --seconds",
-                      out.folders.front().option, options.avatars, options.seconds,
-                      recordingBytes(avatarFrames, 20) / 1e9, kMaxRecordingBytes / 1e9));
+      throw Error(fmt::format(
+          "{}: recording {} avatars for {} s needs more than {:.1f} GB of memory; expected "
+          "at most {:.0f} GB: use fewer {} or {}",
+          out.folders.front().option, options.avatars, options.seconds, recordingBytes(avatarFrames, 20) / 1e9,
+          kMaxRecordingBytes / 1e9, options.fields.avatars, options.fields.seconds));
   }
   if (eventsFolder) {
     const std::string name = options.eventsOut.filename().string();
     if (name == "manifest.json" || avatarFileName(name))
       throw Error(
-          fmt::format("--events-out {}: expected a name other than the {} folder's own files "
+          fmt::format("{} {}: expected a name other than the {} folder's own files "
                       "(manifest.json, avatar_NNN.bvh, avatar_NNN.glb), found {}",
-                      options.eventsOut.string(), eventsFolder->option, quoteToken(name)));
+                      options.fields.eventsOut, options.eventsOut.string(), eventsFolder->option, quoteToken(name)));
   }
   if (!options.eventsOut.empty() && !eventsFolder) {
     const fs::path parent = options.eventsOut.parent_path().empty() ? fs::path(".") : options.eventsOut.parent_path();
-    out.eventsScratch = prepareFolder(parent, "--events-out");
+    out.eventsScratch = prepareFolder(parent, options.fields.eventsOut);
   }
   for (OutputFolder& folder : out.folders) folder.bundle = prepareBundle(folder.dir, folder.created, folder.option);
   return out;
@@ -353,8 +354,8 @@ WrittenFiles writeOutputs(Outputs& out, const ExportRequest& options, const Sess
     std::error_code ec;
     fs::rename(eventsTemporary, options.eventsOut, ec);
     if (ec)
-      throw Error(fmt::format("--events-out {}: could not move the events into place: {}", options.eventsOut.string(),
-                              ec.message()));
+      throw Error(fmt::format("{} {}: could not move the events into place: {}", options.fields.eventsOut,
+                              options.eventsOut.string(), ec.message()));
     out.eventsScratch->keep();
   }
   return written;

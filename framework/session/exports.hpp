@@ -4,7 +4,8 @@
 /// call for other front ends): one BVH and/or binary glTF per avatar and the hit events,
 /// each output folder checked and its scratch folder made before anything is simulated,
 /// then written and swapped in whole with its manifest; a failed run leaves nothing behind.
-/// Messages name the command line's options, which Python's keywords mirror.
+/// Messages name the settings as the caller calls them (ExportFields: the command line's
+/// options by default, Python's keywords from Session.simulate).
 #include <cstdint>
 #include <filesystem>
 #include <memory>
@@ -45,7 +46,7 @@ class ScratchDirectory {
 // One output folder (--bvh-out, --gltf-out, or both when they name the same folder): one
 // unit, written beside it and swapped in whole with its manifest.
 struct OutputFolder {
-  std::string option;  ///< "--bvh-out", "--gltf-out" or "--bvh-out and --gltf-out"
+  std::string option;         ///< "--bvh-out", "--gltf-out" or "--bvh-out and --gltf-out" (as ExportFields name them)
   std::filesystem::path dir;  ///< as given
   bool bvh = false, gltf = false, events = false;
   std::unique_ptr<ScratchDirectory> created;
@@ -54,6 +55,12 @@ struct OutputFolder {
 struct Outputs {
   std::vector<OutputFolder> folders;
   std::unique_ptr<ScratchDirectory> eventsScratch;  ///< --events-out outside every output folder
+};
+
+/// What messages call the export settings.
+struct ExportFields {
+  std::string_view bvhOut = "--bvh-out", gltfOut = "--gltf-out", eventsOut = "--events-out";
+  std::string_view avatars = "--avatars", seconds = "--seconds";
 };
 
 /// What to export and the run's facts for the manifests.
@@ -65,6 +72,7 @@ struct ExportRequest {
   double seconds = 10;  ///< simulated time
   std::string controller = "policy";
   std::uint64_t seed = 1;
+  ExportFields fields;
 };
 
 struct WrittenFiles {

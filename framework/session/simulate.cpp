@@ -32,24 +32,38 @@ const char* struckName(const HitEvent& e) { return e.target < 0 ? "target" : bod
 
 }  // namespace
 
-// Every mistake in the command line, found before anything is loaded.
+SimulateFields SimulateFields::keywords() {
+  SimulateFields f;
+  f.controller = {"controller", "horizon", "horizon_seconds"};
+  f.exports = {"bvh_out", "gltf_out", "events_out", "avatars", "seconds"};
+  f.avatars = "avatars";
+  f.seconds = "seconds";
+  f.topK = "top_k";
+  f.threads = "threads";
+  f.poses = "poses";
+  f.policy = "tables";
+  f.partnerPolicy = "partner_policy";
+  f.partnerRound = "partner_round";
+  return f;
+}
+
+// Every mistake in the settings, found before anything is loaded.
 void checkSimulateSettings(const SimulateSettings& options) {
-  checkControllerChoice(options.controller);
+  const SimulateFields& f = options.fields;
+  checkControllerChoice(options.controller, f.controller);
   if (options.avatars < 1 || options.avatars > kMaxAvatars)
     throw Error(
-        fmt::format("--avatars: expected a number of avatars in [1, {}], found {}", kMaxAvatars, options.avatars));
+        fmt::format("{}: expected a number of avatars in [1, {}], found {}", f.avatars, kMaxAvatars, options.avatars));
   if ((options.poses || options.records()) && options.avatars > kMaxAvatarsWithPoses)
-    throw Error(
-        fmt::format("--avatars: expected at most {} avatars with poses (--poses, --bvh-out or --gltf-out), "
-                    "found {}",
-                    kMaxAvatarsWithPoses, options.avatars));
+    throw Error(fmt::format("{}: expected at most {} avatars with poses ({}, {} or {}), found {}", f.avatars,
+                            kMaxAvatarsWithPoses, f.poses, f.exports.bvhOut, f.exports.gltfOut, options.avatars));
   if (!(options.seconds > 0 && options.seconds <= 86400))
-    throw Error(fmt::format("--seconds: expected simulated seconds in (0, 86400], found {}", options.seconds));
+    throw Error(fmt::format("{}: expected simulated seconds in (0, 86400], found {}", f.seconds, options.seconds));
   if (options.topK < 0 || options.topK > 64)
     throw Error(
-        fmt::format("--top-k: expected a number of candidates in [1, 64] (0: world.top_k), found {}", options.topK));
+        fmt::format("{}: expected a number of candidates in [1, 64] (0: world.top_k), found {}", f.topK, options.topK));
   if (options.threads > 256)
-    throw Error(fmt::format("--threads: expected at most 256 threads, found {}", options.threads));
+    throw Error(fmt::format("{}: expected at most 256 threads, found {}", f.threads, options.threads));
 }
 
 namespace {
@@ -111,18 +125,18 @@ json simulate(Session& session, const SimulateSettings& settings, Outputs& outpu
   const bool poses = settings.poses || record;
   if (settings.topK > 0) session.task.world.variety.topK = static_cast<int>(settings.topK);
   const WorldParams& params = session.task.world;
+  const SimulateFields& f = settings.fields;
   if (!settings.partnerPolicy.empty()) {
     if (params.mode != "sparring")
       throw Error(
-          fmt::format("--partner-policy: expected a sparring world (world.mode: sparring), found {}", params.mode));
+          fmt::format("{}: expected a sparring world (world.mode: sparring), found {}", f.partnerPolicy, params.mode));
     if (settings.controller.name != "policy")
-      throw Error(
-          fmt::format("--partner-policy: expected --controller policy (the first avatar of each pair plays "
-                      "--policy), found {}",
-                      settings.controller.name));
+      throw Error(fmt::format("{}: expected {} policy (the first avatar of each pair plays {}), found {}",
+                              f.partnerPolicy, f.controller.controller, f.policy, settings.controller.name));
     session.loadPartnerPolicy(settings.partnerPolicy, settings.partnerRound);
   } else if (settings.partnerRound > 0) {
-    throw Error("--partner-round: expected --partner-policy DIR as well (the bundle whose round the partner plays)");
+    throw Error(fmt::format("{}: expected {} as well (the bundle whose round the partner plays)", f.partnerRound,
+                            f.partnerPolicy));
   }
   const fs::path& policyDir = session.policyDir;
   const Scenario& scenario = session.scenario;
@@ -137,9 +151,9 @@ json simulate(Session& session, const SimulateSettings& settings, Outputs& outpu
     if (bytes > kMaxRecordingBytes)
       throw Error(
           fmt::format("{}: recording {} avatars for {} frames needs about {:.1f} GB of memory; expected "
-                      "at most {:.0f} GB: use fewer --avatars or --seconds",
-                      settings.bvhOut.empty() ? "--gltf-out" : "--bvh-out", avatars, frames, bytes / 1e9,
-                      kMaxRecordingBytes / 1e9));
+                      "at most {:.0f} GB: use fewer {} or {}",
+                      settings.bvhOut.empty() ? f.exports.gltfOut : f.exports.bvhOut, avatars, frames, bytes / 1e9,
+                      kMaxRecordingBytes / 1e9, f.avatars, f.seconds));
   }
   WorldSetup setup = session.worldSetup(avatars, settings.seed, settings.controller, policy ? *policy : session.policy);
   setup.threads = settings.threads > 0 ? settings.threads : defaultThreadCount();

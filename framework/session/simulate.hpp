@@ -4,7 +4,8 @@
 /// avatars in sparring pairs or with targets, played by the trained policy (or the online
 /// search, or at random), collisions at effective punches, reactions; the report of speed
 /// and hits, and the exports (mgrl/session/exports.hpp). `mgrl simulate` and Python's
-/// Session.simulate call it; messages name the command line's options.
+/// Session.simulate call it; messages name the settings as the caller calls them
+/// (SimulateFields: the command line's options, or Python's keywords).
 #include <cstdint>
 #include <filesystem>
 #include <functional>
@@ -18,6 +19,17 @@
 #include "mgrl/session/session.hpp"
 
 namespace mgrl {
+
+/// What messages call the settings: the command line's options by default.
+struct SimulateFields {
+  ControllerFields controller;
+  ExportFields exports;
+  std::string_view avatars = "--avatars", seconds = "--seconds", topK = "--top-k", threads = "--threads";
+  std::string_view poses = "--poses", policy = "--policy", partnerPolicy = "--partner-policy",
+                   partnerRound = "--partner-round";
+  /// Python's Session.simulate keywords: avatars, seconds, bvh_out, ...
+  static SimulateFields keywords();
+};
 
 struct SimulateSettings {
   ControllerChoice controller;
@@ -35,12 +47,16 @@ struct SimulateSettings {
   /// Called once the world is set up, before it runs; its value is reported as
   /// "startup_seconds" (the command line's: seconds since the program started). Null: not reported.
   std::function<double()> startup;
+  SimulateFields fields;  ///< what messages call the settings
 
   bool records() const { return !bvhOut.empty() || !gltfOut.empty(); }
-  ExportRequest exportRequest() const { return {bvhOut, gltfOut, eventsOut, avatars, seconds, controller.name, seed}; }
+  ExportRequest exportRequest() const {
+    return {bvhOut, gltfOut, eventsOut, avatars, seconds, controller.name, seed, fields.exports};
+  }
 };
 
-/// Every mistake in the settings, found before anything is loaded: mgrl::Error naming the option.
+/// Every mistake in the settings, found before anything is loaded: mgrl::Error naming the
+/// setting as settings.fields calls it.
 void checkSimulateSettings(const SimulateSettings& settings);
 
 /// Runs the world on `session` and writes the exports prepared in `outputs`

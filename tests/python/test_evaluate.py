@@ -84,9 +84,14 @@ class EvaluateTest(unittest.TestCase):
         # The same seed gives the same run; the session's own bundle is untouched afterwards.
         again = self.session.simulate({"approach": self.approach}, avatars=3, seconds=1, seed=2)
         self.assertEqual((again["hits"], again["decisions"]), (r["hits"], r["decisions"]))
-        with self.assertRaisesRegex(mgrl.Error, r"--avatars: expected a number of avatars in \[1, "):
+        # Messages name Python's keywords, not the command line's options.
+        with self.assertRaisesRegex(mgrl.Error, r"^avatars: expected a number of avatars in \[1, "):
             self.session.simulate({"approach": self.approach}, avatars=0)
-        with self.assertRaisesRegex(mgrl.Error, r"expected a file name, found a folder"):
+        with self.assertRaisesRegex(mgrl.Error, r"^avatars: expected at most \d+ avatars with poses \(poses, bvh_out or gltf_out\)"):
+            self.session.simulate({"approach": self.approach}, avatars=300000, poses=True)
+        with self.assertRaisesRegex(mgrl.Error, r"^horizon: expected a search depth in actions in \[1, "):
+            self.session.simulate(controller="online_search", horizon=0)
+        with self.assertRaisesRegex(mgrl.Error, r"^events_out .*: expected a file name, found a folder"):
             self.session.simulate({"approach": self.approach}, seconds=1, events_out=out)
         self.assertEqual(self.session.simulate(controller="random", seconds=1)["controller"], "random")
 
