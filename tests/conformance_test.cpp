@@ -245,7 +245,14 @@ TEST_CASE(
     CHECK(rewards::termRegistry().find(kind.name) != nullptr);
     for (const std::string& key : kind.inherited) {  // an inherited key is one of the term's own
       const auto& termParams = rewards::termRegistry().find(kind.name)->params;
-      CHECK(std::any_of(termParams.begin(), termParams.end(), [&](const ParamSpec& p) { return p.name == key; }));
+      const auto own =
+          std::find_if(termParams.begin(), termParams.end(), [&](const ParamSpec& p) { return p.name == key; });
+      REQUIRE(own != termParams.end());
+      // ...of the same kind, so that the term's value can stand as the condition's default.
+      const auto& mine = kind.params;
+      const auto spec = std::find_if(mine.begin(), mine.end(), [&](const ParamSpec& p) { return p.name == key; });
+      REQUIRE(spec != mine.end());
+      CHECK(spec->kind == own->kind);
     }
     SuccessCriterion criterion = SuccessCriterion::read(ConfigNode::parse(fmt::format("{{term: {}}}", kind.name), "c"),
                                                         nlohmann::json::array(), kinds);

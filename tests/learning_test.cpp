@@ -1088,6 +1088,14 @@ TEST_CASE("success criteria take what they leave out from the reward and hold fo
     CHECK(far.play(m, 1, {0, 0, 1.2}) == 0);
     CHECK(c.describe().find("pelvis") != std::string::npos);
   }
+  SECTION("a reward term's value of the wrong kind is one clear error, not a JSON exception") {
+    const nlohmann::json wrong = nlohmann::json::array({{{"term", "distance"}, {"d0", "far"}}});
+    REQUIRE_THROWS_AS(SuccessCriterion::read(yaml("{term: distance}"), wrong, kinds), Error);
+    REQUIRE_THROWS_WITH(SuccessCriterion::read(yaml("{term: distance}"), wrong, kinds),
+                        Catch::StartsWith("success term distance: d0 defaults to the reward term's value; expected "
+                                          "number in") &&
+                            Catch::EndsWith("found \"far\""));
+  }
   SECTION("a hold carries across actions and breaks when the condition fails") {
     const SuccessCriterion c = SuccessCriterion::read(yaml("{term: distance, within: 0.1, hold_s: 0.2}"), keep, kinds);
     SuccessCriterion::Tracker tracker(c, m.frameTime);

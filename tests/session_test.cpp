@@ -87,6 +87,31 @@ TEST_CASE("a session without the capture's poses starts from the cached model al
   CHECK(session->body.points.empty());
 }
 
+TEST_CASE("a session opened on the cached model reads the capture later only if it is still the graph's",
+          "[session][data]") {
+  const fs::path trained = trainedBoxing();
+  SECTION("a capture file gone since: the loader's error, naming it, and nothing loaded") {
+    const auto session = openSession(boxingOptions(trained), {.motion = false});
+    session->scenario.motion.files.front() = trained / "gone.bvh";
+    CHECK_THROWS_WITH(session->loadMotion(), Contains("gone.bvh"));
+    CHECK_FALSE(session->graph.db.skeleton);
+  }
+  SECTION("another capture in its place: refused, not indexed out of range") {
+    const auto session = openSession(boxingOptions(trained), {.motion = false});
+    session->scenario.motion.files = {fs::path(MGRL_SOURCE_DIR) / "tests" / "data" / "boxer21.bvh"};
+    CHECK_THROWS_WITH(session->loadMotion(), Contains("is not the one the cached graph was built from"));
+    CHECK_FALSE(session->graph.db.skeleton);
+    CHECK(session->body.points.empty());
+  }
+  SECTION("the same capture: parsed once, poses and bodies ready") {
+    const auto session = openSession(boxingOptions(trained), {.motion = false});
+    session->loadMotion();
+    REQUIRE(session->graph.db.skeleton);
+    CHECK(session->graph.db.frameCount() == session->graph.model.framesTotal);
+    CHECK_FALSE(session->body.points.empty());
+  }
+}
+
 TEST_CASE("a session refuses a missing bundle when one is required, and says why when it is optional",
           "[session][data]") {
   test::TempDir temp("session-no-bundle");

@@ -7,6 +7,8 @@
 #include <fmt/format.h>
 #include <fmt/ranges.h>
 
+#include "mgrl/core/error.hpp"
+
 namespace mgrl {
 
 namespace {
@@ -30,6 +32,12 @@ ParamSpecs inheritedSpecs(const ConditionRegistry::Entry& kind, const json& from
         !from.contains(spec.name))
       continue;
     const json& value = from[spec.name];
+    const bool fits = spec.kind == ParamSpec::Kind::Choice    ? value.is_string()
+                      : spec.kind == ParamSpec::Kind::Boolean ? value.is_boolean()
+                                                              : value.is_number();
+    if (!fits)
+      throw Error(fmt::format("success term {}: {} defaults to the reward term's value; expected {}, found {}",
+                              kind.name, spec.name, spec.rangeText(), value.dump()));
     if (spec.kind == ParamSpec::Kind::Choice)
       spec.defaultChoice = value.get<std::string>();
     else if (spec.kind == ParamSpec::Kind::Boolean)

@@ -2,6 +2,7 @@
 
 #include <fmt/format.h>
 
+#include "mgrl/core/error.hpp"
 #include "mgrl/motion/motion_database.hpp"
 #include "mgrl/scenario/behaviors.hpp"
 #include "mgrl/session/plugins.hpp"
@@ -22,9 +23,18 @@ ControllerParts Session::controllerParts(Variety variety) const {
 void Session::loadMotion() {
   if (graph.db.skeleton) return;
   const WarningSink& log = options.log;
-  graph.db = loadMotionDatabase(scenario.motion, [&log](const std::string& w) {
+  MotionDatabase db = loadMotionDatabase(scenario.motion, [&log](const std::string& w) {
     if (log) log(fmt::format("graph: warning: {}", w));
   });
+  // The graph came from the cache; the capture read now must be the one it was built from
+  // (poses and bodies index its frames).
+  if (db.frameCount() != graph.model.framesTotal || db.skeleton->jointCount() != graph.model.jointNames.size())
+    throw Error(fmt::format(
+        "the capture read now ({} frames, {} joints) is not the one the cached graph was built "
+        "from ({} frames, {} joints): it changed on disk since the session opened; open the "
+        "session again",
+        db.frameCount(), db.skeleton->jointCount(), graph.model.framesTotal, graph.model.jointNames.size()));
+  graph.db = std::move(db);
   body = makeBodyTable(graph.db);
 }
 
