@@ -30,6 +30,22 @@ namespace {
 using namespace test::serving;
 using serve::parseClientMessage;
 
+// The median ground distance between avatars 0's and 1's pelvises over `seconds` of the
+// page's world (after its first 2 s, from the start's spacing); counts `values` messages.
+double medianPelvisDistance(serve::ViewerSession& page, double seconds, int* valuesMessages) {
+  std::vector<double> d;
+  for (int f = 0; f < static_cast<int>(seconds / page.frameTime()); ++f) {
+    page.advance(1.0);
+    for (const std::string& m : page.takeOutbox())
+      if (valuesMessages && json::parse(m)["type"] == "values") ++*valuesMessages;
+    const serve::DecodedFrame frame = serve::decodeFrame(page.frame());
+    if (f * page.frameTime() < 2) continue;
+    const Eigen::Vector3d a = frame.avatars.at(0).at(0), b = frame.avatars.at(1).at(0);
+    d.push_back(std::hypot(a.x() - b.x(), a.z() - b.z()));
+  }
+  std::nth_element(d.begin(), d.begin() + static_cast<std::ptrdiff_t>(d.size() / 2), d.end());
+  return d[d.size() / 2];
+}
 
 TEST_CASE("page messages are taken only when every field is what the protocol says", "[serve]") {
   const auto mode = std::get<serve::SetMode>(parseClientMessage(R"({"type": "mode", "mode": "crowd", "avatars": 100})"));
@@ -396,22 +412,8 @@ TEST_CASE("boxing's sparring plays boxing_spar's behaviour at a fighting distanc
   CHECK(json::parse(session.takeOutbox().at(0))["behavior"] == "spar");
   // 20 s of sparring: the pelvises stay a fighting distance apart (the paper's behaviours
   // close in to 0.66 m, boxing_spar's bouts measure 1.10 m), and values of spar follow.
-  auto medianDistance = [](serve::ViewerSession& page, double seconds, int* valuesMessages) {
-    std::vector<double> d;
-    for (int f = 0; f < static_cast<int>(seconds / page.frameTime()); ++f) {
-      page.advance(1.0);
-      for (const std::string& m : page.takeOutbox())
-        if (valuesMessages && json::parse(m)["type"] == "values") ++*valuesMessages;
-      const serve::DecodedFrame frame = serve::decodeFrame(page.frame());
-      if (f * page.frameTime() < 2) continue;  // from the start's 2 m spacing
-      const Eigen::Vector3d a = frame.avatars.at(0).at(0), b = frame.avatars.at(1).at(0);
-      d.push_back(std::hypot(a.x() - b.x(), a.z() - b.z()));
-    }
-    std::nth_element(d.begin(), d.begin() + static_cast<std::ptrdiff_t>(d.size() / 2), d.end());
-    return d[d.size() / 2];
-  };
   int values = 0;
-  const double spar = medianDistance(session, 20, &values);
+  const double spar = medianPelvisDistance(session, 20, &values);
   CHECK(spar >= 0.9);
   CHECK(values >= 10);
   // A crowd plays it too; back in target mode, the paper's two behaviours and no values.
@@ -432,9 +434,96 @@ TEST_CASE("boxing's sparring plays boxing_spar's behaviour at a fighting distanc
   serve::ViewerSession paper(own.assets);
   paper.handle(R"({"type": "mode", "mode": "sparring"})");
   paper.takeOutbox();
-  const double close = medianDistance(paper, 20, nullptr);
+  const double close = medianPelvisDistance(paper, 20, nullptr);
   INFO("median pelvis distance: boxing_spar " << spar << " m, the paper's behaviours " << close << " m");
   CHECK(close < spar - 0.2);
+}
+
+// Issue 43: `mgrl serve --partner-policy DIR`: the second fighter of each pair plays a
+// bundle of its own, greedily, as `mgrl simulate --partner-policy` does.
+TEST_CASE("serve --partner-policy: the second fighter of each pair plays its own bundle", "[serve][data]") {
+  const BoxingAssets spar(true, "boxing_spar.yaml", {});
+  // A partner trained on the same graph and grid to keep 2.5 m away instead of 1.15 m, and
+  // not to punch (its reward without the contact term).
+  test::TempDir dir("serve-partner");
+  std::string text = readFile(fs::path(MGRL_SOURCE_DIR) / "scenarios" / "boxing_spar.yaml");
+  const std::string contact = "        - {term: contact, effector: fists, radius: 0.7, weight: 3}\n";
+  REQUIRE(text.find("d0: 1.15") != std::string::npos);
+  REQUIRE(text.find(contact) != std::string::npos);
+  text.replace(text.find("d0: 1.15"), 8, "d0: 2.5");
+  text.erase(text.find(contact), contact.size());
+  writeFile(dir.path / "far.yaml", text);
+  app::TrainOptions far = spar.train;
+  far.scenario = dir.path / "far.yaml";
+  far.out = dir.path / "far-policy";
+  app::runTrain(far);
+  auto options = [&](const fs::path& partner, int round) {
+    serve::ServeOptions o;
+    static_cast<app::LearnOptions&>(o) = spar.train;
+    o.policy = spar.train.out;
+    o.sparringScenario = "none";
+    o.partnerPolicy = partner;
+    o.partnerRound = round;
+    return o;
+  };
+  auto sparring = [](serve::ViewerSession& page) {
+    page.takeOutbox();
+    page.handle(R"({"type": "mode", "mode": "sparring"})");
+    return json::parse(page.takeOutbox().at(0));
+  };
+  serve::ViewerSession own(spar.assets), near(serve::loadViewerAssets(options(spar.train.out, 0))),
+      again(serve::loadViewerAssets(options(spar.train.out, 0))), away(serve::loadViewerAssets(options(far.out, 0)));
+  CHECK(sparring(own)["opponent"].is_null());
+  CHECK(sparring(near)["opponent"] == "partner_policy");
+  sparring(again);
+  const json scene = sparring(away);
+  CHECK(scene["opponent"] == "partner_policy");
+  CHECK(scene["controller"] == "policy");
+  CHECK_THAT(scene["note"].get<std::string>(),
+             Catch::Contains("The second fighter of each pair plays") && Catch::Contains("far-policy"));
+  // The partner's pelvis, frame by frame: the same bundle twice, the same bout (the world
+  // is deterministic); another bundle, another bout, though the first fighter plays the
+  // same tables.
+  auto partnerPath = [](serve::ViewerSession& page, int frames) {
+    std::vector<Eigen::Vector3d> path;
+    for (int f = 0; f < frames; ++f) {
+      page.advance(1.0);
+      page.takeOutbox();
+      path.push_back(serve::decodeFrame(page.frame()).avatars.at(1).at(0));
+    }
+    return path;
+  };
+  const int frames = static_cast<int>(10 / near.frameTime());
+  const auto nearPath = partnerPath(near, frames);
+  CHECK(partnerPath(again, frames) == nearPath);
+  CHECK(partnerPath(away, frames) != nearPath);
+  // The partner that wants 2.5 m (and no punches) holds the pair further apart than the
+  // scenario's own bundle does.
+  const double withOwn = medianPelvisDistance(near, 20, nullptr), withFar = medianPelvisDistance(away, 20, nullptr);
+  INFO("median pelvis distance: partner plays the scenario's bundle " << withOwn << " m, the far one's " << withFar
+                                                                      << " m");
+  CHECK(withOwn < 1.6);
+  CHECK(withFar > withOwn);
+  // Refusals, each in one line naming the flag.
+  auto refusal = [&](serve::ServeOptions o) {
+    try {
+      serve::loadViewerAssets(o);
+    } catch (const Error& e) {
+      return std::string(e.what());
+    }
+    return std::string("no error");
+  };
+  CHECK_THAT(refusal(options("", 2)), Catch::StartsWith("--partner-round: expected --partner-policy DIR as well"));
+  CHECK_THAT(refusal(options(far.out, 1)),
+             Catch::StartsWith("--partner-policy: ") && Catch::Contains("expected self-play round 1's table"));
+  CHECK_THAT(refusal(options(dir.path / "absent", 0)),
+             Catch::StartsWith("--partner-policy: ") && Catch::Contains("absent"));
+  serve::ServeOptions dodge = options(far.out, 0);
+  dodge.scenario = fs::path(MGRL_SOURCE_DIR) / "scenarios" / "dodge.yaml";
+  dodge.policy.clear();
+  CHECK_THAT(refusal(dodge), Catch::StartsWith("--partner-policy: expected a scenario whose partners play the page's "
+                                               "controller") &&
+                                 Catch::Contains("scripted opponent (pursue)"));
 }
 
 // A sparring scenario that cannot be used is refused at start, in one line.

@@ -15,8 +15,9 @@ const successText = (behaviors) => {
 /** Who the blue corner is when the server plays it (scene.opponent), as a sentence; red
  * plays the page's controller (the trained policy, or the search or random actions). */
 export function opponentText(opponent, controller) {
-  if (opponent !== 'pursue' && opponent !== 'stand') return '';
   const red = controller === 'policy' ? 'the trained avatar' : `the page's controller (${controller ?? '?'})`;
+  if (opponent === 'partner_policy') return `Blue: the partner's own policy bundle (serve --partner-policy); red: ${red}.`;
+  if (opponent !== 'pursue' && opponent !== 'stand') return '';
   const blue = opponent === 'pursue' ? "walking in with the capture's steps and throwing its punches"
                                      : 'standing, turning to face the avatar and punching';
   return `Blue: the scripted opponent the behaviours were trained against, ${blue}; red: ${red}.`;

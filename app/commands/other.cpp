@@ -37,6 +37,13 @@ class Serve final : public SessionCommand {
     sub_->add_option("--sparring-scenario", options_.sparringScenario,
                      "Scenario whose behaviours play sparring and crowds (default: the scenario's sparring_scenario, "
                      "e.g. boxing.yaml's boxing_spar.yaml; none: the scenario's own behaviours)");
+    sub_->add_option("--partner-policy", options_.partnerPolicy,
+                     "Sparring and crowds: the second avatar of each pair plays this bundle (two policies spar; the "
+                     "first plays the page's controller)");
+    sub_->add_option("--partner-round", options_.partnerRound,
+                     "With --partner-policy: the partner plays that self-play round's tables (mgrl train keeps every "
+                     "round)")
+        ->check(CLI::Range(1, 1000));
     sub_->add_option("--web", options_.web, "The viewer's folder (default: MGRL_WEB, else the repository's web/)");
     addSessionOptions(options_, common, false);
   }

@@ -28,6 +28,10 @@ struct ServeOptions : app::LearnOptions {
   /// a scenario file. Its default bundle is used; of the --set flags only `world.` ones
   /// apply to it.
   std::string sparringScenario;
+  /// Issue 43: the second avatar of each sparring pair plays this bundle's tables
+  /// (greedily), the first the page's controller ("" both play the page's controller).
+  std::filesystem::path partnerPolicy;
+  int partnerRound = 0;  ///< > 0: that self-play round's tables of partnerPolicy
 };
 
 /// Everything the sessions share, loaded once: the graph, the behaviours, the policy

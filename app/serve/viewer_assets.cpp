@@ -43,9 +43,35 @@ std::shared_ptr<ViewerAssets> loadAssets(const ServeOptions& options, const Grap
   return assets;
 }
 
+// --partner-policy (issue 43): the second avatar of each sparring pair of `spar` (the assets
+// that play sparring and crowds) plays that bundle greedily, as `mgrl simulate
+// --partner-policy` does.
+void loadPartner(ViewerAssets& spar, const ServeOptions& options) {
+  if (options.partnerPolicy.empty()) return;
+  Session& session = *spar.session;
+  if (!session.partnerName().empty())
+    throw Error(
+        fmt::format("--partner-policy: expected a scenario whose partners play the page's controller, found "
+                    "{}, whose partner is its scripted opponent ({})",
+                    session.scenario.path.string(), session.partnerName()));
+  try {
+    session.loadPartnerPolicy(options.partnerPolicy, options.partnerRound);
+  } catch (const Error& e) {
+    throw Error(fmt::format("--partner-policy: {}", e.what()));
+  }
+  const std::string round = options.partnerRound > 0 ? fmt::format(" (self-play round {})", options.partnerRound) : "";
+  const std::string text =
+      fmt::format("The second fighter of each pair plays {}{}.", options.partnerPolicy.string(), round);
+  spar.note = spar.note.empty() ? text : fmt::format("{} {}", spar.note, text);
+  if (options.log)
+    options.log(fmt::format("serve: sparring partners play {}{}", options.partnerPolicy.string(), round));
+}
+
 }  // namespace
 
 std::shared_ptr<const ViewerAssets> loadViewerAssets(const ServeOptions& options) {
+  if (options.partnerRound > 0 && options.partnerPolicy.empty())
+    throw Error("--partner-round: expected --partner-policy DIR as well (the bundle whose round the partner plays)");
   std::shared_ptr<ViewerAssets> assets = loadAssets(options, nullptr);
   // Sparring and crowds play another scenario's behaviours when the scenario (or
   // --sparring-scenario) names one (issue 46: the paper's approach and hit close in to
@@ -58,7 +84,10 @@ std::shared_ptr<const ViewerAssets> loadViewerAssets(const ServeOptions& options
     other = main.scenario.sparringScenario;
   } else if (options.sparringScenario != "none")
     other = options.sparringScenario;
-  if (other.empty()) return assets;
+  if (other.empty()) {
+    loadPartner(*assets, options);
+    return assets;
+  }
   if (!main.partnerName().empty())
     throw Error(
         fmt::format("--sparring-scenario: expected a scenario without a scripted opponent ({} spars with its "
@@ -72,8 +101,9 @@ std::shared_ptr<const ViewerAssets> loadViewerAssets(const ServeOptions& options
   for (const std::string& set : options.sets)
     if (set.rfind("world.", 0) == 0) companion.sets.push_back(set);
   if (options.log) options.log(fmt::format("serve: sparring and crowds play {}", other.string()));
+  std::shared_ptr<ViewerAssets> sparring;
   try {
-    std::shared_ptr<ViewerAssets> sparring = loadAssets(companion, &main.graph);
+    sparring = loadAssets(companion, &main.graph);
     if (!sparring->session->partnerName().empty())
       throw Error(fmt::format("expected a scenario without a scripted opponent, found one ({})",
                               sparring->session->partnerName()));
@@ -88,10 +118,11 @@ std::shared_ptr<const ViewerAssets> loadViewerAssets(const ServeOptions& options
                     options.sparringScenario.empty() ? fmt::format("{}'s sparring_scenario", options.scenario.string())
                                                      : std::string("--sparring-scenario"),
                     options.scenario.string(), sparring->note.empty() ? "" : " ", sparring->note);
-    assets->sparring = std::move(sparring);
   } catch (const Error& e) {
     throw Error(fmt::format("sparring scenario {}: {}", other.string(), e.what()));
   }
+  loadPartner(*sparring, options);
+  assets->sparring = std::move(sparring);
   return assets;
 }
 

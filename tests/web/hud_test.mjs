@@ -6,7 +6,7 @@ import assert from 'node:assert/strict';
 
 // The HUD touches a few elements when a scene arrives; a stand-in for each.
 globalThis.document = {getElementById: () => ({hidden: false, textContent: ''})};
-const {Hud} = await import('../../web/hud.js');
+const {Hud, opponentText} = await import('../../web/hud.js');
 
 const hit = (time) => ({time, speed: 4, hand: 'right', limb: 'hand', attacker: 0, target: -1});
 
@@ -70,4 +70,12 @@ test('the note says who the blue corner is when the server plays a scripted oppo
   assert.match(hud.noteText(), /^No policy bundle\. Blue: .*red: the page's controller \(online_search\)\.$/);
   hud.setScene({note: '', opponent: 'stand', controller: 'random'});
   assert.match(hud.noteText(), /standing.*red: the page's controller \(random\)/);
+});
+
+test('the blue corner is named when the server plays it: a scripted opponent or a partner bundle', () => {
+  assert.match(opponentText('pursue', 'policy'), /^Blue: the scripted opponent .*walking in.*; red: the trained avatar\.$/);
+  assert.match(opponentText('partner_policy', 'policy'),
+               /^Blue: the partner's own policy bundle \(serve --partner-policy\); red: the trained avatar\.$/);
+  assert.match(opponentText('partner_policy', 'random'), /red: the page's controller \(random\)\.$/);
+  assert.equal(opponentText(null, 'policy'), '');
 });
