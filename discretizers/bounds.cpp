@@ -58,9 +58,10 @@ Bounds boundsOfHits(const Params& p, const StateActionModel& m, bool heights) {
   }
   for (const auto* range : {b.angle, b.distance, b.height})
     if (!(range[1] > range[0]) && (heights || range != b.height))
-      p.fail("bounds", fmt::format("expected the effective hitting points to span {}, found them all on one {}; set "
-                                   "bounds: given",
-                                   heights ? "a volume" : "an area", heights ? "plane" : "line"));
+      p.fail("bounds", heights ? "expected the effective hitting points to span a volume, found them all on one "
+                                 "plane; set bounds: given"
+                               : "expected the effective hitting points to span an area, found them all at one angle "
+                                 "or one distance; set bounds: given");
   return b;
 }
 

@@ -47,7 +47,7 @@ using Key = std::array<std::uint64_t, 3>;
 class KdTree final : public Discretizer {
  public:
   KdTree(const Params& p, const StateActionModel& m)
-      : KdTree(p, chosenBounds(p, m),
+      : KdTree(p, chosenBounds(p, m, p.choice("coordinates") == "cylindrical"),
                {p.integer("angle_cells"), p.integer("distance_cells"), p.integer("height_cells")}) {}
 
   // The tree over bounds `b` starting from `initial` cells (angle, distance, height; the

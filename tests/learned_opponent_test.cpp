@@ -358,7 +358,7 @@ TEST_CASE(
   // simulate: a partner's round without a partner bundle, a partner outside a sparring world.
   const test::Run round = box.run("simulate " + box.scenario() + " --controller random --partner-round 1");
   CHECK(round.status != 0);
-  CHECK(round.lastErrorLine().find("--partner-round: expected --partner-policy as well") != std::string::npos);
+  CHECK(round.lastErrorLine().find("--partner-round: expected --partner-policy DIR as well") != std::string::npos);
   const test::Run targets = box.run("simulate " + box.scenario() + " --controller random --set world.mode=targets" +
                                     " --partner-policy " + test::shellWord(box.path("nothing")));
   CHECK(targets.status != 0);

@@ -473,6 +473,11 @@ TEST_CASE("serve --partner-policy: the second fighter of each pair plays its own
   };
   serve::ViewerSession own(spar.assets), near(serve::loadViewerAssets(options(spar.train.out, 0))),
       again(serve::loadViewerAssets(options(spar.train.out, 0))), away(serve::loadViewerAssets(options(far.out, 0)));
+  // It opens in target mode as without a partner (only a scripted opponent's scene opens
+  // sparring), and the note names the partner only where there are pairs.
+  const json opening = json::parse(near.takeOutbox().at(0));
+  CHECK(opening["mode"] == "target");
+  CHECK(opening["note"].get<std::string>().find("second fighter") == std::string::npos);
   CHECK(sparring(own)["opponent"].is_null());
   CHECK(sparring(near)["opponent"] == "partner_policy");
   sparring(again);

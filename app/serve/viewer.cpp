@@ -81,7 +81,7 @@ ViewerSession::ViewerSession(std::shared_ptr<const ViewerAssets> assets)
   adopt(root_);
   // An opponent scene (dodge) opens on the avatar and the opponent it was trained against;
   // the others on the paper's boxer and its target.
-  if (root_->session->partnerName().empty())
+  if (!root_->session->task.scriptedOpponent)
     rebuild(Mode::Target, 1);
   else
     rebuild(Mode::Sparring, 2);
@@ -225,6 +225,7 @@ std::string ViewerSession::scene() const {
   controllers.push_back("online_search");
   controllers.push_back("random");
   std::string note = a.note;
+  if (mode_ != Mode::Target && !a.partnerNote.empty()) note += (note.empty() ? "" : " ") + a.partnerNote;
   if (!s.adjustment.empty()) note += (note.empty() ? "" : " ") + s.adjustment;
   return json{{"type", "scene"},
               {"mode", modeName(mode_)},

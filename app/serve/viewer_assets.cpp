@@ -62,7 +62,7 @@ void loadPartner(ViewerAssets& spar, const ServeOptions& options) {
   const std::string round = options.partnerRound > 0 ? fmt::format(" (self-play round {})", options.partnerRound) : "";
   const std::string text =
       fmt::format("The second fighter of each pair plays {}{}.", options.partnerPolicy.string(), round);
-  spar.note = spar.note.empty() ? text : fmt::format("{} {}", spar.note, text);
+  spar.partnerNote = text;
   if (options.log)
     options.log(fmt::format("serve: sparring partners play {}{}", options.partnerPolicy.string(), round));
 }

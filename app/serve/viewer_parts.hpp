@@ -29,6 +29,8 @@ struct ViewerAssets {
   std::unique_ptr<Session> session;
   double meanOutDegree = 1;  ///< actions per state, for the online search's cost
   std::string note;          ///< shown on the page (no policy bundle, ...)
+  /// Shown in sparring and crowds only: what the partners play (--partner-policy).
+  std::string partnerNote;
   ServeOptions options;      ///< what the server was started with (live retraining adds --set's)
   /// What eval counts as success (trialCriteria), which the page counts live, and
   /// its text ("contact of the fists within 0.15 m").

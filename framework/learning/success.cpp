@@ -37,7 +37,11 @@ ParamSpecs inheritedSpecs(const ConditionRegistry::Entry& kind, const json& from
                                                               : value.is_number();
     if (!fits)
       throw Error(fmt::format("success term {}: {} defaults to the reward term's value; expected {}, found {}",
-                              kind.name, spec.name, spec.rangeText(), value.dump()));
+                              kind.name, spec.name,
+                              spec.kind == ParamSpec::Kind::Choice    ? "a word"
+                              : spec.kind == ParamSpec::Kind::Boolean ? "true or false"
+                                                                      : "a number",
+                              value.dump()));
     if (spec.kind == ParamSpec::Kind::Choice)
       spec.defaultChoice = value.get<std::string>();
     else if (spec.kind == ParamSpec::Kind::Boolean)

@@ -43,6 +43,7 @@ SimulateFields SimulateFields::keywords() {
   f.poses = "poses";
   f.policy = "tables";
   f.partnerPolicy = "partner_policy";
+  f.partnerPolicyUsage = "partner_policy";
   f.partnerRound = "partner_round";
   return f;
 }
@@ -136,7 +137,7 @@ json simulate(Session& session, const SimulateSettings& settings, Outputs& outpu
     session.loadPartnerPolicy(settings.partnerPolicy, settings.partnerRound);
   } else if (settings.partnerRound > 0) {
     throw Error(fmt::format("{}: expected {} as well (the bundle whose round the partner plays)", f.partnerRound,
-                            f.partnerPolicy));
+                            f.partnerPolicyUsage));
   }
   const fs::path& policyDir = session.policyDir;
   const Scenario& scenario = session.scenario;

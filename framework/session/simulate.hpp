@@ -26,8 +26,9 @@ struct SimulateFields {
   ExportFields exports;
   std::string_view avatars = "--avatars", seconds = "--seconds", topK = "--top-k", threads = "--threads";
   std::string_view poses = "--poses", policy = "--policy", partnerPolicy = "--partner-policy",
-                   partnerRound = "--partner-round";
-  /// Python's Session.simulate keywords: avatars, seconds, bvh_out, ...
+                   partnerPolicyUsage = "--partner-policy DIR", partnerRound = "--partner-round";
+  /// The names Python's Session.simulate gives its keywords (avatars, seconds, bvh_out, ...),
+  /// and would give the settings it does not take yet (top_k, threads, partner_policy, ...).
   static SimulateFields keywords();
 };
 
