@@ -1056,8 +1056,9 @@ async function main() {
         '"bones only" draws the bones without the joint spheres', JSON.stringify(thin));
   await screenshot(page, 'viewer-crowd-bones.png');
   await page.uncheck('#bones-look');
-  // Each look measured five times, alternately; the medians are compared (one measurement
-  // can catch the other core's work, in either look).
+  // Each look measured five times, alternately, and each bodies draw compared with the
+  // bones draw measured right after it: the machine's load (the README check and the demo
+  // run beside this test) changes between pairs, not within one. The median ratio is checked.
   const bodyRuns = [crowd100.drawMs], boneRuns = [bones100.drawMs];
   for (let k = 0; k < 4; ++k) {
     bodyRuns.push((await measured(page, 100)).drawMs);
@@ -1066,7 +1067,7 @@ async function main() {
     await page.uncheck('#bones-look');
   }
   const median = (xs) => [...xs].sort((a, b) => a - b)[Math.floor(xs.length / 2)];
-  const bodyMs = median(bodyRuns), boneMs = median(boneRuns);
+  const ratio = median(bodyRuns.map((ms, k) => ms / boneRuns[k]));
   // The page's own cost of a draw (ms, writing the instances and the draw call): what
   // limits its frame rate. Draws per second are not compared: on a software renderer the
   // page rests as long as a slow draw took between draws, so they swing with the machine.
@@ -1077,8 +1078,8 @@ async function main() {
   // renderer the ratio measured 1.20 at 0c49a9d and 1.22 to 1.32 later with the same drawing
   // code (quiet machine and under load), so a 20 % bound failed by chance. The budget itself
   // wants a benchmark on a real GPU.
-  check(bodyMs <= 1.35 * boneMs, 'bodies cost at most 35 % more than bones a draw at 100 avatars (medians of 5)',
-        `${bodyMs.toFixed(1)} and ${boneMs.toFixed(1)} ms`);
+  check(ratio <= 1.35, 'bodies cost at most 35 % more than bones a draw at 100 avatars (median of 5 paired ratios)',
+        `${ratio.toFixed(2)}x`);
   await panelControls(page);
 
   const table = [sparring];
