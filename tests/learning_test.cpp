@@ -1355,6 +1355,14 @@ TEST_CASE("bounds: hits takes the box of the effective hitting points: an area f
   REQUIRE_THROWS_WITH(makeGrid("{type: cylindrical3d, bounds: hits}", m),
                       Catch::Contains("bounds: expected the effective hitting points to span a volume, found them "
                                       "all on one plane; set bounds: given"));
+  // ...and every hit at one spot leaves a ground grid no area either.
+  for (ActionHit& h : m.hits) {
+    h.x = 0.1f;
+    h.z = 0.6f;
+  }
+  REQUIRE_THROWS_WITH(makeGrid("{type: polar_velocity, bounds: hits}", m),
+                      Catch::Contains("bounds: expected the effective hitting points to span an area, found them "
+                                      "all at one angle or one distance; set bounds: given"));
 }
 
 TEST_CASE("polar_velocity: vertices sit on speed layers, backups stay on them, decisions interpolate across two",

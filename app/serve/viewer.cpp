@@ -348,9 +348,10 @@ void ViewerSession::followSuccess() {
   State& s = *state_;
   const World& world = *s.world;
   const StateActionModel& model = assets_->model();
-  const bool scripted = !assets_->session->partnerName().empty();
+  // A scripted opponent or a partner bundle plays the second of each pair, not the page's controller.
+  const bool partnerApart = !assets_->session->partnerName().empty();
   for (std::size_t i = 0; i < world.avatarCount(); ++i) {
-    if (scripted && world.partner(i) >= 0 && i % 2 == 1) continue;  // a scripted opponent: not the behaviour's
+    if (partnerApart && world.partner(i) >= 0 && i % 2 == 1) continue;
     const World::Decision d = world.lastDecision(i);
     if (d.count == s.decisionsFollowed[i]) continue;
     s.decisionsFollowed[i] = d.count;

@@ -60,9 +60,7 @@ void loadPartner(ViewerAssets& spar, const ServeOptions& options) {
     throw Error(fmt::format("--partner-policy: {}", e.what()));
   }
   const std::string round = options.partnerRound > 0 ? fmt::format(" (self-play round {})", options.partnerRound) : "";
-  const std::string text =
-      fmt::format("The second fighter of each pair plays {}{}.", options.partnerPolicy.string(), round);
-  spar.partnerNote = text;
+  spar.partnerNote = fmt::format("The second fighter of each pair plays {}{}.", options.partnerPolicy.string(), round);
   if (options.log)
     options.log(fmt::format("serve: sparring partners play {}{}", options.partnerPolicy.string(), round));
 }
@@ -70,8 +68,7 @@ void loadPartner(ViewerAssets& spar, const ServeOptions& options) {
 }  // namespace
 
 std::shared_ptr<const ViewerAssets> loadViewerAssets(const ServeOptions& options) {
-  if (options.partnerRound > 0 && options.partnerPolicy.empty())
-    throw Error("--partner-round: expected --partner-policy DIR as well (the bundle whose round the partner plays)");
+  Session::checkPartnerChoice(options.partnerPolicy, options.partnerRound);
   std::shared_ptr<ViewerAssets> assets = loadAssets(options, nullptr);
   // Sparring and crowds play another scenario's behaviours when the scenario (or
   // --sparring-scenario) names one (issue 46: the paper's approach and hit close in to

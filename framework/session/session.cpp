@@ -78,6 +78,12 @@ std::string Session::partnerName() const {
   return "";
 }
 
+void Session::checkPartnerChoice(const std::filesystem::path& dir, int round, std::string_view roundName,
+                                 std::string_view dirName) {
+  if (round > 0 && dir.empty())
+    throw Error(fmt::format("{}: expected {} as well (the bundle whose round the partner plays)", roundName, dirName));
+}
+
 void Session::loadPartnerPolicy(const std::filesystem::path& dir, int round) {
   partnerBundle = loadPolicyBundle(dir, graph.model, graph.key);
   if (round > 0) {

@@ -15,6 +15,7 @@
 #include <functional>
 #include <memory>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include <nlohmann/json.hpp>
@@ -105,6 +106,11 @@ class Session {
   /// each pair a policy controller on it. Throws mgrl::Error naming the bundle's problem.
   /// `round` > 0: the tables of that self-play round (NAME-roundK) instead of the final ones.
   void loadPartnerPolicy(const std::filesystem::path& dir, int round = 0);
+  /// Refuses a self-play round without a partner bundle, before anything loads: mgrl::Error
+  /// naming the two settings as the caller calls them (the command line's by default).
+  static void checkPartnerChoice(const std::filesystem::path& dir, int round,
+                                 std::string_view roundName = "--partner-round",
+                                 std::string_view dirName = "--partner-policy DIR");
   /// What the second avatar of a sparring pair plays, for reports and the viewer: "" (the
   /// same as the first), "partner_policy" or "pursue" / "stand" (the scripted opponent).
   std::string partnerName() const;

@@ -127,6 +127,7 @@ json simulate(Session& session, const SimulateSettings& settings, Outputs& outpu
   if (settings.topK > 0) session.task.world.variety.topK = static_cast<int>(settings.topK);
   const WorldParams& params = session.task.world;
   const SimulateFields& f = settings.fields;
+  Session::checkPartnerChoice(settings.partnerPolicy, settings.partnerRound, f.partnerRound, f.partnerPolicyUsage);
   if (!settings.partnerPolicy.empty()) {
     if (params.mode != "sparring")
       throw Error(
@@ -135,9 +136,6 @@ json simulate(Session& session, const SimulateSettings& settings, Outputs& outpu
       throw Error(fmt::format("{}: expected {} policy (the first avatar of each pair plays {}), found {}",
                               f.partnerPolicy, f.controller.controller, f.policy, settings.controller.name));
     session.loadPartnerPolicy(settings.partnerPolicy, settings.partnerRound);
-  } else if (settings.partnerRound > 0) {
-    throw Error(fmt::format("{}: expected {} as well (the bundle whose round the partner plays)", f.partnerRound,
-                            f.partnerPolicyUsage));
   }
   const fs::path& policyDir = session.policyDir;
   const Scenario& scenario = session.scenario;
