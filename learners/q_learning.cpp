@@ -70,8 +70,12 @@ nlohmann::json toJson(const Walk& w, bool capped) {
   nlohmann::json j = {{"updates", w.updates}, {"restarts", w.restarts}, {"state", w.state},
                       {"target", {w.target.position.x(), w.target.position.y(), w.target.position.z()}}, {"rng", rng}};
   if (capped) j["episode_actions"] = w.episodeActions;
-  // A moving target's speed and heading; absent for static targets (their format unchanged).
-  if (w.target.moving() || w.target.heading != 0) j["target_motion"] = {w.target.speed, w.target.heading};
+  // A moving target's speed and heading, and its turn rate if it turns; absent for static
+  // targets (their format unchanged).
+  if (w.target.moving() || w.target.heading != 0 || w.target.turnRate != 0) {
+    j["target_motion"] = {w.target.speed, w.target.heading};
+    if (w.target.turnRate != 0) j["target_motion"].push_back(w.target.turnRate);
+  }
   return j;
 }
 
@@ -131,12 +135,15 @@ Saved readSaved(const nlohmann::json& state, const ManifestReader& r, std::size_
   w.target = TargetState(target[0].get<double>(), target[1].get<double>(), target[2].get<double>());
   if (walk.contains("target_motion")) {
     const json& motion = walk["target_motion"];
-    if (!motion.is_array() || motion.size() != 2 ||
-        !std::all_of(motion.begin(), motion.end(), [](const json& v) { return v.is_number() && std::isfinite(v.get<double>()); }) ||
+    if (!motion.is_array() || motion.size() < 2 || motion.size() > 3 ||
+        !std::all_of(motion.begin(), motion.end(),
+                     [](const json& v) { return v.is_number() && std::isfinite(v.get<double>()); }) ||
         motion[0].get<double>() < 0)
-      r.fail("state.walk.target_motion", "2 finite numbers: a speed >= 0 (m/s) and a heading (rad)", motion);
+      r.fail("state.walk.target_motion",
+             "2 or 3 finite numbers: a speed >= 0 (m/s), a heading (rad) and a turn rate (rad/s)", motion);
     w.target.speed = motion[0].get<double>();
     w.target.heading = motion[1].get<double>();
+    if (motion.size() == 3) w.target.turnRate = motion[2].get<double>();
   }
   const json& rng = r.member(walk, "state.walk", "rng");
   if (!rng.is_array() || rng.size() != 4 ||

@@ -150,9 +150,11 @@ class PySession {
     p.outIndices = py::array_t<std::int32_t>(A);
     for (std::size_t a = 0; a < A; ++a) p.outIndices.mutable_data()[a] = static_cast<std::int32_t>(a);
     // Each vertex as the grid's coordinates (angle, distance, height, ... as its axes say),
-    // and on a grid with speed layers its layer's speed last (with a learned opponent's
-    // layers, its discrete state: graph state x phases + phase).
-    const int D = grid.dimension(), columns = D + (grid.layerAxis() ? 1 : 0);
+    // then on a grid with speed layers its layer's speed (with a learned opponent's layers,
+    // its discrete state: graph state x phases + phase), and with turn layers the turn rate
+    // (rad/s) last.
+    const int D = grid.dimension(), layerColumn = D + (grid.layerAxis() ? 1 : 0);
+    const int columns = layerColumn + (grid.turnAxis() ? 1 : 0);
     p.vertices = py::array_t<double>({V, static_cast<std::size_t>(columns)});
     for (std::size_t v = 0; v < V; ++v) {
       const TargetState e = grid.vertexState(v);
@@ -160,6 +162,7 @@ class PySession {
       double* row = p.vertices.mutable_data() + v * static_cast<std::size_t>(columns);
       for (int d = 0; d < D; ++d) row[d] = coordinates[static_cast<std::size_t>(d)];
       if (grid.layerAxis()) row[D] = grid.layerCoordinate(e);
+      if (grid.turnAxis()) row[layerColumn] = e.turnRate;
     }
     p.tabulateSeconds = tabulated;
     p.arraysSeconds = since(started) - tabulated;

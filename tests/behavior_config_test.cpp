@@ -2,6 +2,7 @@
 // or a --set override is a ConfigError `file:line:col: key.path: problem` that says what was
 // expected; the behaviour key follows what changes the trained table and nothing else; and
 // `mgrl list` documents every plugin.
+#include <cmath>
 #include <filesystem>
 #include <sstream>
 #include <string>
@@ -240,6 +241,21 @@ TEST_CASE("behaviour mistakes name the file, line, column and key", "[behaviors]
                             "'orbiting_target' (known: static_target, moving_target, opponent, learned_opponent)"));
     REQUIRE_CONFIG_ERROR(build(approachInserting(19, "    environment: {type: moving_target, min_speed: 2, max_speed: 1}")),
                          at(19, 51, "behaviors.approach.environment.min_speed: expected at most max_speed (1 m/s), found 2 m/s"));
+    REQUIRE_CONFIG_ERROR(
+        build(approachInserting(19, "    environment: {type: moving_target, max_turn_deg_s: 90, turns: 1}")),
+        at(19, 67,
+           "behaviors.approach.environment.turns: expected at least 2 turn rates with max_turn_deg_s 90 (from -90 to "
+           "+90 deg/s), found 1"));
+  }
+  SECTION("a turning moving_target gives the behaviour's grid one layer per turn rate") {
+    const std::vector<Behavior> turning =
+        build(approachInserting(19, "    environment: {type: moving_target, max_turn_deg_s: 90, turns: 3}"));
+    const Discretizer& grid = *turning.front().discretizer;
+    REQUIRE(grid.turnAxis() != nullptr);
+    CHECK(grid.turnAxis()->vertices == std::vector<double>{-M_PI / 2, 0, M_PI / 2});
+    CHECK(grid.vertexCount() == 3 * 5 * 13);
+    CHECK(build(approachInserting(19, "    environment: {type: moving_target}")).front().discretizer->turnAxis() ==
+          nullptr);
   }
   SECTION("an opponent needs a grid with a heading axis; avoid needs an opponent") {
     const std::string dodge =

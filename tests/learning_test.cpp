@@ -1484,8 +1484,191 @@ TEST_CASE("Q-learning on speed layers: restarts on a layer, checkpoints keep the
   MemoryCheckpointer damaged = store;
   damaged.state()["walk"]["target_motion"] = nlohmann::json::array({-1, 0});
   REQUIRE_THROWS_WITH(trainWith(learner, problem, g, &damaged),
-                      Catch::Contains("state.walk.target_motion: expected 2 finite numbers: a speed >= 0 (m/s) and a "
-                                      "heading (rad), found '[-1,0]'"));
+                      Catch::Contains("state.walk.target_motion: expected 2 or 3 finite numbers: a speed >= 0 (m/s), "
+                                      "a heading (rad) and a turn rate (rad/s), found '[-1,0]'"));
+}
+
+// ---- Turning targets (issue 46): moving_target's turn rates, a grid's turn layers ----
+
+TEST_CASE("a turning target runs round its circle; next() keeps its turn rate and replays exactly over actions",
+          "[learning][moving][turning]") {
+  // Heading 0 (towards +Z) turning a quarter circle a second towards +X at 1 m/s: the
+  // circle's radius is 2 / pi, so after 1 s the target is r to the left and r ahead.
+  TargetState e(Eigen::Vector3d(0.5, 1.2, 1.0), 1.0, 0.0);
+  e.turnRate = M_PI / 2;
+  const double r = 2 / M_PI;
+  CHECK((e.at(1.0) - Eigen::Vector3d(0.5 + r, 1.2, 1.0 + r)).norm() < 1e-12);
+  CHECK(e.headingAt(1.0) == Approx(M_PI / 2));
+  CHECK((e.at(4.0) - e.position).norm() < 1e-12);  // a whole turn comes back
+  // at() is the integral of the turning velocity (midpoint rule, 10^4 steps over 0.7 s).
+  Eigen::Vector3d walked = e.position;
+  for (int k = 0; k < 10000; ++k) {
+    const double t = (k + 0.5) * 0.7 / 10000, h = e.heading + e.turnRate * t;
+    walked += 0.7 / 10000 * Eigen::Vector3d(std::sin(h), 0, std::cos(h));
+  }
+  CHECK((e.at(0.7) - walked).norm() < 1e-8);
+  // Turn rate 0 is the straight line, bit for bit.
+  const TargetState straight(e.position, 1.0, 0.3);
+  CHECK(straight.at(0.7) == Eigen::Vector3d(e.position + 0.7 * straight.velocity()));
+  CHECK(straight.headingAt(0.7) == 0.3);
+
+  // next(): seen back from the world the target is where at() says, its heading has turned
+  // by w T and back by the avatar's yaw, and its turn rate is the same number.
+  const StateActionModel m = turningWalk();
+  const MovingTarget turning(0, 1, {-M_PI / 2, 0, M_PI / 2});
+  const TargetState one = turning.next(m, 0, e);
+  CHECK((transformPoint(m.displacement(0), one.position) - e.at(0.5)).norm() < 1e-12);
+  CHECK(one.heading == Approx(M_PI / 4 - 0.3));
+  CHECK(one.turnRate == e.turnRate);
+  CHECK(one.speed == e.speed);
+  // Three actions in a row land where the first decision's at(1.5) says: what the table
+  // assumes is what a trial that replays the actions sees.
+  TargetState later = e;
+  GroundMotion avatar{0, 0, 0};
+  for (int k = 0; k < 3; ++k) {
+    later = turning.next(m, 0, later);
+    avatar = compose(avatar, m.displacement(0));
+  }
+  CHECK((transformPoint(avatar, later.position) - e.at(1.5)).norm() < 1e-9);
+  CHECK(std::remainder(later.heading + avatar.dyaw - e.headingAt(1.5), 2 * M_PI) == Approx(0).margin(1e-9));
+
+  SECTION("draws only its turn rates, each as often; without them its random stream is the straight line's") {
+    Rng rng(5);
+    std::array<int, 3> counts{0, 0, 0};
+    const std::vector<double> rates = turning.turnRates();
+    for (int i = 0; i < 3000; ++i) {
+      const double w = turning.draw(Eigen::Vector3d(0, 1, 1), rng).turnRate;
+      const auto found = std::find(rates.begin(), rates.end(), w);
+      REQUIRE(found != rates.end());
+      ++counts[static_cast<std::size_t>(found - rates.begin())];
+    }
+    for (int c : counts) CHECK(c / 3000.0 == Approx(1 / 3.0).margin(0.04));
+    Rng drawn(9), plain(9);
+    CHECK(MovingTarget(0, 1).draw(Eigen::Vector3d(0, 1, 1), drawn).turnRate == 0);
+    plain.uniform();
+    plain.uniform();
+    CHECK(drawn.state() == plain.state());
+  }
+}
+
+TEST_CASE("turn layers: one copy of the speed-layered grid per turn rate, never interpolated across, kept by backups",
+          "[learning][moving][turning]") {
+  const StateActionModel m = turningWalk();
+  const std::vector<double> rates{-M_PI / 2, 0, M_PI / 2};
+  auto grid = makeGrid(kLayeredGrid, m);
+  const std::size_t perTurn = grid->vertexCount(), cellsPerTurn = grid->cellCount();
+  grid->setTurnLayers(rates);
+  CHECK(grid->turnVertexCount() == perTurn);
+  CHECK(grid->vertexCount() == 3 * perTurn);
+  CHECK(grid->cellCount() == 3 * cellsPerTurn);
+  CHECK(grid->cellCorners().size() == grid->cellCount() << 3);
+  CHECK(grid->axis(AxisRole::Turn) == grid->turnAxis());
+  CHECK(grid->describe()["turn_layers"]["name"] == "turn");
+  CHECK(grid->describe()["turn_layers"]["unit"] == "rad/s");
+
+  // Every vertex is on its speed and turn layer, and locates onto itself in that layer.
+  for (std::size_t v = 0; v < grid->vertexCount(); ++v) {
+    const TargetState e = grid->vertexState(v);
+    CHECK(e.turnRate == rates[v / perTurn]);
+    CHECK(e.speed == grid->layerAxis()->vertices[v % perTurn / grid->layerVertexCount()]);
+    GridCell cell;
+    REQUIRE(grid->locate(e, cell));
+    const Stencil s = grid->stencil(cell);
+    double own = 0;
+    for (int k = 0; k < s.size; ++k) {
+      CHECK(s.vertex[k] / perTurn == v / perTurn);
+      if (s.vertex[k] == v) own += s.weight[k];
+    }
+    if (e.position.x() != 0 || e.position.z() != 0) CHECK(own == Approx(1).margin(1e-6));
+  }
+  // Between two speeds and turning at 1.2 rad/s: 16 corners across the speeds, all in the
+  // nearest turn layer (pi / 2), none in another; a NaN turn rate is outside.
+  TargetState between(Eigen::Vector3d(0.3, 1, 0.9), 0.35, 0.2);
+  between.turnRate = 1.2;
+  GridCell cell;
+  REQUIRE(grid->locate(between, cell));
+  const Stencil s = grid->stencil(cell);
+  REQUIRE(s.size == 16);
+  for (int k = 0; k < s.size; ++k) CHECK(s.vertex[k] / perTurn == 2);
+  CHECK(grid->turnLayer(-0.2) == 1);
+  CHECK(grid->turnLayer(-5) == 0);
+  between.turnRate = NAN;
+  CHECK_FALSE(grid->inside(between));
+  // Restarts land on one of speeds x turn rates.
+  for (double u : {0.0, 0.4, 0.9999}) {
+    const TargetState drawn = grid->sample({0.5, 0.5, 0.5, u});
+    const auto pick = static_cast<std::size_t>(u * 9);
+    CHECK(drawn.speed == grid->layerAxis()->vertices[pick % 3]);
+    CHECK(drawn.turnRate == rates[pick / 3]);
+  }
+
+  // Refusals, each in one line.
+  REQUIRE_THROWS_WITH(grid->setTurnLayers({0, 1}), Catch::Contains("the grid has turn layers already"));
+  REQUIRE_THROWS_WITH(makeGrid(kLayeredGrid, m)->setTurnLayers({1, 0}),
+                      Catch::Contains("expected finite ascending turn rates, found 0 at 1"));
+  auto fighting = makeGrid("{type: polar_velocity, distance_max: 2, rings: 3, sectors: 4, headings: 4, speeds: 1}", m);
+  fighting->setOpponentLayers(4);
+  REQUIRE_THROWS_WITH(fighting->setTurnLayers(rates), Catch::Contains("a learned opponent's layers cannot turn"));
+  auto big = makeGrid("{type: polar_velocity, sectors: 100, rings: 100, headings: 100, speeds: 1}", m);
+  REQUIRE_THROWS_WITH(
+      big->setTurnLayers(std::vector<double>{-3, -2, -1, 0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15, 16, 17}),
+      Catch::Contains("expected a grid of at most 20000000 vertices, found 21000000 (1000000 per "
+                      "turn layer x 21 turn rates)"));
+
+  SECTION("learning on it: every backup stays in its vertex's turn and speed layer; compact agrees") {
+    const auto reward = app::plugins().rewards.create(yaml("{type: approach, sigma: 0.3}"));
+    const MovingTarget moving(0, 1, rates);
+    const Problem problem{m, *grid, *reward, moving};
+    const GridModel g = GridModel::build(problem, 2);
+    const std::size_t cellsPerSpeed = grid->cellCount() / 9;
+    std::size_t landed = 0;
+    for (std::size_t v = 0; v < g.vertexCount; ++v) {
+      const GridTransition& t = g.transition[v];
+      if (t.cell < 0) continue;
+      ++landed;
+      CHECK(static_cast<std::size_t>(t.cell) / cellsPerSpeed == v / grid->layerVertexCount());
+    }
+    CHECK(landed > g.vertexCount / 4);
+    const GridModel compact = GridModel::buildCompact(problem, 2);
+    for (std::size_t v = 0; v < g.vertexCount; ++v) {
+      const GridTransition a = g.at(0, v), b = compact.at(0, v);
+      CHECK(a.cell == b.cell);
+      CHECK(a.reward == b.reward);
+    }
+  }
+}
+
+TEST_CASE(
+    "Q-learning on turn layers: checkpoints keep the target's turn rate, a resumed run ends with the "
+    "uninterrupted table",
+    "[learning][moving][turning][checkpoint]") {
+  const StateActionModel m = handModel(2, {{0, 1, 15, 0.1, 0.5, 0.3, {}},
+                                           {1, 0, 12, -0.1, 0.3, -0.4, {}},
+                                           {0, 0, 10, 0, -0.3, 0.2, {}},
+                                           {1, 1, 20, 0.2, 0.6, 0, {}}});
+  auto grid = makeGrid(kLayeredGrid, m);
+  grid->setTurnLayers({-1, 1});  // no straight line: every walk's target turns
+  const auto reward = app::plugins().rewards.create(yaml("{type: approach, sigma: 0.3}"));
+  const MovingTarget moving(0, 1, {-1, 1});
+  const Problem problem{m, *grid, *reward, moving};
+  const GridModel g = GridModel::build(problem, 2);
+  const std::string learner = "{type: q_learning, budget: 3000, seed: 4, checkpoint_every: 1000, curve_points: 3}";
+  const TrainResult whole = trainWith(learner, problem, g);
+  MemoryCheckpointer store(2);
+  REQUIRE_THROWS_WITH(trainWith(learner, problem, g, &store), "simulated crash");
+  const nlohmann::json& walk = store.state()["walk"];
+  REQUIRE(walk["target_motion"].size() == 3);
+  const double w = walk["target_motion"][2].get<double>();
+  CHECK((w == -1 || w == 1));
+  MemoryCheckpointer resumed = store;
+  const TrainResult finished = trainWith(learner, problem, g, &resumed);
+  REQUIRE(finished.stats["resumed"] == true);
+  REQUIRE(finished.table == whole.table);
+  MemoryCheckpointer damaged = store;
+  damaged.state()["walk"]["target_motion"] = nlohmann::json::array({0.5, 0, 1, 2});
+  REQUIRE_THROWS_WITH(trainWith(learner, problem, g, &damaged),
+                      Catch::Contains("state.walk.target_motion: expected 2 or 3 finite numbers: a speed >= 0 (m/s), "
+                                      "a heading (rad) and a turn rate (rad/s), found '[0.5,0,1,2]'"));
 }
 
 TEST_CASE("compare --reference-set refuses a grid with speed layers in one line", "[learning][moving]") {

@@ -86,6 +86,13 @@ void bindEnvironment(const BehaviorSpec& spec, Behavior& b, const StateActionMod
           fmt::format("a learned opponent's {} states as grid layers: {}", states, e.what()));
     }
   }
+  if (std::vector<double> rates = environment.turnRates(); !rates.empty()) {
+    try {
+      b.discretizer->setTurnLayers(std::move(rates));
+    } catch (const Error& e) {
+      spec.discretizer.child("type").fail(fmt::format("a turning target's turn rates as grid layers: {}", e.what()));
+    }
+  }
   b.reward->bindEnvironment(&environment);
   const std::string source = environment.policySource();
   if (source.empty()) return;

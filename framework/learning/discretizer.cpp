@@ -14,7 +14,8 @@ namespace {
 
 // Each AxisRole's name and unit, in the enum's order.
 constexpr std::string_view kAxisNames[][2] = {{"angle", "rad"},   {"distance", "m"}, {"height", "m"},
-                                              {"heading", "rad"}, {"speed", "m/s"},  {"opponent", "state"}};
+                                              {"heading", "rad"}, {"speed", "m/s"},  {"opponent", "state"},
+                                              {"turn", "rad/s"}};
 
 }  // namespace
 
@@ -25,7 +26,8 @@ std::string_view GridAxis::unit() const { return kAxisNames[static_cast<int>(rol
 const GridAxis* Discretizer::axis(AxisRole role) const {
   for (const GridAxis& a : axes_)
     if (a.role == role) return &a;
-  return layers_.role == role && !layers_.vertices.empty() ? &layers_ : nullptr;
+  if (layers_.role == role && !layers_.vertices.empty()) return &layers_;
+  return turns_.role == role && !turns_.vertices.empty() ? &turns_ : nullptr;
 }
 
 namespace {
@@ -109,8 +111,8 @@ void Discretizer::setAxes(std::vector<GridAxis> axes) {
                             vertexCount_, fmt::join(sizes, " x ")));
   }
   axes_ = std::move(axes);
-  layerVertices_ = vertexCount_;
-  layerCells_ = cellCount_;
+  layerVertices_ = turnVertices_ = vertexCount_;
+  layerCells_ = turnCells_ = cellCount_;
   const int d = dimension();
   corners_.assign(cellCount_ << d, 0);
   std::array<std::size_t, 3> n{1, 1, 1};
@@ -143,8 +145,8 @@ void Discretizer::setCells(std::size_t vertexCount, std::size_t cellCount, std::
                             vertexCount));
   vertexCount_ = vertexCount;
   cellCount_ = cellCount;
-  layerVertices_ = vertexCount;
-  layerCells_ = cellCount;
+  layerVertices_ = turnVertices_ = vertexCount;
+  layerCells_ = turnCells_ = cellCount;
   corners_ = std::move(corners);
   hanging_ = std::move(hanging);
 }
@@ -158,6 +160,8 @@ void Discretizer::setLayers(GridAxis layer) {
   }
   const std::size_t count = layer.vertices.size();
   if (!hanging_.empty()) throw Error(fmt::format("{}: a grid with hanging vertices cannot have layers", type()));
+  if (!turns_.vertices.empty())
+    throw Error(fmt::format("{}: {} layers go under the turn layers, not over", type(), layer.name()));
   if (layerVertices_ * count > kMaxGridVertices)
     throw Error(fmt::format("{}: expected a grid of at most {} vertices, found {} ({} per layer x {} {})", type(),
                             kMaxGridVertices, layerVertices_ * count, layerVertices_, count, layer.name()));
@@ -167,9 +171,43 @@ void Discretizer::setLayers(GridAxis layer) {
     for (std::size_t k = 0; k < layerCells_ * perCell; ++k)
       corners[l * layerCells_ * perCell + k] = static_cast<std::uint32_t>(corners_[k] + l * layerVertices_);
   corners_ = std::move(corners);
-  vertexCount_ = layerVertices_ * count;
-  cellCount_ = layerCells_ * count;
+  vertexCount_ = turnVertices_ = layerVertices_ * count;
+  cellCount_ = turnCells_ = layerCells_ * count;
   layers_ = std::move(layer);
+}
+
+void Discretizer::setTurnLayers(std::vector<double> rates) {
+  if (rates.empty()) throw Error(fmt::format("{}: expected at least 1 turn rate, found none", type()));
+  for (std::size_t k = 0; k < rates.size(); ++k)
+    if (!std::isfinite(rates[k]) || (k > 0 && !(rates[k] > rates[k - 1])))
+      throw Error(fmt::format("{}: expected finite ascending turn rates, found {} at {}", type(), rates[k], k));
+  if (!turns_.vertices.empty()) throw Error(fmt::format("{}: the grid has turn layers already", type()));
+  if (opponentLayers_) throw Error(fmt::format("{}: a grid with a learned opponent's layers cannot turn", type()));
+  if (!hanging_.empty()) throw Error(fmt::format("{}: a grid with hanging vertices cannot have layers", type()));
+  const std::size_t count = rates.size();
+  if (vertexCount_ * count > kMaxGridVertices)
+    throw Error(fmt::format("{}: expected a grid of at most {} vertices, found {} ({} per turn layer x {} turn rates)",
+                            type(), kMaxGridVertices, vertexCount_ * count, vertexCount_, count));
+  const std::size_t perBlock = corners_.size();
+  std::vector<std::uint32_t> corners(perBlock * count);
+  for (std::size_t l = 0; l < count; ++l)
+    for (std::size_t k = 0; k < perBlock; ++k)
+      corners[l * perBlock + k] = static_cast<std::uint32_t>(corners_[k] + l * vertexCount_);
+  corners_ = std::move(corners);
+  turnVertices_ = vertexCount_;
+  turnCells_ = cellCount_;
+  vertexCount_ *= count;
+  cellCount_ *= count;
+  turns_.vertices = std::move(rates);
+}
+
+std::size_t Discretizer::turnLayer(double turnRate) const {
+  const std::vector<double>& v = turns_.vertices;
+  if (v.size() < 2) return 0;
+  // The first rate past the midpoint to the next one: the nearest (ties go down).
+  std::size_t k = 0;
+  while (k + 1 < v.size() && turnRate > 0.5 * (v[k] + v[k + 1])) ++k;
+  return k;
 }
 
 void Discretizer::setOpponentLayers(std::size_t count) {
@@ -228,6 +266,10 @@ bool Discretizer::locate(const TargetState& e, GridCell& out) const {
     if (!locateLayer(layerCoordinate(e), layer, out.layerFrac)) return false;
     cell += layer * layerCells_;
   }
+  if (!turns_.vertices.empty()) {
+    if (std::isnan(e.turnRate)) return false;
+    cell += turnLayer(e.turnRate) * turnCells_;
+  }
   out.cell = static_cast<std::uint32_t>(cell);
   return true;
 }
@@ -256,6 +298,7 @@ GridCell Discretizer::locateClamped(const TargetState& e) const {
                 layer, out.layerFrac);
     cell += layer * layerCells_;
   }
+  if (!turns_.vertices.empty()) cell += turnLayer(std::isnan(e.turnRate) ? 0.0 : e.turnRate) * turnCells_;
   out.cell = static_cast<std::uint32_t>(cell);
   return out;
 }
@@ -282,6 +325,8 @@ Stencil Discretizer::stencil(const GridCell& cell) const {
 
 TargetState Discretizer::vertexState(std::size_t v) const {
   std::array<double, 3> c{0, 0, 0};
+  const std::size_t turn = v / turnVertices_;
+  v %= turnVertices_;
   const std::size_t layer = v / layerVertices_;
   v %= layerVertices_;
   for (int i = 0; i < dimension(); ++i) {
@@ -294,6 +339,7 @@ TargetState Discretizer::vertexState(std::size_t v) const {
     e.opponent = static_cast<std::int32_t>(layer);
   else if (!layers_.vertices.empty())
     e.speed = layers_.vertices[layer];
+  if (!turns_.vertices.empty()) e.turnRate = turns_.vertices[turn];
   return e;
 }
 
@@ -305,20 +351,23 @@ TargetState Discretizer::sample(const std::array<double, 4>& u) const {
     c[i] = axis.vertices.front() + u[i] * span;
   }
   TargetState e = state(c);
+  const std::size_t speeds = std::max<std::size_t>(1, layers_.vertices.size());
+  const std::size_t n = speeds * std::max<std::size_t>(1, turns_.vertices.size());
+  const std::size_t pick = std::min(n - 1, static_cast<std::size_t>(u[3] * static_cast<double>(n)));
   if (!layers_.vertices.empty()) {
-    const std::size_t n = layers_.vertices.size();
-    const std::size_t layer = std::min(n - 1, static_cast<std::size_t>(u[3] * static_cast<double>(n)));
+    const std::size_t layer = pick % speeds;
     if (opponentLayers_)
       e.opponent = static_cast<std::int32_t>(layer);
     else
       e.speed = layers_.vertices[layer];
   }
+  if (!turns_.vertices.empty()) e.turnRate = turns_.vertices[pick / speeds];
   return e;
 }
 
 TargetState Discretizer::sample(Rng& rng) const {
   const double u0 = rng.uniform(), u1 = rng.uniform(), u2 = rng.uniform();
-  return sample({u0, u1, u2, layers_.vertices.empty() ? 0.0 : rng.uniform()});
+  return sample({u0, u1, u2, layers_.vertices.empty() && turns_.vertices.empty() ? 0.0 : rng.uniform()});
 }
 
 nlohmann::json Discretizer::describe() const {
@@ -332,6 +381,9 @@ nlohmann::json Discretizer::describe() const {
   if (!layers_.vertices.empty())
     out["layers"] = {
         {"name", std::string(layers_.name())}, {"unit", std::string(layers_.unit())}, {"vertices", layers_.vertices}};
+  if (!turns_.vertices.empty())
+    out["turn_layers"] = {
+        {"name", std::string(turns_.name())}, {"unit", std::string(turns_.unit())}, {"vertices", turns_.vertices}};
   return out;
 }
 

@@ -8,6 +8,8 @@
 /// last vertex neighbours its first. A grid may also have a layer axis (the target's speed):
 /// a coordinate no action changes, so every backup from a vertex stays in its layer and
 /// learners see 3-D cells, while a decision between two layers interpolates across them.
+/// A moving target that turns (issue 46) adds turn layers outside those: one copy of the
+/// layered grid per turn rate the environment model draws, never interpolated across.
 #include <array>
 #include <cstddef>
 #include <cstdint>
@@ -54,6 +56,7 @@ enum class AxisRole {
   Heading,   ///< where it moves or faces, rad (polar_velocity)
   Speed,     ///< its ground speed, m/s (a layer axis)
   Opponent,  ///< a learned opponent's discrete state (a layer axis)
+  Turn,      ///< how fast a moving target's path turns, rad/s (turn layers)
 };
 
 /// One axis of a product grid.
@@ -61,9 +64,10 @@ struct GridAxis {
   AxisRole role = AxisRole::Distance;
   std::vector<double> vertices;  ///< ascending coordinates
   bool wraps = false;            ///< the axis is periodic with period 2 pi (angles only)
-  /// "angle", "distance", "height", "heading", "speed", "opponent": in messages and describe().
+  /// "angle", "distance", "height", "heading", "speed", "opponent", "turn": in messages and
+  /// describe().
   std::string_view name() const;
-  /// "rad", "m", "m/s" or "state".
+  /// "rad", "m", "m/s", "state" or "rad/s".
   std::string_view unit() const;
 };
 
@@ -115,7 +119,7 @@ class Discretizer {
   /// The axes, first varying fastest in the vertex numbering:
   /// vertex = i0 + n0 * (i1 + n1 * i2).
   const std::vector<GridAxis>& axes() const { return axes_; }
-  /// The axis (or the layer axis) with that role, null if the grid has none.
+  /// The axis (or the layer axis, or the turn layers) with that role, null if the grid has none.
   const GridAxis* axis(AxisRole role) const;
   int dimension() const { return static_cast<int>(axes_.size()); }
   std::size_t vertexCount() const { return vertexCount_; }
@@ -133,7 +137,8 @@ class Discretizer {
 
   /// The layer axis (the target's speed), or null if the grid has none.
   const GridAxis* layerAxis() const { return layers_.vertices.empty() ? nullptr : &layers_; }
-  /// Vertices per layer (all of them without a layer axis); vertex v is in layer v / this.
+  /// Vertices per layer (all of them without a layer axis); vertex v is in speed layer
+  /// (v / this) % (speed layers), turn layer v / turnVertexCount().
   std::size_t layerVertexCount() const { return layerVertices_; }
   /// The layer coordinate of a state: its speed (the one coordinate a moving_target keeps),
   /// or on a grid with opponent layers the opponent's discrete state.
@@ -145,6 +150,20 @@ class Discretizer {
   /// or hanging vertices, or if the layered grid would exceed kMaxGridVertices.
   void setOpponentLayers(std::size_t count);
   bool hasOpponentLayers() const { return opponentLayers_; }
+  /// Repeats the (speed-layered) grid once per turn rate of a turning moving target (issue
+  /// 46; `rates` rad/s, ascending, as EnvironmentModel::turnRates() gives them): turn layer k
+  /// holds the states whose TargetState::turnRate is nearest rates[k]. A moving_target keeps
+  /// its turn rate, so, as with speed, every backup stays in its layer; unlike speed, a state
+  /// is never between two turn layers (a model draws only these rates). Throws mgrl::Error
+  /// for rates not finite and ascending, on a grid with opponent layers or hanging
+  /// vertices, or past kMaxGridVertices.
+  void setTurnLayers(std::vector<double> rates);
+  /// The turn layers (role Turn), or null if the grid has none.
+  const GridAxis* turnAxis() const { return turns_.vertices.empty() ? nullptr : &turns_; }
+  /// Vertices per turn layer (all of them without turn layers); vertex v is in turn layer v / this.
+  std::size_t turnVertexCount() const { return turnVertices_; }
+  /// The turn layer a state is in: the one nearest its turn rate (0 without turn layers).
+  std::size_t turnLayer(double turnRate) const;
 
   /// Locates e: false if it lies outside the grid (future value 0 there, paper sec. 4.2).
   virtual bool locate(const TargetState& e, GridCell& out) const;
@@ -161,7 +180,8 @@ class Discretizer {
   /// The target position at vertex v.
   Eigen::Vector3d vertexPosition(std::size_t v) const { return vertexState(v).position; }
   /// A state uniform in grid coordinates, from u uniform in [0, 1)^4; on a layered grid
-  /// u[3] picks a layer (exactly at a layer vertex: what learners restart from).
+  /// u[3] picks a layer (exactly at a layer vertex: what learners restart from), with turn
+  /// layers one of speed layers x turn layers.
   TargetState sample(const std::array<double, 4>& u) const;
   /// sample() from `rng`: three numbers, and a fourth only on a layered grid (so grids
   /// without layers keep the paper's random stream and tables). Learners' restarts.
@@ -222,6 +242,8 @@ class Discretizer {
   GridAxis layers_;
   bool opponentLayers_ = false;
   std::size_t layerVertices_ = 0, layerCells_ = 0;
+  GridAxis turns_{AxisRole::Turn, {}, false};
+  std::size_t turnVertices_ = 0, turnCells_ = 0;
   /// The layer below coordinate c and the fraction towards the next (0 at a layer, and at the
   /// last layer itself); false outside (or NaN).
   bool locateLayer(double c, std::uint32_t& layer, float& frac) const;

@@ -23,14 +23,21 @@ TargetState MovingTarget::next(const StateActionModel& model, std::size_t action
   const GroundMotion d = model.displacement(action);
   const double seconds = static_cast<double>(model.actionLength(action)) * model.frameTime;
   // The velocity is a direction in the avatar frame: it turns with the frame (by -dyaw) and
-  // does not translate; the speed is copied, not recomputed, so it stays on its layer.
-  return {inverseTransformPoint(d, e.at(seconds)), e.speed, std::remainder(e.heading - d.dyaw, 2 * M_PI)};
+  // does not translate; the speed and the turn rate are copied, not recomputed, so they
+  // stay on their layers. At turn rate 0 the heading is the straight line's, bit for bit.
+  TargetState out(inverseTransformPoint(d, e.at(seconds)), e.speed,
+                  std::remainder(e.headingAt(seconds) - d.dyaw, 2 * M_PI));
+  out.turnRate = e.turnRate;
+  return out;
 }
 
 TargetState MovingTarget::draw(const Eigen::Vector3d& position, Rng& rng) const {
   const double speed = minSpeed_ + (maxSpeed_ - minSpeed_) * rng.uniform();
   const double heading = (2 * rng.uniform() - 1) * M_PI;
-  return {position, speed, heading};
+  TargetState e(position, speed, heading);
+  // Only a model with turn rates draws one, so straight-line trials keep their random stream.
+  if (!turnRates_.empty()) e.turnRate = turnRates_[rng.below(turnRates_.size())];
+  return e;
 }
 
 }  // namespace mgrl

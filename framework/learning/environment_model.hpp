@@ -48,6 +48,10 @@ class EnvironmentModel {
   virtual TargetState draw(const Eigen::Vector3d& position, Rng&) const { return position; }
   /// The most a draw() may ask of a grid's layer axis (its top speed), m/s.
   virtual double maxSpeed() const { return 0; }
+  /// The turn rates (rad/s, ascending) a draw() picks one of per episode and next() keeps bit
+  /// for bit (issue 46's turning targets): the behaviour's grid gets one layer per rate
+  /// (Discretizer::setTurnLayers). Empty for a model whose targets do not turn.
+  virtual std::vector<double> turnRates() const { return {}; }
   /// True if the state's heading is which way the target faces (an `opponent`), not where
   /// it moves: its grid must hold a heading, the world supplies it (a sparring partner's
   /// facing, a dragged target's toward the avatar), and trials report the spacing to it.
@@ -99,21 +103,27 @@ class StaticTarget final : public EnvironmentModel {
   bool rigid() const override { return true; }
 };
 
-/// `moving_target`: the target moves on the ground in a straight line at a constant velocity
-/// for the episode (what TargetState::at() predicts); after an action of T seconds it is at
-/// p + v T seen from the action's end, its heading turned back by the avatar's yaw. The
-/// speed is kept bit for bit, so it can be a grid's layer axis.
+/// `moving_target`: the target moves on the ground at a constant speed for the episode, in
+/// a straight line or, at a turn rate, round a circle (what TargetState::at() predicts);
+/// after an action of T seconds it is at TargetState::at(T) seen from the action's end, its
+/// heading turned by w T and back by the avatar's yaw. The speed and the turn rate are
+/// kept bit for bit, so they can be a grid's layers.
 class MovingTarget final : public EnvironmentModel {
  public:
-  MovingTarget(double minSpeed, double maxSpeed) : minSpeed_(minSpeed), maxSpeed_(maxSpeed) {}
+  /// `turnRates`: the turn rates an episode draws one of (rad/s, ascending); empty for
+  /// straight lines only (what draw() did before turning targets, random stream included).
+  MovingTarget(double minSpeed, double maxSpeed, std::vector<double> turnRates = {})
+      : minSpeed_(minSpeed), maxSpeed_(maxSpeed), turnRates_(std::move(turnRates)) {}
   std::string type() const override { return "moving_target"; }
   TargetState next(const StateActionModel& model, std::size_t action, const TargetState& e) const override;
   bool keepsSpeed() const override { return true; }
   TargetState draw(const Eigen::Vector3d& position, Rng& rng) const override;
   double maxSpeed() const override { return maxSpeed_; }
+  std::vector<double> turnRates() const override { return turnRates_; }
 
  private:
   double minSpeed_, maxSpeed_;
+  std::vector<double> turnRates_;
 };
 
 /// The inverse of transformPoint(): a point of the frame `motion` starts from, seen from

@@ -161,7 +161,8 @@ SuccessCriterion::Tracker::Tracker(const SuccessCriterion& criterion, double fra
 std::uint32_t SuccessCriterion::Tracker::play(const StateActionModel& m, std::size_t a, const TargetState& e) {
   const auto frames = static_cast<std::uint32_t>(m.actionLength(a));
   for (std::uint32_t t = 1; t <= frames; ++t) {
-    const TargetState now(e.at(t * m.frameTime), e.speed, e.heading);
+    TargetState now(e.at(t * m.frameTime), e.speed, e.headingAt(t * m.frameTime));
+    now.turnRate = e.turnRate;
     held_ = criterion_->holdsAt(m, a, t, now) ? held_ + 1 : 0;
     if (held_ >= needed_) return t;
   }

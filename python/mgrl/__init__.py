@@ -18,7 +18,8 @@ learners on it (issue 41; a first part).
     p.next_state int32   (A,)       the graph state action a ends in
     p.out_actions (indptr int32 (S+1,), indices int32 (A,)): the actions leaving each state
     p.vertices   float64 (V, D)     each vertex's grid coordinates (on a grid with speed
-                                    layers, the layer's speed as a last column)
+                                    layers, the layer's speed as a further column; with a
+                                    turning target's turn layers, its turn rate, rad/s, last)
 
 One value-iteration backup is
 
@@ -28,7 +29,8 @@ One value-iteration backup is
 which is the paper's sec. 4.2 backup with the grid's multilinear interpolation (the max
 is taken of the interpolated row, as the C++ code does: max_a' sum_k, not sum_k max).
 On a grid with speed layers (moving targets) a vertex lands exactly on its layer, so the
-corners are one layer's and the formula is the same; grids whose vertices are partly
+corners are one layer's and the formula is the same (likewise a turning target's turn
+layers); grids whose vertices are partly
 interpolated (a refined kd-tree's hanging vertices) are refused for now.
 
 Session:
