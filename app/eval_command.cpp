@@ -1,6 +1,10 @@
 // `mgrl eval` (DESIGN.md sec. 5): runs a trained combined policy (or a random controller)
 // from random starts against a static target and reports how often and how fast it hits.
+#include <string>
+#include <vector>
+
 #include <fmt/format.h>
+#include <fmt/ranges.h>
 
 #include "learn_common.hpp"
 #include "mgrl/session/evaluate.hpp"
@@ -49,6 +53,13 @@ std::string evalText(const json& r) {
       r["controller"].get<std::string>(), counted(r["trials"].get<std::size_t>(), "trial"),
       100 * r["success_rate"].get<double>(), timeToHit(r["mean_time_to_hit_s"], r["median_time_to_hit_s"]),
       r["mean_return"].get<double>(), humanCount(r["decisions_per_second"].get<double>()));
+  if (r.contains("by_turn_rate")) {
+    std::vector<std::string> parts;
+    for (const json& t : r["by_turn_rate"])
+      parts.push_back(fmt::format("{:+.0f} deg/s {:.1f} % of {}", t["turn_deg_s"].get<double>(),
+                                  100 * t["success_rate"].get<double>(), t["trials"].get<std::size_t>()));
+    text += fmt::format("by the target's turn rate: {}\n", fmt::join(parts, ", "));
+  }
   if (r.contains("opponent_gap_m")) {
     const json& g = r["opponent_gap_m"];
     const json& f = r["opponent_facing_deg"];

@@ -1490,7 +1490,7 @@ TEST_CASE("Q-learning on speed layers: restarts on a layer, checkpoints keep the
 
 // ---- Turning targets (issue 46): moving_target's turn rates, a grid's turn layers ----
 
-TEST_CASE("a turning target runs round its circle; next() keeps its turn rate and replays exactly over actions",
+TEST_CASE("a turning target runs round its circle, next() keeps its turn rate and replays exactly over actions",
           "[learning][moving][turning]") {
   // Heading 0 (towards +Z) turning a quarter circle a second towards +X at 1 m/s: the
   // circle's radius is 2 / pi, so after 1 s the target is r to the left and r ahead.

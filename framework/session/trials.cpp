@@ -90,9 +90,14 @@ TrialStats Trials::run(const ChooseAction& choose, std::size_t count, double sec
   stats.trials = count;
   const double limit = seconds / model.frameTime;
   const bool opponent = environment.faces();
+  stats.turnRates = environment.turnRates();
+  stats.turnTrials.assign(stats.turnRates.size(), 0);
+  stats.turnSuccesses.assign(stats.turnRates.size(), 0);
   for (std::size_t trial = 0; trial < count; ++trial) {
     auto s = static_cast<std::uint32_t>(starts.below(model.stateCount()));
     TargetState e = placeTarget(starts);
+    const auto turn = static_cast<std::size_t>(std::find(stats.turnRates.begin(), stats.turnRates.end(), e.turnRate) -
+                                               stats.turnRates.begin());
     double elapsed = 0, discount = 1, trialReturn = 0;
     bool hit = false;
     std::vector<SuccessCriterion::Tracker> trackers;
@@ -134,6 +139,10 @@ TrialStats Trials::run(const ChooseAction& choose, std::size_t count, double sec
     }
     stats.successes += hit;
     stats.returns += trialReturn;
+    if (turn < stats.turnRates.size()) {
+      ++stats.turnTrials[turn];
+      stats.turnSuccesses[turn] += hit;
+    }
   }
   return stats;
 }
@@ -306,6 +315,16 @@ json Trials::summary(TrialStats stats) {
     result["strikes_reached_per_minute"] = 60 * static_cast<double>(stats.strikesReached) / stats.secondsPlayed;
     result["bodies_overlapping"] = static_cast<double>(stats.framesOverlapping) /
                                    static_cast<double>(std::max<std::size_t>(1, stats.opponentGaps.size()));
+  }
+  if (!stats.turnRates.empty()) {
+    json turns = json::array();
+    for (std::size_t k = 0; k < stats.turnRates.size(); ++k)
+      turns.push_back({{"turn_deg_s", stats.turnRates[k] * 180 / M_PI},
+                       {"trials", stats.turnTrials[k]},
+                       {"successes", stats.turnSuccesses[k]},
+                       {"success_rate", static_cast<double>(stats.turnSuccesses[k]) /
+                                            static_cast<double>(std::max<std::size_t>(1, stats.turnTrials[k]))}});
+    result["by_turn_rate"] = std::move(turns);
   }
   if (!stats.opponentGaps.empty()) {
     std::vector<float>& gaps = stats.opponentGaps;

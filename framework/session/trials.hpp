@@ -46,6 +46,10 @@ struct TrialStats {
   /// gap under two body radii), and the seconds played.
   std::size_t strikesReached = 0, framesOverlapping = 0;
   double secondsPlayed = 0;
+  /// With a turning target (issue 46): per turn rate the environment model draws (rad/s,
+  /// ascending), the trials that drew it and how many succeeded; empty otherwise.
+  std::vector<double> turnRates;
+  std::vector<std::size_t> turnTrials, turnSuccesses;
 };
 
 /// Picks an action of state s (a global action index) for the environment state e (avatar frame).

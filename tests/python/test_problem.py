@@ -103,13 +103,17 @@ class ProblemTest(unittest.TestCase):
 
     @unittest.skipUnless(os.environ.get("MGRL_PYTHON_SLOW") == "1", "slow (ten seconds): MGRL_PYTHON_SLOW=1")
     def test_slow_speed_layers_fit_the_same_formula(self):
-        # intercept.yaml's moving target: a polar_velocity grid with 3 speed layers. A backup
-        # lands exactly on its layer, so the cell's corners are one layer's and the formula
-        # holds as it is; the vertices carry the layer's speed as a last column.
-        session = mgrl.Session(SOURCE / "scenarios" / "intercept.yaml", cache=CACHE)
+        # intercept.yaml's moving target: a polar_velocity grid with 3 speed layers, repeated
+        # per turn rate (3 here, not the scenario's 5: the arrays are (A, V, 16) and this
+        # test is about the layers, not their number). A backup lands exactly on its layers,
+        # so the cell's corners are one layer's and the formula holds as it is; the vertices
+        # carry the layer's speed and then the turn rate (rad/s) as their last two columns.
+        turns = {f"behaviors.{b}.environment.turns": 3 for b in ("approach", "hit")}
+        session = mgrl.Session(SOURCE / "scenarios" / "intercept.yaml", cache=CACHE, sets=turns)
         p = session.problem("approach")
-        self.assertEqual(p.vertices.shape, (p.rewards.shape[1], p.dimension + 1))
-        self.assertEqual(sorted(set(np.round(p.vertices[:, -1], 6))), [0.0, 0.5, 1.0])
+        self.assertEqual(p.vertices.shape, (p.rewards.shape[1], p.dimension + 2))
+        self.assertEqual(sorted(set(np.round(p.vertices[:, -2], 6))), [0.0, 0.5, 1.0])
+        self.assertEqual(sorted(set(np.round(np.degrees(p.vertices[:, -1]), 6))), [-90.0, 0.0, 90.0])
         mine = numpy_value_iteration(p, tolerance=0, sweeps=SWEEPS)
         theirs = session.train("approach", learner="value_iteration", sets={"tolerance": 1e-9, "max_sweeps": SWEEPS})
         np.testing.assert_allclose(mine, theirs, atol=1e-4)
