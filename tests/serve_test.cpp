@@ -20,6 +20,7 @@
 #include "serve/server.hpp"
 #include "serve/static_files.hpp"
 #include "serve/viewer.hpp"
+#include "serve/viewer_parts.hpp"
 #include "serve_support.hpp"
 #include "test_support.hpp"
 
@@ -370,6 +371,47 @@ TEST_CASE("a dodge page opens on the avatar and its scripted opponent, in sparri
   scene = json::parse(paper.takeOutbox().at(0));
   CHECK(scene["mode"] == "target");
   CHECK(scene["opponent"].is_null());
+}
+
+// Issue 46: a turning target's grid repeats every position per turn rate. The values view
+// shows the speed-0 slice at the decision's heading (a dragged target stands still), taken
+// from the straight-line turn layer; a standing target does not turn, so every turn layer
+// holds the same values there, as the table shows.
+TEST_CASE("an intercept page's values view shows a standing target's values of a turning target's grid",
+          "[serve][data][turning]") {
+  const BoxingAssets intercept(true, "intercept.yaml", {});
+  serve::ViewerSession session(intercept.assets);
+  session.takeOutbox();
+  for (int f = 0; f < 60; ++f) session.advance(1.0);
+  session.takeOutbox();
+  session.handle(R"({"type": "values", "behavior": "approach"})");
+  const std::vector<json> out = textMessages(session);
+  REQUIRE(out.size() == 1);
+  const json& values = out[0];
+  const Discretizer& grid = *intercept.assets->session->behaviors.at(0).discretizer;
+  REQUIRE(grid.turnAxis() != nullptr);
+  REQUIRE(grid.turnAxis()->vertices.size() == 5);
+  const std::size_t positions = 13 * 5;  // sectors x rings of one heading, speed and turn
+  REQUIRE(values["points"].size() == positions);
+  // Speed 0, heading 0 (the fourth of six: a dragged target's heading at a decision): the
+  // maxima the table holds there, in each of the five turn layers alike.
+  const QTable& q = intercept.assets->session->bundle.behaviors.at("approach").table;
+  const auto state = values["state"].get<std::size_t>();
+  std::vector<double> shown;
+  for (const json& p : values["points"]) shown.push_back(p[3].get<double>());
+  std::sort(shown.begin(), shown.end());
+  for (std::size_t turn = 0; turn < 5; ++turn) {
+    const std::size_t first = turn * grid.turnVertexCount() + 3 * positions;
+    std::vector<double> expected;
+    for (std::size_t v = first; v < first + positions; ++v) {
+      CHECK(grid.vertexState(v).speed == 0);
+      const float* row = q.row(state, v);
+      expected.push_back(*std::max_element(row, row + q.actionsOf(state)));
+    }
+    std::sort(expected.begin(), expected.end());
+    REQUIRE(shown.size() == expected.size());
+    for (std::size_t k = 0; k < shown.size(); ++k) CHECK(shown[k] == Approx(expected[k]).margin(1e-4));
+  }
 }
 
 // Issue 46: boxing.yaml's sparring and crowds play boxing_spar.yaml's behaviour, which keeps
