@@ -247,15 +247,23 @@ TEST_CASE("behaviour mistakes name the file, line, column and key", "[behaviors]
            "behaviors.approach.environment.turns: expected at least 2 turn rates with max_turn_deg_s 90 (from -90 to "
            "+90 deg/s), found 1"));
   }
-  SECTION("a turning moving_target gives the behaviour's grid one layer per turn rate") {
-    const std::vector<Behavior> turning =
-        build(approachInserting(19, "    environment: {type: moving_target, max_turn_deg_s: 90, turns: 3}"));
-    const Discretizer& grid = *turning.front().discretizer;
+  SECTION("a turning moving_target gives a grid with a heading one layer per turn rate") {
+    const std::string turning =
+        "  chase:\n"
+        "    discretizer: {type: polar_velocity, sectors: 4, rings: 3, headings: 4, speeds: 2}\n"
+        "    reward: {type: approach}\n"
+        "    environment: {type: moving_target, max_turn_deg_s: 90, turns: 3}\n"
+        "    learner: {type: value_iteration}\n";
+    const std::vector<Behavior> built = build(turning);
+    const Discretizer& grid = *built.front().discretizer;
     REQUIRE(grid.turnAxis() != nullptr);
     CHECK(grid.turnAxis()->vertices == std::vector<double>{-M_PI / 2, 0, M_PI / 2});
-    CHECK(grid.vertexCount() == 3 * 5 * 13);
-    CHECK(build(approachInserting(19, "    environment: {type: moving_target}")).front().discretizer->turnAxis() ==
-          nullptr);
+    CHECK(grid.vertexCount() == 4 * 3 * 4 * 2 * 3);
+    // A grid without a heading (polar2d) cannot tell which way a turn goes: its values
+    // average over turns as over headings, with no layers.
+    CHECK(build(approachInserting(19, "    environment: {type: moving_target, max_turn_deg_s: 90, turns: 3}"))
+              .front()
+              .discretizer->turnAxis() == nullptr);
   }
   SECTION("an opponent needs a grid with a heading axis; avoid needs an opponent") {
     const std::string dodge =
@@ -659,6 +667,15 @@ TEST_CASE("the behaviour key changes with what the table depends on, and only th
     CHECK(keyOf("{term: effort}") == keyOf("{term: effort, point: pelvis}"));
     CHECK(keyOf("{term: effort}") != keyOf("{term: effort, point: body}"));
     CHECK(keyOf("{term: effort}") != keyOf("{term: effort, point: LeftHand}"));
+  }
+  SECTION("a moving_target that does not turn keeps the key it had before turning targets (issue 46)") {
+    auto keyOf = [&](const std::string& environment) {
+      return build(approachInserting(19, "    environment: " + environment)).front().key;
+    };
+    CHECK(keyOf("{type: moving_target}") == keyOf("{type: moving_target, max_turn_deg_s: 0, turns: 7}"));
+    CHECK(keyOf("{type: moving_target}") != keyOf("{type: moving_target, max_turn_deg_s: 90}"));
+    CHECK(keyOf("{type: moving_target, max_turn_deg_s: 90}") !=
+          keyOf("{type: moving_target, max_turn_deg_s: 90, turns: 5}"));
   }
   SECTION("a parameter given at its default is the same as one left out") {
     CHECK(keyWith("behaviors.approach.learner.alpha_final=0") == base);

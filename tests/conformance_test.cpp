@@ -110,10 +110,14 @@ TEST_CASE("every reward is finite and the same for the same action and state", "
 TEST_CASE("every environment model is deterministic and keeps a still target still, an opponent aside", "[conformance]") {
   const auto& registry = builtinPlugins().environments;
   REQUIRE(registry.entries().size() >= 3);
-  for (const auto& entry : registry.entries()) {
-    INFO("environment " << entry.name);
-    const std::unique_ptr<EnvironmentModel> environment = registry.create(exampleOf(entry));
-    REQUIRE(environment->type() == entry.name);
+  // Every registered model with its defaults, and a turning moving_target (issue 46).
+  std::vector<ConfigNode> examples;
+  for (const auto& entry : registry.entries()) examples.push_back(exampleOf(entry));
+  examples.push_back(ConfigNode::parse("{type: moving_target, max_turn_deg_s: 90, turns: 4}", "turning.yaml"));
+  for (const ConfigNode& example : examples) {
+    const std::unique_ptr<EnvironmentModel> environment = registry.create(example);
+    INFO("environment " << environment->type() << " " << environment->turnRates().size() << " turn rates");
+    const std::vector<double> rates = environment->turnRates();
     environment->bind(model());
     const std::size_t opponentStates = environment->opponentStates();
     Rng rng(3);
@@ -125,7 +129,16 @@ TEST_CASE("every environment model is deterministic and keeps a still target sti
       REQUIRE(next.speed == again.speed);
       REQUIRE(next.heading == again.heading);
       REQUIRE(next.opponent == again.opponent);
+      REQUIRE(next.turnRate == again.turnRate);
       REQUIRE(next.position.allFinite());
+      // A turning target draws one of its model's turn rates and keeps it bit for bit (its
+      // grid layer); others never turn.
+      if (rates.empty()) {
+        REQUIRE(e.turnRate == 0);
+      } else {
+        REQUIRE(std::find(rates.begin(), rates.end(), e.turnRate) != rates.end());
+        REQUIRE(next.turnRate == e.turnRate);
+      }
       // A learned opponent's discrete state stays among its states; what it plays during the
       // action is one frame per avatar frame. Other models have neither.
       std::vector<OpponentFrame> track;

@@ -1606,6 +1606,8 @@ TEST_CASE("turn layers: one copy of the speed-layered grid per turn rate, never 
   REQUIRE_THROWS_WITH(grid->setTurnLayers({0, 1}), Catch::Contains("the grid has turn layers already"));
   REQUIRE_THROWS_WITH(makeGrid(kLayeredGrid, m)->setTurnLayers({1, 0}),
                       Catch::Contains("expected finite ascending turn rates, found 0 at 1"));
+  REQUIRE_THROWS_WITH(makeGrid("{type: kd_tree, bounds: given}", m)->setTurnLayers(rates),
+                      Catch::Contains("kd_tree: an adaptive grid cannot hold turn layers; use polar_velocity"));
   auto fighting = makeGrid("{type: polar_velocity, distance_max: 2, rings: 3, sectors: 4, headings: 4, speeds: 1}", m);
   fighting->setOpponentLayers(4);
   REQUIRE_THROWS_WITH(fighting->setTurnLayers(rates), Catch::Contains("a learned opponent's layers cannot turn"));

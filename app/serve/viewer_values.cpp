@@ -50,7 +50,7 @@ std::string ViewerSession::values() const {
   // 0; an opponent's facing, issue 17, does).
   const Discretizer& grid = *s.policy[shown].grid;
   const GridAxis* heading = grid.axis(AxisRole::Heading);
-  std::size_t vertices = q.vertexCount();
+  std::size_t vertices = grid.turnAxis() ? grid.turnVertexCount() : q.vertexCount();
   if (grid.layerAxis()) {  // the positions of one heading and layer
     vertices = 1;
     for (const GridAxis& axis : grid.axes())

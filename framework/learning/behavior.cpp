@@ -31,6 +31,13 @@ std::pair<nlohmann::json, std::string> behaviorConfigAndKey(const BehaviorSpec& 
   // A parameter added after tables were trained keeps their keys while it holds the value
   // that reproduces them bit for bit (q_learning's max_episode_actions: 0, the paper's rule).
   if (keyed["learner"].value("max_episode_actions", std::int64_t{0}) == 0) keyed["learner"].erase("max_episode_actions");
+  // Likewise a moving_target that does not turn (max_turn_deg_s: 0, issue 46): turns has no
+  // effect then, and neither key was there before.
+  if (keyed["environment"].is_object() && keyed["environment"].contains("max_turn_deg_s") &&
+      keyed["environment"]["max_turn_deg_s"].is_number() && keyed["environment"]["max_turn_deg_s"].get<double>() == 0) {
+    keyed["environment"].erase("max_turn_deg_s");
+    keyed["environment"].erase("turns");
+  }
   // Likewise effort's point: pelvis (the root's ground speed, all effort measured before).
   if (keyed["reward"].contains("terms") && keyed["reward"]["terms"].is_array())
     for (nlohmann::json& term : keyed["reward"]["terms"])
@@ -86,7 +93,9 @@ void bindEnvironment(const BehaviorSpec& spec, Behavior& b, const StateActionMod
           fmt::format("a learned opponent's {} states as grid layers: {}", states, e.what()));
     }
   }
-  if (std::vector<double> rates = environment.turnRates(); !rates.empty()) {
+  // A turn rate means something only beside the heading it turns (polar_velocity); on a grid
+  // without one the values average over the turns as over the headings it cannot see.
+  if (std::vector<double> rates = environment.turnRates(); !rates.empty() && b.discretizer->axis(AxisRole::Heading)) {
     try {
       b.discretizer->setTurnLayers(std::move(rates));
     } catch (const Error& e) {

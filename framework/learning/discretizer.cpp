@@ -161,7 +161,9 @@ void Discretizer::setLayers(GridAxis layer) {
   const std::size_t count = layer.vertices.size();
   if (!hanging_.empty()) throw Error(fmt::format("{}: a grid with hanging vertices cannot have layers", type()));
   if (!turns_.vertices.empty())
-    throw Error(fmt::format("{}: {} layers go under the turn layers, not over", type(), layer.name()));
+    throw Error(fmt::format("{}: {} layers cannot be added after turn layers", type(), layer.name()));
+  if (refinable())
+    throw Error(fmt::format("{}: an adaptive grid cannot hold {} layers; use polar_velocity", type(), layer.name()));
   if (layerVertices_ * count > kMaxGridVertices)
     throw Error(fmt::format("{}: expected a grid of at most {} vertices, found {} ({} per layer x {} {})", type(),
                             kMaxGridVertices, layerVertices_ * count, layerVertices_, count, layer.name()));
@@ -183,6 +185,7 @@ void Discretizer::setTurnLayers(std::vector<double> rates) {
       throw Error(fmt::format("{}: expected finite ascending turn rates, found {} at {}", type(), rates[k], k));
   if (!turns_.vertices.empty()) throw Error(fmt::format("{}: the grid has turn layers already", type()));
   if (opponentLayers_) throw Error(fmt::format("{}: a grid with a learned opponent's layers cannot turn", type()));
+  if (refinable()) throw Error(fmt::format("{}: an adaptive grid cannot hold turn layers; use polar_velocity", type()));
   if (!hanging_.empty()) throw Error(fmt::format("{}: a grid with hanging vertices cannot have layers", type()));
   const std::size_t count = rates.size();
   if (vertexCount_ * count > kMaxGridVertices)

@@ -50,13 +50,6 @@ struct TargetState {
   /// The velocity's heading `seconds` after the decision, in the decision's avatar frame
   /// (not wrapped): the heading itself, bit for bit, at turn rate 0.
   double headingAt(double seconds) const { return turnRate == 0 ? heading : heading + turnRate * seconds; }
-  /// The state `seconds` after the decision, in the decision's avatar frame.
-  TargetState after(double seconds) const {
-    TargetState e(at(seconds), speed, headingAt(seconds));
-    e.turnRate = turnRate;
-    e.opponent = opponent;
-    return e;
-  }
 };
 
 }  // namespace mgrl

@@ -57,7 +57,8 @@ Comparison compareTables(const QTable& q, const std::vector<double>& positions, 
 
 void requireCovers(const Discretizer& reference, const Discretizer& grid, const std::string& behavior) {
   // The measures read a table's vertices back from the bundle's positions, which do not
-  // tell a speed layer or a velocity heading apart.
+  // tell a speed layer, a turn layer or a velocity heading apart (turn layers come only on
+  // grids with speed layers, polar_velocity's).
   if (reference.layerAxis() || grid.layerAxis())
     throw Error(fmt::format("--reference-set: behaviors.{}: a {} grid has speed layers, which a reference set cannot "
                             "be compared on yet; compare without --reference-set (against value iteration on the same grid)",
