@@ -22,7 +22,7 @@ void registerStaticTargets(EnvironmentRegistry& registry) {
                 "the target moves on the ground at a speed drawn per episode from [min_speed, max_speed] in a "
                 "uniform direction, in a straight line or, with max_turn_deg_s, round a circle at one of `turns` "
                 "turn rates; its speed and heading in the avatar frame are part of the state (pair it with a grid "
-                "that has them, e.g. polar_velocity), and each turn rate gets its own layer of the grid",
+                "that has them, e.g. polar_velocity), which then gets one layer per turn rate",
                 {ParamSpec::number("min_speed", 0.0, 0, 20, "m/s", "slowest target an evaluation trial draws"),
                  ParamSpec::number("max_speed", 1.0, 0, 20, "m/s", "fastest target an evaluation trial draws"),
                  ParamSpec::number("max_turn_deg_s", 0.0, 0, 720, "deg/s",
