@@ -1608,6 +1608,14 @@ TEST_CASE("turn layers: one copy of the speed-layered grid per turn rate, never 
                       Catch::Contains("expected finite ascending turn rates, found 0 at 1"));
   REQUIRE_THROWS_WITH(makeGrid("{type: kd_tree, bounds: given}", m)->setTurnLayers(rates),
                       Catch::Contains("kd_tree: an adaptive grid cannot hold turn layers; use polar_velocity"));
+  REQUIRE_THROWS_WITH(makeGrid("{type: kd_tree, bounds: given}", m)->setOpponentLayers(4),
+                      Catch::Contains("kd_tree: an adaptive grid cannot hold opponent layers; use polar_velocity"));
+  REQUIRE_THROWS_WITH(makeGrid(kLayeredGrid, m)->setTurnLayers({}),
+                      Catch::Contains("expected at least 1 turn rate, found none"));
+  auto turning = makeGrid("{type: polar_velocity, distance_max: 2, rings: 3, sectors: 4, headings: 4, speeds: 1}", m);
+  turning->setTurnLayers(rates);
+  REQUIRE_THROWS_WITH(turning->setOpponentLayers(4),
+                      Catch::Contains("opponent layers cannot be added after turn layers"));
   auto fighting = makeGrid("{type: polar_velocity, distance_max: 2, rings: 3, sectors: 4, headings: 4, speeds: 1}", m);
   fighting->setOpponentLayers(4);
   REQUIRE_THROWS_WITH(fighting->setTurnLayers(rates), Catch::Contains("a learned opponent's layers cannot turn"));

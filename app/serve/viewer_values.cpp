@@ -57,14 +57,15 @@ std::string ViewerSession::values() const {
       if (axis.role != AxisRole::Heading) vertices *= axis.vertices.size();
   }
   // Turn layers (a turning target): the one nearest a straight line.
-  std::size_t offset = grid.turnLayer(0) * grid.turnVertexCount();
+  const std::size_t straight = grid.turnLayer(0) * grid.turnVertexCount();
+  std::size_t offset = straight;
   if (grid.layerAxis() && heading) {
     const std::vector<double>& headings = heading->vertices;
     double nearest = 10;
     for (std::size_t h = 0; h < headings.size(); ++h)
       if (const double gap = std::abs(std::remainder(headings[h] - d.target.heading, 2 * M_PI)); gap < nearest) {
         nearest = gap;
-        offset = grid.turnLayer(0) * grid.turnVertexCount() + h * vertices;
+        offset = straight + h * vertices;
       }
   }
   double level = vertexPositions.empty() ? 0 : vertexPositions[3 * offset + 1];
