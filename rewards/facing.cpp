@@ -1,19 +1,23 @@
 // term: facing: how the avatar's facing stands to the target's direction. Either
-// exp(-|angle - angle0| / sigma) about a given angle, or (prefer: hits) the capture's own
-// stance: how often the source's effective strikes land at that signed angle from the
-// facing, a density normalised to 1 at its mode (issue 46: a boxer whose punches land 30
-// degrees to his left stands with his target there, not straight ahead). As a success
-// condition: |angle - angle0| <= within_deg.
+// exp(-|angle - angle0| / sigma) about a given angle, or a stance learned from capture, a
+// density normalised to 1 at its mode (issue 46): (prefer: hits) how often the source's
+// effective strikes land at that signed angle from the facing (a boxer whose punches land
+// 30 degrees to his left stands with his target there, not straight ahead), or (prefer:
+// bouts) how often the real SNU sparring fighters keep that angle to each other. As a
+// success condition: |angle - angle0| <= within_deg.
 #include <algorithm>
 #include <array>
 #include <cmath>
 #include <numbers>
 #include <set>
 #include <stdexcept>
+#include <string_view>
 #include <utility>
 
 #include <fmt/format.h>
 
+#include "mgrl/core/data_paths.hpp"
+#include "mgrl/learning/real_bouts.hpp"
 #include "term.hpp"
 
 namespace mgrl::rewards {
@@ -51,33 +55,28 @@ class FacingCondition final : public SuccessCondition {
   double angle_, within_;  // rad
 };
 
-// The density of the signed angle, on the ground, from the avatar's facing to its own
-// effective hitting points (punches and kicks) at their frames: one sample per source frame
-// and limb (an action replaying a frame adds none), smoothed with a circular Gaussian of
-// `sigma`, tabulated per degree and normalised to 1 at its largest.
-class HitFacing final : public Term {
+// A preferred facing learned from capture, as a density over the signed angle from the
+// avatar's facing to the target (per degree, smoothed with a circular Gaussian of `sigma`,
+// normalised to 1 at its largest). The samples come from one of two sources:
+// - prefer: hits: the signed angle from the avatar's facing to its own effective hitting
+//   points (punches and kicks) at their frames, one sample per source frame and limb (an
+//   action replaying a frame adds none): the stance its own strikes are thrown from;
+// - prefer: bouts: the angle each fighter of the real SNU sparring bouts keeps to the
+//   other at every frame, as `mgrl stats` measures it (unsigned, so each sample counts at
+//   both signs): the real fighters' stance, circling and turning away included, which
+//   shadow boxing, having no partner, does not record.
+class FacingDensity final : public Term {
  public:
-  explicit HitFacing(const Params& p) : sigma_(p.number("sigma_deg")) {}
+  explicit FacingDensity(const Params& p) : fromBouts_(p.choice("prefer") == "bouts"), sigma_(p.number("sigma_deg")) {}
 
   void bind(const StateActionModel& m) override {
     std::array<double, kBins> counts{};
-    std::set<std::pair<std::uint32_t, std::uint8_t>> seen;  // (source frame, limb)
-    std::size_t samples = 0;
-    auto add = [&](const std::vector<ActionHit>& list, std::uint8_t limb0) {
-      for (const ActionHit& h : list) {
-        const std::size_t k = m.actionFrameBegin[h.action] + h.offset - 1;
-        if (!seen.emplace(m.actionFrames[k], static_cast<std::uint8_t>(limb0 + h.hand)).second) continue;
-        const double angle = signedFacing(m, k, Eigen::Vector3d(h.x, h.y, h.z)) / kDegree;  // (-180, 180]
-        counts[static_cast<std::size_t>(std::lround(angle + 180)) % kBins] += 1;
-        ++samples;
-      }
-    };
-    add(m.hits, 0);
-    add(m.kicks, 2);
+    const std::size_t samples = fromBouts_ ? boutSamples(counts) : hitSamples(m, counts);
     if (samples == 0)
-      throw TermError("prefer",
-                      "expected effective punches or kicks in the capture to learn the facing from (prefer: "
-                      "hits), found none; use prefer: angle with angle_deg");
+      throw TermError("prefer", fromBouts_ ? "expected frames in the SNU sparring bouts to learn the facing from "
+                                             "(prefer: bouts), found none; use prefer: angle with angle_deg"
+                                           : "expected effective punches or kicks in the capture to learn the facing "
+                                             "from (prefer: hits), found none; use prefer: angle with angle_deg");
     // Circular Gaussian smoothing (kernel cut at 4 sigma).
     const int reach = static_cast<int>(std::ceil(4 * sigma_));
     double largest = 0;
@@ -94,7 +93,7 @@ class HitFacing final : public Term {
   }
 
   double signal(const TermFrame& f) const override {
-    if (!bound_) throw std::logic_error("facing term with prefer: hits evaluated before it was bound to a model");
+    if (!bound_) throw std::logic_error("facing term with a learned preference evaluated before it was bound");
     const double degrees = signedFacing(f.model, f.frame, f.target) / kDegree + 180;  // [0, 360]
     const double low = std::floor(degrees), w = degrees - low;
     const auto a = static_cast<std::size_t>(low) % kBins, b = (a + 1) % kBins;
@@ -103,7 +102,46 @@ class HitFacing final : public Term {
 
  private:
   static constexpr int kBins = 360;  // one per degree, bin b at b - 180 degrees
-  double sigma_;                     // degrees
+
+  static void add(std::array<double, kBins>& counts, double degrees) {
+    counts[static_cast<std::size_t>(std::lround(degrees + 180)) % kBins] += 1;
+  }
+
+  static std::size_t hitSamples(const StateActionModel& m, std::array<double, kBins>& counts) {
+    std::set<std::pair<std::uint32_t, std::uint8_t>> seen;  // (source frame, limb)
+    std::size_t samples = 0;
+    auto addAll = [&](const std::vector<ActionHit>& list, std::uint8_t limb0) {
+      for (const ActionHit& h : list) {
+        const std::size_t k = m.actionFrameBegin[h.action] + h.offset - 1;
+        if (!seen.emplace(m.actionFrames[k], static_cast<std::uint8_t>(limb0 + h.hand)).second) continue;
+        add(counts, signedFacing(m, k, Eigen::Vector3d(h.x, h.y, h.z)) / kDegree);  // (-180, 180]
+        ++samples;
+      }
+    };
+    addAll(m.hits, 0);
+    addAll(m.kicks, 2);
+    return samples;
+  }
+
+  static std::size_t boutSamples(std::array<double, kBins>& counts) {
+    const std::vector<double>* degrees = nullptr;
+    try {
+      degrees = &snuFacingDegrees(scenarioDataDirectory());
+    } catch (const Error& e) {
+      // snuBouts speaks to mgrl stats' --snu; here the key at fault is prefer.
+      std::string_view why = e.what();
+      if (why.starts_with("--snu: ")) why.remove_prefix(7);
+      throw TermError("prefer", fmt::format("bouts: {}", why));
+    }
+    for (const double d : *degrees) {
+      add(counts, d);
+      add(counts, -d);
+    }
+    return degrees->size();
+  }
+
+  bool fromBouts_;
+  double sigma_;  // degrees
   std::array<double, kBins> density_{};
   bool bound_ = false;
 };
@@ -115,15 +153,19 @@ void registerFacing(Vocabulary& v) {
       ParamSpec::number("angle_deg", 0, 0, 180, "deg", "preferred angle (0: target straight ahead)");
   v.terms.add(
       {"facing",
-       "exp(-|angle - angle0| / sigma), angle between the avatar's facing and the target's direction; or "
-       "(prefer: hits) how often the capture's own strikes land at that signed angle",
-       {ParamSpec::choice("prefer", "angle", {"angle", "hits"},
+       "exp(-|angle - angle0| / sigma), angle between the avatar's facing and the target's direction; or how "
+       "often capture has that angle: (prefer: hits) the capture's own strikes, (prefer: bouts) the real SNU "
+       "sparring bouts' fighters",
+       {ParamSpec::choice("prefer", "angle", {"angle", "hits", "bouts"},
                           "angle: about angle_deg; hits: the capture's distribution of the signed angle from "
-                          "the facing to its effective hitting points (its own stance), smoothed by sigma_deg"),
+                          "the facing to its effective hitting points (its own stance); bouts: the distribution "
+                          "of the angle the real SNU sparring bouts' fighters keep to each other (the data "
+                          "folder's snu_martial_arts/motion/s_*.bvh, as mgrl stats measures it); both smoothed "
+                          "by sigma_deg"),
         angle, ParamSpec::number("sigma_deg", 30, 0.1, 360, "deg", "angle scale of the exponential (of the smoothing)"),
         weightSpec()},
        [](const Params& p) -> std::unique_ptr<Term> {
-         if (p.choice("prefer") == "hits") return std::make_unique<HitFacing>(p);
+         if (p.choice("prefer") != "angle") return std::make_unique<FacingDensity>(p);
          return std::make_unique<Facing>(p);
        }});
   ConditionRegistry::Entry entry{

@@ -14,22 +14,23 @@
 
 #include <fmt/format.h>
 
-#include "mgrl/session/compare_tables.hpp"
 #include "app/plugins.hpp"
-#include "mgrl/session/trials.hpp"
 #include "environments/environments.hpp"
-#include "mgrl/motion/roles.hpp"
+#include "learners/q_learning_steps.hpp"
 #include "mgrl/core/bundle.hpp"
+#include "mgrl/core/data_paths.hpp"
 #include "mgrl/core/files.hpp"
-#include "mgrl/learning/checkpoint_store.hpp"
-#include "mgrl/learning/behavior.hpp"
-#include "mgrl/runtime/controller.hpp"
+#include "mgrl/core/random.hpp"
 #include "mgrl/graph/motion_graph.hpp"
-#include "synthetic_model.hpp"
+#include "mgrl/learning/behavior.hpp"
+#include "mgrl/learning/checkpoint_store.hpp"
 #include "mgrl/learning/problem.hpp"
 #include "mgrl/learning/success.hpp"
-#include "mgrl/core/random.hpp"
-#include "learners/q_learning_steps.hpp"
+#include "mgrl/motion/roles.hpp"
+#include "mgrl/runtime/controller.hpp"
+#include "mgrl/session/compare_tables.hpp"
+#include "mgrl/session/trials.hpp"
+#include "synthetic_model.hpp"
 #include "test_support.hpp"
 
 namespace mgrl::learning_test {
@@ -1010,6 +1011,43 @@ TEST_CASE("each reward term gives its hand-computed value", "[learning][terms]")
     still.actionKickBegin.assign(still.actionKickBegin.size(), 0);
     const auto none = app::plugins().rewards.create(yaml(hits));
     CHECK_THROWS_WITH(none->bind(still), Catch::Contains("prefer: ") && Catch::Contains("found none"));
+  }
+  SECTION("facing as the real bouts' fighters stand to each other (prefer: bouts)") {
+    // A data folder of one SNU-named bout made from tests/data/stats/stand: fighter 2 faces
+    // fighter 1 (0 degrees), fighter 1 is turned 60 degrees away, for 30 frames each. The
+    // density counts each unsigned sample at both signs: 60 samples at 0, 30 at +60 and 30
+    // at -60, so 0 degrees gives 1 and 60 degrees either way 0.5.
+    const mgrl::test::TempDir data("facing_bouts");
+    const std::filesystem::path motion = data.path / "snu_martial_arts" / "motion";
+    std::filesystem::create_directories(motion);
+    const std::filesystem::path stand = mgrl::test::testData() / "stats" / "stand";
+    std::string turned = readFile(stand / "fighter_1.bvh");
+    for (std::size_t at = turned.find("0 95 0 0 0 0"); at != std::string::npos; at = turned.find("0 95 0 0 0 0", at))
+      turned.replace(at, 12, "0 95 0 60 0 0");
+    writeFileAtomically(motion / "s_001_1_1.bvh", turned);
+    writeFileAtomically(motion / "s_001_1_2.bvh", readFile(stand / "fighter_2.bvh"));
+    recordScenarioDataDirectory(data.path);
+    const std::string bouts = "{type: terms, gamma: 0.9, terms: [{term: facing, prefer: bouts, sigma_deg: 1}]}";
+    auto bound = [&](const std::string& block, const Eigen::Vector3d& e) {
+      const auto reward = app::plugins().rewards.create(yaml(block));
+      reward->bind(m);
+      return reward->evaluate(m, 1, e);  // standing: the angle is the same at every frame
+    };
+    auto at = [](double degrees) {
+      return Eigen::Vector3d(2 * std::sin(degrees * M_PI / 180), 0, 2 * std::cos(degrees * M_PI / 180));
+    };
+    CHECK(bound(bouts, at(0)) == Approx(g));
+    CHECK(bound(bouts, at(60)) == Approx(0.5 * g).epsilon(1e-3));
+    CHECK(bound(bouts, at(-60)) == Approx(0.5 * g).epsilon(1e-3));
+    CHECK(bound(bouts, at(30)) < 1e-6);
+    CHECK(bound(bouts, at(120)) < 1e-6);
+    // A data folder without the SNU capture: one error at the term's key.
+    const mgrl::test::TempDir empty("facing_bouts_none");
+    recordScenarioDataDirectory(empty.path);
+    const auto none = app::plugins().rewards.create(yaml(bouts));
+    CHECK_THROWS_WITH(none->bind(m), Catch::Contains("prefer: ") &&
+                                         Catch::Contains("expected the SNU sparring capture s_TTT_K_P.bvh in"));
+    recordScenarioDataDirectory({});
   }
   SECTION("contact by a chosen effector") {
     const Eigen::Vector3d kick(0.2, 0.9, 0.7), punch(0, 1.3, 0.6);

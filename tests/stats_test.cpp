@@ -7,6 +7,7 @@
 
 #include <catch2/catch.hpp>
 
+#include "mgrl/learning/real_bouts.hpp"
 #include "mgrl/motion/kinematics.hpp"
 #include "mgrl/runtime/bout_stats.hpp"
 #include "stats_command.hpp"
@@ -207,6 +208,30 @@ TEST_CASE("stats: each capture fighter faces the nearest other, simulate's avata
   CHECK_THAT(mgrl::quantile(partners.distance_m, 1.0), WithinAbs(3.0, 1e-9));
 }
 
+TEST_CASE("stats: the facing samples a reward learns from are the ones stats measures", "[stats]") {
+  // learning/real_bouts (the facing term's prefer: bouts) measures facing on its own, below
+  // the runtime stage: every sample, in order, as measureBout's, for a walking fighter and
+  // for four fighters facing the nearest other.
+  for (const char* folder : {"walk", "four", "stand"}) {
+    CAPTURE(folder);
+    const mgrl::BoutFiles files = mgrl::resolveBout((statsData() / folder).string(), {});
+    const std::vector<double> degrees = mgrl::boutFacingDegrees({files});
+    const std::vector<double> measured = measureFolder(folder).facing_deg;
+    REQUIRE(degrees.size() == measured.size());
+    for (std::size_t i = 0; i < degrees.size(); ++i) CHECK_THAT(degrees[i], WithinAbs(measured[i], 1e-9));
+  }
+  // The walk's fighter 1 steps up to 0.5 m sideways, its opponent 2 m ahead: the largest
+  // angle is atan(0.5 / 2) = 14.04 degrees.
+  CHECK_THAT(mgrl::quantile(mgrl::boutFacingDegrees({mgrl::resolveBout((statsData() / "walk").string(), {})}), 1.0),
+             WithinAbs(std::atan2(0.5, 2.0) * 180 / M_PI, 1e-6));
+  // Bad bouts: one clear error each.
+  const mgrl::BoutFiles one{"lone", {statsData() / "stand" / "fighter_1.bvh"}};
+  REQUIRE_THROWS_WITH(mgrl::boutFacingDegrees({one}),
+                      Contains("bout lone: expected at least 2 fighters (BVH files), found 1"));
+  const mgrl::BoutFiles mixed = mgrl::resolveBout((statsData() / "mixed_rate").string(), {});
+  REQUIRE_THROWS_WITH(mgrl::boutFacingDegrees({mixed}), Contains("expected one frame time for all fighters"));
+}
+
 TEST_CASE("stats: pooling sums counts and times and keeps every sample", "[stats]") {
   const BoutStats a = measureFolder("stand"), b = measureFolder("walk");
   const BoutStats p = mgrl::pool({a, b}, "pooled");
@@ -293,6 +318,10 @@ TEST_CASE("stats: the real SNU sparring bouts pooled match the issue's figures l
   // 408 fighter-seconds at 30 fps (DATA.md).
   CHECK_THAT(mgrl::pool(measured, "pooled").fighterSeconds, WithinAbs(408, 1));
   const BoutStats p = mgrl::pool(measured, "pooled");
+  // What the facing term's prefer: bouts learns from: the same samples.
+  const std::vector<double>& learned = mgrl::snuFacingDegrees(mgrl::test::mocap());
+  CHECK(learned.size() == p.facing_deg.size());
+  CHECK_THAT(median(learned), WithinAbs(median(p.facing_deg), 1e-9));
   const double minutes = p.fighterSeconds / 60;
   const double strikes = static_cast<double>(p.punches + p.kicks) / minutes;
   const double reversals = static_cast<double>(p.reversals) / static_cast<double>(p.rootSteps);

@@ -1,13 +1,31 @@
 #include "mgrl/core/data_paths.hpp"
 
 #include <cstdlib>
+#include <mutex>
 
 namespace mgrl {
+
+namespace {
+
+std::mutex recordedMutex;
+std::filesystem::path recorded;
+
+}  // namespace
 
 std::filesystem::path dataDirectory(const std::filesystem::path& explicitDir) {
   if (!explicitDir.empty()) return explicitDir;
   if (const char* env = std::getenv("MGRL_DATA"); env && *env) return env;
   return std::filesystem::path(MGRL_SOURCE_DIR).parent_path() / "shared" / "mocap";
+}
+
+std::filesystem::path scenarioDataDirectory() {
+  const std::lock_guard<std::mutex> lock(recordedMutex);
+  return recorded.empty() ? dataDirectory() : recorded;
+}
+
+void recordScenarioDataDirectory(const std::filesystem::path& dir) {
+  const std::lock_guard<std::mutex> lock(recordedMutex);
+  recorded = dir;
 }
 
 }  // namespace mgrl

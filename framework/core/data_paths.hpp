@@ -11,4 +11,11 @@ namespace mgrl {
 /// the folder exists.
 std::filesystem::path dataDirectory(const std::filesystem::path& explicitDir = {});
 
+/// The data folder the last scenario was read with (the scenario reader records it), else
+/// dataDirectory(). For plug-ins that read capture of their own when they bind (the facing
+/// term's `prefer: bouts`), which see neither the command line nor the scenario. One per
+/// process: sessions on two data folders at once would share the last one.
+std::filesystem::path scenarioDataDirectory();
+void recordScenarioDataDirectory(const std::filesystem::path& dir);
+
 }  // namespace mgrl

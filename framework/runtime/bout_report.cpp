@@ -8,7 +8,6 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
-#include <map>
 
 #include <fmt/format.h>
 #include <fmt/ranges.h>
@@ -126,30 +125,6 @@ BoutFiles resolveBout(const std::string& argument, const fs::path& dataDir) {
       fmt::format("{}: expected a folder of BVH files or a quoted file pattern, found no such folder or "
                   "file{}",
                   argument, where));
-}
-
-std::vector<BoutFiles> snuBouts(const fs::path& dataDir) {
-  const fs::path dir = dataDir / "snu_martial_arts" / "motion";
-  std::map<std::string, std::vector<fs::path>> groups;
-  std::error_code ec;
-  if (fs::is_directory(dir, ec))
-    for (const auto& item : fs::directory_iterator(dir, ec)) {
-      const std::string file = item.path().filename().string();
-      // s_TTT_K_P.bvh: the bout is s_TTT_K, the fighter P.
-      if (!item.is_regular_file(ec) || ::fnmatch("s_*_*_*.bvh", file.c_str(), 0) != 0) continue;
-      groups[file.substr(0, file.rfind('_'))].push_back(item.path());
-    }
-  if (groups.empty())
-    throw Error(
-        fmt::format("--snu: expected the SNU sparring capture s_TTT_K_P.bvh in {}, found none (set --data or "
-                    "MGRL_DATA)",
-                    dir.string()));
-  std::vector<BoutFiles> bouts;
-  for (auto& [name, files] : groups) {
-    std::sort(files.begin(), files.end());
-    bouts.push_back({name, files});
-  }
-  return bouts;
 }
 
 namespace {

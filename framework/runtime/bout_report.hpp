@@ -11,15 +11,10 @@
 
 #include <nlohmann/json.hpp>
 
+#include "mgrl/learning/real_bouts.hpp"  // BoutFiles, snuBouts
 #include "mgrl/runtime/bout_stats.hpp"
 
 namespace mgrl {
-
-/// A bout's name and files, before loading.
-struct BoutFiles {
-  std::string name;
-  std::vector<std::filesystem::path> files;
-};
 
 /// One BOUT argument: a folder (every *.bvh in it; manifest.json and other files are
 /// ignored) or a pattern with * or ? in its file name part. A relative argument is looked
@@ -27,10 +22,6 @@ struct BoutFiles {
 /// folder, a folder without BVH files, a pattern matching nothing, wildcards in the folder
 /// part.
 BoutFiles resolveBout(const std::string& argument, const std::filesystem::path& dataDir);
-
-/// Every real SNU sparring bout: snu_martial_arts/motion/s_TTT_K_P.bvh under `dataDir`,
-/// grouped by TTT_K (the fighters P of one bout). Throws mgrl::Error if there is none.
-std::vector<BoutFiles> snuBouts(const std::filesystem::path& dataDir);
 
 struct StatsOptions {
   /// The bouts (with --compare: the real group).

@@ -6,6 +6,7 @@
 #include <fmt/format.h>
 #include <fmt/ranges.h>
 
+#include "mgrl/core/data_paths.hpp"
 #include "mgrl/core/files.hpp"
 #include "mgrl/core/hash.hpp"
 #include "mgrl/motion/motion_io.hpp"
@@ -337,6 +338,7 @@ Scenario parseScenario(std::string_view text, const std::filesystem::path& sourc
              readBehaviors(root),
              root};
   if (root.has("sparring_scenario")) s.sparringScenario = sparringScenarioPath(root.child("sparring_scenario"), dir);
+  recordScenarioDataDirectory(dataDir);
   return s;
 }
 
