@@ -374,43 +374,92 @@ TEST_CASE("a dodge page opens on the avatar and its scripted opponent, in sparri
 }
 
 // Issue 46: a turning target's grid repeats every position per turn rate. The values view
-// shows the speed-0 slice at the decision's heading (a dragged target stands still), taken
-// from the straight-line turn layer; a standing target does not turn, so every turn layer
-// holds the same values there, as the table shows.
-TEST_CASE("an intercept page's values view shows a standing target's values of a turning target's grid",
-          "[serve][data][turning]") {
+// shows the positions of the target's motion at the decision: its turn layer, its speed
+// layer and its heading. intercept's targets walk and turn in target mode; one the page
+// drags stands, and then the view shows the straight, speed-0 layers, where every turn layer
+// holds the same values, as the table shows.
+TEST_CASE("an intercept page's values view shows the layers of its target's motion", "[serve][data][turning]") {
   const BoxingAssets intercept(true, "intercept.yaml", {});
   serve::ViewerSession session(intercept.assets);
   session.takeOutbox();
+  for (int f = 0; f < 60; ++f) session.advance(1.0);
+  session.takeOutbox();
+  const Discretizer& grid = *intercept.assets->session->behaviors.at(0).discretizer;
+  REQUIRE(grid.turnAxis() != nullptr);
+  REQUIRE(grid.turnAxis()->vertices.size() == 5);
+  const QTable& q = intercept.assets->session->bundle.behaviors.at("approach").table;
+  const std::size_t positions = 13 * 5;  // sectors x rings of one heading, speed and turn
+  // The maxima the table holds on the positions of one heading at vertex `first` on.
+  auto maxima = [&](std::size_t state, std::size_t first) {
+    std::vector<double> out;
+    for (std::size_t v = first; v < first + positions; ++v) {
+      const float* row = q.row(state, v);
+      out.push_back(*std::max_element(row, row + q.actionsOf(state)));
+    }
+    std::sort(out.begin(), out.end());
+    return out;
+  };
+  auto shownValues = [](const json& values) {
+    std::vector<double> shown;
+    for (const json& p : values["points"]) shown.push_back(p[3].get<double>());
+    std::sort(shown.begin(), shown.end());
+    return shown;
+  };
+  auto same = [](const std::vector<double>& a, const std::vector<double>& b) {
+    if (a.size() != b.size()) return false;
+    for (std::size_t k = 0; k < a.size(); ++k)
+      if (std::abs(a[k] - b[k]) > 1e-4) return false;
+    return true;
+  };
+
+  // A walking target: the view is one heading's slice of its speed and turn layers. A
+  // target is placed again every 3 s with a new motion; wait for one nearest a layer above
+  // speed 0 (speeds are drawn from 0 to 1 m/s, the layers at 0, 0.5 and 1).
+  json moving;
+  for (int tries = 0; tries < 20 && !(moving.contains("speed") && moving["speed"].get<double>() > 0); ++tries) {
+    for (int f = 0; f < 45; ++f) session.advance(1.0);
+    session.takeOutbox();
+    session.handle(R"({"type": "values", "behavior": "approach"})");
+    const std::vector<json> out = textMessages(session);
+    REQUIRE(out.size() == 1);
+    moving = out[0];
+    session.handle(R"({"type": "values", "behavior": null})");
+  }
+  REQUIRE(moving["speed"].get<double>() > 0);
+  REQUIRE(moving["points"].size() == positions);
+  const GridAxis& speeds = *grid.axis(AxisRole::Speed);
+  const auto speedLayer = static_cast<std::size_t>(
+      std::find(speeds.vertices.begin(), speeds.vertices.end(), moving["speed"].get<double>()) -
+      speeds.vertices.begin());
+  REQUIRE(speedLayer < speeds.vertices.size());
+  const std::vector<double>& rates = grid.turnAxis()->vertices;
+  std::size_t turnLayer = rates.size();
+  for (std::size_t k = 0; k < rates.size(); ++k)
+    if (std::abs(rates[k] * 180 / M_PI - moving["turn_deg_s"].get<double>()) < 1e-9) turnLayer = k;
+  REQUIRE(turnLayer < rates.size());
+  const std::size_t layer = turnLayer * grid.turnVertexCount() + speedLayer * grid.layerVertexCount();
+  bool found = false;
+  for (std::size_t h = 0; h < 6 && !found; ++h)
+    found = same(shownValues(moving), maxima(moving["state"].get<std::size_t>(), layer + h * positions));
+  CHECK(found);
+
+  // Dragged, the target stands: speed 0, the straight layer, heading 0 (the fourth of six:
+  // a dragged target's heading at a decision); every turn layer holds the same maxima there.
+  session.handle(R"({"type": "move_target", "position": [0.5, 1.2, 0.8]})");
   for (int f = 0; f < 60; ++f) session.advance(1.0);
   session.takeOutbox();
   session.handle(R"({"type": "values", "behavior": "approach"})");
   const std::vector<json> out = textMessages(session);
   REQUIRE(out.size() == 1);
   const json& values = out[0];
-  const Discretizer& grid = *intercept.assets->session->behaviors.at(0).discretizer;
-  REQUIRE(grid.turnAxis() != nullptr);
-  REQUIRE(grid.turnAxis()->vertices.size() == 5);
-  const std::size_t positions = 13 * 5;  // sectors x rings of one heading, speed and turn
+  CHECK(values["speed"] == 0.0);
+  CHECK(values["turn_deg_s"] == 0.0);
   REQUIRE(values["points"].size() == positions);
-  // Speed 0, heading 0 (the fourth of six: a dragged target's heading at a decision): the
-  // maxima the table holds there, in each of the five turn layers alike.
-  const QTable& q = intercept.assets->session->bundle.behaviors.at("approach").table;
   const auto state = values["state"].get<std::size_t>();
-  std::vector<double> shown;
-  for (const json& p : values["points"]) shown.push_back(p[3].get<double>());
-  std::sort(shown.begin(), shown.end());
   for (std::size_t turn = 0; turn < 5; ++turn) {
     const std::size_t first = turn * grid.turnVertexCount() + 3 * positions;
-    std::vector<double> expected;
-    for (std::size_t v = first; v < first + positions; ++v) {
-      CHECK(grid.vertexState(v).speed == 0);
-      const float* row = q.row(state, v);
-      expected.push_back(*std::max_element(row, row + q.actionsOf(state)));
-    }
-    std::sort(expected.begin(), expected.end());
-    REQUIRE(shown.size() == expected.size());
-    for (std::size_t k = 0; k < shown.size(); ++k) CHECK(shown[k] == Approx(expected[k]).margin(1e-4));
+    for (std::size_t v = first; v < first + positions; ++v) CHECK(grid.vertexState(v).speed == 0);
+    CHECK(same(shownValues(values), maxima(state, first)));
   }
 }
 

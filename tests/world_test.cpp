@@ -509,6 +509,89 @@ TEST_CASE("a boxer follows a target the user drags and punches it", "[world][dat
   REQUIRE_THROWS_AS(World(b.setup(2)).moveTarget(0, far), Error);
 }
 
+TEST_CASE("a target of a moving_target scene moves as the model draws it, and controllers see its motion",
+          "[world][data]") {
+  const Boxing& b = boxing();
+  // Speeds 0.5 to 1 m/s, turning at -90, 0 or +90 deg/s: every target moves.
+  const MovingTarget moving(0.5, 1.0, {-M_PI / 2, 0.0, M_PI / 2});
+  WorldSetup s = b.setup(4);
+  s.params.mode = "targets";
+  s.params.targetHold = 2.0;
+  s.targetMotion = &moving;
+  World world(s);
+  const double dt = b.model().frameTime;
+  world.run(1);  // the first frame places every target and every avatar decides
+  std::set<double> rates;
+  for (std::size_t i = 0; i < 4; ++i) {
+    CAPTURE(i);
+    const Target& t = world.target(i);
+    REQUIRE(t.path.speed >= 0.5);
+    REQUIRE(t.path.speed <= 1.0);
+    rates.insert(t.path.turnRate);
+    // Placed when the world was made, at time 0; the first frame is at dt.
+    CHECK(t.placedAt == 0);
+    CHECK((t.base - t.path.at(world.time())).norm() < 1e-12);
+    // The decision saw the target's motion in the avatar's frame.
+    const World::Decision d = world.lastDecision(i);
+    CHECK((d.target.position - inverseTransformPoint(d.frame, t.centre())).norm() < 1e-12);
+    CHECK(d.target.speed == t.path.speed);
+    CHECK(d.target.turnRate == t.path.turnRate);
+    CHECK(d.target.heading ==
+          Approx(std::remainder(t.path.headingAt(world.time()) - d.frame.dyaw, 2 * M_PI)).margin(1e-12));
+  }
+  CHECK(rates.size() >= 2);
+  // Every later decision sees the heading the arc has turned to by then, in its own frame.
+  std::vector<Target> placed;
+  std::vector<std::size_t> seen;
+  for (std::size_t i = 0; i < 4; ++i) {
+    placed.push_back(world.target(i));
+    seen.push_back(world.lastDecision(i).count);
+  }
+  std::size_t later = 0;
+  for (std::size_t f = 0; f < framesFor(b, 1.5); ++f) {
+    world.run(1);
+    for (std::size_t i = 0; i < 4; ++i) {
+      const World::Decision d = world.lastDecision(i);
+      if (d.count == seen[i]) continue;
+      seen[i] = d.count;
+      ++later;
+      const TargetState& path = placed[i].path;
+      CAPTURE(i, d.count, world.time());
+      CHECK(d.target.heading ==
+            Approx(std::remainder(path.headingAt(world.time() - placed[i].placedAt) - d.frame.dyaw, 2 * M_PI))
+                .margin(1e-9));
+    }
+  }
+  CHECK(later >= 4);
+  // 1.5 s on, each target is where its arc says, having moved about speed x time.
+  const double elapsed = world.time() - placed[0].placedAt;
+  for (std::size_t i = 0; i < 4; ++i) {
+    CAPTURE(i);
+    const Target& t = world.target(i);
+    CHECK((t.base - placed[i].path.at(elapsed)).norm() < 1e-9);
+    const double travelled = (t.base - placed[i].base).norm();
+    CHECK(travelled > 0.5 * placed[i].path.speed * elapsed);  // a 90 deg/s arc over 1.5 s: chord 0.78 of the path
+    CHECK(travelled <= placed[i].path.speed * elapsed + 1e-9);
+  }
+  // After the hold a target is placed again with a new motion; one the user drags stands.
+  world.run(framesFor(b, 0.6));
+  CHECK(world.target(0).placedAt > placed[0].placedAt);
+  const Eigen::Vector3d put = world.target(1).base + Eigen::Vector3d(0.3, 0, 0);
+  world.moveTarget(1, put);
+  world.run(framesFor(b, 3.0));
+  CHECK(world.target(1).base == put);
+  CHECK(world.lastDecision(1).target.speed == 0);
+  // Without a model that moves them, targets stand between their moves (the paper's).
+  WorldSetup still = b.setup(1);
+  still.params.mode = "targets";
+  World fixed(still);
+  fixed.run(1);
+  const Eigen::Vector3d base = fixed.target(0).base;
+  fixed.run(framesFor(b, 1.0));
+  CHECK(fixed.target(0).base == base);
+  CHECK(fixed.lastDecision(0).target.speed == 0);
+}
+
 TEST_CASE("variety draws among the top k actions, seeded, k = 1 is greedy", "[world][data]") {
   const Boxing& b = boxing();
   const StateActionModel& m = b.model();

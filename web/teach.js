@@ -167,7 +167,11 @@ export class Teach {
       $('legend-bar').style.background = viridisGradient();
       $('legend-caption').textContent = `colour: V = max over actions of Q; ${marks}`;
     }
+    // A grid that holds the target's motion shows the layers of the target's motion.
+    const motion = m.speed || m.turn_deg_s
+      ? `, values for a target at ${Number(m.speed).toFixed(1)} m/s turning ${Number(m.turn_deg_s).toFixed(0)} deg/s`
+      : '';
     $('teach-state').textContent = `state ${m.state}, chosen action ${m.chosen} of ${m.actions} (counted from 0), ` +
-      `target inside grid: ${m.target_inside ? 'yes' : 'no'} (t ${Number(m.time).toFixed(1)} s)`;
+      `target inside grid: ${m.target_inside ? 'yes' : 'no'}${motion} (t ${Number(m.time).toFixed(1)} s)`;
   }
 }

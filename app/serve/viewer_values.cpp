@@ -45,9 +45,11 @@ std::string ViewerSession::values() const {
   const World::Decision d = s.world->lastDecision(0);
   const Eigen::Vector3d e = inverseTransformPoint(d.frame, s.world->aim(0));
   // A grid that also holds the target's heading (polar_velocity) repeats each position per
-  // heading and speed layer: the viewer's target stands still, so show the speed-0 slice at
-  // the heading nearest the decision's (a moving target's heading changes nothing at speed
-  // 0; an opponent's facing, issue 17, does).
+  // heading and speed layer, and per turn layer for a turning target: show the positions at
+  // the target's motion as the controller saw it, the turn layer of its turn rate, the
+  // speed layer nearest its speed and the heading nearest its heading (a standing target,
+  // one the page dragged: the straight, speed-0 layers; an opponent's facing, issue 17, is
+  // its heading too). A learned opponent's layers show its first state.
   const Discretizer& grid = *s.policy[shown].grid;
   const GridAxis* heading = grid.axis(AxisRole::Heading);
   std::size_t vertices = grid.turnAxis() ? grid.turnVertexCount() : q.vertexCount();
@@ -56,16 +58,24 @@ std::string ViewerSession::values() const {
     for (const GridAxis& axis : grid.axes())
       if (axis.role != AxisRole::Heading) vertices *= axis.vertices.size();
   }
-  // Turn layers (a turning target): the one nearest a straight line.
-  const std::size_t straight = grid.turnLayer(0) * grid.turnVertexCount();
-  std::size_t offset = straight;
+  std::size_t offset = grid.turnLayer(d.target.turnRate) * grid.turnVertexCount();
+  double layerSpeed = 0;
+  if (const GridAxis* speeds = grid.axis(AxisRole::Speed)) {
+    std::size_t nearest = 0;
+    for (std::size_t k = 1; k < speeds->vertices.size(); ++k)
+      if (std::abs(speeds->vertices[k] - d.target.speed) < std::abs(speeds->vertices[nearest] - d.target.speed))
+        nearest = k;
+    offset += nearest * grid.layerVertexCount();
+    layerSpeed = speeds->vertices[nearest];
+  }
   if (grid.layerAxis() && heading) {
     const std::vector<double>& headings = heading->vertices;
+    const std::size_t base = offset;
     double nearest = 10;
     for (std::size_t h = 0; h < headings.size(); ++h)
       if (const double gap = std::abs(std::remainder(headings[h] - d.target.heading, 2 * M_PI)); gap < nearest) {
         nearest = gap;
-        offset = straight + h * vertices;
+        offset = base + h * vertices;
       }
   }
   double level = vertexPositions.empty() ? 0 : vertexPositions[3 * offset + 1];
@@ -94,19 +104,22 @@ std::string ViewerSession::values() const {
     const Eigen::Vector3d w = transformPoint(d.frame, {model.frameRoot[3 * k], 0, model.frameRoot[3 * k + 1]});
     path.push_back({std::round(w.x() * 1000) / 1000, 0, std::round(w.z() * 1000) / 1000});
   }
-  return json{{"type", "values"},
-              {"behavior", behavior.name},
-              {"avatar", 0},
-              {"time", s.world->time()},
-              {"state", d.state},
-              {"actions", n},
-              {"chosen", d.action - model.stateActionBegin[d.state]},
-              {"height", level},
-              {"target_inside", s.policy[shown].grid->inside(e)},
-              {"v_min", lo},
-              {"v_max", hi},
-              {"points", points},
-              {"path", path}}
+  return json{
+      {"type", "values"},
+      {"behavior", behavior.name},
+      {"avatar", 0},
+      {"time", s.world->time()},
+      {"state", d.state},
+      {"actions", n},
+      {"chosen", d.action - model.stateActionBegin[d.state]},
+      {"height", level},
+      {"target_inside", s.policy[shown].grid->inside(e)},
+      {"speed", layerSpeed},
+      {"turn_deg_s", grid.turnAxis() ? grid.turnAxis()->vertices[grid.turnLayer(d.target.turnRate)] * 180 / M_PI : 0.0},
+      {"v_min", lo},
+      {"v_max", hi},
+      {"points", points},
+      {"path", path}}
       .dump();
 }
 

@@ -143,7 +143,7 @@ void World::startAvatar(std::size_t i) {
   if (!paired) {
     // A target in front, within reach of a few steps (the user's first placement).
     const double angle = (2 * a.rng.uniform() - 1) * M_PI / 3, distance = 0.8 + a.rng.uniform();
-    t.base = transformPoint(a.decision, {distance * std::sin(angle), centroidHeight_, distance * std::cos(angle)});
+    placeTarget(t, a.decision, {distance * std::sin(angle), centroidHeight_, distance * std::cos(angle)}, a.rng, 0);
     t.nextMove = p.targetHold;
   }
   if (setup_.poses) {
@@ -160,6 +160,17 @@ void World::startAvatar(std::size_t i) {
 Eigen::Vector3d World::bodyPoint(std::size_t i, int which) const {
   const Avatar& a = avatars_[i];
   return transformPoint(a.now, body_.point(a.sourceFrame, which));
+}
+
+void World::placeTarget(Target& t, const GroundMotion& frame, const Eigen::Vector3d& local, Rng& rng, double time) {
+  t.base = transformPoint(frame, local);
+  if (!setup_.targetMotion) return;
+  // Its motion drawn in the avatar frame, as the behaviours were trained and eval's trials
+  // draw it, then turned into the world frame: a heading h in a frame of yaw y is h + y.
+  t.path = setup_.targetMotion->draw(local, rng);
+  t.path.position = t.base;
+  t.path.heading += frame.dyaw;
+  t.placedAt = time;
 }
 
 Eigen::Vector3d World::aim(std::size_t i) const {
@@ -184,6 +195,13 @@ void World::decide(std::size_t i, Controller& controller) {
       e.opponent = 0;
     }
   }
+  if (a.partner < 0 && targets_[i].path.moving()) {
+    // A moving target: its motion now, seen from the decision's frame.
+    const Target& t = targets_[i];
+    e.speed = t.path.speed;
+    e.heading = std::remainder(t.path.headingAt(time() - t.placedAt) - a.decision.dyaw, 2 * M_PI);
+    e.turnRate = t.path.turnRate;
+  }
   if (setup_.opponent)
     e.heading = a.partner >= 0
                     ? std::remainder(avatars_[static_cast<std::size_t>(a.partner)].now.dyaw - a.decision.dyaw, 2 * M_PI)
@@ -201,9 +219,7 @@ void World::decide(std::size_t i, Controller& controller) {
   a.hitCursor = model_.actionHitBegin[a.action];
   a.kickCursor = model_.actionKickBegin.empty() ? 0 : model_.actionKickBegin[a.action];
   ++a.decisions;
-  a.decisionTarget = e.position;
-  a.decisionHeading = e.heading;
-  a.decisionOpponent = e.opponent;
+  a.decisionTarget = e;
   if (a.playback) a.playback->begin(a.action);
 }
 
@@ -221,9 +237,10 @@ void World::advance(std::size_t begin, std::size_t end, unsigned worker) {
       Target& t = targets_[i];
       if (time >= t.nextMove) {
         const double angle = (2 * a.rng.uniform() - 1) * M_PI, distance = 0.6 + 1.4 * a.rng.uniform();
-        t.base = transformPoint(a.now, {distance * std::sin(angle), centroidHeight_, distance * std::cos(angle)});
+        placeTarget(t, a.now, {distance * std::sin(angle), centroidHeight_, distance * std::cos(angle)}, a.rng, time);
         t.nextMove += p.targetHold;
       }
+      if (t.path.moving()) t.base = t.path.at(time - t.placedAt);
       const Eigen::Vector3d acceleration = -omega * omega * t.bend - 2 * p.bendDamping * omega * t.bendVelocity;
       t.bendVelocity += dt * acceleration;
       t.bend += dt * t.bendVelocity;
@@ -367,6 +384,7 @@ void World::moveTarget(std::size_t i, const Eigen::Vector3d& base) {
   if (i >= avatars_.size() || avatars_[i].partner >= 0)
     throw Error(fmt::format("world: expected an avatar with a target of its own, found avatar {}", i));
   targets_[i].base = base;
+  targets_[i].path = TargetState();  // the user's target stands where it is put
   targets_[i].nextMove = std::numeric_limits<double>::infinity();
 }
 
@@ -385,9 +403,7 @@ std::size_t World::avatarCount() const { return avatars_.size(); }
 GroundMotion World::avatarFrame(std::size_t i) const { return avatars_[i].now; }
 World::Decision World::lastDecision(std::size_t i) const {
   const Avatar& a = avatars_[i];
-  TargetState target(a.decisionTarget, 0.0, a.decisionHeading);
-  target.opponent = a.decisionOpponent;
-  return {a.state, a.action, a.decision, target, a.decisions};
+  return {a.state, a.action, a.decision, a.decisionTarget, a.decisions};
 }
 int World::partner(std::size_t i) const { return avatars_[i].partner; }
 const Target& World::target(std::size_t i) const { return targets_[i]; }

@@ -21,13 +21,14 @@
 #include <Eigen/Geometry>
 
 #include "mgrl/core/config.hpp"
-#include "mgrl/learning/target_state.hpp"
-#include "mgrl/runtime/controller.hpp"
-#include "mgrl/motion/motion_database.hpp"
 #include "mgrl/core/params.hpp"
-#include "mgrl/graph/playback.hpp"
 #include "mgrl/core/random.hpp"
+#include "mgrl/graph/playback.hpp"
 #include "mgrl/graph/state_action_model.hpp"
+#include "mgrl/learning/environment_model.hpp"
+#include "mgrl/learning/target_state.hpp"
+#include "mgrl/motion/motion_database.hpp"
+#include "mgrl/runtime/controller.hpp"
 
 namespace mgrl {
 
@@ -137,6 +138,10 @@ struct Target {
   Eigen::Vector3d base = Eigen::Vector3d::Zero();
   Eigen::Vector3d bend = Eigen::Vector3d::Zero(), bendVelocity = Eigen::Vector3d::Zero();
   double nextMove = 0;  ///< s, targets mode
+  /// How the base moves (WorldSetup::targetMotion), in the world frame from where it was
+  /// placed at `placedAt` s: base = path.at(time - placedAt). Speed 0: it stands.
+  TargetState path;
+  double placedAt = 0;
   Eigen::Vector3d centre() const { return base + bend; }
 };
 
@@ -167,6 +172,13 @@ struct WorldSetup {
   /// were trained with); a target of the targets mode is taken to be about to arrive at
   /// state 0. 0: no such state.
   int opponentPhases = 0;
+  /// The behaviours' environment moves its targets (a `moving_target`, maxSpeed() > 0):
+  /// each time a target of the targets mode is placed, its motion (speed, direction, turn
+  /// rate) is drawn from this model as eval's trials draw it, the target then moves along
+  /// it, and controllers see that motion (TargetState::speed, heading, turnRate). A target
+  /// the user moves (moveTarget) stands. Null: targets stand (the paper's). It must
+  /// outlive the world.
+  const EnvironmentModel* targetMotion = nullptr;
   /// Optional: makes the controllers of the second avatar of each sparring pair (odd
   /// indices), so that two policies spar (`simulate --partner-policy`); unset, every avatar
   /// plays makeController's.
@@ -242,6 +254,8 @@ class World {
   struct Worker;
   void startAvatar(std::size_t i);
   void decide(std::size_t i, Controller& controller);
+  /// Puts target t at `local` in `frame` (at `time` s) and, with a targetMotion, draws how it moves.
+  void placeTarget(Target& t, const GroundMotion& frame, const Eigen::Vector3d& local, Rng& rng, double time);
   void advance(std::size_t begin, std::size_t end, unsigned worker);
   void collide(std::size_t begin, std::size_t end, std::vector<HitEvent>& out);
   void react(const HitEvent& event);

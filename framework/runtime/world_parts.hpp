@@ -46,12 +46,10 @@ struct World::Avatar {
   std::uint32_t hitCursor = 0;  ///< next hit of the action to check
   std::uint32_t kickCursor = 0;  ///< next kick of the action to check
   std::int32_t partner = -1;
-  double decisionHeading = 0;  ///< an opponent's facing at the last decision (TargetState::heading)
-  std::int32_t decisionOpponent = -1;  ///< a learned opponent's state at the last decision (TargetState::opponent)
   /// Last frame of a landed strike, per limb: left and right fist, left and right foot.
   std::array<std::size_t, 4> landedFrame{world_detail::kNever, world_detail::kNever, world_detail::kNever, world_detail::kNever};
   std::size_t decisions = 0;
-  Eigen::Vector3d decisionTarget = Eigen::Vector3d::Zero();  ///< e at the last decision
+  TargetState decisionTarget;  ///< e at the last decision, as the controller saw it
   // Reaction to the last hit taken: displacement `push` of `part`, starting at `reactionStart`.
   BodyPart part = BodyPart::Head;
   Eigen::Vector3d push = Eigen::Vector3d::Zero();

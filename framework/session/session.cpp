@@ -51,6 +51,7 @@ WorldSetup Session::worldSetup(std::size_t avatars, std::uint64_t seed, const Co
   setup.seed = seed;
   setup.opponent = task.opponent;
   setup.opponentPhases = task.opponentPhases;
+  if (task.environment->maxSpeed() > 0) setup.targetMotion = task.environment;
   ControllerParts parts = controllerParts(task.world.variety);
   parts.policy = policyParts;
   requireParts(choice, parts);  // now, not at the world's first decision
