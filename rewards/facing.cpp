@@ -11,7 +11,6 @@
 #include <numbers>
 #include <set>
 #include <stdexcept>
-#include <string_view>
 #include <utility>
 
 #include <fmt/format.h>
@@ -128,10 +127,7 @@ class FacingDensity final : public Term {
     try {
       degrees = &snuFacingDegrees(scenarioDataDirectory());
     } catch (const Error& e) {
-      // snuBouts speaks to mgrl stats' --snu; here the key at fault is prefer.
-      std::string_view why = e.what();
-      if (why.starts_with("--snu: ")) why.remove_prefix(7);
-      throw TermError("prefer", fmt::format("bouts: {}", why));
+      throw TermError("prefer", fmt::format("bouts: {}", e.what()));
     }
     for (const double d : *degrees) {
       add(counts, d);

@@ -11,11 +11,12 @@
 #include <catch2/catch.hpp>
 
 #include "app/plugins.hpp"
+#include "mgrl/core/data_paths.hpp"
+#include "mgrl/graph/state_action_model.hpp"
 #include "mgrl/learning/behavior.hpp"
+#include "mgrl/motion/roles.hpp"
 #include "mgrl/scenario/behaviors.hpp"
 #include "mgrl/scenario/scenario.hpp"
-#include "mgrl/graph/state_action_model.hpp"
-#include "mgrl/motion/roles.hpp"
 #include "test_support.hpp"
 
 // A namespace of its own: the suite compiles in unity batches (tests/CMakeLists.txt).
@@ -676,6 +677,30 @@ TEST_CASE("the behaviour key changes with what the table depends on, and only th
     CHECK(keyOf("{type: moving_target}") != keyOf("{type: moving_target, max_turn_deg_s: 90}"));
     CHECK(keyOf("{type: moving_target, max_turn_deg_s: 90}") !=
           keyOf("{type: moving_target, max_turn_deg_s: 90, turns: 5}"));
+  }
+  SECTION("a facing term that learns from the real bouts keys on their samples (issue 46)") {
+    const Scenario s = parse(
+        "  keep:\n    discretizer: {type: polar2d}\n    reward: {type: terms, terms: [{term: facing, prefer: bouts}]}\n"
+        "    learner: {type: value_iteration}\n");  // records test::mocap() as the data folder
+    const std::string real = buildBehaviors(s, app::plugins(), model(), kGraphKey).front().key;
+    CHECK(buildBehaviors(s, app::plugins(), model(), kGraphKey).front().key == real);
+    // Another data folder whose only SNU bout is two stick figures facing each other.
+    const test::TempDir other("facing_bouts_key");
+    const std::filesystem::path motion = other.path / "snu_martial_arts" / "motion";
+    std::filesystem::create_directories(motion);
+    for (const char* fighter : {"1", "2"})
+      std::filesystem::copy_file(test::testData() / "stats" / "stand" / (std::string("fighter_") + fighter + ".bvh"),
+                                 motion / (std::string("s_001_1_") + fighter + ".bvh"));
+    recordScenarioDataDirectory(other.path);
+    std::string made;
+    try {
+      made = buildBehaviors(s, app::plugins(), model(), kGraphKey).front().key;
+    } catch (...) {
+      recordScenarioDataDirectory({});
+      throw;
+    }
+    recordScenarioDataDirectory({});
+    CHECK(made != real);
   }
   SECTION("a parameter given at its default is the same as one left out") {
     CHECK(keyWith("behaviors.approach.learner.alpha_final=0") == base);

@@ -10,6 +10,7 @@
 #include <cstring>
 #include <filesystem>
 #include <limits>
+#include <optional>
 #include <utility>
 
 #include <fmt/format.h>
@@ -1026,7 +1027,15 @@ TEST_CASE("each reward term gives its hand-computed value", "[learning][terms]")
       turned.replace(at, 12, "0 95 0 60 0 0");
     writeFileAtomically(motion / "s_001_1_1.bvh", turned);
     writeFileAtomically(motion / "s_001_1_2.bvh", readFile(stand / "fighter_2.bvh"));
-    recordScenarioDataDirectory(data.path);
+    // The data folder a scenario would have recorded, put back however the section ends.
+    struct Recorded {
+      explicit Recorded(const std::filesystem::path& dir) { recordScenarioDataDirectory(dir); }
+      ~Recorded() { recordScenarioDataDirectory({}); }
+      Recorded(const Recorded&) = delete;
+      Recorded& operator=(const Recorded&) = delete;
+    };
+    std::optional<Recorded> recorded;
+    recorded.emplace(data.path);
     const std::string bouts = "{type: terms, gamma: 0.9, terms: [{term: facing, prefer: bouts, sigma_deg: 1}]}";
     auto bound = [&](const std::string& block, const Eigen::Vector3d& e) {
       const auto reward = app::plugins().rewards.create(yaml(block));
@@ -1043,11 +1052,11 @@ TEST_CASE("each reward term gives its hand-computed value", "[learning][terms]")
     CHECK(bound(bouts, at(120)) < 1e-6);
     // A data folder without the SNU capture: one error at the term's key.
     const mgrl::test::TempDir empty("facing_bouts_none");
-    recordScenarioDataDirectory(empty.path);
+    recorded.reset();
+    recorded.emplace(empty.path);
     const auto none = app::plugins().rewards.create(yaml(bouts));
     CHECK_THROWS_WITH(none->bind(m), Catch::Contains("prefer: ") &&
                                          Catch::Contains("expected the SNU sparring capture s_TTT_K_P.bvh in"));
-    recordScenarioDataDirectory({});
   }
   SECTION("contact by a chosen effector") {
     const Eigen::Vector3d kick(0.2, 0.9, 0.7), punch(0, 1.3, 0.6);

@@ -300,7 +300,12 @@ TEST_CASE("stats: bad bouts are refused with where, what was expected and what w
                                               Contains("0.0166667 s in"));
   REQUIRE_THROWS_AS(load("broken"), mgrl::ParseError);
   REQUIRE_THROWS_WITH(load("broken"), Contains("fighter_2.bvh:100: expected 6 channel values, found 5"));
-  REQUIRE_THROWS_WITH(mgrl::snuBouts(data), Contains("--snu: expected the SNU sparring capture s_TTT_K_P.bvh in"));
+  REQUIRE_THROWS_WITH(mgrl::snuBouts(data), Contains("expected the SNU sparring capture s_TTT_K_P.bvh in"));
+  // mgrl stats says which of its options asked for them.
+  mgrl::StatsOptions snu;
+  snu.snu = true;
+  snu.dataDir = data;
+  REQUIRE_THROWS_WITH(mgrl::runStats(snu), Contains("--snu: expected the SNU sparring capture s_TTT_K_P.bvh in"));
   // Patterns resolve against the data folder (here: tests/data/stats) when not found locally.
   CHECK(mgrl::resolveBout("punch_near/fighter_*.bvh", data).files.size() == 2);
 }

@@ -519,8 +519,7 @@ TEST_CASE("a target of a moving_target scene moves as the model draws it, and co
   s.params.targetHold = 2.0;
   s.targetMotion = &moving;
   World world(s);
-  const double dt = b.model().frameTime;
-  world.run(1);  // the first frame places every target and every avatar decides
+  world.run(1);  // every avatar decides at the first frame, its target placed when the world was made
   std::set<double> rates;
   for (std::size_t i = 0; i < 4; ++i) {
     CAPTURE(i);
@@ -581,6 +580,23 @@ TEST_CASE("a target of a moving_target scene moves as the model draws it, and co
   world.run(framesFor(b, 3.0));
   CHECK(world.target(1).base == put);
   CHECK(world.lastDecision(1).target.speed == 0);
+  // The frames' convention, checked on its own: a target drawn walking straight ahead of the
+  // avatar (heading 0 in its frame) walks along the avatar's facing in the world.
+  struct AheadTarget final : EnvironmentModel {
+    std::string type() const override { return "ahead"; }
+    TargetState next(const StateActionModel&, std::size_t, const TargetState& e) const override { return e; }
+    TargetState draw(const Eigen::Vector3d& position, Rng&) const override { return {position, 0.8, 0.0}; }
+    double maxSpeed() const override { return 0.8; }
+  } ahead;
+  WorldSetup straight = b.setup(1);
+  straight.params.mode = "targets";
+  straight.targetMotion = &ahead;
+  World walker(straight);
+  const double yaw = walker.avatarFrame(0).dyaw;  // the frame the target was placed in
+  const Eigen::Vector3d start = walker.target(0).base;
+  walker.run(framesFor(b, 1.0));
+  const Eigen::Vector3d step = walker.target(0).base - start;
+  CHECK((step - 0.8 * walker.time() * Eigen::Vector3d(std::sin(yaw), 0, std::cos(yaw))).norm() < 1e-9);
   // Without a model that moves them, targets stand between their moves (the paper's).
   WorldSetup still = b.setup(1);
   still.params.mode = "targets";

@@ -168,7 +168,7 @@ export class Teach {
       $('legend-caption').textContent = `colour: V = max over actions of Q; ${marks}`;
     }
     // A grid that holds the target's motion shows the layers of the target's motion.
-    const motion = m.speed || m.turn_deg_s
+    const motion = m.speed > 0
       ? `, values for a target at ${Number(m.speed).toFixed(1)} m/s turning ${Number(m.turn_deg_s).toFixed(0)} deg/s`
       : '';
     $('teach-state').textContent = `state ${m.state}, chosen action ${m.chosen} of ${m.actions} (counted from 0), ` +

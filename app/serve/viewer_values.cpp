@@ -44,6 +44,9 @@ std::string ViewerSession::values() const {
   const QTable& q = *s.policy[shown].table;
   const World::Decision d = s.world->lastDecision(0);
   const Eigen::Vector3d e = inverseTransformPoint(d.frame, s.world->aim(0));
+  // Where the target is now, in the decision's frame, moving as the controller saw it.
+  TargetState seenNow = d.target;
+  seenNow.position = e;
   // A grid that also holds the target's heading (polar_velocity) repeats each position per
   // heading and speed layer, and per turn layer for a turning target: show the positions at
   // the target's motion as the controller saw it, the turn layer of its turn rate, the
@@ -113,7 +116,7 @@ std::string ViewerSession::values() const {
       {"actions", n},
       {"chosen", d.action - model.stateActionBegin[d.state]},
       {"height", level},
-      {"target_inside", s.policy[shown].grid->inside(e)},
+      {"target_inside", s.policy[shown].grid->inside(seenNow)},
       {"speed", layerSpeed},
       {"turn_deg_s", grid.turnAxis() ? grid.turnAxis()->vertices[grid.turnLayer(d.target.turnRate)] * 180 / M_PI : 0.0},
       {"v_min", lo},

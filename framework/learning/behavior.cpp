@@ -5,8 +5,10 @@
 
 #include <tuple>
 
+#include "mgrl/core/data_paths.hpp"
 #include "mgrl/core/hash.hpp"
 #include "mgrl/learning/policy_bundle.hpp"
+#include "mgrl/learning/real_bouts.hpp"
 
 namespace mgrl {
 
@@ -46,6 +48,22 @@ std::pair<nlohmann::json, std::string> behaviorConfigAndKey(const BehaviorSpec& 
   h.update(std::string_view("mgrl.behavior.v1"));
   h.update(std::string_view(graphKey));
   h.update(std::string_view(keyed.dump()));
+  // A facing term that learns from the real SNU bouts (prefer: bouts) reads capture beside
+  // the scenario's: its samples go into the key, so a table learned from other bouts (another
+  // data folder) is not taken for this one.
+  if (keyed["reward"].contains("terms") && keyed["reward"]["terms"].is_array())
+    for (const nlohmann::json& term : keyed["reward"]["terms"])
+      if (term.value("term", "") == "facing" && term.value("prefer", "") == "bouts") {
+        const std::vector<double>* samples = nullptr;
+        try {
+          samples = &snuFacingDegrees(scenarioDataDirectory());
+        } catch (const Error& e) {
+          spec.reward.fail(fmt::format("facing, prefer: bouts: {}", e.what()));
+        }
+        const std::vector<double>& degrees = *samples;
+        h.update(std::string_view(reinterpret_cast<const char*>(degrees.data()), degrees.size() * sizeof(double)));
+        break;
+      }
   return {std::move(config), h.hex()};
 }
 

@@ -35,7 +35,7 @@ std::vector<BoutFiles> snuBouts(const fs::path& dataDir) {
     }
   if (groups.empty())
     throw Error(
-        fmt::format("--snu: expected the SNU sparring capture s_TTT_K_P.bvh in {}, found none (set --data or "
+        fmt::format("expected the SNU sparring capture s_TTT_K_P.bvh in {}, found none (set --data or "
                     "MGRL_DATA)",
                     dir.string()));
   std::vector<BoutFiles> bouts;

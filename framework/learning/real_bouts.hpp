@@ -17,7 +17,8 @@ struct BoutFiles {
 };
 
 /// Every real SNU sparring bout: snu_martial_arts/motion/s_TTT_K_P.bvh under `dataDir`,
-/// grouped by TTT_K (the fighters P of one bout). Throws mgrl::Error if there is none.
+/// grouped by TTT_K (the fighters P of one bout). Throws mgrl::Error if there is none (the
+/// message names no option: callers say which of theirs asked).
 std::vector<BoutFiles> snuBouts(const std::filesystem::path& dataDir);
 
 /// For every fighter and frame of `bouts`: the angle on the ground between the fighter's

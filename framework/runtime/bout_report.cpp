@@ -200,7 +200,13 @@ json statsJson(const BoutStats& s) {
 json runStats(const StatsOptions& options) {
   options.params.validate();
   std::vector<BoutFiles> real, synthetic;
-  if (options.snu) real = snuBouts(options.dataDir);
+  if (options.snu) {
+    try {
+      real = snuBouts(options.dataDir);
+    } catch (const Error& e) {
+      throw Error(fmt::format("--snu: {}", e.what()));
+    }
+  }
   for (const std::string& a : options.bouts) real.push_back(resolveBout(a, options.dataDir));
   for (const std::string& a : options.synthetic) synthetic.push_back(resolveBout(a, options.dataDir));
   if (real.empty())

@@ -176,7 +176,8 @@ struct WorldSetup {
   /// each time a target of the targets mode is placed, its motion (speed, direction, turn
   /// rate) is drawn from this model as eval's trials draw it, the target then moves along
   /// it, and controllers see that motion (TargetState::speed, heading, turnRate). A target
-  /// the user moves (moveTarget) stands. Null: targets stand (the paper's). It must
+  /// the user moves (moveTarget) stands. Sparring's odd one out has such a target too.
+  /// Null: targets stand (the paper's). It must
   /// outlive the world.
   const EnvironmentModel* targetMotion = nullptr;
   /// Optional: makes the controllers of the second avatar of each sparring pair (odd
@@ -218,7 +219,8 @@ class World {
   struct Decision {
     std::uint32_t state = 0, action = 0;
     GroundMotion frame;
-    TargetState target;  ///< the aim point in that frame (and an opponent's facing), as the controller saw it
+    TargetState target;  ///< the environment state in that frame (aim point, and its motion or facing), as the
+                         ///< controller saw it
     std::size_t count = 0;                             ///< avatar i's decisions so far (this one included)
   };
   Decision lastDecision(std::size_t i) const;
