@@ -701,6 +701,20 @@ TEST_CASE("the behaviour key changes with what the table depends on, and only th
     }
     recordScenarioDataDirectory({});
     CHECK(made != real);
+    // A data folder without the SNU capture: one error at the term's key, saying where it
+    // looked.
+    const test::TempDir none("facing_bouts_key_none");
+    recordScenarioDataDirectory(none.path);
+    try {
+      buildBehaviors(s, app::plugins(), model(), kGraphKey);
+      recordScenarioDataDirectory({});
+      FAIL("expected a ConfigError");
+    } catch (const ConfigError& e) {
+      recordScenarioDataDirectory({});
+      CHECK_THAT(e.what(), Contains("behaviors.keep.reward.terms[0].prefer: bouts: expected the SNU sparring capture "
+                                    "s_TTT_K_P.bvh in") &&
+                               Contains(none.path.string()));
+    }
   }
   SECTION("a parameter given at its default is the same as one left out") {
     CHECK(keyWith("behaviors.approach.learner.alpha_final=0") == base);

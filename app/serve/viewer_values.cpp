@@ -61,26 +61,24 @@ std::string ViewerSession::values() const {
     for (const GridAxis& axis : grid.axes())
       if (axis.role != AxisRole::Heading) vertices *= axis.vertices.size();
   }
-  std::size_t offset = grid.turnLayer(d.target.turnRate) * grid.turnVertexCount();
+  // The index of the vertex of `axis` nearest c (the first of equals), by `gap`.
+  auto nearest = [](const std::vector<double>& axis, auto gap) {
+    std::size_t best = 0;
+    for (std::size_t k = 1; k < axis.size(); ++k)
+      if (gap(axis[k]) < gap(axis[best])) best = k;
+    return best;
+  };
+  const std::size_t turnLayer = grid.turnLayer(d.target.turnRate);
+  std::size_t offset = turnLayer * grid.turnVertexCount();
   double layerSpeed = 0;
   if (const GridAxis* speeds = grid.axis(AxisRole::Speed)) {
-    std::size_t nearest = 0;
-    for (std::size_t k = 1; k < speeds->vertices.size(); ++k)
-      if (std::abs(speeds->vertices[k] - d.target.speed) < std::abs(speeds->vertices[nearest] - d.target.speed))
-        nearest = k;
-    offset += nearest * grid.layerVertexCount();
-    layerSpeed = speeds->vertices[nearest];
+    const std::size_t k = nearest(speeds->vertices, [&](double v) { return std::abs(v - d.target.speed); });
+    offset += k * grid.layerVertexCount();
+    layerSpeed = speeds->vertices[k];
   }
-  if (grid.layerAxis() && heading) {
-    const std::vector<double>& headings = heading->vertices;
-    const std::size_t base = offset;
-    double nearest = 10;
-    for (std::size_t h = 0; h < headings.size(); ++h)
-      if (const double gap = std::abs(std::remainder(headings[h] - d.target.heading, 2 * M_PI)); gap < nearest) {
-        nearest = gap;
-        offset = base + h * vertices;
-      }
-  }
+  if (grid.layerAxis() && heading)
+    offset += vertices * nearest(heading->vertices,
+                                 [&](double v) { return std::abs(std::remainder(v - d.target.heading, 2 * M_PI)); });
   double level = vertexPositions.empty() ? 0 : vertexPositions[3 * offset + 1];
   for (std::size_t v = offset; v < offset + vertices; ++v)
     if (std::abs(vertexPositions[3 * v + 1] - e.y()) < std::abs(level - e.y())) level = vertexPositions[3 * v + 1];
@@ -107,22 +105,21 @@ std::string ViewerSession::values() const {
     const Eigen::Vector3d w = transformPoint(d.frame, {model.frameRoot[3 * k], 0, model.frameRoot[3 * k + 1]});
     path.push_back({std::round(w.x() * 1000) / 1000, 0, std::round(w.z() * 1000) / 1000});
   }
-  return json{
-      {"type", "values"},
-      {"behavior", behavior.name},
-      {"avatar", 0},
-      {"time", s.world->time()},
-      {"state", d.state},
-      {"actions", n},
-      {"chosen", d.action - model.stateActionBegin[d.state]},
-      {"height", level},
-      {"target_inside", s.policy[shown].grid->inside(seenNow)},
-      {"speed", layerSpeed},
-      {"turn_deg_s", grid.turnAxis() ? grid.turnAxis()->vertices[grid.turnLayer(d.target.turnRate)] * 180 / M_PI : 0.0},
-      {"v_min", lo},
-      {"v_max", hi},
-      {"points", points},
-      {"path", path}}
+  return json{{"type", "values"},
+              {"behavior", behavior.name},
+              {"avatar", 0},
+              {"time", s.world->time()},
+              {"state", d.state},
+              {"actions", n},
+              {"chosen", d.action - model.stateActionBegin[d.state]},
+              {"height", level},
+              {"target_inside", s.policy[shown].grid->inside(seenNow)},
+              {"speed", layerSpeed},
+              {"turn_deg_s", grid.turnAxis() ? grid.turnAxis()->vertices[turnLayer] * 180 / M_PI : 0.0},
+              {"v_min", lo},
+              {"v_max", hi},
+              {"points", points},
+              {"path", path}}
       .dump();
 }
 

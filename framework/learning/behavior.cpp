@@ -3,6 +3,7 @@
 #include <fmt/format.h>
 #include <fmt/ranges.h>
 
+#include <algorithm>
 #include <tuple>
 
 #include "mgrl/core/data_paths.hpp"
@@ -51,19 +52,15 @@ std::pair<nlohmann::json, std::string> behaviorConfigAndKey(const BehaviorSpec& 
   // A facing term that learns from the real SNU bouts (prefer: bouts) reads capture beside
   // the scenario's: its samples go into the key, so a table learned from other bouts (another
   // data folder) is not taken for this one.
-  if (keyed["reward"].contains("terms") && keyed["reward"]["terms"].is_array())
-    for (const nlohmann::json& term : keyed["reward"]["terms"])
-      if (term.value("term", "") == "facing" && term.value("prefer", "") == "bouts") {
-        const std::vector<double>* samples = nullptr;
-        try {
-          samples = &snuFacingDegrees(scenarioDataDirectory());
-        } catch (const Error& e) {
-          spec.reward.fail(fmt::format("facing, prefer: bouts: {}", e.what()));
-        }
-        const std::vector<double>& degrees = *samples;
-        h.update(std::string_view(reinterpret_cast<const char*>(degrees.data()), degrees.size() * sizeof(double)));
-        break;
-      }
+  const nlohmann::json& terms = keyed["reward"].contains("terms") ? keyed["reward"]["terms"] : nlohmann::json();
+  if (terms.is_array() && std::any_of(terms.begin(), terms.end(), [](const nlohmann::json& term) {
+        return term.value("term", "") == "facing" && term.value("prefer", "") == "bouts";
+      })) {
+    // (The term's bind has read them already, or failed at its `prefer` key.)
+    const std::vector<double>& degrees = spec.reward.withLocation(
+        []() -> const std::vector<double>& { return snuFacingDegrees(scenarioDataDirectory()); });
+    h.update(std::string_view(reinterpret_cast<const char*>(degrees.data()), degrees.size() * sizeof(double)));
+  }
   return {std::move(config), h.hex()};
 }
 

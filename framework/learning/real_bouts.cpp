@@ -46,6 +46,10 @@ std::vector<BoutFiles> snuBouts(const fs::path& dataDir) {
   return bouts;
 }
 
+double facingDegrees(const Eigen::Vector2d& facing, const Eigen::Vector2d& toOther, double distance) {
+  return std::acos(std::clamp(facing.dot(toOther) / distance, -1.0, 1.0)) * 180 / std::numbers::pi;
+}
+
 namespace {
 
 // One fighter's facing (unit, on the ground) and pelvis (on the ground) per frame.
@@ -106,9 +110,7 @@ std::vector<double> boutFacingDegrees(const std::vector<BoutFiles>& bouts) {
             toOther = d;
           }
         }
-        if (!(nearest > 1e-9)) continue;
-        const double c = std::clamp(tracks[i].facing[f].dot(toOther) / nearest, -1.0, 1.0);
-        degrees.push_back(std::acos(c) * 180 / std::numbers::pi);
+        if (nearest > 1e-9) degrees.push_back(facingDegrees(tracks[i].facing[f], toOther, nearest));
       }
   }
   return degrees;

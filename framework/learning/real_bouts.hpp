@@ -8,6 +8,8 @@
 #include <string>
 #include <vector>
 
+#include <Eigen/Core>
+
 namespace mgrl {
 
 /// A bout's name and files (one BVH per fighter, one world frame), before loading.
@@ -20,6 +22,10 @@ struct BoutFiles {
 /// grouped by TTT_K (the fighters P of one bout). Throws mgrl::Error if there is none (the
 /// message names no option: callers say which of theirs asked).
 std::vector<BoutFiles> snuBouts(const std::filesystem::path& dataDir);
+
+/// The facing `mgrl stats` reports: the angle on the ground between a unit `facing` and the
+/// direction `toOther` of length `distance` (> 0), in degrees in [0, 180].
+double facingDegrees(const Eigen::Vector2d& facing, const Eigen::Vector2d& toOther, double distance);
 
 /// For every fighter and frame of `bouts`: the angle on the ground between the fighter's
 /// facing (the annotation's yaw) and the direction to the nearest other fighter's pelvis,

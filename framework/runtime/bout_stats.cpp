@@ -3,11 +3,11 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
-#include <numbers>
 #include <regex>
 
 #include <fmt/format.h>
 
+#include "mgrl/learning/real_bouts.hpp"  // facingDegrees
 #include "mgrl/motion/kinematics.hpp"
 #include "mgrl/motion/motion_io.hpp"
 #include "mgrl/runtime/world.hpp"
@@ -274,10 +274,7 @@ BoutStats measureBout(const Bout& bout, const StatsParams& params) {
       const double distance = toOther.norm();
       ++s.pairFrames;
       s.distance_m.push_back(distance);
-      if (distance > 1e-9) {
-        const double c = std::clamp(me.facing[f].dot(toOther) / distance, -1.0, 1.0);
-        s.facing_deg.push_back(std::acos(c) * 180 / std::numbers::pi);
-      }
+      if (distance > 1e-9) s.facing_deg.push_back(facingDegrees(me.facing[f], toOther, distance));
       if (distance < params.closeDistance_m) ++s.closeFrames;
       if (capsulesOverlap(me, other, f, params)) ++s.overlapFrames;
     }

@@ -177,8 +177,7 @@ struct WorldSetup {
   /// rate) is drawn from this model as eval's trials draw it, the target then moves along
   /// it, and controllers see that motion (TargetState::speed, heading, turnRate). A target
   /// the user moves (moveTarget) stands. Sparring's odd one out has such a target too.
-  /// Null: targets stand (the paper's). It must
-  /// outlive the world.
+  /// Null: targets stand (the paper's). It must outlive the world.
   const EnvironmentModel* targetMotion = nullptr;
   /// Optional: makes the controllers of the second avatar of each sparring pair (odd
   /// indices), so that two policies spar (`simulate --partner-policy`); unset, every avatar
