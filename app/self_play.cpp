@@ -2,9 +2,12 @@
 
 #include <cmath>
 #include <cstdint>
+#include <memory>
+#include <span>
 
 #include <fmt/format.h>
 
+#include "mgrl/core/error.hpp"
 #include "mgrl/core/random.hpp"
 #include "mgrl/learning/problem.hpp"
 
@@ -49,9 +52,7 @@ double meanReturn(const Behavior& b, const StateActionModel& m, const QTable& ta
 
 nlohmann::json selfPlayRound(const Behavior& behavior, const StateActionModel& model, int round, const QTable& table,
                              const QTable* previous, const std::function<void(const std::string&)>& log) {
-  nlohmann::json entry = {
-      {"round", round},
-      {"opponent", round == 1 ? behavior.environment->policyKey() : fmt::format("round {}", round - 1)}};
+  nlohmann::json entry = {{"round", round}, {"opponent", behavior.environment->policyKey()}};
   const double mine = meanReturn(behavior, model, table, kSelfPlaySeed);
   entry["return"] = mine;
   if (!previous) {
@@ -63,10 +64,25 @@ nlohmann::json selfPlayRound(const Behavior& behavior, const StateActionModel& m
   entry["previous_return"] = old;
   entry["gap"] = mine - old;
   log(
-      fmt::format("train {}: round {}: return {:.3f} against round {}'s table, which itself gets {:.3f}: "
+      fmt::format("train {}: round {}: return {:.3f} against {}'s table, which itself gets {:.3f}: "
                   "best-response gap {:.3f}",
-                  behavior.name, round, mine, round - 1, old, mine - old));
+                  behavior.name, round, mine, behavior.environment->policyKey(), old, mine - old));
   return entry;
+}
+
+std::shared_ptr<const QTable> meanOfRounds(const QTable* mean, const QTable& table, int n) {
+  if (!mean) return std::make_shared<const QTable>(table);
+  if (mean->actionCount() != table.actionCount() || mean->vertexCount() != table.vertexCount())
+    throw Error(
+        fmt::format("self-play against: average: round {}'s table has {} actions x {} vertices, the earlier "
+                    "rounds' {} x {} (an adaptive grid refines each round differently; use against: previous)",
+                    n, table.actionCount(), table.vertexCount(), mean->actionCount(), mean->vertexCount()));
+  auto next = std::make_shared<QTable>(*mean);
+  const std::span<float> out = next->values();
+  const std::span<const float> in = table.values();
+  const float weight = 1.0F / static_cast<float>(n);
+  for (std::size_t i = 0; i < out.size(); ++i) out[i] += (in[i] - out[i]) * weight;
+  return next;
 }
 
 }  // namespace mgrl::app

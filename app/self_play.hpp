@@ -3,6 +3,7 @@
 /// Self-play rounds of `mgrl train` (issue 43): how a round's table does against the
 /// opponent it was trained against, and how much it gains over the previous round's.
 #include <functional>
+#include <memory>
 #include <string>
 
 #include <nlohmann/json.hpp>
@@ -14,12 +15,19 @@
 namespace mgrl::app {
 
 /// Round `round`'s entry for train's report and the bundle's record: {"round", "opponent",
-/// "return"} and, given the previous round's table, {"previous_return", "gap"}: the mean
+/// "return"} and, given the table the opponent plays (the previous round's, or with
+/// `against: average` the earlier rounds' mean), {"previous_return", "gap"}: the mean
 /// discounted return of each table's greedy policy against the behaviour's environment as
-/// it stands (its opponent playing the previous round's table), over the same 200 episodes
-/// of 10 s; the gap (this minus the previous) is the best-response gap, which shrinks as the
-/// rounds settle. Says the figures through `log`.
+/// it stands (its opponent playing that table), over the same 200 episodes of 10 s; the gap
+/// (this minus the opponent's own) is the best-response gap, which shrinks as the rounds
+/// settle. Says the figures through `log`.
 nlohmann::json selfPlayRound(const Behavior& behavior, const StateActionModel& model, int round, const QTable& table,
                              const QTable* previous, const std::function<void(const std::string&)>& log);
+
+/// `against: average`: the mean of rounds 1..n's tables, from the mean of rounds 1..n - 1's
+/// (null for n = 1) and round n's table: mean + (table - mean) / n, entry by entry. Throws
+/// mgrl::Error when the tables differ in layout (an adaptive grid refines each round
+/// differently).
+std::shared_ptr<const QTable> meanOfRounds(const QTable* mean, const QTable& table, int n);
 
 }  // namespace mgrl::app

@@ -240,19 +240,25 @@ class TrainRun {
   }
 
   // Self-play rounds (issue 43): round 1 against the opponent the scenario names, round k
-  // against round k - 1's table; each round's table is kept, the last under the
-  // behaviour's own name, the others as NAME-roundK.
+  // against round k - 1's table, or with `against: average` greedily on the mean of rounds
+  // 1..k - 1's tables (fictitious self-play answers the mixture of every earlier strategy;
+  // a greedy player on the mean of their values is its deterministic stand-in, so the
+  // transition stays one successor per action and vertex). Each round's table is kept, the
+  // last under the behaviour's own name, the others as NAME-roundK.
   void trainBehavior(Behavior& behavior, const std::vector<Behavior>& all) {
     const int rounds = behavior.environment->rounds();
-    std::shared_ptr<const QTable> previous;
+    const bool average = behavior.environment->roundsAgainstAverage();
+    std::shared_ptr<const QTable> previous, mean;
     json roundsReport = json::array();
     for (int round = 1; round <= rounds; ++round) {
       const std::string label = round < rounds ? fmt::format("{}-round{}", behavior.name, round) : behavior.name;
       if (rounds > 1) {
-        if (previous)
-          behavior.environment->playPolicy(behavior.discretizer.get(), previous, fmt::format("round {}", round - 1));
+        const std::string against = !previous              ? ""
+                                    : average && round > 2 ? fmt::format("rounds 1-{} mean", round - 1)
+                                                           : fmt::format("round {}", round - 1);
+        if (previous) behavior.environment->playPolicy(behavior.discretizer.get(), average ? mean : previous, against);
         log_(fmt::format("train {}: self-play round {} of {}, against {}", behavior.name, round, rounds,
-                         previous ? fmt::format("round {}'s table", round - 1)
+                         previous ? fmt::format("{}'s table", against)
                                   : fmt::format("the {} opponent", behavior.environment->policyKey())));
       }
       auto [result, record] = trainRound(behavior, all, label, round, rounds);
@@ -260,11 +266,16 @@ class TrainRun {
       const Discretizer& tableGrid = result.grid ? *result.grid : *behavior.discretizer;
       if (rounds > 1) {
         // Scoring the round is reporting: rank 0's (issue 44).
-        if (writes_) roundsReport.push_back(selfPlayRound(behavior, model_, round, result.table, previous.get(), log_));
+        if (writes_)
+          roundsReport.push_back(
+              selfPlayRound(behavior, model_, round, result.table, average ? mean.get() : previous.get(), log_));
         record["round"] = round;
         record["rounds"] = roundsReport;
         report_["behaviors"][behavior.name]["rounds"] = roundsReport;
-        if (round < rounds) previous = std::make_shared<const QTable>(result.table);
+        if (round < rounds) {
+          previous = std::make_shared<const QTable>(result.table);
+          if (average) mean = meanOfRounds(mean.get(), *previous, round);
+        }
       }
       bundle_.behaviors[round == rounds ? behavior.name : label] = PolicyBehavior{
           behavior.key,          record, std::move(result.table), vertexPositions(tableGrid), tableGrid.type(),

@@ -53,10 +53,12 @@ std::uint64_t freshGeneration();
 /// action ends at and the phase bucket b of the frames left (0: about to arrive).
 class LearnedOpponent final : public EnvironmentModel {
  public:
-  LearnedOpponent(std::string policy, int phases, int rounds, double stopDistance, double reach, double strikeBonus)
+  LearnedOpponent(std::string policy, int phases, int rounds, bool averageRounds, double stopDistance, double reach,
+                  double strikeBonus)
       : policy_(std::move(policy)),
         phases_(phases),
         rounds_(rounds),
+        averageRounds_(averageRounds),
         stopDistance_(stopDistance),
         reach_(reach),
         strikeBonus_(strikeBonus) {}
@@ -77,6 +79,7 @@ class LearnedOpponent final : public EnvironmentModel {
   const std::string& policy() const { return policy_; }
   int opponentPhases() const override { return phases_; }
   int rounds() const override { return rounds_; }
+  bool roundsAgainstAverage() const override { return averageRounds_; }
   /// The graph state s's representative incoming action (what the opponent is taken to be
   /// playing when only its end state and phase are known).
   std::uint32_t representative(std::uint32_t s) const { return representative_[s]; }
@@ -96,6 +99,7 @@ class LearnedOpponent final : public EnvironmentModel {
 
   std::string policy_;
   int phases_, rounds_;
+  bool averageRounds_;
   double stopDistance_, reach_, strikeBonus_;
   const StateActionModel* model_ = nullptr;
   std::vector<std::uint32_t> representative_;

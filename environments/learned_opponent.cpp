@@ -281,15 +281,19 @@ void registerLearnedOpponent(EnvironmentRegistry& registry) {
                            "graph states x phases)"),
         ParamSpec::integer("rounds", 1, 1, 20, "rounds",
                            "mgrl train: self-play rounds; round 1 against `policy`, round k against round k - 1's "
-                           "table; every round is kept in the bundle"),
+                           "table (or the rounds' mean, `against`); every round is kept in the bundle"),
+        ParamSpec::choice("against", "previous", {"previous", "average"},
+                          "self-play: round k's opponent plays round k - 1's table (previous), or greedily on the "
+                          "mean of rounds 1..k - 1's tables (average: a stand-in for fictitious self-play, so that "
+                          "a round cannot win by beating only the last one)"),
         ParamSpec::number("stop_distance", 0.9, 0, 10, "m", "scripted: the ground distance it closes to"),
         ParamSpec::number("reach", 0.3, 0.01, 2, "m",
                           "scripted: a punch whose tip comes this close to the head counts"),
         ParamSpec::number("strike_bonus", 0.5, 0, 10, "m", "scripted: how much a punch in reach outweighs position")},
        [](const Params& p) {
-         return std::make_unique<LearnedOpponent>(p.choice("policy"), static_cast<int>(p.integer("phases")),
-                                                  static_cast<int>(p.integer("rounds")), p.number("stop_distance"),
-                                                  p.number("reach"), p.number("strike_bonus"));
+         return std::make_unique<LearnedOpponent>(
+             p.choice("policy"), static_cast<int>(p.integer("phases")), static_cast<int>(p.integer("rounds")),
+             p.choice("against") == "average", p.number("stop_distance"), p.number("reach"), p.number("strike_bonus"));
        }});
 }
 

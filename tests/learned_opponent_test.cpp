@@ -4,12 +4,14 @@
 #include <algorithm>
 #include <cmath>
 #include <cstring>
+#include <memory>
 #include <vector>
 
 #include <fmt/format.h>
 #include <catch2/catch.hpp>
 
 #include "app/plugins.hpp"
+#include "app/self_play.hpp"
 #include "cli_support.hpp"
 #include "environments/environments.hpp"
 #include "mgrl/core/random.hpp"
@@ -279,30 +281,39 @@ struct SparSandbox : test::CliSandbox {
 TEST_CASE("mgrl train runs self-play rounds against a learned opponent, keeps every round and reports the gap",
           "[opponent][cli][data][slow]") {
   SparSandbox box;
-  const test::Run trained =
-      box.run("train " + box.scenario() + kSmallSpar + " --set behaviors.spar.environment.rounds=2 --json --out " +
-              test::shellWord(box.path("policy")));
+  // Three rounds, the third against the mean of the first two (against: average).
+  const test::Run trained = box.run("train " + box.scenario() + kSmallSpar +
+                                    " --set behaviors.spar.environment.rounds=3"
+                                    " --set behaviors.spar.environment.against=average --json --out " +
+                                    test::shellWord(box.path("policy")));
   INFO(trained.err);
   REQUIRE(trained.status == 0);
   const nlohmann::json report = trained.report();
   const nlohmann::json& rounds = report["behaviors"]["spar"]["rounds"];
-  REQUIRE(rounds.size() == 2);
+  REQUIRE(rounds.size() == 3);
   CHECK(rounds[0]["opponent"] == "scripted");
   CHECK_FALSE(rounds[0].contains("gap"));
   CHECK(rounds[1]["opponent"] == "round 1");
-  CHECK(rounds[1]["gap"].get<double>() ==
-        Approx(rounds[1]["return"].get<double>() - rounds[1]["previous_return"].get<double>()));
-  // Round 2 is a best response to round 1: against round 1's table it does at least as well
-  // as round 1's own table (up to the grid's interpolation).
-  CHECK(rounds[1]["gap"].get<double>() > -0.05 * rounds[1]["return"].get<double>());
-  CHECK(trained.err.find("train spar: self-play round 2 of 2, against round 1's table") != std::string::npos);
+  CHECK(rounds[2]["opponent"] == "rounds 1-2 mean");
+  for (std::size_t k = 1; k < 3; ++k) {
+    INFO("round " << k + 1);
+    CHECK(rounds[k]["gap"].get<double>() ==
+          Approx(rounds[k]["return"].get<double>() - rounds[k]["previous_return"].get<double>()));
+    // Round k is a best response to the table its opponent plays: against it, it does at
+    // least as well as that table's own greedy policy (up to the grid's interpolation).
+    CHECK(rounds[k]["gap"].get<double>() > -0.05 * rounds[k]["return"].get<double>());
+  }
+  CHECK(trained.err.find("train spar: self-play round 2 of 3, against round 1's table") != std::string::npos);
+  CHECK(trained.err.find("train spar: self-play round 3 of 3, against rounds 1-2 mean's table") != std::string::npos);
   CHECK(trained.err.find("best-response gap") != std::string::npos);
   CHECK(report["behaviors"]["spar"]["vertices"] == kSmallPositions * 117);
 
-  // Both rounds are in the bundle, and they differ: the opponent changed between them.
+  // Every round is in the bundle, and they differ: the opponent changed between them.
   const nlohmann::json manifest = nlohmann::json::parse(test::readText(box.path("policy") / "manifest.json"));
   CHECK(manifest.dump().find("spar-round1") != std::string::npos);
+  CHECK(manifest.dump().find("spar-round2") != std::string::npos);
   CHECK(test::readText(box.path("policy") / "spar.q.npy") != test::readText(box.path("policy") / "spar-round1.q.npy"));
+  CHECK(test::readText(box.path("policy") / "spar.q.npy") != test::readText(box.path("policy") / "spar-round2.q.npy"));
 
   // The opponent can play a bundle's table (here round 2's) from round 1 on.
   const test::Run against = box.run("train " + box.scenario() + kSmallSpar +
@@ -364,6 +375,32 @@ TEST_CASE(
   CHECK(targets.status != 0);
   CHECK(targets.lastErrorLine().find("--partner-policy: expected a sparring world (world.mode: sparring), found "
                                      "targets") != std::string::npos);
+}
+
+TEST_CASE("self-play against: average plays the entry-by-entry mean of the earlier rounds' tables",
+          "[opponent][learning]") {
+  StateActionModel m;  // what a table's layout depends on: state 0 has actions 0 and 1, state 1 action 2
+  m.actionFrom = {0, 0, 1};
+  m.actionTo = {1, 0, 0};
+  m.stateActionBegin = {0, 2, 3};
+  std::vector<QTable> rounds(3, QTable(m, 4));
+  for (std::size_t k = 0; k < rounds.size(); ++k)
+    for (std::size_t a = 0; a < 3; ++a)
+      for (std::size_t v = 0; v < 4; ++v)
+        rounds[k].at(a, v) = static_cast<float>((k + 1) * (a + 1)) + 0.25F * static_cast<float>(v * k);
+  std::shared_ptr<const QTable> mean;
+  for (std::size_t k = 0; k < rounds.size(); ++k)
+    mean = app::meanOfRounds(mean.get(), rounds[k], static_cast<int>(k + 1));
+  for (std::size_t a = 0; a < 3; ++a)
+    for (std::size_t v = 0; v < 4; ++v) {
+      const double expected = (rounds[0].at(a, v) + rounds[1].at(a, v) + rounds[2].at(a, v)) / 3.0;
+      CHECK(mean->at(a, v) == Approx(expected).epsilon(1e-6));
+    }
+  // The first round's mean is its own table; a table of another layout is refused.
+  CHECK(*app::meanOfRounds(nullptr, rounds[1], 1) == rounds[1]);
+  const QTable other(m, 5);
+  CHECK_THROWS_WITH(app::meanOfRounds(mean.get(), other, 4),
+                    Catch::Contains("round 4's table has 3 actions x 5 vertices, the earlier rounds' 3 x 4"));
 }
 
 }  // namespace mgrl::learned_opponent_test

@@ -81,6 +81,9 @@ class EnvironmentModel {
   virtual void playPolicy(const Discretizer* grid, std::shared_ptr<const QTable> table, const std::string& key);
   /// Self-play rounds `mgrl train` runs (round k's opponent plays round k - 1's table).
   virtual int rounds() const { return 1; }
+  /// True when round k's opponent plays the mean of rounds 1..k - 1's tables instead of
+  /// round k - 1's alone (a stand-in for fictitious self-play, issue 43).
+  virtual bool roundsAgainstAverage() const { return false; }
   /// What the opponent plays, for messages and records: "" without a learned opponent.
   virtual std::string policyKey() const { return ""; }
   /// The policy bundle directory the scenario asks the opponent to play, "" for none (a
