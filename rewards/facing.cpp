@@ -16,6 +16,7 @@
 #include <fmt/format.h>
 
 #include "mgrl/core/data_paths.hpp"
+#include "mgrl/learning/behavior_spec.hpp"
 #include "mgrl/learning/real_bouts.hpp"
 #include "term.hpp"
 
@@ -142,6 +143,45 @@ class FacingDensity final : public Term {
   bool bound_ = false;
 };
 
+// A stance learned from the real SNU sparring bouts (prefer: stance, issue 46): the facing
+// angles their fighters keep to each other (as prefer: bouts reads them) are cut into
+// `stances` equally likely parts, and stance k prefers the median of part k, as the
+// constant term prefers angle_deg. A scenario gives each stance its own behaviour (`stance:
+// k`), and the world lets each fighter hold one at a time, drawn uniformly: the bout's
+// facing then follows the real distribution part by part, which one preferred angle (the
+// distribution's mode) cannot do.
+class FacingStance final : public Term {
+ public:
+  explicit FacingStance(const Params& p)
+      : stance_(static_cast<int>(p.integer("stance"))),
+        stances_(static_cast<int>(p.integer("stances"))),
+        sigma_(p.number("sigma_deg") * kDegree) {
+    if (stance_ >= stances_)
+      throw TermError("stance", fmt::format("expected a stance below stances ({}), found {}", stances_, stance_));
+  }
+
+  void bind(const StateActionModel&) override {
+    try {
+      angle_ = facingStances(snuFacingDegrees(scenarioDataDirectory()), stances_)[static_cast<std::size_t>(stance_)] *
+               kDegree;
+    } catch (const Error& e) {
+      throw TermError("prefer", fmt::format("stance: {}", e.what()));
+    }
+    bound_ = true;
+  }
+
+  double signal(const TermFrame& f) const override {
+    if (!bound_) throw std::logic_error("facing term with a learned stance evaluated before it was bound");
+    return std::exp(-std::abs(facingError(f.model, f.frame, f.target) - angle_) / sigma_);
+  }
+
+ private:
+  int stance_, stances_;
+  double sigma_;      // rad
+  double angle_ = 0;  // rad, learned at bind
+  bool bound_ = false;
+};
+
 }  // namespace
 
 void registerFacing(Vocabulary& v) {
@@ -152,15 +192,21 @@ void registerFacing(Vocabulary& v) {
        "exp(-|angle - angle0| / sigma), angle between the avatar's facing and the target's direction; or how "
        "often capture has that angle: (prefer: hits) the capture's own strikes, (prefer: bouts) the real SNU "
        "sparring bouts' fighters",
-       {ParamSpec::choice("prefer", "angle", {"angle", "hits", "bouts"},
+       {ParamSpec::choice("prefer", "angle", {"angle", "hits", "bouts", "stance"},
                           "angle: about angle_deg; hits: the capture's distribution of the signed angle from "
                           "the facing to its effective hitting points (its own stance); bouts: the distribution "
                           "of the angle the real SNU sparring bouts' fighters keep to each other (the data "
                           "folder's snu_martial_arts/motion/s_*.bvh, as mgrl stats measures it); both smoothed "
-                          "by sigma_deg"),
+                          "by sigma_deg; stance: as angle, about the median of part `stance` of the bouts' angles "
+                          "cut into `stances` equally likely parts"),
+        ParamSpec::integer("stance", 0, 0, kMaxStances - 1, "",
+                           "prefer: stance: which part of the real angles, from the smallest (0)"),
+        ParamSpec::integer("stances", 3, 1, kMaxStances, "",
+                           "prefer: stance: how many parts the real angles are cut into"),
         angle, ParamSpec::number("sigma_deg", 30, 0.1, 360, "deg", "angle scale of the exponential (of the smoothing)"),
         weightSpec()},
        [](const Params& p) -> std::unique_ptr<Term> {
+         if (p.choice("prefer") == "stance") return std::make_unique<FacingStance>(p);
          if (p.choice("prefer") != "angle") return std::make_unique<FacingDensity>(p);
          return std::make_unique<Facing>(p);
        }});

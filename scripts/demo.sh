@@ -79,9 +79,10 @@ step "train: approach and hit (Q-learning, paper sec. 4)"
 step "eval: the combined policy against a random controller"
 "$mgrl" eval "$root/scenarios/boxing.yaml" --data "$data" --trials "$trials" "${train_sets[@]}"
 # The bout: the paper's behaviours, made for a target, close in until the boxers stand
-# chest to chest (pelvises about 0.66 m apart); boxing_spar.yaml's one behaviour keeps a
-# fighting distance (about 1.1 m) and punches from it, on the same graph (issue 46).
-step "train: boxing_spar's sparring behaviour (value iteration, paper sec. 4.2)"
+# chest to chest (pelvises about 0.66 m apart); boxing_spar.yaml's behaviours keep a
+# fighting distance (about 1.2 m), stand in stances learned from real sparring and punch
+# from there, on the same graph (issue 46).
+step "train: boxing_spar's sparring behaviours, one per stance (value iteration, paper sec. 4.2)"
 "$mgrl" train "$root/scenarios/boxing_spar.yaml" --data "$data"
 step "simulate: a two-boxer bout of $bout s at a fighting distance (BVH and hits in $out)"
 "$mgrl" simulate "$root/scenarios/boxing_spar.yaml" --data "$data" --avatars 2 --seconds "$bout" \

@@ -223,7 +223,7 @@ TEST_CASE("behaviour mistakes name the file, line, column and key", "[behaviors]
     REQUIRE_CONFIG_ERROR(build(approachWith(8, "    wieght: 1")),
                          at(8, 13,
                             "behaviors.approach.wieght: unknown key (expected one of: description, weight, "
-                            "activation, discretizer, reward, environment, learner, success)"));
+                            "activation, stance, discretizer, reward, environment, learner, success)"));
   }
   SECTION("an unknown plugin type lists the known names, seam by seam") {
     REQUIRE_CONFIG_ERROR(build(approachWith(11, "      type: hexgrid")),
@@ -404,6 +404,17 @@ TEST_CASE("behaviour mistakes name the file, line, column and key", "[behaviors]
                          at(9, 17,
                             "behaviors.approach.activation: expected an activation rule (always, "
                             "target_inside), found 'sometimes'"));
+  }
+  SECTION("stances numbered with a gap, or out of range") {
+    // Issue 46: stances number 0..N-1, each held by a behaviour.
+    REQUIRE_CONFIG_ERROR(build(approachWith(9, "    stance: 2")),
+                         at(9, 13,
+                            "behaviors.approach.stance: expected stances numbered 0..2 with a behaviour for each, "
+                            "found none for stance 0"));
+    REQUIRE_THROWS_WITH(build(approachWith(9, "    stance: 16")),
+                        Catch::Contains("behaviors.approach.stance") && Catch::Contains("16"));
+    REQUIRE_THROWS_WITH(build(approachWith(9, "    stance: -1")),
+                        Catch::Contains("behaviors.approach.stance") && Catch::Contains("-1"));
   }
   SECTION("a behaviour name that cannot name a file") {
     REQUIRE_CONFIG_ERROR(build(approachWith(6, "  \"a/b\":")),
@@ -651,7 +662,7 @@ TEST_CASE("the behaviour key changes with what the table depends on, and only th
   }
   SECTION("weight, activation, description, threads, curve_points and checkpoint_every do not") {
     for (const char* set :
-         {"behaviors.approach.weight=3", "behaviors.approach.activation=target_inside",
+         {"behaviors.approach.weight=3", "behaviors.approach.activation=target_inside", "behaviors.approach.stance=0",
           "behaviors.approach.description=other", "behaviors.approach.learner.threads=1",
           "behaviors.approach.learner.curve_points=50", "behaviors.approach.learner.checkpoint_every=1000"}) {
       CAPTURE(set);
@@ -668,6 +679,20 @@ TEST_CASE("the behaviour key changes with what the table depends on, and only th
     CHECK(keyOf("{term: effort}") == keyOf("{term: effort, point: pelvis}"));
     CHECK(keyOf("{term: effort}") != keyOf("{term: effort, point: body}"));
     CHECK(keyOf("{term: effort}") != keyOf("{term: effort, point: LeftHand}"));
+  }
+  SECTION("facing's stance and stances count in the key only with prefer: stance (issue 46)") {
+    auto keyOf = [&](const std::string& terms) {
+      return build("  keep:\n    discretizer: {type: polar2d}\n    reward: {type: terms, terms: [" + terms +
+                   "]}\n    learner: {type: value_iteration}\n")
+          .front()
+          .key;
+    };
+    CHECK(keyOf("{term: facing}") == keyOf("{term: facing, stance: 2, stances: 5}"));
+    CHECK(keyOf("{term: facing, prefer: bouts}") == keyOf("{term: facing, prefer: bouts, stance: 1}"));
+    const std::string stance0 = keyOf("{term: facing, prefer: stance, stance: 0}");
+    CHECK(stance0 != keyOf("{term: facing, prefer: stance, stance: 1}"));
+    CHECK(stance0 != keyOf("{term: facing, prefer: stance, stance: 0, stances: 2}"));
+    CHECK(stance0 != keyOf("{term: facing}"));
   }
   SECTION("a moving_target that does not turn keeps the key it had before turning targets (issue 46)") {
     auto keyOf = [&](const std::string& environment) {

@@ -194,9 +194,10 @@ json bout(Sandbox& box, const std::string& scenario, int seed, const std::string
 
 }  // namespace
 
-TEST_CASE("boxing_spar.yaml keeps a fighting distance and punches from it: pelvises about a metre apart, never "
-          "under 0.35 m, strikes at over half the capture's rate, both land hits",
-          "[cli][data]") {
+TEST_CASE(
+    "boxing_spar.yaml keeps a fighting distance and stands to its partner as the real SNU fighters do: "
+    "pelvises about a metre apart, never under 0.35 m, facing median near the real one, most punches miss",
+    "[cli][data]") {
   Sandbox box;
   const std::string scenario = std::string(MGRL_SOURCE_DIR) + "/scenarios/boxing_spar.yaml";
   const Run trained = box.run("train " + shellWord(scenario) + " --json --out " + shellWord(box.path("policy")));
@@ -208,8 +209,6 @@ TEST_CASE("boxing_spar.yaml keeps a fighting distance and punches from it: pelvi
     const json report = bout(box, scenario, seed, folder);
     CAPTURE(seed);
     REQUIRE(report["hits_by_avatar"].size() == 2);
-    CHECK(report["hits_by_avatar"][0].get<int>() > 10);
-    CHECK(report["hits_by_avatar"][1].get<int>() > 10);
     bouts.push_back(' ');
     bouts.append(shellWord(folder));
 
@@ -226,17 +225,32 @@ TEST_CASE("boxing_spar.yaml keeps a fighting distance and punches from it: pelvi
       apart.push_back(std::hypot(d.x(), d.z()) / 100);
     }
     std::sort(apart.begin(), apart.end());
-    // Measured (scenarios/README.md): medians 1.09, 1.07, 1.14 m for seeds 1-3, closest
-    // 0.40 m (the bodies' floor); boxing.yaml's approach keeps them 0.66 m apart.
+    // Measured (scenarios/README.md): medians 1.16-1.17 m for seeds 1-3; boxing.yaml's
+    // approach keeps them 0.66 m apart.
     CHECK(apart.front() >= 0.35);
     CHECK(apart[apart.size() / 2] >= 0.9);
     CHECK(apart[apart.size() / 2] <= 1.5);
   }
-  // The CMU source's effective punches: 56.4 per fighter-minute; measured 42.1 (0.75x).
   const json stats = mgrl::test::runMgrl("stats --json" + bouts, box.dir()).report();
+  // Issue 46: the facing follows the real bouts' (median 64 degrees, quartiles 35-102), each
+  // bout's median within 15 degrees of it; one behaviour facing the partner gave medians of
+  // about 20 and quartiles 10-32. Measured: 59, 62 and 69, quartiles 29-106.
+  for (const json& one : stats["bouts"]) {
+    const json& facing = one["facing_deg"];
+    CAPTURE(facing.dump());
+    CHECK(facing["median"].get<double>() >= 64 - 15);
+    CHECK(facing["median"].get<double>() <= 64 + 15);
+    CHECK(facing["q1"].get<double>() <= 45);
+    CHECK(facing["q3"].get<double>() >= 80);
+  }
+  // The CMU source's effective punches: 56.4 per fighter-minute; measured 36.9 (0.65x). The
+  // real fighters land almost none (0.7 a minute); these land 2.4 and miss or are blocked
+  // with 93 % (at least a third, issue 46), but they do land.
   const double strikes = stats["pooled"]["strikes_per_fighter_minute"].get<double>();
   CHECK(strikes >= 0.5 * 56.4);
   CHECK(strikes <= 2 * 56.4);
+  CHECK(stats["pooled"]["unlanded_share"].get<double>() >= 1.0 / 3);
+  CHECK(stats["pooled"]["landed"].get<int>() > 0);
   CHECK(stats["pooled"]["pelvis_close_share"].get<double>() == 0.0);
 }
 

@@ -1050,6 +1050,21 @@ TEST_CASE("each reward term gives its hand-computed value", "[learning][terms]")
     CHECK(bound(bouts, at(-60)) == Approx(0.5 * g).epsilon(1e-3));
     CHECK(bound(bouts, at(30)) < 1e-6);
     CHECK(bound(bouts, at(120)) < 1e-6);
+    // Stances (prefer: stance): the 60 samples cut in two equally large parts, 30 at 0
+    // degrees and 30 at 60: stance 0 prefers 0 degrees, stance 1 60, as angle_deg would.
+    auto stance = [](int k, int of) {
+      return fmt::format(
+          "{{type: terms, gamma: 0.9, terms: [{{term: facing, prefer: stance, stance: {}, stances: {}, "
+          "sigma_deg: 30}}]}}",
+          k, of);
+    };
+    CHECK(bound(stance(1, 2), at(60)) == Approx(g));
+    CHECK(bound(stance(1, 2), at(-60)) == Approx(g));
+    CHECK(bound(stance(1, 2), at(0)) == Approx(g * std::exp(-2.0)));
+    CHECK(bound(stance(0, 2), at(0)) == Approx(g));
+    CHECK(bound(stance(0, 1), at(30)) == Approx(g));  // one part: the median of 0 and 60
+    CHECK_THROWS_WITH(app::plugins().rewards.create(yaml(stance(2, 2))),
+                      Catch::Contains("stance") && Catch::Contains("expected a stance below stances (2), found 2"));
     // A data folder without the SNU capture: one error at the term's key.
     const mgrl::test::TempDir empty("facing_bouts_none");
     recorded.reset();
@@ -1057,6 +1072,9 @@ TEST_CASE("each reward term gives its hand-computed value", "[learning][terms]")
     const auto none = app::plugins().rewards.create(yaml(bouts));
     CHECK_THROWS_WITH(none->bind(m), Catch::Contains("prefer: ") &&
                                          Catch::Contains("expected the SNU sparring capture s_TTT_K_P.bvh in"));
+    const auto noStance = app::plugins().rewards.create(yaml(stance(0, 2)));
+    CHECK_THROWS_WITH(noStance->bind(m), Catch::Contains("prefer: stance: ") &&
+                                             Catch::Contains("expected the SNU sparring capture s_TTT_K_P.bvh in"));
   }
   SECTION("contact by a chosen effector") {
     const Eigen::Vector3d kick(0.2, 0.9, 0.7), punch(0, 1.3, 0.6);

@@ -4,6 +4,7 @@
 // and made in one place; hits become JSON in one place.
 #include <catch2/catch.hpp>
 
+#include <algorithm>
 #include <cmath>
 #include <filesystem>
 
@@ -11,6 +12,7 @@
 #include "mgrl/core/random.hpp"
 #include "mgrl/runtime/world.hpp"
 #include "mgrl/session/session.hpp"
+#include "mgrl/session/trials.hpp"
 #include "test_support.hpp"
 
 namespace mgrl::session_test {
@@ -266,6 +268,38 @@ TEST_CASE("a hit reads the same in the events file and the viewer's protocol", "
   CHECK(hitEventJson(e)["part"] == "target");
   CHECK(hitEventJson(e)["limb"] == "foot");
   CHECK(hitEventJson(e)["hand"] == "left");
+}
+
+// Issue 46: boxing_spar's stances. The session's world holds them, and eval's trial i holds
+// stance i mod 3 through every decision of the trial.
+TEST_CASE("a scenario's stances reach the world and eval's trials: trial i holds stance i mod N", "[session][data]") {
+  const test::TempDir cache("session-stances");
+  SessionOptions options;
+  options.scenario = fs::path(MGRL_SOURCE_DIR) / "scenarios" / "boxing_spar.yaml";
+  options.dataDir = test::mocap();
+  options.cacheDir = cache.path;
+  const auto session = openSession(options, {.motion = false});
+  REQUIRE(session->behaviors.size() == 3);
+  for (int k = 0; k < 3; ++k) CHECK(session->behaviors[static_cast<std::size_t>(k)].stance == k);
+  CHECK(session->worldSetup(2, 1, {"random"}).stances == 3);
+  const Trials trials(session->model(), session->behaviors, session->task, std::nan(""), "boxing_spar");
+  std::vector<std::int32_t> seen;
+  const ChooseAction record = [&](std::uint32_t s, const TargetState& e) -> std::size_t {
+    seen.push_back(e.stance);
+    return session->model().stateActionBegin[s];
+  };
+  // Trials shorter than any action: one decision each.
+  trials.run(record, 7, 0.01, 3);
+  CHECK(seen == std::vector<std::int32_t>{0, 1, 2, 0, 1, 2, 0});
+  // Longer trials: every decision of trial i in stance i mod 3 (the environment's next
+  // target keeps it).
+  seen.clear();
+  trials.run(record, 3, 4, 3);
+  REQUIRE(seen.size() > 6);
+  CHECK(std::is_sorted(seen.begin(), seen.end()));
+  CHECK(seen.front() == 0);
+  CHECK(seen.back() == 2);
+  CHECK(std::count(seen.begin(), seen.end(), 1) > 0);
 }
 
 }  // namespace mgrl::session_test

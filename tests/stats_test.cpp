@@ -232,6 +232,17 @@ TEST_CASE("stats: the facing samples a reward learns from are the ones stats mea
   REQUIRE_THROWS_WITH(mgrl::boutFacingDegrees({mixed}), Contains("expected one frame time for all fighters"));
 }
 
+TEST_CASE("stats: stances are the medians of equally large parts of the facing samples", "[stats]") {
+  // Ten samples, given out of order: parts of 3, 3 and 4 (k n / parts boundaries 0, 3, 6, 10).
+  const std::vector<double> samples{90, 10, 30, 20, 100, 40, 50, 60, 80, 70};
+  CHECK(mgrl::facingStances(samples, 3) == std::vector<double>{20, 50, 85});
+  CHECK(mgrl::facingStances(samples, 1) == std::vector<double>{55});
+  CHECK(mgrl::facingStances(samples, 10) == std::vector<double>{10, 20, 30, 40, 50, 60, 70, 80, 90, 100});
+  REQUIRE_THROWS_WITH(mgrl::facingStances({1.0, 2.0}, 3),
+                      Contains("expected at least as many facing samples as stances (3), found 2"));
+  REQUIRE_THROWS_WITH(mgrl::facingStances(samples, 0), Contains("stances (0)"));
+}
+
 TEST_CASE("stats: pooling sums counts and times and keeps every sample", "[stats]") {
   const BoutStats a = measureFolder("stand"), b = measureFolder("walk");
   const BoutStats p = mgrl::pool({a, b}, "pooled");
@@ -327,6 +338,13 @@ TEST_CASE("stats: the real SNU sparring bouts pooled match the issue's figures l
   const std::vector<double>& learned = mgrl::snuFacingDegrees(mgrl::test::mocap());
   CHECK(learned.size() == p.facing_deg.size());
   CHECK_THAT(median(learned), WithinAbs(median(p.facing_deg), 1e-9));
+  // The stances prefer: stance learns (scenarios/README.md): thirds about 24, 64 and 126
+  // degrees, the middle one the median itself.
+  const std::vector<double> thirds = mgrl::facingStances(learned, 3);
+  CAPTURE(thirds);
+  CHECK_THAT(thirds[1], WithinAbs(median(learned), 1.0));
+  CHECK_THAT(thirds[0], WithinAbs(24, 3));
+  CHECK_THAT(thirds[2], WithinAbs(126, 3));
   const double minutes = p.fighterSeconds / 60;
   const double strikes = static_cast<double>(p.punches + p.kicks) / minutes;
   const double reversals = static_cast<double>(p.reversals) / static_cast<double>(p.rootSteps);

@@ -4,6 +4,7 @@
 #include <catch2/catch.hpp>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <set>
 #include <span>
@@ -990,6 +991,97 @@ TEST_CASE("a learned opponent's state reaches the controller: what the partner i
   World other(plain);
   other.run(1);
   CHECK(other.lastDecision(0).target.opponent == -1);
+}
+
+// Issue 46: stances. Each avatar draws one, holds it an exponential time of mean
+// stance_hold, draws again at the next decision after that; the controller sees it, and a
+// policy part of another stance takes no part.
+TEST_CASE("a world with stances gives each avatar one at a time, held stance_hold on average, and controllers see it",
+          "[world][data]") {
+  const Boxing& b = boxing();
+  // A controller that records the stance it is shown and takes the state's first action.
+  struct Recorder final : Controller {
+    const StateActionModel& m;
+    std::vector<std::int32_t>& seen;
+    Recorder(const StateActionModel& model, std::vector<std::int32_t>& out) : m(model), seen(out) {}
+    std::size_t choose(std::uint32_t s, const TargetState& e, Rng&) override {
+      seen.push_back(e.stance);
+      return m.stateActionBegin[s];
+    }
+    std::size_t choose(std::uint32_t s, const TargetState& e, Rng& rng, std::span<const std::uint8_t>) override {
+      return choose(s, e, rng);
+    }
+  };
+  std::vector<std::int32_t> seen;
+  WorldSetup s = b.setup(2);
+  s.params.bodyRadius = 0;
+  s.stances = 3;
+  s.params.stanceHold = 0.8;
+  s.makeController = [&] { return std::make_unique<Recorder>(b.model(), seen); };
+  World world(s);
+  std::array<std::size_t, 3> frames{};
+  std::size_t changes = 0;
+  std::int32_t last = -1;
+  const std::size_t total = framesFor(b, 600);
+  for (std::size_t f = 0; f < total; ++f) {
+    world.run(1);
+    const std::int32_t held = world.lastDecision(0).target.stance;
+    REQUIRE(held >= 0);
+    REQUIRE(held < 3);
+    ++frames[static_cast<std::size_t>(held)];
+    if (last >= 0 && held != last) ++changes;
+    last = held;
+  }
+  // What the controllers saw is what the world reports, every decision a stance.
+  CHECK(std::all_of(seen.begin(), seen.end(), [](std::int32_t k) { return k >= 0 && k < 3; }));
+  // Each stance about a third of the time; a draw changes the stance 2 times in 3, and a hold
+  // lasts 0.8 s plus the wait for the next decision (actions average 0.6 s): over 600 s,
+  // 600 / (0.8 + about 0.3) x 2/3 = about 360 changes.
+  for (const std::size_t n : frames) CHECK(n > total / 4);
+  INFO(changes << " changes of stance in 600 s");
+  CHECK(changes > 200);
+  CHECK(changes < 600);
+  // A longer hold changes less often.
+  s.params.stanceHold = 5;
+  World slow(s);
+  std::size_t slowChanges = 0;
+  last = -1;
+  for (std::size_t f = 0; f < total; ++f) {
+    slow.run(1);
+    const std::int32_t held = slow.lastDecision(0).target.stance;
+    if (last >= 0 && held != last) ++slowChanges;
+    last = held;
+  }
+  CHECK(slowChanges * 3 < changes);
+  // Without stances, none is held.
+  s.stances = 0;
+  World none(s);
+  none.run(30);
+  CHECK(none.lastDecision(0).target.stance == -1);
+
+  // A policy part of another stance takes no part: the approach table alone (stance 0) and
+  // the same part under stance 1 shown a target in stance 0 leave the scores at 0.
+  const std::vector<PolicyPart> parts = b.parts;
+  REQUIRE(!parts.empty());
+  PolicyPart own = parts[0], other = parts[0];
+  own.stance = 0;
+  other.stance = 1;
+  TargetState e(Eigen::Vector3d(0.3, 1.2, 0.9));
+  PolicyController both(b.model(), {own, other}), alone(b.model(), {parts[0]}), away(b.model(), {other});
+  Rng rng(1);
+  e.stance = 0;
+  both.choose(0, e, rng);
+  alone.choose(0, e, rng);
+  away.choose(0, e, rng);
+  CHECK(std::vector<float>(both.scores().begin(), both.scores().end()) ==
+        std::vector<float>(alone.scores().begin(), alone.scores().end()));
+  CHECK(std::all_of(away.scores().begin(), away.scores().end(), [](float v) { return v == 0; }));
+  // No stance held (e.stance -1): every part counts.
+  e.stance = -1;
+  away.choose(0, e, rng);
+  alone.choose(0, e, rng);
+  CHECK(std::vector<float>(away.scores().begin(), away.scores().end()) ==
+        std::vector<float>(alone.scores().begin(), alone.scores().end()));
 }
 
 }  // namespace mgrl::world_test

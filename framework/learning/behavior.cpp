@@ -44,7 +44,13 @@ std::pair<nlohmann::json, std::string> behaviorConfigAndKey(const BehaviorSpec& 
   // Likewise effort's point: pelvis (the root's ground speed, all effort measured before).
   if (keyed["reward"].contains("terms") && keyed["reward"]["terms"].is_array())
     for (nlohmann::json& term : keyed["reward"]["terms"])
-      if (term.value("term", "") == "effort" && term.value("point", "") == "pelvis") term.erase("point");
+      if (term.value("term", "") == "effort" && term.value("point", "") == "pelvis") {
+        term.erase("point");
+      } else if (term.value("term", "") == "facing" && term.value("prefer", "") != "stance") {
+        // And facing's stance and stances, which only prefer: stance reads (issue 46).
+        term.erase("stance");
+        term.erase("stances");
+      }
   Hasher h;
   h.update(std::string_view("mgrl.behavior.v1"));
   h.update(std::string_view(graphKey));
@@ -54,7 +60,8 @@ std::pair<nlohmann::json, std::string> behaviorConfigAndKey(const BehaviorSpec& 
   // data folder) is not taken for this one.
   const nlohmann::json& terms = keyed["reward"].contains("terms") ? keyed["reward"]["terms"] : nlohmann::json();
   if (terms.is_array() && std::any_of(terms.begin(), terms.end(), [](const nlohmann::json& term) {
-        return term.value("term", "") == "facing" && term.value("prefer", "") == "bouts";
+        return term.value("term", "") == "facing" &&
+               (term.value("prefer", "") == "bouts" || term.value("prefer", "") == "stance");
       })) {
     // (The term's bind has read them already, or failed at its `prefer` key.)
     const std::vector<double>& degrees = spec.reward.withLocation(
@@ -149,6 +156,7 @@ Behavior buildBehavior(const BehaviorSpec& spec, const Plugins& plugins, const S
   b.name = spec.name;
   b.weight = spec.weight;
   b.activation = spec.activation;
+  b.stance = spec.stance;
   b.discretizer = plugins.discretizers.create(spec.discretizer, model);
   b.reward = plugins.rewards.create(spec.reward);
   b.reward->bind(model);

@@ -32,6 +32,7 @@ struct Behavior {
   std::string name;
   double weight = 1;
   Activation activation = Activation::Always;
+  int stance = -1;  ///< BehaviorSpec::stance
   std::unique_ptr<Discretizer> discretizer;
   std::unique_ptr<Reward> reward;
   std::unique_ptr<EnvironmentModel> environment;

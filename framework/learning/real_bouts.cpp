@@ -116,6 +116,21 @@ std::vector<double> boutFacingDegrees(const std::vector<BoutFiles>& bouts) {
   return degrees;
 }
 
+std::vector<double> facingStances(std::vector<double> degrees, int count) {
+  if (count < 1 || degrees.size() < static_cast<std::size_t>(count))
+    throw Error(
+        fmt::format("expected at least as many facing samples as stances ({}), found {}", count, degrees.size()));
+  std::sort(degrees.begin(), degrees.end());
+  std::vector<double> stances;
+  const std::size_t n = degrees.size(), parts = static_cast<std::size_t>(count);
+  for (std::size_t k = 0; k < parts; ++k) {
+    const std::size_t begin = k * n / parts, end = (k + 1) * n / parts;  // [begin, end), not empty
+    const std::size_t middle = begin + (end - begin) / 2;
+    stances.push_back((end - begin) % 2 == 1 ? degrees[middle] : 0.5 * (degrees[middle - 1] + degrees[middle]));
+  }
+  return stances;
+}
+
 const std::vector<double>& snuFacingDegrees(const fs::path& dataDir) {
   static std::mutex mutex;
   static std::map<fs::path, std::vector<double>> read;

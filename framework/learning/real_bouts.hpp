@@ -35,6 +35,11 @@ double facingDegrees(const Eigen::Vector2d& facing, const Eigen::Vector2d& toOth
 /// with different frame times.
 std::vector<double> boutFacingDegrees(const std::vector<BoutFiles>& bouts);
 
+/// Stances learned from facing samples (issue 46): the samples sorted and cut into `count`
+/// equally large parts, the median of each, in increasing order. Throws mgrl::Error for
+/// fewer samples than parts or a count below 1.
+std::vector<double> facingStances(std::vector<double> degrees, int count);
+
 /// boutFacingDegrees(snuBouts(dataDir)), read once per data folder and process (the
 /// capture is about 7 MB; every behaviour with such a term would read it again).
 const std::vector<double>& snuFacingDegrees(const std::filesystem::path& dataDir);

@@ -23,6 +23,10 @@ struct TargetState {
   /// A `learned_opponent`'s discrete state (its graph state and phase, a grid layer), -1 for
   /// every other environment model.
   std::int32_t opponent = -1;
+  /// The stance the fighter holds (issue 46: a world with stances draws one per fighter and
+  /// holds it a while; behaviours with `stance: k` are active only while it is k), -1 for
+  /// none (every behaviour active). Environment models do not change it.
+  std::int32_t stance = -1;
 
   TargetState() = default;
   /// A static target at `p` (implicit: every static-target call site passes a position, or

@@ -79,6 +79,7 @@ void PolicyController::score(std::uint32_t s, const TargetState& e) {
   buffer_.assign(n + 16, 0.0f);  // vector code writes whole 16-float registers
   count_ = n;
   for (const PolicyPart& part : parts_) {
+    if (!stanceActive(part.stance, e.stance)) continue;
     GridCell cell;
     if (part.activation == Activation::TargetInside) {
       if (!part.grid->locate(e, cell)) continue;
@@ -155,9 +156,16 @@ OnlineSearchController::OnlineSearchController(const StateActionModel& model, co
     discount_[a] = std::pow(gamma, static_cast<double>(model.actionLength(a)));
 }
 
+TargetState OnlineSearchController::next(std::size_t a, const TargetState& e) const {
+  TargetState after = environment_.next(model_, a, e);
+  after.stance = e.stance;  // held through the search
+  return after;
+}
+
 double OnlineSearchController::reward(std::size_t a, const TargetState& e) const {
   double r = 0;
   for (const SearchPart& part : parts_) {
+    if (!stanceActive(part.stance, e.stance)) continue;
     if (part.activation == Activation::TargetInside && !part.grid->inside(e)) continue;
     r += part.weight * part.reward->evaluate(model_, a, e);
   }
@@ -169,7 +177,7 @@ double OnlineSearchController::value(std::uint32_t s, const TargetState& e, int 
   double best = -std::numeric_limits<double>::infinity();
   for (std::uint32_t a = model_.stateActionBegin[s]; a < model_.stateActionBegin[s + 1]; ++a) {
     ++expanded_;
-    const double q = reward(a, e) + discount_[a] * value(model_.actionTo[a], environment_.next(model_, a, e), depth - 1,
+    const double q = reward(a, e) + discount_[a] * value(model_.actionTo[a], next(a, e), depth - 1,
                                                          frames - static_cast<double>(model_.actionLength(a)));
     best = std::max(best, q);
   }
@@ -182,7 +190,7 @@ std::size_t OnlineSearchController::choose(std::uint32_t s, const TargetState& e
   double best = -std::numeric_limits<double>::infinity();
   for (std::uint32_t a = model_.stateActionBegin[s]; a < model_.stateActionBegin[s + 1]; ++a) {
     ++expanded_;
-    const double q = reward(a, e) + discount_[a] * value(model_.actionTo[a], environment_.next(model_, a, e), horizon_ - 1,
+    const double q = reward(a, e) + discount_[a] * value(model_.actionTo[a], next(a, e), horizon_ - 1,
                                                          horizonFrames_ - static_cast<double>(model_.actionLength(a)));
     if (q > best) {
       best = q;
@@ -205,7 +213,7 @@ std::size_t OnlineSearchController::choose(std::uint32_t s, const TargetState& e
   for (std::uint32_t a = begin; a < model_.stateActionBegin[s + 1]; ++a) {
     if (allowed[a - begin] == 0) continue;
     ++expanded_;
-    const double q = reward(a, e) + discount_[a] * value(model_.actionTo[a], environment_.next(model_, a, e), horizon_ - 1,
+    const double q = reward(a, e) + discount_[a] * value(model_.actionTo[a], next(a, e), horizon_ - 1,
                                                          horizonFrames_ - static_cast<double>(model_.actionLength(a)));
     if (bestAction == model_.actionCount() || q > best) {
       best = q;

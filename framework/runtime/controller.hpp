@@ -93,6 +93,7 @@ struct PolicyPart {
   const QTable* table = nullptr;
   double weight = 1;
   Activation activation = Activation::Always;
+  int stance = -1;  ///< active only while the target's stance is this (-1: always)
 };
 
 class PolicyController final : public Controller {
@@ -132,6 +133,7 @@ struct SearchPart {
   const Reward* reward = nullptr;
   double weight = 1;
   Activation activation = Activation::Always;
+  int stance = -1;  ///< as PolicyPart::stance
 };
 
 /// How far the online search looks: `actions` actions deep, or, when seconds > 0, every
@@ -167,6 +169,8 @@ class OnlineSearchController final : public Controller {
   /// frames to cover (frames <= 0: the time horizon is reached).
   double value(std::uint32_t s, const TargetState& e, int depth, double frames);
   double reward(std::size_t a, const TargetState& e) const;
+  /// The environment's next target after action a, the stance kept.
+  TargetState next(std::size_t a, const TargetState& e) const;
 
   const StateActionModel& model_;
   const EnvironmentModel& environment_;

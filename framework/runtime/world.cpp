@@ -195,6 +195,13 @@ void World::decide(std::size_t i, Controller& controller) {
       e.opponent = 0;
     }
   }
+  if (setup_.stances > 0) {
+    if (a.stance < 0 || time() >= a.stanceUntil) {
+      a.stance = static_cast<std::int32_t>(a.rng.below(static_cast<std::uint64_t>(setup_.stances)));
+      a.stanceUntil = time() - setup_.params.stanceHold * std::log1p(-a.rng.uniform());
+    }
+    e.stance = a.stance;
+  }
   if (a.partner < 0 && targets_[i].path.moving()) {
     // A moving target: its motion now, seen from the decision's frame.
     const Target& t = targets_[i];

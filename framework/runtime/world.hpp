@@ -42,6 +42,7 @@ struct WorldParams {
   double spacing = 4.0;           ///< m between the centres of neighbouring pairs
   double startDistance = 1.6;     ///< m between sparring partners at the start
   double targetHold = 3.0;        ///< s a target stays before it is moved (targets mode)
+  double stanceHold = 0.8;        ///< s, mean time a fighter holds a stance (WorldSetup::stances)
   double targetHeight = -1;       ///< m; < 0: the effective hitting points' centroid height
   double targetRadius = 0.12;     ///< m, target sphere
   double fistRadius = 0.05;       ///< m, fist sphere
@@ -179,6 +180,10 @@ struct WorldSetup {
   /// the user moves (moveTarget) stands. Sparring's odd one out has such a target too.
   /// Null: targets stand (the paper's). It must outlive the world.
   const EnvironmentModel* targetMotion = nullptr;
+  /// Stances the behaviours number (issue 46, `stance: k`): each avatar draws one uniformly,
+  /// holds it for an exponential time of mean params.stanceHold, then draws again (at its
+  /// next decision); controllers see it as TargetState::stance. 0: no stances.
+  int stances = 0;
   /// Optional: makes the controllers of the second avatar of each sparring pair (odd
   /// indices), so that two policies spar (`simulate --partner-policy`); unset, every avatar
   /// plays makeController's.

@@ -17,6 +17,10 @@ const ParamSpecs& worldParamSpecs() {
       ParamSpec::number("spacing", 4.0, 0.5, 100, "m", "distance between neighbouring pairs on the floor"),
       ParamSpec::number("start_distance", 1.6, 0.3, 20, "m", "distance between sparring partners at the start"),
       ParamSpec::number("target_hold", 3.0, 0.1, 3600, "s", "targets mode: a target stays this long, then moves"),
+      ParamSpec::number("stance_hold", 0.8, 0.05, 3600, "s",
+                        "stances (behaviours with `stance:`): a fighter holds the stance it drew for a random time "
+                        "of this mean (exponential), then draws one again, uniformly; 0.8 s is how long the real "
+                        "SNU fighters stay in a third of their facing angles"),
       ParamSpec::number("target_height", -1, -1, 5, "m",
                         "targets mode: target height (-1: the hitting points' centroid)"),
       ParamSpec::number("target_radius", 0.12, 0.01, 2, "m", "radius of a target sphere"),
@@ -58,6 +62,7 @@ WorldParams readWorldParams(const ConfigNode& node) {
   w.spacing = p.number("spacing");
   w.startDistance = p.number("start_distance");
   w.targetHold = p.number("target_hold");
+  w.stanceHold = p.number("stance_hold");
   w.targetHeight = p.number("target_height");
   w.targetRadius = p.number("target_radius");
   w.fistRadius = p.number("fist_radius");
@@ -89,6 +94,7 @@ nlohmann::json worldParamsJson(const WorldParams& w) {
           {"spacing", w.spacing},
           {"start_distance", w.startDistance},
           {"target_hold", w.targetHold},
+          {"stance_hold", w.stanceHold},
           {"target_height", w.targetHeight},
           {"target_radius", w.targetRadius},
           {"fist_radius", w.fistRadius},

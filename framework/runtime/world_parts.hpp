@@ -46,6 +46,8 @@ struct World::Avatar {
   std::uint32_t hitCursor = 0;  ///< next hit of the action to check
   std::uint32_t kickCursor = 0;  ///< next kick of the action to check
   std::int32_t partner = -1;
+  std::int32_t stance = -1;  ///< the stance held (WorldSetup::stances), until stanceUntil (s)
+  double stanceUntil = 0;
   /// Last frame of a landed strike, per limb: left and right fist, left and right foot.
   std::array<std::size_t, 4> landedFrame{world_detail::kNever, world_detail::kNever, world_detail::kNever, world_detail::kNever};
   std::size_t decisions = 0;

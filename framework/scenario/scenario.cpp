@@ -178,7 +178,8 @@ std::vector<BehaviorSpec> readBehaviors(const ConfigNode& root) {
                             std::string::npos)
       b.fail("expected a behaviour name of letters, digits, '_' and '-' (it names files of the policy bundle)");
     if (!b.isMap()) b.fail("expected a map with discretizer, reward and learner sections");
-    b.allowOnly({"description", "weight", "activation", "discretizer", "reward", "environment", "learner", "success"});
+    b.allowOnly({"description", "weight", "activation", "stance", "discretizer", "reward", "environment", "learner",
+                 "success"});
     BehaviorSpec spec{name,
                       b.string("description", ""),
                       b.number("weight", 1.0, -1e6, 1e6),
@@ -194,10 +195,21 @@ std::vector<BehaviorSpec> readBehaviors(const ConfigNode& root) {
       const std::string text = activation.asString();
       spec.activation = activation.withLocation([&] { return parseActivation(text); });
     }
+    if (b.has("stance")) spec.stance = static_cast<int>(b.integer("stance", -1, 0, kMaxStances - 1));
     if (!spec.environment.isNull() && !spec.environment.isMap())
       spec.environment.fail("expected a map with 'type: static_target' or another environment model");
     result.push_back(std::move(spec));
   }
+  // Stances (issue 46) number 0..N-1, each held by at least one behaviour.
+  int stances = 0;
+  for (const BehaviorSpec& spec : result) stances = std::max(stances, spec.stance + 1);
+  for (int k = 0; k < stances; ++k)
+    if (std::none_of(result.begin(), result.end(), [k](const BehaviorSpec& s) { return s.stance == k; })) {
+      const auto last =
+          std::find_if(result.begin(), result.end(), [&](const BehaviorSpec& s) { return s.stance == stances - 1; });
+      last->node.child("stance").fail(fmt::format(
+          "expected stances numbered 0..{} with a behaviour for each, found none for stance {}", stances - 1, k));
+    }
   return result;
 }
 

@@ -245,7 +245,7 @@ std::vector<PolicyPart> policyPartsOf(PolicyBundle& bundle, const fs::path& dir,
                               "with mgrl train {} --behavior {}{}",
                               dir.string(), b.name, grid->vertexCount(), trained.table.vertexCount(),
                               options.scenario.string(), b.name, setFlags(options.sets)));
-    parts.push_back({grid, &trained.table, b.weight, b.activation});
+    parts.push_back({grid, &trained.table, b.weight, b.activation, b.stance});
   }
   return parts;
 }

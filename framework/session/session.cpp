@@ -1,5 +1,7 @@
 #include "mgrl/session/session.hpp"
 
+#include <algorithm>
+
 #include <fmt/format.h>
 
 #include "mgrl/core/error.hpp"
@@ -52,6 +54,7 @@ WorldSetup Session::worldSetup(std::size_t avatars, std::uint64_t seed, const Co
   setup.opponent = task.opponent;
   setup.opponentPhases = task.opponentPhases;
   if (task.environment->maxSpeed() > 0) setup.targetMotion = task.environment;
+  for (const Behavior& b : behaviors) setup.stances = std::max(setup.stances, b.stance + 1);
   ControllerParts parts = controllerParts(task.world.variety);
   parts.policy = policyParts;
   requireParts(choice, parts);  // now, not at the world's first decision
@@ -153,7 +156,7 @@ std::unique_ptr<Session> openSession(const SessionOptions& options, const Sessio
   if (!session->policyDir.empty())
     session->policy = policyParts(session->policyDir, session->behaviors, session->graph, options, session->bundle);
   for (const Behavior& b : session->behaviors)
-    session->search.push_back({b.discretizer.get(), b.reward.get(), b.weight, b.activation});
+    session->search.push_back({b.discretizer.get(), b.reward.get(), b.weight, b.activation, b.stance});
   if (session->graph.db.skeleton) session->body = makeBodyTable(session->graph.db);
   return session;
 }

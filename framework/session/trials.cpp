@@ -26,6 +26,7 @@ Trials::Trials(const StateActionModel& model, const std::vector<Behavior>& behav
   const auto region = std::find_if(behaviors.begin(), behaviors.end(),
                                    [](const Behavior& b) { return b.activation == Activation::Always; });
   region_ = (region != behaviors.end() ? region : behaviors.begin())->discretizer.get();
+  for (const Behavior& b : behaviors) stances_ = std::max(stances_, b.stance + 1);
   if (const GridAxis* distance = region_->axis(AxisRole::Distance)) reach_ = distance->vertices.back();
   if (!(reach_ > 0))
     throw Error(fmt::format("{}: expected a behaviour whose grid has a distance axis to place targets in, found none",
@@ -54,8 +55,12 @@ Trials::Trials(const StateActionModel& model, const std::vector<Behavior>& behav
 
 std::pair<std::vector<SuccessCriterion>, std::string> trialCriteria(const std::vector<Behavior>& behaviors) {
   std::vector<SuccessCriterion> criteria;
+  // One of each: a scenario's stances (issue 46) declare the same criterion once a stance.
   for (const Behavior& b : behaviors)
-    if (b.successDeclared && b.success) criteria.push_back(*b.success);
+    if (b.successDeclared && b.success &&
+        std::none_of(criteria.begin(), criteria.end(),
+                     [&](const SuccessCriterion& c) { return c.toJson() == b.success->toJson(); }))
+      criteria.push_back(*b.success);
   if (!criteria.empty()) return {std::move(criteria), "declared"};
   for (const Behavior& b : behaviors)
     if (b.success) return {{*b.success}, "implied"};
@@ -96,6 +101,8 @@ TrialStats Trials::run(const ChooseAction& choose, std::size_t count, double sec
   for (std::size_t trial = 0; trial < count; ++trial) {
     auto s = static_cast<std::uint32_t>(starts.below(model.stateCount()));
     TargetState e = placeTarget(starts);
+    // Stances (issue 46) in turn, trial by trial: each held through its trial.
+    if (stances_ > 0) e.stance = static_cast<std::int32_t>(trial % static_cast<std::size_t>(stances_));
     const auto turn = static_cast<std::size_t>(std::find(stats.turnRates.begin(), stats.turnRates.end(), e.turnRate) -
                                                stats.turnRates.begin());
     double elapsed = 0, discount = 1, trialReturn = 0;
@@ -113,6 +120,7 @@ TrialStats Trials::run(const ChooseAction& choose, std::size_t count, double sec
       ++stats.decisions;
       double reward = 0;
       for (const Behavior& b : behaviors_) {
+        if (!stanceActive(b.stance, e.stance)) continue;
         if (b.activation == Activation::TargetInside && !b.discretizer->inside(e)) continue;
         reward += b.weight * b.reward->evaluate(model, a, e);
       }
@@ -134,7 +142,9 @@ TrialStats Trials::run(const ChooseAction& choose, std::size_t count, double sec
       const auto frames = static_cast<double>(model.actionLength(a));
       discount *= std::pow(gamma_, frames);
       elapsed += frames;
+      const std::int32_t stance = e.stance;
       e = environment.next(model, a, e);
+      e.stance = stance;
       s = model.actionTo[a];
     }
     stats.successes += hit;

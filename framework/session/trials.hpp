@@ -108,6 +108,7 @@ class Trials {
   const Discretizer* region_ = nullptr;
   bool insideRegion(const Eigen::Vector3d& position) const;
   double reach_ = 0, targetHeight_ = 0, gamma_ = 0.97;
+  int stances_ = 0;  ///< behaviours' stances (issue 46): trial i holds stance i mod stances_
   std::vector<SuccessCriterion> criteria_;
   std::string criteriaFrom_;
 };

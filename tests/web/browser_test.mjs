@@ -498,8 +498,8 @@ async function teachViews(page) {
 }
 
 // A new world (mode change) while values are shown. boxing.yaml names boxing_spar.yaml as
-// its sparring_scenario (issue 46), so sparring plays that scenario's one behaviour: the
-// values of approach stop and the select offers spar. Between sparring and crowd (the same
+// its sparring_scenario (issue 46), so sparring plays that scenario's behaviours (one per
+// stance): the values of approach stop and the select offers them. Between sparring and crowd (the same
 // scenario) the page asks again and the new world's values arrive at once. Target mode
 // brings the paper's two behaviours back.
 async function valuesAcrossModeChange(page) {
@@ -515,9 +515,9 @@ async function valuesAcrossModeChange(page) {
     selected: document.querySelector('#values-behavior').value,
     cells: mgrl.teach().instances,
     note: mgrl.state.scene.note}));
-  check(spar.names === 'spar' && spar.options === ',spar' && spar.selected === '' && spar.cells === 0 &&
-        spar.note.includes('Sparring plays'),
-        'sparring plays boxing_spar.yaml\'s spar (its note says so); approach\'s values stop and the select offers spar',
+  check(spar.names === 'spar_square,spar,spar_turned' && spar.options === ',spar_square,spar,spar_turned' &&
+        spar.selected === '' && spar.cells === 0 && spar.note.includes('Sparring plays'),
+        'sparring plays boxing_spar.yaml\'s three stances (its note says so); approach\'s values stop and the select offers them',
         JSON.stringify(spar));
   await page.selectOption('#values-behavior', 'spar');
   await waitInPage(page, () => mgrl.teach().instances > 0, null, 10000, 'spar values in sparring');
