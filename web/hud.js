@@ -6,10 +6,16 @@ const kHitLines = 5;
 
 const fixed = (v, digits) => (Number.isFinite(v) ? v.toFixed(digits) : '–');
 
-/** What eval counts as success, behaviour by behaviour ("hit: an effective strike ..."). */
-const successText = (behaviors) => {
-  const declared = (behaviors ?? []).filter((b) => typeof b.success === 'string');
-  return declared.length ? declared.map((b) => `${b.name}: ${b.success}`).join('; ') : '–';
+/** What eval counts as success, behaviour by behaviour ("hit: an effective strike ..."); behaviours
+ * that declare the same criterion (a scenario's stances) share one entry ("a, b: ..."). */
+export const successText = (behaviors) => {
+  const byText = new Map();
+  for (const b of behaviors ?? []) {
+    if (typeof b.success !== 'string') continue;
+    if (!byText.has(b.success)) byText.set(b.success, []);
+    byText.get(b.success).push(b.name);
+  }
+  return byText.size ? [...byText].map(([text, names]) => `${names.join(', ')}: ${text}`).join('; ') : '–';
 };
 
 /** Who the blue corner is when the server plays it (scene.opponent), as a sentence; red

@@ -6,7 +6,7 @@ import assert from 'node:assert/strict';
 
 // The HUD touches a few elements when a scene arrives; a stand-in for each.
 globalThis.document = {getElementById: () => ({hidden: false, textContent: ''})};
-const {Hud, opponentText} = await import('../../web/hud.js');
+const {Hud, opponentText, successText} = await import('../../web/hud.js');
 
 const hit = (time) => ({time, speed: 4, hand: 'right', limb: 'hand', attacker: 0, target: -1});
 
@@ -78,4 +78,18 @@ test('the blue corner is named when the server plays it: a scripted opponent or 
                /^Blue: the partner's own policy bundle \(serve --partner-policy\); red: the trained avatar\.$/);
   assert.match(opponentText('partner_policy', 'random'), /red: the page's controller \(random\)\.$/);
   assert.equal(opponentText(null, 'policy'), '');
+});
+
+test('behaviours that declare the same success criterion share one entry in the HUD', () => {
+  const strike = 'an effective strike of the fists within 0.15 m';
+  // boxing_spar.yaml's three stances declare the same criterion.
+  assert.equal(successText([{name: 'spar_square', success: strike}, {name: 'spar', success: strike},
+                            {name: 'spar_turned', success: strike}]),
+               `spar_square, spar, spar_turned: ${strike}`);
+  // Different criteria stay apart, in the behaviours' order; undeclared ones are left out.
+  assert.equal(successText([{name: 'approach', success: null}, {name: 'hit', success: strike},
+                            {name: 'keep', success: 'within 0.3 m'}]),
+               `hit: ${strike}; keep: within 0.3 m`);
+  assert.equal(successText([{name: 'approach', success: null}]), '–');
+  assert.equal(successText(undefined), '–');
 });
