@@ -72,6 +72,7 @@ std::vector<Row> rows() {
        "joint_speed_mps"},
       {"pelvises closer than limit", [](const json& g) { return percent(g["pelvis_close_share"]); }},
       {"body capsules overlapping", [](const json& g) { return percent(g["capsule_overlap_share"]); }},
+      {"forearms inside the opponent", [](const json& g) { return percent(g["forearm_inside_share"]); }},
   };
 }
 

@@ -41,8 +41,9 @@ TEST_CASE("mgrl stats reads a simulate --bvh-out folder", "[stats][cli][data]") 
     REQUIRE(bout[key]["median"].is_number());
     CHECK(bout[key]["deciles"].size() == 11);
   }
-  for (const char* key : {"strikes_per_fighter_minute", "landed_per_fighter_minute", "reversals_per_frame",
-                          "reversals_per_second", "pelvis_close_share", "capsule_overlap_share"}) {
+  for (const char* key :
+       {"strikes_per_fighter_minute", "landed_per_fighter_minute", "reversals_per_frame", "reversals_per_second",
+        "pelvis_close_share", "capsule_overlap_share", "forearm_inside_share"}) {
     INFO(key);
     CHECK(bout[key].is_number());
   }

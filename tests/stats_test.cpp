@@ -232,6 +232,23 @@ TEST_CASE("stats: the facing samples a reward learns from are the ones stats mea
   REQUIRE_THROWS_WITH(mgrl::boutFacingDegrees({mixed}), Contains("expected one frame time for all fighters"));
 }
 
+TEST_CASE("stats: a forearm that goes on into the opponent's body is counted, one that stops short is not", "[stats]") {
+  // punch_near: fighter 1's left arm (a T-pose arm along X) lunges 40 cm into fighter 2, 1.3 m
+  // away: its forearm runs through fighter 2's head and chest capsules for part of the bout.
+  const BoutStats near = measureFolder("punch_near");
+  CHECK(near.forearmInsideFrames > 0);
+  CHECK(near.forearmInsideFrames < near.pairFrames);
+  // 3 m away, the same lunge stops short; standing 1 m apart, face to face, with the arms
+  // out sideways, and 0.2 m apart (capsules overlapping), no forearm enters the other body.
+  CHECK(measureFolder("punch_far").forearmInsideFrames == 0);
+  CHECK(measureFolder("stand").forearmInsideFrames == 0);
+  CHECK(measureFolder("overlap").forearmInsideFrames == 0);
+  // Thinner bodies let fewer frames in.
+  StatsParams thin;
+  thin.spineRadius_m = thin.chestRadius_m = thin.headRadius_m = 0.01;
+  CHECK(measureFolder("punch_near", thin).forearmInsideFrames < near.forearmInsideFrames);
+}
+
 TEST_CASE("stats: stances are the medians of equally large parts of the facing samples", "[stats]") {
   // Ten samples, given out of order: parts of 3, 3 and 4 (k n / parts boundaries 0, 3, 6, 10).
   const std::vector<double> samples{90, 10, 30, 20, 100, 40, 50, 60, 80, 70};

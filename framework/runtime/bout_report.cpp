@@ -194,6 +194,8 @@ json statsJson(const BoutStats& s) {
       {"pelvis_close_share", rounded(ratio(static_cast<double>(s.closeFrames), static_cast<double>(s.pairFrames)), 5)},
       {"capsule_overlap_share",
        rounded(ratio(static_cast<double>(s.overlapFrames), static_cast<double>(s.pairFrames)), 5)},
+      {"forearm_inside_share",
+       rounded(ratio(static_cast<double>(s.forearmInsideFrames), static_cast<double>(s.pairFrames)), 5)},
   };
 }
 

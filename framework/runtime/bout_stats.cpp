@@ -102,6 +102,19 @@ bool capsulesOverlap(const Fighter& a, const Fighter& b, std::size_t f, const St
   return false;
 }
 
+// Whether one of a's forearms (elbow to fist tip) runs inside one of b's body capsules at
+// frame f: the forearm's axis closer to the capsule's axis than the capsule's radius (issue
+// 46: a limb through the other fighter's torso or head).
+bool forearmInside(const Fighter& a, const Fighter& b, std::size_t f, const StatsParams& params) {
+  const Eigen::Vector3d* pa = a.body.data() + f * kBodyPoints;
+  const Eigen::Vector3d* pb = b.body.data() + f * kBodyPoints;
+  for (const auto& [elbow, fist] :
+       {std::pair{BodyTable::LeftElbow, BodyTable::LeftFist}, std::pair{BodyTable::RightElbow, BodyTable::RightFist}})
+    for (const Capsule& c : capsules(params))
+      if (segmentsDistance(pa[elbow], pa[fist], pb[c.from], pb[c.to]) < c.radius) return true;
+  return false;
+}
+
 // Strikes of one kind (punches or kicks) of fighter `i`: runs of consecutive effective
 // frames per limb, as the annotation counts them. Frame by frame, a run is blocked when its
 // tip first comes within the block radius of an opponent's forearm (elbow to fist tip), and
@@ -277,6 +290,7 @@ BoutStats measureBout(const Bout& bout, const StatsParams& params) {
       if (distance > 1e-9) s.facing_deg.push_back(facingDegrees(me.facing[f], toOther, distance));
       if (distance < params.closeDistance_m) ++s.closeFrames;
       if (capsulesOverlap(me, other, f, params)) ++s.overlapFrames;
+      if (forearmInside(me, other, f, params)) ++s.forearmInsideFrames;
     }
     // 3: strikes and landed strikes, for the bout and for this fighter.
     const std::size_t punches = s.punches, kicks = s.kicks, landed = s.landed, blocked = s.blocked;
@@ -361,6 +375,7 @@ BoutStats pool(const std::vector<BoutStats>& bouts, const std::string& name) {
     p.pairFrames += b.pairFrames;
     p.closeFrames += b.closeFrames;
     p.overlapFrames += b.overlapFrames;
+    p.forearmInsideFrames += b.forearmInsideFrames;
   }
   return p;
 }

@@ -128,6 +128,9 @@ struct BoutStats {
   std::size_t landedByMore = 0, landedInPairs = 0;
   /// Fighter-frames with an opponent; those with pelvises close; those with capsules overlapping.
   std::size_t pairFrames = 0, closeFrames = 0, overlapFrames = 0;
+  /// Fighter-frames in which one of the fighter's forearms (elbow to fist tip) runs inside one
+  /// of the opponent's body capsules (its axis within the capsule's radius of the capsule's).
+  std::size_t forearmInsideFrames = 0;
   /// Seconds of the frame-to-frame steps (sum over fighters), for reversals per second.
   double stepSeconds = 0;
 };
