@@ -453,6 +453,8 @@ TEST_CASE("an intercept page's values view shows the layers of its target's moti
   REQUIRE(out.size() == 1);
   const json& values = out[0];
   CHECK(values["speed"] == 0.0);
+  CHECK(values["stance"].is_null());  // intercept has no stances
+  CHECK(values["behavior_stance"].is_null());
   CHECK(values["turn_deg_s"] == 0.0);
   REQUIRE(values["points"].size() == positions);
   const auto state = values["state"].get<std::size_t>();
@@ -500,7 +502,12 @@ TEST_CASE("boxing's sparring plays boxing_spar's behaviour at a fighting distanc
   CHECK_THAT(json::parse(session.takeOutbox().at(0))["message"].get<std::string>(),
              Catch::Contains("expected behaviour names from spar_square, spar, spar_turned, found \"hit\""));
   session.handle(R"({"type": "values", "behavior": "spar"})");
-  CHECK(json::parse(session.takeOutbox().at(0))["behavior"] == "spar");
+  const json sparValues = json::parse(session.takeOutbox().at(0));
+  CHECK(sparValues["behavior"] == "spar");
+  CHECK(sparValues["behavior_stance"] == 1);  // spar is stance 1 of 3; avatar 0 holds one
+  REQUIRE(sparValues["stance"].is_number_integer());
+  CHECK(sparValues["stance"].get<int>() >= 0);
+  CHECK(sparValues["stance"].get<int>() < 3);
   // 20 s of sparring: the pelvises stay a fighting distance apart (the paper's behaviours
   // close in to 0.66 m, boxing_spar's bouts measure 1.17 m), and values of spar follow.
   int values = 0;

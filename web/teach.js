@@ -167,11 +167,20 @@ export class Teach {
       $('legend-bar').style.background = viridisGradient();
       $('legend-caption').textContent = `colour: V = max over actions of Q; ${marks}`;
     }
+    // A scenario of stances (issue 46): which one avatar 0 holds, and whether the shown
+    // behaviour (one stance's) played at that decision.
+    const stanceText = (v) => {
+      if (v.stance === null || v.stance === undefined) return '';
+      if (v.behavior_stance === null || v.behavior_stance === undefined) return `, holding stance ${v.stance}`;
+      return v.stance === v.behavior_stance
+        ? `, holding stance ${v.stance}: this behaviour's, it plays`
+        : `, holding stance ${v.stance}: this behaviour's is ${v.behavior_stance}, it waits`;
+    };
     // A grid that holds the target's motion shows the layers of the target's motion.
     const motion = m.speed > 0
       ? `, values for a target at ${Number(m.speed).toFixed(1)} m/s turning ${Number(m.turn_deg_s).toFixed(0)} deg/s`
       : '';
     $('teach-state').textContent = `state ${m.state}, chosen action ${m.chosen} of ${m.actions} (counted from 0), ` +
-      `target inside grid: ${m.target_inside ? 'yes' : 'no'}${motion} (t ${Number(m.time).toFixed(1)} s)`;
+      `target inside grid: ${m.target_inside ? 'yes' : 'no'}${motion}${stanceText(m)} (t ${Number(m.time).toFixed(1)} s)`;
   }
 }

@@ -116,6 +116,10 @@ std::string ViewerSession::values() const {
               {"target_inside", s.policy[shown].grid->inside(seenNow)},
               {"speed", layerSpeed},
               {"turn_deg_s", grid.turnAxis() ? grid.turnAxis()->vertices[turnLayer] * 180 / M_PI : 0.0},
+              // Stances (issue 46): the one avatar 0 held at the decision, and the shown
+              // behaviour's (it played only if they are the same); null for none.
+              {"stance", d.target.stance >= 0 ? json(d.target.stance) : json(nullptr)},
+              {"behavior_stance", behavior.stance >= 0 ? json(behavior.stance) : json(nullptr)},
               {"v_min", lo},
               {"v_max", hi},
               {"points", points},
