@@ -33,8 +33,9 @@ void SnapshotEvaluator::snapshot(const QTable& table, const CurvePoint& point, c
   std::vector<PolicyPart> parts;
   std::size_t next = 0;
   for (const Behavior& b : all_)
-    parts.push_back(b.name == trainedName_ ? PolicyPart{grid ? grid : b.discretizer.get(), &table, b.weight, b.activation}
-                                           : shared_[next++]);
+    parts.push_back(b.name == trainedName_
+                        ? PolicyPart{grid ? grid : b.discretizer.get(), &table, b.weight, b.activation, b.stance}
+                        : shared_[next++]);
   PolicyController controller(graph_.model, std::move(parts));
   const json result = Trials::summary(trials_.run(
       [&](std::uint32_t s, const TargetState& e) { return controller.choose(s, e); }, trialCount_, seconds_, 1));

@@ -357,6 +357,7 @@ class TrainRun {
     record["config"] = behavior.config;
     record["weight"] = behavior.weight;
     record["activation"] = std::string(activationName(behavior.activation));
+    if (behavior.stance >= 0) record["stance"] = behavior.stance;  // issue 46 (absent before stances)
     record["grid"] = tableGrid.describe();
     record["curve_columns"] = {"updates", "seconds", "residual", "mean_residual"};
     record["curve"] = curve;

@@ -336,7 +336,7 @@ class PySession {
     }
     for (const Behavior& b : session_->behaviors) {
       if (!out.behaviors.count(b.name)) out.behaviors[b.name] = otherTable(b);
-      out.parts.push_back({b.discretizer.get(), &out.behaviors[b.name]->table, b.weight, b.activation});
+      out.parts.push_back({b.discretizer.get(), &out.behaviors[b.name]->table, b.weight, b.activation, b.stance});
     }
     return out;
   }

@@ -411,6 +411,23 @@ TEST_CASE("behaviour mistakes name the file, line, column and key", "[behaviors]
                          at(9, 13,
                             "behaviors.approach.stance: expected stances numbered 0..2 with a behaviour for each, "
                             "found none for stance 0"));
+    // A stance's facing term must be its behaviour's and count the scenario's stances.
+    const std::string stanceTerm =
+        "  keep:\n    stance: 0\n    discretizer: {type: polar2d}\n    reward: {type: terms, terms: [{term: facing, "
+        "prefer: stance, stance: 1, stances: 1}]}\n    learner: {type: value_iteration}\n";
+    REQUIRE_THROWS_WITH(build(stanceTerm), Catch::Contains("behaviors.keep.reward.terms[0].stance: expected the "
+                                                           "behaviour's stance, 0, found 1"));
+    std::string counted = stanceTerm;
+    counted.replace(counted.find("stance: 1, stances: 1"), 21, "stance: 0, stances: 3");
+    REQUIRE_THROWS_WITH(build(counted), Catch::Contains("behaviors.keep.reward.terms[0].stances: expected the "
+                                                        "scenario's number of stances, 1, found 3"));
+    std::string unheld = counted;
+    unheld.replace(unheld.find("    stance: 0\n"), 14, "");
+    REQUIRE_THROWS_WITH(build(unheld), Catch::Contains("behaviors.keep.reward.terms[0].prefer: expected the behaviour "
+                                                       "to hold a stance"));
+    std::string fine = counted;
+    fine.replace(fine.find("stances: 3"), 10, "stances: 1");
+    CHECK(build(fine).front().stance == 0);
     REQUIRE_THROWS_WITH(build(approachWith(9, "    stance: 16")),
                         Catch::Contains("behaviors.approach.stance") && Catch::Contains("16"));
     REQUIRE_THROWS_WITH(build(approachWith(9, "    stance: -1")),
@@ -689,10 +706,29 @@ TEST_CASE("the behaviour key changes with what the table depends on, and only th
     };
     CHECK(keyOf("{term: facing}") == keyOf("{term: facing, stance: 2, stances: 5}"));
     CHECK(keyOf("{term: facing, prefer: bouts}") == keyOf("{term: facing, prefer: bouts, stance: 1}"));
-    const std::string stance0 = keyOf("{term: facing, prefer: stance, stance: 0}");
-    CHECK(stance0 != keyOf("{term: facing, prefer: stance, stance: 1}"));
-    CHECK(stance0 != keyOf("{term: facing, prefer: stance, stance: 0, stances: 2}"));
+    // Stance k of n: n behaviours, each holding its stance with its own facing term.
+    auto stanceKey = [&](int k, int n) {
+      std::string behaviors;
+      for (int i = 0; i < n; ++i)
+        behaviors += fmt::format(
+            "  s{0}:\n    stance: {0}\n    discretizer: {{type: polar2d}}\n    reward: {{type: terms, terms: "
+            "[{{term: facing, prefer: stance, stance: {0}, stances: {1}}}]}}\n    learner: {{type: value_iteration}}\n",
+            i, n);
+      return build(behaviors).at(static_cast<std::size_t>(k)).key;
+    };
+    const std::string stance0 = stanceKey(0, 1);
+    CHECK(stance0 != stanceKey(0, 2));
+    CHECK(stanceKey(0, 2) != stanceKey(1, 2));
     CHECK(stance0 != keyOf("{term: facing}"));
+  }
+  SECTION("a learned opponent's against: previous keeps the key self-play rounds had before the choice (issue 43)") {
+    auto keyOf = [&](const std::string& environment) {
+      const Scenario scenario = parse(approachInserting(19, "    environment: " + environment));
+      return behaviorConfigAndKey(scenario.behaviors.front(), app::plugins(), kGraphKey).second;
+    };
+    const std::string rounds = "{type: learned_opponent, rounds: 3";
+    CHECK(keyOf(rounds + "}") == keyOf(rounds + ", against: previous}"));
+    CHECK(keyOf(rounds + "}") != keyOf(rounds + ", against: average}"));
   }
   SECTION("a moving_target that does not turn keeps the key it had before turning targets (issue 46)") {
     auto keyOf = [&](const std::string& environment) {

@@ -495,6 +495,7 @@ TEST_CASE("boxing's sparring plays boxing_spar's behaviour at a fighting distanc
   CHECK(scene["mode"] == "sparring");
   CHECK(scene["scenario"] == "boxing_spar");
   CHECK(names(scene) == std::vector<std::string>{"spar_square", "spar", "spar_turned"});  // its three stances
+  for (int k = 0; k < 3; ++k) CHECK(scene["behaviors"][static_cast<std::size_t>(k)]["stance"] == k);
   CHECK(scene["controller"] == "policy");
   CHECK(scene["behaviors"][0]["vertices"].get<int>() > 0);  // the bundle's table, not a search
   CHECK(scene["note"].get<std::string>().find("Sparring plays") != std::string::npos);

@@ -194,6 +194,7 @@ std::string ViewerSession::scene() const {
     json b = {{"name", a.session->behaviors[i].name},
               {"weight", s.weights[i]},
               {"activation", std::string(activationName(a.session->behaviors[i].activation))}};
+    if (a.session->behaviors[i].stance >= 0) b["stance"] = a.session->behaviors[i].stance;  // issue 46
     // The bundle's training record: its learner and curve (updates, seconds, residual,
     // mean residual), for the page's learning-curve view.
     const auto trained = a.session->bundle.behaviors.find(a.session->behaviors[i].name);

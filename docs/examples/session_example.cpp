@@ -22,7 +22,7 @@ int main(int argc, char** argv) try {
     const mgrl::Problem problem = b.problem(session->model());
     const mgrl::GridModel grid = mgrl::GridModel::build(problem, 2);
     tables.push_back(learner->train({problem, grid, nullptr, nullptr, 2}).table);
-    session->policy.push_back({b.discretizer.get(), &tables.back(), b.weight, b.activation});
+    session->policy.push_back({b.discretizer.get(), &tables.back(), b.weight, b.activation, b.stance});
     std::printf("trained %s: %zu vertices\n", b.name.c_str(), grid.vertexCount);
   }
 

@@ -41,6 +41,9 @@ std::pair<nlohmann::json, std::string> behaviorConfigAndKey(const BehaviorSpec& 
     keyed["environment"].erase("max_turn_deg_s");
     keyed["environment"].erase("turns");
   }
+  // Likewise a learned opponent's against: previous (issue 43), what self-play rounds did
+  // before the choice.
+  if (keyed["environment"].value("against", "") == "previous") keyed["environment"].erase("against");
   // Likewise effort's point: pelvis (the root's ground speed, all effort measured before).
   if (keyed["reward"].contains("terms") && keyed["reward"]["terms"].is_array())
     for (nlohmann::json& term : keyed["reward"]["terms"])

@@ -197,7 +197,11 @@ void World::decide(std::size_t i, Controller& controller) {
   }
   if (setup_.stances > 0) {
     if (a.stance < 0 || time() >= a.stanceUntil) {
-      a.stance = static_cast<std::int32_t>(a.rng.below(static_cast<std::uint64_t>(setup_.stances)));
+      // The first uniformly; then one of the others, so that a hold is a stay in one stance.
+      const auto n = static_cast<std::uint64_t>(setup_.stances);
+      a.stance = a.stance < 0 || n == 1
+                     ? static_cast<std::int32_t>(a.rng.below(n))
+                     : static_cast<std::int32_t>((static_cast<std::uint64_t>(a.stance) + 1 + a.rng.below(n - 1)) % n);
       a.stanceUntil = time() - setup_.params.stanceHold * std::log1p(-a.rng.uniform());
     }
     e.stance = a.stance;

@@ -181,8 +181,9 @@ struct WorldSetup {
   /// Null: targets stand (the paper's). It must outlive the world.
   const EnvironmentModel* targetMotion = nullptr;
   /// Stances the behaviours number (issue 46, `stance: k`): each avatar draws one uniformly,
-  /// holds it for an exponential time of mean params.stanceHold, then draws again (at its
-  /// next decision); controllers see it as TargetState::stance. 0: no stances.
+  /// holds it for an exponential time of mean params.stanceHold, then changes to one of the
+  /// others, drawn uniformly (at its next decision); controllers see it as
+  /// TargetState::stance. 0: no stances.
   int stances = 0;
   /// Optional: makes the controllers of the second avatar of each sparring pair (odd
   /// indices), so that two policies spar (`simulate --partner-policy`); unset, every avatar

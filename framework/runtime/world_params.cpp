@@ -19,8 +19,8 @@ const ParamSpecs& worldParamSpecs() {
       ParamSpec::number("target_hold", 3.0, 0.1, 3600, "s", "targets mode: a target stays this long, then moves"),
       ParamSpec::number("stance_hold", 0.8, 0.05, 3600, "s",
                         "stances (behaviours with `stance:`): a fighter holds the stance it drew for a random time "
-                        "of this mean (exponential), then draws one again, uniformly; 0.8 s is how long the real "
-                        "SNU fighters stay in a third of their facing angles"),
+                        "of this mean (exponential), then changes to another, drawn uniformly; 0.8 s is how long "
+                        "the real SNU fighters stay in a third of their facing angles"),
       ParamSpec::number("target_height", -1, -1, 5, "m",
                         "targets mode: target height (-1: the hitting points' centroid)"),
       ParamSpec::number("target_radius", 0.12, 0.01, 2, "m", "radius of a target sphere"),

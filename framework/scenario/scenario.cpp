@@ -210,6 +210,27 @@ std::vector<BehaviorSpec> readBehaviors(const ConfigNode& root) {
       last->node.child("stance").fail(fmt::format(
           "expected stances numbered 0..{} with a behaviour for each, found none for stance {}", stances - 1, k));
     }
+  // A facing term that learns a stance (prefer: stance) belongs to a behaviour of that
+  // stance, and cuts the real angles into as many parts as the scenario has stances: a copy
+  // slip would otherwise train one stance's table for another.
+  for (const BehaviorSpec& spec : result) {
+    if (!spec.reward.isMap() || !spec.reward.has("terms") || !spec.reward.child("terms").yaml().IsSequence()) continue;
+    for (const ConfigNode& term : spec.reward.child("terms").elements()) {
+      if (!term.isMap() || term.string("term", "") != "facing" || term.string("prefer", "") != "stance") continue;
+      const long long stance = term.integer("stance", 0, 0, kMaxStances - 1);
+      const long long count = term.integer("stances", 3, 1, kMaxStances);
+      if (spec.stance < 0)
+        term.child("prefer").fail(
+            "expected the behaviour to hold a stance (a `stance: k` key) for a facing term with prefer: stance, "
+            "found none");
+      if (stance != spec.stance)
+        (term.has("stance") ? term.child("stance") : term.child("prefer"))
+            .fail(fmt::format("expected the behaviour's stance, {}, found {}", spec.stance, stance));
+      if (count != stances)
+        (term.has("stances") ? term.child("stances") : term.child("prefer"))
+            .fail(fmt::format("expected the scenario's number of stances, {}, found {}", stances, count));
+    }
+  }
   return result;
 }
 

@@ -244,8 +244,9 @@ TrialStats Trials::runAgainstAvatar(const ChooseAction& choose, std::size_t coun
       if (first || avatar.played == avatar.length) {
         if (!first) finish(avatar);
         const GroundMotion o = rootAt(opponent);
-        const TargetState e(inverseTransformPoint(avatar.decision, {o.dx, targetHeight_, o.dz}), 0.0,
-                            std::remainder(o.dyaw - avatar.decision.dyaw, 2 * M_PI));
+        TargetState e(inverseTransformPoint(avatar.decision, {o.dx, targetHeight_, o.dz}), 0.0,
+                      std::remainder(o.dyaw - avatar.decision.dyaw, 2 * M_PI));
+        if (stances_ > 0) e.stance = static_cast<std::int32_t>(trial % static_cast<std::size_t>(stances_));
         const std::size_t begin = model.stateActionBegin[avatar.state], end = model.stateActionBegin[avatar.state + 1];
         start(avatar, choose ? choose(avatar.state, e) : begin + choices.below(end - begin));
         ++stats.decisions;
