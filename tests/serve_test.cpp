@@ -543,16 +543,21 @@ TEST_CASE("boxing's sparring plays boxing_spar's behaviour at a fighting distanc
 TEST_CASE("serve --partner-policy: the second fighter of each pair plays its own bundle", "[serve][data]") {
   const BoxingAssets spar(true, "boxing_spar.yaml", {});
   // A partner trained on the same graph and grid to keep 2.5 m away instead of 1.15 m, and
-  // not to punch (its reward without the contact term).
+  // not to punch nor to mind its facing (its reward without the contact and facing terms).
   test::TempDir dir("serve-partner");
   std::string text = readFile(fs::path(MGRL_SOURCE_DIR) / "scenarios" / "boxing_spar.yaml");
   const std::string contact = "        - {term: contact, effector: fists, radius: 0.7, weight: 3}\n";
-  REQUIRE(text.find("d0: 1.15") != std::string::npos);
+  REQUIRE(text.find("d0: 1.15, sigma: 0.2") != std::string::npos);
   REQUIRE(text.find(contact) != std::string::npos);
-  for (std::size_t at = text.find("d0: 1.15"); at != std::string::npos; at = text.find("d0: 1.15"))
-    text.replace(at, 8, "d0: 2.5");  // every stance's
+  const std::string distance = "d0: 1.15, sigma: 0.2";  // every stance's
+  for (std::size_t at = text.find(distance); at != std::string::npos; at = text.find(distance))
+    text.replace(at, distance.size(), "d0: 2.5, sigma: 0.2");
   for (std::size_t at = text.find(contact); at != std::string::npos; at = text.find(contact))
     text.erase(at, contact.size());
+  // And without the stances' facing terms: it minds the distance alone.
+  const std::string facing = "        - {term: facing, prefer: stance";
+  for (std::size_t at = text.find(facing); at != std::string::npos; at = text.find(facing))
+    text.erase(at, text.find('\n', at) + 1 - at);
   writeFile(dir.path / "far.yaml", text);
   app::TrainOptions far = spar.train;
   far.scenario = dir.path / "far.yaml";
