@@ -26,15 +26,43 @@ namespace {
 
 constexpr double kDegree = std::numbers::pi / 180;
 
+// exp(-|angle - angle0| / sigma): angle0 written (angle_deg), or (prefer: stance, issue 46)
+// learned at bind from the real SNU sparring bouts: their facing angles (as prefer: bouts
+// reads them) cut into `stances` equally large parts, angle0 the median of part `stance`. A
+// scenario gives each stance its own behaviour (`stance: k`), and the world lets each fighter
+// hold one at a time: the bout's facing then follows the real distribution part by part,
+// which one preferred angle (the distribution's mode) cannot do.
 class Facing final : public Term {
  public:
-  explicit Facing(const Params& p) : angle_(p.number("angle_deg") * kDegree), sigma_(p.number("sigma_deg") * kDegree) {}
+  explicit Facing(const Params& p)
+      : angle_(p.number("angle_deg") * kDegree),
+        sigma_(p.number("sigma_deg") * kDegree),
+        stance_(p.choice("prefer") == "stance" ? static_cast<int>(p.integer("stance")) : -1),
+        stances_(static_cast<int>(p.integer("stances"))) {
+    if (stance_ >= stances_)
+      throw TermError("stance", fmt::format("expected a stance below stances ({}), found {}", stances_, stance_));
+  }
+
+  void bind(const StateActionModel&) override {
+    if (stance_ < 0) return;
+    try {
+      angle_ = facingStances(snuFacingDegrees(scenarioDataDirectory()), stances_)[static_cast<std::size_t>(stance_)] *
+               kDegree;
+    } catch (const Error& e) {
+      throw TermError("prefer", fmt::format("stance: {}", e.what()));
+    }
+    bound_ = true;
+  }
+
   double signal(const TermFrame& f) const override {
+    if (!bound_) throw std::logic_error("facing term with a learned stance evaluated before it was bound");
     return std::exp(-std::abs(facingError(f.model, f.frame, f.target) - angle_) / sigma_);
   }
 
  private:
   double angle_, sigma_;  // rad
+  int stance_, stances_;  // stance_ -1: angle_ as written
+  bool bound_ = stance_ < 0;
 };
 
 class FacingCondition final : public SuccessCondition {
@@ -143,45 +171,6 @@ class FacingDensity final : public Term {
   bool bound_ = false;
 };
 
-// A stance learned from the real SNU sparring bouts (prefer: stance, issue 46): the facing
-// angles their fighters keep to each other (as prefer: bouts reads them) are cut into
-// `stances` equally likely parts, and stance k prefers the median of part k, as the
-// constant term prefers angle_deg. A scenario gives each stance its own behaviour (`stance:
-// k`), and the world lets each fighter hold one at a time, drawn uniformly: the bout's
-// facing then follows the real distribution part by part, which one preferred angle (the
-// distribution's mode) cannot do.
-class FacingStance final : public Term {
- public:
-  explicit FacingStance(const Params& p)
-      : stance_(static_cast<int>(p.integer("stance"))),
-        stances_(static_cast<int>(p.integer("stances"))),
-        sigma_(p.number("sigma_deg") * kDegree) {
-    if (stance_ >= stances_)
-      throw TermError("stance", fmt::format("expected a stance below stances ({}), found {}", stances_, stance_));
-  }
-
-  void bind(const StateActionModel&) override {
-    try {
-      angle_ = facingStances(snuFacingDegrees(scenarioDataDirectory()), stances_)[static_cast<std::size_t>(stance_)] *
-               kDegree;
-    } catch (const Error& e) {
-      throw TermError("prefer", fmt::format("stance: {}", e.what()));
-    }
-    bound_ = true;
-  }
-
-  double signal(const TermFrame& f) const override {
-    if (!bound_) throw std::logic_error("facing term with a learned stance evaluated before it was bound");
-    return std::exp(-std::abs(facingError(f.model, f.frame, f.target) - angle_) / sigma_);
-  }
-
- private:
-  int stance_, stances_;
-  double sigma_;      // rad
-  double angle_ = 0;  // rad, learned at bind
-  bool bound_ = false;
-};
-
 }  // namespace
 
 void registerFacing(Vocabulary& v) {
@@ -206,8 +195,7 @@ void registerFacing(Vocabulary& v) {
         angle, ParamSpec::number("sigma_deg", 30, 0.1, 360, "deg", "angle scale of the exponential (of the smoothing)"),
         weightSpec()},
        [](const Params& p) -> std::unique_ptr<Term> {
-         if (p.choice("prefer") == "stance") return std::make_unique<FacingStance>(p);
-         if (p.choice("prefer") != "angle") return std::make_unique<FacingDensity>(p);
+         if (p.choice("prefer") == "hits" || p.choice("prefer") == "bouts") return std::make_unique<FacingDensity>(p);
          return std::make_unique<Facing>(p);
        }});
   ConditionRegistry::Entry entry{

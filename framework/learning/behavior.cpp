@@ -153,6 +153,12 @@ void bindEnvironment(const BehaviorSpec& spec, Behavior& b, const StateActionMod
 
 }  // namespace
 
+int stanceCount(const std::vector<Behavior>& behaviors) {
+  int count = 0;
+  for (const Behavior& b : behaviors) count = std::max(count, b.stance + 1);
+  return count;
+}
+
 Behavior buildBehavior(const BehaviorSpec& spec, const Plugins& plugins, const StateActionModel& model,
                        const std::string& graphKey) {
   Behavior b;

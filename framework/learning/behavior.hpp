@@ -56,6 +56,10 @@ struct Behavior {
 std::pair<nlohmann::json, std::string> behaviorConfigAndKey(const BehaviorSpec& spec, const Plugins& plugins,
                                                              const std::string& graphKey);
 
+/// The stances the behaviours number (issue 46): the largest `stance` plus one, 0 for none
+/// (the scenario reader has checked that 0..N-1 each have a behaviour).
+int stanceCount(const std::vector<Behavior>& behaviors);
+
 /// Builds a behaviour's plugins; ConfigError (`file:line:col: behaviors.NAME.reward.type:
 /// unknown reward 'x' (known: approach, hit)`) for unknown types and bad parameters.
 Behavior buildBehavior(const BehaviorSpec& spec, const Plugins& plugins, const StateActionModel& model,

@@ -94,6 +94,15 @@ class EnvironmentModel {
   virtual std::optional<ScriptedOpponent> scriptedOpponent() const { return std::nullopt; }
 };
 
+/// `environment.next(model, action, e)` with e's stance held (TargetState::stance): what
+/// trials and the online search step a stance-holding target with.
+inline TargetState nextHoldingStance(const EnvironmentModel& environment, const StateActionModel& model,
+                                     std::size_t action, const TargetState& e) {
+  TargetState after = environment.next(model, action, e);
+  after.stance = e.stance;
+  return after;
+}
+
 using EnvironmentRegistry = Registry<EnvironmentModel>;
 
 /// `static_target`: the target stays put in the world, so its new avatar-frame position is

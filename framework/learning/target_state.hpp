@@ -25,7 +25,8 @@ struct TargetState {
   std::int32_t opponent = -1;
   /// The stance the fighter holds (issue 46: a world with stances draws one per fighter and
   /// holds it a while; behaviours with `stance: k` are active only while it is k), -1 for
-  /// none (every behaviour active). Environment models do not change it.
+  /// none (every behaviour active). It belongs to the fighter, not to the target's motion:
+  /// environment models build their next state without it, and nextHoldingStance() keeps it.
   std::int32_t stance = -1;
 
   TargetState() = default;

@@ -156,12 +156,6 @@ OnlineSearchController::OnlineSearchController(const StateActionModel& model, co
     discount_[a] = std::pow(gamma, static_cast<double>(model.actionLength(a)));
 }
 
-TargetState OnlineSearchController::next(std::size_t a, const TargetState& e) const {
-  TargetState after = environment_.next(model_, a, e);
-  after.stance = e.stance;  // held through the search
-  return after;
-}
-
 double OnlineSearchController::reward(std::size_t a, const TargetState& e) const {
   double r = 0;
   for (const SearchPart& part : parts_) {
@@ -177,8 +171,9 @@ double OnlineSearchController::value(std::uint32_t s, const TargetState& e, int 
   double best = -std::numeric_limits<double>::infinity();
   for (std::uint32_t a = model_.stateActionBegin[s]; a < model_.stateActionBegin[s + 1]; ++a) {
     ++expanded_;
-    const double q = reward(a, e) + discount_[a] * value(model_.actionTo[a], next(a, e), depth - 1,
-                                                         frames - static_cast<double>(model_.actionLength(a)));
+    const double q =
+        reward(a, e) + discount_[a] * value(model_.actionTo[a], nextHoldingStance(environment_, model_, a, e),
+                                            depth - 1, frames - static_cast<double>(model_.actionLength(a)));
     best = std::max(best, q);
   }
   return best;
@@ -190,8 +185,9 @@ std::size_t OnlineSearchController::choose(std::uint32_t s, const TargetState& e
   double best = -std::numeric_limits<double>::infinity();
   for (std::uint32_t a = model_.stateActionBegin[s]; a < model_.stateActionBegin[s + 1]; ++a) {
     ++expanded_;
-    const double q = reward(a, e) + discount_[a] * value(model_.actionTo[a], next(a, e), horizon_ - 1,
-                                                         horizonFrames_ - static_cast<double>(model_.actionLength(a)));
+    const double q =
+        reward(a, e) + discount_[a] * value(model_.actionTo[a], nextHoldingStance(environment_, model_, a, e),
+                                            horizon_ - 1, horizonFrames_ - static_cast<double>(model_.actionLength(a)));
     if (q > best) {
       best = q;
       bestAction = a;
@@ -213,8 +209,9 @@ std::size_t OnlineSearchController::choose(std::uint32_t s, const TargetState& e
   for (std::uint32_t a = begin; a < model_.stateActionBegin[s + 1]; ++a) {
     if (allowed[a - begin] == 0) continue;
     ++expanded_;
-    const double q = reward(a, e) + discount_[a] * value(model_.actionTo[a], next(a, e), horizon_ - 1,
-                                                         horizonFrames_ - static_cast<double>(model_.actionLength(a)));
+    const double q =
+        reward(a, e) + discount_[a] * value(model_.actionTo[a], nextHoldingStance(environment_, model_, a, e),
+                                            horizon_ - 1, horizonFrames_ - static_cast<double>(model_.actionLength(a)));
     if (bestAction == model_.actionCount() || q > best) {
       best = q;
       bestAction = a;

@@ -169,8 +169,6 @@ class OnlineSearchController final : public Controller {
   /// frames to cover (frames <= 0: the time horizon is reached).
   double value(std::uint32_t s, const TargetState& e, int depth, double frames);
   double reward(std::size_t a, const TargetState& e) const;
-  /// The environment's next target after action a, the stance kept.
-  TargetState next(std::size_t a, const TargetState& e) const;
 
   const StateActionModel& model_;
   const EnvironmentModel& environment_;

@@ -1,7 +1,5 @@
 #include "mgrl/session/session.hpp"
 
-#include <algorithm>
-
 #include <fmt/format.h>
 
 #include "mgrl/core/error.hpp"
@@ -54,7 +52,7 @@ WorldSetup Session::worldSetup(std::size_t avatars, std::uint64_t seed, const Co
   setup.opponent = task.opponent;
   setup.opponentPhases = task.opponentPhases;
   if (task.environment->maxSpeed() > 0) setup.targetMotion = task.environment;
-  for (const Behavior& b : behaviors) setup.stances = std::max(setup.stances, b.stance + 1);
+  setup.stances = stanceCount(behaviors);
   ControllerParts parts = controllerParts(task.world.variety);
   parts.policy = policyParts;
   requireParts(choice, parts);  // now, not at the world's first decision

@@ -26,7 +26,7 @@ Trials::Trials(const StateActionModel& model, const std::vector<Behavior>& behav
   const auto region = std::find_if(behaviors.begin(), behaviors.end(),
                                    [](const Behavior& b) { return b.activation == Activation::Always; });
   region_ = (region != behaviors.end() ? region : behaviors.begin())->discretizer.get();
-  for (const Behavior& b : behaviors) stances_ = std::max(stances_, b.stance + 1);
+  stances_ = stanceCount(behaviors);
   if (const GridAxis* distance = region_->axis(AxisRole::Distance)) reach_ = distance->vertices.back();
   if (!(reach_ > 0))
     throw Error(fmt::format("{}: expected a behaviour whose grid has a distance axis to place targets in, found none",
@@ -102,7 +102,7 @@ TrialStats Trials::run(const ChooseAction& choose, std::size_t count, double sec
     auto s = static_cast<std::uint32_t>(starts.below(model.stateCount()));
     TargetState e = placeTarget(starts);
     // Stances (issue 46) in turn, trial by trial: each held through its trial.
-    if (stances_ > 0) e.stance = static_cast<std::int32_t>(trial % static_cast<std::size_t>(stances_));
+    e.stance = stanceOf(trial);
     const auto turn = static_cast<std::size_t>(std::find(stats.turnRates.begin(), stats.turnRates.end(), e.turnRate) -
                                                stats.turnRates.begin());
     double elapsed = 0, discount = 1, trialReturn = 0;
@@ -142,9 +142,7 @@ TrialStats Trials::run(const ChooseAction& choose, std::size_t count, double sec
       const auto frames = static_cast<double>(model.actionLength(a));
       discount *= std::pow(gamma_, frames);
       elapsed += frames;
-      const std::int32_t stance = e.stance;
-      e = environment.next(model, a, e);
-      e.stance = stance;
+      e = nextHoldingStance(environment, model, a, e);
       s = model.actionTo[a];
     }
     stats.successes += hit;
@@ -246,7 +244,7 @@ TrialStats Trials::runAgainstAvatar(const ChooseAction& choose, std::size_t coun
         const GroundMotion o = rootAt(opponent);
         TargetState e(inverseTransformPoint(avatar.decision, {o.dx, targetHeight_, o.dz}), 0.0,
                       std::remainder(o.dyaw - avatar.decision.dyaw, 2 * M_PI));
-        if (stances_ > 0) e.stance = static_cast<std::int32_t>(trial % static_cast<std::size_t>(stances_));
+        e.stance = stanceOf(trial);
         const std::size_t begin = model.stateActionBegin[avatar.state], end = model.stateActionBegin[avatar.state + 1];
         start(avatar, choose ? choose(avatar.state, e) : begin + choices.below(end - begin));
         ++stats.decisions;

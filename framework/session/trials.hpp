@@ -109,6 +109,10 @@ class Trials {
   bool insideRegion(const Eigen::Vector3d& position) const;
   double reach_ = 0, targetHeight_ = 0, gamma_ = 0.97;
   int stances_ = 0;  ///< behaviours' stances (issue 46): trial i holds stance i mod stances_
+  /// Trial i's stance: i mod stances_, -1 without stances.
+  std::int32_t stanceOf(std::size_t trial) const {
+    return stances_ > 0 ? static_cast<std::int32_t>(trial % static_cast<std::size_t>(stances_)) : -1;
+  }
   std::vector<SuccessCriterion> criteria_;
   std::string criteriaFrom_;
 };
