@@ -334,6 +334,21 @@ TEST_CASE("mgrl train runs self-play rounds against a learned opponent, keeps ev
             sides["hits_by_side"]["partner_policy"].get<std::size_t>() ==
         sides["hits"].get<std::size_t>());
   CHECK(sides["partner_policy"] == box.path("next").string());
+  // Any two rounds spar: the first avatar of each pair plays round 2, the partner round 1.
+  const test::Run rounds21 =
+      box.run("simulate " + box.scenario() + kSmallSpar + " --seconds 20 --avatars 2 --json --policy " +
+              test::shellWord(box.path("policy")) + " --round 2 --partner-policy " +
+              test::shellWord(box.path("policy")) + " --partner-round 1");
+  INFO(rounds21.err);
+  REQUIRE(rounds21.status == 0);
+  CHECK(rounds21.report()["round"] == 2);
+  CHECK(rounds21.report()["partner_round"] == 1);
+  // A round the bundle does not have is refused, naming what it has.
+  const test::Run round9 = box.run("simulate " + box.scenario() + kSmallSpar + " --seconds 1 --policy " +
+                                   test::shellWord(box.path("policy")) + " --round 9");
+  CHECK(round9.status != 0);
+  CHECK(round9.lastErrorLine().find("expected self-play round 9's table for behaviour 'spar' (spar-round9), found "
+                                    "only spar, spar-round1") != std::string::npos);
   // A partner policy needs policies on both sides.
   const test::Run random = box.run("simulate " + box.scenario() + kSmallSpar +
                                    " --controller random --partner-policy " + test::shellWord(box.path("next")));
@@ -370,6 +385,10 @@ TEST_CASE(
   const test::Run round = box.run("simulate " + box.scenario() + " --controller random --partner-round 1");
   CHECK(round.status != 0);
   CHECK(round.lastErrorLine().find("--partner-round: expected --partner-policy DIR as well") != std::string::npos);
+  const test::Run ownRound = box.run("simulate " + box.scenario() + " --controller random --round 1");
+  CHECK(ownRound.status != 0);
+  CHECK(ownRound.lastErrorLine().find("--round: expected --controller policy (a self-play round's tables), found "
+                                      "random") != std::string::npos);
   const test::Run targets = box.run("simulate " + box.scenario() + " --controller random --set world.mode=targets" +
                                     " --partner-policy " + test::shellWord(box.path("nothing")));
   CHECK(targets.status != 0);

@@ -127,6 +127,10 @@ class Simulate final : public SessionCommand {
                      "With --partner-policy: the partner plays that self-play round's tables (mgrl train keeps every "
                      "round)")
         ->check(CLI::Range(1, 1000));
+    sub_->add_option("--round", options_.run.round,
+                     "The policy's avatars play that self-play round's tables instead of the final ones (with "
+                     "--partner-round: any two rounds spar)")
+        ->check(CLI::Range(1, 1000));
     sub_->add_option("--controller", options_.run.controller.name, "policy, online_search or random")
         ->default_str("policy");
     sub_->add_option("--horizon", options_.run.controller.horizon, "online_search: search depth in actions")

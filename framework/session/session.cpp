@@ -86,26 +86,42 @@ void Session::checkPartnerChoice(const std::filesystem::path& dir, int round, st
     throw Error(fmt::format("{}: expected {} as well (the bundle whose round the partner plays)", roundName, dirName));
 }
 
+namespace {
+
+// Self-play rounds are kept as NAME-roundK (mgrl train, issue 43): each behaviour's table
+// is replaced by its round's.
+void takeRound(PolicyBundle& bundle, const std::filesystem::path& dir, const std::vector<Behavior>& behaviors,
+               int round) {
+  for (const Behavior& b : behaviors) {
+    const std::string name = fmt::format("{}-round{}", b.name, round);
+    auto found = bundle.behaviors.find(name);
+    if (found == bundle.behaviors.end()) {
+      std::string have;
+      for (const auto& entry : bundle.behaviors) have += (have.empty() ? "" : ", ") + entry.first;
+      throw Error(fmt::format("{}: expected self-play round {}'s table for behaviour '{}' ({}), found only {}",
+                              dir.string(), round, b.name, name, have));
+    }
+    bundle.behaviors[b.name] = std::move(found->second);
+  }
+}
+
+}  // namespace
+
 void Session::loadPartnerPolicy(const std::filesystem::path& dir, int round) {
   partnerBundle = loadPolicyBundle(dir, graph.model, graph.key);
-  if (round > 0) {
-    // Self-play rounds are kept as NAME-roundK (mgrl train, issue 43).
-    for (const Behavior& b : behaviors) {
-      const std::string name = fmt::format("{}-round{}", b.name, round);
-      auto found = partnerBundle.behaviors.find(name);
-      if (found == partnerBundle.behaviors.end()) {
-        std::string have;
-        for (const auto& entry : partnerBundle.behaviors) have += (have.empty() ? "" : ", ") + entry.first;
-        throw Error(fmt::format("{}: expected self-play round {}'s table for behaviour '{}' ({}), found only {}",
-                                dir.string(), round, b.name, name, have));
-      }
-      partnerBundle.behaviors[b.name] = std::move(found->second);
-    }
-  }
+  if (round > 0) takeRound(partnerBundle, dir, behaviors, round);
   // A partner may have been trained with other settings (another opponent, other self-play
   // rounds): its tables need only fit the scenario's graph and grids.
   partnerPolicy = policyPartsOf(partnerBundle, dir, behaviors, options, {}, false);
   partnerPolicyDir = dir;
+}
+
+void Session::playRound(int round) {
+  if (policyDir.empty()) throw Error(fmt::format("self-play round {}: expected a policy bundle, found none", round));
+  takeRound(bundle, policyDir, behaviors, round);
+  // The final tables were checked against the scenario's settings; a round's were trained
+  // with them too, against another opponent.
+  policy = policyPartsOf(bundle, policyDir, behaviors, options, {}, false);
 }
 
 std::unique_ptr<Session> openSession(const SessionOptions& options, const SessionNeeds& needs) {

@@ -106,6 +106,10 @@ class Session {
   /// each pair a policy controller on it. Throws mgrl::Error naming the bundle's problem.
   /// `round` > 0: the tables of that self-play round (NAME-roundK) instead of the final ones.
   void loadPartnerPolicy(const std::filesystem::path& dir, int round = 0);
+  /// The main bundle's avatars play self-play round `round`'s tables (NAME-roundK, kept by
+  /// mgrl train) instead of the final ones, so any two rounds can spar. Throws mgrl::Error
+  /// naming the bundle and the rounds it has when there is no such round.
+  void playRound(int round);
   /// Refuses a self-play round without a partner bundle, before anything loads: mgrl::Error
   /// naming the two settings as the caller calls them (the command line's by default).
   static void checkPartnerChoice(const std::filesystem::path& dir, int round,

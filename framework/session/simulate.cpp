@@ -45,6 +45,7 @@ SimulateFields SimulateFields::keywords() {
   f.partnerPolicy = "partner_policy";
   f.partnerPolicyUsage = "partner_policy";
   f.partnerRound = "partner_round";
+  f.round = "round";
   return f;
 }
 
@@ -52,6 +53,9 @@ SimulateFields SimulateFields::keywords() {
 void checkSimulateSettings(const SimulateSettings& options) {
   const SimulateFields& f = options.fields;
   checkControllerChoice(options.controller, f.controller);
+  if (options.round > 0 && options.controller.name != "policy")
+    throw Error(fmt::format("{}: expected {} policy (a self-play round's tables), found {}", f.round,
+                            f.controller.controller, options.controller.name));
   if (options.avatars < 1 || options.avatars > kMaxAvatars)
     throw Error(
         fmt::format("{}: expected a number of avatars in [1, {}], found {}", f.avatars, kMaxAvatars, options.avatars));
@@ -137,6 +141,10 @@ json simulate(Session& session, const SimulateSettings& settings, Outputs& outpu
                               f.partnerPolicy, f.controller.controller, f.policy, settings.controller.name));
     session.loadPartnerPolicy(settings.partnerPolicy, settings.partnerRound);
   }
+  if (settings.round > 0) {
+    if (policy) throw Error(fmt::format("{}: expected the bundle's tables, found tables given by the caller", f.round));
+    session.playRound(settings.round);
+  }
   const fs::path& policyDir = session.policyDir;
   const Scenario& scenario = session.scenario;
   const GraphResult& graph = session.graph;
@@ -192,6 +200,7 @@ json simulate(Session& session, const SimulateSettings& settings, Outputs& outpu
   if (startup >= 0) report["startup_seconds"] = startup;
   countHits(world, avatars, report);
   if (settings.controller.name == "policy" && !policy) report["policy"] = policyDir.string();
+  if (settings.round > 0) report["round"] = settings.round;
   if (!settings.partnerPolicy.empty()) {
     // Two policies spar: the hits each side landed (the first avatar of each pair plays
     // --policy, the second --partner-policy).

@@ -26,7 +26,7 @@ struct SimulateFields {
   ExportFields exports;
   std::string_view avatars = "--avatars", seconds = "--seconds", topK = "--top-k", threads = "--threads";
   std::string_view poses = "--poses", policy = "--policy", partnerPolicy = "--partner-policy",
-                   partnerPolicyUsage = "--partner-policy DIR", partnerRound = "--partner-round";
+                   partnerPolicyUsage = "--partner-policy DIR", partnerRound = "--partner-round", round = "--round";
   /// The names Python's Session.simulate gives its keywords (avatars, seconds, bvh_out, ...),
   /// and would give the settings it does not take yet (top_k, threads, partner_policy, ...).
   static SimulateFields keywords();
@@ -41,6 +41,7 @@ struct SimulateSettings {
   /// A second bundle the second avatar of each sparring pair plays ("" none: all play the policy).
   std::filesystem::path partnerPolicy;
   int partnerRound = 0;                              ///< > 0: the partner plays that self-play round's tables
+  int round = 0;  ///< > 0: the policy's avatars play that self-play round's tables (not the final ones)
   std::filesystem::path bvhOut, gltfOut, eventsOut;  ///< exports ("" none)
   bool poses = false;    ///< forward kinematics of every joint each frame (exports imply it)
   unsigned threads = 0;  ///< 0: the hardware's
