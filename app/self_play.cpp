@@ -50,6 +50,12 @@ double meanReturn(const Behavior& b, const StateActionModel& m, const QTable& ta
 
 }  // namespace
 
+std::string gapNote(double gap) {
+  if (!(gap < 0)) return "";
+  return " (negative: on this grid the best response's table does worse in continuous play than the "
+         "opponent's own; a finer grid narrows this, scenarios/README.md)";
+}
+
 nlohmann::json selfPlayRound(const Behavior& behavior, const StateActionModel& model, int round, const QTable& table,
                              const QTable* previous, const std::function<void(const std::string&)>& log) {
   nlohmann::json entry = {{"round", round}, {"opponent", behavior.environment->policyKey()}};
@@ -65,8 +71,8 @@ nlohmann::json selfPlayRound(const Behavior& behavior, const StateActionModel& m
   entry["gap"] = mine - old;
   log(
       fmt::format("train {}: round {}: return {:.3f} against {}'s table, which itself gets {:.3f}: "
-                  "best-response gap {:.3f}",
-                  behavior.name, round, mine, behavior.environment->policyKey(), old, mine - old));
+                  "best-response gap {:.3f}{}",
+                  behavior.name, round, mine, behavior.environment->policyKey(), old, mine - old, gapNote(mine - old)));
   return entry;
 }
 

@@ -24,6 +24,12 @@ namespace mgrl::app {
 nlohmann::json selfPlayRound(const Behavior& behavior, const StateActionModel& model, int round, const QTable& table,
                              const QTable* previous, const std::function<void(const std::string&)>& log);
 
+/// What train adds to a round's line after its best-response gap: "" for a gap of at least
+/// 0; for a negative one, that the grid's best response does worse in the episodes (which
+/// move continuously, not from vertex to vertex) than the opponent's own table, and that a
+/// finer grid narrows this.
+std::string gapNote(double gap);
+
 /// `against: average`: the mean of rounds 1..n's tables, from the mean of rounds 1..n - 1's
 /// (null for n = 1) and round n's table: mean + (table - mean) / n, entry by entry. Throws
 /// mgrl::Error when the tables differ in layout (an adaptive grid refines each round

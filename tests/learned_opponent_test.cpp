@@ -396,6 +396,13 @@ TEST_CASE(
                                      "targets") != std::string::npos);
 }
 
+TEST_CASE("a negative best-response gap is explained in train's round line", "[opponent][learning]") {
+  CHECK(app::gapNote(0.33).empty());
+  CHECK(app::gapNote(0.0).empty());
+  CHECK(app::gapNote(-0.47).find("negative: on this grid") != std::string::npos);
+  CHECK(app::gapNote(-0.47).find("a finer grid narrows this") != std::string::npos);
+}
+
 TEST_CASE("self-play against: average plays the entry-by-entry mean of the earlier rounds' tables",
           "[opponent][learning]") {
   StateActionModel m;  // what a table's layout depends on: state 0 has actions 0 and 1, state 1 action 2
