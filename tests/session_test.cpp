@@ -7,11 +7,13 @@
 #include <algorithm>
 #include <cmath>
 #include <filesystem>
+#include <map>
 
 #include "app/learn_commands.hpp"
 #include "mgrl/core/random.hpp"
 #include "mgrl/runtime/world.hpp"
 #include "mgrl/session/session.hpp"
+#include "mgrl/session/simulate.hpp"
 #include "mgrl/session/trials.hpp"
 #include "test_support.hpp"
 
@@ -77,6 +79,42 @@ TEST_CASE("a session opens the scenario's graph, behaviours, task and policy bun
   CHECK(std::isnan(session->task.targetHeight(std::nan(""))));
   CHECK(session->task.targetHeight(1.2) == 1.2);
   CHECK_FALSE(session->body.points.empty());
+}
+
+TEST_CASE(
+    "a session plays a self-play round's tables only when every behaviour has one, and simulate asks for the "
+    "bundle's",
+    "[session][data]") {
+  const fs::path trained = trainedBoxing();
+  const auto bare = openSession(boxingOptions(trained), {.motion = false});
+  CHECK_THROWS_WITH(bare->playRound(1), "self-play round 1: expected a policy bundle, found none");
+
+  const auto session =
+      openSession(boxingOptions(trained), {.policy = PolicyNeed::Required, .policyDir = trained / "policy"});
+  std::map<std::string, PolicyBehavior>& kept = session->bundle.behaviors;
+  const QTable approach = kept.at("approach").table, hit = kept.at("hit").table;
+  // Round 1 of approach only: refused at hit, and nothing taken.
+  kept["approach-round1"] = kept.at("approach");
+  kept["approach-round1"].table.at(0, 0) += 1;
+  CHECK_THROWS_WITH(session->playRound(1), Contains("expected self-play round 1's table for behaviour 'hit' "
+                                                    "(hit-round1), found only approach, approach-round1, hit"));
+  CHECK(kept.at("approach").table == approach);
+  CHECK(kept.count("approach-round1") == 1);
+  // Both rounds there: the policy plays them, and they leave the bundle.
+  kept["hit-round1"] = kept.at("hit");
+  session->playRound(1);
+  CHECK(kept.at("approach").table.at(0, 0) == approach.at(0, 0) + 1);
+  CHECK(kept.at("hit").table == hit);
+  CHECK(session->policy[0].table == &kept.at("approach").table);
+  CHECK(kept.count("approach-round1") == 0);
+  CHECK(kept.count("hit-round1") == 0);
+
+  // simulate's round is the bundle's: with tables of the caller's own it is refused.
+  SimulateSettings settings;
+  settings.round = 1;
+  Outputs outputs;
+  CHECK_THROWS_WITH(simulate(*session, settings, outputs, &session->policy),
+                    "--round: expected the bundle's tables, found tables given by the caller");
 }
 
 TEST_CASE("a session without the capture's poses starts from the cached model alone", "[session][data]") {

@@ -1,5 +1,8 @@
 #include "mgrl/session/session.hpp"
 
+#include <map>
+#include <vector>
+
 #include <fmt/format.h>
 
 #include "mgrl/core/error.hpp"
@@ -89,19 +92,25 @@ void Session::checkPartnerChoice(const std::filesystem::path& dir, int round, st
 namespace {
 
 // Self-play rounds are kept as NAME-roundK (mgrl train, issue 43): each behaviour's table
-// is replaced by its round's.
+// is replaced by its round's, which leaves the bundle. Every round's table is found before
+// any is taken, so a missing one leaves the bundle as it was.
 void takeRound(PolicyBundle& bundle, const std::filesystem::path& dir, const std::vector<Behavior>& behaviors,
                int round) {
+  std::vector<std::map<std::string, PolicyBehavior>::iterator> rounds;
   for (const Behavior& b : behaviors) {
     const std::string name = fmt::format("{}-round{}", b.name, round);
-    auto found = bundle.behaviors.find(name);
+    const auto found = bundle.behaviors.find(name);
     if (found == bundle.behaviors.end()) {
       std::string have;
       for (const auto& entry : bundle.behaviors) have += (have.empty() ? "" : ", ") + entry.first;
       throw Error(fmt::format("{}: expected self-play round {}'s table for behaviour '{}' ({}), found only {}",
                               dir.string(), round, b.name, name, have));
     }
-    bundle.behaviors[b.name] = std::move(found->second);
+    rounds.push_back(found);
+  }
+  for (std::size_t i = 0; i < behaviors.size(); ++i) {
+    bundle.behaviors[behaviors[i].name] = std::move(rounds[i]->second);
+    bundle.behaviors.erase(rounds[i]);
   }
 }
 

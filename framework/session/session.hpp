@@ -107,8 +107,9 @@ class Session {
   /// `round` > 0: the tables of that self-play round (NAME-roundK) instead of the final ones.
   void loadPartnerPolicy(const std::filesystem::path& dir, int round = 0);
   /// The main bundle's avatars play self-play round `round`'s tables (NAME-roundK, kept by
-  /// mgrl train) instead of the final ones, so any two rounds can spar. Throws mgrl::Error
-  /// naming the bundle and the rounds it has when there is no such round.
+  /// mgrl train) instead of the final ones, so any two rounds can spar; the round's entries
+  /// leave the bundle. Throws mgrl::Error without a bundle, or naming the bundle and what it
+  /// has when a behaviour lacks that round (the bundle then stays as it was).
   void playRound(int round);
   /// Refuses a self-play round without a partner bundle, before anything loads: mgrl::Error
   /// naming the two settings as the caller calls them (the command line's by default).
