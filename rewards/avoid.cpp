@@ -73,7 +73,8 @@ class Avoid final : public Term {
 };
 
 // As a success condition: the point at least `clear` from every strike tip the opponent
-// standing at the target can throw, and the bodies at least `clear` apart.
+// standing at the target can throw (a learned opponent: those it throws near the frame),
+// and the bodies at least `clear` apart.
 class AvoidCondition final : public SuccessCondition {
  public:
   explicit AvoidCondition(const Params& p) : guard_(p) {}
@@ -84,6 +85,10 @@ class AvoidCondition final : public SuccessCondition {
     const Guard& g = guard_;
     if (!g.reach || g.point.joint < 0 || static_cast<std::size_t>(g.point.joint) >= f.model.jointNames.size())
       throw std::logic_error("an avoid success condition used before bind()");
+    // A learned opponent (issue 43): the strikes it throws near this frame, as the term reads them.
+    if (f.opponent)
+      return !(trackedClearance(f.model, f.frame, g.point.joint, *f.opponent, g.effectors, kStrikeWindow,
+                                g.reach->cap(), g.bodyRadius) < g.clear);
     return !(opponentClearance(f.model, f.frame, g.point.joint, *g.reach, f.target, g.bodyRadius) < g.clear);
   }
   nlohmann::json toJson() const override {

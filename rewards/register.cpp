@@ -22,6 +22,7 @@ const Vocabulary& vocabulary() {
     registerTravel(terms);
     registerEffort(terms);
     registerAvoid(terms);
+    registerUnhurt(terms);
     return terms;
   }();
   return v;

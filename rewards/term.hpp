@@ -80,6 +80,7 @@ void registerContact(Vocabulary& v);
 void registerTravel(Vocabulary& v);
 void registerEffort(Vocabulary& v);
 void registerAvoid(Vocabulary& v);
+void registerUnhurt(Vocabulary& v);
 
 /// Binds `point` to `m`, or throws TermError at "point" saying which roles and joints `m` has.
 void bindPoint(const StateActionModel& m, BodyPoint& point);

@@ -113,12 +113,7 @@ class Terms final : public Reward {
       const OpponentFrame* opponent = nullptr;
       if (tracked) {
         opponent = &track[t - 1];
-        if (head_ >= 0) {
-          e = opponent->toAvatar(jointAt(m, opponent->frame(m), head_));
-        } else {
-          e = opponent->ground(m);
-          e.y() = state.position.y();
-        }
+        e = opponentTarget(m, *opponent, head_, state.position.y());
       } else {
         e = state.at(static_cast<double>(t) * m.frameTime);  // where a moving target is at frame t
       }

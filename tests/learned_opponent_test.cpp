@@ -23,6 +23,7 @@
 #include "mgrl/motion/motion_database.hpp"
 #include "mgrl/scenario/behaviors.hpp"
 #include "mgrl/scenario/scenario.hpp"
+#include "rewards/term.hpp"
 #include "test_support.hpp"
 
 namespace mgrl::learned_opponent_test {
@@ -255,6 +256,130 @@ TEST_CASE(
                   "action moves the opponent's next arrival point by {:.3f} m (median), {:.3f} m (90th percentile)",
                   decisions, frames, snapGap[snapGap.size() / 2], snapGap[snapGap.size() * 9 / 10]));
   CHECK(decisions == 240);
+}
+
+TEST_CASE("the unhurt term is 0 on the frame a learned opponent's strike lands on the head, 1 off it",
+          "[opponent][data]") {
+  SparFixture& f = fixture();
+  const StateActionModel& m = f.model;
+  const rewards::TermKind* kind = rewards::termRegistry().find("unhurt");
+  REQUIRE(kind != nullptr);
+  auto make = [&](const char* yaml) {
+    std::unique_ptr<rewards::Term> term = kind->make(Params::read(ConfigNode::parse(yaml, "t"), kind->params, {}));
+    term->bind(m);
+    return term;
+  };
+  BodyPoint head = parseBodyPoint("head");
+  rewards::bindPoint(m, head);
+  // The avatar stands still in a frame of its first action; the opponent's punch whose tip
+  // is nearest the head's height, its decision placed so that the tip is straight above or
+  // below the head.
+  const std::size_t a = 0, t = 1, frame = m.actionFrameBegin[a];
+  const Eigen::Vector3d p = jointAt(m, frame, head.joint);
+  REQUIRE_FALSE(m.hits.empty());
+  const ActionHit* h = &m.hits.front();
+  for (const ActionHit& x : m.hits)
+    if (std::abs(x.y - p.y()) < std::abs(h->y - p.y())) h = &x;
+  const double radius = std::abs(h->y - p.y()) + 0.02;
+  REQUIRE(radius < 0.3);
+  OpponentFrame o{GroundMotion{p.x() - h->x, p.z() - h->z, 0}, h->action, h->offset, 1, 0};
+  const TargetState e(Eigen::Vector3d(0, 1.4, 1.2), 0, M_PI);
+  const Eigen::Vector3d target = o.toAvatar(Eigen::Vector3d(h->x, h->y, h->z));
+  auto at = [&](const rewards::Term& term, const OpponentFrame* opponent) {
+    return term.signal(rewards::TermFrame{m, a, t, frame, target, e, 1.2, opponent});
+  };
+  const std::string plain = fmt::format("{{radius: {}, use_speed: false}}", radius);
+  const auto unhurt = make(plain.c_str());
+  CHECK(at(*unhurt, &o) == 0);
+  // Weighted by the punch's speed, as contact weighs the avatar's own.
+  const auto weighted = make(fmt::format("{{radius: {}}}", radius).c_str());
+  CHECK(at(*weighted, &o) <= 1 - h->weight + 1e-6);
+  CHECK(at(*weighted, &o) < 1);
+  // The same punch a metre to the side, or the head the punch does not reach: unhurt.
+  OpponentFrame aside = o;
+  aside.decision.dx += 1;
+  CHECK(at(*unhurt, &aside) == 1);
+  const auto tight = make(fmt::format("{{radius: {}, use_speed: false}}", std::abs(h->y - p.y()) * 0.5 + 1e-4).c_str());
+  if (std::abs(h->y - p.y()) > 1e-3) CHECK(at(*tight, &o) == 1);
+  // A frame of the action at which it throws nothing is not a hit.
+  for (std::uint32_t k = 1; k <= m.actionLength(h->action); ++k) {
+    const auto strikes = m.hitsOf(h->action);
+    if (std::none_of(strikes.begin(), strikes.end(), [&](const ActionHit& x) { return x.offset == k; })) {
+      OpponentFrame idle = o;
+      idle.offset = k;
+      CHECK(at(*unhurt, &idle) == 1);
+      break;
+    }
+  }
+  // The scripted opponent (environment `opponent`) throws every punch at every moment: on
+  // top of the avatar it lands, 5 m away it does not.
+  CHECK(unhurt->signal(rewards::TermFrame{m, a, t, frame, target, TargetState(Eigen::Vector3d(0, 1.4, 0), 0, M_PI), 0,
+                                          nullptr}) == 0);
+  CHECK(unhurt->signal(rewards::TermFrame{m, a, t, frame, target, TargetState(Eigen::Vector3d(0, 1.4, 5), 0, M_PI), 5,
+                                          nullptr}) == 1);
+}
+
+TEST_CASE(
+    "eval's success conditions see a learned opponent as the reward terms do: its head where it is at each frame, "
+    "the strikes it throws",
+    "[opponent][data]") {
+  SparFixture& f = fixture();
+  const StateActionModel& m = f.model;
+  const EnvironmentModel& environment = *f.behaviors.front().environment;
+  const ConditionRegistry& kinds = app::plugins().conditions;
+  auto criterion = [&](const char* yaml) {
+    SuccessCriterion c = SuccessCriterion::read(ConfigNode::parse(yaml, "c"), nlohmann::json::array(), kinds);
+    c.bind(m);
+    return c;
+  };
+  const SuccessCriterion contact = criterion("{term: contact, radius: 0.2}");
+  const SuccessCriterion avoid = criterion("{term: avoid, clear: 0.1}");
+  auto term = [&](const char* name, const char* yaml) {
+    const rewards::TermKind* kind = rewards::termRegistry().find(name);
+    std::unique_ptr<rewards::Term> t = kind->make(Params::read(ConfigNode::parse(yaml, "t"), kind->params, {}));
+    t->bind(m);
+    return t;
+  };
+  const auto contactTerm = term("contact", "{radius: 0.2, use_speed: false}");
+  const auto avoidTerm = term("avoid", "{clear: 0.1}");
+  BodyPoint head = parseBodyPoint("head");
+  rewards::bindPoint(m, head);
+  Rng rng(11);
+  std::size_t landed = 0, unlike = 0, cornered = 0;
+  std::vector<OpponentFrame> track;
+  for (int trial = 0; trial < 3000; ++trial) {
+    // The opponent within reach, in front: where strikes land both ways.
+    const double r = 0.5 + 0.5 * rng.uniform(), angle = 0.6 * (rng.uniform() - 0.5);
+    const TargetState e = environment.draw(Eigen::Vector3d(r * std::sin(angle), 1.4, r * std::cos(angle)), rng);
+    const std::uint32_t s = rng.below(m.stateCount());
+    const std::size_t a = m.stateActionBegin[s] + rng.below(m.stateActionBegin[s + 1] - m.stateActionBegin[s]);
+    REQUIRE(environment.track(m, a, e, track));
+    // The first frame each term says so, read as the reward reads the track.
+    std::uint32_t firstHit = 0, firstClear = 0;
+    for (std::uint32_t t = 1; t <= m.actionLength(a); ++t) {
+      const OpponentFrame& o = track[t - 1];
+      const Eigen::Vector3d target = opponentTarget(m, o, head.joint, e.position.y());
+      const rewards::TermFrame frame{m, a, t, m.actionFrameBegin[a] + t - 1, target, e, r, &o};
+      if (firstHit == 0 && contactTerm->signal(frame) > 0) firstHit = t;
+      if (firstClear == 0 && avoidTerm->signal(frame) == 1) firstClear = t;
+    }
+    SuccessCriterion::Tracker hits(contact, m.frameTime), clears(avoid, m.frameTime);
+    const std::uint32_t hitAt = hits.play(m, a, e, &environment);
+    CHECK(hitAt == firstHit);
+    CHECK(clears.play(m, a, e, &environment) == firstClear);
+    landed += hitAt > 0;
+    cornered += firstClear != 1;
+    // Without the environment the head stands where it was at the decision.
+    SuccessCriterion::Tracker still(contact, m.frameTime);
+    unlike += still.play(m, a, e) != hitAt;
+  }
+  WARN(
+      fmt::format("of 3000 actions within reach of a learned opponent, {} land a punch on its head, {} start "
+                  "inside its strikes; a head left standing at the decision differs in {}",
+                  landed, cornered, unlike));
+  CHECK(landed > 0);
+  CHECK(cornered > 0);
+  CHECK(unlike > 0);
 }
 
 namespace {

@@ -1119,9 +1119,10 @@ TEST_CASE("reward terms refuse bad YAML with the line, column and key", "[learni
   CHECK_THROWS_WITH(build("{type: terms}"), Catch::StartsWith("test.yaml:1:1: ") && Catch::Contains("expected a 'terms' list"));
   CHECK_THROWS_WITH(build("{type: terms, terms: []}"),
                     Catch::StartsWith("test.yaml:1:22: terms: ") && Catch::Contains("expected at least one term"));
-  CHECK_THROWS_WITH(build("{type: terms, terms: [{term: dist}]}"),
-                    Catch::StartsWith("test.yaml:1:30: terms[0].term: ") &&
-                        Catch::Contains("unknown term 'dist' (known: distance, facing, contact, travel, effort, avoid)"));
+  CHECK_THROWS_WITH(
+      build("{type: terms, terms: [{term: dist}]}"),
+      Catch::StartsWith("test.yaml:1:30: terms[0].term: ") &&
+          Catch::Contains("unknown term 'dist' (known: distance, facing, contact, travel, effort, avoid, unhurt)"));
   CHECK_THROWS_WITH(build("{type: terms, terms: [{term: distance, sigma: 0}]}"),
                     Catch::StartsWith("test.yaml:1:47: terms[0].sigma: "));
   CHECK_THROWS_WITH(build("{type: terms, terms: [{term: distance, point: pelvis, dims: 3}]}"),
@@ -1132,8 +1133,9 @@ TEST_CASE("reward terms refuse bad YAML with the line, column and key", "[learni
                     Catch::Contains("terms[0].d0: unknown key"));
   CHECK_THROWS_WITH(build("{type: terms, combine: mean, terms: [{term: facing}]}"),
                     Catch::Contains("combine: ") && Catch::Contains("max, sum"));
-  CHECK_THROWS_WITH(build("{type: terms, terms: [facing]}"),
-                    Catch::Contains("terms[0]: expected a map with 'term: <distance|facing|contact|travel|effort|avoid>'"));
+  CHECK_THROWS_WITH(
+      build("{type: terms, terms: [facing]}"),
+      Catch::Contains("terms[0]: expected a map with 'term: <distance|facing|contact|travel|effort|avoid|unhurt>'"));
   CHECK_NOTHROW(build("{type: terms, terms: [{term: facing}]}"));
 }
 

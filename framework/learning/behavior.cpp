@@ -86,14 +86,21 @@ void checkOpponent(const BehaviorSpec& spec, const Behavior& b) {
           b.discretizer->type()));
     return;
   }
-  const std::string why = fmt::format(
-      "expected environment: {{type: opponent}} (the avoid term reads the opponent's strikes), found {}",
-      b.environment->type());
   if (b.config["reward"].value("type", "") == "terms" && spec.reward.has("terms")) {
     const std::vector<ConfigNode> terms = spec.reward.child("terms").elements();
-    for (std::size_t i = 0; i < terms.size(); ++i)
-      if (terms[i].has("term") && terms[i].child("term").asString() == "avoid") terms[i].child("term").fail(why);
+    for (std::size_t i = 0; i < terms.size(); ++i) {
+      if (!terms[i].has("term")) continue;
+      const std::string term = terms[i].child("term").asString();
+      if (term == "avoid" || term == "unhurt")
+        terms[i].child("term").fail(fmt::format(
+            "expected environment: {{type: opponent}} or learned_opponent (the {} term reads the opponent's "
+            "strikes), found {}",
+            term, b.environment->type()));
+    }
   }
+  const std::string why =
+      fmt::format("expected environment: {{type: opponent}} (the avoid term reads the opponent's strikes), found {}",
+                  b.environment->type());
   if (b.success && b.success->clearance()) spec.success.fail(why);  // only a declared criterion has one
 }
 

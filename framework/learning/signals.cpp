@@ -216,6 +216,13 @@ Eigen::Vector3d applyMotion(const GroundMotion& g, const Eigen::Vector3d& p) { r
 
 GroundMotion composeMotion(const GroundMotion& a, const GroundMotion& b) { return compose(a, b); }
 
+Eigen::Vector3d opponentTarget(const StateActionModel& m, const OpponentFrame& o, int head, double height) {
+  if (head >= 0) return o.toAvatar(jointAt(m, o.frame(m), head));
+  Eigen::Vector3d e = o.ground(m);
+  e.y() = height;
+  return e;
+}
+
 double trackedClearance(const StateActionModel& m, std::size_t frame, int joint, const OpponentFrame& o,
                         std::uint8_t effectors, std::uint32_t window, double cap, double bodyRadius) {
   double nearest = cap;

@@ -152,6 +152,11 @@ struct OpponentFrame {
   }
 };
 
+/// What a learned opponent offers as the target at one frame (issue 43), in the avatar's
+/// decision frame: its head (joint `head` of `m`), or with head < 0 its root's ground point
+/// at `height`. The reward terms and the success conditions read the same point.
+Eigen::Vector3d opponentTarget(const StateActionModel& m, const OpponentFrame& o, int head, double height);
+
 /// The root motion from action a's decision to its frame k (k = 0: none).
 GroundMotion actionFrameMotion(const StateActionModel& m, std::size_t a, std::uint32_t k);
 /// `b` expressed in the frame `a` leads to, composed: the frame b leads to from a's start.

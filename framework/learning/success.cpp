@@ -3,11 +3,13 @@
 #include <algorithm>
 #include <cmath>
 #include <stdexcept>
+#include <vector>
 
 #include <fmt/format.h>
 #include <fmt/ranges.h>
 
 #include "mgrl/core/error.hpp"
+#include "mgrl/learning/environment_model.hpp"
 
 namespace mgrl {
 
@@ -134,9 +136,9 @@ std::optional<Clearance> SuccessCriterion::clearance() const {
   return std::nullopt;
 }
 
-bool SuccessCriterion::holdsAt(const StateActionModel& m, std::size_t a, std::uint32_t t,
-                               const TargetState& state) const {
-  const ConditionFrame frame{m, a, t, m.actionFrameBegin[a] + t - 1, state};
+bool SuccessCriterion::holdsAt(const StateActionModel& m, std::size_t a, std::uint32_t t, const TargetState& state,
+                               const OpponentFrame* opponent) const {
+  const ConditionFrame frame{m, a, t, m.actionFrameBegin[a] + t - 1, state, opponent};
   return std::all_of(conditions_.begin(), conditions_.end(), [&](const Read& c) { return c.condition->holds(frame); });
 }
 
@@ -158,8 +160,26 @@ SuccessCriterion::Tracker::Tracker(const SuccessCriterion& criterion, double fra
     : criterion_(&criterion),
       needed_(std::max<std::size_t>(1, static_cast<std::size_t>(std::lround(criterion.hold_s_ / frameTime)))) {}
 
-std::uint32_t SuccessCriterion::Tracker::play(const StateActionModel& m, std::size_t a, const TargetState& e) {
+std::uint32_t SuccessCriterion::Tracker::play(const StateActionModel& m, std::size_t a, const TargetState& e,
+                                              const EnvironmentModel* environment) {
   const auto frames = static_cast<std::uint32_t>(m.actionLength(a));
+  // A learned opponent moves and strikes during the action: its head is the target at each
+  // frame, facing where its root does, and its strikes are the ones it throws (issue 43).
+  thread_local std::vector<OpponentFrame> track;
+  if (environment && environment->track(m, a, e, track)) {
+    if (head_ == -2) {
+      BodyPoint head = parseBodyPoint("head");
+      head_ = bindBodyPoint(m, head, nullptr) ? head.joint : -1;
+    }
+    for (std::uint32_t t = 1; t <= frames; ++t) {
+      const OpponentFrame& o = track[t - 1];
+      TargetState now(opponentTarget(m, o, head_, e.position.y()), 0, opponentRootAt(m, o).dyaw);
+      now.opponent = e.opponent;
+      held_ = criterion_->holdsAt(m, a, t, now, &o) ? held_ + 1 : 0;
+      if (held_ >= needed_) return t;
+    }
+    return 0;
+  }
   for (std::uint32_t t = 1; t <= frames; ++t) {
     TargetState now(e.at(t * m.frameTime), e.speed, e.headingAt(t * m.frameTime));
     now.turnRate = e.turnRate;

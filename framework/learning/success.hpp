@@ -33,6 +33,8 @@
 
 namespace mgrl {
 
+class EnvironmentModel;
+
 /// What a condition reads at offset t (1 = the first frame after the decision) of action
 /// `action`.
 struct ConditionFrame {
@@ -41,6 +43,9 @@ struct ConditionFrame {
   std::uint32_t t;
   std::size_t frame;          ///< the global action-frame index of t
   const TargetState& target;  ///< the target at t, in the decision's avatar frame (an opponent's facing: heading)
+  /// A learned opponent (issue 43): what it plays at t (`target` is then its head, as the
+  /// reward terms see it). Null for other environments.
+  const OpponentFrame* opponent = nullptr;
 };
 
 /// What an avoid condition keeps clear, for trials that play the opponent as an avatar
@@ -98,8 +103,10 @@ class SuccessCriterion {
   /// The first condition's clearance that has one (an avoid condition), else none.
   std::optional<Clearance> clearance() const;
   /// Whether every condition holds at offset t (1 = first frame) of action a, the target in
-  /// state e then (in the decision's avatar frame; an opponent's facing is e.heading).
-  bool holdsAt(const StateActionModel& m, std::size_t a, std::uint32_t t, const TargetState& e) const;
+  /// state e then (in the decision's avatar frame; an opponent's facing is e.heading), a
+  /// learned opponent playing `opponent` then.
+  bool holdsAt(const StateActionModel& m, std::size_t a, std::uint32_t t, const TargetState& e,
+               const OpponentFrame* opponent = nullptr) const;
   /// {"all": [{"term": ..., ...}], "hold_s": s, "text": describe()}.
   nlohmann::json toJson() const;
   /// "an effective strike of the fists within 0.15 m", "the pelvis within 0.2 m of 1.4 m
@@ -110,15 +117,18 @@ class SuccessCriterion {
   class Tracker {
    public:
     explicit Tracker(const SuccessCriterion& criterion, double frameTime);
-    /// Plays action a from a decision in state e (a moving target followed frame by frame):
-    /// the offset (1 = the action's first frame) at which the criterion is first met, 0 if
-    /// it is not met in this action.
-    std::uint32_t play(const StateActionModel& m, std::size_t a, const TargetState& e);
+    /// Plays action a from a decision in state e (a moving target followed frame by frame;
+    /// a learned opponent of `environment` as its track() has it, so that a condition sees
+    /// the head and the strikes the reward terms see): the offset (1 = the action's first
+    /// frame) at which the criterion is first met, 0 if it is not met in this action.
+    std::uint32_t play(const StateActionModel& m, std::size_t a, const TargetState& e,
+                       const EnvironmentModel* environment = nullptr);
     const SuccessCriterion* criterion() const { return criterion_; }
 
    private:
     const SuccessCriterion* criterion_;
     std::size_t needed_ = 1, held_ = 0;
+    int head_ = -2;  ///< the model's head joint for a learned opponent's target; -2 not yet looked up
   };
 
  private:

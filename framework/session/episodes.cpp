@@ -57,7 +57,8 @@ EpisodeStep Episodes::step(std::size_t i, std::size_t choice) {
   const std::size_t a = model_.stateActionBegin[slot.state] + choice;
   EpisodeStep out;
   out.reward = static_cast<float>(behavior_.reward->evaluate(model_, a, slot.target));
-  for (SuccessCriterion::Tracker& tracker : slot.trackers) out.success |= tracker.play(model_, a, slot.target) > 0;
+  for (SuccessCriterion::Tracker& tracker : slot.trackers)
+    out.success |= tracker.play(model_, a, slot.target, behavior_.environment.get()) > 0;
   slot.target = behavior_.environment->next(model_, a, slot.target);
   slot.state = model_.actionTo[a];
   slot.frames += model_.actionLength(a);

@@ -127,7 +127,8 @@ TrialStats Trials::run(const ChooseAction& choose, std::size_t count, double sec
       trialReturn += discount * reward;
       std::uint32_t first = 0;  // the earliest offset any criterion is met at
       for (SuccessCriterion::Tracker& tracker : trackers)
-        if (const std::uint32_t t = tracker.play(model, a, e); t > 0 && (first == 0 || t < first)) first = t;
+        if (const std::uint32_t t = tracker.play(model, a, e, &environment); t > 0 && (first == 0 || t < first))
+          first = t;
       if (first > 0) {
         hit = true;
         stats.hitTimes.push_back((elapsed + first) * model.frameTime);

@@ -1,0 +1,100 @@
+// term: unhurt (issue 43): 1 - s, s the opponent's strike landing on a body point at frame
+// t (its speed weight, or 1), 0 when none lands. `contact` seen from the other side: with
+// the same weight and radius as the behaviour's contact, a punch landed and a punch taken
+// cancel, so a best response against a fixed opponent (self-play rounds) is paid for
+// trading well, not for trading at all. A constant 1 on frames without a hit shifts every
+// return by the same 1 / (1 - gamma) and changes no decision.
+#include <algorithm>
+#include <iterator>
+#include <memory>
+#include <span>
+#include <stdexcept>
+
+#include <fmt/format.h>
+
+#include "term.hpp"
+
+namespace mgrl::rewards {
+
+namespace {
+
+class Unhurt final : public Term {
+ public:
+  explicit Unhurt(const Params& p)
+      : point_(parseBodyPoint(p.choice("point"))),
+        effectors_(parseEffector(p.choice("effector"))),
+        radius_(p.number("radius")),
+        useSpeed_(p.boolean("use_speed")),
+        bodyRadius_(p.number("body_radius")) {
+    if (point_.kind != BodyPoint::Kind::Joint)
+      p.fail("point", fmt::format("expected a role (head, left_shoulder, ...) or a joint, found {} (the opponent "
+                                  "strikes a body joint)",
+                                  point_.name));
+  }
+  void bind(const StateActionModel& m) override {
+    bindPoint(m, point_);
+    try {
+      reach_ = std::make_shared<const StrikeReach>(m, effectors_, std::min(1.0, radius_ + 0.05));
+    } catch (const ConfigError&) {
+      throw;
+    } catch (const Error& e) {
+      throw TermError("effector", e.what());
+    }
+  }
+  double signal(const TermFrame& f) const override {
+    if (!reach_) throw std::logic_error("an unhurt term evaluated before bind()");
+    // A learned opponent: the strikes its action throws at exactly this frame (the world
+    // checks a strike at its effective frame only, paper sec. 6.6).
+    if (f.opponent) return 1 - landed(f.model, f.frame, *f.opponent);
+    // The scripted opponent of `opponent` throws every strike of the graph at every moment:
+    // any tip within the radius lands.
+    const double d = opponentClearance(f.model, f.frame, point_.joint, *reach_, f.state, bodyRadius_);
+    return d <= radius_ ? 0.0 : 1.0;
+  }
+  bool readsJoints() const override { return true; }
+
+ private:
+  double landed(const StateActionModel& m, std::size_t frame, const OpponentFrame& o) const {
+    const Eigen::Vector3d p = jointAt(m, frame, point_.joint);
+    double best = 0;
+    auto scan = [&](std::span<const ActionHit> strikes, std::uint8_t leftBit) {
+      for (const ActionHit& h : strikes) {
+        if (h.offset != o.offset || !(effectors_ & (leftBit << h.hand))) continue;
+        if ((o.toAvatar(Eigen::Vector3d(h.x, h.y, h.z)) - p).norm() > radius_) continue;
+        best = std::max(best, useSpeed_ ? static_cast<double>(h.weight) : 1.0);
+      }
+    };
+    if (effectors_ & kFists) scan(m.hitsOf(o.action), kLeftFist);
+    if (effectors_ & kFeet) scan(m.kicksOf(o.action), kLeftFoot);
+    return best;
+  }
+
+  BodyPoint point_;
+  std::uint8_t effectors_;
+  double radius_;
+  bool useSpeed_;
+  double bodyRadius_;
+  std::shared_ptr<const StrikeReach> reach_;
+};
+
+}  // namespace
+
+void registerUnhurt(Vocabulary& v) {
+  v.terms.add(
+      {"unhurt",
+       "1 - s, s the speed weight (or 1) of the opponent's effective strike landing within radius of a body point "
+       "at this frame, 0 if none: contact taken rather than given (a learned opponent's actual strikes; the "
+       "scripted opponent's every strike)",
+       {ParamSpec::choiceOrName("point", "head", {"head"}, "a skeleton role or joint",
+                                "the body point the opponent's strike lands on: a role (head, ...) or a joint's name"),
+        ParamSpec::choice("effector", "fists", {std::begin(kEffectorNames), std::end(kEffectorNames)},
+                          "whose strikes the opponent throws (feet: its effective kicks)"),
+        ParamSpec::number("radius", 0.15, 1e-4, 0.95, "m", "a strike lands when its tip is this close to the point"),
+        ParamSpec::boolean("use_speed", true, "weight a strike by its normalised speed (false: 1)"),
+        ParamSpec::number("body_radius", 0.2, 0, 1, "m",
+                          "the scripted opponent: each body's ground radius (bodies overlapping count as struck)"),
+        weightSpec()},
+       [](const Params& p) { return std::make_unique<Unhurt>(p); }});
+}
+
+}  // namespace mgrl::rewards
