@@ -25,24 +25,13 @@ constexpr std::uint32_t kStrikeWindow = 2;
 // reach (a field capped at `cap`).
 struct Guard {
   explicit Guard(const Params& p)
-      : point(parseBodyPoint(p.choice("point"))),
+      : point(struckPoint(p)),
         effectors(parseEffector(p.choice("effector"))),
         clear(p.number("clear")),
-        bodyRadius(p.number("body_radius")) {
-    if (point.kind != BodyPoint::Kind::Joint)
-      p.fail("point", fmt::format("expected a role (head, left_fist, ...) or a joint, found {} (the opponent strikes "
-                                  "a body joint)",
-                                  point.name));
-  }
+        bodyRadius(p.number("body_radius")) {}
   void bind(const StateActionModel& m, double cap) {
     bindPoint(m, point);
-    try {
-      reach = std::make_shared<const StrikeReach>(m, effectors, cap);
-    } catch (const ConfigError&) {
-      throw;
-    } catch (const Error& e) {
-      throw TermError("effector", e.what());
-    }
+    reach = bindReach(m, effectors, cap);
   }
   BodyPoint point;
   std::uint8_t effectors;

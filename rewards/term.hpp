@@ -6,6 +6,7 @@
 /// facing.cpp, ...) with its register function, called in register.cpp; a term that
 /// success criteria can test registers its condition (a measure against a threshold) there too.
 #include <cstddef>
+#include <memory>
 #include <string>
 
 #include <Eigen/Core>
@@ -84,5 +85,12 @@ void registerUnhurt(Vocabulary& v);
 
 /// Binds `point` to `m`, or throws TermError at "point" saying which roles and joints `m` has.
 void bindPoint(const StateActionModel& m, BodyPoint& point);
+
+/// The body point an opponent's strikes reach (avoid, unhurt): `point` read from `p`, which
+/// must name a joint (Params::fail at "point" otherwise).
+BodyPoint struckPoint(const Params& p);
+/// Where the opponent's strikes of the `effectors` reach in `m` (a field exact up to
+/// `cap`), or TermError at "effector" when `m` has none of them.
+std::shared_ptr<const StrikeReach> bindReach(const StateActionModel& m, std::uint8_t effectors, double cap);
 
 }  // namespace mgrl::rewards

@@ -27,6 +27,25 @@ void bindPoint(const StateActionModel& m, BodyPoint& point) {
   if (!bindBodyPoint(m, point, &why)) throw TermError("point", why);
 }
 
+BodyPoint struckPoint(const Params& p) {
+  BodyPoint point = parseBodyPoint(p.choice("point"));
+  if (point.kind != BodyPoint::Kind::Joint)
+    p.fail("point", fmt::format("expected a role (head, left_fist, ...) or a joint, found {} (the opponent strikes "
+                                "a body joint)",
+                                point.name));
+  return point;
+}
+
+std::shared_ptr<const StrikeReach> bindReach(const StateActionModel& m, std::uint8_t effectors, double cap) {
+  try {
+    return std::make_shared<const StrikeReach>(m, effectors, cap);
+  } catch (const ConfigError&) {
+    throw;
+  } catch (const Error& e) {
+    throw TermError("effector", e.what());
+  }
+}
+
 const std::vector<TermKind>& termKinds() { return termRegistry().entries(); }
 
 namespace {

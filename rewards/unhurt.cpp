@@ -10,8 +10,6 @@
 #include <span>
 #include <stdexcept>
 
-#include <fmt/format.h>
-
 #include "term.hpp"
 
 namespace mgrl::rewards {
@@ -21,25 +19,14 @@ namespace {
 class Unhurt final : public Term {
  public:
   explicit Unhurt(const Params& p)
-      : point_(parseBodyPoint(p.choice("point"))),
+      : point_(struckPoint(p)),
         effectors_(parseEffector(p.choice("effector"))),
         radius_(p.number("radius")),
         useSpeed_(p.boolean("use_speed")),
-        bodyRadius_(p.number("body_radius")) {
-    if (point_.kind != BodyPoint::Kind::Joint)
-      p.fail("point", fmt::format("expected a role (head, left_shoulder, ...) or a joint, found {} (the opponent "
-                                  "strikes a body joint)",
-                                  point_.name));
-  }
+        bodyRadius_(p.number("body_radius")) {}
   void bind(const StateActionModel& m) override {
     bindPoint(m, point_);
-    try {
-      reach_ = std::make_shared<const StrikeReach>(m, effectors_, std::min(1.0, radius_ + 0.05));
-    } catch (const ConfigError&) {
-      throw;
-    } catch (const Error& e) {
-      throw TermError("effector", e.what());
-    }
+    reach_ = bindReach(m, effectors_, std::min(1.0, radius_ + 0.05));
   }
   double signal(const TermFrame& f) const override {
     if (!reach_) throw std::logic_error("an unhurt term evaluated before bind()");
