@@ -22,7 +22,7 @@ const Vocabulary& vocabulary() {
     registerTravel(terms);
     registerEffort(terms);
     registerAvoid(terms);
-    registerUnhurt(terms);
+    registerStruck(terms);
     return terms;
   }();
   return v;

@@ -43,6 +43,8 @@ class Term {
   virtual void bind(const StateActionModel&) {}
   /// s_k(t), in [0, 1].
   virtual double signal(const TermFrame& f) const = 0;
+  /// True for a cost: the reward subtracts w_k s_k(t) instead of adding it (struck).
+  virtual bool cost() const { return false; }
   /// True if signal() reads per-joint arrays of the bound model (the reward then refuses
   /// a model with another joint count).
   virtual bool readsJoints() const { return false; }
@@ -81,12 +83,12 @@ void registerContact(Vocabulary& v);
 void registerTravel(Vocabulary& v);
 void registerEffort(Vocabulary& v);
 void registerAvoid(Vocabulary& v);
-void registerUnhurt(Vocabulary& v);
+void registerStruck(Vocabulary& v);
 
 /// Binds `point` to `m`, or throws TermError at "point" saying which roles and joints `m` has.
 void bindPoint(const StateActionModel& m, BodyPoint& point);
 
-/// The body point an opponent's strikes reach (avoid, unhurt): `point` read from `p`, which
+/// The body point an opponent's strikes reach (avoid, struck): `point` read from `p`, which
 /// must name a joint (Params::fail at "point" otherwise).
 BodyPoint struckPoint(const Params& p);
 /// Where the opponent's strikes of the `effectors` reach in `m` (a field exact up to

@@ -91,7 +91,7 @@ class Terms final : public Reward {
     for (ReadTerm& t : terms) {
       if (t.term->readsJoints()) joints_ = -1;
       params_.push_back(std::move(t.params));
-      terms_.push_back({t.weight, std::move(t.term)});
+      terms_.push_back({t.term->cost() ? -t.weight : t.weight, std::move(t.term)});
     }
   }
   std::string type() const override { return "terms"; }

@@ -288,12 +288,12 @@ TEST_CASE("behaviour mistakes name the file, line, column and key", "[behaviors]
                             "behaviors.dodge.reward.terms[0].term: expected environment: {type: opponent} or "
                             "learned_opponent (the avoid term reads the opponent's strikes), found static_target"));
     // The strikes it takes (issue 43) read them too.
-    std::string unhurt = still;
-    unhurt.replace(unhurt.find("{term: avoid}"), 13, "{term: unhurt}");
-    REQUIRE_CONFIG_ERROR(build(unhurt),
+    std::string struck = still;
+    struck.replace(struck.find("{term: avoid}"), 13, "{term: struck}");
+    REQUIRE_CONFIG_ERROR(build(struck),
                          at(8, 42,
                             "behaviors.dodge.reward.terms[0].term: expected environment: {type: opponent} or "
-                            "learned_opponent (the unhurt term reads the opponent's strikes), found static_target"));
+                            "learned_opponent (the struck term reads the opponent's strikes), found static_target"));
     std::string successOnly = still;
     successOnly.replace(successOnly.find("{term: avoid}, "), 15, "");
     REQUIRE_CONFIG_ERROR(build(successOnly),

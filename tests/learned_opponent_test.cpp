@@ -258,11 +258,11 @@ TEST_CASE(
   CHECK(decisions == 240);
 }
 
-TEST_CASE("the unhurt term is 0 on the frame a learned opponent's strike lands on the head, 1 off it",
+TEST_CASE("the struck term costs the frame a learned opponent's strike lands on the head, and no other",
           "[opponent][data]") {
   SparFixture& f = fixture();
   const StateActionModel& m = f.model;
-  const rewards::TermKind* kind = rewards::termRegistry().find("unhurt");
+  const rewards::TermKind* kind = rewards::termRegistry().find("struck");
   REQUIRE(kind != nullptr);
   auto make = [&](const char* yaml) {
     std::unique_ptr<rewards::Term> term = kind->make(Params::read(ConfigNode::parse(yaml, "t"), kind->params, {}));
@@ -289,34 +289,51 @@ TEST_CASE("the unhurt term is 0 on the frame a learned opponent's strike lands o
     return term.signal(rewards::TermFrame{m, a, t, frame, target, e, 1.2, opponent});
   };
   const std::string plain = fmt::format("{{radius: {}, use_speed: false}}", radius);
-  const auto unhurt = make(plain.c_str());
-  CHECK(at(*unhurt, &o) == 0);
+  const auto struck = make(plain.c_str());
+  CHECK(struck->cost());
+  CHECK(at(*struck, &o) == 1);
   // Weighted by the punch's speed, as contact weighs the avatar's own.
   const auto weighted = make(fmt::format("{{radius: {}}}", radius).c_str());
-  CHECK(at(*weighted, &o) <= 1 - h->weight + 1e-6);
-  CHECK(at(*weighted, &o) < 1);
-  // The same punch a metre to the side, or the head the punch does not reach: unhurt.
+  CHECK(at(*weighted, &o) >= h->weight - 1e-6);
+  CHECK(at(*weighted, &o) <= 1);
+  // The same punch a metre to the side, or the head the punch does not reach: no cost.
   OpponentFrame aside = o;
   aside.decision.dx += 1;
-  CHECK(at(*unhurt, &aside) == 1);
+  CHECK(at(*struck, &aside) == 0);
   const auto tight = make(fmt::format("{{radius: {}, use_speed: false}}", std::abs(h->y - p.y()) * 0.5 + 1e-4).c_str());
-  if (std::abs(h->y - p.y()) > 1e-3) CHECK(at(*tight, &o) == 1);
+  if (std::abs(h->y - p.y()) > 1e-3) CHECK(at(*tight, &o) == 0);
   // A frame of the action at which it throws nothing is not a hit.
   for (std::uint32_t k = 1; k <= m.actionLength(h->action); ++k) {
     const auto strikes = m.hitsOf(h->action);
     if (std::none_of(strikes.begin(), strikes.end(), [&](const ActionHit& x) { return x.offset == k; })) {
       OpponentFrame idle = o;
       idle.offset = k;
-      CHECK(at(*unhurt, &idle) == 1);
+      CHECK(at(*struck, &idle) == 0);
       break;
     }
   }
+  // In a reward the term costs: a bout of actions within reach of a learned opponent loses
+  // what the punches it takes weigh, and never gains.
+  const std::unique_ptr<Reward> reward = app::plugins().rewards.create(ConfigNode::parse(
+      "{type: terms, combine: sum, terms: [{term: struck, radius: 0.2, use_speed: false, weight: 2}]}", "r"));
+  reward->bind(m);
+  reward->bindEnvironment(f.behaviors.front().environment.get());
+  Rng rng(5);
+  std::size_t costly = 0;
+  for (int trial = 0; trial < 400; ++trial) {
+    const TargetState near =
+        f.behaviors.front().environment->draw(Eigen::Vector3d(0, 1.4, 0.6 + 0.3 * rng.uniform()), rng);
+    const double r = reward->evaluate(m, rng.below(m.actionCount()), near);
+    REQUIRE(r <= 0);
+    costly += r < 0;
+  }
+  CHECK(costly > 0);
   // The scripted opponent (environment `opponent`) throws every punch at every moment: on
   // top of the avatar it lands, 5 m away it does not.
-  CHECK(unhurt->signal(rewards::TermFrame{m, a, t, frame, target, TargetState(Eigen::Vector3d(0, 1.4, 0), 0, M_PI), 0,
-                                          nullptr}) == 0);
-  CHECK(unhurt->signal(rewards::TermFrame{m, a, t, frame, target, TargetState(Eigen::Vector3d(0, 1.4, 5), 0, M_PI), 5,
+  CHECK(struck->signal(rewards::TermFrame{m, a, t, frame, target, TargetState(Eigen::Vector3d(0, 1.4, 0), 0, M_PI), 0,
                                           nullptr}) == 1);
+  CHECK(struck->signal(rewards::TermFrame{m, a, t, frame, target, TargetState(Eigen::Vector3d(0, 1.4, 5), 0, M_PI), 5,
+                                          nullptr}) == 0);
 }
 
 TEST_CASE(

@@ -1122,7 +1122,7 @@ TEST_CASE("reward terms refuse bad YAML with the line, column and key", "[learni
   CHECK_THROWS_WITH(
       build("{type: terms, terms: [{term: dist}]}"),
       Catch::StartsWith("test.yaml:1:30: terms[0].term: ") &&
-          Catch::Contains("unknown term 'dist' (known: distance, facing, contact, travel, effort, avoid, unhurt)"));
+          Catch::Contains("unknown term 'dist' (known: distance, facing, contact, travel, effort, avoid, struck)"));
   CHECK_THROWS_WITH(build("{type: terms, terms: [{term: distance, sigma: 0}]}"),
                     Catch::StartsWith("test.yaml:1:47: terms[0].sigma: "));
   CHECK_THROWS_WITH(build("{type: terms, terms: [{term: distance, point: pelvis, dims: 3}]}"),
@@ -1135,7 +1135,7 @@ TEST_CASE("reward terms refuse bad YAML with the line, column and key", "[learni
                     Catch::Contains("combine: ") && Catch::Contains("max, sum"));
   CHECK_THROWS_WITH(
       build("{type: terms, terms: [facing]}"),
-      Catch::Contains("terms[0]: expected a map with 'term: <distance|facing|contact|travel|effort|avoid|unhurt>'"));
+      Catch::Contains("terms[0]: expected a map with 'term: <distance|facing|contact|travel|effort|avoid|struck>'"));
   CHECK_NOTHROW(build("{type: terms, terms: [{term: facing}]}"));
 }
 

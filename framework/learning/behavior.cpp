@@ -91,7 +91,7 @@ void checkOpponent(const BehaviorSpec& spec, const Behavior& b) {
     for (std::size_t i = 0; i < terms.size(); ++i) {
       if (!terms[i].has("term")) continue;
       const std::string term = terms[i].child("term").asString();
-      if (term == "avoid" || term == "unhurt")
+      if (term == "avoid" || term == "struck")
         terms[i].child("term").fail(fmt::format(
             "expected environment: {{type: opponent}} or learned_opponent (the {} term reads the opponent's "
             "strikes), found {}",

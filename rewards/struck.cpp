@@ -1,9 +1,10 @@
-// term: unhurt (issue 43): 1 - s, s the opponent's strike landing on a body point at frame
-// t (its speed weight, or 1), 0 when none lands. `contact` seen from the other side: with
-// the same weight and radius as the behaviour's contact, a punch landed and a punch taken
-// cancel, so a best response against a fixed opponent (self-play rounds) is paid for
-// trading well, not for trading at all. A constant 1 on frames without a hit shifts every
-// return by the same 1 / (1 - gamma) and changes no decision.
+// term: struck (issue 43), a cost: s, the opponent's strike landing on a body point at frame
+// t (its speed weight, or 1), 0 when none lands; the reward subtracts w s. `contact` seen
+// from the other side: with the same weight and radius as the behaviour's contact, a punch
+// landed and a punch taken cancel, so a best response against a fixed opponent (self-play
+// rounds) is paid for trading well, not for trading at all. (A reward of 1 - s would do the
+// same for value iteration, but it would lift every value by w / (1 - gamma) and make the
+// world's variety margin, a share of the best value, keep every candidate.)
 #include <algorithm>
 #include <iterator>
 #include <memory>
@@ -16,9 +17,9 @@ namespace mgrl::rewards {
 
 namespace {
 
-class Unhurt final : public Term {
+class Struck final : public Term {
  public:
-  explicit Unhurt(const Params& p)
+  explicit Struck(const Params& p)
       : point_(struckPoint(p)),
         effectors_(parseEffector(p.choice("effector"))),
         radius_(p.number("radius")),
@@ -29,16 +30,17 @@ class Unhurt final : public Term {
     reach_ = bindReach(m, effectors_, std::min(1.0, radius_ + 0.05));
   }
   double signal(const TermFrame& f) const override {
-    if (!reach_) throw std::logic_error("an unhurt term evaluated before bind()");
+    if (!reach_) throw std::logic_error("a struck term evaluated before bind()");
     // A learned opponent: the strikes its action throws at exactly this frame (the world
     // checks a strike at its effective frame only, paper sec. 6.6).
-    if (f.opponent) return 1 - landed(f.model, f.frame, *f.opponent);
+    if (f.opponent) return landed(f.model, f.frame, *f.opponent);
     // The scripted opponent of `opponent` throws every strike of the graph at every moment:
     // any tip within the radius lands.
     const double d = opponentClearance(f.model, f.frame, point_.joint, *reach_, f.state, bodyRadius_);
-    return d <= radius_ ? 0.0 : 1.0;
+    return d <= radius_ ? 1.0 : 0.0;
   }
   bool readsJoints() const override { return true; }
+  bool cost() const override { return true; }
 
  private:
   double landed(const StateActionModel& m, std::size_t frame, const OpponentFrame& o) const {
@@ -66,12 +68,12 @@ class Unhurt final : public Term {
 
 }  // namespace
 
-void registerUnhurt(Vocabulary& v) {
+void registerStruck(Vocabulary& v) {
   v.terms.add(
-      {"unhurt",
-       "1 - s, s the speed weight (or 1) of the opponent's effective strike landing within radius of a body point "
-       "at this frame, 0 if none: contact taken rather than given (a learned opponent's actual strikes; the "
-       "scripted opponent's every strike)",
+      {"struck",
+       "a cost (the reward subtracts w s): s the speed weight (or 1) of the opponent's effective strike landing "
+       "within radius of a body point at this frame, 0 if none; contact taken rather than given (a learned "
+       "opponent's actual strikes; the scripted opponent's every strike)",
        {ParamSpec::choiceOrName("point", "head", {"head"}, "a skeleton role or joint",
                                 "the body point the opponent's strike lands on: a role (head, ...) or a joint's name"),
         ParamSpec::choice("effector", "fists", {std::begin(kEffectorNames), std::end(kEffectorNames)},
@@ -81,7 +83,7 @@ void registerUnhurt(Vocabulary& v) {
         ParamSpec::number("body_radius", 0.2, 0, 1, "m",
                           "the scripted opponent: each body's ground radius (bodies overlapping count as struck)"),
         weightSpec()},
-       [](const Params& p) { return std::make_unique<Unhurt>(p); }});
+       [](const Params& p) { return std::make_unique<Struck>(p); }});
 }
 
 }  // namespace mgrl::rewards
