@@ -4,12 +4,14 @@
 #include <cstdint>
 #include <memory>
 #include <span>
+#include <vector>
 
 #include <fmt/format.h>
 
 #include "mgrl/core/error.hpp"
 #include "mgrl/core/random.hpp"
 #include "mgrl/learning/problem.hpp"
+#include "mgrl/learning/signals.hpp"
 
 namespace mgrl::app {
 
@@ -17,19 +19,33 @@ namespace {
 
 // The same episodes for every table compared.
 constexpr std::uint64_t kSelfPlaySeed = 43;
+constexpr int kEpisodes = 200;
+constexpr double kSeconds = 10;
+// A punch lands, in the exchange counts, with its fist tip this close to the head: the
+// world's fist and head radii (0.05 + 0.11 m).
+constexpr double kLandRadius = 0.16;
 
-// The mean discounted return of the greedy policy of `table` over 200 episodes of 10 s
-// against the behaviour's environment as it stands: starts drawn from `seed` (graph state
-// uniform, the opponent at a grid position drawn uniformly in grid coordinates, its own
-// state drawn by the environment). Not eval's Trials: those end a trial at its first
-// success, and a round's return is measured over the whole episode.
-double meanReturn(const Behavior& b, const StateActionModel& m, const QTable& table, std::uint64_t seed) {
-  constexpr int kEpisodes = 200;
-  constexpr double kSeconds = 10;
+// How one table's greedy policy does over the episodes.
+struct Play {
+  double meanReturn = 0;
+  double landedPerMinute = 0, takenPerMinute = 0;  ///< punches on the heads, both ways
+};
+
+// The greedy policy of `table` over 200 episodes of 10 s against the behaviour's
+// environment as it stands: starts drawn from `seed` (graph state uniform, the opponent at a
+// grid position drawn uniformly in grid coordinates, its own state drawn by the
+// environment); its mean discounted return and, against a learned opponent, the fist
+// punches landing on either head, frame by frame as the model plays them. Not eval's
+// Trials: those end a trial at its first success, and a round is measured over the whole
+// episode.
+Play play(const Behavior& b, const StateActionModel& m, const QTable& table, std::uint64_t seed) {
   Rng rng(seed);
   const double gamma = b.reward->gamma();
   const double limit = kSeconds / m.frameTime;
-  double total = 0;
+  BodyPoint head = parseBodyPoint("head");
+  const bool exchanges = bindBodyPoint(m, head, nullptr);
+  std::vector<OpponentFrame> track;
+  double total = 0, landed = 0, taken = 0;
   for (int episode = 0; episode < kEpisodes; ++episode) {
     auto s = static_cast<std::uint32_t>(rng.below(m.stateCount()));
     TargetState e = b.environment->draw(b.discretizer->sample(rng).position, rng);
@@ -37,6 +53,14 @@ double meanReturn(const Behavior& b, const StateActionModel& m, const QTable& ta
     while (elapsed < limit) {
       const std::size_t a = greedyAction(m, *b.discretizer, table, s, e);
       sum += discount * b.reward->evaluate(m, a, e);
+      if (exchanges && b.environment->track(m, a, e, track)) {
+        for (std::uint32_t t = 1; t <= track.size(); ++t) {
+          const OpponentFrame& o = track[t - 1];
+          const Eigen::Vector3d target = opponentTarget(m, o, head.joint, e.position.y());
+          landed += strikeAt(m, a, t, kFists, kLandRadius, false, target) > 0;
+          taken += trackedStrikeAt(m, m.actionFrameBegin[a] + t - 1, head.joint, o, kFists, kLandRadius, false) > 0;
+        }
+      }
       const auto frames = static_cast<double>(m.actionLength(a));
       discount *= std::pow(gamma, frames);
       elapsed += frames;
@@ -45,7 +69,14 @@ double meanReturn(const Behavior& b, const StateActionModel& m, const QTable& ta
     }
     total += sum;
   }
-  return total / kEpisodes;
+  const double minutes = kEpisodes * kSeconds / 60;
+  return {total / kEpisodes, landed / minutes, taken / minutes};
+}
+
+// ", landing 1.2 and taking 0.8 punches a minute" (nothing without a learned opponent).
+std::string exchangeText(const Play& p) {
+  if (p.landedPerMinute == 0 && p.takenPerMinute == 0) return "";
+  return fmt::format(" (landing {:.2f} and taking {:.2f} punches a minute)", p.landedPerMinute, p.takenPerMinute);
 }
 
 }  // namespace
@@ -59,20 +90,27 @@ std::string gapNote(double gap) {
 nlohmann::json selfPlayRound(const Behavior& behavior, const StateActionModel& model, int round, const QTable& table,
                              const QTable* previous, const std::function<void(const std::string&)>& log) {
   nlohmann::json entry = {{"round", round}, {"opponent", behavior.environment->policyKey()}};
-  const double mine = meanReturn(behavior, model, table, kSelfPlaySeed);
+  const Play me = play(behavior, model, table, kSelfPlaySeed);
+  const double mine = me.meanReturn;
   entry["return"] = mine;
+  entry["landed_per_min"] = me.landedPerMinute;
+  entry["taken_per_min"] = me.takenPerMinute;
   if (!previous) {
-    log(fmt::format("train {}: round {}: return {:.3f} against its {} opponent", behavior.name, round, mine,
-                    behavior.environment->policyKey()));
+    log(fmt::format("train {}: round {}: return {:.3f}{} against its {} opponent", behavior.name, round, mine,
+                    exchangeText(me), behavior.environment->policyKey()));
     return entry;
   }
-  const double old = meanReturn(behavior, model, *previous, kSelfPlaySeed);
+  const Play them = play(behavior, model, *previous, kSelfPlaySeed);
+  const double old = them.meanReturn;
   entry["previous_return"] = old;
+  entry["previous_landed_per_min"] = them.landedPerMinute;
+  entry["previous_taken_per_min"] = them.takenPerMinute;
   entry["gap"] = mine - old;
   log(
-      fmt::format("train {}: round {}: return {:.3f} against {}'s table, which itself gets {:.3f}: "
+      fmt::format("train {}: round {}: return {:.3f}{} against {}'s table, which itself gets {:.3f}{}: "
                   "best-response gap {:.3f}{}",
-                  behavior.name, round, mine, behavior.environment->policyKey(), old, mine - old, gapNote(mine - old)));
+                  behavior.name, round, mine, exchangeText(me), behavior.environment->policyKey(), old,
+                  exchangeText(them), mine - old, gapNote(mine - old)));
   return entry;
 }
 

@@ -8,7 +8,6 @@
 #include <algorithm>
 #include <iterator>
 #include <memory>
-#include <span>
 #include <stdexcept>
 
 #include "term.hpp"
@@ -33,7 +32,7 @@ class Struck final : public Term {
     if (!reach_) throw std::logic_error("a struck term evaluated before bind()");
     // A learned opponent: the strikes its action throws at exactly this frame (the world
     // checks a strike at its effective frame only, paper sec. 6.6).
-    if (f.opponent) return landed(f.model, f.frame, *f.opponent);
+    if (f.opponent) return trackedStrikeAt(f.model, f.frame, point_.joint, *f.opponent, effectors_, radius_, useSpeed_);
     // The scripted opponent of `opponent` throws every strike of the graph at every moment:
     // any tip within the radius lands.
     const double d = opponentClearance(f.model, f.frame, point_.joint, *reach_, f.state, bodyRadius_);
@@ -43,21 +42,6 @@ class Struck final : public Term {
   bool cost() const override { return true; }
 
  private:
-  double landed(const StateActionModel& m, std::size_t frame, const OpponentFrame& o) const {
-    const Eigen::Vector3d p = jointAt(m, frame, point_.joint);
-    double best = 0;
-    auto scan = [&](std::span<const ActionHit> strikes, std::uint8_t leftBit) {
-      for (const ActionHit& h : strikes) {
-        if (h.offset != o.offset || !(effectors_ & (leftBit << h.hand))) continue;
-        if ((o.toAvatar(Eigen::Vector3d(h.x, h.y, h.z)) - p).norm() > radius_) continue;
-        best = std::max(best, useSpeed_ ? static_cast<double>(h.weight) : 1.0);
-      }
-    };
-    if (effectors_ & kFists) scan(m.hitsOf(o.action), kLeftFist);
-    if (effectors_ & kFeet) scan(m.kicksOf(o.action), kLeftFoot);
-    return best;
-  }
-
   BodyPoint point_;
   std::uint8_t effectors_;
   double radius_;

@@ -444,7 +444,14 @@ TEST_CASE("mgrl train runs self-play rounds against a learned opponent, keeps ev
     // Round k is a best response to the table its opponent plays: against it, it does at
     // least as well as that table's own greedy policy (up to the grid's interpolation).
     CHECK(rounds[k]["gap"].get<double>() > -0.05 * rounds[k]["return"].get<double>());
+    // The punches each table's policy lands and takes in those episodes, a minute.
+    for (const char* key : {"landed_per_min", "taken_per_min", "previous_landed_per_min", "previous_taken_per_min"})
+      CHECK(rounds[k][key].get<double>() >= 0);
   }
+  bool exchanged = false;
+  for (const nlohmann::json& r : rounds)
+    exchanged |= r["landed_per_min"].get<double>() + r["taken_per_min"].get<double>() > 0;
+  CHECK((trained.err.find("punches a minute") != std::string::npos) == exchanged);
   CHECK(trained.err.find("train spar: self-play round 2 of 3, against round 1's table") != std::string::npos);
   CHECK(trained.err.find("train spar: self-play round 3 of 3, against rounds 1-2 mean's table") != std::string::npos);
   CHECK(trained.err.find("best-response gap") != std::string::npos);

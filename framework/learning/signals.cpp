@@ -223,6 +223,22 @@ Eigen::Vector3d opponentTarget(const StateActionModel& m, const OpponentFrame& o
   return e;
 }
 
+double trackedStrikeAt(const StateActionModel& m, std::size_t frame, int joint, const OpponentFrame& o,
+                       std::uint8_t effectors, double radius, bool useSpeed) {
+  const Eigen::Vector3d p = jointAt(m, frame, joint);
+  double best = 0;
+  auto scan = [&](std::span<const ActionHit> strikes, std::uint8_t leftBit) {
+    for (const ActionHit& h : strikes) {
+      if (h.offset != o.offset || !(effectors & (leftBit << h.hand))) continue;
+      if ((o.toAvatar(Eigen::Vector3d(h.x, h.y, h.z)) - p).norm() > radius) continue;
+      best = std::max(best, useSpeed ? static_cast<double>(h.weight) : 1.0);
+    }
+  };
+  if (effectors & kFists) scan(m.hitsOf(o.action), kLeftFist);
+  if (effectors & kFeet) scan(m.kicksOf(o.action), kLeftFoot);
+  return best;
+}
+
 double trackedClearance(const StateActionModel& m, std::size_t frame, int joint, const OpponentFrame& o,
                         std::uint8_t effectors, std::uint32_t window, double cap, double bodyRadius) {
   double nearest = cap;

@@ -177,6 +177,13 @@ inline std::int32_t opponentStateIndex(std::uint32_t endState, std::uint32_t fra
   return static_cast<std::int32_t>(endState * p + std::min<std::uint32_t>(p - 1, (framesLeft - 1) * p / length));
 }
 
+/// The best effective strike of the `effectors` that a learned opponent at its frame `o`
+/// lands within `radius` of joint `joint` of the avatar at its action frame `frame` (issue
+/// 43; a strike counts at its effective frame only, as the world checks it): its speed
+/// weight (or 1 without use_speed), 0 if none lands. `contact` seen from the other side.
+double trackedStrikeAt(const StateActionModel& m, std::size_t frame, int joint, const OpponentFrame& o,
+                       std::uint8_t effectors, double radius, bool useSpeed);
+
 /// How far joint `joint` of the avatar, at its action frame `frame`, is from the opponent's
 /// actual strikes at its frame `o` (issue 43): the distance to the tip of each effective
 /// strike of the `effectors` that its action throws within `window` frames of o, and the
