@@ -841,6 +841,25 @@ TEST_CASE("an opponent's facing reaches the controller: a partner's own, a targe
   const double partnerFacing = std::remainder(world.lastDecision(1).frame.dyaw - d.frame.dyaw, 2 * M_PI);
   CHECK(d.target.heading == Approx(partnerFacing).margin(1e-12));
   CHECK(std::abs(d.target.heading) > M_PI - 45 * M_PI / 180);
+  // ...and where it stands as the opponent environments' states hold it: its root on the
+  // ground (issue 43), not its head, which stands some centimetres off it (the head, the
+  // strikes' aim, gave the policies a state they were not trained on).
+  const GroundMotion& stands = world.lastDecision(1).frame;
+  const Eigen::Vector3d seen = inverseTransformPoint(d.frame, Eigen::Vector3d(stands.dx, 0, stands.dz));
+  CHECK(d.target.position.x() == Approx(seen.x()).margin(1e-9));
+  CHECK(d.target.position.z() == Approx(seen.z()).margin(1e-9));
+  CHECK(d.target.position.y() > 1);  // the head's height
+  const Eigen::Vector3d head = inverseTransformPoint(d.frame, world.head(1));
+  CHECK(std::hypot(head.x() - seen.x(), head.z() - seen.z()) > 0.01);
+  // Without an opponent environment the partner's head is the target, as the static-target
+  // behaviours were trained to punch it: the same start, off the root by as much.
+  s.opponent = false;
+  World apart(s);
+  apart.run(1);
+  const World::Decision a = apart.lastDecision(0);
+  REQUIRE(a.frame.dx == d.frame.dx);
+  CHECK(a.target.position.y() == d.target.position.y());
+  CHECK(std::hypot(a.target.position.x() - seen.x(), a.target.position.z() - seen.z()) > 0.01);
 }
 
 TEST_CASE("the scripted opponent closes in, faces its target, and throws the punch that reaches it",

@@ -43,7 +43,7 @@ std::string ViewerSession::values() const {
       retrained ? retrained->vertices : a.session->bundle.behaviors.at(behavior.name).vertices;
   const QTable& q = *s.policy[shown].table;
   const World::Decision d = s.world->lastDecision(0);
-  const Eigen::Vector3d e = inverseTransformPoint(d.frame, s.world->aim(0));
+  const Eigen::Vector3d e = inverseTransformPoint(d.frame, s.world->seen(0));
   // Where the target is now, in the decision's frame, moving as the controller saw it.
   TargetState seenNow = d.target;
   seenNow.position = e;

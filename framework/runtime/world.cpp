@@ -79,8 +79,12 @@ World::World(WorldSetup setup)
   avatars_.resize(setup_.avatars);
   targets_.resize(setup_.avatars);
   heads_.resize(setup_.avatars);
+  roots_.resize(setup_.avatars);
   for (std::size_t i = 0; i < avatars_.size(); ++i) startAvatar(i);
-  for (std::size_t i = 0; i < avatars_.size(); ++i) heads_[i] = bodyPoint(i, aimPoint_);
+  for (std::size_t i = 0; i < avatars_.size(); ++i) {
+    heads_[i] = bodyPoint(i, aimPoint_);
+    roots_[i] = avatars_[i].now;
+  }
   tracks_.resize(avatars_.size());
   pending_.assign(avatars_.size(), Eigen::Vector2d::Zero());
   bodyCounts_.assign(avatars_.size(), {0, 0});
@@ -178,9 +182,19 @@ Eigen::Vector3d World::aim(std::size_t i) const {
   return a.partner >= 0 ? heads_[static_cast<std::size_t>(a.partner)] : targets_[i].centre();
 }
 
+Eigen::Vector3d World::seen(std::size_t i) const {
+  const Avatar& a = avatars_[i];
+  if (!setup_.opponent || a.partner < 0) return aim(i);
+  // An opponent environment's state (opponent, learned_opponent) holds where the opponent
+  // stands, its root on the ground, as training saw it (issue 43); its head is only what the
+  // strikes aim at. The head's height stays.
+  const auto j = static_cast<std::size_t>(a.partner);
+  return {roots_[j].dx, heads_[j].y(), roots_[j].dz};
+}
+
 void World::decide(std::size_t i, Controller& controller) {
   Avatar& a = avatars_[i];
-  TargetState e = inverseTransformPoint(a.decision, aim(i));
+  TargetState e = inverseTransformPoint(a.decision, seen(i));
   if (setup_.opponentPhases > 0) {
     // What the partner is doing, from the last frame's snapshot (the same whatever the
     // order avatars are advanced in): the state its action ends at and the frames left.
@@ -336,7 +350,10 @@ void World::run(std::size_t frames) {
       }
       list.clear();
     }
-    for (std::size_t i = 0; i < n; ++i) heads_[i] = bodyPoint(i, aimPoint_);
+    for (std::size_t i = 0; i < n; ++i) {
+      heads_[i] = bodyPoint(i, aimPoint_);
+      roots_[i] = avatars_[i].now;
+    }
   };
   // Where the avatars now are, for the next decisions; bodies that overlap are pushed apart
   // before anything is posed or collides.

@@ -231,6 +231,10 @@ class World {
   Decision lastDecision(std::size_t i) const;
   /// The point avatar i aims at now (its partner's head or its target's centre).
   Eigen::Vector3d aim(std::size_t i) const;
+  /// Where avatar i's controller sees its target now (the position of TargetState): the aim
+  /// point, or in a scene of opponent environments (WorldSetup::opponent) its partner's root
+  /// on the ground at the head's height, as those environments' states hold it.
+  Eigen::Vector3d seen(std::size_t i) const;
   /// Avatar i's partner, or -1 if it has a target of its own.
   int partner(std::size_t i) const;
   const Target& target(std::size_t i) const;
@@ -297,6 +301,9 @@ class World {
   std::vector<Avatar> avatars_;
   std::vector<Target> targets_;
   std::vector<Eigen::Vector3d> heads_;  ///< every avatar's aim point (head or chest) at the end of the last frame
+  /// Every avatar's root on the ground at the end of the last frame: where an opponent
+  /// stands, as the opponent environments' states hold it.
+  std::vector<GroundMotion> roots_;
   std::vector<HitEvent> events_;
   std::size_t blocked_ = 0;  ///< events_ with `blocked`
   std::vector<std::unique_ptr<Controller>> controllers_;
