@@ -42,8 +42,8 @@ Play play(const Behavior& b, const StateActionModel& m, const QTable& table, std
   Rng rng(seed);
   const double gamma = b.reward->gamma();
   const double limit = kSeconds / m.frameTime;
-  BodyPoint head = parseBodyPoint("head");
-  const bool exchanges = bindBodyPoint(m, head, nullptr);
+  const int head = headJoint(m);
+  const bool exchanges = head >= 0;
   std::vector<OpponentFrame> track;
   double total = 0, landed = 0, taken = 0;
   for (int episode = 0; episode < kEpisodes; ++episode) {
@@ -56,9 +56,9 @@ Play play(const Behavior& b, const StateActionModel& m, const QTable& table, std
       if (exchanges && b.environment->track(m, a, e, track)) {
         for (std::uint32_t t = 1; t <= track.size(); ++t) {
           const OpponentFrame& o = track[t - 1];
-          const Eigen::Vector3d target = opponentTarget(m, o, head.joint, e.position.y());
+          const Eigen::Vector3d target = opponentTarget(m, o, head, e.position.y());
           landed += strikeAt(m, a, t, kFists, kLandRadius, false, target) > 0;
-          taken += trackedStrikeAt(m, m.actionFrameBegin[a] + t - 1, head.joint, o, kFists, kLandRadius, false) > 0;
+          taken += trackedStrikeAt(m, m.actionFrameBegin[a] + t - 1, head, o, kFists, kLandRadius, false) > 0;
         }
       }
       const auto frames = static_cast<double>(m.actionLength(a));

@@ -109,8 +109,7 @@ class Terms final : public Reward {
       }
     }
     if (joints_ != 0) joints_ = static_cast<std::int64_t>(m.jointNames.size());
-    BodyPoint head = parseBodyPoint("head");
-    head_ = bindBodyPoint(m, head, nullptr) ? head.joint : -1;
+    head_ = headJoint(m);
   }
   void bindEnvironment(const EnvironmentModel* environment) override { environment_ = environment; }
   nlohmann::json terms() const override { return params_; }

@@ -216,6 +216,11 @@ Eigen::Vector3d applyMotion(const GroundMotion& g, const Eigen::Vector3d& p) { r
 
 GroundMotion composeMotion(const GroundMotion& a, const GroundMotion& b) { return compose(a, b); }
 
+int headJoint(const StateActionModel& m) {
+  BodyPoint head = parseBodyPoint("head");
+  return bindBodyPoint(m, head, nullptr) ? head.joint : -1;
+}
+
 Eigen::Vector3d opponentTarget(const StateActionModel& m, const OpponentFrame& o, int head, double height) {
   if (head >= 0) return o.toAvatar(jointAt(m, o.frame(m), head));
   Eigen::Vector3d e = o.ground(m);

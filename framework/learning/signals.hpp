@@ -152,6 +152,10 @@ struct OpponentFrame {
   }
 };
 
+/// The model's head joint (the `head` role), or -1 if its skeleton has none: where a learned
+/// opponent is aimed at (opponentTarget()).
+int headJoint(const StateActionModel& m);
+
 /// What a learned opponent offers as the target at one frame (issue 43), in the avatar's
 /// decision frame: its head (joint `head` of `m`), or with head < 0 its root's ground point
 /// at `height`. The reward terms and the success conditions read the same point.

@@ -167,10 +167,7 @@ std::uint32_t SuccessCriterion::Tracker::play(const StateActionModel& m, std::si
   // frame, facing where its root does, and its strikes are the ones it throws (issue 43).
   thread_local std::vector<OpponentFrame> track;
   if (environment && environment->track(m, a, e, track)) {
-    if (head_ == -2) {
-      BodyPoint head = parseBodyPoint("head");
-      head_ = bindBodyPoint(m, head, nullptr) ? head.joint : -1;
-    }
+    if (head_ == -2) head_ = headJoint(m);
     for (std::uint32_t t = 1; t <= frames; ++t) {
       const OpponentFrame& o = track[t - 1];
       TargetState now(opponentTarget(m, o, head_, e.position.y()), 0, opponentRootAt(m, o).dyaw);

@@ -81,10 +81,7 @@ World::World(WorldSetup setup)
   heads_.resize(setup_.avatars);
   roots_.resize(setup_.avatars);
   for (std::size_t i = 0; i < avatars_.size(); ++i) startAvatar(i);
-  for (std::size_t i = 0; i < avatars_.size(); ++i) {
-    heads_[i] = bodyPoint(i, aimPoint_);
-    roots_[i] = avatars_[i].now;
-  }
+  recordAims();
   tracks_.resize(avatars_.size());
   pending_.assign(avatars_.size(), Eigen::Vector2d::Zero());
   bodyCounts_.assign(avatars_.size(), {0, 0});
@@ -180,6 +177,13 @@ void World::placeTarget(Target& t, const GroundMotion& frame, const Eigen::Vecto
 Eigen::Vector3d World::aim(std::size_t i) const {
   const Avatar& a = avatars_[i];
   return a.partner >= 0 ? heads_[static_cast<std::size_t>(a.partner)] : targets_[i].centre();
+}
+
+void World::recordAims() {
+  for (std::size_t i = 0; i < avatars_.size(); ++i) {
+    heads_[i] = bodyPoint(i, aimPoint_);
+    roots_[i] = avatars_[i].now;
+  }
 }
 
 Eigen::Vector3d World::seen(std::size_t i) const {
@@ -350,10 +354,7 @@ void World::run(std::size_t frames) {
       }
       list.clear();
     }
-    for (std::size_t i = 0; i < n; ++i) {
-      heads_[i] = bodyPoint(i, aimPoint_);
-      roots_[i] = avatars_[i].now;
-    }
+    recordAims();
   };
   // Where the avatars now are, for the next decisions; bodies that overlap are pushed apart
   // before anything is posed or collides.

@@ -280,6 +280,8 @@ class World {
   Segment predict(std::size_t j, std::uint32_t ahead) const;
   Segment place(const GroundMotion& at, double c, double s, std::size_t k) const;
   void snapshot();
+  /// heads_ and roots_ from where every avatar is now (the decisions' view of the last frame).
+  void recordAims();
   void buildGrid();
   template <class F>
   void forNeighbours(const Eigen::Vector3d& at, F&& visit) const;
