@@ -41,7 +41,7 @@ double nearOptimalFraction(const QTable& learned, const QTable& reference, doubl
 
 }  // namespace
 
-TEST_CASE("on boxing, the trained combined policy hits far more often than a random controller", "[boxing][learning][slow]") {
+TEST_CASE("on boxing, the trained combined policy hits far more often than a random controller", "[boxing][learning][slow][outcome]") {
   test::TempDir temp("boxing-learning");
   app::TrainOptions train;
   train.scenario = kBoxing;
@@ -72,7 +72,7 @@ TEST_CASE("on boxing, the trained combined policy hits far more often than a ran
     REQUIRE(again[key] == report[key]);
 }
 
-TEST_CASE("on boxing, the Q-learned policy reaches 90 % of the online search's success", "[boxing][learning][slow]") {
+TEST_CASE("on boxing, the Q-learned policy reaches 90 % of the online search's success", "[boxing][learning][slow][outcome]") {
   // The scenario as it is (Q-learning, the file's budgets: about 12 s), against the online
   // search at horizon 3 on the same starts. The benchmark (mgrl_bench_runtime) measures
   // the other side: each policy decision costs thousands of times less.

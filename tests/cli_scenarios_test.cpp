@@ -56,7 +56,7 @@ std::string walkthrough() {
 
 }  // namespace
 
-TEST_CASE("scenarios made of reward terms train and meet their success criteria in eval", "[cli][data][slow]") {
+TEST_CASE("scenarios made of reward terms train and meet their success criteria in eval", "[cli][data][slow][outcome]") {
   for (const char* name : {"out_boxing.yaml", "walk_to.yaml", "kick.yaml"}) {
     CAPTURE(name);
     Sandbox box;
@@ -69,7 +69,7 @@ TEST_CASE("scenarios made of reward terms train and meet their success criteria 
   }
 }
 
-TEST_CASE("intercept.yaml trains on a moving target and punches it far more often than random actions", "[cli][data][slow]") {
+TEST_CASE("intercept.yaml trains on a moving target and punches it far more often than random actions", "[cli][data][slow][outcome]") {
   Sandbox box;
   const json report = box.trainAndEvaluate(std::string(MGRL_SOURCE_DIR) + "/scenarios/intercept.yaml");
   CHECK(report["success"]["from"] == "declared");
@@ -103,7 +103,7 @@ TEST_CASE("intercept.yaml trains on a moving target and punches it far more ofte
 
 TEST_CASE("dodge.yaml trains against a pursuing opponent and keeps out of its punches far more often than random "
           "actions",
-          "[cli][data]") {
+          "[cli][data][outcome]") {
   Sandbox box;
   const std::string dodge = std::string(MGRL_SOURCE_DIR) + "/scenarios/dodge.yaml";
   const json report = box.trainAndEvaluate(dodge);
@@ -197,7 +197,7 @@ json bout(Sandbox& box, const std::string& scenario, int seed, const std::string
 TEST_CASE(
     "boxing_spar.yaml keeps a fighting distance and stands to its partner as the real SNU fighters do: "
     "pelvises about a metre apart, never under 0.35 m, facing median near the real one, most punches miss",
-    "[cli][data]") {
+    "[cli][data][outcome]") {
   Sandbox box;
   const std::string scenario = std::string(MGRL_SOURCE_DIR) + "/scenarios/boxing_spar.yaml";
   const Run trained = box.run("train " + shellWord(scenario) + " --json --out " + shellWord(box.path("policy")));
@@ -255,7 +255,7 @@ TEST_CASE(
 }
 
 TEST_CASE("sparring.yaml spars like the SNU capture: distance, strike rate, bodies apart, both fighters land",
-          "[cli][data][slow]") {
+          "[cli][data][slow][outcome]") {
   Sandbox box;
   const std::string scenario = std::string(MGRL_SOURCE_DIR) + "/scenarios/sparring.yaml";
   const Run trained = box.run("train " + shellWord(scenario) + " --json --out " + shellWord(box.path("policy")));

@@ -468,7 +468,7 @@ TEST_CASE("an intercept page's values view shows the layers of its target's moti
 // Issue 46: boxing.yaml's sparring and crowds play boxing_spar.yaml's behaviour, which keeps
 // a fighting distance; target mode keeps the paper's two behaviours.
 TEST_CASE("boxing's sparring plays boxing_spar's behaviour at a fighting distance and its target mode the paper's",
-          "[serve][data]") {
+          "[serve][data][outcome]") {
   const BoxingAssets boxing(
       true, "boxing.yaml",
       {"behaviors.approach.learner.type=value_iteration", "behaviors.hit.learner.type=value_iteration"},
