@@ -4,33 +4,52 @@
 /// opponent it was trained against, and how much it gains over the previous round's.
 #include <functional>
 #include <memory>
+#include <optional>
 #include <string>
 
 #include <nlohmann/json.hpp>
 
 #include "mgrl/graph/state_action_model.hpp"
 #include "mgrl/learning/behavior.hpp"
+#include "mgrl/learning/problem.hpp"
 #include "mgrl/learning/q_table.hpp"
 
 namespace mgrl::app {
+
+/// The best-response gap on the grid (issue 43): in the problem a round was trained in (its
+/// opponent playing `opponent`'s table), the mean over every graph state and grid vertex of
+/// the round's table's value (value iteration's optimum there) minus the value of playing
+/// greedily on `opponent`'s table (policy evaluation in the same problem,
+/// evaluateGreedy()). At least 0 up to the tolerances, and free of the episodes' sampling
+/// and of the grid's interpolation error in continuous play; 0 when the opponent's table is
+/// already its own best answer, so it shrinks as the rounds settle.
+struct TableGap {
+  double gap = 0;
+  double seconds = 0;  ///< the policy evaluation's time
+  int sweeps = 0;
+};
+TableGap bestResponseGapOnGrid(const GridModel& grid, const StateActionModel& model, const QTable& table,
+                               const QTable& opponent, unsigned threads);
 
 /// Round `round`'s entry for train's report and the bundle's record: {"round", "opponent",
 /// "return"} and, given the table the opponent plays (the previous round's, or with
 /// `against: average` the earlier rounds' mean), {"previous_return", "gap"}: the mean
 /// discounted return of each table's greedy policy against the behaviour's environment as
-/// it stands (its opponent playing that table), over the same 200 episodes of 10 s; the gap
-/// (this minus the opponent's own) is the best-response gap, which shrinks as the rounds
-/// settle. Against a learned opponent also {"landed_per_min", "taken_per_min"} and the
-/// opponent table's {"previous_landed_per_min", "previous_taken_per_min"}: the fist punches
-/// landing within 0.16 m of either head (the world's fist and head radii) in those
-/// episodes, as the model plays them. Says the figures through `log`.
+/// it stands (its opponent playing that table), over the same 200 episodes of 10 s, and
+/// their difference, which the grid's interpolation and the episodes' sampling can make
+/// negative; with `tableGap` also {"table_gap"}, the exact gap on the grid
+/// (bestResponseGapOnGrid), which shrinks as the rounds settle. Against a learned opponent
+/// also {"landed_per_min", "taken_per_min"} and the opponent table's
+/// {"previous_landed_per_min", "previous_taken_per_min"}: the fist punches landing within
+/// 0.16 m of either head (the world's fist and head radii) in those episodes, as the model
+/// plays them. Says the figures through `log`, one line a round.
 nlohmann::json selfPlayRound(const Behavior& behavior, const StateActionModel& model, int round, const QTable& table,
-                             const QTable* previous, const std::function<void(const std::string&)>& log);
+                             const QTable* previous, const std::optional<TableGap>& tableGap,
+                             const std::function<void(const std::string&)>& log);
 
-/// What train adds to a round's line after its best-response gap: "" for a gap of at least
-/// 0; for a negative one, that the grid's best response does worse in the episodes (which
-/// move continuously, not from vertex to vertex) than the opponent's own table, and that a
-/// finer grid narrows this.
+/// What train adds to a round's line after the episodes' difference: "" for one of at
+/// least 0; for a negative one, that the grid's best response is not the best where the
+/// episodes move between vertices, and that a finer grid narrows this.
 std::string gapNote(double gap);
 
 /// `against: average`: the mean of rounds 1..n's tables, from the mean of rounds 1..n - 1's

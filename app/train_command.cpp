@@ -5,6 +5,7 @@
 #include <functional>
 #include <iostream>
 #include <map>
+#include <optional>
 
 #include <fmt/format.h>
 #include <fmt/ranges.h>
@@ -261,14 +262,16 @@ class TrainRun {
                          previous ? fmt::format("{}'s table", against)
                                   : fmt::format("the {} opponent", behavior.environment->policyKey())));
       }
-      auto [result, record] = trainRound(behavior, all, label, round, rounds);
+      std::optional<TableGap> tableGap;
+      auto [result, record] =
+          trainRound(behavior, all, label, round, rounds, average ? mean.get() : previous.get(), tableGap);
       // An adaptive learner returns the grid it refined: the table's vertices are its.
       const Discretizer& tableGrid = result.grid ? *result.grid : *behavior.discretizer;
       if (rounds > 1) {
         // Scoring the round is reporting: rank 0's (issue 44).
         if (writes_)
-          roundsReport.push_back(
-              selfPlayRound(behavior, model_, round, result.table, average ? mean.get() : previous.get(), log_));
+          roundsReport.push_back(selfPlayRound(behavior, model_, round, result.table,
+                                               average ? mean.get() : previous.get(), tableGap, log_));
         record["round"] = round;
         record["rounds"] = roundsReport;
         report_["behaviors"][behavior.name]["rounds"] = roundsReport;
@@ -285,8 +288,11 @@ class TrainRun {
 
   // Tabulates the problem and trains one table (one round of self-play): the result and
   // its record for the bundle; its summary goes in the report when it is the last round.
-  std::pair<TrainResult, json> trainRound(Behavior& behavior, const std::vector<Behavior>& all, const std::string& label, int round,
-                         int rounds) {
+  // Given the table the opponent played (`opponent`, rounds 2 on), also the best-response
+  // gap on the grid (tableGap), while the tabulated problem is at hand.
+  std::pair<TrainResult, json> trainRound(Behavior& behavior, const std::vector<Behavior>& all,
+                                          const std::string& label, int round, int rounds, const QTable* opponent,
+                                          std::optional<TableGap>& tableGap) {
     const std::string roundKey = rounds > 1 ? fmt::format("{}-round{}", behavior.key, round) : behavior.key;
     const Problem problem = behavior.problem(model_);
     const auto tabulateStart = Clock::now();
@@ -333,6 +339,10 @@ class TrainRun {
     if (options_.resume && !checkpointer.resumed())
       log_(fmt::format("resume: {}: no checkpoint to continue from, trained from the start", behavior.name));
     TrainResult& result = *trained;
+    // Rank 0 alone reports; a learner that tabulated its own share has no model here, and an
+    // adaptive learner's table is not on the problem's grid.
+    if (opponent && writes_ && !itself && !result.grid && grid.hanging.empty())
+      tableGap = bestResponseGapOnGrid(grid, model_, result.table, *opponent, threads_);
 
     const Discretizer& tableGrid = result.grid ? *result.grid : *behavior.discretizer;
     json curve = json::array();

@@ -444,6 +444,10 @@ TEST_CASE("mgrl train runs self-play rounds against a learned opponent, keeps ev
     // Round k is a best response to the table its opponent plays: against it, it does at
     // least as well as that table's own greedy policy (up to the grid's interpolation).
     CHECK(rounds[k]["gap"].get<double>() > -0.05 * rounds[k]["return"].get<double>());
+    // On the grid, where the round was trained, the best response gains exactly: at least 0
+    // (up to the evaluation's tolerance, 0.01).
+    REQUIRE(rounds[k].contains("table_gap"));
+    CHECK(rounds[k]["table_gap"].get<double>() > -0.01);
     // The punches each table's policy lands and takes in those episodes, a minute.
     for (const char* key : {"landed_per_min", "taken_per_min", "previous_landed_per_min", "previous_taken_per_min"})
       CHECK(rounds[k][key].get<double>() >= 0);
@@ -454,7 +458,10 @@ TEST_CASE("mgrl train runs self-play rounds against a learned opponent, keeps ev
   CHECK((trained.err.find("punches a minute") != std::string::npos) == exchanged);
   CHECK(trained.err.find("train spar: self-play round 2 of 3, against round 1's table") != std::string::npos);
   CHECK(trained.err.find("train spar: self-play round 3 of 3, against rounds 1-2 mean's table") != std::string::npos);
-  CHECK(trained.err.find("best-response gap") != std::string::npos);
+  CHECK(trained.err.find("train spar: round 2: best-response gap ") != std::string::npos);
+  CHECK(trained.err.find(" on the grid against round 1's table (its value less that of the opponent's own table") !=
+        std::string::npos);
+  CHECK(trained.err.find("in 200 episodes of 10 s it returns ") != std::string::npos);
   CHECK(report["behaviors"]["spar"]["vertices"] == kSmallPositions * 117);
 
   // Every round is in the bundle, and they differ: the opponent changed between them.
@@ -548,7 +555,7 @@ TEST_CASE(
 TEST_CASE("a negative best-response gap is explained in train's round line", "[opponent][learning]") {
   CHECK(app::gapNote(0.33).empty());
   CHECK(app::gapNote(0.0).empty());
-  CHECK(app::gapNote(-0.47).find("negative: on this grid") != std::string::npos);
+  CHECK(app::gapNote(-0.47).find("negative: the grid's best response is not the best") != std::string::npos);
   CHECK(app::gapNote(-0.47).find("a finer grid narrows this") != std::string::npos);
 }
 

@@ -25,6 +25,7 @@
 #include "mgrl/graph/motion_graph.hpp"
 #include "mgrl/learning/behavior.hpp"
 #include "mgrl/learning/checkpoint_store.hpp"
+#include "mgrl/learning/policy_evaluation.hpp"
 #include "mgrl/learning/problem.hpp"
 #include "mgrl/learning/success.hpp"
 #include "mgrl/motion/roles.hpp"
@@ -1949,6 +1950,70 @@ TEST_CASE("trials against an avatar need an opponent environment and an avoid co
   CHECK_FALSE(withoutAvoid.hasAvatarOpponent());
   CHECK_THROWS_WITH(withoutAvoid.runAgainstAvatar(nullptr, 1, 1, 1),
                     "trials against an avatar: expected a success criterion with an avoid condition, found none");
+}
+
+// Policy evaluation (issue 43's best-response gap on the grid): the values of playing
+// greedily on a fixed table, in the problem value iteration solves.
+TEST_CASE(
+    "policy evaluation: value iteration's own table is worth its values, another policy the corridor's closed "
+    "form and at most those",
+    "[learning][opponent]") {
+  const CorridorSetup parts(2);
+  const GridModel& g = parts.tabulated;
+  const TrainResult vi = trainWith("{type: value_iteration, tolerance: 1e-7}", parts.problem, g);
+  REQUIRE(vi.stats["converged"] == true);
+  const double gamma = 0.97;
+  const std::size_t forward = 0, back = 1, punch = 2, ahead = centre(*parts.grid, 0);
+
+  // Playing value iteration's own table greedily is worth exactly its values: no gap.
+  const PolicyValues own = evaluateGreedy(vi.table, g, parts.model, 2, 1e-7);
+  CHECK(own.change < 1e-7);
+  double largest = 0;
+  for (std::size_t i = 0; i < own.q.values().size(); ++i)
+    largest = std::max(largest, static_cast<double>(std::fabs(own.q.values()[i] - vi.table.values()[i])));
+  CHECK(largest < 1e-4);
+  CHECK(std::fabs(meanAdvantageOver(vi.table, own.q, vi.table)) < 1e-4);
+
+  // A table that always walks back: the target recedes off the grid and nothing is ever
+  // hit again, so every value is 0 but a punch at the target 0.5 m ahead, gamma^3 (its hit
+  // on frame 3, then walking back forever).
+  QTable walkBack(parts.model, g.vertexCount);
+  for (std::size_t v = 0; v < g.vertexCount; ++v) walkBack.at(back, v) = 1;
+  const PolicyValues retreat = evaluateGreedy(walkBack, g, parts.model, 2, 1e-7);
+  CHECK(retreat.q.at(punch, ahead) == Approx(std::pow(gamma, 3)).epsilon(1e-6));
+  for (int k = 0; k < 6; ++k) {
+    INFO("the centre line's vertex at " << 0.5 * (k + 1) << " m");
+    CHECK(retreat.q.at(back, centre(*parts.grid, k)) == 0);
+    CHECK(retreat.q.at(forward, centre(*parts.grid, k)) == 0);
+  }
+  // No policy beats the optimum anywhere, and the optimum's gain over this one is real:
+  // punching in place forever at 0.5 m is worth gamma^3 / (1 - gamma^5) there.
+  for (std::size_t i = 0; i < retreat.q.values().size(); ++i)
+    REQUIRE(retreat.q.values()[i] <= vi.table.values()[i] + 1e-5F);
+  CHECK(vi.table.at(punch, ahead) - retreat.q.at(punch, ahead) ==
+        Approx(std::pow(gamma, 3) / (1 - std::pow(gamma, 5)) * std::pow(gamma, 5)).epsilon(1e-4));
+  CHECK(meanAdvantageOver(vi.table, retreat.q, walkBack) > 0.1);
+
+  // The same bytes on one thread, and from the compact model.
+  const PolicyValues alone = evaluateGreedy(walkBack, g, parts.model, 1, 1e-7);
+  CHECK(alone.sweeps == retreat.sweeps);
+  CHECK(std::equal(alone.q.values().begin(), alone.q.values().end(), retreat.q.values().begin()));
+  const GridModel compact = GridModel::buildCompact(parts.problem, 2);
+  const PolicyValues fromCompact = evaluateGreedy(walkBack, compact, parts.model, 2, 1e-7);
+  CHECK(std::equal(fromCompact.q.values().begin(), fromCompact.q.values().end(), retreat.q.values().begin()));
+}
+
+TEST_CASE("policy evaluation refuses a table of another layout and a model without its transitions, saying which",
+          "[learning][opponent]") {
+  const CorridorSetup parts(1);
+  const QTable small(parts.model, 10);
+  CHECK_THROWS_WITH(evaluateGreedy(small, parts.tabulated, parts.model, 1, 1e-3),
+                    Catch::Contains("expected a table of 3 actions x 54 vertices, found 3 x 10"));
+  CHECK_THROWS_WITH(meanAdvantageOver(QTable(parts.model, 54), QTable(parts.model, 54), small),
+                    Catch::Contains("expected three tables of one layout"));
+  const GridModel frame = GridModel::frame(parts.problem);
+  CHECK_THROWS_WITH(evaluateGreedy(QTable(parts.model, 54), frame, parts.model, 1, 1e-3),
+                    Catch::Contains("expected a tabulated or compact model, found the model's frame only"));
 }
 
 }  // namespace mgrl::learning_test
