@@ -373,6 +373,34 @@ TEST_CASE("a dodge page opens on the avatar and its scripted opponent, in sparri
   CHECK(scene["opponent"].is_null());
 }
 
+// Issue 43: a learned opponent's scene opens on two fighters, as dodge's does, each playing
+// the bundle and told what the other is doing (it opened on one boxer and a dragged target
+// until 2026-11-29). The success counter sees the partner's head and strikes as the
+// environment tracks them through each action, as eval's trials do.
+TEST_CASE("a learned opponent's page opens on two fighters that spar with the bundle",
+          "[serve][data][opponent][slow]") {
+  // spar_learned.yaml shrunk as in learned_opponent_test: 936 vertices, 2 rounds.
+  const BoxingAssets spar(true, "spar_learned.yaml",
+                          {"behaviors.spar.discretizer.sectors=2", "behaviors.spar.discretizer.rings=2",
+                           "behaviors.spar.discretizer.headings=2", "behaviors.spar.environment.phases=1",
+                           "behaviors.spar.environment.rounds=2"});
+  serve::ViewerSession page(spar.assets);
+  const json scene = json::parse(page.takeOutbox().at(0));
+  INFO(scene.dump());
+  CHECK(scene["mode"] == "sparring");
+  CHECK(scene["avatars"] == 2);
+  CHECK(scene["partners"] == json::array({1, 0}));
+  for (int f = 0; f < static_cast<int>(60 / page.frameTime()); ++f) page.advance(1.0);
+  page.takeOutbox();
+  const json stats = json::parse(page.stats(0, 0));
+  INFO(stats.dump());
+  CHECK(stats["decisions"].get<int>() > 0);
+  CHECK(stats["successes"].get<int>() <= stats["decisions"].get<int>());
+  // Both corners play the page's controller (no partner bundle given), told what the other does.
+  CHECK(scene["controller"] == "policy");
+  CHECK(scene["opponent"].is_null());
+}
+
 // Issue 46: a turning target's grid repeats every position per turn rate. The values view
 // shows the positions of the target's motion at the decision: its turn layer, its speed
 // layer and its heading. intercept's targets walk and turn in target mode; one the page

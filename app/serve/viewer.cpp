@@ -79,9 +79,10 @@ constexpr std::size_t kHitMessagesPerAdvance = 30;
 ViewerSession::ViewerSession(std::shared_ptr<const ViewerAssets> assets)
     : root_(std::move(assets)), state_(std::make_unique<State>()) {
   adopt(root_);
-  // An opponent scene (dodge) opens on the avatar and the opponent it was trained against;
-  // the others on the paper's boxer and its target.
-  if (!root_->session->task.scriptedOpponent)
+  // An opponent scene opens on the avatar and the opponent it was trained against (dodge's
+  // scripted pursuer; spar_learned's partner playing a table, issue 43); the others on the
+  // paper's boxer and its target.
+  if (!root_->session->task.opponent)
     rebuild(Mode::Target, 1);
   else
     rebuild(Mode::Sparring, 2);
@@ -351,14 +352,20 @@ void ViewerSession::followSuccess() {
   const StateActionModel& model = assets_->model();
   // A scripted opponent or a partner bundle plays the second of each pair, not the page's controller.
   const bool partnerApart = !assets_->session->partnerName().empty();
+  const EnvironmentModel* environment = assets_->session->task.environment;
   for (std::size_t i = 0; i < world.avatarCount(); ++i) {
     if (partnerApart && world.partner(i) >= 0 && i % 2 == 1) continue;
     const World::Decision d = world.lastDecision(i);
     if (d.count == s.decisionsFollowed[i]) continue;
     s.decisionsFollowed[i] = d.count;
-    std::uint32_t first = 0;  // the earliest offset any criterion is met at, as in eval's trials
+    // The earliest offset any criterion is met at, as in eval's trials: against a learned
+    // opponent partner, its head and strikes as the environment tracks them through the
+    // action from what the controller saw at the decision (the partner's root, graph state
+    // and phase); a target the page drags stands still.
+    std::uint32_t first = 0;
+    const EnvironmentModel* tracked = world.partner(i) >= 0 ? environment : nullptr;
     for (SuccessCriterion::Tracker& tracker : s.trackers[i])
-      if (const std::uint32_t t = tracker.play(model, d.action, d.target); t > 0 && (first == 0 || t < first))
+      if (const std::uint32_t t = tracker.play(model, d.action, d.target, tracked); t > 0 && (first == 0 || t < first))
         first = t;
     if (first == 0) continue;
     ++s.successes;
