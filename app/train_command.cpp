@@ -130,6 +130,16 @@ std::set<std::string> keepCurrentTables(const fs::path& out, bool resume, const 
 // Issue 19: a behaviour's size is checked before anything is allocated or trained, not
 // found by bad_alloc, nor after training the others. Issue 20: the tabulated model when it
 // fits (or is asked for), else the compact one. Returns true for the compact model.
+// ", 2 more tables held", ", 6.5 more tables held by 4 self-play rounds", ", 8.5 more tables
+// held (6.5 by 4 self-play rounds)", or "" for none.
+std::string heldText(std::size_t learnerTables, double selfPlayTables, int rounds) {
+  if (selfPlayTables == 0)
+    return learnerTables > 0 ? fmt::format(", {} more tables held", learnerTables) : std::string();
+  if (learnerTables == 0) return fmt::format(", {:g} more tables held by {} self-play rounds", selfPlayTables, rounds);
+  return fmt::format(", {:g} more tables held ({:g} by {} self-play rounds)",
+                     static_cast<double>(learnerTables) + selfPlayTables, selfPlayTables, rounds);
+}
+
 bool choosesCompactModel(const Behavior& behavior, const StateActionModel& model, const TrainOptions& options,
                          const Log& log) {
   try {
@@ -139,8 +149,17 @@ bool choosesCompactModel(const Behavior& behavior, const StateActionModel& model
   }
   // A refining learner's tables grow to its vertex budget (adaptive_value_iteration).
   const std::size_t vertices = behavior.learner->trainingVertices(*behavior.discretizer);
-  const double extra = static_cast<double>(behavior.learner->extraTables()) * static_cast<double>(vertices) *
-                       static_cast<double>(model.actionCount()) * sizeof(float);
+  // Self-play (issue 43) holds tables beside the learner's: every finished round's (the
+  // bundle keeps them), the opponent's (a copy of the previous round's, and with `against:
+  // average` the mean), and while a round's best-response gap is measured, its own table
+  // beside policy evaluation's pair and chosen actions (2.5 tables) where the learner's pair
+  // stood: 1.5 more.
+  const int rounds = behavior.environment->rounds();
+  const double selfPlayTables =
+      rounds > 1 ? (rounds - 1) + (behavior.environment->roundsAgainstAverage() ? 2 : 1) + 1.5 : 0;
+  const double extraTables = static_cast<double>(behavior.learner->extraTables()) + selfPlayTables;
+  const double extra =
+      extraTables * static_cast<double>(vertices) * static_cast<double>(model.actionCount()) * sizeof(float);
   // A distributed learner knows its share (issue 44).
   const double share = behavior.learner->bytesPerProcess(model.actionCount(), vertices);
   const double tabulatedBytes =
@@ -171,8 +190,7 @@ bool choosesCompactModel(const Behavior& behavior, const StateActionModel& model
         "raise --max-memory",
         behavior.name, behavior.discretizer->type(), vertices > behavior.discretizer->vertexCount() ? "up to " : "",
         vertices, opponentNote, model.actionCount(), humanBytes(needed), compact ? "compact" : "tabulated",
-        extra > 0 ? fmt::format(", {} more tables held", behavior.learner->extraTables()) : "",
-        humanBytes(options.maxMemoryBytes),
+        heldText(behavior.learner->extraTables(), selfPlayTables, rounds), humanBytes(options.maxMemoryBytes),
         !compact && canCompact && compactBytes <= options.maxMemoryBytes
             ? fmt::format(", --model compact (about {})", humanBytes(compactBytes))
             : ""));

@@ -536,6 +536,9 @@ TEST_CASE(
   CHECK(big.lastErrorLine().find("behaviors.spar: training on a polar_velocity grid of 33696 vertices (a learned "
                                  "opponent's 234 states times 144 positions") != std::string::npos);
   CHECK(big.lastErrorLine().find("expected at most 500.0 MB (--max-memory)") != std::string::npos);
+  // The rounds' tables count: the three finished, the previous round's copy and the mean,
+  // and policy evaluation's 1.5 more than value iteration's pair (train_command.cpp).
+  CHECK(big.lastErrorLine().find("6.5 more tables held by 4 self-play rounds") != std::string::npos);
   CHECK(big.err.find("tabulated") == std::string::npos);
   // simulate: a partner's round without a partner bundle, a partner outside a sparring world.
   const test::Run round = box.run("simulate " + box.scenario() + " --controller random --partner-round 1");

@@ -1966,6 +1966,7 @@ TEST_CASE(
   const std::size_t forward = 0, back = 1, punch = 2, ahead = centre(*parts.grid, 0);
 
   // Playing value iteration's own table greedily is worth exactly its values: no gap.
+  const QTable small(parts.model, 10);
   const PolicyValues own = evaluateGreedy(vi.table, g, parts.model, 2, 1e-7);
   CHECK(own.change < 1e-7);
   double largest = 0;
@@ -1993,6 +1994,13 @@ TEST_CASE(
   CHECK(vi.table.at(punch, ahead) - retreat.q.at(punch, ahead) ==
         Approx(std::pow(gamma, 3) / (1 - std::pow(gamma, 5)) * std::pow(gamma, 5)).epsilon(1e-4));
   CHECK(meanAdvantageOver(vi.table, retreat.q, walkBack) > 0.1);
+
+  // From another start (the optimum's values) the same values, up to the tolerance.
+  const PolicyValues fromOptimum = evaluateGreedy(walkBack, g, parts.model, 2, 1e-7, 2000, &vi.table);
+  for (std::size_t i = 0; i < retreat.q.values().size(); ++i)
+    REQUIRE(fromOptimum.q.values()[i] == Approx(retreat.q.values()[i]).margin(1e-5));
+  CHECK_THROWS_WITH(evaluateGreedy(walkBack, g, parts.model, 2, 1e-7, 2000, &small),
+                    Catch::Contains("expected a start table of 3 actions x 54 vertices, found 3 x 10"));
 
   // The same bytes on one thread, and from the compact model.
   const PolicyValues alone = evaluateGreedy(walkBack, g, parts.model, 1, 1e-7);

@@ -30,10 +30,32 @@ Stencil stencilOf(const GridModel& g, std::uint32_t cell, const float* frac) {
 
 constexpr std::uint16_t kOutside = std::numeric_limits<std::uint16_t>::max();
 
+// Action j's value interpolated at the point with cell `cell` and fractions `frac`, from the
+// block of its state's rows (vertex u's row at block + u * n).
+inline float interpolatedAt(const float* block, std::size_t n, std::size_t j, const GridModel& g, std::uint32_t cell,
+                            const float* frac) {
+  const int d = g.dimension;
+  const std::uint32_t* corner = &g.corners[static_cast<std::size_t>(cell) << d];
+  if (d == 3) {
+    // maxInterpolated()'s products, written out.
+    const float f0 = frac[0], f1 = frac[1], f2 = frac[2], g0 = 1 - f0, g1 = 1 - f1, g2 = 1 - f2;
+    const float w[8] = {g0 * g1 * g2, f0 * g1 * g2, g0 * f1 * g2, f0 * f1 * g2,
+                        g0 * g1 * f2, f0 * g1 * f2, g0 * f1 * f2, f0 * f1 * f2};
+    float sum = 0;
+    for (int k = 0; k < 8; ++k) sum += w[k] * block[corner[k] * n + j];
+    return sum;
+  }
+  float w[8];
+  cornerWeights(d, {frac[0], frac[1], frac[2]}, w);
+  float sum = 0;
+  for (int k = 0; k < (1 << d); ++k) sum += w[k] * block[corner[k] * n + j];
+  return sum;
+}
+
 }  // namespace
 
 PolicyValues evaluateGreedy(const QTable& policy, const GridModel& g, const StateActionModel& model, unsigned threads,
-                            double tolerance, int maxSweeps) {
+                            double tolerance, int maxSweeps, const QTable* start) {
   const std::size_t V = g.vertexCount, A = g.actionCount;
   if (!g.hanging.empty())
     throw Error("policy evaluation: expected a fixed grid, found one with hanging vertices (an adaptive grid)");
@@ -64,35 +86,38 @@ PolicyValues evaluateGreedy(const QTable& policy, const GridModel& g, const Stat
       chosen[a * V + v] = static_cast<std::uint16_t>(best);
     }
   });
-  PolicyValues out{QTable(model, V)};
+  if (start && (start->vertexCount() != V || start->actionCount() != A))
+    throw Error(fmt::format("policy evaluation: expected a start table of {} actions x {} vertices, found {} x {}", A,
+                            V, start->actionCount(), start->vertexCount()));
+  PolicyValues out{start ? *start : QTable(model, V)};
   QTable next(model, V);
   // Jacobi sweeps: each action's values from the last sweep's table only, so the order of
-  // the actions (and the threads) does not matter.
-  std::vector<double> change(A, 0.0);
+  // the actions (and the threads) does not matter. Actions grouped by the state they end
+  // at, as sweep() groups them: a group reads one block of the table, which stays in cache.
+  const std::size_t states = g.incomingBegin.size() - 1;
+  std::vector<double> change(states, 0.0);
   while (out.sweeps < maxSweeps) {
-    parallelFor(A, threads, [&](std::size_t a, unsigned) {
-      const std::uint32_t s = g.actionTo[a];
+    parallelFor(states, threads, [&](std::size_t s, unsigned) {
       const std::size_t n = out.q.actionsOf(s);
+      const float* block = out.q.row(s, 0);  // vertex u's row starts at block + u * n
       double largest = 0;
-      for (std::size_t v = 0; v < V; ++v) {
-        const GridTransition t = g.at(a, v);
-        float value = t.reward;
-        if (t.cell >= 0) {
-          const Stencil st = stencilOf(g, static_cast<std::uint32_t>(t.cell), t.frac);
-          const std::size_t j = chosen[a * V + v];
-          const float* block = out.q.row(s, 0);
-          float future = 0;
-          for (int k = 0; k < st.size; ++k) future += st.weight[k] * block[st.vertex[k] * n + j];
-          value += g.discount[a] * future;
+      for (std::uint32_t i = g.incomingBegin[s]; i < g.incomingBegin[s + 1]; ++i) {
+        const std::size_t a = g.incoming[i];
+        for (std::size_t v = 0; v < V; ++v) {
+          const GridTransition t = g.at(a, v);
+          float value = t.reward;
+          if (t.cell >= 0)
+            value += g.discount[a] *
+                     interpolatedAt(block, n, chosen[a * V + v], g, static_cast<std::uint32_t>(t.cell), t.frac);
+          largest = std::max(largest, static_cast<double>(std::fabs(value - out.q.at(a, v))));
+          next.at(a, v) = value;
         }
-        largest = std::max(largest, static_cast<double>(std::fabs(value - out.q.at(a, v))));
-        next.at(a, v) = value;
       }
-      change[a] = largest;
+      change[s] = largest;
     });
     std::swap(out.q, next);
     ++out.sweeps;
-    out.change = *std::max_element(change.begin(), change.end());
+    out.change = change.empty() ? 0 : *std::max_element(change.begin(), change.end());
     if (out.change < tolerance) break;
   }
   return out;

@@ -16,9 +16,9 @@ namespace mgrl {
 /// Q^pi(e'(v, a), pi(e')), where pi(e') is the out-action of a's end state with the largest
 /// `policy` value interpolated at e' (ties to the lowest index; value iteration's backup
 /// takes the max there instead), and the future is 0 when e' leaves the grid. Jacobi
-/// sweeps from Q = 0 until the largest change is below `tolerance` or `maxSweeps` have
-/// run; with value iteration's table Q* of the same problem, Q* >= Q^pi entry by entry
-/// (Sutton & Barto, sec. 4.1 and 4.3: the optimal backup dominates any fixed policy's).
+/// sweeps from `start` (Q = 0 if null; the closer to Q^pi, the fewer sweeps) until the
+/// largest change is below `tolerance` or `maxSweeps` have run; with value iteration's table Q* of the same problem, Q*
+/// >= Q^pi entry by entry (Sutton & Barto, sec. 4.1 and 4.3: the optimal backup dominates any fixed policy's).
 /// Deterministic whatever the thread count. Needs a tabulated or compact model without
 /// hanging vertices (a fixed grid): throws mgrl::Error otherwise, or when `policy`'s layout
 /// is not `g`'s.
@@ -28,7 +28,7 @@ struct PolicyValues {
   double change = 0;  ///< the last sweep's largest change
 };
 PolicyValues evaluateGreedy(const QTable& policy, const GridModel& g, const StateActionModel& model, unsigned threads,
-                            double tolerance, int maxSweeps = 2000);
+                            double tolerance, int maxSweeps = 2000, const QTable* start = nullptr);
 
 /// How much `best` (value iteration's table of a problem) gains over playing greedily on
 /// `policy` in the same problem (`values`, evaluateGreedy's Q^pi of it): the mean over every
