@@ -20,13 +20,15 @@ namespace mgrl::app {
 /// opponent playing `opponent`'s table), the mean over every graph state and grid vertex of
 /// the round's table's value (value iteration's optimum there) minus the value of playing
 /// greedily on `opponent`'s table (policy evaluation in the same problem,
-/// evaluateGreedy()). At least 0 up to the tolerances, and free of the episodes' sampling
+/// evaluateGreedy()). `table` must be the problem's optimum (a converged value
+/// iteration). At least 0 up to the tolerances, and free of the episodes' sampling
 /// and of the grid's interpolation error in continuous play; 0 when the opponent's table is
 /// already its own best answer, so it shrinks as the rounds settle.
 struct TableGap {
   double gap = 0;
   double seconds = 0;  ///< the policy evaluation's time
   int sweeps = 0;
+  bool converged = true;  ///< false: the evaluation stopped at its sweep limit
 };
 TableGap bestResponseGapOnGrid(const GridModel& grid, const StateActionModel& model, const QTable& table,
                                const QTable& opponent, unsigned threads);
@@ -48,9 +50,11 @@ nlohmann::json selfPlayRound(const Behavior& behavior, const StateActionModel& m
                              const std::function<void(const std::string&)>& log);
 
 /// What train adds to a round's line after the episodes' difference: "" for one of at
-/// least 0; for a negative one, that the grid's best response is not the best where the
-/// episodes move between vertices, and that a finer grid narrows this.
-std::string gapNote(double gap);
+/// least 0; for a negative one, with `optimum` (the round's table is the grid problem's
+/// optimum, a converged value iteration), that the grid's best response is not the best
+/// where the episodes move between vertices and that a finer grid narrows this; without,
+/// only that the round's table does worse in those episodes.
+std::string gapNote(double gap, bool optimum);
 
 /// `against: average`: the mean of rounds 1..n's tables, from the mean of rounds 1..n - 1's
 /// (null for n = 1) and round n's table: mean + (table - mean) / n, entry by entry. Throws

@@ -357,9 +357,11 @@ class TrainRun {
     if (options_.resume && !checkpointer.resumed())
       log_(fmt::format("resume: {}: no checkpoint to continue from, trained from the start", behavior.name));
     TrainResult& result = *trained;
-    // Rank 0 alone reports; a learner that tabulated its own share has no model here, and an
-    // adaptive learner's table is not on the problem's grid.
-    if (opponent && writes_ && !itself && !result.grid && grid.hanging.empty())
+    // Rank 0 alone reports; a learner that tabulated its own share has no model here, an
+    // adaptive learner's table is not on the problem's grid, and the gap needs the problem's
+    // optimum: a value iteration that converged (Q-learning's table is not one).
+    const bool optimum = result.stats.is_object() && result.stats.value("converged", false);
+    if (opponent && writes_ && !itself && !result.grid && grid.hanging.empty() && optimum)
       tableGap = bestResponseGapOnGrid(grid, model_, result.table, *opponent, threads_);
 
     const Discretizer& tableGrid = result.grid ? *result.grid : *behavior.discretizer;

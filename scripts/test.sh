@@ -140,7 +140,7 @@ fuzz_smoke() {
     MGRL_DATA="$data" "$root/scripts/fuzz.sh" 20
 }
 sanitizer_tests() {
-  # Not the tests labelled slow-outcome (tests/CMakeLists.txt says why).
+  # Not the tests labelled unit-outcome or slow-outcome (tests/CMakeLists.txt says why).
   (cd "$sanitize" && ASAN_OPTIONS=detect_leaks=1 ctest --output-on-failure -j "$jobs" -LE outcome)
 }
 

@@ -471,6 +471,19 @@ TEST_CASE("mgrl train runs self-play rounds against a learned opponent, keeps ev
   CHECK(test::readText(box.path("policy") / "spar.q.npy") != test::readText(box.path("policy") / "spar-round1.q.npy"));
   CHECK(test::readText(box.path("policy") / "spar.q.npy") != test::readText(box.path("policy") / "spar-round2.q.npy"));
 
+  // The gap on the grid needs the problem's optimum: a Q-learned round gets the episodes'
+  // figures only.
+  const test::Run learned = box.run("train " + box.scenario() + kSmallSpar +
+                                    " --set behaviors.spar.environment.rounds=2 --set behaviors.spar.learner.type="
+                                    "q_learning --set behaviors.spar.learner.budget=20000 --json --out " +
+                                    test::shellWord(box.path("q")));
+  INFO(learned.err);
+  REQUIRE(learned.status == 0);
+  const nlohmann::json qRound = learned.report()["behaviors"]["spar"]["rounds"].at(1);
+  CHECK(qRound.contains("gap"));
+  CHECK_FALSE(qRound.contains("table_gap"));
+  CHECK(learned.err.find("on the grid") == std::string::npos);
+
   // The opponent can play a bundle's table (here round 2's) from round 1 on.
   const test::Run against = box.run("train " + box.scenario() + kSmallSpar +
                                     " --set behaviors.spar.environment.policy=" + test::shellWord(box.path("policy")) +
@@ -556,10 +569,13 @@ TEST_CASE(
 }
 
 TEST_CASE("a negative best-response gap is explained in train's round line", "[opponent][learning]") {
-  CHECK(app::gapNote(0.33).empty());
-  CHECK(app::gapNote(0.0).empty());
-  CHECK(app::gapNote(-0.47).find("negative: the grid's best response is not the best") != std::string::npos);
-  CHECK(app::gapNote(-0.47).find("a finer grid narrows this") != std::string::npos);
+  CHECK(app::gapNote(0.33, true).empty());
+  CHECK(app::gapNote(0.0, true).empty());
+  CHECK(app::gapNote(-0.47, true).find("negative: the grid's best response is not the best") != std::string::npos);
+  CHECK(app::gapNote(-0.47, true).find("a finer grid narrows this") != std::string::npos);
+  // A table that is not the grid's optimum (Q-learning) is not called its best response.
+  CHECK(app::gapNote(-0.47, false).find("best response") == std::string::npos);
+  CHECK(app::gapNote(-0.47, false).find("does worse in these episodes") != std::string::npos);
 }
 
 TEST_CASE("self-play against: average plays the entry-by-entry mean of the earlier rounds' tables",
