@@ -14,6 +14,7 @@
 #include "mgrl/learning/policy_evaluation.hpp"
 #include "mgrl/learning/problem.hpp"
 #include "mgrl/learning/signals.hpp"
+#include "mgrl/session/graph_source.hpp"
 
 namespace mgrl::app {
 
@@ -104,7 +105,7 @@ TableGap bestResponseGapOnGrid(const GridModel& grid, const StateActionModel& mo
   out.converged = own.change < 0.01;
   out.gap = meanAdvantageOver(table, own.q, opponent);
   out.sweeps = own.sweeps;
-  out.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  out.seconds = since(start);
   return out;
 }
 

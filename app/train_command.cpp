@@ -127,9 +127,6 @@ std::set<std::string> keepCurrentTables(const fs::path& out, bool resume, const 
   return finished;
 }
 
-// Issue 19: a behaviour's size is checked before anything is allocated or trained, not
-// found by bad_alloc, nor after training the others. Issue 20: the tabulated model when it
-// fits (or is asked for), else the compact one. Returns true for the compact model.
 // ", 2 more tables held", ", 6.5 more tables held by 4 self-play rounds", ", 8.5 more tables
 // held (6.5 by 4 self-play rounds)", or "" for none.
 std::string heldText(std::size_t learnerTables, double selfPlayTables, int rounds) {
@@ -140,6 +137,9 @@ std::string heldText(std::size_t learnerTables, double selfPlayTables, int round
                      static_cast<double>(learnerTables) + selfPlayTables, selfPlayTables, rounds);
 }
 
+// Issue 19: a behaviour's size is checked before anything is allocated or trained, not
+// found by bad_alloc, nor after training the others. Issue 20: the tabulated model when it
+// fits (or is asked for), else the compact one. Returns true for the compact model.
 bool choosesCompactModel(const Behavior& behavior, const StateActionModel& model, const TrainOptions& options,
                          const Log& log) {
   try {

@@ -416,6 +416,11 @@ struct SparSandbox : test::CliSandbox {
   std::string scenario() const {
     return test::shellWord(std::string(test::sourceDirectory()) + "/scenarios/spar_learned.yaml");
   }
+  /// `mgrl train` on the small grid with `sets` (" --set K=V ..."), its report on stdout,
+  /// the bundle in `out`.
+  test::Run trainSmall(const std::string& sets, const std::string& out) {
+    return run("train " + scenario() + kSmallSpar + sets + " --json --out " + test::shellWord(path(out)));
+  }
 };
 
 }  // namespace
@@ -424,10 +429,8 @@ TEST_CASE("mgrl train runs self-play rounds against a learned opponent, keeps ev
           "[opponent][cli][data][slow]") {
   SparSandbox box;
   // Three rounds, the third against the mean of the first two (against: average).
-  const test::Run trained = box.run("train " + box.scenario() + kSmallSpar +
-                                    " --set behaviors.spar.environment.rounds=3"
-                                    " --set behaviors.spar.environment.against=average --json --out " +
-                                    test::shellWord(box.path("policy")));
+  const test::Run trained = box.trainSmall(
+      " --set behaviors.spar.environment.rounds=3 --set behaviors.spar.environment.against=average", "policy");
   INFO(trained.err);
   REQUIRE(trained.status == 0);
   const nlohmann::json report = trained.report();
@@ -473,10 +476,11 @@ TEST_CASE("mgrl train runs self-play rounds against a learned opponent, keeps ev
 
   // The gap on the grid needs the problem's optimum: a Q-learned round gets the episodes'
   // figures only.
-  const test::Run learned = box.run("train " + box.scenario() + kSmallSpar +
-                                    " --set behaviors.spar.environment.rounds=2 --set behaviors.spar.learner.type="
-                                    "q_learning --set behaviors.spar.learner.budget=20000 --json --out " +
-                                    test::shellWord(box.path("q")));
+  const test::Run learned = box.trainSmall(
+      " --set behaviors.spar.environment.rounds=2 --set "
+      "behaviors.spar.learner.type=q_learning --set "
+      "behaviors.spar.learner.budget=20000",
+      "q");
   INFO(learned.err);
   REQUIRE(learned.status == 0);
   const nlohmann::json qRound = learned.report()["behaviors"]["spar"]["rounds"].at(1);
