@@ -7,11 +7,11 @@
 #include <chrono>
 #include <cstdio>
 #include <cstdlib>
-#include <cstring>
 #include <vector>
 
 #include <sys/resource.h>
 
+#include "bench_args.hpp"
 #include "bench_support.hpp"
 #include "mgrl/core/data_paths.hpp"
 #include "mgrl/graph/motion_graph.hpp"
@@ -39,16 +39,11 @@ mgrl::MotionDatabase prefix(const mgrl::MotionDatabase& db, std::size_t clips) {
 }  // namespace
 
 int main(int argc, char** argv) {
-  int runs = 5;
   std::filesystem::path data;
-  for (int i = 1; i < argc; ++i) {
-    if (!std::strcmp(argv[i], "--runs") && i + 1 < argc) runs = std::max(1, std::atoi(argv[++i]));
-    else if (!std::strcmp(argv[i], "--data") && i + 1 < argc) data = argv[++i];
-    else {
-      std::fprintf(stderr, "usage: %s [--runs N] [--data DIR]\n", argv[0]);
-      return 2;
-    }
-  }
+  const int runs =
+      mgrl::bench::parseRunArgs(argc, argv, "mgrl_bench_graph: motion graph construction on the sparring capture", 5, 0,
+                                mgrl::bench::dataOption(data))
+          .runs;
   try {
     const auto scenarioPath = std::filesystem::path(MGRL_SOURCE_DIR) / "scenarios" / "sparring.yaml";
     const mgrl::Scenario scenario = mgrl::loadScenario(scenarioPath, mgrl::dataDirectory(data));

@@ -6,16 +6,16 @@
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
-#include <cstring>
 #include <string>
 #include <vector>
 
+#include "bench_args.hpp"
 #include "bench_support.hpp"
+#include "mgrl/core/data_paths.hpp"
+#include "mgrl/core/hash.hpp"
 #include "mgrl/motion/annotation.hpp"
 #include "mgrl/motion/asf_amc.hpp"
 #include "mgrl/motion/bvh.hpp"
-#include "mgrl/core/data_paths.hpp"
-#include "mgrl/core/hash.hpp"
 #include "mgrl/motion/kinematics.hpp"
 #include "mgrl/motion/motion_io.hpp"
 
@@ -29,16 +29,10 @@ double seconds(Clock::time_point a, Clock::time_point b) { return std::chrono::d
 }  // namespace
 
 int main(int argc, char** argv) {
-  int runs = 7;
   std::filesystem::path dataArg;
-  for (int i = 1; i < argc; ++i) {
-    if (!std::strcmp(argv[i], "--runs") && i + 1 < argc) runs = std::max(1, std::atoi(argv[++i]));
-    else if (!std::strcmp(argv[i], "--data") && i + 1 < argc) dataArg = argv[++i];
-    else {
-      std::fprintf(stderr, "usage: %s [--runs N] [--data DIR]\n", argv[0]);
-      return 2;
-    }
-  }
+  const int runs = bench::parseRunArgs(argc, argv, "mgrl_bench_load: parsing every BVH and AMC file of the data folder",
+                                       7, 0, bench::dataOption(dataArg))
+                       .runs;
   const std::filesystem::path data = dataDirectory(dataArg);
   std::vector<std::filesystem::path> files;
   try {

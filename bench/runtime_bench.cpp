@@ -12,7 +12,6 @@
 
 #include <chrono>
 #include <cstdio>
-#include <cstring>
 #include <string>
 
 #include <fmt/format.h>
@@ -20,13 +19,14 @@
 #include "app/learn_commands.hpp"
 #include "app/learn_common.hpp"
 #include "app/plugins.hpp"
+#include "bench_args.hpp"
 #include "bench_support.hpp"
 #include "boxing_setup.hpp"
-#include "mgrl/learning/behavior.hpp"
-#include "mgrl/scenario/behaviors.hpp"
 #include "mgrl/core/data_paths.hpp"
 #include "mgrl/core/parallel.hpp"
+#include "mgrl/learning/behavior.hpp"
 #include "mgrl/runtime/world.hpp"
+#include "mgrl/scenario/behaviors.hpp"
 #include "mgrl/session/session.hpp"
 
 namespace {
@@ -47,22 +47,11 @@ double heapBytes() {
 }  // namespace
 
 int main(int argc, char** argv) {
-  int runs = 5;
-  bool quick = false;
   unsigned threads = mgrl::defaultThreadCount();
-  for (int i = 1; i < argc; ++i) {
-    if (!std::strcmp(argv[i], "--quick")) {
-      quick = true;
-      runs = 3;
-    } else if (!std::strcmp(argv[i], "--runs") && i + 1 < argc) {
-      runs = std::max(1, std::atoi(argv[++i]));
-    } else if (!std::strcmp(argv[i], "--threads") && i + 1 < argc) {
-      threads = static_cast<unsigned>(std::max(1, std::atoi(argv[++i])));
-    } else {
-      std::fprintf(stderr, "usage: mgrl_bench_runtime [--quick] [--runs N] [--threads T]\n");
-      return 2;
-    }
-  }
+  const auto [runs, quick] = mgrl::bench::parseRunArgs(
+      argc, argv, "mgrl_bench_runtime: decisions, poses and crowds of the boxing scenario", 5, 3, [&](CLI::App& app) {
+        app.add_option("--threads", threads, "threads of the crowd runs")->check(CLI::Range(1, 1000));
+      });
   try {
     const mgrl::app::TrainOptions train = mgrl::bench::trainBoxingByValueIteration("runtime");
     const fs::path scratch = train.cacheDir;

@@ -13,19 +13,19 @@
 
 #include <chrono>
 #include <cstdio>
-#include <cstring>
 #include <thread>
 
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>
 
 #include "app/learn_commands.hpp"
+#include "bench_args.hpp"
 #include "bench_support.hpp"
 #include "boxing_setup.hpp"
 #include "mgrl/core/data_paths.hpp"
 #include "page_load.hpp"
-#include "serve/server.hpp"
 #include "serve/serve_command.hpp"
+#include "serve/server.hpp"
 #include "serve/viewer.hpp"
 
 namespace {
@@ -41,22 +41,12 @@ constexpr double kSharedSeconds = 6;
 }  // namespace
 
 int main(int argc, char** argv) {
-  int runs = 5;
-  int frames = 150;
   bool shared = false;
-  for (int i = 1; i < argc; ++i) {
-    if (!std::strcmp(argv[i], "--quick")) {
-      runs = 3;
-      frames = 60;
-    } else if (!std::strcmp(argv[i], "--runs") && i + 1 < argc) {
-      runs = std::max(1, std::atoi(argv[++i]));
-    } else if (!std::strcmp(argv[i], "--shared")) {
-      shared = true;
-    } else {
-      std::fprintf(stderr, "usage: mgrl_bench_serve [--quick] [--runs N] [--shared]\n");
-      return 2;
-    }
-  }
+  const auto [runs, quick] = mgrl::bench::parseRunArgs(
+      argc, argv, "mgrl_bench_serve: the viewer's server under pages", 5, 3, [&](CLI::App& app) {
+        app.add_flag("--shared", shared, "also time a light page beside crowds sharing the server");
+      });
+  const int frames = quick ? 60 : 150;
   try {
     const mgrl::app::TrainOptions train = mgrl::bench::trainBoxingByValueIteration("serve");
     const fs::path scratch = train.cacheDir;

@@ -35,8 +35,6 @@ namespace mgrl::learners {
 
 namespace {
 
-using Clock = std::chrono::steady_clock;
-
 // Targets at which backupGap() compares starts: this many uniform in the grid's
 // coordinates (a fixed seed), and at most kGapVertexPoints of the starts' final vertices.
 constexpr std::size_t kGapPoints = 200, kGapVertexPoints = 400;
@@ -422,9 +420,7 @@ std::vector<std::uint32_t> AdaptiveValueIteration::choose(const Discretizer& gri
 TrainResult AdaptiveValueIteration::train(const TrainContext& context) const {
   const Problem& problem = context.problem;
   const unsigned threads = threads_ > 0 ? threads_ : context.threads;
-  const auto start = Clock::now();
-  double paused = 0;  // spent on snapshots (TrainObserver::snapshot): not training
-  auto elapsed = [&] { return std::chrono::duration<double>(Clock::now() - start).count() - paused; };
+  TrainingClock clock;  // snapshots (TrainObserver::snapshot) are not training
   checkGrid(problem.grid);
   if (counted(problem.grid) > maxVertices_)
     throw Error(fmt::format("adaptive_value_iteration: max_vertices: expected at least the initial tree's {} "
@@ -467,15 +463,16 @@ TrainResult AdaptiveValueIteration::train(const TrainContext& context) const {
         std::swap(q, next);
         ++sweeps;
         updates += pairs;
-        result.curve.push_back({updates, elapsed(), run.change, 0});
-        if (context.observer) context.observer->progress({updates, 0, elapsed(), run.change});
+        result.curve.push_back({updates, clock.seconds(), run.change, 0});
+        if (context.observer) context.observer->progress({updates, 0, clock.seconds(), run.change});
         if (context.stop && context.stop->load(std::memory_order_relaxed) && run.change >= tolerance_)
           throw TrainInterrupted(updates, 0, false);
         if (run.change < tolerance_) break;
       }
       run.sweeps += sweeps;
       if (snapshotsWanted(context.observer) > 0)  // one per round: the values converged on this tree
-        paused += takeSnapshot(*context.observer, q, result.curve.back(), run.grid == &problem.grid ? nullptr : run.grid);
+        clock.leaveOut(
+            takeSnapshot(*context.observer, q, result.curve.back(), run.grid == &problem.grid ? nullptr : run.grid));
       nlohmann::json record = {{"vertices", run.grid->vertexCount()},
                                {"free_vertices", run.grid->vertexCount() - run.grid->hanging().size()},
                                {"leaves", run.grid->cellCount()},
@@ -603,7 +600,7 @@ TrainResult AdaptiveValueIteration::train(const TrainContext& context) const {
   result.table = std::move(best.q);
   result.grid = best.owned;
   result.updates = updates;
-  result.seconds = elapsed();
+  result.seconds = clock.seconds();
   const Discretizer& grid = *best.grid;
   result.stats = {{"rounds", best.rounds},
                   {"stopped_by", best.stopped},

@@ -93,9 +93,7 @@ class MpiValueIteration final : public Learner {
     // Ranks sharing a machine share its cores.
     const unsigned threads =
         threads_ > 0 ? threads_ : std::max(1u, context.threads / static_cast<unsigned>(std::max(1, ranks.localSize())));
-    const auto start = Clock::now();
-    double paused = 0;
-    auto elapsed = [&] { return std::chrono::duration<double>(Clock::now() - start).count() - paused; };
+    TrainingClock clock;
 
     // The split, and the order of the rows each rank sends and receives: by the other
     // rank, then by action.
@@ -141,8 +139,8 @@ class MpiValueIteration final : public Learner {
       if (K == 1 && context.stop && context.stop->load()) throw TrainInterrupted(0, 0, false);
     }
     // Training time starts after the tabulation, as for learners given a tabulated model.
-    const double tabulateSeconds = elapsed();
-    paused += tabulateSeconds;
+    const double tabulateSeconds = clock.seconds();
+    clock.leaveOut(tabulateSeconds);
 
     // The rows of this rank's states only: a table over a model in which the other
     // states have no actions (QTable keeps each state's block contiguous, so row(s, v) of
@@ -253,13 +251,11 @@ class MpiValueIteration final : public Learner {
       double global[2] = {change, context.stop && context.stop->load(std::memory_order_relaxed) ? 1.0 : 0.0};
       ranks.maxAll(global, 2);
       change = global[0];
-      result.curve.push_back({sweeps * pairs, elapsed(), change, 0});
-      if (context.observer && ranks.root()) context.observer->progress({sweeps * pairs, 0, elapsed(), change});
+      result.curve.push_back({sweeps * pairs, clock.seconds(), change, 0});
+      if (context.observer && ranks.root()) context.observer->progress({sweeps * pairs, 0, clock.seconds(), change});
       const bool last = change < tolerance_ || sweeps == maxSweeps_;
       if (checkpointing[0] > 0 && !last && (sweeps % checkpointEvery_ == 0 || global[1] > 0)) {
-        const auto began = Clock::now();
-        save();
-        paused += std::chrono::duration<double>(Clock::now() - began).count();
+        clock.leavingOut(save);
       }
       // A test of a lost rank (MGRL_TEST_KILL="RANK:SWEEP"): this rank kills itself, as a
       // crashed machine would, after that sweep's checkpoint.
@@ -286,7 +282,7 @@ class MpiValueIteration final : public Learner {
     result.table = K == 1 ? std::move(q) : std::move(whole);
     result.updates = sweeps * pairs;
     result.finalResidual = residual[0];
-    result.seconds = elapsed();
+    result.seconds = clock.seconds();
     result.stats = {{"sweeps", sweeps},
                     {"converged", converged},
                     {"last_change", change},

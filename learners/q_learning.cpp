@@ -26,8 +26,6 @@ namespace mgrl::learners {
 
 namespace {
 
-using Clock = std::chrono::steady_clock;
-
 class QLearning final : public Learner {
  public:
   explicit QLearning(const Params& p)
@@ -103,9 +101,7 @@ TrainResult QLearning::train(const TrainContext& context) const {
   }
   if (!resumed) restart(walk);
 
-  const auto start = Clock::now();
-  double paused = 0;  // spent on snapshots: not training
-  auto elapsed = [&] { return secondsBefore + std::chrono::duration<double>(Clock::now() - start).count() - paused; };
+  TrainingClock clock(secondsBefore);  // snapshots are not training
   auto curveAt = [&](std::uint64_t i) { return total * i / curvePoints_; };
   std::uint64_t nextCurveIndex = 1;
   while (nextCurveIndex <= curvePoints_ && curveAt(nextCurveIndex) <= walk.updates) ++nextCurveIndex;
@@ -290,22 +286,21 @@ TrainResult QLearning::train(const TrainContext& context) const {
       // Sampled (curve_sample): full sweeps at 20 points took about a fifth of boxing's
       // training (issue 20); the final residual below is always the whole table's.
       const Residual r = bellmanResidual(q, g, threads, curveSample_);
-      result.curve.push_back({walk.updates, elapsed(), r.max, r.mean});
+      result.curve.push_back({walk.updates, clock.seconds(), r.max, r.mean});
       lastResidual = r.max;
       ++nextCurveIndex;
     }
     while (nextSnapshotIndex <= snapshots && snapshotAt(nextSnapshotIndex) < walk.updates) ++nextSnapshotIndex;
     if (nextSnapshotIndex <= snapshots && walk.updates == snapshotAt(nextSnapshotIndex)) {
-      const auto before = Clock::now();
       // The residual of a curve point taken here, else one measured for the snapshot alone.
       CurvePoint point = !result.curve.empty() && result.curve.back().updates == walk.updates ? result.curve.back()
                                                                                               : CurvePoint{};
       if (point.updates != walk.updates) {
-        const Residual r = bellmanResidual(q, g, threads, curveSample_);
-        paused += std::chrono::duration<double>(Clock::now() - before).count();
-        point = {walk.updates, elapsed(), r.max, r.mean};
+        Residual r;
+        clock.leavingOut([&] { r = bellmanResidual(q, g, threads, curveSample_); });
+        point = {walk.updates, clock.seconds(), r.max, r.mean};
       }
-      paused += takeSnapshot(*context.observer, q, point);
+      clock.leaveOut(takeSnapshot(*context.observer, q, point));
       while (nextSnapshotIndex <= snapshots && snapshotAt(nextSnapshotIndex) <= walk.updates) ++nextSnapshotIndex;
     }
     const bool stopping = context.stop && context.stop->load(std::memory_order_relaxed) && walk.updates < total;
@@ -315,22 +310,21 @@ TrainResult QLearning::train(const TrainContext& context) const {
         (stopping || (checkpointEvery_ > 0 && walk.updates % checkpointEvery_ == 0))) {
       nlohmann::json curve = nlohmann::json::array();
       for (const CurvePoint& p : result.curve) curve.push_back({p.updates, p.seconds, p.residual, p.meanResidual});
-      context.checkpointer->save(
-          {{"updates", walk.updates},
-           {"walk", toJson(walk, maxEpisode_ > 0)},
-           {"seconds", elapsed()},
-           {"curve", curve},
-           {"cells_seen", encodeCells(cellSeen)}},
-          q);
+      context.checkpointer->save({{"updates", walk.updates},
+                                  {"walk", toJson(walk, maxEpisode_ > 0)},
+                                  {"seconds", clock.seconds()},
+                                  {"curve", curve},
+                                  {"cells_seen", encodeCells(cellSeen)}},
+                                 q);
     }
-    if (context.observer) context.observer->progress({walk.updates, total, elapsed(), lastResidual});
+    if (context.observer) context.observer->progress({walk.updates, total, clock.seconds(), lastResidual});
     if (stopping) throw TrainInterrupted(walk.updates, total, context.checkpointer != nullptr);
   }
 
   result.updates = walk.updates;
   result.finalResidual = result.curve.empty() || curveSample_ > 1 ? bellmanResidual(q, g, threads).max
                                                                    : result.curve.back().residual;
-  result.seconds = elapsed();
+  result.seconds = clock.seconds();
   const auto cellsVisited = static_cast<std::size_t>(std::count(cellSeen.begin(), cellSeen.end(), 1));
   result.stats = {{"restarts", walk.restarts},
                   {"cells_visited", cellsVisited},

@@ -11,8 +11,6 @@ namespace mgrl::learners {
 
 namespace {
 
-using Clock = std::chrono::steady_clock;
-
 class ValueIteration final : public Learner {
  public:
   explicit ValueIteration(const Params& p)
@@ -29,9 +27,7 @@ class ValueIteration final : public Learner {
   TrainResult train(const TrainContext& context) const override {
     const GridModel& g = context.grid;
     const unsigned threads = threads_ > 0 ? threads_ : context.threads;
-    const auto start = Clock::now();
-    double paused = 0;  // spent on snapshots: not training
-    auto elapsed = [&] { return std::chrono::duration<double>(Clock::now() - start).count() - paused; };
+    TrainingClock clock;  // snapshots are not training
     const std::size_t snapshots = snapshotsWanted(context.observer);
     std::size_t taken = 0;
     double previousChange = 0;
@@ -46,8 +42,8 @@ class ValueIteration final : public Learner {
       change = sweep(current, next, g, threads, stage);
       std::swap(current, next);
       ++sweeps;
-      result.curve.push_back({sweeps * pairs, elapsed(), change, 0});
-      if (context.observer) context.observer->progress({sweeps * pairs, 0, elapsed(), change});
+      result.curve.push_back({sweeps * pairs, clock.seconds(), change, 0});
+      if (context.observer) context.observer->progress({sweeps * pairs, 0, clock.seconds(), change});
       if (snapshots > 0) {
         // The sweep count is not known ahead, but the change shrinks by a nearly constant
         // factor per sweep: the sweeps left are estimated from the last two changes, and a
@@ -58,7 +54,7 @@ class ValueIteration final : public Learner {
                                                                                          std::log(change / previousChange)));
         const bool last = change < tolerance_ || sweeps == maxSweeps_;
         if (last || static_cast<double>(sweeps) >= estimate * static_cast<double>(taken + 1) / static_cast<double>(snapshots)) {
-          paused += takeSnapshot(*context.observer, current, result.curve.back());
+          clock.leaveOut(takeSnapshot(*context.observer, current, result.curve.back()));
           ++taken;
         }
       }
@@ -74,7 +70,7 @@ class ValueIteration final : public Learner {
     result.table = std::move(current);
     result.updates = sweeps * pairs;
     result.finalResidual = bellmanResidual(result.table, g, threads).max;
-    result.seconds = elapsed();
+    result.seconds = clock.seconds();
     result.stats = {{"sweeps", sweeps}, {"converged", converged}, {"last_change", change}};
     return result;
   }

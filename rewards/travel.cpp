@@ -12,15 +12,15 @@ const BodyPoint kPelvis = BodyPoint::pelvis();
 
 class Travel final : public Term {
  public:
-  explicit Travel(const Params& p) : sign_(p.choice("direction") == "toward" ? 1 : -1), scale_(p.number("scale_m")) {}
+  explicit Travel(const Params& p)
+      : scale_(p.choice("direction") == "toward" ? p.number("scale_m") : -p.number("scale_m")) {}
   double signal(const TermFrame& f) const override {
-    const double progress = sign_ * (f.startDistance - bodyDistance(f.model, f.frame, kPelvis, 2, f.target));
-    return std::clamp(progress / scale_, 0.0, 1.0);
+    const double closer = f.startDistance - bodyDistance(f.model, f.frame, kPelvis, 2, f.target);
+    return std::clamp(closer / scale_, 0.0, 1.0);
   }
 
  private:
-  int sign_;
-  double scale_;
+  double scale_;  ///< m of progress for the full signal; negative when progress is away
 };
 
 }  // namespace

@@ -24,51 +24,52 @@ import tempfile
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 SCENARIO = "scenarios/boxing.yaml"
 
-UNIFORM = "behaviors.hit.learner.type=value_iteration"
-KD = "behaviors.hit.discretizer.type=kd_tree behaviors.hit.discretizer.bounds=hits"
-AVI = "behaviors.hit.learner.type=adaptive_value_iteration"
+
+def hit(part, **settings):
+    """`--set` flags for the hit behaviour's `part` (discretizer or learner): one per setting
+    that is not None, in the order given."""
+    return [f"behaviors.hit.{part}.{key}={value}" for key, value in settings.items() if value is not None]
 
 
-def uniform(a, d, h):
-    return f"{UNIFORM} behaviors.hit.discretizer.angles={a} behaviors.hit.discretizer.distances={d} " \
-           f"behaviors.hit.discretizer.heights={h}"
+def uniform(angles, distances, heights):
+    """Value iteration on the scenario's grid with these vertex counts."""
+    return " ".join(hit("learner", type="value_iteration") +
+                    hit("discretizer", angles=angles, distances=distances, heights=heights))
 
 
-def adaptive(cells, extra):
-    a, d, h = cells
-    return f"{KD} behaviors.hit.discretizer.angle_cells={a} behaviors.hit.discretizer.distance_cells={d} " \
-           f"behaviors.hit.discretizer.height_cells={h} {AVI} {extra}"
+def adaptive(cells, max_vertices, split_axes=None, refinement=None, criterion=None, starts=None):
+    """Adaptive value iteration up to `max_vertices` on a kd_tree of `cells` (angle, distance,
+    height) over the hits' bounds; a setting left None keeps the plug-in's default."""
+    angle_cells, distance_cells, height_cells = cells
+    return " ".join(hit("discretizer", type="kd_tree", bounds="hits", angle_cells=angle_cells,
+                        distance_cells=distance_cells, height_cells=height_cells) +
+                    hit("learner", type="adaptive_value_iteration") +
+                    hit("discretizer", split_axes=split_axes, refinement=refinement) +
+                    hit("learner", max_vertices=max_vertices, criterion=criterion, starts=starts))
 
 
-def forest(budget, cells, criterion):
+def forest(max_vertices, cells, criterion, starts=None):
     """A conforming, longest-axis tree from `cells` (any counts: a forest of root boxes)."""
-    return adaptive(cells, "behaviors.hit.discretizer.split_axes=longest behaviors.hit.discretizer.refinement=conforming "
-                           f"behaviors.hit.learner.max_vertices={budget} behaviors.hit.learner.criterion={criterion}")
+    return adaptive(cells, max_vertices, split_axes="longest", refinement="conforming", criterion=criterion,
+                    starts=starts)
 
 
 # name -> --set flags (space separated). Equal table rows: 480 and 1,920 vertices.
 CONFIGS = {
     "uniform 10x8x6": uniform(10, 8, 6),
     "uniform 20x16x6": uniform(20, 16, 6),
-    "adaptive 480 (old: both, round robin)": adaptive((4, 4, 2), "behaviors.hit.learner.max_vertices=480"),
-    "adaptive 480 longest": adaptive((4, 4, 2), "behaviors.hit.discretizer.split_axes=longest "
-                                                "behaviors.hit.learner.max_vertices=480"),
-    "adaptive 480 longest influence_policy": adaptive(
-        (4, 4, 2), "behaviors.hit.discretizer.split_axes=longest behaviors.hit.learner.max_vertices=480 "
-                   "behaviors.hit.learner.criterion=influence_policy"),
-    "adaptive 1920 longest influence_policy": adaptive(
-        (8, 8, 4), "behaviors.hit.discretizer.split_axes=longest behaviors.hit.learner.max_vertices=1920 "
-                   "behaviors.hit.learner.criterion=influence_policy"),
+    "adaptive 480 (old: both, round robin)": adaptive((4, 4, 2), 480),
+    "adaptive 480 longest": adaptive((4, 4, 2), 480, split_axes="longest"),
+    "adaptive 480 longest influence_policy": adaptive((4, 4, 2), 480, split_axes="longest",
+                                                      criterion="influence_policy"),
+    "adaptive 1920 longest influence_policy": adaptive((8, 8, 4), 1920, split_axes="longest",
+                                                       criterion="influence_policy"),
     # Conforming splits: the neighbours around a split leaf's new corners split too, so that
     # those corners are free (discretizers/README.md).
-    "adaptive 480 conforming influence_policy": adaptive(
-        (4, 4, 2), "behaviors.hit.discretizer.split_axes=longest behaviors.hit.discretizer.refinement=conforming "
-                   "behaviors.hit.learner.max_vertices=480 behaviors.hit.learner.criterion=influence_policy"),
+    "adaptive 480 conforming influence_policy": forest(480, (4, 4, 2), "influence_policy"),
     # From the largest power-of-two cells of the uniform grids' proportions within 85 % of the
     # budget (mgrl_bench_adaptive's start): 8 x 8 x 4 cells, 405 vertices.
-    "adaptive 480 conforming both 8x8x4": adaptive(
-        (8, 8, 4), "behaviors.hit.discretizer.split_axes=longest behaviors.hit.discretizer.refinement=conforming "
-                   "behaviors.hit.learner.max_vertices=480 behaviors.hit.learner.criterion=both"),
+    "adaptive 480 conforming both 8x8x4": forest(480, (8, 8, 4), "both"),
     # A forest start (kd_tree cells of any count): the uniform grid's cells scaled down to 75 %
     # of the budget (mgrl_bench_adaptive's start since kd_tree has root boxes), refined by
     # the value criterion. The cells are what the bench prints for each budget.
@@ -83,16 +84,12 @@ CONFIGS = {
     "adaptive 1920 forest value 17x13x4": forest(1920, (17, 13, 4), "value"),
     # The same with `starts: 3` (the learner also refines from the cells scaled by 0.9 and
     # 0.8, and keeps the tree with the lowest backup gap).
-    "adaptive 120 forest value 4x3x3 starts 3": forest(120, (4, 3, 3), "value") + " behaviors.hit.learner.starts=3",
-    "adaptive 240 forest value 6x4x4 starts 3": forest(240, (6, 4, 4), "value") + " behaviors.hit.learner.starts=3",
-    "adaptive 480 forest value 8x6x4 starts 3": forest(480, (8, 6, 4), "value") + " behaviors.hit.learner.starts=3",
-    "adaptive 1008 forest value 12x10x4 starts 3": forest(1008, (12, 10, 4), "value") +
-    " behaviors.hit.learner.starts=3",
-    "adaptive 1920 forest value 17x13x4 starts 3": forest(1920, (17, 13, 4), "value") +
-    " behaviors.hit.learner.starts=3",
-    "adaptive 480 conforming both": adaptive(
-        (4, 4, 2), "behaviors.hit.discretizer.split_axes=longest behaviors.hit.discretizer.refinement=conforming "
-                   "behaviors.hit.learner.max_vertices=480 behaviors.hit.learner.criterion=both"),
+    "adaptive 120 forest value 4x3x3 starts 3": forest(120, (4, 3, 3), "value", starts=3),
+    "adaptive 240 forest value 6x4x4 starts 3": forest(240, (6, 4, 4), "value", starts=3),
+    "adaptive 480 forest value 8x6x4 starts 3": forest(480, (8, 6, 4), "value", starts=3),
+    "adaptive 1008 forest value 12x10x4 starts 3": forest(1008, (12, 10, 4), "value", starts=3),
+    "adaptive 1920 forest value 17x13x4 starts 3": forest(1920, (17, 13, 4), "value", starts=3),
+    "adaptive 480 conforming both": forest(480, (4, 4, 2), "both"),
 }
 
 

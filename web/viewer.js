@@ -1,14 +1,15 @@
 // The page of `mgrl serve` (docs/viewer-protocol.md): the three.js scene, the socket, and
 // the glue between them. The pieces live in their own modules: protocol.js (frames and
 // messages), avatars.js (bodies, targets, hit flashes), target_drag.js (target mode's
-// mouse input), panel.js (controls), hud.js (read-outs), floor.js (the grid), teach.js
-// and values_view.js (the learned values around avatar 0, the learning curves), learn.js
-// (Q-learning step by step, live retraining).
+// mouse input), panel.js (controls), hud.js (read-outs), stage.js (background and
+// lights), floor.js (the grid), teach.js and values_view.js (the learned values around
+// avatar 0, the learning curves), learn.js (Q-learning step by step, live retraining).
 import * as THREE from 'three';
 import {OrbitControls} from 'three/addons/controls/OrbitControls.js';
 import {Connection, PoseFrame} from './protocol.js';
 import {Avatars, HitFlashes, Targets} from './avatars.js';
 import {TargetDrag} from './target_drag.js';
+import {makeStage} from './stage.js';
 import {makeFloor} from './floor.js';
 import {Panel} from './panel.js';
 import {Hud} from './hud.js';
@@ -40,12 +41,8 @@ const renderer = new THREE.WebGLRenderer({antialias: !software, preserveDrawingB
 renderer.setPixelRatio(software ? 1 : Math.min(window.devicePixelRatio, 2));
 container.append(renderer.domElement);
 
-const scene3d = new THREE.Scene();
-scene3d.background = new THREE.Color(0x1b1f27);
-scene3d.add(new THREE.HemisphereLight(0xdfe8ff, 0x30343c, 1.6));
-const sun = new THREE.DirectionalLight(0xffffff, 1.6);
-sun.position.set(4, 10, 6);
-scene3d.add(sun);
+const scene3d = makeStage({background: 0x1b1f27, sky: 0xdfe8ff, ground: 0x30343c, skyIntensity: 1.6,
+                           sunIntensity: 1.6, sunAt: [4, 10, 6]});
 
 scene3d.add(makeFloor());
 // Far grid lines shimmer (a software renderer draws them without antialiasing): they
@@ -135,44 +132,47 @@ function onScene(message) {
   dirty = true;
 }
 
+function onStats(message) {
+  state.stats = message;
+  hud.setStats(message);
+  panel.setStats(message);
+}
+
+function onHit(message) {
+  if (state.hits.length >= kKeptHits) state.hits.splice(0, kKeptHits / 2);
+  state.hits.push(message);
+  flashes.add(message, performance.now());
+  avatars.strike(message, performance.now());
+  hud.addHit(message);
+  if (performance.now() - hudAt > 100) renderHud();   // the line shows with its flash
+}
+
+function onError(message) {
+  state.lastError = String(message.message);
+  state.errors.push(state.lastError);
+  hud.setError(state.lastError);
+}
+
+// Each message type the server sends (docs/viewer-protocol.md) and what takes it. A Map,
+// not an object: a type such as "constructor" must not find Object's.
+const kHandlers = new Map([
+  ['scene', onScene],
+  ['stats', onStats],
+  ['hit', onHit],
+  ['values', (message) => teach.onValues(message)],
+  ['lesson', (message) => learn.onLesson(message)],
+  ['learn_step', (message) => learn.onStep(message)],
+  ['retrain', (message) => learn.onRetrain(message)],
+  ['error', onError],
+]);
+
 function onMessage(message) {
-  switch (message.type) {
-    case 'scene':
-      onScene(message);
-      break;
-    case 'stats':
-      state.stats = message;
-      hud.setStats(message);
-      panel.setStats(message);
-      break;
-    case 'hit':
-      if (state.hits.length >= kKeptHits) state.hits.splice(0, kKeptHits / 2);
-      state.hits.push(message);
-      flashes.add(message, performance.now());
-      avatars.strike(message, performance.now());
-      hud.addHit(message);
-      if (performance.now() - hudAt > 100) renderHud();   // the line shows with its flash
-      break;
-    case 'values':
-      teach.onValues(message);
-      break;
-    case 'lesson':
-      learn.onLesson(message);
-      break;
-    case 'learn_step':
-      learn.onStep(message);
-      break;
-    case 'retrain':
-      learn.onRetrain(message);
-      break;
-    case 'error':
-      state.lastError = String(message.message);
-      state.errors.push(state.lastError);
-      hud.setError(state.lastError);
-      break;
-    default:
-      console.warn(`mgrl: ignored a message of unknown type "${message.type}"`);
+  const handle = kHandlers.get(message.type);
+  if (handle === undefined) {
+    console.warn(`mgrl: ignored a message of unknown type "${message.type}"`);
+    return;
   }
+  handle(message);
 }
 
 function onFrame(buffer) {

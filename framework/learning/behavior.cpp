@@ -45,8 +45,8 @@ std::pair<nlohmann::json, std::string> behaviorConfigAndKey(const BehaviorSpec& 
   // before the choice.
   if (keyed["environment"].value("against", "") == "previous") keyed["environment"].erase("against");
   // Likewise effort's point: pelvis (the root's ground speed, all effort measured before).
-  if (keyed["reward"].contains("terms") && keyed["reward"]["terms"].is_array())
-    for (nlohmann::json& term : keyed["reward"]["terms"])
+  if (keyed["reward"].contains("terms") && keyed["reward"]["terms"].is_array()) {
+    for (nlohmann::json& term : keyed["reward"]["terms"]) {
       if (term.value("term", "") == "effort" && term.value("point", "") == "pelvis") {
         term.erase("point");
       } else if (term.value("term", "") == "facing" && term.value("prefer", "") != "stance") {
@@ -54,6 +54,8 @@ std::pair<nlohmann::json, std::string> behaviorConfigAndKey(const BehaviorSpec& 
         term.erase("stance");
         term.erase("stances");
       }
+    }
+  }
   Hasher h;
   h.update(std::string_view("mgrl.behavior.v1"));
   h.update(std::string_view(graphKey));

@@ -66,6 +66,28 @@ class TrainObserver {
 /// The number of snapshots `observer` wants (0 for none or no observer).
 inline std::size_t snapshotsWanted(const TrainObserver* observer) { return observer ? observer->snapshotCount() : 0; }
 
+/// A learner's training time: the wall time since the clock started, plus a resumed run's
+/// earlier time, less what the learner leaves out (snapshots, checkpoints, tabulation).
+class TrainingClock {
+ public:
+  explicit TrainingClock(double secondsBefore = 0) : before_(secondsBefore) {}
+  double seconds() const { return before_ + std::chrono::duration<double>(Clock::now() - start_).count() - left_; }
+  void leaveOut(double seconds) { left_ += seconds; }
+  /// Runs `work` and leaves its time out.
+  template <class Work>
+  void leavingOut(Work&& work) {
+    const auto began = Clock::now();
+    std::forward<Work>(work)();
+    left_ += std::chrono::duration<double>(Clock::now() - began).count();
+  }
+
+ private:
+  using Clock = std::chrono::steady_clock;
+  double before_;
+  double left_ = 0;
+  Clock::time_point start_ = Clock::now();
+};
+
 /// Gives `observer` a snapshot and returns the seconds it took, for the learner to leave
 /// out of its training time.
 inline double takeSnapshot(TrainObserver& observer, const QTable& table, const CurvePoint& point,

@@ -345,37 +345,36 @@ BoutStats measureBout(const Bout& bout, const StatsParams& params) {
 }
 
 BoutStats pool(const std::vector<BoutStats>& bouts, const std::string& name) {
+  // Every count and sum adds up over bouts, every per-frame sample list concatenates: a
+  // new field of BoutStats goes into one of these lists.
+  static constexpr std::size_t BoutStats::*kCounts[] = {
+      &BoutStats::bouts,        &BoutStats::fighters,      &BoutStats::frames,
+      &BoutStats::rootSteps,    &BoutStats::reversals,     &BoutStats::punches,
+      &BoutStats::kicks,        &BoutStats::landed,        &BoutStats::blocked,
+      &BoutStats::landedByMore, &BoutStats::landedInPairs, &BoutStats::pairFrames,
+      &BoutStats::closeFrames,  &BoutStats::overlapFrames, &BoutStats::forearmInsideFrames};
+  static constexpr double BoutStats::*kSums[] = {&BoutStats::seconds, &BoutStats::fighterSeconds,
+                                                 &BoutStats::stepSeconds};
+  static constexpr std::vector<double> BoutStats::*kSamples[] = {&BoutStats::fps,
+                                                                 &BoutStats::distance_m,
+                                                                 &BoutStats::facing_deg,
+                                                                 &BoutStats::plantedFootSpeed_mps,
+                                                                 &BoutStats::plantedAnkleSpeed_mps,
+                                                                 &BoutStats::plantedToeSpeed_mps,
+                                                                 &BoutStats::jointStep_m,
+                                                                 &BoutStats::jointSpeed_mps};
+  static_assert(sizeof(BoutStats) == sizeof(std::string) + sizeof kCounts / sizeof(void*) * sizeof(std::size_t) +
+                                         sizeof kSums / sizeof(void*) * sizeof(double) +
+                                         (sizeof kSamples / sizeof(void*) + 1) * sizeof(std::vector<double>),
+                "a field of BoutStats is missing from pool's lists");
   BoutStats p;
   p.name = name;
-  const auto append = [](auto& into, const auto& from) { into.insert(into.end(), from.begin(), from.end()); };
   for (const BoutStats& b : bouts) {
-    p.bouts += b.bouts;
-    p.fighters += b.fighters;
-    p.frames += b.frames;
-    p.seconds += b.seconds;
-    p.fighterSeconds += b.fighterSeconds;
-    append(p.fps, b.fps);
-    append(p.distance_m, b.distance_m);
-    append(p.facing_deg, b.facing_deg);
-    append(p.plantedFootSpeed_mps, b.plantedFootSpeed_mps);
-    append(p.plantedAnkleSpeed_mps, b.plantedAnkleSpeed_mps);
-    append(p.plantedToeSpeed_mps, b.plantedToeSpeed_mps);
-    append(p.jointStep_m, b.jointStep_m);
-    append(p.jointSpeed_mps, b.jointSpeed_mps);
-    p.rootSteps += b.rootSteps;
-    p.reversals += b.reversals;
-    p.stepSeconds += b.stepSeconds;
-    p.punches += b.punches;
-    p.kicks += b.kicks;
-    p.landed += b.landed;
-    p.blocked += b.blocked;
-    append(p.sides, b.sides);
-    p.landedByMore += b.landedByMore;
-    p.landedInPairs += b.landedInPairs;
-    p.pairFrames += b.pairFrames;
-    p.closeFrames += b.closeFrames;
-    p.overlapFrames += b.overlapFrames;
-    p.forearmInsideFrames += b.forearmInsideFrames;
+    for (const auto count : kCounts) p.*count += b.*count;
+    for (const auto sum : kSums) p.*sum += b.*sum;
+    for (const auto samples : kSamples)
+      (p.*samples).insert((p.*samples).end(), (b.*samples).begin(), (b.*samples).end());
+    p.sides.insert(p.sides.end(), b.sides.begin(), b.sides.end());
   }
   return p;
 }

@@ -166,52 +166,29 @@ double OnlineSearchController::reward(std::size_t a, const TargetState& e) const
   return r;
 }
 
+double OnlineSearchController::backup(std::size_t a, const TargetState& e, int depth, double frames) {
+  ++expanded_;
+  return reward(a, e) + discount_[a] * value(model_.actionTo[a], nextHoldingStance(environment_, model_, a, e),
+                                             depth - 1, frames - static_cast<double>(model_.actionLength(a)));
+}
+
 double OnlineSearchController::value(std::uint32_t s, const TargetState& e, int depth, double frames) {
   if (depth == 0 || frames <= 0) return 0;
   double best = -std::numeric_limits<double>::infinity();
-  for (std::uint32_t a = model_.stateActionBegin[s]; a < model_.stateActionBegin[s + 1]; ++a) {
-    ++expanded_;
-    const double q =
-        reward(a, e) + discount_[a] * value(model_.actionTo[a], nextHoldingStance(environment_, model_, a, e),
-                                            depth - 1, frames - static_cast<double>(model_.actionLength(a)));
-    best = std::max(best, q);
-  }
+  for (std::uint32_t a = model_.stateActionBegin[s]; a < model_.stateActionBegin[s + 1]; ++a)
+    best = std::max(best, backup(a, e, depth, frames));
   return best;
 }
 
-std::size_t OnlineSearchController::choose(std::uint32_t s, const TargetState& e) {
-  expanded_ = 0;
-  std::size_t bestAction = model_.stateActionBegin[s];
-  double best = -std::numeric_limits<double>::infinity();
-  for (std::uint32_t a = model_.stateActionBegin[s]; a < model_.stateActionBegin[s + 1]; ++a) {
-    ++expanded_;
-    const double q =
-        reward(a, e) + discount_[a] * value(model_.actionTo[a], nextHoldingStance(environment_, model_, a, e),
-                                            horizon_ - 1, horizonFrames_ - static_cast<double>(model_.actionLength(a)));
-    if (q > best) {
-      best = q;
-      bestAction = a;
-    }
-  }
-  return bestAction;
-}
-
-}  // namespace mgrl
-
-namespace mgrl {
-
-std::size_t OnlineSearchController::choose(std::uint32_t s, const TargetState& e, Rng&,
-                                           std::span<const std::uint8_t> allowed) {
+std::size_t OnlineSearchController::first(std::uint32_t s, const TargetState& e,
+                                          std::span<const std::uint8_t> allowed) {
   expanded_ = 0;
   const std::uint32_t begin = model_.stateActionBegin[s];
   std::size_t bestAction = model_.actionCount();
   double best = -std::numeric_limits<double>::infinity();
   for (std::uint32_t a = begin; a < model_.stateActionBegin[s + 1]; ++a) {
-    if (allowed[a - begin] == 0) continue;
-    ++expanded_;
-    const double q =
-        reward(a, e) + discount_[a] * value(model_.actionTo[a], nextHoldingStance(environment_, model_, a, e),
-                                            horizon_ - 1, horizonFrames_ - static_cast<double>(model_.actionLength(a)));
+    if (!allowed.empty() && allowed[a - begin] == 0) continue;
+    const double q = backup(a, e, horizon_, horizonFrames_);
     if (bestAction == model_.actionCount() || q > best) {
       best = q;
       bestAction = a;
@@ -220,6 +197,13 @@ std::size_t OnlineSearchController::choose(std::uint32_t s, const TargetState& e
   if (bestAction == model_.actionCount())
     throw Error(fmt::format("controller: expected an allowed action at state {}, found none", s));
   return bestAction;
+}
+
+std::size_t OnlineSearchController::choose(std::uint32_t s, const TargetState& e) { return first(s, e, {}); }
+
+std::size_t OnlineSearchController::choose(std::uint32_t s, const TargetState& e, Rng&,
+                                           std::span<const std::uint8_t> allowed) {
+  return first(s, e, allowed);
 }
 
 }  // namespace mgrl

@@ -168,6 +168,12 @@ class OnlineSearchController final : public Controller {
   /// Best discounted value from s with `depth` more actions allowed and `frames` more
   /// frames to cover (frames <= 0: the time horizon is reached).
   double value(std::uint32_t s, const TargetState& e, int depth, double frames);
+  /// Action a's reward plus the discounted best value after it, with depth - 1 actions
+  /// and the frames left after it.
+  double backup(std::size_t a, const TargetState& e, int depth, double frames);
+  /// The first action of the best sequence among the allowed ones (every one when
+  /// `allowed` is empty); ties go to the lowest index.
+  std::size_t first(std::uint32_t s, const TargetState& e, std::span<const std::uint8_t> allowed);
   double reward(std::size_t a, const TargetState& e) const;
 
   const StateActionModel& model_;

@@ -48,9 +48,11 @@ for (const name of glbs) {
 }
 
 // 2. three.js in Chromium. Every request goes to a made-up origin answered from disk, so the
-// page loads nothing from the network.
+// page loads nothing from the network. The page lights its scene as the viewer does
+// (web/stage.js), in colours of its own.
 const files = {
   '/three/': path.join(repo, 'web/node_modules/three/'),
+  '/web/': path.join(repo, 'web/'),
   '/out/': path.resolve(folder) + '/',
 };
 const page_html = `<!doctype html><html><head><meta charset="utf-8">
@@ -85,6 +87,7 @@ try {
     const THREE = await import('three');
     const {GLTFLoader} = await import('three/addons/loaders/GLTFLoader.js');
     const {BVHLoader} = await import('three/addons/loaders/BVHLoader.js');
+    const {makeStage} = await import('/web/stage.js');
     const worldPositions = (root, mixer, time, scale) => {
       mixer.setTime(time);
       root.updateMatrixWorld(true);
@@ -94,12 +97,8 @@ try {
       });
       return out;
     };
-    const scene = new THREE.Scene();
-    scene.background = new THREE.Color(0xeef0f4);
-    scene.add(new THREE.HemisphereLight(0xffffff, 0x667788, 2.0));
-    const sun = new THREE.DirectionalLight(0xffffff, 1.5);
-    sun.position.set(3, 6, 4);
-    scene.add(sun);
+    const scene = makeStage({background: 0xeef0f4, sky: 0xffffff, ground: 0x667788, skyIntensity: 2.0,
+                             sunIntensity: 1.5, sunAt: [3, 6, 4]});
     const floor = new THREE.Mesh(new THREE.PlaneGeometry(20, 20), new THREE.MeshLambertMaterial({color: 0xbfc5cc}));
     floor.rotation.x = -Math.PI / 2;
     scene.add(floor);
