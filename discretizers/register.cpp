@@ -5,10 +5,7 @@
 namespace mgrl::discretizers {
 
 void registerAll(DiscretizerRegistry& registry) {
-  registerPolar2d(registry);
-  registerCylindrical3d(registry);
-  registerKdTree(registry);
-  registerPolarVelocity(registry);
+  for (const auto add : {registerPolar2d, registerCylindrical3d, registerKdTree, registerPolarVelocity}) add(registry);
 }
 
 }  // namespace mgrl::discretizers

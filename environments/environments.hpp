@@ -10,8 +10,8 @@
 
 namespace mgrl::environments {
 
-/// Adds static_target (the paper's: the target stays put in the world), moving_target and
-/// opponent.
+/// Adds static_target (the paper's: the target stays put in the world), moving_target,
+/// opponent and learned_opponent, in the order `mgrl list` shows them (register.cpp).
 void registerAll(EnvironmentRegistry& registry);
 /// Adds static_target and moving_target (environments/static_target.cpp).
 void registerStaticTargets(EnvironmentRegistry& registry);

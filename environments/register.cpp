@@ -5,9 +5,7 @@
 namespace mgrl::environments {
 
 void registerAll(EnvironmentRegistry& registry) {
-  registerStaticTargets(registry);
-  registerOpponent(registry);
-  registerLearnedOpponent(registry);
+  for (const auto add : {registerStaticTargets, registerOpponent, registerLearnedOpponent}) add(registry);
 }
 
 }  // namespace mgrl::environments

@@ -5,10 +5,9 @@
 namespace mgrl::learners {
 
 void registerAll(LearnerRegistry& registry) {
-  registerQLearning(registry);
-  registerValueIteration(registry);
-  registerAdaptiveValueIteration(registry);
-  registerMpiValueIteration(registry);
+  for (const auto add :
+       {registerQLearning, registerValueIteration, registerAdaptiveValueIteration, registerMpiValueIteration})
+    add(registry);
 }
 
 }  // namespace mgrl::learners

@@ -141,22 +141,19 @@ class PyEpisodes {
 }  // namespace
 
 void bindEpisodes(py::module_& m) {
-  py::class_<PyEpisodes>(m, "Episodes")
-      .def(py::init<py::object, const std::string&, std::size_t, double, bool>(), py::arg("session"),
-           py::arg("behavior"), py::arg("count") = 1, py::arg("seconds") = 10.0, py::arg("end_on_success") = false)
-      .def_property_readonly("count", &PyEpisodes::count)
-      .def_property_readonly("max_actions", &PyEpisodes::maxActions)
-      .def_property_readonly("dimension", &PyEpisodes::dimension)
-      .def_property_readonly("states", &PyEpisodes::states)
-      .def_property_readonly("bounds", &PyEpisodes::bounds)
-      .def_property_readonly("axes", &PyEpisodes::axisNames)
-      .def_property_readonly("reach", &PyEpisodes::reach)
-      .def("observe", &PyEpisodes::observe, py::arg("i"))
-      .def("reset", &PyEpisodes::reset, py::arg("i"), py::arg("seed") = py::none())
-      .def("step", &PyEpisodes::step, py::arg("i"), py::arg("choice"))
-      .def("observe_all", &PyEpisodes::observeAll)
-      .def("reset_all", &PyEpisodes::resetAll, py::arg("seed") = py::none())
-      .def("step_all", &PyEpisodes::stepAll, py::arg("actions"));
+  using E = PyEpisodes;
+  py::class_<E> episodes(m, "Episodes");
+  episodes.def(py::init<py::object, const std::string&, std::size_t, double, bool>(), py::arg("session"),
+               py::arg("behavior"), py::arg("count") = 1, py::arg("seconds") = 10.0, py::arg("end_on_success") = false);
+  bindReadonly(episodes, Readonly{"count", &E::count}, Readonly{"max_actions", &E::maxActions},
+               Readonly{"dimension", &E::dimension}, Readonly{"states", &E::states}, Readonly{"bounds", &E::bounds},
+               Readonly{"axes", &E::axisNames}, Readonly{"reach", &E::reach});
+  episodes.def("observe", &E::observe, py::arg("i"))
+      .def("reset", &E::reset, py::arg("i"), py::arg("seed") = py::none())
+      .def("step", &E::step, py::arg("i"), py::arg("choice"))
+      .def("observe_all", &E::observeAll)
+      .def("reset_all", &E::resetAll, py::arg("seed") = py::none())
+      .def("step_all", &E::stepAll, py::arg("actions"));
 }
 
 }  // namespace mgrl::python

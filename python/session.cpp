@@ -41,22 +41,15 @@ py::dict graphArrays(py::object self) {
 }  // namespace
 
 void bindSession(py::module_& m) {
-  py::class_<ProblemArrays>(m, "Problem")
-      .def_readonly("behavior", &ProblemArrays::behavior)
-      .def_readonly("rewards", &ProblemArrays::rewards)
-      .def_readonly("corners", &ProblemArrays::corners)
-      .def_readonly("weights", &ProblemArrays::weights)
-      .def_readonly("discount", &ProblemArrays::discount)
-      .def_readonly("next_state", &ProblemArrays::nextState)
-      .def_property_readonly("out_actions",
-                             [](const ProblemArrays& p) { return py::make_tuple(p.outIndptr, p.outIndices); })
-      .def_readonly("vertices", &ProblemArrays::vertices)
-      .def_readonly("states", &ProblemArrays::states)
-      .def_readonly("actions", &ProblemArrays::actions)
-      .def_readonly("dimension", &ProblemArrays::dimension)
-      .def_readonly("tabulate_seconds", &ProblemArrays::tabulateSeconds)
-      .def_readonly("arrays_seconds", &ProblemArrays::arraysSeconds)
-      .def_property_readonly("vertex_count", [](const ProblemArrays& p) { return p.vertexCount; });
+  using P = ProblemArrays;
+  py::class_<P> problem(m, "Problem");
+  bindReadonly(problem, Readonly{"behavior", &P::behavior}, Readonly{"rewards", &P::rewards},
+               Readonly{"corners", &P::corners}, Readonly{"weights", &P::weights}, Readonly{"discount", &P::discount},
+               Readonly{"next_state", &P::nextState}, Readonly{"vertices", &P::vertices},
+               Readonly{"states", &P::states}, Readonly{"actions", &P::actions}, Readonly{"dimension", &P::dimension},
+               Readonly{"tabulate_seconds", &P::tabulateSeconds}, Readonly{"arrays_seconds", &P::arraysSeconds},
+               Readonly{"vertex_count", &P::vertexCount});
+  problem.def_property_readonly("out_actions", [](const P& p) { return py::make_tuple(p.outIndptr, p.outIndices); });
 
   py::class_<PySession>(m, "Session")
       .def(py::init<const std::filesystem::path&, const py::object&, const py::object&, const py::object&>(),

@@ -5,6 +5,7 @@
 #include <pybind11/pybind11.h>
 
 #include <string>
+#include <type_traits>
 #include <vector>
 
 namespace py = pybind11;
@@ -24,6 +25,30 @@ py::array_t<T> view(const T* data, std::vector<py::ssize_t> shape, py::handle ow
   // Read-only: the session's graph is shared by everything made from it.
   reinterpret_cast<py::detail::PyArray_Proxy*>(a.ptr())->flags &= ~py::detail::npy_api::NPY_ARRAY_WRITEABLE_;
   return a;
+}
+
+// A read-only attribute of a bound class: its Python name and the C++ member behind it,
+// a data member or a const member function that takes nothing.
+template <class Member>
+struct Readonly {
+  const char* name;
+  Member member;
+};
+template <class Member>
+Readonly(const char*, Member) -> Readonly<Member>;  // clang 14 deduces no aggregate's arguments
+
+// Binds each of `attributes` to `cls`: data members by def_readonly (NumPy arrays stay the
+// member's own), member functions as properties.
+template <class Class, class... Members>
+Class& bindReadonly(Class& cls, Readonly<Members>... attributes) {
+  const auto bindOne = [&cls](const char* name, auto member) {
+    if constexpr (std::is_member_object_pointer_v<decltype(member)>)
+      cls.def_readonly(name, member);
+    else
+      cls.def_property_readonly(name, member);
+  };
+  (bindOne(attributes.name, attributes.member), ...);
+  return cls;
 }
 
 // `sets` as the command line takes them: a dict {key: value} or a list of "key=value".

@@ -16,13 +16,9 @@ namespace {
 const Vocabulary& vocabulary() {
   static const Vocabulary v = [] {
     Vocabulary terms;
-    registerDistance(terms);
-    registerFacing(terms);
-    registerContact(terms);
-    registerTravel(terms);
-    registerEffort(terms);
-    registerAvoid(terms);
-    registerStruck(terms);
+    for (const auto add : {registerDistance, registerFacing, registerContact, registerTravel, registerEffort,
+                           registerAvoid, registerStruck})
+      add(terms);
     return terms;
   }();
   return v;

@@ -9,15 +9,9 @@
 #include "mgrl/core/bundle.hpp"
 
 namespace mgrl {
-namespace {
 
 namespace fs = std::filesystem;
 using nlohmann::json;
-
-constexpr std::string_view kStateFile = "state.json";
-constexpr std::string_view kTableFile = "table.npy";
-
-}  // namespace
 
 DirectoryCheckpointer::DirectoryCheckpointer(fs::path dir, std::string key, const StateActionModel& model,
                                              std::size_t vertexCount, WarningSink log)
@@ -36,8 +30,8 @@ void DirectoryCheckpointer::requireTableShape(const QTable& table) const {
 
 void DirectoryCheckpointer::save(const json& state, const QTable& table) {
   requireTableShape(table);
-  EncodedArray array = encodeBundleArray<float>(std::string(kTableFile), table.actionMajor(),
-                                                {actionCount_, vertexCount_});
+  EncodedArray array =
+      encodeBundleArray<float>(std::string(kCheckpointTableFile), table.actionMajor(), {actionCount_, vertexCount_});
   json manifest = {{"format", std::string(kCheckpointFormatName)},
                          {"version", kCheckpointFormatVersion},
                          {"key", key_},
@@ -51,7 +45,7 @@ void DirectoryCheckpointer::save(const json& state, const QTable& table) {
   } catch (const json::exception& e) {
     throw Error(fmt::format("{}: state: expected valid UTF-8 strings, found {}", dir_.string(), e.what()));
   }
-  writeBundleDirectory(dir_, {std::move(array.file)}, text, "checkpoint", kStateFile);
+  writeBundleDirectory(dir_, {std::move(array.file)}, text, "checkpoint", kCheckpointStateFile);
 }
 
 std::optional<json> DirectoryCheckpointer::load(QTable& table) { return loadChecked(table, {}); }
@@ -59,12 +53,12 @@ std::optional<json> DirectoryCheckpointer::load(QTable& table) { return loadChec
 std::optional<json> DirectoryCheckpointer::loadChecked(QTable& table, const StateCheck& check) {
   requireTableShape(table);
   std::error_code ec;
-  recoverBundleDirectory(dir_, kStateFile);  // what a killed writer left (issue 19)
+  recoverBundleDirectory(dir_, kCheckpointStateFile);  // what a killed writer left (issue 19)
   const fs::file_status status = fs::status(dir_, ec);
   if (status.type() == fs::file_type::not_found) return std::nullopt;
 
   // A checkpoint only saves time: whatever is wrong with it, say so and start over.
-  const fs::path statePath = dir_ / kStateFile;
+  const fs::path statePath = dir_ / kCheckpointStateFile;
   const ManifestReader reader(statePath.string());
   std::string reason;
   try {
@@ -97,10 +91,11 @@ std::optional<json> DirectoryCheckpointer::loadChecked(QTable& table, const Stat
     if (check) check(state, reader);
 
     std::vector<std::size_t> shape;
-    const std::vector<float> values = loadBundleArray<float>(dir_, reader, manifest, "", "table", kTableFile, &shape);
+    const std::vector<float> values =
+        loadBundleArray<float>(dir_, reader, manifest, "", "table", kCheckpointTableFile, &shape);
     if (shape != std::vector<std::size_t>{actionCount_, vertexCount_})
       throw Error(fmt::format("{}: expected shape ({}, {}) (actions, vertices), found {}",
-                              (dir_ / kTableFile).string(), actionCount_, vertexCount_, formatShape(shape)));
+                              (dir_ / kCheckpointTableFile).string(), actionCount_, vertexCount_, formatShape(shape)));
     table.setActionMajor(values);
     return state;
   } catch (const Error& e) {
@@ -122,7 +117,7 @@ void DirectoryCheckpointer::remove() {
   for (const StaleSibling& stale : staleSiblings(dir_)) fs::remove_all(stale.path, ec);
   if (!fs::is_directory(fs::symlink_status(dir_, ec))) return;
   // Never delete a directory that is not a checkpoint (a mistyped path).
-  if (!fs::exists(dir_ / kStateFile, ec) && !fs::is_empty(dir_, ec)) return;
+  if (!fs::exists(dir_ / kCheckpointStateFile, ec) && !fs::is_empty(dir_, ec)) return;
   fs::remove_all(dir_, ec);
 }
 

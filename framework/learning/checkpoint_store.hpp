@@ -31,6 +31,9 @@ namespace mgrl {
 /// The state file's "format" and "version"; a checkpoint with others is ignored.
 inline constexpr std::string_view kCheckpointFormatName = "mgrl.checkpoint";
 inline constexpr int kCheckpointFormatVersion = 2;
+/// The checkpoint's two files in its directory (the layout above).
+inline constexpr std::string_view kCheckpointStateFile = "state.json";
+inline constexpr std::string_view kCheckpointTableFile = "table.npy";
 
 /// Keeps one checkpoint in a directory. A checkpoint is only resumed by a run with the
 /// same `key` (the caller's hash of the problem and learner settings); anything else

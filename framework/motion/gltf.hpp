@@ -34,13 +34,9 @@ struct GltfWriteOptions {
   std::map<int, double> jointRadii;
   /// Capsule radius of any other bone: this share of its length, within [minRadius,
   /// maxRadius] (metres); bones shorter than minBoneLength get no capsule.
-  double radiusPerLength = 0.2;
-  double minRadius = 0.025;
-  double maxRadius = 0.075;
-  double minBoneLength = 0.01;
+  double radiusPerLength = 0.2, minRadius = 0.025, maxRadius = 0.075, minBoneLength = 0.01;
   /// Sides around a capsule and rings per half sphere.
-  int segments = 10;
-  int capRings = 3;
+  int segments = 10, capRings = 3;
   /// Written as the asset's generator.
   std::string generator = "mgrl";
 };
