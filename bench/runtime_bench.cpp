@@ -48,10 +48,12 @@ double heapBytes() {
 
 int main(int argc, char** argv) {
   unsigned threads = mgrl::defaultThreadCount();
-  const auto [runs, quick] = mgrl::bench::parseRunArgs(
+  const mgrl::bench::RunArgs args = mgrl::bench::parseRunArgs(
       argc, argv, "mgrl_bench_runtime: decisions, poses and crowds of the boxing scenario", 5, 3, [&](CLI::App& app) {
         app.add_option("--threads", threads, "threads of the crowd runs")->check(CLI::Range(1, 1000));
       });
+  const int runs = args.runs;
+  const bool quick = args.quick;
   try {
     const mgrl::app::TrainOptions train = mgrl::bench::trainBoxingByValueIteration("runtime");
     const fs::path scratch = train.cacheDir;

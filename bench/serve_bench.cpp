@@ -42,11 +42,12 @@ constexpr double kSharedSeconds = 6;
 
 int main(int argc, char** argv) {
   bool shared = false;
-  const auto [runs, quick] = mgrl::bench::parseRunArgs(
+  const mgrl::bench::RunArgs args = mgrl::bench::parseRunArgs(
       argc, argv, "mgrl_bench_serve: the viewer's server under pages", 5, 3, [&](CLI::App& app) {
         app.add_flag("--shared", shared, "also time a light page beside crowds sharing the server");
       });
-  const int frames = quick ? 60 : 150;
+  const int runs = args.runs;
+  const int frames = args.quick ? 60 : 150;
   try {
     const mgrl::app::TrainOptions train = mgrl::bench::trainBoxingByValueIteration("serve");
     const fs::path scratch = train.cacheDir;
