@@ -6,11 +6,13 @@
 #include <catch2/catch.hpp>
 
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <cstring>
 #include <filesystem>
 #include <limits>
 #include <optional>
+#include <thread>
 #include <utility>
 
 #include <fmt/format.h>
@@ -284,6 +286,21 @@ TEST_CASE("value iteration gives the corridor's closed-form values", "[learning]
 // nothing, so they cannot tell this reward from 0: a lunge, the punch taken while walking
 // 0.5 m forward, lands its hit on a target 0.5 m ahead (gamma^3 on frame 3) and then
 // leaves it at distance 0, off the grid.
+TEST_CASE("a learner's training clock leaves out what it is told to and adds a resumed run's time", "[learning]") {
+  const auto sleep = [] { std::this_thread::sleep_for(std::chrono::milliseconds(150)); };
+  mgrl::TrainingClock clock;
+  clock.leavingOut(sleep);
+  CHECK(clock.seconds() < 0.1);  // the 150 ms slept are not training
+  sleep();
+  const double trained = clock.seconds();
+  CHECK(trained >= 0.15);
+  clock.leaveOut(trained);
+  CHECK(clock.seconds() < 0.1);
+  const mgrl::TrainingClock resumed(100);
+  CHECK(resumed.seconds() >= 100);
+  CHECK(resumed.seconds() < 100.1);
+}
+
 TEST_CASE("a step that leaves the grid backs up its own reward and no future", "[learning]") {
   const ActionHit punch{0, 3, 1, 0.0f, 1.0f, 0.5f, 1.0f};
   const CorridorSetup parts(2, handModel(1, {{0, 0, 5, 0, 0.5, 0, {}}, {0, 0, 5, 0, -0.5, 0, {}},

@@ -184,6 +184,39 @@ TEST_CASE("stats: strikes are counted each way, per fighter and for the stronger
   CHECK(p.landedInPairs == 2);
 }
 
+TEST_CASE("stats: pooling sums every count and time and joins every sample list and side", "[stats]") {
+  // Every field of BoutStats set, one bout's to 1 (or {1}), the other's to 2 (or {2, 2}).
+  const auto filled = [](std::size_t n) {
+    BoutStats b;
+    const double x = static_cast<double>(n);
+    for (std::size_t* count :
+         {&b.bouts, &b.fighters, &b.frames, &b.rootSteps, &b.reversals, &b.punches, &b.kicks, &b.landed, &b.blocked,
+          &b.landedByMore, &b.landedInPairs, &b.pairFrames, &b.closeFrames, &b.overlapFrames, &b.forearmInsideFrames})
+      *count = n;
+    for (double* sum : {&b.seconds, &b.fighterSeconds, &b.stepSeconds}) *sum = x;
+    for (std::vector<double>* samples :
+         {&b.fps, &b.distance_m, &b.facing_deg, &b.plantedFootSpeed_mps, &b.plantedAnkleSpeed_mps,
+          &b.plantedToeSpeed_mps, &b.jointStep_m, &b.jointSpeed_mps})
+      samples->assign(n, x);
+    b.sides.assign(n, BoutStats::Side{"f" + std::to_string(n), n, n, n, x});
+    return b;
+  };
+  const BoutStats p = mgrl::pool({filled(1), filled(2)}, "pooled");
+  CHECK(p.name == "pooled");
+  for (std::size_t count :
+       {p.bouts, p.fighters, p.frames, p.rootSteps, p.reversals, p.punches, p.kicks, p.landed, p.blocked,
+        p.landedByMore, p.landedInPairs, p.pairFrames, p.closeFrames, p.overlapFrames, p.forearmInsideFrames})
+    CHECK(count == 3);
+  for (double sum : {p.seconds, p.fighterSeconds, p.stepSeconds}) CHECK(sum == 3.0);
+  for (const std::vector<double>& samples :
+       {p.fps, p.distance_m, p.facing_deg, p.plantedFootSpeed_mps, p.plantedAnkleSpeed_mps, p.plantedToeSpeed_mps,
+        p.jointStep_m, p.jointSpeed_mps})
+    CHECK(samples == std::vector<double>{1, 2, 2});
+  REQUIRE(p.sides.size() == 3);
+  CHECK(p.sides[0].source == "f1");
+  CHECK(p.sides[2].source == "f2");
+}
+
 TEST_CASE("stats: bodies 20 cm apart interpenetrate every frame", "[stats]") {
   const BoutStats s = measureFolder("overlap");
   CHECK(s.pairFrames == 60);

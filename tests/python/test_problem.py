@@ -79,6 +79,32 @@ class ProblemTest(unittest.TestCase):
         self.assertTrue(((p.weights == 0) | inside).all())
         self.assertTrue((p.discount > 0).all() and (p.discount < 1).all())
 
+    def test_every_attribute_is_there_and_read_only(self):
+        p = self.session.problem("approach")
+        A, V = p.rewards.shape
+        self.assertEqual(p.behavior, "approach")
+        self.assertEqual((p.actions, p.vertex_count), (A, V))
+        self.assertEqual(p.states, len(p.out_actions[0]) - 1)
+        self.assertGreaterEqual(p.tabulate_seconds, 0)
+        self.assertGreaterEqual(p.arrays_seconds, 0)
+        for name in ("behavior", "rewards", "corners", "weights", "discount", "next_state", "out_actions",
+                     "vertices", "states", "actions", "dimension", "tabulate_seconds", "arrays_seconds",
+                     "vertex_count"):
+            with self.subTest(name=name):
+                getattr(p, name)  # bound (a pybind11 class also refuses to set an unknown name)
+                with self.assertRaises(AttributeError):
+                    setattr(p, name, 0)
+        episodes = mgrl._core.Episodes(self.session, "approach", 2, 10.0, False)
+        self.assertEqual(episodes.count, 2)
+        self.assertEqual(episodes.dimension, p.dimension)
+        self.assertEqual(episodes.max_actions, int(np.diff(p.out_actions[0]).max()))
+        self.assertEqual(len(episodes.axes), p.dimension)
+        for name in ("count", "max_actions", "dimension", "states", "bounds", "axes", "reach"):
+            with self.subTest(name=name):
+                getattr(episodes, name)
+                with self.assertRaises(AttributeError):
+                    setattr(episodes, name, 0)
+
     def test_numpy_value_iteration_reproduces_the_cpp_one(self):
         p = self.session.problem("approach")
         mine = numpy_value_iteration(p)
