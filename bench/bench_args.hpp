@@ -1,6 +1,8 @@
 #pragma once
-// The benchmarks' command lines, parsed by CLI11 as mgrl's own: every benchmark takes
-// --runs, those with a quick form --quick, and each adds its own options.
+// The command lines of the benchmarks that take --runs and --data or --quick (graph, load,
+// runtime, serve), parsed by CLI11 as mgrl's are: a value out of range or an unknown
+// option is refused with CLI11's message and exit status 2. learn, adaptive, memory and
+// mpi parse their own longer lists.
 #include <cstdlib>
 #include <filesystem>
 #include <functional>
@@ -16,15 +18,18 @@ struct RunArgs {
   bool quick = false;  ///< --quick: fewer runs (unless --runs says) and smaller loads
 };
 
-/// Parses `--runs N` (at least 1; default `runs`), `--quick` when `quickRuns` > 0 (then
-/// runs is quickRuns unless --runs is given) and what `more` adds. A bad command line
-/// prints CLI11's message and exits with 2; --help prints the options and exits with 0.
+/// Parses `--runs N` (1 to 1000; default `runs`; given twice, the last counts), `--quick`
+/// when `quickRuns` > 0 (then runs is quickRuns unless --runs is given, wherever it
+/// stands: before this parser, `--runs 1 --quick` gave quickRuns) and what `more` adds. A
+/// bad command line prints CLI11's message and exits with 2; --help prints the options
+/// and exits with 0.
 inline RunArgs parseRunArgs(int argc, char** argv, const std::string& about, int runs, int quickRuns = 0,
                             const std::function<void(CLI::App&)>& more = {}) {
   CLI::App app(about);
   RunArgs args{runs, false};
-  CLI::Option* runsOption =
-      app.add_option("--runs", args.runs, "timed runs; the median is reported")->check(CLI::Range(1, 1000));
+  CLI::Option* runsOption = app.add_option("--runs", args.runs, "timed runs; the median is reported")
+                                ->check(CLI::Range(1, 1000))
+                                ->take_last();
   if (quickRuns > 0) app.add_flag("--quick", args.quick, fmt::format("{} runs and smaller loads", quickRuns));
   if (more) more(app);
   try {

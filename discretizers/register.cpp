@@ -1,5 +1,6 @@
 // The discretizers this folder offers, in the order `mgrl list` shows them. A new grid is
-// its own file with its register function, declared and called here (docs/extending.md).
+// its own file with its register function, declared in discretizers.hpp and named in the list
+// below (docs/extending.md).
 #include "discretizers.hpp"
 
 namespace mgrl::discretizers {

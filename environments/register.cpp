@@ -1,5 +1,6 @@
 // The environment models this folder offers, in the order `mgrl list` shows them. A new
-// model is its own file with its register function, declared and called here.
+// model is its own file with its register function, declared in environments.hpp and named
+// in the list below (docs/extending.md).
 #include "environments.hpp"
 
 namespace mgrl::environments {

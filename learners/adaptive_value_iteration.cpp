@@ -18,7 +18,6 @@
 // Why one file of about 650 lines: the refinement loop, the splitting criteria and the
 // influence field are one algorithm from one paper, and the criteria are private to it.
 #include <algorithm>
-#include <chrono>
 #include <cmath>
 #include <limits>
 #include <numeric>

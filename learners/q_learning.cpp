@@ -9,7 +9,6 @@
 // from 1 over the budget of actions.
 #include <algorithm>
 #include <array>
-#include <chrono>
 #include <cmath>
 #include <limits>
 #include <thread>

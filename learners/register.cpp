@@ -1,5 +1,6 @@
 // The learners this folder offers, in the order `mgrl list` shows them. A new learner is
-// its own file with its register function, declared and called here (docs/extending.md).
+// its own file with its register function, declared in learners.hpp and named in the list
+// below (docs/extending.md).
 #include "learners.hpp"
 
 namespace mgrl::learners {

@@ -2,7 +2,6 @@
 // action) pair until nothing changes more than a tolerance: the exact answer on the grid,
 // the reference other learners are measured against (DESIGN.md sec. 4).
 #include <algorithm>
-#include <chrono>
 #include <cmath>
 
 #include "learners.hpp"

@@ -1,6 +1,6 @@
 // The rewards this folder offers, and the terms of the `terms` reward, in the order
 // `mgrl list` shows them. A new reward or term is its own file with its register function,
-// declared in rewards.hpp (a term: term.hpp) and called here.
+// declared in rewards.hpp (a term: term.hpp) and called (a term: named in the list) here.
 #include "rewards.hpp"
 
 namespace mgrl::rewards {

@@ -280,12 +280,6 @@ TEST_CASE("value iteration gives the corridor's closed-form values", "[learning]
   REQUIRE(vi.finalResidual < 1e-6);
 }
 
-// A backup whose target leaves the grid is the action's own reward, earned before it left,
-// with no future: r(v, a) + gamma^t * 0 (problem.hpp's backup(); "future value 0 there,
-// paper sec. 4.2", Discretizer::locate()). The corridor's own ways out of the grid earn
-// nothing, so they cannot tell this reward from 0: a lunge, the punch taken while walking
-// 0.5 m forward, lands its hit on a target 0.5 m ahead (gamma^3 on frame 3) and then
-// leaves it at distance 0, off the grid.
 TEST_CASE("a learner's training clock leaves out what it is told to and adds a resumed run's time", "[learning]") {
   const auto sleep = [] { std::this_thread::sleep_for(std::chrono::milliseconds(150)); };
   mgrl::TrainingClock clock;
@@ -301,6 +295,12 @@ TEST_CASE("a learner's training clock leaves out what it is told to and adds a r
   CHECK(resumed.seconds() < 100.1);
 }
 
+// A backup whose target leaves the grid is the action's own reward, earned before it left,
+// with no future: r(v, a) + gamma^t * 0 (problem.hpp's backup(); "future value 0 there,
+// paper sec. 4.2", Discretizer::locate()). The corridor's own ways out of the grid earn
+// nothing, so they cannot tell this reward from 0: a lunge, the punch taken while walking
+// 0.5 m forward, lands its hit on a target 0.5 m ahead (gamma^3 on frame 3) and then
+// leaves it at distance 0, off the grid.
 TEST_CASE("a step that leaves the grid backs up its own reward and no future", "[learning]") {
   const ActionHit punch{0, 3, 1, 0.0f, 1.0f, 0.5f, 1.0f};
   const CorridorSetup parts(2, handModel(1, {{0, 0, 5, 0, 0.5, 0, {}}, {0, 0, 5, 0, -0.5, 0, {}},

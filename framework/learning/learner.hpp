@@ -11,6 +11,7 @@
 #include <memory>
 #include <optional>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include <nlohmann/json.hpp>
@@ -70,8 +71,11 @@ inline std::size_t snapshotsWanted(const TrainObserver* observer) { return obser
 /// earlier time, less what the learner leaves out (snapshots, checkpoints, tabulation).
 class TrainingClock {
  public:
+  /// Starts now, `secondsBefore` already trained.
   explicit TrainingClock(double secondsBefore = 0) : before_(secondsBefore) {}
+  /// The training time so far (s).
   double seconds() const { return before_ + std::chrono::duration<double>(Clock::now() - start_).count() - left_; }
+  /// Leaves `seconds` already spent outside training out.
   void leaveOut(double seconds) { left_ += seconds; }
   /// Runs `work` and leaves its time out.
   template <class Work>

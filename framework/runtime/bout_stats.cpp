@@ -363,9 +363,9 @@ BoutStats pool(const std::vector<BoutStats>& bouts, const std::string& name) {
                                                                  &BoutStats::plantedToeSpeed_mps,
                                                                  &BoutStats::jointStep_m,
                                                                  &BoutStats::jointSpeed_mps};
-  static_assert(sizeof(BoutStats) == sizeof(std::string) + sizeof kCounts / sizeof(void*) * sizeof(std::size_t) +
-                                         sizeof kSums / sizeof(void*) * sizeof(double) +
-                                         (sizeof kSamples / sizeof(void*) + 1) * sizeof(std::vector<double>),
+  static_assert(sizeof(BoutStats) == sizeof(std::string) + std::size(kCounts) * sizeof(std::size_t) +
+                                         std::size(kSums) * sizeof(double) +
+                                         (std::size(kSamples) + 1) * sizeof(std::vector<double>),
                 "a field of BoutStats is missing from pool's lists");
   BoutStats p;
   p.name = name;

@@ -180,8 +180,8 @@ double OnlineSearchController::value(std::uint32_t s, const TargetState& e, int 
   return best;
 }
 
-std::size_t OnlineSearchController::first(std::uint32_t s, const TargetState& e,
-                                          std::span<const std::uint8_t> allowed) {
+std::size_t OnlineSearchController::bestFirstAction(std::uint32_t s, const TargetState& e,
+                                                    std::span<const std::uint8_t> allowed) {
   expanded_ = 0;
   const std::uint32_t begin = model_.stateActionBegin[s];
   std::size_t bestAction = model_.actionCount();
@@ -199,11 +199,11 @@ std::size_t OnlineSearchController::first(std::uint32_t s, const TargetState& e,
   return bestAction;
 }
 
-std::size_t OnlineSearchController::choose(std::uint32_t s, const TargetState& e) { return first(s, e, {}); }
+std::size_t OnlineSearchController::choose(std::uint32_t s, const TargetState& e) { return bestFirstAction(s, e, {}); }
 
 std::size_t OnlineSearchController::choose(std::uint32_t s, const TargetState& e, Rng&,
                                            std::span<const std::uint8_t> allowed) {
-  return first(s, e, allowed);
+  return bestFirstAction(s, e, allowed);
 }
 
 }  // namespace mgrl

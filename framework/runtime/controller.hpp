@@ -173,7 +173,7 @@ class OnlineSearchController final : public Controller {
   double backup(std::size_t a, const TargetState& e, int depth, double frames);
   /// The first action of the best sequence among the allowed ones (every one when
   /// `allowed` is empty); ties go to the lowest index.
-  std::size_t first(std::uint32_t s, const TargetState& e, std::span<const std::uint8_t> allowed);
+  std::size_t bestFirstAction(std::uint32_t s, const TargetState& e, std::span<const std::uint8_t> allowed);
   double reward(std::size_t a, const TargetState& e) const;
 
   const StateActionModel& model_;

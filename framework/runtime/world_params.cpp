@@ -1,4 +1,5 @@
 // The world section of a scenario (paper sec. 6.6): its parameters, read and reported.
+#include <string>
 #include <utility>
 #include <vector>
 
@@ -16,9 +17,9 @@ struct Field {
   bool WorldParams::*flag = nullptr;
 };
 
-template <class... Spec>
-Field number(double WorldParams::*member, Spec&&... spec) {
-  return {ParamSpec::number(std::forward<Spec>(spec)...), member, nullptr};
+Field number(double WorldParams::*member, std::string name, double fallback, double min, double max, std::string unit,
+             std::string help) {
+  return {ParamSpec::number(std::move(name), fallback, min, max, std::move(unit), std::move(help)), member, nullptr};
 }
 
 Field boolean(bool WorldParams::*member, std::string name, bool fallback, std::string help) {
@@ -28,7 +29,7 @@ Field boolean(bool WorldParams::*member, std::string name, bool fallback, std::s
 /// After mode, aim, top_k and margin, in `mgrl list`'s order.
 const std::vector<Field>& fields() {
   using W = WorldParams;
-  static const std::vector<Field> fields = {
+  static const std::vector<Field> table = {
       number(&W::spacing, "spacing", 4.0, 0.5, 100, "m", "distance between neighbouring pairs on the floor"),
       number(&W::startDistance, "start_distance", 1.6, 0.3, 20, "m", "distance between sparring partners at the start"),
       number(&W::targetHold, "target_hold", 3.0, 0.1, 3600, "s", "targets mode: a target stays this long, then moves"),
@@ -68,7 +69,7 @@ const std::vector<Field>& fields() {
       number(&W::reactionSeconds, "reaction_seconds", 0.5, 0.05, 5, "s",
              "time for a hit reaction to fade (to under 10 %)"),
   };
-  return fields;
+  return table;
 }
 
 }  // namespace
