@@ -29,6 +29,7 @@
 #include "app/learn_commands.hpp"
 #include "app/learn_common.hpp"
 #include "app/plugins.hpp"
+#include "bench_args.hpp"
 #include "bench_support.hpp"
 #include "boxing_setup.hpp"
 #include "mgrl/core/parallel.hpp"
@@ -149,59 +150,62 @@ std::string startCells(std::size_t budget, double share) {
 }
 
 int main(int argc, char** argv) {
-  int runs = 5;
   std::vector<Budget> budgets;
   std::vector<Variant> variants;
   double startShare = 0.75;
-  bool pow2Start = false;
-  bool quick = false, error = true, decision = true;
+  bool pow2Start = false, noError = false, noDecision = false;
   std::array<int, 3> reference{40, 32, 12};
   std::size_t pointCount = 3000;
-  for (int i = 1; i < argc; ++i) {
-    if (!std::strcmp(argv[i], "--quick")) {
-      quick = true;
-      runs = 3;
-      reference = {30, 24, 9};
-      pointCount = 1000;
-    } else if (!std::strcmp(argv[i], "--runs") && i + 1 < argc) {
-      runs = std::max(1, std::atoi(argv[++i]));
-    } else if (!std::strcmp(argv[i], "--points") && i + 1 < argc) {
-      pointCount = static_cast<std::size_t>(std::max(1, std::atoi(argv[++i])));
-    } else if (!std::strcmp(argv[i], "--reference") && i + 1 < argc &&
-               std::sscanf(argv[i + 1], "%d,%d,%d", &reference[0], &reference[1], &reference[2]) == 3) {
-      ++i;
-    } else if (!std::strcmp(argv[i], "--budget") && i + 1 < argc) {
-      Budget b{};
-      if (std::sscanf(argv[++i], "%d,%d,%d", &b.uniform[0], &b.uniform[1], &b.uniform[2]) != 3) {
-        std::fprintf(stderr, "mgrl_bench_adaptive: --budget: expected A,D,H, found '%s'\n", argv[i]);
-        return 2;
-      }
-      budgets.push_back(b);
-    } else if (!std::strcmp(argv[i], "--variant") && i + 1 < argc) {
-      // NAME;GRID KEYS;LEARNER KEYS, e.g. "conf;refinement: conforming;criterion: influence_policy"
-      const std::string text = argv[++i];
-      const std::size_t a = text.find(';'), b = a == std::string::npos ? a : text.find(';', a + 1);
-      if (b == std::string::npos) {
-        std::fprintf(stderr, "mgrl_bench_adaptive: --variant: expected NAME;GRID;LEARNER, found '%s'\n",
-                     text.c_str());
-        return 2;
-      }
-      variants.push_back({text.substr(0, a), text.substr(a + 1, b - a - 1), text.substr(b + 1)});
-    } else if (!std::strcmp(argv[i], "--start") && i + 1 < argc) {
-      startShare = std::atof(argv[++i]);
-    } else if (!std::strcmp(argv[i], "--pow2-start")) {
-      pow2Start = true;
-    } else if (!std::strcmp(argv[i], "--no-error")) {
-      error = false;
-    } else if (!std::strcmp(argv[i], "--no-decision")) {
-      decision = false;
-    } else {
-      std::fprintf(stderr,
-                   "usage: mgrl_bench_adaptive [--quick] [--runs N] [--reference A,D,H] [--points N] [--budget A,D,H]... "
-                   "[--variant NAME;GRID;LEARNER]... [--start SHARE] [--pow2-start] [--no-error] [--no-decision]\n");
-      return 2;
-    }
-  }
+  const CLI::Option* referenceOption = nullptr;
+  const CLI::Option* pointsOption = nullptr;
+  // A,D,H: three vertex counts of a uniform grid (angle, distance, height).
+  const auto counts = [](const char* option, const std::string& text) {
+    std::array<int, 3> n{};
+    char end = 0;
+    if (std::sscanf(text.c_str(), "%d,%d,%d%c", &n[0], &n[1], &n[2], &end) != 3 || n[0] < 2 || n[1] < 2 || n[2] < 2)
+      throw CLI::ValidationError(
+          fmt::format("{}: expected A,D,H (three counts of at least 2), found '{}'", option, text));
+    return n;
+  };
+  const mgrl::bench::RunArgs args = mgrl::bench::parseRunArgs(
+      argc, argv, "mgrl_bench_adaptive: adaptive value iteration against uniform grids of the same budget", 5, 3,
+      [&](CLI::App& app) {
+        referenceOption = app.add_option_function<std::string>(
+            "--reference", [&](const std::string& text) { reference = counts("--reference", text); },
+            "the uniform reference grid A,D,H (default 40,32,12; --quick 30,24,9)");
+        pointsOption =
+            app.add_option("--points", pointCount, "random targets of the error (default 3000; --quick 1000)")
+                ->check(CLI::Range(std::size_t{1}, std::size_t{10'000'000}));
+        app.add_option_function<std::vector<std::string>>(
+               "--budget",
+               [&](const std::vector<std::string>& texts) {
+                 for (const std::string& text : texts) budgets.push_back({counts("--budget", text)});
+               },
+               "a uniform grid A,D,H whose vertex count is a budget (repeat for several; replaces the defaults)")
+            ->multi_option_policy(CLI::MultiOptionPolicy::TakeAll);
+        app.add_option_function<std::vector<std::string>>(
+               "--variant",
+               [&](const std::vector<std::string>& texts) {
+                 // NAME;GRID KEYS;LEARNER KEYS, e.g. "conf;refinement: conforming;criterion: influence_policy"
+                 for (const std::string& text : texts) {
+                   const std::size_t a = text.find(';'), b = a == std::string::npos ? a : text.find(';', a + 1);
+                   if (b == std::string::npos)
+                     throw CLI::ValidationError(fmt::format("--variant: expected NAME;GRID;LEARNER, found '{}'", text));
+                   variants.push_back({text.substr(0, a), text.substr(a + 1, b - a - 1), text.substr(b + 1)});
+                 }
+               },
+               "an adaptive configuration NAME;GRID KEYS;LEARNER KEYS (repeat; replaces the defaults)")
+            ->multi_option_policy(CLI::MultiOptionPolicy::TakeAll);
+        app.add_option("--start", startShare, "a tree's start: at most this share of the budget's vertices")
+            ->check(CLI::Range(0.01, 1.0));
+        app.add_flag("--pow2-start", pow2Start, "start from the largest power-of-two cells within the share");
+        app.add_flag("--no-error", noError, "skip the error against the reference");
+        app.add_flag("--no-decision", noDecision, "skip the decision timings");
+      });
+  const int runs = args.runs;
+  const bool quick = args.quick, error = !noError, decision = !noDecision;
+  if (quick && referenceOption->count() == 0) reference = {30, 24, 9};
+  if (quick && pointsOption->count() == 0) pointCount = 1000;
   try {
     const unsigned threads = mgrl::defaultThreadCount();
     // The adaptive trees: over the hitting volume, halving their longest side.

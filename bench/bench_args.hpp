@@ -1,8 +1,8 @@
 #pragma once
-// The command lines of the benchmarks that take --runs and --data or --quick (graph, load,
-// runtime, serve), parsed by CLI11 as mgrl's are: a value out of range or an unknown
-// option is refused with CLI11's message and exit status 2. learn, adaptive, memory and
-// mpi parse their own longer lists.
+// The benchmarks' command lines (all but mpi's, which takes a scenario and a behaviour),
+// parsed by CLI11 as mgrl's are: a value out of range or an unknown option is refused with
+// CLI11's message and exit status 2. Each takes --runs, those with a quick form --quick,
+// and each adds its own options.
 #include <cstdlib>
 #include <filesystem>
 #include <functional>

@@ -21,11 +21,12 @@
 #include <sys/resource.h>
 
 #include "app/plugins.hpp"
+#include "bench_args.hpp"
 #include "bench_support.hpp"
-#include "mgrl/runtime/controller.hpp"
 #include "mgrl/core/parallel.hpp"
-#include "mgrl/learning/problem.hpp"
 #include "mgrl/core/random.hpp"
+#include "mgrl/learning/problem.hpp"
+#include "mgrl/runtime/controller.hpp"
 #include "synthetic_model.hpp"
 
 namespace {
@@ -94,23 +95,22 @@ std::string hitGrid(int angles, int distances, int heights) {
 
 int main(int argc, char** argv) {
   std::uint64_t approachActions = 50'000'000, hitActions = 400'000'000;
-  int runs = 5;
-  bool growth = true;
-  for (int i = 1; i < argc; ++i) {
-    const bool hasValue = i + 1 < argc;
-    if (!std::strcmp(argv[i], "--approach-actions") && hasValue) approachActions = std::strtoull(argv[++i], nullptr, 10);
-    else if (!std::strcmp(argv[i], "--hit-actions") && hasValue) hitActions = std::strtoull(argv[++i], nullptr, 10);
-    else if (!std::strcmp(argv[i], "--runs") && hasValue) runs = std::max(1, std::atoi(argv[++i]));
-    else if (!std::strcmp(argv[i], "--no-growth")) growth = false;
-    else if (!std::strcmp(argv[i], "--quick")) {
-      approachActions = 10'000'000;
-      hitActions = 20'000'000;
-    } else {
-      std::fprintf(stderr,
-                   "usage: mgrl_bench_learn [--approach-actions N] [--hit-actions N] [--runs N] [--quick] [--no-growth]\n");
-      return 2;
-    }
-  }
+  bool noGrowth = false;
+  const CLI::Option* approachOption = nullptr;
+  const CLI::Option* hitOption = nullptr;
+  // --quick keeps the 5 runs and takes 10 M approach and 20 M hit actions (unless given).
+  const mgrl::bench::RunArgs args = mgrl::bench::parseRunArgs(
+      argc, argv, "mgrl_bench_learn: Q-learning and value iteration on a seed-sized synthetic model", 5, 5,
+      [&](CLI::App& app) {
+        const auto actions = CLI::Range(std::uint64_t{1}, std::uint64_t{1'000'000'000'000});
+        approachOption = app.add_option("--approach-actions", approachActions, "Q-learning actions on approach's grid")
+                             ->check(actions);
+        hitOption = app.add_option("--hit-actions", hitActions, "Q-learning actions on hit's grid")->check(actions);
+        app.add_flag("--no-growth", noGrowth, "skip the runs on growing grids");
+      });
+  const int runs = args.runs;
+  if (args.quick && approachOption->count() == 0) approachActions = 10'000'000;
+  if (args.quick && hitOption->count() == 0) hitActions = 20'000'000;
 
   auto start = Clock::now();
   const mgrl::StateActionModel m = mgrl::makeSyntheticModel({});
@@ -226,7 +226,7 @@ int main(int argc, char** argv) {
   }
 
   // Growth with grid size (hit problem) and with the number of actions.
-  if (!growth) {
+  if (noGrowth) {
     std::printf("peak memory %.0f MB\n", peakMegabytes());
     return 0;
   }

@@ -18,6 +18,7 @@
 #include <thread>
 #include <vector>
 
+#include "bench_args.hpp"
 #include "bench_support.hpp"
 #include "mgrl/core/huge_pages.hpp"
 #include "mgrl/core/random.hpp"
@@ -64,17 +65,13 @@ double timed(unsigned threads, F f) {
 
 int main(int argc, char** argv) {
   std::size_t megabytes = 1024;
-  int runs = 5;
-  for (int i = 1; i < argc; ++i) {
-    if (!std::strcmp(argv[i], "--megabytes") && i + 1 < argc) {
-      megabytes = static_cast<std::size_t>(std::max(64, std::atoi(argv[++i])));
-    } else if (!std::strcmp(argv[i], "--runs") && i + 1 < argc) {
-      runs = std::max(1, std::atoi(argv[++i]));
-    } else {
-      std::fprintf(stderr, "usage: mgrl_bench_memory [--megabytes N] [--runs N]\n");
-      return 2;
-    }
-  }
+  const int runs =
+      mgrl::bench::parseRunArgs(argc, argv, "mgrl_bench_memory: this machine's memory latency and bandwidth", 5, 0,
+                                [&](CLI::App& app) {
+                                  app.add_option("--megabytes", megabytes, "size of the buffer (MB)")
+                                      ->check(CLI::Range(std::size_t{64}, std::size_t{1} << 20));
+                                })
+          .runs;
   const std::size_t lines = megabytes * (std::size_t{1} << 20) / kLine;
   // On transparent huge pages, as the Q tables and tabulated models are (HugePageAllocator).
   std::vector<std::uint64_t, mgrl::HugePageAllocator<std::uint64_t>> words(lines * kWordsPerLine);
