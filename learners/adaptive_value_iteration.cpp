@@ -470,8 +470,7 @@ TrainResult AdaptiveValueIteration::train(const TrainContext& context) const {
       }
       run.sweeps += sweeps;
       if (snapshotsWanted(context.observer) > 0)  // one per round: the values converged on this tree
-        clock.leaveOut(
-            takeSnapshot(*context.observer, q, result.curve.back(), run.grid == &problem.grid ? nullptr : run.grid));
+        takeSnapshot(*context.observer, clock, q, result.curve.back(), run.grid == &problem.grid ? nullptr : run.grid);
       nlohmann::json record = {{"vertices", run.grid->vertexCount()},
                                {"free_vertices", run.grid->vertexCount() - run.grid->hanging().size()},
                                {"leaves", run.grid->cellCount()},

@@ -299,7 +299,7 @@ TrainResult QLearning::train(const TrainContext& context) const {
         clock.leavingOut([&] { r = bellmanResidual(q, g, threads, curveSample_); });
         point = {walk.updates, clock.seconds(), r.max, r.mean};
       }
-      clock.leaveOut(takeSnapshot(*context.observer, q, point));
+      takeSnapshot(*context.observer, clock, q, point);
       while (nextSnapshotIndex <= snapshots && snapshotAt(nextSnapshotIndex) <= walk.updates) ++nextSnapshotIndex;
     }
     const bool stopping = context.stop && context.stop->load(std::memory_order_relaxed) && walk.updates < total;

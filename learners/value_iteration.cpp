@@ -53,7 +53,7 @@ class ValueIteration final : public Learner {
                                                                                          std::log(change / previousChange)));
         const bool last = change < tolerance_ || sweeps == maxSweeps_;
         if (last || static_cast<double>(sweeps) >= estimate * static_cast<double>(taken + 1) / static_cast<double>(snapshots)) {
-          clock.leaveOut(takeSnapshot(*context.observer, current, result.curve.back()));
+          takeSnapshot(*context.observer, clock, current, result.curve.back());
           ++taken;
         }
       }

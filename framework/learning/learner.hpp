@@ -92,13 +92,10 @@ class TrainingClock {
   Clock::time_point start_ = Clock::now();
 };
 
-/// Gives `observer` a snapshot and returns the seconds it took, for the learner to leave
-/// out of its training time.
-inline double takeSnapshot(TrainObserver& observer, const QTable& table, const CurvePoint& point,
-                           const Discretizer* grid = nullptr) {
-  const auto start = std::chrono::steady_clock::now();
-  observer.snapshot(table, point, grid);
-  return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+/// Gives `observer` a snapshot; the time it takes is left out of `clock`'s training time.
+inline void takeSnapshot(TrainObserver& observer, TrainingClock& clock, const QTable& table, const CurvePoint& point,
+                         const Discretizer* grid = nullptr) {
+  clock.leavingOut([&] { observer.snapshot(table, point, grid); });
 }
 
 /// A learner's check of its own saved state, run by Checkpointer::loadChecked() before the
