@@ -6,9 +6,11 @@
 //
 // With --shared, also the shared time budget (issue 40) on the real server over loopback:
 // what 15 pages of crowds of 2,000 on the online search at speed 4 leave to one light page
-// (frames per second it receives, medians of the runs).
+// (frames per second it receives, medians of the runs). With --flood, what 4 pages switching
+// between a crowd of 2,000 and target mode at 150 messages a second leave to one light page
+// and to a request every 50 ms (frames per second, longest gap, longest request).
 //
-// Usage: mgrl_bench_serve [--quick] [--runs N] [--shared]
+// Usage: mgrl_bench_serve [--quick] [--runs N] [--shared] [--flood]
 #include <unistd.h>
 
 #include <chrono>
@@ -37,14 +39,17 @@ double since(Clock::time_point start) { return std::chrono::duration<double>(Clo
 
 // Seconds the light page is watched for in each --shared run (after 3 s for the crowds).
 constexpr double kSharedSeconds = 6;
+// Seconds of flooding in each --flood run.
+constexpr double kFloodSeconds = 20;
 
 }  // namespace
 
 int main(int argc, char** argv) {
-  bool shared = false;
+  bool shared = false, flood = false;
   const mgrl::bench::RunArgs args = mgrl::bench::parseRunArgs(
       argc, argv, "mgrl_bench_serve: the viewer's server under pages", 5, 3, [&](CLI::App& app) {
         app.add_flag("--shared", shared, "also time a light page beside crowds sharing the server");
+        app.add_flag("--flood", flood, "also time a light page and requests beside pages flooding mode switches");
       });
   const int runs = args.runs;
   const int frames = args.quick ? 60 : 150;
@@ -87,6 +92,31 @@ int main(int argc, char** argv) {
       const double ms = mgrl::bench::median(perFrame) * 1e3;
       std::printf("%-22s %12.3f %14zu %16.1f %14.2f\n", c.name, ms, bytes,
                   static_cast<double>(bytes) / static_cast<double>(avatars), static_cast<double>(bytes) * 30 / 1e6);
+    }
+    if (flood) {
+      mgrl::serve::ServerOptions serverOptions;
+      serverOptions.port = 0;
+      serverOptions.webRoot = mgrl::serve::webDirectory({});
+      mgrl::serve::Server server(assets, serverOptions);
+      std::thread thread([&] { server.run(); });
+      std::vector<double> fps, gaps, longest, median;
+      for (int r = 0; r < runs; ++r) {
+        const mgrl::bench::FloodBesideLight m = mgrl::bench::floodBesideLight(server.port(), 4, 150, kFloodSeconds);
+        fps.push_back(m.lightFramesPerSecond);
+        gaps.push_back(m.lightLongestGap);
+        longest.push_back(m.requestLongest);
+        median.push_back(m.requestMedian);
+        std::fprintf(stderr, "  run %d: %s\n", r + 1, m.summary().c_str());
+      }
+      server.stop();
+      thread.join();
+      std::printf(
+          "\nmessages in the shared budget: 4 pages switching crowd/target at 150 messages/s beside one light "
+          "page and a request every 50 ms, medians of %d runs of %.0f s\n",
+          runs, kFloodSeconds);
+      std::printf("  light page %.1f frames/s, longest gap %.2f s; requests %.1f ms median, %.1f ms longest\n",
+                  mgrl::bench::median(fps), mgrl::bench::median(gaps), mgrl::bench::median(median) * 1e3,
+                  mgrl::bench::median(longest) * 1e3);
     }
     if (shared) {
       mgrl::serve::ServerOptions serverOptions;

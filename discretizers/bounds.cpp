@@ -79,8 +79,21 @@ Bounds givenBounds(const Params& p, bool heights) {
   return b;
 }
 
+// The box's parameters are checked as a whole: a key the chosen `bounds` does not read is
+// refused rather than ignored (a range given beside `bounds: hits` would change nothing).
 Bounds chosenBounds(const Params& p, const StateActionModel& m, bool heights) {
-  return p.choice("bounds") == "hits" ? boundsOfHits(p, m, heights) : givenBounds(p, heights);
+  const bool hits = p.choice("bounds") == "hits";
+  std::vector<const char*> unread = {"margin", "angle_margin"};
+  if (hits) {
+    unread = {"angle_min", "angle_max", "distance_min", "distance_max"};
+    if (heights) unread.insert(unread.end(), {"height_min", "height_max"});
+  }
+  for (const char* key : unread)
+    if (p.given(key))
+      p.fail(key, fmt::format("expected no {} with bounds: {} (it applies to bounds: {} only); remove it or set "
+                              "bounds: {}",
+                              key, hits ? "hits" : "given", hits ? "given" : "hits", hits ? "given" : "hits"));
+  return hits ? boundsOfHits(p, m, heights) : givenBounds(p, heights);
 }
 
 std::vector<ParamSpec> withBounds(std::vector<ParamSpec> own, const BoundsDefaults& d) {

@@ -378,6 +378,16 @@ TEST_CASE("behaviour mistakes name the file, line, column and key", "[behaviors]
                          at(25, 83,
                             "behaviors.hit.discretizer.angle_max: expected at most 360 degrees above "
                             "angle_min"));
+    // A key the chosen bounds do not read is refused, not ignored.
+    const std::string hitsHead = "  hit:\n    discretizer: {type: cylindrical3d, bounds: hits, ";
+    REQUIRE_CONFIG_ERROR(build(kApproach + hitsHead + "distance_min: 5, distance_max: 0.1" + hitTail),
+                         at(25, 68,
+                            "behaviors.hit.discretizer.distance_min: expected no distance_min with bounds: hits (it "
+                            "applies to bounds: given only); remove it or set bounds: given"));
+    REQUIRE_CONFIG_ERROR(build(kApproach + hitHead + "margin: 0.1" + hitTail),
+                         at(25, 63,
+                            "behaviors.hit.discretizer.margin: expected no margin with bounds: given (it applies to "
+                            "bounds: hits only); remove it or set bounds: hits"));
   }
   SECTION("missing sections and blocks without a type") {
     REQUIRE_CONFIG_ERROR(build("  approach:\n    discretizer: {type: polar2d}\n    learner: {type: q_learning}\n"),

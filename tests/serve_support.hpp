@@ -115,10 +115,11 @@ struct RunningServer {
 struct HttpReply {
   int status = 0;
   std::string type, body;
+  std::string allow;  ///< the Allow header, if any
 };
 
 // Headers of a request as a test sets them: {name, value}; a value of "-" removes the
-// header (Host is set to 127.0.0.1:PORT unless given).
+// header (Host is set to 127.0.0.1:PORT unless given); a name given twice is sent twice.
 using Headers = std::vector<std::pair<std::string, std::string>>;
 
 // One request on a fresh connection; `target` is sent as is.
@@ -130,11 +131,15 @@ inline HttpReply get(std::uint16_t port, const std::string& target, http::verb v
   stream.connect(tcp::endpoint(net::ip::make_address("127.0.0.1"), port));
   http::request<http::empty_body> request{verb, target, 11};
   request.set(http::field::host, fmt::format("127.0.0.1:{}", port));
+  std::vector<std::string> named;
   for (const auto& [name, value] : headers) {
     if (value == "-")
       request.erase(name);
+    else if (std::find(named.begin(), named.end(), name) != named.end())
+      request.insert(name, value);
     else
       request.set(name, value);
+    named.push_back(name);
   }
   if (upgrade) {  // a WebSocket handshake by hand, to see the refusal's status
     request.set(http::field::connection, "Upgrade");
@@ -148,7 +153,8 @@ inline HttpReply get(std::uint16_t port, const std::string& target, http::verb v
   parser.skip(verb == http::verb::head);
   http::read(stream, buffer, parser);
   const auto& response = parser.get();
-  return {static_cast<int>(response.result_int()), std::string(response[http::field::content_type]), response.body()};
+  return {static_cast<int>(response.result_int()), std::string(response[http::field::content_type]), response.body(),
+          std::string(response[http::field::allow])};
 }
 
 // A page over a real WebSocket, every read bounded by a timeout.

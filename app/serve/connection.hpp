@@ -36,6 +36,9 @@ struct Shared {
   std::filesystem::path root;
   std::optional<OriginPolicy> origins;  ///< set once the port is known
   std::atomic<int> sessions{0};
+  /// Costly page messages (a crowd's build) take turns: none starts before this time,
+  /// which each one sets to its end plus as long again as it took (page_session.cpp).
+  Clock::time_point costlyFree{};
   // Refusals of foreign Host or Origin headers: logged at most once a second (a hostile
   // page may send thousands), with how many were not.
   Clock::time_point lastRefusalLog{};

@@ -27,6 +27,9 @@ constexpr double kWorldShare = 0.5;
 /// How far ahead of its share a page may run, s (a burst: a mode change, a retraining's
 /// table taken).
 constexpr double kAllowanceMax = 0.1;
+/// A message that costs the network thread this long or longer is costly: a mode or crowd
+/// switch, a lesson's start. Costly messages of all pages take turns (Shared::costlyFree).
+constexpr double kCostly = 0.01;
 /// The longest a page's world simulates in one tick before the frames still due are
 /// dropped: a crowd's eight frames (speed 4, a late timer) took 110 ms here, and far longer
 /// on a loaded machine, holding every other page for that long.
@@ -50,8 +53,11 @@ class PageSession : public std::enable_shared_from_this<PageSession> {
         timer_(ws_.get_executor()),
         viewer_(server_.assets) {
     ++server_.sessions;
+    viewer_.buildInBackground(true);
   }
-  ~PageSession() { --server_.sessions; }
+  ~PageSession() {
+    if (!finished_) --server_.sessions;
+  }
 
   void start(const http::request<http::empty_body>& request) {
     ws_.set_option(websocket::stream_base::timeout::suggested(beast::role_type::server));
@@ -118,11 +124,47 @@ class PageSession : public std::enable_shared_from_this<PageSession> {
         read();
         return;
       }
-      const std::string text = beast::buffers_to_string(buffer_.data());
+      pending_ = beast::buffers_to_string(buffer_.data());
       buffer_.consume(buffer_.size());
-      const auto began = Clock::now();
-      viewer_.handle(text);
-      spend(began);
+      pendingSince_ = now;
+    } catch (const std::exception& e) {
+      server_.log(fmt::format("serve: a page's message failed: {}", e.what()));
+      close(websocket::close_code::internal_error, "internal error");
+      return;
+    }
+    process();
+  }
+
+  // Handles the message read (pending_) if this page's share covers its price and no other
+  // page's costly message has just run, then reads the next; else leaves it waiting, and
+  // the page's socket unread, for a later tick to try again. So a page's messages cost it
+  // as its world's steps do: one that spends more than its share waits, and its kernel
+  // buffers, then its own sending, hold the rest (docs/viewer-protocol.md, "Limits and
+  // fairness").
+  void process() {
+    try {
+      const auto now = Clock::now();
+      refill(now);
+      const double price = std::min(viewer_.price(pending_), kAllowanceMax);
+      const bool costly = price >= kCostly;
+      if (!viewer_.ready(pending_) || allowance_ < std::max(price, 0.0) || (costly && now < server_.costlyFree)) {
+        if (!waiting_) ++messagesWaited_;
+        waiting_ = true;
+        return;
+      }
+      if (waiting_) {
+        waiting_ = false;
+        waitedSeconds_ += std::chrono::duration<double>(now - pendingSince_).count();
+        // The page's messages sat in the socket while this one waited: they are counted
+        // against the rate limit from now, as they are read, not for when they arrived.
+        windowStart_ = now;
+        windowCount_ = 1;
+      }
+      viewer_.handle(pending_);
+      pending_.clear();
+      const auto ended = Clock::now();
+      spend(now);
+      took(now, ended, costly);
       dirty_ = true;
       flushOutbox();
     } catch (const std::exception& e) {
@@ -130,7 +172,7 @@ class PageSession : public std::enable_shared_from_this<PageSession> {
       close(websocket::close_code::internal_error, "internal error");
       return;
     }
-    read();
+    if (!closeCode_) read();
   }
 
   void tick() {
@@ -153,15 +195,49 @@ class PageSession : public std::enable_shared_from_this<PageSession> {
     allowance_ -= std::chrono::duration<double>(now - began).count();
   }
 
+  // Costly work of the pages takes turns with everything else on the thread: after a
+  // costly message, a world installed or a crowd's step (`costly`: priced as such before it
+  // ran, or it took kCostly or longer), no other costly work starts for as long as it took.
+  void took(Clock::time_point began, Clock::time_point ended, bool costly) {
+    if (costly || ended - began >= std::chrono::duration<double>(kCostly))
+      server_.costlyFree = std::max(server_.costlyFree, ended + (ended - began));
+  }
+
   void onTick() {
     if (closing_ || closeCode_) return;
+    try {
+      // A world built in the background: installed (its first frame run) on this thread,
+      // in its turn with the other costly work; its first step is taken to cost as much.
+      const auto began = Clock::now();
+      if (began >= server_.costlyFree && viewer_.poll()) {
+        refill(began);
+        spend(began);
+        const auto installed = Clock::now();
+        lastStep_ = std::chrono::duration<double>(installed - began).count();
+        took(began, installed, false);
+        dirty_ = true;
+        flushOutbox();
+        if (closeCode_) return;
+      }
+    } catch (const std::exception& e) {
+      server_.log(fmt::format("serve: a page's world failed: {}", e.what()));
+      close(websocket::close_code::internal_error, "internal error");
+      return;
+    }
+    if (waiting_) {
+      process();
+      if (closeCode_) return;
+    }
     try {
       const auto began = Clock::now();
       refill(began);
       ++ticks_;
       // Over its share: this step is skipped (its world runs slower), and `stats` says why.
-      const bool over = allowance_ < 0;
-      if (over) ++ticksSkipped_;
+      // A message waiting for its price goes first: the world holds still until it has run.
+      // A world whose steps are costly (a crowd) takes turns with the other costly work.
+      const bool turn = lastStep_ < kCostly || began >= server_.costlyFree;
+      const bool over = allowance_ < 0 || waiting_ || !turn;
+      if (over && !waiting_) ++ticksSkipped_;  // held for a message: its stats say so
       const bool moved = !over && viewer_.advance(1.0, kStepSlice);
       if (moved || (dirty_ && !over)) {
         dirty_ = false;
@@ -174,13 +250,26 @@ class PageSession : public std::enable_shared_from_this<PageSession> {
           ++framesSent_;
         }
       }
-      if (!over) spend(began);
+      if (!over) {
+        spend(began);
+        const auto stepped = Clock::now();
+        lastStep_ = std::chrono::duration<double>(stepped - began).count();
+        took(began, stepped, false);
+      }
       const auto now = Clock::now();
       if (now >= nextStats_) {
         nextStats_ = now + std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(kStatsEvery_s));
-        const PageShare fair{share(), server_.sessions.load(), ticksSkipped_, ticks_};
+        double waited = waitedSeconds_;
+        if (waiting_) waited += std::chrono::duration<double>(now - pendingSince_).count();
+        const PageShare fair{share(), server_.sessions.load(), ticksSkipped_, ticks_, messagesWaited_, waited};
         push({false, viewer_.stats(framesSent_, framesDropped_, fair), {}});
         ticks_ = ticksSkipped_ = 0;
+        messagesWaited_ = 0;
+        waitedSeconds_ = 0;
+        if (waiting_) {  // what it has waited is said; the next stats count on from now
+          pendingSince_ = now;
+          messagesWaited_ = 1;
+        }
       }
       flushOutbox();
       nextTick_ += period_;
@@ -277,9 +366,11 @@ class PageSession : public std::enable_shared_from_this<PageSession> {
     write();
   }
 
-  // The connection is gone: stop ticking; the last handler releases the session.
+  // The connection is gone: stop ticking; the last handler releases the session. The page
+  // is counted out now, not when its last handler lets go, so that pages leaving together
+  // each say how many stay.
   void finish() {
-    if (!finished_) server_.log(fmt::format("serve: a page left ({} open)", server_.sessions.load() - 1));
+    if (!finished_) server_.log(fmt::format("serve: a page left ({} open)", --server_.sessions));
     finished_ = true;
     closing_ = true;
     timer_.cancel();
@@ -300,7 +391,13 @@ class PageSession : public std::enable_shared_from_this<PageSession> {
   Clock::duration period_{};
   Clock::time_point nextTick_, nextStats_, windowStart_{};
   int windowCount_ = 0;
+  std::string pending_;             ///< the message read and not yet handled
+  bool waiting_ = false;            ///< pending_ waits for the page's share or its turn
+  Clock::time_point pendingSince_;  ///< since when pending_ waits (or the last stats)
+  std::size_t messagesWaited_ = 0;  ///< since the last stats
+  double waitedSeconds_ = 0;        ///< by them, in all
   std::size_t framesSent_ = 0, framesDropped_ = 0;
+  double lastStep_ = 0;               ///< s, the last step of the world (simulating and encoding)
   double allowance_ = kAllowanceMax;  ///< seconds of the network thread this page may still use
   Clock::time_point refilled_ = Clock::now();
   std::size_t ticks_ = 0, ticksSkipped_ = 0;  ///< since the last stats

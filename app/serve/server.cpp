@@ -59,6 +59,16 @@ class HttpConnection : public std::enable_shared_from_this<HttpConnection> {
       return;
     }
     http::request<http::empty_body> request = parser_->release();
+    // One Host (RFC 9112 sec. 3.2: a request with more is answered 400) and at most one
+    // Origin: with two, which one a check reads and which one a proxy or the page meant
+    // may differ.
+    for (const auto field : {http::field::host, http::field::origin})
+      if (const std::size_t n = request.count(field); n > 1) {
+        const std::string why = fmt::format("expected one {} header, found {}", http::to_string(field), n);
+        server_->refused(why);
+        sendText(http::status::bad_request, why + "\n", request.version(), false);
+        return;
+      }
     // Who may ask (serve/origin.hpp): requests that name this server, pages of its origins.
     const auto host = request.find(http::field::host);
     if (const auto why = server_->origins->refuseHost(host == request.end() ? std::string_view() : host->value())) {
@@ -90,7 +100,8 @@ class HttpConnection : public std::enable_shared_from_this<HttpConnection> {
       return;
     }
     if (request.method() != http::verb::get && request.method() != http::verb::head) {
-      sendText(http::status::method_not_allowed, "expected GET or HEAD\n", request.version(), request.keep_alive());
+      sendText(http::status::method_not_allowed, "expected GET or HEAD\n", request.version(), request.keep_alive(),
+               "GET, HEAD");
       return;
     }
     const StaticLookup found = lookupStatic(server_->root, request.target());
@@ -127,9 +138,11 @@ class HttpConnection : public std::enable_shared_from_this<HttpConnection> {
     response.keep_alive(keepAlive);
   }
 
-  void sendText(http::status status, std::string text, unsigned version, bool keepAlive) {
+  // `allow`: the methods a 405 names (RFC 9110 sec. 15.5.6 requires the Allow header).
+  void sendText(http::status status, std::string text, unsigned version, bool keepAlive, std::string_view allow = {}) {
     http::response<http::string_body> response{status, version};
     headers(response, "text/plain; charset=utf-8", keepAlive);
+    if (!allow.empty()) response.set(http::field::allow, allow);
     response.body() = std::move(text);
     response.prepare_payload();
     send(std::move(response));
@@ -240,7 +253,7 @@ Server::Server(std::shared_ptr<const ViewerAssets> assets, ServerOptions options
 
 Server::~Server() {
   impl_.reset();          // the pages go, each asking its retraining (if any) to stop
-  waitForRetrainings();   // none outlives the server
+  waitForWorkers();       // none outlives the server
 }
 
 std::uint16_t Server::port() const { return impl_->acceptor.local_endpoint().port(); }

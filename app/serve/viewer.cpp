@@ -8,6 +8,9 @@
 #include <thread>
 #include <utility>
 
+#include <sys/resource.h>
+#include <unistd.h>
+
 #include <fmt/format.h>
 #include <fmt/ranges.h>
 #include <nlohmann/json.hpp>
@@ -69,6 +72,14 @@ class TimedController final : public Controller {
   std::unique_ptr<Controller> inner_;
   DecisionClock& clock_;
 };
+
+// One world is built in the background at a time on the whole server (the others' changes
+// of mode wait): the builds share the cores with the network thread.
+std::atomic<bool> gBuilding{false};
+
+// What a costly message of a kind not yet run on this server is taken to cost, s: as much
+// as a page may spend at once (page_session.cpp's kAllowanceMax).
+constexpr double kUnknownPrice = 0.1;
 
 // A page is sent at most this many hit messages per call of advance(); the others are
 // only counted (a crowd of 2,000 lands over a thousand a second).
@@ -153,15 +164,60 @@ void ViewerSession::applyController() {
 
 void ViewerSession::rebuild(Mode mode, int avatars) {
   // Sparring and crowds may play another scenario's behaviours (ViewerAssets::sparring).
-  if (const auto& want = mode != Mode::Target && root_->sparring ? root_->sparring : root_; want != assets_)
-    adopt(want);
-  const ViewerAssets& a = *assets_;
-  State& s = *state_;
-  WorldSetup setup = a.session->worldSetup(static_cast<std::size_t>(avatars), 1, {"random"});  // replaced below
+  std::shared_ptr<const ViewerAssets> want = mode != Mode::Target && root_->sparring ? root_->sparring : root_;
+  WorldSetup setup = want->session->worldSetup(static_cast<std::size_t>(avatars), 1, {"random"});  // replaced below
   setup.params.mode = mode == Mode::Target ? "targets" : "sparring";
   setup.threads = 1;  // every page on the server's one thread
   setup.poses = true;
-  auto world = std::make_unique<World>(setup);
+  setup.sourcePoses = want->sourcePoses;
+  bool idle = false;
+  if (!background_ || !gBuilding.compare_exchange_strong(idle, true)) {
+    install(std::make_unique<World>(std::move(setup)), mode, std::move(want));
+    return;
+  }
+  auto build = std::make_shared<State::Build>();
+  build->mode = mode;
+  build->assets = std::move(want);
+  startWorker([build, setup = std::move(setup)]() mutable {
+    // Below the network thread: the pages' frames and requests come first.
+    setpriority(PRIO_PROCESS, static_cast<id_t>(gettid()), 19);
+    try {
+      build->world = std::make_unique<World>(std::move(setup));
+    } catch (const std::exception& e) {
+      build->failure = e.what();
+    }
+    gBuilding = false;
+    build->done = true;
+  });
+  state_->build = std::move(build);
+}
+
+bool ViewerSession::ready(std::string_view text) const {
+  if (state_->build) return false;
+  if (!background_ || !gBuilding) return true;
+  try {
+    return !std::holds_alternative<SetMode>(parseClientMessage(text));
+  } catch (const Error&) {
+    return true;  // refused at once
+  }
+}
+
+bool ViewerSession::poll() {
+  State& s = *state_;
+  if (!s.build || !s.build->done) return false;
+  const std::shared_ptr<State::Build> build = std::move(s.build);
+  if (!build->failure.empty()) {
+    outbox_.push_back(json{{"type", "error"}, {"message", fmt::format("mode: {}", build->failure)}}.dump());
+    return true;
+  }
+  install(std::move(build->world), build->mode, build->assets);
+  return true;
+}
+
+void ViewerSession::install(std::unique_ptr<World> world, Mode mode, std::shared_ptr<const ViewerAssets> assets) {
+  if (assets != assets_) adopt(std::move(assets));
+  const ViewerAssets& a = *assets_;
+  State& s = *state_;
   s.world = std::move(world);
   mode_ = mode;
   s.adjustment.clear();
@@ -272,77 +328,117 @@ std::string ViewerSession::behaviorNames() const {
   return fmt::format("{}", fmt::join(names, ", "));
 }
 
+namespace {
+
+// What a message costs is counted in: a mode change in the avatars of the world it
+// replaces and of the new one (`avatarsNow`), a lesson's steps in steps, a start in starts.
+std::optional<std::pair<MessagePrices::Kind, double>> costOf(const ClientMessage& message, std::size_t avatarsNow,
+                                                             bool lessonOn) {
+  if (const auto* mode = std::get_if<SetMode>(&message))
+    return std::pair(MessagePrices::Mode, static_cast<double>(avatarsNow + static_cast<std::size_t>(mode->avatars)));
+  if (const auto* learn = std::get_if<Learn>(&message)) {
+    if (learn->command == Learn::Command::Start) return std::pair(MessagePrices::LessonStart, 1.0);
+    if (learn->command == Learn::Command::Step && lessonOn)
+      return std::pair(MessagePrices::LessonSteps, static_cast<double>(learn->steps));
+    return std::nullopt;
+  }
+  if (std::holds_alternative<Retrain>(message)) return std::pair(MessagePrices::Retrain, 1.0);
+  return std::nullopt;
+}
+
+}  // namespace
+
+double ViewerSession::price(std::string_view text) const {
+  try {
+    const auto cost = costOf(parseClientMessage(text), avatars(), state_->lesson != nullptr);
+    // A kind this server has not run yet is taken to cost the most a page may spend at once.
+    return cost ? root_->prices.price(cost->first, cost->second, kUnknownPrice) : 0.0;
+  } catch (const Error&) {
+    return 0;  // refused at once when handled
+  }
+}
+
 void ViewerSession::handle(std::string_view text) {
-  State& s = *state_;
-  const ViewerAssets& a = *assets_;
   try {
     const ClientMessage message = parseClientMessage(text);
-    if (const auto* mode = std::get_if<SetMode>(&message)) {
-      rebuild(mode->mode, mode->avatars);
-    } else if (const auto* move = std::get_if<MoveTarget>(&message)) {
-      if (mode_ != Mode::Target)
-        throw Error(fmt::format("move_target: expected target mode, found {} mode", modeName(mode_)));
-      s.world->moveTarget(0, move->position);
-    } else if (const auto* choice = std::get_if<SetController>(&message)) {
-      if (choice->controller == "policy" && a.session->policy.empty())
-        throw Error("controller.controller: expected online_search or random (this server has no policy bundle), "
-                    "found \"policy\"");
-      const std::string old = s.controller;
-      const int oldHorizon = s.horizon;
-      s.controller = choice->controller;
-      if (choice->horizon > 0) s.horizon = choice->horizon;
-      s.adjustment.clear();
-      try {
-        applyController();
-      } catch (...) {
-        s.controller = old;
-        s.horizon = oldHorizon;
-        applyController();
-        throw;
-      }
-      outbox_.push_back(scene());
-    } else if (const auto* set = std::get_if<SetWeights>(&message)) {
-      std::vector<double> weights = s.weights;
-      for (const auto& [name, weight] : set->weights) {
-        const int i = behaviorIndex(name);
-        if (i < 0)
-          throw Error(fmt::format("weights.weights: expected behaviour names from {}, found \"{}\"", behaviorNames(),
-                                  name));
-        weights[static_cast<std::size_t>(i)] = weight;
-      }
-      s.weights = weights;
-      applyController();
-      outbox_.push_back(scene());
-    } else if (const auto* pause = std::get_if<Pause>(&message)) {
-      s.paused = pause->paused;
-      s.carry = 0;
-    } else if (std::holds_alternative<Step>(message)) {
-      if (!s.paused) throw Error("step: expected a paused world (send {\"type\": \"pause\", \"paused\": true} first)");
-      s.steps = std::min(s.steps + 1, 30);
-    } else if (const auto* speed = std::get_if<SetSpeed>(&message)) {
-      s.speed = speed->speed;
-    } else if (const auto* show = std::get_if<ShowValues>(&message)) {
-      if (show->behavior.empty()) {
-        s.shown = -1;
-      } else {
-        const int i = behaviorIndex(show->behavior);
-        if (i < 0)
-          throw Error(fmt::format("values.behavior: expected one of {} or null, found \"{}\"", behaviorNames(),
-                                  show->behavior));
-        if (a.session->policy.empty())
-          throw Error("values: expected a policy bundle to take values from; this server has none (mgrl train makes one)");
-        s.shown = i;
-        s.valuesSent = values();
-        outbox_.push_back(s.valuesSent);
-        s.valuesFrame = s.world->frame();
-      }
-    } else if (const auto* learnMessage = std::get_if<Learn>(&message)) {
-      learn(*learnMessage);
-    } else if (const auto* retrainMessage = std::get_if<Retrain>(&message)) {
-      retrain(*retrainMessage);
-    }
+    const auto began = Clock::now();
+    const auto cost = costOf(message, avatars(), state_->lesson != nullptr);
+    handle(message);
+    if (cost)
+      root_->prices.learn(cost->first, cost->second, std::chrono::duration<double>(Clock::now() - began).count());
   } catch (const Error& e) {
     outbox_.push_back(json{{"type", "error"}, {"message", e.what()}}.dump());
+  }
+}
+
+void ViewerSession::handle(const ClientMessage& message) {
+  State& s = *state_;
+  const ViewerAssets& a = *assets_;
+  if (const auto* mode = std::get_if<SetMode>(&message)) {
+    rebuild(mode->mode, mode->avatars);
+  } else if (const auto* move = std::get_if<MoveTarget>(&message)) {
+    if (mode_ != Mode::Target)
+      throw Error(fmt::format("move_target: expected target mode, found {} mode", modeName(mode_)));
+    s.world->moveTarget(0, move->position);
+  } else if (const auto* choice = std::get_if<SetController>(&message)) {
+    if (choice->controller == "policy" && a.session->policy.empty())
+      throw Error(
+          "controller.controller: expected online_search or random (this server has no policy bundle), "
+          "found \"policy\"");
+    const std::string old = s.controller;
+    const int oldHorizon = s.horizon;
+    s.controller = choice->controller;
+    if (choice->horizon > 0) s.horizon = choice->horizon;
+    s.adjustment.clear();
+    try {
+      applyController();
+    } catch (...) {
+      s.controller = old;
+      s.horizon = oldHorizon;
+      applyController();
+      throw;
+    }
+    outbox_.push_back(scene());
+  } else if (const auto* set = std::get_if<SetWeights>(&message)) {
+    std::vector<double> weights = s.weights;
+    for (const auto& [name, weight] : set->weights) {
+      const int i = behaviorIndex(name);
+      if (i < 0)
+        throw Error(
+            fmt::format("weights.weights: expected behaviour names from {}, found \"{}\"", behaviorNames(), name));
+      weights[static_cast<std::size_t>(i)] = weight;
+    }
+    s.weights = weights;
+    applyController();
+    outbox_.push_back(scene());
+  } else if (const auto* pause = std::get_if<Pause>(&message)) {
+    s.paused = pause->paused;
+    s.carry = 0;
+  } else if (std::holds_alternative<Step>(message)) {
+    if (!s.paused) throw Error("step: expected a paused world (send {\"type\": \"pause\", \"paused\": true} first)");
+    s.steps = std::min(s.steps + 1, 30);
+  } else if (const auto* speed = std::get_if<SetSpeed>(&message)) {
+    s.speed = speed->speed;
+  } else if (const auto* show = std::get_if<ShowValues>(&message)) {
+    if (show->behavior.empty()) {
+      s.shown = -1;
+    } else {
+      const int i = behaviorIndex(show->behavior);
+      if (i < 0)
+        throw Error(
+            fmt::format("values.behavior: expected one of {} or null, found \"{}\"", behaviorNames(), show->behavior));
+      if (a.session->policy.empty())
+        throw Error(
+            "values: expected a policy bundle to take values from; this server has none (mgrl train makes one)");
+      s.shown = i;
+      s.valuesSent = values();
+      outbox_.push_back(s.valuesSent);
+      s.valuesFrame = s.world->frame();
+    }
+  } else if (const auto* learnMessage = std::get_if<Learn>(&message)) {
+    learn(*learnMessage);
+  } else if (const auto* retrainMessage = std::get_if<Retrain>(&message)) {
+    retrain(*retrainMessage);
   }
 }
 

@@ -15,6 +15,9 @@
 #include "learn_commands.hpp"
 #include "serve/protocol.hpp"
 
+namespace mgrl {
+class World;
+}
 namespace mgrl::learners {
 struct QStep;
 }
@@ -39,9 +42,10 @@ struct ServeOptions : app::LearnOptions {
 struct ViewerAssets;
 std::shared_ptr<const ViewerAssets> loadViewerAssets(const ServeOptions& options);
 
-/// Waits until no retraining thread runs (pages that left ask theirs to stop; each stage
-/// of a retraining checks). The server calls it when it stops, so that none outlives it.
-void waitForRetrainings();
+/// Waits until no worker thread runs: retrainings (pages that left ask theirs to stop;
+/// each stage of a retraining checks) and worlds being built. The server calls it when it
+/// stops, so that none outlives it.
+void waitForWorkers();
 
 /// The server's time as a page shares it (docs/viewer-protocol.md, "Limits and
 /// fairness"), for its `stats`.
@@ -49,6 +53,10 @@ struct PageShare {
   double secondsPerSecond = 0;  ///< this page's share of the network thread
   int pages = 1;
   std::size_t ticksSkipped = 0, ticks = 0;  ///< since the last stats
+  /// Messages of the page that waited for its share or for another page's costly message
+  /// to end before they were handled, and how long, s, since the last stats.
+  std::size_t messagesWaited = 0;
+  double waitedSeconds = 0;
 };
 
 /// No slice: advance() runs every frame it is asked for.
@@ -62,9 +70,27 @@ class ViewerSession {
   ViewerSession(const ViewerSession&) = delete;
   ViewerSession& operator=(const ViewerSession&) = delete;
 
+  /// Builds the worlds of changes of mode on a thread of their own: a crowd's world touches
+  /// megabytes of fresh memory (2,000 avatars: 18 MB, about 90 ms of page faults here),
+  /// which would hold the server's one network thread. Off (the default), handle() builds
+  /// them at once.
+  void buildInBackground(bool on) { background_ = on; }
+  /// Whether `text` may be handled now: not while this page's new world is being built,
+  /// nor a change of mode while another page's is (one world is built at a time).
+  bool ready(std::string_view text) const;
+  /// Installs the world built in the background once it is done (or says why it failed):
+  /// true if it did, and the page has a new scene and frame.
+  bool poll();
+
   /// Acts on one page message (text). Refusals (mgrl::Error) are answered with an `error`
   /// message in the outbox and change nothing.
   void handle(std::string_view text);
+  /// What handling `text` is expected to take of the server's thread, s, before it runs:
+  /// a mode or crowd switch by the avatars of the world it replaces and of the new one, a
+  /// lesson's or retraining's start by what the last such start took on this server (0.1 s,
+  /// the most a page may spend at once, before one has run); 0 for messages that cost
+  /// little (they are measured as they run) and for malformed ones.
+  double price(std::string_view text) const;
   /// Advances the world by `frames` frames of its clock times the speed (fractions carry
   /// over); nothing while paused unless a step was asked for. True if it moved. Once
   /// `sliceSeconds` have gone on simulating (after the first frame), the frames still due
@@ -86,12 +112,18 @@ class ViewerSession {
 
  private:
   struct State;
+  /// Acts on a parsed message; throws mgrl::Error to refuse it.
+  void handle(const ClientMessage& message);
+  /// A new world of `avatars` in `mode`, built at once or in the background.
   void rebuild(Mode mode, int avatars);
+  /// Makes `world`, playing `assets`' behaviours in `mode`, the page's world.
+  void install(std::unique_ptr<World> world, Mode mode, std::shared_ptr<const ViewerAssets> assets);
   void applyController();
   /// After each frame: plays every decision the frame made through the avatar's success
   /// trackers and counts the successes (the `stats` message's `successes`).
   void followSuccess();
   std::string scene() const;
+  std::string slowed(const PageShare& share) const;
   /// The index of the behaviour called `name`, or -1; the names, comma-separated.
   int behaviorIndex(std::string_view name) const;
   std::string behaviorNames() const;
@@ -114,6 +146,7 @@ class ViewerSession {
   std::shared_ptr<const ViewerAssets> assets_;  ///< what the page plays now: root_ or root_->sparring
   std::unique_ptr<State> state_;
   Mode mode_ = Mode::Target;
+  bool background_ = false;
   std::vector<std::string> outbox_;
 };
 

@@ -38,6 +38,7 @@ std::shared_ptr<ViewerAssets> loadAssets(const ServeOptions& options, const Grap
   for (const SuccessCriterion& c : assets->criteria) texts.push_back(c.describe());
   assets->criteriaText = fmt::format("{}", fmt::join(texts, ", or "));
   const StateActionModel& model = session.model();
+  assets->sourcePoses = std::make_shared<const SourcePoses>(makeSourcePoses(session.graph.db));
   assets->meanOutDegree = std::max(1.0, static_cast<double>(model.actionCount()) /
                                             static_cast<double>(std::max<std::size_t>(1, model.stateCount())));
   return assets;

@@ -3,10 +3,13 @@
 // viewer.cpp (the world, controllers, scene, frames, success), viewer_lesson.cpp (the
 // learn panel), viewer_retrain.cpp (live retraining), viewer_values.cpp (the values view).
 // Not for other code: include serve/viewer.hpp.
+#include <algorithm>
+#include <array>
 #include <atomic>
 #include <chrono>
 #include <cmath>
 #include <deque>
+#include <functional>
 #include <memory>
 #include <string>
 #include <thread>
@@ -16,12 +19,37 @@
 
 #include "learners/q_learning_steps.hpp"
 #include "mgrl/learning/success.hpp"
+#include "mgrl/runtime/world.hpp"
 #include "mgrl/session/session.hpp"
 #include "serve/viewer.hpp"
 
 namespace mgrl::serve {
 
 using Clock = std::chrono::steady_clock;
+
+// What costly page messages took of the server's thread, learned as they run, so that the
+// next is priced before it runs (ViewerSession::price): seconds per unit of each kind.
+struct MessagePrices {
+  enum Kind { Mode, LessonStart, LessonSteps, Retrain, kKinds };
+  std::array<std::atomic<double>, kKinds> perUnit{};
+
+  /// Seconds; a kind not yet seen on this server is taken to cost `unknown`.
+  double price(Kind kind, double units, double unknown) const {
+    const double perUnitNow = perUnit[kind].load(std::memory_order_relaxed);
+    return perUnitNow == 0 ? unknown : perUnitNow * units;
+  }
+  // A run that took longer than the price raises it at once; one that took less lowers it
+  // by a quarter of the difference: prices err high.
+  void learn(Kind kind, double units, double seconds) {
+    if (units <= 0) return;
+    const double measured = seconds / units, old = perUnit[kind].load(std::memory_order_relaxed);
+    perUnit[kind].store(old == 0 ? measured : std::max(measured, 0.75 * old + 0.25 * measured),
+                        std::memory_order_relaxed);
+  }
+};
+
+/// Runs `work` (which must not throw) on a detached thread that waitForWorkers() waits for.
+void startWorker(std::function<void()> work);
 
 struct ViewerAssets {
   /// The scenario opened once for every page: graph, behaviours, task and (when one serves)
@@ -39,6 +67,12 @@ struct ViewerAssets {
   /// The scenario whose behaviours play sparring and crowds (ServeOptions::sparringScenario),
   /// loaded beside this one at start; null: this scenario's own play every mode.
   std::shared_ptr<const ViewerAssets> sparring;
+  /// Learned by every page of the server from the messages it handles (mutable: a price
+  /// is not part of what the assets are).
+  mutable MessagePrices prices;
+  /// The capture's source poses, made once: every page's crowd poses from them instead of
+  /// making its own at each change of mode (a forward-kinematics pass over every frame).
+  std::shared_ptr<const SourcePoses> sourcePoses;
 
   const StateActionModel& model() const { return session->model(); }
 };
@@ -114,7 +148,7 @@ struct ViewerSession::State {
   // A retraining under way on a thread of its own, which holds the job (and everything
   // it reads) jointly with the page: a page that leaves asks it to stop and lets go at
   // once, never waiting for it on the network thread; the thread frees the rest when it
-  // ends (waitForRetrainings() waits for that when the server stops).
+  // ends (waitForWorkers() waits for that when the server stops).
   struct Job {
     int behavior = -1;
     Clock::time_point started;
@@ -123,6 +157,18 @@ struct ViewerSession::State {
     std::string failure;                ///< set instead of a usable result
   };
   std::shared_ptr<Job> job;
+
+  // A world being built on a thread of its own (ViewerSession::buildInBackground), which
+  // holds the build jointly with the page: a page that leaves lets go, and the thread frees
+  // the world. The page's messages wait until it is installed.
+  struct Build {
+    Mode mode = Mode::Target;
+    std::shared_ptr<const ViewerAssets> assets;  ///< what the new world plays; outlives it
+    std::atomic<bool> done{false};
+    std::unique_ptr<World> world;  ///< read once done
+    std::string failure;           ///< set instead of a world
+  };
+  std::shared_ptr<Build> build;
 
   ~State() {
     if (job) job->stop = true;

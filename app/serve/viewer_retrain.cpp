@@ -37,7 +37,8 @@ namespace {
 // At most one retraining at a time on the whole server: it takes every core for a second
 // or two, and the pages' worlds share them.
 std::atomic<bool> gRetraining{false};
-// Retraining threads still running (detached), for waitForRetrainings().
+// Worker threads still running (detached: retrainings, worlds being built), for
+// waitForWorkers().
 std::mutex gRunningMutex;
 std::condition_variable gRunningDone;
 int gRunning = 0;
@@ -170,11 +171,7 @@ void ViewerSession::retrain(const Retrain& message) {
   for (std::size_t k = 0; k < before.size(); ++k) before[k].weight = s.weights[k];
   std::shared_ptr<const ViewerAssets> assets = assets_;
   std::vector<std::shared_ptr<const Retrained>> keep = s.retrained;  // `before` points into these
-  {
-    const std::lock_guard lock(gRunningMutex);
-    ++gRunning;
-  }
-  std::thread([j = job, assets, before, keep = std::move(keep), result, index]() mutable {
+  startWorker([j = job, assets, before, keep = std::move(keep), result, index]() mutable {
     try {
       trainAndEvaluate(j->stop, *assets, before, *result, index);
     } catch (const TrainInterrupted&) {
@@ -193,15 +190,27 @@ void ViewerSession::retrain(const Retrain& message) {
     j.reset();
     assets.reset();
     gRetraining = false;
+  });
+  s.job = std::move(job);
+  outbox_.push_back(
+      json{{"type", "retrain"}, {"behavior", message.behavior}, {"status", "started"}, {"set", set}}.dump());
+}
+
+void startWorker(std::function<void()> work) {
+  {
+    const std::lock_guard lock(gRunningMutex);
+    ++gRunning;
+  }
+  std::thread([work = std::move(work)]() mutable {
+    work();
+    work = nullptr;  // what it held goes before the server may stop
     const std::lock_guard lock(gRunningMutex);
     --gRunning;
     gRunningDone.notify_all();
   }).detach();
-  s.job = std::move(job);
-  outbox_.push_back(json{{"type", "retrain"}, {"behavior", message.behavior}, {"status", "started"}, {"set", set}}.dump());
 }
 
-void waitForRetrainings() {
+void waitForWorkers() {
   std::unique_lock lock(gRunningMutex);
   gRunningDone.wait(lock, [] { return gRunning == 0; });
 }

@@ -47,10 +47,35 @@ void ViewerSession::followSuccess() {
   }
 }
 
+// Why the page runs slower than it asked, in a sentence, or "": its world's steps or its
+// messages spent more than its share of the server's thread.
+std::string ViewerSession::slowed(const PageShare& share) const {
+  const State& s = *state_;
+  if (share.ticksSkipped == 0 && s.framesShed == 0 && share.messagesWaited == 0) return {};
+  std::string text = fmt::format("The server shares its time among {} page{}, {:.0f} ms a second each;", share.pages,
+                                 share.pages == 1 ? "" : "s", share.secondsPerSecond * 1e3);
+  if (share.ticksSkipped > 0 || s.framesShed > 0)
+    text += fmt::format(
+        " this world asks for more ({} avatars, {}{} at speed {}), so {} of its last {} steps were skipped{} and it "
+        "runs slower.",
+        state_->world->avatarCount(), s.controller,
+        s.controller == "online_search" ? fmt::format(" ({} actions ahead)", s.horizon) : std::string(), s.speed,
+        share.ticksSkipped, share.ticks,
+        s.framesShed == 0 ? std::string() : fmt::format(", {} frames were cut short", s.framesShed));
+  if (share.messagesWaited > 0)
+    text += fmt::format(
+        " {}{} of this page's messages waited {:.1f} s in all for its share or for another page's costly message to "
+        "end (a change of mode or crowd, a lesson's start cost the most); the page's world holds still and its "
+        "further messages wait behind them.",
+        share.ticksSkipped > 0 || s.framesShed > 0 ? "And " : "", share.messagesWaited, share.waitedSeconds);
+  return text;
+}
+
 std::string ViewerSession::stats(std::size_t framesSent, std::size_t framesDropped, const PageShare& share) {
   State& s = *state_;
   const World& world = *s.world;
   const double window = std::min(30.0, std::max(world.time(), 1.0));
+  const std::string why = slowed(share);
   json j = {
       {"type", "stats"},
       {"time", world.time()},
@@ -71,18 +96,8 @@ std::string ViewerSession::stats(std::size_t framesSent, std::size_t framesDropp
       {"share_ms_per_s", round3(share.secondsPerSecond * 1e3)},
       {"steps_skipped", share.ticksSkipped},
       {"frames_shed", s.framesShed},
-      {"slowed",
-       share.ticksSkipped == 0 && s.framesShed == 0
-           ? json(nullptr)
-           : json(fmt::format(
-                 "The server shares its time among {} page{}, {:.0f} ms a second each; this "
-                 "world asks for more ({} avatars, {}{} at speed {}), so {} of its last {} "
-                 "steps were skipped{} and it runs slower.",
-                 share.pages, share.pages == 1 ? "" : "s", share.secondsPerSecond * 1e3, world.avatarCount(),
-                 s.controller,
-                 s.controller == "online_search" ? fmt::format(" ({} actions ahead)", s.horizon) : std::string(),
-                 s.speed, share.ticksSkipped, share.ticks,
-                 s.framesShed == 0 ? std::string() : fmt::format(", {} frames were cut short", s.framesShed)))}};
+      {"messages_waited", share.messagesWaited},
+      {"slowed", why.empty() ? json(nullptr) : json(why)}};
   s.decisions = {};
   s.framesShed = 0;
   s.busySeconds = 0;

@@ -54,8 +54,16 @@ World::World(WorldSetup setup)
     // here. The table (boxing: 1,960 frames, 3.4 MB; SNU sparring: 12,242 frames, 15 MB)
     // costs a forward-kinematics pass per frame and a page fault per 4 KB at the start, which
     // 64 avatars win back within seconds; fewer avatars, which are cheap anyway, do without.
+    if (setup_.sourcePoses && (setup_.sourcePoses->frameCount() != setup_.db->frameCount() ||
+                               setup_.sourcePoses->joints != setup_.db->skeleton->jointCount()))
+      throw Error(
+          fmt::format("world: expected source poses of the motion database ({} frames x {} joints), found {} "
+                      "x {}",
+                      setup_.db->frameCount(), setup_.db->skeleton->jointCount(), setup_.sourcePoses->frameCount(),
+                      setup_.sourcePoses->joints));
     if (setup_.avatars >= kSourcePosesMinAvatars)
-      sourcePoses_ = std::make_unique<const SourcePoses>(makeSourcePoses(*setup_.db));
+      sourcePoses_ =
+          setup_.sourcePoses ? setup_.sourcePoses : std::make_shared<const SourcePoses>(makeSourcePoses(*setup_.db));
     // Each struck part's reaction chain: up to 3 joints below the struck one and above the
     // pelvis, lowest first, and the joints each one's turn moves.
     const Skeleton& skeleton = *setup_.db->skeleton;

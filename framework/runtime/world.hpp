@@ -189,6 +189,10 @@ struct WorldSetup {
   /// indices), so that two policies spar (`simulate --partner-policy`); unset, every avatar
   /// plays makeController's.
   std::function<std::unique_ptr<Controller>()> makePartnerController;
+  /// Optional: `db`'s source poses (makeSourcePoses()), made once and shared by the worlds
+  /// that pose a crowd from the same capture (the viewer's pages). Null: a world of many
+  /// avatars with poses makes its own (a forward-kinematics pass over every frame).
+  std::shared_ptr<const SourcePoses> sourcePoses;
 };
 
 class World {
@@ -291,7 +295,7 @@ class World {
   WorldSetup setup_;
   const StateActionModel& model_;
   const BodyTable& body_;
-  std::unique_ptr<const SourcePoses> sourcePoses_;  ///< with poses: shared by every avatar's playback
+  std::shared_ptr<const SourcePoses> sourcePoses_;  ///< with poses: shared by every avatar's playback
   /// Per struck BodyPart, the joints a hit reaction turns (lowest first) and, for each, the
   /// joints its turn moves (subtreeJoints()).
   struct ReactionChain {
