@@ -2,9 +2,11 @@
 // the same table, bit for bit, as value_iteration, alone and across 2 and 3 ranks, on
 // boxing's hit behaviour and on a learned-opponent behaviour; a rank killed mid-run fails
 // the job naming it, and `--resume` ends with the uninterrupted table.
+#include <algorithm>
 #include <cstdlib>
 #include <fstream>
 #include <optional>
+#include <set>
 #include <string>
 #include <utility>
 #include <vector>
@@ -12,8 +14,10 @@
 #include <catch2/catch.hpp>
 
 #include "cli_support.hpp"
+#include "learners/mpi_ranks.hpp"
 #include "mgrl/core/bundle.hpp"
 #include "mgrl/core/launch.hpp"
+#include "mgrl/core/random.hpp"
 #include "sanitizer.hpp"
 #include "test_support.hpp"
 
@@ -252,6 +256,57 @@ TEST_CASE("mpi_value_iteration --resume ignores a checkpoint whose sweep count i
   CHECK(resumed.err.find("no checkpoint to continue from, trained from the start") != std::string::npos);
   REQUIRE(box.run(train + test::shellWord(box.path("straight"))).status == 0);
   CHECK(compareTables(box.table("bundle", "hit"), box.table("straight", "hit")) == "identical");
+}
+
+// partitionByEndState: longest processing time first (Graham 1969), the load of a state
+// being the actions that end at it. Checked against a hand-worked split and, on random
+// loads, against the bound that greedy split guarantees.
+namespace {
+
+GridModel withLoads(const std::vector<std::uint32_t>& loads) {
+  GridModel g;
+  g.incomingBegin.assign(1, 0);
+  for (const std::uint32_t load : loads) g.incomingBegin.push_back(g.incomingBegin.back() + load);
+  return g;
+}
+
+std::vector<std::uint64_t> rankLoads(const std::vector<std::uint32_t>& loads, const std::vector<int>& owner,
+                                     int ranks) {
+  std::vector<std::uint64_t> sum(static_cast<std::size_t>(ranks), 0);
+  for (std::size_t s = 0; s < loads.size(); ++s) sum[static_cast<std::size_t>(owner[s])] += loads[s];
+  return sum;
+}
+
+}  // namespace
+
+TEST_CASE("the MPI split gives each state to one rank, largest first to the least loaded", "[mpi]") {
+  // By hand, 2 ranks: 5 -> r0 (5, 0); 3 -> r1 (5, 3); 3 -> r1 (5, 6); 2 -> r0 (7, 6);
+  // 2 -> r1 (7, 8); 1 -> r0 (8, 8). States in the order 2, 0, 5, 1, 3, 4 by load, ties kept
+  // in state order.
+  const std::vector<std::uint32_t> loads = {3, 2, 5, 2, 1, 3};
+  CHECK(learners::partitionByEndState(withLoads(loads), 2) == std::vector<int>{1, 0, 0, 1, 0, 1});
+  CHECK(rankLoads(loads, learners::partitionByEndState(withLoads(loads), 2), 2) == std::vector<std::uint64_t>{8, 8});
+  // One rank holds everything; more ranks than states give each state a rank of its own.
+  CHECK(learners::partitionByEndState(withLoads(loads), 1) == std::vector<int>(6, 0));
+  const std::vector<int> alone = learners::partitionByEndState(withLoads(loads), 8);
+  CHECK(std::set<int>(alone.begin(), alone.end()).size() == 6);
+
+  // Random loads: every state owned by a rank in range, and no rank more than the largest
+  // state's load above the least loaded one (what the greedy choice guarantees).
+  Rng rng(7);
+  for (int trial = 0; trial < 50; ++trial) {
+    std::vector<std::uint32_t> random(20 + rng.below(200));
+    for (auto& load : random) load = static_cast<std::uint32_t>(rng.below(1000));
+    const int ranks = 2 + static_cast<int>(rng.below(7));
+    const std::vector<int> owner = learners::partitionByEndState(withLoads(random), ranks);
+    REQUIRE(owner.size() == random.size());
+    CHECK(std::all_of(owner.begin(), owner.end(), [&](int r) { return r >= 0 && r < ranks; }));
+    const std::vector<std::uint64_t> sum = rankLoads(random, owner, ranks);
+    const auto [least, most] = std::minmax_element(sum.begin(), sum.end());
+    INFO("trial " << trial << ": " << random.size() << " states over " << ranks << " ranks");
+    CHECK(*most - *least <= *std::max_element(random.begin(), random.end()));
+    CHECK(learners::partitionByEndState(withLoads(random), ranks) == owner);  // deterministic
+  }
 }
 
 }  // namespace mpi_test
