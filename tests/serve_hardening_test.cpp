@@ -376,7 +376,13 @@ TEST_CASE(
     "four pages flooding crowd switches beside a light one: the light page and HTTP keep their pace, the "
     "flooders are told",
     "[serve][data][slow][serial]") {
-  const BoxingAssets boxing;
+  // As `mgrl serve scenarios/boxing.yaml` serves it: crowds play boxing_spar's three-stance
+  // policies, whose first frame (2,000 avatars deciding at once) is the costliest part of a
+  // switch.
+  const BoxingAssets boxing(
+      true, "boxing.yaml",
+      {"behaviors.approach.learner.type=value_iteration", "behaviors.hit.learner.type=value_iteration"},
+      /*sparring=*/true);
   RunningServer running(boxing.assets, 16);
   const bench::FloodBesideLight r = bench::floodBesideLight(running.port(), 4, 150, 20);
   WARN(r.summary());

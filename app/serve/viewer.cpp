@@ -125,33 +125,59 @@ ViewerSession::~ViewerSession() = default;
 double ViewerSession::frameTime() const { return assets_->model().frameTime; }
 std::size_t ViewerSession::avatars() const { return state_->world->avatarCount(); }
 
-void ViewerSession::applyController() {
-  State& s = *state_;
-  const ViewerAssets& a = *assets_;
-  if (s.controller == "online_search") {
-    const int affordable = affordableHorizon(a, s.horizon, s.world->avatarCount());
-    if (affordable < s.horizon) {
-      s.adjustment = fmt::format("The online search's horizon was lowered from {} to {} actions for {} avatars (it "
-                                 "would expand about {:.0f} actions per round of decisions; at most {:.0f} keep the "
-                                 "world running).",
-                                 s.horizon, affordable, s.world->avatarCount(),
-                                 searchCost(a, s.horizon, s.world->avatarCount()), kSearchBudget);
-      s.horizon = affordable;
+PageController pageController(const ViewerAssets& a, const PageChoices& page, std::size_t avatars) {
+  PageController out;
+  int horizon = page.horizon;
+  if (page.controller == "online_search") {
+    const int affordable = affordableHorizon(a, horizon, avatars);
+    if (affordable < horizon) {
+      out.adjustment = fmt::format(
+          "The online search's horizon was lowered from {} to {} actions for {} avatars (it "
+          "would expand about {:.0f} actions per round of decisions; at most {:.0f} keep the "
+          "world running).",
+          horizon, affordable, avatars, searchCost(a, horizon, avatars), kSearchBudget);
+      horizon = affordable;
     }
   }
   // The page's weights on the session's parts; the protocol's horizon is in actions only.
-  ControllerParts parts = a.session->controllerParts(a.session->task.world.variety);
-  parts.policy = s.policy;
-  for (std::size_t i = 0; i < s.weights.size(); ++i) {
-    if (i < parts.policy.size()) parts.policy[i].weight = s.weights[i];
-    parts.search[i].weight = s.weights[i];
+  out.parts = a.session->controllerParts(a.session->task.world.variety);
+  out.parts.policy = page.policy;
+  for (std::size_t i = 0; i < page.weights.size(); ++i) {
+    if (i < out.parts.policy.size()) out.parts.policy[i].weight = page.weights[i];
+    out.parts.search[i].weight = page.weights[i];
   }
-  const ControllerChoice choice{s.controller, s.horizon, 0};
+  out.choice = ControllerChoice{page.controller, horizon, 0};
+  out.keep = page.retrained;
+  return out;
+}
+
+PageChoices ViewerSession::choices() const {
+  const State& s = *state_;
+  return {s.controller, s.horizon, s.weights, s.policy, s.retrained};
+}
+
+PageChoices ViewerSession::choicesAfterAdopting(const ViewerAssets& assets) const {
+  if (&assets == assets_.get()) return choices();
+  // What adopt() will make of the page's choices.
+  const Session& session = *assets.session;
+  PageChoices page{state_->controller, state_->horizon, {}, session.policy, {}};
+  for (const Behavior& b : session.behaviors) page.weights.push_back(b.weight);
+  page.retrained.assign(session.behaviors.size(), nullptr);
+  if (page.controller.empty() || (page.controller == "policy" && session.policy.empty()))
+    page.controller = session.policy.empty() ? "online_search" : "policy";
+  return page;
+}
+
+void ViewerSession::applyController() {
+  State& s = *state_;
+  const PageController c = pageController(*assets_, choices(), s.world->avatarCount());
+  if (!c.adjustment.empty()) {
+    s.adjustment = c.adjustment;
+    s.horizon = c.choice.horizon;
+  }
   DecisionClock* clock = &s.decisions;
-  const std::vector<std::shared_ptr<const Retrained>> keep = s.retrained;  // the tables `parts` points into
-  s.world->setControllerFactory([=]() -> std::unique_ptr<Controller> {
-    (void)keep;
-    return std::make_unique<TimedController>(makeController(choice, parts), *clock);
+  s.world->setControllerFactory([c, clock]() -> std::unique_ptr<Controller> {
+    return std::make_unique<TimedController>(makeController(c.choice, c.parts), *clock);
   });
 }
 

@@ -40,6 +40,7 @@ struct ServeOptions : app::LearnOptions {
 /// Everything the sessions share, loaded once: the graph, the behaviours, the policy
 /// bundle (if any), the body table. Read-only once made.
 struct ViewerAssets;
+struct PageChoices;
 std::shared_ptr<const ViewerAssets> loadViewerAssets(const ServeOptions& options);
 
 /// Waits until no worker thread runs: retrainings (pages that left ask theirs to stop;
@@ -117,8 +118,13 @@ class ViewerSession {
   /// A new world of `avatars` in `mode`, built at once or in the background.
   void rebuild(Mode mode, int avatars);
   /// Makes `world`, playing `assets`' behaviours in `mode`, the page's world.
-  void install(std::unique_ptr<World> world, Mode mode, std::shared_ptr<const ViewerAssets> assets);
+  /// `started`: the world has run its first frame (a background build runs it).
+  void install(std::unique_ptr<World> world, Mode mode, std::shared_ptr<const ViewerAssets> assets,
+               bool started = false);
   void applyController();
+  /// The page's choices now, and what adopting `assets` would make of them.
+  PageChoices choices() const;
+  PageChoices choicesAfterAdopting(const ViewerAssets& assets) const;
   /// After each frame: plays every decision the frame made through the avatar's success
   /// trackers and counts the successes (the `stats` message's `successes`).
   void followSuccess();

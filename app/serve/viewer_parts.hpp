@@ -99,6 +99,26 @@ struct Retrained {
   const Discretizer& grid() const { return refined ? *refined : *behavior.discretizer; }
 };
 
+// What a page chose to play (its controller, horizon, weights and policy), and the
+// controller that makes in a world of some number of avatars.
+struct PageChoices {
+  std::string controller;
+  int horizon = 3;
+  std::vector<double> weights;
+  std::vector<PolicyPart> policy;
+  std::vector<std::shared_ptr<const Retrained>> retrained;  ///< per behaviour; null: the bundle's
+};
+struct PageController {
+  ControllerParts parts;
+  ControllerChoice choice;
+  std::string adjustment;                              ///< "" unless the horizon was lowered for the world's size
+  std::vector<std::shared_ptr<const Retrained>> keep;  ///< the tables `parts` points into
+};
+/// The page's choices on `assets`' behaviours for a world of `avatars`: the online search's
+/// horizon is lowered where so many avatars would hold up the world. Reads no page state, so
+/// a world's first frame can be run with it off the network thread.
+PageController pageController(const ViewerAssets& assets, const PageChoices& page, std::size_t avatars);
+
 inline double round3(double x) { return std::round(x * 1000) / 1000; }
 inline nlohmann::json point3(const Eigen::Vector3d& p) {
   return nlohmann::json::array({round3(p.x()), round3(p.y()), round3(p.z())});
@@ -165,7 +185,7 @@ struct ViewerSession::State {
     Mode mode = Mode::Target;
     std::shared_ptr<const ViewerAssets> assets;  ///< what the new world plays; outlives it
     std::atomic<bool> done{false};
-    std::unique_ptr<World> world;  ///< read once done
+    std::unique_ptr<World> world;  ///< read once done, its first frame run
     std::string failure;           ///< set instead of a world
   };
   std::shared_ptr<Build> build;
