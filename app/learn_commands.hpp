@@ -16,6 +16,7 @@
 #include "mgrl/scenario/scenario.hpp"
 #include "mgrl/session/policy_source.hpp"
 #include "mgrl/session/simulate.hpp"
+#include "mgrl/session/training.hpp"
 
 namespace mgrl {
 struct Behavior;
@@ -29,36 +30,14 @@ struct LearnOptions : SessionOptions {
   bool progressBar = false;       ///< draw a progress bar on stderr (a terminal)
 };
 
-/// Hears one behaviour's training beside the progress report (compare's snapshot
-/// evaluator): progress and snapshots as a TrainObserver, and a record kept in the bundle.
-class TrainListener : public TrainObserver {
- public:
-  /// Kept in the behaviour's record in the policy bundle under "snapshots" (null: nothing).
-  virtual nlohmann::json record() const { return nullptr; }
-  /// Appended to the progress line (say, the last snapshot's success rate); "" nothing.
-  virtual std::string status() const { return {}; }
+/// `mgrl train`'s options: the session's and the terminal's, what to train and where
+/// (TrainSettings), and who else hears it (compare's snapshot evaluator).
+struct TrainOptions : LearnOptions, TrainSettings {
+  ListenerFactory listen;  ///< null: no listener
 };
 
-/// Called once per behaviour about to be trained, with the scenario's behaviours and the
-/// graph the tables are for (both outlive the listener); may return null.
-using ListenerFactory = std::function<std::unique_ptr<TrainListener>(
-    const Behavior& trained, const std::vector<Behavior>& all, const GraphResult& graph)>;
-
-struct TrainOptions : LearnOptions {
-  std::string behavior;        ///< only this one ("" every behaviour)
-  std::filesystem::path out;   ///< policy bundle ("" the default in the cache)
-  bool resume = false;         ///< continue from checkpoints left by a killed run
-  double maxMemoryBytes = 1e18;  ///< refuse a behaviour whose training would need more
-  /// The learning problem's model: "tabulated" (every transition stored, the fastest),
-  /// "compact" (rewards only, a fifth of the memory, landings found per backup; same
-  /// tables), or "auto": tabulated when it fits in maxMemoryBytes, else compact.
-  std::string model = "auto";
-  ListenerFactory listen;        ///< null: no listener
-};
-
-/// Trains, saves the policy bundle atomically and returns the --json report:
-/// {"scenario", "policy", "graph_key", "behaviors": {NAME: {"learner", "updates", "seconds",
-/// "updates_per_second", "final_residual", "table_bytes", ...}}}.
+/// Opens the scenario, trains it (trainScenario) with Ctrl-C and SIGTERM stopping it, and
+/// returns the --json report (Trained::report).
 nlohmann::json runTrain(const TrainOptions& options);
 std::string trainText(const nlohmann::json& report);
 
@@ -88,12 +67,5 @@ nlohmann::json runSimulate(const SimulateOptions& options);
 std::string simulateText(const nlohmann::json& report);
 
 using mgrl::defaultPolicyDirectory;  // framework/session/policy_source.hpp
-
-/// A run stopped by Ctrl-C or SIGTERM after saving what it could; the message says how to
-/// continue. The command line exits with 130 for it.
-class Interrupted : public Error {
- public:
-  using Error::Error;
-};
 
 }  // namespace mgrl::app

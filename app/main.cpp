@@ -80,7 +80,7 @@ int main(int argc, char** argv) {
   try {
     for (const auto& command : commands)
       if (command->parsed()) command->run(common);
-  } catch (const mgrl::app::Interrupted& e) {
+  } catch (const mgrl::Interrupted& e) {
     std::cerr << "mgrl: " << e.what() << '\n';
     return kExitInterrupted;
   } catch (const mgrl::Error& e) {

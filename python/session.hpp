@@ -192,21 +192,30 @@ class PySession {
       throw Error(fmt::format("on_snapshot: expected a callable taking a dict, or None, found an object of type {}",
                               typeName(onSnapshot)));
     if (snapshots > 1000) throw Error(fmt::format("snapshots: expected at most 1000, found {}", snapshots));
-    const auto made = builtinPlugins().learners.create(ConfigNode::parse(config.dump(), fmt::format("{} learner", name)));
-    made->checkGrid(*b.discretizer);
-    const TrainResult result =
-        trainWatched(name, *made, b.problem(session_->model()), progress, snapshots, onSnapshot);
-    if (result.grid)
-      throw Error(fmt::format("train: the learner {} refined its own grid ({} vertices); tables on refined grids are "
-                              "not offered to Python yet",
-                              made->type(), result.table.vertexCount()));
-    nlohmann::json curve = nlohmann::json::array();
-    for (const CurvePoint& c : result.curve) curve.push_back({c.updates, c.seconds, c.residual, c.meanResidual});
-    lastTrain_ = {{"behavior", name},          {"learner", made->type()},
-                  {"updates", result.updates}, {"seconds", result.seconds},
-                  {"final_residual", result.finalResidual}, {"curve", curve},
-                  {"stats", result.stats}};
-    return tableArray(result.table);
+    TrainSettings settings;
+    settings.behavior = name;
+    settings.save = false;
+    if (!learner.is_none() || !setsOf(sets).empty())
+      settings.learner =
+          builtinPlugins().learners.create(ConfigNode::parse(config.dump(), fmt::format("{} learner", name)));
+    // The one way every front end trains: its self-play rounds, memory plan and record.
+    Trained trained = trainWatched(*session_, settings, progress, snapshots, onSnapshot);
+    PolicyBehavior& table = trained.bundle.behaviors.at(name);
+    if (trained.refined.count(name) != 0)
+      throw Error(
+          fmt::format("train: the learner {} refined its own grid ({} vertices); tables on refined grids are "
+                      "not offered to Python yet",
+                      table.record.value("learner", std::string()), table.table.vertexCount()));
+    const nlohmann::json& report = trained.report["behaviors"][name];
+    lastTrain_ = {{"behavior", name},
+                  {"learner", report["learner"]},
+                  {"updates", report["updates"]},
+                  {"seconds", report["seconds"]},
+                  {"final_residual", report["final_residual"]},
+                  {"curve", table.record["curve"]},
+                  {"stats", report["stats"]}};
+    if (report.contains("rounds")) lastTrain_["rounds"] = report["rounds"];
+    return tableArray(table.table);
   }
 
   // What the last train() reported: updates, seconds, final_residual, curve, stats.
@@ -290,17 +299,14 @@ class PySession {
     }
     toStderr(fmt::format("mgrl: {} ({}): training {} with {} first; `mgrl train {} --behavior {}` keeps one", b.name,
                          why, b.name, b.learner->type(), session.scenario.path.string(), b.name));
-    TrainResult result = trainWatched(b.name, *b.learner, b.problem(session.model()), py::none());
-    if (result.grid)
+    TrainSettings settings;
+    settings.behavior = b.name;
+    settings.save = false;
+    Trained trained = trainWatched(session, settings, py::none());
+    if (trained.refined.count(b.name) != 0)
       throw Error(fmt::format("{}: its learner {} refines its grid; train it with `mgrl train` first", b.name,
                               b.learner->type()));
-    auto table = std::make_shared<PolicyBehavior>();
-    table->key = b.key;
-    table->record = {{"learner", b.learner->type()}, {"config", b.config}, {"updates", result.updates}};
-    table->table = std::move(result.table);
-    table->vertices = vertexPositions(*b.discretizer);
-    table->gridType = b.discretizer->type();
-    table->grid = b.discretizer->structure();
+    auto table = std::make_shared<PolicyBehavior>(std::move(trained.bundle.behaviors.at(b.name)));
     others_[b.name] = table;
     return table;
   }

@@ -13,12 +13,15 @@
 
 #include <fmt/format.h>
 
+#include "mgrl/session/training.hpp"
+
 namespace mgrl::python {
 namespace {
 
-// A C++ learner run off the Python thread: its progress handed to a Python callback about
-// ten times a second, Ctrl-C turned into the learner's stop request (as the command line's
-// handler does), the callback's own exception stopping it too.
+// Training run off the Python thread: its progress handed to a Python callback about ten
+// times a second, what it says printed on Python's stderr, Ctrl-C turned into the learner's
+// stop request (as the command line's handler does), the callback's own exception stopping
+// it too.
 class Relay final : public TrainObserver {
  public:
   void progress(const TrainProgress& p) override {
@@ -30,16 +33,11 @@ class Relay final : public TrainObserver {
     std::lock_guard lock(mutex_);
     notes_.push_back(line);
   }
+  void snapshot(const QTable& table, const CurvePoint& point, const Discretizer* grid) override;
   // Snapshots of the table along training (compare's learning curves): copied here, on
   // the learner's thread, and handed to Python by take().
   explicit Relay(std::size_t snapshots = 0) : snapshots_(snapshots) {}
   std::size_t snapshotCount() const override { return snapshots_; }
-  void snapshot(const QTable& table, const CurvePoint& point, const Discretizer* grid) override {
-    if (grid) return;  // a refined grid's table is not offered to Python
-    Taken t{point, table.actionMajor(), table.vertexCount()};
-    std::lock_guard lock(mutex_);
-    taken_.push_back(std::move(t));
-  }
   struct Taken {
     CurvePoint point;
     std::vector<float> table;  // (A, V) action-major
@@ -71,23 +69,49 @@ class Relay final : public TrainObserver {
   std::vector<Taken> taken_;
 };
 
+void Relay::snapshot(const QTable& table, const CurvePoint& point, const Discretizer* grid) {
+  if (grid) return;  // a refined grid's table is not offered to Python
+  Taken t{point, table.actionMajor(), table.vertexCount()};
+  std::lock_guard lock(mutex_);
+  taken_.push_back(std::move(t));
+}
+
+// Hands each behaviour's (and round's) progress and snapshots to the one relay.
+class Forward final : public TrainListener {
+ public:
+  explicit Forward(Relay& relay) : relay_(relay) {}
+  void progress(const TrainProgress& p) override { relay_.progress(p); }
+  std::size_t snapshotCount() const override { return relay_.snapshotCount(); }
+  void snapshot(const QTable& table, const CurvePoint& point, const Discretizer* grid) override {
+    relay_.snapshot(table, point, grid);
+  }
+
+ private:
+  Relay& relay_;
+};
+
 }  // namespace
 
-TrainResult trainWatched(const std::string& behavior, const Learner& learner, const Problem& problem,
-                         const py::object& progress, std::size_t snapshots, const py::object& onSnapshot) {
-  const unsigned threads = std::max(1u, std::thread::hardware_concurrency());
+Trained trainWatched(const Session& session, const TrainSettings& settings, const py::object& progress,
+                     std::size_t snapshots, const py::object& onSnapshot) {
+  const std::string& behavior = settings.behavior;
   std::atomic<bool> stop{false};
   std::mutex mutex;
   std::condition_variable finished;
   bool done = false;
-  std::optional<TrainResult> result;
+  std::optional<Trained> result;
   std::exception_ptr failure;
   Relay relay(onSnapshot.is_none() ? 0 : snapshots);
+  TrainHooks hooks;
+  hooks.log = [&relay](const std::string& line) { relay.note(line); };
+  hooks.progressLines = false;  // the progress callback has them
+  hooks.listen = [&relay](const Behavior&, const std::vector<Behavior>&, const GraphResult&) {
+    return std::make_unique<Forward>(relay);
+  };
+  hooks.stop = &stop;
   std::thread worker([&] {
     try {
-      const GridModel g = learner.takesCompactModel() ? GridModel::buildCompact(problem, threads, &stop)
-                                                      : GridModel::build(problem, threads, &stop);
-      result = learner.train({problem, g, &relay, nullptr, threads, &stop});
+      result = trainScenario(session, settings, hooks);
     } catch (...) {
       failure = std::current_exception();
     }
@@ -106,7 +130,7 @@ TrainResult trainWatched(const std::string& behavior, const Learner& learner, co
     }
     std::vector<std::string> notes;
     const std::optional<TrainProgress> p = relay.take(notes);
-    for (const std::string& line : notes) toStderr(fmt::format("train {}: {}", behavior, line));
+    for (const std::string& line : notes) toStderr(fmt::format("mgrl: {}", line));
     // Calls a Python callback; its exception stops training (Ctrl-C while it ran
     // surfaces there as KeyboardInterrupt: the same stop as below).
     auto call = [&](const py::object& callback, py::dict d) {

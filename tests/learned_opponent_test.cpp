@@ -11,7 +11,6 @@
 #include <catch2/catch.hpp>
 
 #include "app/plugins.hpp"
-#include "app/self_play.hpp"
 #include "cli_support.hpp"
 #include "environments/environments.hpp"
 #include "mgrl/core/random.hpp"
@@ -23,6 +22,7 @@
 #include "mgrl/motion/motion_database.hpp"
 #include "mgrl/scenario/behaviors.hpp"
 #include "mgrl/scenario/scenario.hpp"
+#include "mgrl/session/self_play.hpp"
 #include "rewards/term.hpp"
 #include "test_support.hpp"
 
@@ -573,13 +573,13 @@ TEST_CASE(
 }
 
 TEST_CASE("a negative best-response gap is explained in train's round line", "[opponent][learning]") {
-  CHECK(app::gapNote(0.33, true).empty());
-  CHECK(app::gapNote(0.0, true).empty());
-  CHECK(app::gapNote(-0.47, true).find("negative: the grid's best response is not the best") != std::string::npos);
-  CHECK(app::gapNote(-0.47, true).find("a finer grid narrows this") != std::string::npos);
+  CHECK(gapNote(0.33, true).empty());
+  CHECK(gapNote(0.0, true).empty());
+  CHECK(gapNote(-0.47, true).find("negative: the grid's best response is not the best") != std::string::npos);
+  CHECK(gapNote(-0.47, true).find("a finer grid narrows this") != std::string::npos);
   // A table that is not the grid's optimum (Q-learning) is not called its best response.
-  CHECK(app::gapNote(-0.47, false).find("best response") == std::string::npos);
-  CHECK(app::gapNote(-0.47, false).find("does worse in these episodes") != std::string::npos);
+  CHECK(gapNote(-0.47, false).find("best response") == std::string::npos);
+  CHECK(gapNote(-0.47, false).find("does worse in these episodes") != std::string::npos);
 }
 
 TEST_CASE("self-play against: average plays the entry-by-entry mean of the earlier rounds' tables",
@@ -594,17 +594,16 @@ TEST_CASE("self-play against: average plays the entry-by-entry mean of the earli
       for (std::size_t v = 0; v < 4; ++v)
         rounds[k].at(a, v) = static_cast<float>((k + 1) * (a + 1)) + 0.25F * static_cast<float>(v * k);
   std::shared_ptr<const QTable> mean;
-  for (std::size_t k = 0; k < rounds.size(); ++k)
-    mean = app::meanOfRounds(mean.get(), rounds[k], static_cast<int>(k + 1));
+  for (std::size_t k = 0; k < rounds.size(); ++k) mean = meanOfRounds(mean.get(), rounds[k], static_cast<int>(k + 1));
   for (std::size_t a = 0; a < 3; ++a)
     for (std::size_t v = 0; v < 4; ++v) {
       const double expected = (rounds[0].at(a, v) + rounds[1].at(a, v) + rounds[2].at(a, v)) / 3.0;
       CHECK(mean->at(a, v) == Approx(expected).epsilon(1e-6));
     }
   // The first round's mean is its own table; a table of another layout is refused.
-  CHECK(*app::meanOfRounds(nullptr, rounds[1], 1) == rounds[1]);
+  CHECK(*meanOfRounds(nullptr, rounds[1], 1) == rounds[1]);
   const QTable other(m, 5);
-  CHECK_THROWS_WITH(app::meanOfRounds(mean.get(), other, 4),
+  CHECK_THROWS_WITH(meanOfRounds(mean.get(), other, 4),
                     Catch::Contains("round 4's table has 3 actions x 5 vertices, the earlier rounds' 3 x 4"));
 }
 

@@ -15,17 +15,16 @@
 #include <fmt/ranges.h>
 #include <nlohmann/json.hpp>
 
-#include "learn_common.hpp"
-#include "learners/q_learning_steps.hpp"
-#include "mgrl/session/trials.hpp"
 #include "mgrl/graph/motion_graph.hpp"
 #include "mgrl/learning/behavior.hpp"
 #include "mgrl/learning/policy_bundle.hpp"
 #include "mgrl/runtime/controller.hpp"
 #include "mgrl/runtime/world.hpp"
 #include "mgrl/scenario/behaviors.hpp"
+#include "mgrl/session/plugins.hpp"
 #include "mgrl/session/session.hpp"
-#include "plugins.hpp"
+#include "mgrl/session/training.hpp"
+#include "mgrl/session/trials.hpp"
 
 namespace mgrl::serve {
 
@@ -49,28 +48,43 @@ constexpr double kRetrainTrialSeconds = 10;
 // The tabulated problem and two tables of a retraining, at most.
 constexpr double kRetrainBytes = 1e9;
 
-// The retraining thread's work: value iteration on the retrained behaviour, then both
-// policies (`before`, and `before` with the new table) on the same trials. Checks the job's
-// stop flag between stages (TrainInterrupted) and passes it to the learner.
+// What a retraining trains: value iteration on the tabulated problem, within the server's
+// limit.
+TrainSettings retrainSettings() {
+  static const std::shared_ptr<const Learner> valueIteration =
+      builtinPlugins().learners.create(ConfigNode::parse("{type: value_iteration}", "retrain"));
+  TrainSettings settings;
+  settings.save = false;
+  settings.learner = valueIteration;
+  settings.maxMemoryBytes = kRetrainBytes;
+  settings.model = "tabulated";
+  settings.limitName = "the server's limit for a retraining";
+  settings.limitRaisable = false;
+  return settings;
+}
+
+// The retraining thread's work: the behaviour trained as every front end trains
+// (trainBehavior), then both policies (`before`, and `before` with the new table) on the
+// same trials. Checks the job's stop flag between stages (TrainInterrupted) and passes it to
+// the training.
 void trainAndEvaluate(std::atomic<bool>& stop, const ViewerAssets& assets, const std::vector<PolicyPart>& before,
                       Retrained& result, std::size_t index) {
   auto stopped = [&] {
     if (stop) throw TrainInterrupted(0, 0, false);
   };
   const StateActionModel& model = assets.model();
-  const unsigned threads = std::max(1u, std::thread::hardware_concurrency());
   const auto start = Clock::now();
-  const Problem problem = result.behavior.problem(model);
-  stopped();
-  const GridModel grid = GridModel::build(problem, threads, &stop);
-  stopped();
-  const auto learner = app::plugins().learners.create(ConfigNode::parse("{type: value_iteration}", "retrain"));
-  TrainResult trained = learner->train({problem, grid, nullptr, nullptr, threads, &stop});
+  TrainHooks hooks;
+  hooks.stop = &stop;
+  Trained trained = trainBehavior(*assets.session, result.behavior, retrainSettings(), hooks);
+  const std::string& name = result.behavior.name;
+  PolicyBehavior& table = trained.bundle.behaviors.at(name);
   result.trainSeconds = std::chrono::duration<double>(Clock::now() - start).count();
-  result.table = std::move(trained.table);
-  result.refined = trained.grid;
-  result.updates = trained.updates;
-  for (const CurvePoint& p : trained.curve) result.curve.push_back({p.updates, p.seconds, p.residual, p.meanResidual});
+  result.table = std::move(table.table);
+  if (const auto refined = trained.refined.find(name); refined != trained.refined.end())
+    result.refined = refined->second;
+  result.updates = trained.report["behaviors"][name]["updates"].get<std::uint64_t>();
+  result.curve = table.record["curve"];
   const Discretizer& g = result.grid();
   for (std::size_t v = 0; v < g.vertexCount(); ++v) {
     const Eigen::Vector3d p = g.vertexPosition(v);
@@ -144,19 +158,17 @@ void ViewerSession::retrain(const Retrain& message) {
     options.sets.push_back(fmt::format("behaviors.{}.{}={}", message.behavior, key, value));
     set[key] = value;
   }
-  Scenario scenario = app::checkedScenario(options);
+  Scenario scenario = checkedScenario(options);
   std::vector<Behavior> built =
-      buildBehaviors(scenario, app::plugins(), a.model(), a.session->graph.key, message.behavior);
+      buildBehaviors(scenario, builtinPlugins(), a.model(), a.session->graph.key, message.behavior);
   auto result = std::make_shared<Retrained>();
   result->behavior = std::move(built.front());
   result->set = set;
-  const double bytes = GridModel::trainingBytes(a.model().actionCount(), result->behavior.discretizer->vertexCount());
-  if (bytes > kRetrainBytes)
-    throw Error(
-        fmt::format("retrain: expected training to need at most {}, found {} for {} vertices x {} actions; "
-                    "choose a coarser grid",
-                    humanBytes(kRetrainBytes), humanBytes(bytes), result->behavior.discretizer->vertexCount(),
-                    a.model().actionCount()));
+  try {  // too large for the server: refused before anything is trained
+    checkTrainingFits(result->behavior, a.model(), retrainSettings());
+  } catch (const Error& e) {
+    throw Error(fmt::format("retrain: {}", e.what()));
+  }
   bool idle = false;
   if (!gRetraining.compare_exchange_strong(idle, true))
     throw Error("retrain: expected the server's one retraining slot to be free, found another page's retraining "

@@ -4,9 +4,9 @@
 #include <string>
 #include <vector>
 
-#include "mgrl/learning/problem.hpp"
 #include "mgrl/session/plugins.hpp"
 #include "mgrl/session/session.hpp"
+#include "mgrl/session/training.hpp"
 
 int main(int argc, char** argv) try {
   mgrl::SessionOptions options;
@@ -14,20 +14,19 @@ int main(int argc, char** argv) try {
   const double seconds = argc > 2 ? std::stod(argv[2]) : 10;
   const auto session = mgrl::openSession(options);  // graph, behaviours, the task they share
 
-  // Each behaviour's table by value iteration (paper sec. 4), then the tables as the policy.
-  const auto learner = mgrl::builtinPlugins().learners.create(mgrl::ConfigNode::parse("{type: value_iteration}", "ex"));
-  std::vector<mgrl::QTable> tables;
-  tables.reserve(session->behaviors.size());  // the policy points into them
-  for (const mgrl::Behavior& b : session->behaviors) {
-    const mgrl::Problem problem = b.problem(session->model());
-    const mgrl::GridModel grid = mgrl::GridModel::build(problem, 2);
-    tables.push_back(learner->train({problem, grid, nullptr, nullptr, 2}).table);
-    session->policy.push_back({b.discretizer.get(), &tables.back(), b.weight, b.activation, b.stance});
-    std::printf("trained %s: %zu vertices\n", b.name.c_str(), grid.vertexCount);
-  }
+  // Every behaviour trained as `mgrl train` trains it, by value iteration (paper sec. 4),
+  // its tables kept in memory; then those tables as the policy.
+  mgrl::TrainSettings settings;
+  settings.save = false;
+  settings.learner = mgrl::builtinPlugins().learners.create(mgrl::ConfigNode::parse("{type: value_iteration}", "ex"));
+  mgrl::Trained trained = mgrl::trainScenario(*session, settings);
+  for (const auto& [name, b] : trained.bundle.behaviors)
+    std::printf("trained %s: %zu vertices\n", name.c_str(), b.table.vertexCount());
+  const std::vector<mgrl::PolicyPart> policy =
+      mgrl::policyPartsOf(trained.bundle, "", session->behaviors, session->options);
 
   // Four avatars sparring in the scenario's world, each run by the trained policy.
-  mgrl::World world(session->worldSetup(4, /*seed=*/1, {"policy"}));
+  mgrl::World world(session->worldSetup(4, /*seed=*/1, {"policy"}, policy));
   world.run(static_cast<std::size_t>(seconds / session->model().frameTime));
   for (const mgrl::HitEvent& hit : world.events()) std::printf("%s\n", mgrl::hitEventJson(hit).dump().c_str());
   std::printf("%zu hits in %g s\n", world.events().size(), seconds);

@@ -1,4 +1,4 @@
-#include "self_play.hpp"
+#include "mgrl/session/self_play.hpp"
 
 #include <chrono>
 #include <cmath>
@@ -16,7 +16,7 @@
 #include "mgrl/learning/signals.hpp"
 #include "mgrl/session/graph_source.hpp"
 
-namespace mgrl::app {
+namespace mgrl {
 
 namespace {
 
@@ -161,4 +161,4 @@ std::shared_ptr<const QTable> meanOfRounds(const QTable* mean, const QTable& tab
   return next;
 }
 
-}  // namespace mgrl::app
+}  // namespace mgrl

@@ -1,6 +1,6 @@
 #pragma once
 /// \file
-/// Self-play rounds of `mgrl train` (issue 43): how a round's table does against the
+/// Self-play rounds of training (trainScenario, training.hpp): how a round's table does against the
 /// opponent it was trained against, and how much it gains over the previous round's.
 #include <functional>
 #include <memory>
@@ -14,7 +14,7 @@
 #include "mgrl/learning/problem.hpp"
 #include "mgrl/learning/q_table.hpp"
 
-namespace mgrl::app {
+namespace mgrl {
 
 /// The best-response gap on the grid (issue 43): in the problem a round was trained in (its
 /// opponent playing `opponent`'s table), the mean over every graph state and grid vertex of
@@ -62,4 +62,4 @@ std::string gapNote(double gap, bool optimum);
 /// differently).
 std::shared_ptr<const QTable> meanOfRounds(const QTable* mean, const QTable& table, int n);
 
-}  // namespace mgrl::app
+}  // namespace mgrl

@@ -1,0 +1,498 @@
+// Training a scenario's behaviours (training.hpp): the memory plan, self-play rounds,
+// checkpoints and the bundle, for every front end.
+#include "mgrl/session/training.hpp"
+
+#include <algorithm>
+#include <map>
+#include <optional>
+#include <set>
+
+#include <fmt/format.h>
+#include <fmt/ranges.h>
+
+#include "mgrl/core/files.hpp"
+#include "mgrl/core/launch.hpp"
+#include "mgrl/core/numbers.hpp"
+#include "mgrl/core/parallel.hpp"
+#include "mgrl/core/version.hpp"
+#include "mgrl/learning/behavior.hpp"
+#include "mgrl/learning/checkpoint_store.hpp"
+#include "mgrl/learning/problem.hpp"
+#include "mgrl/scenario/behaviors.hpp"
+#include "mgrl/session/graph_source.hpp"
+#include "mgrl/session/plugins.hpp"
+#include "mgrl/session/policy_source.hpp"
+#include "mgrl/session/self_play.hpp"
+#include "mgrl/session/train_progress.hpp"
+
+namespace mgrl {
+
+namespace fs = std::filesystem;
+using json = nlohmann::json;
+
+fs::path checkpointDirectory(const fs::path& out, const std::string& behavior) {
+  return out.parent_path() / (out.filename().string() + ".checkpoints") / behavior;
+}
+
+void removeCheckpoint(const fs::path& dir) {
+  std::error_code ec;
+  for (const StaleSibling& stale : staleSiblings(dir)) fs::remove_all(stale.path, ec);
+  fs::remove_all(dir, ec);
+  fs::remove(dir.parent_path(), ec);  // only if empty
+}
+
+fs::path bundleFolder(const TrainSettings& settings, const SessionOptions& options, const Scenario& scenario) {
+  const fs::path cacheDir = options.cacheDir.empty() ? defaultCacheDirectory() : options.cacheDir;
+  fs::path out = settings.out.empty() ? defaultPolicyDirectory(cacheDir, scenario) : settings.out;
+  if (!out.has_filename()) out = out.parent_path();
+  std::error_code ec;
+  if (out.has_parent_path()) fs::create_directories(out.parent_path(), ec);
+  if (ec)
+    throw Error(fmt::format("--out {}: cannot create {}: {}", out.string(), out.parent_path().string(), ec.message()));
+  if (fs::exists(out, ec) && !fs::is_directory(out, ec))
+    throw Error(fmt::format("--out {}: expected a policy bundle directory or nothing, found a file", out.string()));
+  // The bundle is written beside `out` and renamed into place: that folder must take a
+  // new file now, not after training. The probe is `.<name>.probe-PID`.
+  const fs::path parent = out.has_parent_path() ? out.parent_path() : fs::path(".");
+  if (!folderTakesNewFiles(parent, fmt::format(".{}.probe-", out.filename().string())))
+    throw Error(fmt::format("--out {}: expected a folder where files can be written, found {} is not writable",
+                            out.string(), parent.string()));
+  return out;
+}
+
+namespace {
+
+// A stopped run keeps what had finished: the bundle is saved with the finished tables and
+// the unfinished behaviours named in its provenance (so eval and simulate refuse it,
+// saying to resume, instead of taking it for a whole one), then the run ends with
+// Interrupted saying how to continue.
+[[noreturn]] void interrupted(const SessionOptions& options, const TrainSettings& settings, const fs::path& out,
+                              PolicyBundle& bundle, const std::vector<std::string>& wanted, const std::string& current,
+                              const TrainInterrupted& stop, const fs::path& checkpoint) {
+  // A table of the current behaviour from an earlier run is still right (same key).
+  std::vector<std::string> unfinished;
+  for (const std::string& name : wanted)
+    if (bundle.behaviors.count(name) == 0) unfinished.push_back(name);
+  std::vector<std::string> kept;
+  for (const auto& entry : bundle.behaviors) kept.push_back(entry.first);
+  std::string keptText = "nothing had finished";
+  if (!kept.empty()) {
+    bundle.provenance["unfinished"] = unfinished;
+    savePolicyBundle(out, bundle);
+    keptText = fmt::format("kept {} in {}", fmt::join(kept, ", "), out.string());
+  }
+  const std::string where = stop.checkpointed() ? fmt::format("checkpoint at {} of {} actions in {}", stop.updates(),
+                                                              stop.total(), checkpoint.string())
+                                                : std::string("no checkpoint: it starts over");
+  std::string command = fmt::format("mgrl train {}", options.scenario.string());
+  if (!settings.behavior.empty()) command += fmt::format(" --behavior {}", settings.behavior);
+  command += setFlags(options.sets);
+  if (!settings.out.empty()) command += fmt::format(" --out {}", settings.out.string());
+  throw Interrupted(fmt::format("interrupted while training {} ({}); {}; run `{} --resume` to continue", current, where,
+                                keptText, command));
+}
+
+using Log = std::function<void(const std::string&)>;
+
+// Tables already in the bundle at `out` that are still current (same key: the same
+// settings on the same graph, so the same table) go into `bundle`: those of other
+// behaviours when training one, those a stopped run finished when resuming, and all of them
+// until replaced. Returns the behaviours a resumed run has finished.
+std::set<std::string> keepCurrentTables(const fs::path& out, bool resume, const std::vector<Behavior>& all,
+                                        const StateActionModel& model, const std::string& graphKey,
+                                        PolicyBundle& bundle, const Log& log) {
+  std::set<std::string> finished;
+  if (!fs::exists(out / "manifest.json")) return finished;
+  try {
+    PolicyBundle previous = loadPolicyBundle(out, model, graphKey);
+    // A stopped run's bundle holds only finished tables (its unfinished ones are absent).
+    for (auto& item : previous.behaviors) {
+      // Named, not a structured binding: clang before 16 cannot capture one in the lambda.
+      const std::string& name = item.first;
+      auto& entry = item.second;
+      // A self-play round's table (NAME-roundK) belongs to behaviour NAME.
+      std::string base = name;
+      if (const auto cut = name.rfind("-round"); cut != std::string::npos && cut > 0) base = name.substr(0, cut);
+      const auto match = std::find_if(all.begin(), all.end(), [&](const Behavior& b) {
+        return b.name == name || (b.name == base && b.environment->rounds() > 1);
+      });
+      if (match != all.end() && match->key == entry.key) {
+        bundle.behaviors.emplace(name, std::move(entry));
+        if (resume && match->name == name) finished.insert(name);
+      } else {
+        log(fmt::format("warning: dropping {}'s table from {}: the scenario {}", name, out.string(),
+                        match == all.end() ? "no longer has this behaviour" : "now asks for other settings"));
+      }
+    }
+  } catch (const Error& e) {
+    log(fmt::format("warning: not keeping the behaviours already in {}: {}", out.string(), e.what()));
+  }
+  return finished;
+}
+
+// ", 2 more tables held", ", 6.5 more tables held by 4 self-play rounds", ", 8.5 more tables
+// held (6.5 by 4 self-play rounds)", or "" for none.
+std::string heldText(std::size_t learnerTables, double selfPlayTables, int rounds) {
+  if (selfPlayTables == 0)
+    return learnerTables > 0 ? fmt::format(", {} more tables held", learnerTables) : std::string();
+  if (learnerTables == 0) return fmt::format(", {:g} more tables held by {} self-play rounds", selfPlayTables, rounds);
+  return fmt::format(", {:g} more tables held ({:g} by {} self-play rounds)",
+                     static_cast<double>(learnerTables) + selfPlayTables, selfPlayTables, rounds);
+}
+
+// A behaviour's size is checked before anything is allocated or trained, not found by
+// bad_alloc, nor after training the others. The tabulated model when it fits (or is asked
+// for), else the compact one. Returns true for the compact model.
+bool choosesCompactModel(const Behavior& behavior, const Learner& learner, const StateActionModel& model,
+                         const TrainSettings& options, const Log& log) {
+  try {
+    learner.checkGrid(*behavior.discretizer);
+  } catch (const Error& e) {
+    throw Error(fmt::format("behaviors.{}: {}", behavior.name, e.what()));
+  }
+  // A refining learner's tables grow to its vertex budget (adaptive_value_iteration).
+  const std::size_t vertices = learner.trainingVertices(*behavior.discretizer);
+  // Self-play holds tables beside the learner's: every finished round's (the
+  // bundle keeps them), the opponent's (a copy of the previous round's, and with `against:
+  // average` the mean), and while a round's best-response gap is measured, its own table
+  // beside policy evaluation's pair and chosen actions (2.5 tables) where the learner's pair
+  // stood: 1.5 more.
+  const int rounds = behavior.environment->rounds();
+  const double selfPlayTables =
+      rounds > 1 ? (rounds - 1) + (behavior.environment->roundsAgainstAverage() ? 2 : 1) + 1.5 : 0;
+  const double extraTables = static_cast<double>(learner.extraTables()) + selfPlayTables;
+  const double extra =
+      extraTables * static_cast<double>(vertices) * static_cast<double>(model.actionCount()) * sizeof(float);
+  // A distributed learner knows its share.
+  const double share = learner.bytesPerProcess(model.actionCount(), vertices);
+  const double tabulatedBytes =
+      (share >= 0 ? share : GridModel::trainingBytes(model.actionCount(), vertices, false)) + extra;
+  const double compactBytes = GridModel::trainingBytes(model.actionCount(), vertices, true) + extra;
+  const bool canCompact = learner.takesCompactModel();
+  if (options.model == "compact" && !canCompact)
+    throw Error(
+        fmt::format("behaviors.{}: --model compact: expected a learner that takes a compact model "
+                    "(q_learning, value_iteration), found {}; use --model tabulated or auto",
+                    behavior.name, learner.type()));
+  const bool compact =
+      options.model == "compact" || (options.model == "auto" && tabulatedBytes > options.maxMemoryBytes && canCompact);
+  const double needed = compact ? compactBytes : tabulatedBytes;
+  // A learned opponent's states multiply the grid: say by how much.
+  const std::size_t opponentStates = behavior.environment->opponentStates();
+  const std::string opponentNote = opponentStates > 0
+                                       ? fmt::format(
+                                             " (a learned opponent's {} states times {} positions: fewer phases or a "
+                                             "coarser grid shrink it; a table larger than one machine trains with "
+                                             "mpi_value_iteration across machines, docs/distributed.md)",
+                                             opponentStates, behavior.discretizer->layerVertexCount())
+                                       : std::string();
+  if (needed > options.maxMemoryBytes)
+    throw Error(fmt::format(
+        "behaviors.{}: training on a {} grid of {}{} vertices{} x {} actions needs about {} "
+        "({} model and Q tables{}); expected at most {} ({}): use a coarser grid{}{}",
+        behavior.name, behavior.discretizer->type(), vertices > behavior.discretizer->vertexCount() ? "up to " : "",
+        vertices, opponentNote, model.actionCount(), humanBytes(needed), compact ? "compact" : "tabulated",
+        heldText(learner.extraTables(), selfPlayTables, rounds), humanBytes(options.maxMemoryBytes), options.limitName,
+        options.limitRaisable && !compact && canCompact && compactBytes <= options.maxMemoryBytes
+            ? fmt::format(", --model compact (about {})", humanBytes(compactBytes))
+            : "",
+        options.limitRaisable ? fmt::format(", or raise {}", options.limitName) : ""));
+  if (compact && options.model == "auto" && log)
+    log(fmt::format(
+        "train {}: the tabulated model and tables would need about {}, over --max-memory {}: using "
+        "the compact model (about {}; same tables, slower backups)",
+        behavior.name, humanBytes(tabulatedBytes), humanBytes(options.maxMemoryBytes), humanBytes(compactBytes)));
+  return compact;
+}
+
+// One training: the session, the bundle being filled, and the report.
+class TrainRun {
+ public:
+  // `speaks`: this process reports (rank 0 of an MPI job, or the only one); `saves`: and
+  // writes the bundle and checkpoints.
+  TrainRun(const TrainSettings& settings, const TrainHooks& hooks, const Session& session, fs::path out, bool speaks)
+      : settings_(settings),
+        hooks_(hooks),
+        session_(session),
+        model_(session.model()),
+        out_(std::move(out)),
+        speaks_(speaks),
+        saves_(speaks && settings.save),
+        log_([&hooks](const std::string& m) {
+          if (hooks.log) hooks.log(m);
+        }) {
+    if (settings.learner && settings.save)
+      throw Error("training with a learner other than the scenario's: expected the tables returned, not saved");
+  }
+
+  // `given`: a behaviour the caller built (trainBehavior()) to train instead of the
+  // session's own of that name.
+  Trained run(const Behavior* given = nullptr) {
+    const std::vector<Behavior>& all = session_.behaviors;
+    const GraphResult& graph = session_.graph;
+    bundle_.graphKey = graph.key;
+    bundle_.provenance = {{"scenario", session_.scenario.path.string()},
+                          {"scenario_name", session_.scenario.name},
+                          {"tool", fmt::format("mgrl {}", kVersion)},
+                          {"sets", session_.options.sets}};
+    const std::set<std::string> finished =
+        settings_.save && !given ? keepCurrentTables(out_, settings_.resume, all, model_, graph.key, bundle_, log_)
+                                 : std::set<std::string>();
+    report_ = {{"scenario", session_.scenario.path.string()},
+               {"policy", out_.string()},
+               {"graph_key", graph.key},
+               {"behaviors", json::object()}};
+    if (given) {
+      compactModel_[given->name] = choosesCompactModel(*given, learnerOf(*given), model_, settings_, log_);
+      wanted_.push_back(given->name);
+      trainBehavior(*given, all);
+      return {std::move(bundle_), std::move(report_), std::move(refined_)};
+    }
+    for (const Behavior& behavior : all)
+      if (settings_.behavior.empty() || behavior.name == settings_.behavior) wanted_.push_back(behavior.name);
+    if (wanted_.empty() && !settings_.behavior.empty())
+      requireBehavior(session_.scenario, settings_.behavior);  // says which there are
+    // Every behaviour's size is checked before any is trained.
+    for (const Behavior& behavior : all)
+      if (isWanted(behavior))
+        compactModel_[behavior.name] = choosesCompactModel(behavior, learnerOf(behavior), model_, settings_, log_);
+    for (const Behavior& behavior : all) {
+      if (!isWanted(behavior)) continue;
+      if (finished.count(behavior.name) != 0) {
+        log_(fmt::format("resume: {}: already trained in {}, kept", behavior.name, out_.string()));
+        report_["kept"].push_back(behavior.name);
+        // A run killed after its bundle was in place may have left its checkpoints.
+        checkpoints_.push_back(checkpointDirectory(out_, behavior.name));
+        continue;
+      }
+      if (behavior.environment->rounds() > 1) {
+        // Self-play changes the opponent its environment plays round by round: the rounds
+        // get a behaviour of their own, and the session's stays as it was opened.
+        std::vector<Behavior> own =
+            buildBehaviors(session_.scenario, builtinPlugins(), model_, session_.graph.key, behavior.name);
+        trainBehavior(own.at(0), all);
+      } else {
+        trainBehavior(behavior, all);
+      }
+    }
+    if (bundle_.provenance.contains("unfinished")) bundle_.provenance.erase("unfinished");
+    if (saves_) {
+      savePolicyBundle(out_, bundle_);
+      for (const fs::path& dir : checkpoints_) removeCheckpoint(dir);
+      log_(fmt::format("policy: {}", out_.string()));
+    }
+    return {std::move(bundle_), std::move(report_), std::move(refined_)};
+  }
+
+ private:
+  bool isWanted(const Behavior& behavior) const {
+    return std::find(wanted_.begin(), wanted_.end(), behavior.name) != wanted_.end();
+  }
+  const Learner& learnerOf(const Behavior& behavior) const {
+    return settings_.learner ? *settings_.learner : *behavior.learner;
+  }
+
+  // Self-play rounds: round 1 against the opponent the scenario names, round k
+  // against round k - 1's table, or with `against: average` greedily on the mean of rounds
+  // 1..k - 1's tables (fictitious self-play answers the mixture of every earlier strategy;
+  // a greedy player on the mean of their values is its deterministic stand-in, so the
+  // transition stays one successor per action and vertex). Each round's table is kept, the
+  // last under the behaviour's own name, the others as NAME-roundK.
+  void trainBehavior(const Behavior& behavior, const std::vector<Behavior>& all) {
+    const int rounds = behavior.environment->rounds();
+    const bool average = behavior.environment->roundsAgainstAverage();
+    std::shared_ptr<const QTable> previous, mean;
+    json roundsReport = json::array();
+    for (int round = 1; round <= rounds; ++round) {
+      const std::string label = round < rounds ? fmt::format("{}-round{}", behavior.name, round) : behavior.name;
+      if (rounds > 1) {
+        const std::string against = !previous              ? ""
+                                    : average && round > 2 ? fmt::format("rounds 1-{} mean", round - 1)
+                                                           : fmt::format("round {}", round - 1);
+        if (previous) behavior.environment->playPolicy(behavior.discretizer.get(), average ? mean : previous, against);
+        log_(fmt::format("train {}: self-play round {} of {}, against {}", behavior.name, round, rounds,
+                         previous ? fmt::format("{}'s table", against)
+                                  : fmt::format("the {} opponent", behavior.environment->policyKey())));
+      }
+      std::optional<TableGap> tableGap;
+      auto [result, record] =
+          trainRound(behavior, all, label, round, rounds, average ? mean.get() : previous.get(), tableGap);
+      // An adaptive learner returns the grid it refined: the table's vertices are its.
+      const Discretizer& tableGrid = result.grid ? *result.grid : *behavior.discretizer;
+      if (result.grid) refined_[round == rounds ? behavior.name : label] = result.grid;
+      if (rounds > 1) {
+        // Scoring the round is reporting: rank 0's.
+        if (speaks_)
+          roundsReport.push_back(selfPlayRound(behavior, model_, round, result.table,
+                                               average ? mean.get() : previous.get(), tableGap, log_));
+        record["round"] = round;
+        record["rounds"] = roundsReport;
+        report_["behaviors"][behavior.name]["rounds"] = roundsReport;
+        if (round < rounds) {
+          previous = std::make_shared<const QTable>(result.table);
+          if (average) mean = meanOfRounds(mean.get(), *previous, round);
+        }
+      }
+      bundle_.behaviors[round == rounds ? behavior.name : label] = PolicyBehavior{
+          behavior.key,          record, std::move(result.table), vertexPositions(tableGrid), tableGrid.type(),
+          tableGrid.structure(), nullptr};
+    }
+  }
+
+  // Tabulates the problem and trains one table (one round of self-play): the result and
+  // its record for the bundle; its summary goes in the report when it is the last round.
+  // Given the table the opponent played (`opponent`, rounds 2 on), also the best-response
+  // gap on the grid (tableGap), while the tabulated problem is at hand.
+  std::pair<TrainResult, json> trainRound(const Behavior& behavior, const std::vector<Behavior>& all,
+                                          const std::string& label, int round, int rounds, const QTable* opponent,
+                                          std::optional<TableGap>& tableGap) {
+    const std::string roundKey = rounds > 1 ? fmt::format("{}-round{}", behavior.key, round) : behavior.key;
+    const Problem problem = behavior.problem(model_);
+    const auto tabulateStart = Clock::now();
+    const bool compact = compactModel_.at(behavior.name);
+    // A learner that tabulates itself (each MPI rank its share) gets the model's frame only.
+    const Learner& learner = learnerOf(behavior);
+    const bool itself = !compact && learner.tabulatesItself();
+    if (const int ranks = launchedProcess().size; ranks > 1 && !learner.tabulatesItself())
+      log_(
+          fmt::format("train {}: {} runs in one process: the other {} ranks of this MPI job repeat it and keep "
+                      "nothing (mpi_value_iteration shares the work)",
+                      label, learner.type(), ranks - 1));
+    GridModel grid;
+    try {
+      grid = compact  ? GridModel::buildCompact(problem, threads_, stop_)
+             : itself ? GridModel::frame(problem)
+                      : GridModel::build(problem, threads_, stop_);
+    } catch (const TrainInterrupted& stop) {  // stopped while tabulating
+      if (!saves_) throw;
+      interrupted(session_.options, settings_, out_, bundle_, wanted_, behavior.name, stop,
+                  checkpointDirectory(out_, label));
+    }
+    const double tabulateSeconds = since(tabulateStart);
+    if (itself)
+      log_(fmt::format("train {}: {} on a {} grid ({} vertices) x {} actions, tabulated by the learner", label,
+                       learner.type(), behavior.discretizer->type(), behavior.discretizer->vertexCount(),
+                       model_.actionCount()));
+    else
+      log_(fmt::format("train {}: {} on a {} grid ({} vertices) x {} actions, {} tabulated in {:.2f} s ({} MB)", label,
+                       learner.type(), behavior.discretizer->type(), behavior.discretizer->vertexCount(),
+                       model_.actionCount(), compact ? "rewards (compact model)" : "problem", tabulateSeconds,
+                       grid.bytes() / 1000000));
+
+    DirectoryCheckpointer directory(checkpointDirectory(out_, label), roundKey, model_,
+                                    behavior.discretizer->vertexCount(), hooks_.log);
+    if (!settings_.resume && saves_) directory.remove();
+    CrashTestCheckpointer checkpointer(directory, behavior.name, hooks_.log, stop_);
+    if (saves_) checkpoints_.push_back(directory.directory());
+    std::optional<TrainResult> trained;
+    std::unique_ptr<TrainListener> listener = hooks_.listen ? hooks_.listen(behavior, all, session_.graph) : nullptr;
+    {
+      ProgressReporter progress(label, hooks_.progressBar, hooks_.progressLines, hooks_.log, listener.get());
+      try {
+        trained = learner.train(
+            {problem, grid, &progress, saves_ ? &checkpointer : nullptr, threads_, stop_, round < rounds});
+      } catch (const TrainInterrupted& stop) {
+        if (!saves_) throw;
+        interrupted(session_.options, settings_, out_, bundle_, wanted_, behavior.name, stop, directory.directory());
+      }
+    }
+    if (settings_.resume && saves_ && !checkpointer.resumed())
+      log_(fmt::format("resume: {}: no checkpoint to continue from, trained from the start", behavior.name));
+    TrainResult& result = *trained;
+    // Rank 0 alone reports; a learner that tabulated its own share has no model here, an
+    // adaptive learner's table is not on the problem's grid, and the gap needs the problem's
+    // optimum: a value iteration that converged (Q-learning's table is not one).
+    const bool optimum = result.stats.is_object() && result.stats.value("converged", false);
+    if (opponent && speaks_ && !itself && !result.grid && grid.hanging.empty() && optimum)
+      tableGap = bestResponseGapOnGrid(grid, model_, result.table, *opponent, threads_);
+
+    const Discretizer& tableGrid = result.grid ? *result.grid : *behavior.discretizer;
+    json curve = json::array();
+    for (const CurvePoint& p : result.curve) curve.push_back({p.updates, p.seconds, p.residual, p.meanResidual});
+    const double rate = result.seconds > 0 ? static_cast<double>(result.updates) / result.seconds : 0;
+    json summary = {{"learner", learner.type()},
+                    {"updates", result.updates},
+                    {"seconds", result.seconds},
+                    {"updates_per_second", rate},
+                    {"final_residual", result.finalResidual},
+                    {"table_bytes", result.table.bytes()},
+                    {"vertices", tableGrid.vertexCount()},
+                    {"actions", model_.actionCount()},
+                    {"tabulate_seconds", tabulateSeconds},
+                    {"stats", result.stats}};
+    if (round == rounds) {
+      report_["behaviors"][behavior.name] = summary;
+      report_["behaviors"][behavior.name]["model"] = compact ? "compact" : "tabulated";
+      report_["behaviors"][behavior.name]["model_bytes"] = grid.bytes();
+    }
+    json record = summary;
+    record["config"] = behavior.config;
+    record["weight"] = behavior.weight;
+    record["activation"] = std::string(activationName(behavior.activation));
+    if (behavior.stance >= 0) record["stance"] = behavior.stance;  // absent before stances
+    record["grid"] = tableGrid.describe();
+    record["curve_columns"] = {"updates", "seconds", "residual", "mean_residual"};
+    record["curve"] = curve;
+    if (listener) {
+      json snapshots = listener->record();
+      if (!snapshots.is_null()) record["snapshots"] = std::move(snapshots);
+    }
+    log_(fmt::format("train {}: {} updates in {:.2f} s ({}updates/s), Bellman residual {:.3g}", label, result.updates,
+                     result.seconds, humanCount(rate), result.finalResidual));
+    return {std::move(result), std::move(record)};
+  }
+
+  const TrainSettings& settings_;
+  const TrainHooks& hooks_;
+  const Session& session_;
+  const StateActionModel& model_;
+  const fs::path out_;
+  const bool speaks_, saves_;
+  const Log log_;
+  std::atomic<bool> ownStop_{false};
+  std::atomic<bool>* const stop_ = hooks_.stop ? hooks_.stop : &ownStop_;
+  const unsigned threads_ = defaultThreadCount();
+  PolicyBundle bundle_;
+  json report_;
+  std::vector<std::string> wanted_;
+  std::map<std::string, bool> compactModel_;
+  std::vector<fs::path> checkpoints_;
+  std::map<std::string, std::shared_ptr<const Discretizer>> refined_;
+};
+
+}  // namespace
+
+Trained trainScenario(const Session& session, const TrainSettings& settings, const TrainHooks& given) {
+  // Under an MPI launcher (`mpirun -np K mgrl train`), every process trains, a distributed
+  // learner's ranks together, and rank 0 alone writes (the bundle, checkpoints) and speaks;
+  // the others read the same files and stay silent.
+  const bool speaks = launchedProcess().rank == 0;
+  TrainHooks hooks = given;
+  if (!speaks) {
+    hooks.log = nullptr;
+    hooks.progressBar = false;
+    hooks.listen = nullptr;
+  }
+  const fs::path out = settings.save ? bundleFolder(settings, session.options, session.scenario) : fs::path();
+  TrainRun run(settings, hooks, session, out, speaks);
+  return run.run();
+}
+
+Trained trainBehavior(const Session& session, const Behavior& behavior, const TrainSettings& settings,
+                      const TrainHooks& given) {
+  if (settings.save)
+    throw Error(fmt::format("training {} as given: expected its table returned, not saved", behavior.name));
+  TrainHooks hooks = given;
+  const bool speaks = launchedProcess().rank == 0;
+  if (!speaks) hooks = {nullptr, false, false, nullptr, given.stop};
+  TrainSettings one = settings;
+  one.behavior = behavior.name;
+  TrainRun run(one, hooks, session, fs::path(), speaks);
+  return run.run(&behavior);
+}
+
+void checkTrainingFits(const Behavior& behavior, const StateActionModel& model, const TrainSettings& settings) {
+  choosesCompactModel(behavior, settings.learner ? *settings.learner : *behavior.learner, model, settings, nullptr);
+}
+
+}  // namespace mgrl
