@@ -64,6 +64,38 @@ class CompareTest(unittest.TestCase):
         self.assertIn("numpy_sweeps,1,snapshot,", (out / "curves.csv").read_text())
         self.assertTrue(any("numpy_sweeps" in line and "agreement" in line for line in lines))
 
+    def test_rmse_and_agreement_are_what_numpy_computes_from_the_tables(self):
+        # Per graph state and vertex: the table's greedy action among the state's actions,
+        # its value less the reference's best (RMSE over them), and whether the reference
+        # scores that action within 1e-6 (relative, at least absolute) of its best.
+        p = self.session.problem("approach")
+        indptr, indices = p.out_actions
+        rng = np.random.default_rng(7)
+        reference = rng.normal(10.0, 1.0, p.rewards.shape).astype(np.float32)
+        # Near-ties at two to four times the tolerance, so that the tolerance decides.
+        table = (reference + rng.uniform(-4e-5, 4e-5, reference.shape)).astype(np.float32)
+        table[:, ::3] += rng.normal(0.0, 0.5, table[:, ::3].shape).astype(np.float32)
+        squares, agree, count = 0.0, 0, 0
+        for s in range(len(indptr) - 1):
+            actions = indices[indptr[s]:indptr[s + 1]]
+            if len(actions) == 0:
+                continue
+            q = table[actions].astype(np.float64)
+            r = reference[actions].astype(np.float64)
+            best = np.argmax(q, axis=0)
+            ref_best = r.max(axis=0)
+            columns = np.arange(q.shape[1])
+            squares += float(((q[best, columns] - ref_best) ** 2).sum())
+            agree += int((ref_best - r[best, columns] <= 1e-6 * np.maximum(1.0, np.abs(ref_best))).sum())
+            count += q.shape[1]
+        measured = self.session.compare_tables("approach", table, reference)
+        self.assertAlmostEqual(measured["value_rmse"], np.sqrt(squares / count), places=9)
+        self.assertEqual(measured["greedy_agreement"], agree / count)
+        # The tolerance matters here: neither all nor none of the greedy actions agree.
+        self.assertGreater(agree / count, 0.05)
+        self.assertLess(agree / count, 0.95)
+        self.assertFalse(measured["reference_interpolated"])
+
     def test_a_learner_that_raises_stops_the_comparison_and_writes_nothing(self):
         out = pathlib.Path(tempfile.mkdtemp(prefix="mgrl-python-report-")) / "report"
         with self.assertRaisesRegex(ValueError, "the learner's own mistake"):
