@@ -181,7 +181,11 @@ struct FloodBesideLight {
   }
 };
 
-inline FloodBesideLight floodBesideLight(std::uint16_t port, int flooding, double perSecond, double seconds) {
+// `flooding` pages alternate a crowd of 2,000 and target mode at `perSecond` messages each
+// for `seconds` (each first sent `first`, if given: say, a controller) beside one light page
+// and an HTTP request every 50 ms.
+inline FloodBesideLight floodBesideLight(std::uint16_t port, int flooding, double perSecond, double seconds,
+                                         const std::string& first = {}) {
   namespace http = beast::http;
   PageLoad load;
   std::vector<PageLoad::Page*> floods;
@@ -189,6 +193,10 @@ inline FloodBesideLight floodBesideLight(std::uint16_t port, int flooding, doubl
   for (int i = 0; i < flooding; ++i) floods.push_back(&load.open(port, {}));
   PageLoad::Page& light = load.open(port, {});
   load.runFor(1);  // every page open and playing
+  if (!first.empty()) {  // each flooding page's own set-up (say, its controller)
+    for (PageLoad::Page* p : floods) load.send(*p, first);
+    load.runFor(1);
+  }
   FloodBesideLight r;
   r.flooding = flooding;
   r.perSecond = perSecond;

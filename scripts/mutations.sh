@@ -14,7 +14,9 @@ set -uo pipefail
 root="$(cd "$(dirname "$0")/.." && pwd)"
 work="${MGRL_MUTATIONS_DIR:-$root/build-mutations}"
 tree="$work/tree"
-export SOURCE="$tree" BUILD="$work/build"
+# The build inside the tree, as build/ is in a checkout: ccache then hits what the
+# checkout's own builds compiled (paths are hashed relative to the build folder).
+export SOURCE="$tree" BUILD="$tree/build"
 export MGRL_DATA="${MGRL_DATA:-$(cd "$root/.." && pwd)/shared/mocap}"
 export PYTHONPATH="$BUILD/python" MGRL_SOURCE="$tree" MGRL_BIN="$BUILD/app/mgrl"
 start=$SECONDS
@@ -52,6 +54,7 @@ git -C "$tree" reset --quiet --hard && git -C "$tree" clean --quiet -fd
 
 launcher=()
 command -v ccache >/dev/null 2>&1 && launcher=(-DCMAKE_CXX_COMPILER_LAUNCHER=ccache)
+export CCACHE_SLOPPINESS="${CCACHE_SLOPPINESS:-pch_defines,time_macros,include_file_mtime,include_file_ctime}"
 build() {  # TARGETS...
   CCACHE_BASEDIR="$tree" cmake -S "$tree" -B "$BUILD" -G Ninja -DCMAKE_BUILD_TYPE=Release "${launcher[@]}" \
     >"$work/configure.log" 2>&1 || { tail -20 "$work/configure.log" >&2; return 1; }
@@ -60,14 +63,23 @@ build() {  # TARGETS...
     { grep -m 5 -E "error" "$work/build.log" >&2; return 1; }
 }
 catches() {  # PATCH: runs its command, output in $work/last.log; returns its status
-  (cd "$tree" && timeout 900 bash -c "$(field "$1" Catches)") >"$work/last.log" 2>&1
+  (cd "$tree" && timeout 900 bash -c "$(field "$1" Catches)") >"$work/last.log" 2>&1 || return 1
+  # A selection that matches nothing passes (Catch2 v2, unittest): it proves nothing.
+  if grep -qE "No test cases matched|No tests ran|Ran 0 tests|No tests were found" "$work/last.log"; then
+    echo "mutations.sh: $(basename "$1" .patch): its command selects no test: $(field "$1" Catches)" >&2
+    return 2
+  fi
 }
 
 targets="$(for p in "${patches[@]}"; do field "$p" Build; done | tr ' ' '\n' | sort -u | tr '\n' ' ')"
 echo "mutations: building $targets at $(git -C "$tree" rev-parse --short HEAD) in $BUILD" >&2
 build $targets || { echo "mutations.sh: the unmutated tree does not build" >&2; exit 1; }
 for patch in "${patches[@]}"; do
-  if ! catches "$patch"; then
+  catches "$patch"
+  status=$?
+  if [ $status -eq 2 ]; then
+    exit 1
+  elif [ $status -ne 0 ]; then
     tail -20 "$work/last.log" >&2
     echo "mutations.sh: $(basename "$patch" .patch): its test fails on the unmutated tree: $(field "$patch" Catches)" >&2
     exit 1
@@ -86,6 +98,8 @@ for patch in "${patches[@]}"; do
     survived+=("$name (does not build)")
   elif catches "$patch"; then
     survived+=("$name")
+  elif [ $? -eq 2 ]; then
+    survived+=("$name (its command selects no test)")
     echo "mutation $name SURVIVED ($((SECONDS - t0)) s): $(field "$patch" Mutation)" >&2
   else
     echo "mutation $name caught ($((SECONDS - t0)) s): $(field "$patch" Mutation)" >&2

@@ -54,6 +54,28 @@ trap summary EXIT
 
 data="${MGRL_DATA:-$root/../shared/mocap}"
 
+# Every part the suite tests was built and registered: a missing one fails here, naming it
+# and how to get it, instead of its tests silently not running.
+parts_built() {
+  local missing=() cache="$root/build/CMakeCache.txt" listed
+  listed="$(cd "$root/build" && ctest -N)"
+  compgen -G "$root/build/python/mgrl/_core*.so" >/dev/null ||
+    missing+=("the Python module (build/python/mgrl/_core*.so): pybind11 (apt-get install pybind11-dev), then configure again")
+  for test in python_tests python_tests_slow python_notebooks session_example; do
+    grep -q ": $test\$" <<<"$listed" || missing+=("the ctest entry $test (configured without its part)")
+  done
+  grep -Eq '^MPI_mpi_LIBRARY:FILEPATH=/' "$cache" ||
+    missing+=("MPI (mpi_value_iteration's C API): Open MPI (apt-get install libopenmpi-dev openmpi-bin), then configure again")
+  command -v mpirun >/dev/null || missing+=("mpirun (apt-get install openmpi-bin)")
+  [ -x /usr/bin/chromium ] || missing+=("Chromium for the browser test (apt-get install chromium)")
+  command -v clang++ >/dev/null || missing+=("clang++ for the sanitizer build and the fuzzers (apt-get install clang)")
+  if [ ${#missing[@]} -gt 0 ]; then
+    printf 'test: expected every part the suite tests, found missing:\n' >&2
+    printf '  %s\n' "${missing[@]}" >&2
+    return 1
+  fi
+}
+
 release_tests() {
   local selection=()
   ((quick)) && selection=(-LE slow)
@@ -149,12 +171,14 @@ if ((quick)); then
   stage "format of the C++ lines changed since HEAD (scripts/format_check.sh)" "$root/scripts/format_check.sh"
   stage "clang-tidy on the C++ sources changed since HEAD (scripts/tidy_check.sh)" "$root/scripts/tidy_check.sh"
   stage "Release build (incremental)" "$root/scripts/build.sh" "$root/build"
+  stage "every part built (Python, MPI, Chromium, clang)" parts_built
   stage "Release tests not labelled slow" release_tests
   exit 0
 fi
 
 stage "set-up" "$root/scripts/setup.sh" --test
 stage "Release build" "$root/scripts/build.sh" "$root/build"
+stage "every part built (Python, MPI, Chromium, clang)" parts_built
 stage "Release tests (ctest)" release_tests
 stage "three checks at once: browser test, README figures, main job from a fresh clone" product_checks
 # Not beside the stages above: tried (2026-11-26), the build at nice 10 still slowed the

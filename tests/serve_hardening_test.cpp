@@ -377,14 +377,15 @@ TEST_CASE(
     "flooders are told",
     "[serve][data][slow][serial]") {
   // As `mgrl serve scenarios/boxing.yaml` serves it: crowds play boxing_spar's three-stance
-  // policies, whose first frame (2,000 avatars deciding at once) is the costliest part of a
-  // switch.
+  // behaviours. The flooding pages choose the online search, whose first frame of a crowd
+  // (2,000 avatars searching at once, about 0.3 s) is the costliest part of a switch.
   const BoxingAssets boxing(
       true, "boxing.yaml",
       {"behaviors.approach.learner.type=value_iteration", "behaviors.hit.learner.type=value_iteration"},
       /*sparring=*/true);
   RunningServer running(boxing.assets, 16);
-  const bench::FloodBesideLight r = bench::floodBesideLight(running.port(), 4, 150, 20);
+  const bench::FloodBesideLight r =
+      bench::floodBesideLight(running.port(), 4, 150, 20, R"({"type": "controller", "controller": "online_search"})");
   WARN(r.summary());
   WARN("a flooding page was told: " << r.toldExample);
   // Under AddressSanitizer one crowd's build takes several times as long, and a single one
