@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""Keeps the sample outputs and the figures in README.md true to what `mgrl` prints.
+"""Keeps the sample outputs and the figures in README.md and the docs true to what `mgrl` prints.
 
 Two kinds of markers. A sample output is a fenced block right after a line
 
@@ -15,6 +15,9 @@ that reads its bundle) and looks in the last one's stdout for each EXPECTED text
 `success rate 95.0 %`: same words, numbers within the tolerance below. EXPECTED may give a
 range, `93..96`, for a figure the prose states as a range. Put the marker right after the
 paragraph whose figures it checks, and keep the two in step.
+
+The markers are read from README.md, every page in docs/ and scenarios/README.md (or from
+the one file --readme names).
 
 Before anything runs, the boxing scenario is trained with its own budgets, as the README
 tells a user to; every command shares that cache (graph and bundles), so a figure's train
@@ -120,7 +123,7 @@ def run(mgrl, args, cache, data):
     return result.stdout.replace(cache, "~/.cache/mgrl").rstrip("\n").split("\n")
 
 
-def blocks(lines):
+def blocks(lines, name="README.md"):
     """(marker index, args, first line of the block's body, index of its closing fence)."""
     found = []
     for i, line in enumerate(lines):
@@ -128,17 +131,17 @@ def blocks(lines):
         if not m:
             continue
         if i + 1 >= len(lines) or not lines[i + 1].startswith("```"):
-            sys.exit(f"README.md:{i + 1}: expected a fenced block right after the mgrl-output marker, found none")
+            sys.exit(f"{name}:{i + 1}: expected a fenced block right after the mgrl-output marker, found none")
         end = i + 2
         while end < len(lines) and not lines[end].startswith("```"):
             end += 1
         if end == len(lines):
-            sys.exit(f"README.md:{i + 2}: expected the block to be closed with ```, found the end of the file")
+            sys.exit(f"{name}:{i + 2}: expected the block to be closed with ```, found the end of the file")
         found.append((i, m.group(1), i + 2, end))
     return found
 
 
-def figures(lines):
+def figures(lines, name="README.md"):
     """(line index, [mgrl args per command], [expected texts])."""
     found = []
     for i, line in enumerate(lines):
@@ -146,14 +149,21 @@ def figures(lines):
             continue
         m = FIGURE.match(line)
         if not m:
-            sys.exit(f"README.md:{i + 1}: expected <!-- mgrl-figure: ARGS ; ARGS => EXPECTED | EXPECTED -->, "
+            sys.exit(f"{name}:{i + 1}: expected <!-- mgrl-figure: ARGS ; ARGS => EXPECTED | EXPECTED -->, "
                      f"found {line!r}")
         commands = [c.strip() for c in m.group(1).split(" ; ") if c.strip()]
         expected = [e.strip() for e in m.group(2).split(" | ") if e.strip()]
         if not commands or not expected:
-            sys.exit(f"README.md:{i + 1}: expected at least one command and one expected text, found {line!r}")
+            sys.exit(f"{name}:{i + 1}: expected at least one command and one expected text, found {line!r}")
         found.append((i, commands, expected))
     return found
+
+
+def documents():
+    """README.md, the docs' pages and the scenario keys' page: where markers may be."""
+    docs = os.path.join(ROOT, "docs")
+    pages = sorted(os.path.join(docs, f) for f in os.listdir(docs) if f.endswith(".md"))
+    return [os.path.join(ROOT, "README.md"), *pages, os.path.join(ROOT, "scenarios", "README.md")]
 
 
 def main():
@@ -162,26 +172,27 @@ def main():
     mode.add_argument("--update", action="store_true")
     mode.add_argument("--check", action="store_true")
     parser.add_argument("--mgrl", default=os.path.join(ROOT, "build", "app", "mgrl"))
-    parser.add_argument("--readme", default=os.path.join(ROOT, "README.md"), help=argparse.SUPPRESS)
+    parser.add_argument("--readme", default=None, help=argparse.SUPPRESS)  # one file only (the rules' test)
     parser.add_argument("--data", default=os.environ.get("MGRL_DATA", os.path.join(ROOT, "..", "shared", "mocap")))
     options = parser.parse_args()
 
-    path = options.readme
-    with open(path) as f:
-        lines = f.read().split("\n")
-    found = blocks(lines)
-    stated = figures(lines)
-    if not found:
-        sys.exit("readme_outputs: expected mgrl-output markers in README.md, found none")
+    # (path, name, lines, blocks, figures) of every file with markers.
+    files = []
+    for path in [options.readme] if options.readme else documents():
+        with open(path) as f:
+            lines = f.read().split("\n")
+        name = os.path.relpath(path, ROOT) if not options.readme else os.path.basename(path)
+        found, stated = blocks(lines, name), figures(lines, name)
+        if found or stated:
+            files.append((path, name, lines, found, stated))
+    if not any(found for _, _, _, found, _ in files):
+        sys.exit("readme_outputs: expected mgrl-output markers in README.md or docs/, found none")
     with tempfile.TemporaryDirectory(prefix="mgrl-readme-") as cache:
         print("readme_outputs: training the boxing scenario (about 20 s)", file=sys.stderr)
         run(options.mgrl, "train scenarios/boxing.yaml", cache, options.data)
-        outputs = [run(options.mgrl, args, cache, options.data) for _, args, _, _ in found]
         # A `train` that an earlier figure ran with the same arguments is not run again: its
         # bundle is in the shared cache already (a bundle is found by the scenario and its
-        # settings), and a second run would write the same tables. dodge.yaml's three
-        # figures trained it three times (issue 38: the README check was the longest of
-        # the three checks that run side by side).
+        # settings), and a second run would write the same tables.
         trained = {}
 
         def run_figure(args):
@@ -191,46 +202,53 @@ def main():
                 trained[args] = run(options.mgrl, args, cache, options.data)
             return trained[args]
 
-        figure_outputs = [[run_figure(args) for args in commands][-1] for _, commands, _ in stated]
+        results = []
+        for path, name, lines, found, stated in files:
+            outputs = [run(options.mgrl, args, cache, options.data) for _, args, _, _ in found]
+            figure_outputs = [[run_figure(args) for args in commands][-1] for _, commands, _ in stated]
+            results.append((outputs, figure_outputs))
 
-    if options.update:
-        for (_, _, begin, end), output in reversed(list(zip(found, outputs))):
-            lines[begin:end] = output
-        tmp = path + ".tmp"
-        with open(tmp, "w") as f:
-            f.write("\n".join(lines))
-        os.replace(tmp, path)
-        print(f"readme_outputs: rewrote {len(found)} blocks of README.md; the figures (mgrl-figure) are edited "
-              f"by hand", file=sys.stderr)
     problems = 0
-    name = os.path.basename(path)
-    for (marker, args, begin, end), output in zip(found, outputs):
+    samples = figures_checked = 0
+    for (path, name, lines, found, stated), (outputs, figure_outputs) in zip(files, results):
+        samples += len(found)
+        figures_checked += sum(len(e) for _, _, e in stated)
         if options.update:
-            break
-        documented = lines[begin:end]
-        why = (f"{len(documented)} lines in the README, {len(output)} from the program"
-               if len(documented) != len(output) else
-               next((f"line {k + 1}: {w}" for k, (d, o) in enumerate(zip(documented, output))
-                     if (w := compare_lines(d, o))), None))
-        if why:
-            problems += 1
-            print(f"{name}:{begin + 1}: the sample output of `mgrl {args}` no longer matches the program's ({why}):",
-                  file=sys.stderr)
-            print("  README:  " + "\n  README:  ".join(documented), file=sys.stderr)
-            print("  program: " + "\n  program: ".join(output), file=sys.stderr)
-    for (marker, commands, expected), output in zip(stated, figure_outputs):
-        for text in expected:
-            why = find_figure(text, output)
+            for (_, _, begin, end), output in reversed(list(zip(found, outputs))):
+                lines[begin:end] = output
+            tmp = path + ".tmp"
+            with open(tmp, "w") as f:
+                f.write("\n".join(lines))
+            os.replace(tmp, path)
+            print(f"readme_outputs: rewrote {len(found)} blocks of {name}; the figures (mgrl-figure) are edited "
+                  f"by hand", file=sys.stderr)
+            continue
+        for (marker, args, begin, end), output in zip(found, outputs):
+            documented = lines[begin:end]
+            why = (f"{len(documented)} lines in the text, {len(output)} from the program"
+                   if len(documented) != len(output) else
+                   next((f"line {k + 1}: {w}" for k, (d, o) in enumerate(zip(documented, output))
+                         if (w := compare_lines(d, o))), None))
             if why:
                 problems += 1
-                print(f"{name}:{marker + 1}: the figure '{text}' no longer holds for `mgrl {commands[-1]}`: {why}",
-                      file=sys.stderr)
+                print(f"{name}:{begin + 1}: the sample output of `mgrl {args}` no longer matches the program's "
+                      f"({why}):", file=sys.stderr)
+                print("  text:    " + "\n  text:    ".join(documented), file=sys.stderr)
+                print("  program: " + "\n  program: ".join(output), file=sys.stderr)
+        for (marker, commands, expected), output in zip(stated, figure_outputs):
+            for text in expected:
+                why = find_figure(text, output)
+                if why:
+                    problems += 1
+                    print(f"{name}:{marker + 1}: the figure '{text}' no longer holds for `mgrl {commands[-1]}`: {why}",
+                          file=sys.stderr)
+    names = ", ".join(name for _, name, _, _, _ in files)
     if problems:
-        sys.exit(f"readme_outputs: {problems} outputs or figures in {name} are stale (tolerance: "
+        sys.exit(f"readme_outputs: {problems} outputs or figures in {names} are stale (tolerance: "
                  f"{RELATIVE:.0%} or one unit of the last digit; timings are not compared): update the text, "
                  f"or run scripts/readme_outputs.py --update for the sample blocks")
-    print(f"readme_outputs: the {len(found)} sample outputs and {sum(len(e) for _, _, e in stated)} figures in "
-          f"{name} match the program's", file=sys.stderr)
+    print(f"readme_outputs: the {samples} sample outputs and {figures_checked} figures in {names} match the "
+          f"program's", file=sys.stderr)
 
 
 if __name__ == "__main__":

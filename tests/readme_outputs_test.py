@@ -64,5 +64,45 @@ class Figures(unittest.TestCase):
         self.assertEqual(r.find_figure("hit rate 100.0 %", self.OUTPUT), "found no line with those words")
 
 
+class WhereMarkersAreRead(unittest.TestCase):
+    def test_the_readme_every_docs_page_and_the_scenario_keys_are_read(self):
+        read = [os.path.relpath(p, r.ROOT) for p in r.documents()]
+        self.assertEqual(read[0], "README.md")
+        self.assertIn(os.path.join("scenarios", "README.md"), read)
+        docs = sorted(f for f in os.listdir(os.path.join(r.ROOT, "docs")) if f.endswith(".md"))
+        self.assertEqual([p for p in read if p.startswith("docs")], [os.path.join("docs", f) for f in docs])
+
+    def test_a_marker_in_a_page_is_found_and_named_by_its_file(self):
+        lines = ["text", "<!-- mgrl-figure: eval scenarios/boxing.yaml => success rate 100.0 % -->"]
+        self.assertEqual(r.figures(lines, "docs/commands.md"), [(1, ["eval scenarios/boxing.yaml"], ["success rate 100.0 %"])])
+        with self.assertRaises(SystemExit) as failed:
+            r.figures(["<!-- mgrl-figure: eval scenarios/boxing.yaml -->"], "docs/commands.md")
+        self.assertIn("docs/commands.md:1:", str(failed.exception))
+
+
+class Pages(unittest.TestCase):
+    """The docs' pages are reachable and their links lead somewhere."""
+
+    LINK = __import__("re").compile(r"\]\(([^)#\s]+)(?:#[^)]*)?\)")
+
+    def test_the_index_links_every_page(self):
+        docs = os.path.join(r.ROOT, "docs")
+        index = open(os.path.join(docs, "index.md")).read()
+        linked = set(self.LINK.findall(index))
+        pages = sorted(f for f in os.listdir(docs) if f.endswith(".md") and f != "index.md")
+        self.assertEqual([p for p in pages if p not in linked], [], "pages docs/index.md does not link")
+
+    def test_every_relative_link_in_the_readme_and_docs_resolves(self):
+        broken = []
+        for path in r.documents():
+            text = open(path).read()
+            for target in self.LINK.findall(text):
+                if "://" in target or target.startswith("mailto:"):
+                    continue
+                if not os.path.exists(os.path.normpath(os.path.join(os.path.dirname(path), target))):
+                    broken.append(f"{os.path.relpath(path, r.ROOT)}: {target}")
+        self.assertEqual(broken, [])
+
+
 if __name__ == "__main__":
     unittest.main()
