@@ -6,6 +6,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <numeric>
 
 #include <fmt/format.h>
 #include <fmt/ranges.h>
@@ -37,6 +38,29 @@ template <class Entry>
 ConfigNode exampleOf(const Entry& entry) {
   return ConfigNode::parse(entry.example.empty() ? "{type: " + entry.name + "}" : entry.example,
                            "conformance " + entry.name);
+}
+
+// The correlation, over every graph state with actions and every vertex, of two tables'
+// greedy values (the largest of the state's actions).
+double greedyValueCorrelation(const QTable& a, const QTable& b) {
+  std::vector<double> x, y;
+  for (std::size_t s = 0; s < a.stateCount(); ++s) {
+    const std::size_t n = a.actionsOf(s);
+    if (n == 0) continue;
+    for (std::size_t v = 0; v < a.vertexCount(); ++v) {
+      x.push_back(*std::max_element(a.row(s, v), a.row(s, v) + n));
+      y.push_back(*std::max_element(b.row(s, v), b.row(s, v) + n));
+    }
+  }
+  const auto mean = [](const std::vector<double>& z) { return std::accumulate(z.begin(), z.end(), 0.0) / z.size(); };
+  const double mx = mean(x), my = mean(y);
+  double sxy = 0, sxx = 0, syy = 0;
+  for (std::size_t i = 0; i < x.size(); ++i) {
+    sxy += (x[i] - mx) * (y[i] - my);
+    sxx += (x[i] - mx) * (x[i] - mx);
+    syy += (y[i] - my) * (y[i] - my);
+  }
+  return sxx > 0 && syy > 0 ? sxy / std::sqrt(sxx * syy) : 0.0;
 }
 
 // A function linear in the grid's coordinates (angles that wrap left out: a periodic axis
@@ -200,6 +224,16 @@ TEST_CASE("every learner trains a finite table of the problem's shape, the same 
     REQUIRE(std::equal(first.table.values().begin(), first.table.values().end(), second.table.values().begin(),
                        second.table.values().end()));
     REQUIRE(first.updates > 0);
+    // Not any finite table (all zeros, a constant, the rewards alone): its greedy values
+    // follow the problem's optimum, value iteration's on the same grid, across graph
+    // states and grid vertices.
+    const Discretizer& tableGrid = first.grid ? *first.grid : *grid;
+    const Problem onTable{model(), tableGrid, *reward, environment};
+    const TrainResult optimum = registry.create(ConfigNode::parse("{type: value_iteration}", "c"))
+                                    ->train({onTable, GridModel::build(onTable, 1), nullptr, nullptr, 1});
+    const double r = greedyValueCorrelation(first.table, optimum.table);
+    WARN(entry.name << ": greedy values' correlation with value iteration's " << r);
+    CHECK(r > 0.9);
   }
 }
 
@@ -290,7 +324,9 @@ TEST_CASE(
     WARN(kind.name << " with its defaults holds at " << held << " of " << tried << " frames");
   }
   WARN("success terms that need the capture: " << fmt::format("{}", fmt::join(onCapture, ", ")));
-  CHECK(onCapture.size() < kinds.entries().size());
+  // Only avoid reads the opponent's joints, which the synthetic model lacks: any other
+  // condition refusing to bind here is a failure, not a term to check elsewhere.
+  CHECK(onCapture == std::vector<std::string>{"avoid"});
 }
 
 }  // namespace mgrl::conformance_test
