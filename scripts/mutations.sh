@@ -51,6 +51,8 @@ fi
 git -C "$tree" checkout --quiet --detach "$(git -C "$root" rev-parse HEAD)" -- 2>/dev/null ||
   git -C "$tree" checkout --quiet --detach "$(git -C "$root" rev-parse HEAD)"
 git -C "$tree" reset --quiet --hard && git -C "$tree" clean --quiet -fd
+# The tree's ../shared is the checkout's (the README's commands name ../shared/mocap).
+[ -e "$work/shared" ] || ln -s "$(cd "$root/.." && pwd)/shared" "$work/shared"
 
 launcher=()
 command -v ccache >/dev/null 2>&1 && launcher=(-DCMAKE_CXX_COMPILER_LAUNCHER=ccache)
