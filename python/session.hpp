@@ -178,7 +178,8 @@ class PySession {
     nlohmann::json config = b.config.value("learner", nlohmann::json::object());
     if (!learner.is_none() && config.value("type", std::string()) != learner.cast<std::string>())
       config = {{"type", learner.cast<std::string>()}};
-    for (const std::string& set : setsOf(sets)) {
+    const std::vector<std::string> given = setsOf(sets);
+    for (const std::string& set : given) {
       const std::size_t eq = set.find('=');
       if (eq == std::string::npos) throw Error(fmt::format("sets: expected 'key=value', found '{}'", set));
       config[set.substr(0, eq)] = nlohmann::json::parse(set.substr(eq + 1), nullptr, false).is_discarded()
@@ -195,7 +196,7 @@ class PySession {
     TrainSettings settings;
     settings.behavior = name;
     settings.save = false;
-    if (!learner.is_none() || !setsOf(sets).empty())
+    if (!learner.is_none() || !given.empty())
       settings.learner =
           builtinPlugins().learners.create(ConfigNode::parse(config.dump(), fmt::format("{} learner", name)));
     // The one way every front end trains: its self-play rounds, memory plan and record.

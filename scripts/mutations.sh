@@ -48,8 +48,7 @@ if [ ! -d "$tree/.git" ] && [ ! -f "$tree/.git" ]; then
   git -C "$root" worktree prune
   git -C "$root" worktree add --detach --quiet "$tree" HEAD || { echo "mutations.sh: cannot make $tree" >&2; exit 1; }
 fi
-git -C "$tree" checkout --quiet --detach "$(git -C "$root" rev-parse HEAD)" -- 2>/dev/null ||
-  git -C "$tree" checkout --quiet --detach "$(git -C "$root" rev-parse HEAD)"
+git -C "$tree" checkout --quiet --detach "$(git -C "$root" rev-parse HEAD)"
 git -C "$tree" reset --quiet --hard && git -C "$tree" clean --quiet -fd
 # The tree's ../shared is the checkout's (the README's commands name ../shared/mocap).
 [ -e "$work/shared" ] || ln -s "$(cd "$root/.." && pwd)/shared" "$work/shared"
@@ -98,13 +97,14 @@ for patch in "${patches[@]}"; do
   fi
   if ! build "$(field "$patch" Build)"; then
     survived+=("$name (does not build)")
-  elif catches "$patch"; then
-    survived+=("$name")
-  elif [ $? -eq 2 ]; then
-    survived+=("$name (its command selects no test)")
-    echo "mutation $name SURVIVED ($((SECONDS - t0)) s): $(field "$patch" Mutation)" >&2
   else
-    echo "mutation $name caught ($((SECONDS - t0)) s): $(field "$patch" Mutation)" >&2
+    catches "$patch"
+    case $? in
+      0) survived+=("$name")
+         echo "mutation $name SURVIVED ($((SECONDS - t0)) s): $(field "$patch" Mutation)" >&2 ;;
+      2) survived+=("$name (its command selects no test)") ;;
+      *) echo "mutation $name caught ($((SECONDS - t0)) s): $(field "$patch" Mutation)" >&2 ;;
+    esac
   fi
   git -C "$tree" checkout --quiet -- .
 done

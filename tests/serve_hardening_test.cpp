@@ -227,6 +227,11 @@ TEST_CASE("a retraining's parameters are checked as a whole: ranges ordered and 
        "discretizer.angle_max: expected more than angle_min"},
       {R"({"type": "retrain", "behavior": "approach", "set": {"discretizer.angle_min": 90, "discretizer.angle_max": -90}})",
        "discretizer.angle_max: expected more than angle_min"},
+      // A grid whose training would not fit in the server's limit: refused before it starts.
+      {R"({"type": "retrain", "behavior": "hit", "set": {"discretizer.angles": 200, "discretizer.distances": 200, "discretizer.heights": 20}})",
+       "retrain: behaviors.hit: training on a cylindrical3d grid of 800000 vertices x 1438 actions needs about"},
+      {R"({"type": "retrain", "behavior": "hit", "set": {"discretizer.angles": 200, "discretizer.distances": 200, "discretizer.heights": 20}})",
+       "; expected at most 1.00 GB (the server's limit for a retraining): use a coarser grid"},
   };
   for (const auto& [message, expected] : refused) {
     INFO(message);

@@ -78,6 +78,19 @@ constexpr double kUnknownPrice = 0.1;
 // only counted (a crowd of 2,000 lands over a thousand a second).
 constexpr std::size_t kHitMessagesPerAdvance = 30;
 
+// The page's choices on `assets`' behaviours, as adopt() makes them: their weights, policy
+// and bundle tables; the controller and horizon stay where the new scenario offers them.
+PageChoices adoptedChoices(PageChoices page, const ViewerAssets& assets) {
+  const Session& session = *assets.session;
+  page.weights.clear();
+  for (const Behavior& b : session.behaviors) page.weights.push_back(b.weight);
+  page.policy = session.policy;
+  page.retrained.assign(session.behaviors.size(), nullptr);
+  if (page.controller.empty() || (page.controller == "policy" && session.policy.empty()))
+    page.controller = session.policy.empty() ? "online_search" : "policy";
+  return page;
+}
+
 }  // namespace
 
 ViewerSession::ViewerSession(std::shared_ptr<const ViewerAssets> assets)
@@ -94,15 +107,12 @@ ViewerSession::ViewerSession(std::shared_ptr<const ViewerAssets> assets)
 
 void ViewerSession::adopt(std::shared_ptr<const ViewerAssets> assets) {
   State& s = *state_;
+  PageChoices page = adoptedChoices(choices(), *assets);
   const std::shared_ptr<const ViewerAssets> old = std::exchange(assets_, std::move(assets));
-  const Session& session = *assets_->session;
-  s.weights.clear();
-  for (const Behavior& b : session.behaviors) s.weights.push_back(b.weight);
-  s.policy = session.policy;
-  s.retrained.assign(session.behaviors.size(), nullptr);
-  // The page's choice stays where the new scenario offers it.
-  if (s.controller.empty() || (s.controller == "policy" && session.policy.empty()))
-    s.controller = session.policy.empty() ? "online_search" : "policy";
+  s.controller = std::move(page.controller);
+  s.weights = std::move(page.weights);
+  s.policy = std::move(page.policy);
+  s.retrained = std::move(page.retrained);
   s.shown = -1;
   s.valuesSent.clear();
   if (s.lesson) {
@@ -157,15 +167,7 @@ PageChoices ViewerSession::choices() const {
 }
 
 PageChoices ViewerSession::choicesAfterAdopting(const ViewerAssets& assets) const {
-  if (&assets == assets_.get()) return choices();
-  // What adopt() will make of the page's choices.
-  const Session& session = *assets.session;
-  PageChoices page{state_->controller, state_->horizon, {}, session.policy, {}};
-  for (const Behavior& b : session.behaviors) page.weights.push_back(b.weight);
-  page.retrained.assign(session.behaviors.size(), nullptr);
-  if (page.controller.empty() || (page.controller == "policy" && session.policy.empty()))
-    page.controller = session.policy.empty() ? "online_search" : "policy";
-  return page;
+  return &assets == assets_.get() ? choices() : adoptedChoices(choices(), assets);
 }
 
 void ViewerSession::applyController() {

@@ -1,5 +1,5 @@
-// A page's world: built at once or on a worker thread (ViewerSession::buildInBackground),
-// then installed with the page's controller, trackers and first frame. Apart from
+// A page's world: built at once or on a worker thread (ViewerSession::rebuild), then
+// installed with the page's controller, trackers and first frame. Apart from
 // viewer.cpp, which handles the messages and steps the world.
 #include <sys/resource.h>
 #include <unistd.h>

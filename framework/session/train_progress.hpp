@@ -4,7 +4,7 @@
 /// checkpoints on disk with their crash-test hooks. Not for other code: include
 /// mgrl/session/training.hpp.
 #include <atomic>
-#include <csignal>
+#include <chrono>
 #include <cstdlib>
 #include <filesystem>
 #include <iostream>
@@ -25,8 +25,8 @@ using Clock = std::chrono::steady_clock;
 
 /// Where a behaviour's checkpoints go: `<out>.checkpoints/<behavior>` beside the bundle.
 std::filesystem::path checkpointDirectory(const std::filesystem::path& out, const std::string& behavior);
-/// After a finished run: a behaviour's checkpoint, what killed writers left beside it
-/// beside it, and the checkpoints folder once nothing else is in it.
+/// After a finished run: a behaviour's checkpoint, what killed writers left beside it, and
+/// the checkpoints folder once nothing else is in it.
 void removeCheckpoint(const std::filesystem::path& dir);
 
 // Progress of one behaviour's training: a bar redrawn in place on a terminal, else a line

@@ -198,10 +198,11 @@ bool choosesCompactModel(const Behavior& behavior, const Learner& learner, const
             : "",
         options.limitRaisable ? fmt::format(", or raise {}", options.limitName) : ""));
   if (compact && options.model == "auto" && log)
-    log(fmt::format(
-        "train {}: the tabulated model and tables would need about {}, over --max-memory {}: using "
-        "the compact model (about {}; same tables, slower backups)",
-        behavior.name, humanBytes(tabulatedBytes), humanBytes(options.maxMemoryBytes), humanBytes(compactBytes)));
+    log(
+        fmt::format("train {}: the tabulated model and tables would need about {}, over {} {}: using "
+                    "the compact model (about {}; same tables, slower backups)",
+                    behavior.name, humanBytes(tabulatedBytes), options.limitName, humanBytes(options.maxMemoryBytes),
+                    humanBytes(compactBytes)));
   return compact;
 }
 
@@ -460,19 +461,21 @@ class TrainRun {
   std::map<std::string, std::shared_ptr<const Discretizer>> refined_;
 };
 
+// Under an MPI launcher (`mpirun -np K mgrl train`), every process trains, a distributed
+// learner's ranks together, and rank 0 alone writes (the bundle, checkpoints) and speaks;
+// the others read the same files and stay silent: only the stop flag is kept.
+TrainHooks heardHere(const TrainHooks& hooks, bool speaks) {
+  if (speaks) return hooks;
+  TrainHooks silent;
+  silent.stop = hooks.stop;
+  return silent;
+}
+
 }  // namespace
 
 Trained trainScenario(const Session& session, const TrainSettings& settings, const TrainHooks& given) {
-  // Under an MPI launcher (`mpirun -np K mgrl train`), every process trains, a distributed
-  // learner's ranks together, and rank 0 alone writes (the bundle, checkpoints) and speaks;
-  // the others read the same files and stay silent.
   const bool speaks = launchedProcess().rank == 0;
-  TrainHooks hooks = given;
-  if (!speaks) {
-    hooks.log = nullptr;
-    hooks.progressBar = false;
-    hooks.listen = nullptr;
-  }
+  const TrainHooks hooks = heardHere(given, speaks);
   const fs::path out = settings.save ? bundleFolder(settings, session.options, session.scenario) : fs::path();
   TrainRun run(settings, hooks, session, out, speaks);
   return run.run();
@@ -482,9 +485,8 @@ Trained trainBehavior(const Session& session, const Behavior& behavior, const Tr
                       const TrainHooks& given) {
   if (settings.save)
     throw Error(fmt::format("training {} as given: expected its table returned, not saved", behavior.name));
-  TrainHooks hooks = given;
   const bool speaks = launchedProcess().rank == 0;
-  if (!speaks) hooks = {nullptr, false, false, nullptr, given.stop};
+  const TrainHooks hooks = heardHere(given, speaks);
   TrainSettings one = settings;
   one.behavior = behavior.name;
   TrainRun run(one, hooks, session, fs::path(), speaks);
