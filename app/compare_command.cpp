@@ -204,7 +204,7 @@ std::vector<Run> planRuns(const CompareOptions& options, std::map<std::string, s
       Run run{learner, seeded ? options.seeds[k] : 0, seeded, runSets(options, learnerSets, learner), {}, nullptr};
       if (seeded) run.sets.push_back(fmt::format("behaviors.{}.learner.seed={}", options.behavior, run.seed));
       const Scenario checked = loadChecked(options, run.sets, fmt::format("--learners {}", learner));
-      run.dir = defaultPolicyDirectory(compareCache, checked);
+      run.dir = defaultPolicyDirectory(compareCache, checked, plugins());
       run.scenario = std::make_shared<Scenario>(checked);
       runs.push_back(std::move(run));
     }
@@ -223,7 +223,7 @@ Run planReference(const CompareOptions& options, CheckedFlags& flags, const fs::
   reference.sets.insert(reference.sets.end(), flags.referenceSets.begin(), flags.referenceSets.end());
   reference.scenario = std::make_shared<Scenario>(
       loadChecked(options, reference.sets, flags.referenceSets.empty() ? "reference" : "--reference-set"));
-  reference.dir = defaultPolicyDirectory(compareCache, *reference.scenario);
+  reference.dir = defaultPolicyDirectory(compareCache, *reference.scenario, plugins());
   return reference;
 }
 
@@ -323,7 +323,9 @@ json runCompare(const CompareOptions& options) {
   };
   // The graph first (cached after the first time): every learner is checked against its
   // grid before anything is trained.
-  const fs::path base = compareCache / fmt::format("{}-shared", defaultPolicyDirectory(compareCache, scenario).filename().string());
+  const fs::path base =
+      compareCache /
+      fmt::format("{}-shared", defaultPolicyDirectory(compareCache, scenario, plugins()).filename().string());
   Loaded loaded = load(options, std::move(scenario), false);  // the model is enough: no poses
   const StateActionModel& model = loaded.graph.model;
   // The reference's grid stays: tables on other grids are measured by interpolating on it.

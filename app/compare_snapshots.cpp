@@ -18,13 +18,17 @@ using json = nlohmann::json;
 SnapshotEvaluator::SnapshotEvaluator(const Behavior& trained, const std::vector<Behavior>& all,
                                      const GraphResult& graph, const fs::path& shared, const CompareOptions& options,
                                      std::size_t count, std::size_t trials)
-    : all_(all), graph_(graph), trainedName_(trained.name), count_(count), trialCount_(trials),
+    : all_(all),
+      graph_(graph),
+      trainedName_(trained.name),
+      count_(count),
+      trialCount_(trials),
       seconds_(options.seconds),
       // The final evaluation is eval's: targets at the scenario's world.target_height when
       // it gives one, so the snapshots' too.
       task_(makeTask(checkedScenario(options), all)),
       trials_(graph.model, all, task_, task_.targetHeight(std::numeric_limits<double>::quiet_NaN()),
-              options.scenario.string()) {
+              options.scenario.string(), options.plugins->conditions) {
   if (all.size() > 1) shared_ = policyParts(shared, all, graph, options, bundle_, trained.name);
 }
 

@@ -10,7 +10,7 @@
 
 namespace mgrl::app {
 
-// The graph's source moved to the session stage (framework/session/graph_source.hpp).
+// The graph's source moved to the session stage (framework/include/mgrl/session/graph_source.hpp).
 using mgrl::CaptureTravel;
 using mgrl::defaultCacheDirectory;
 using mgrl::GraphOptions;

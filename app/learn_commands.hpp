@@ -11,6 +11,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "builtin_plugins.hpp"
 #include "mgrl/core/error.hpp"
 #include "mgrl/learning/learner.hpp"
 #include "mgrl/scenario/scenario.hpp"
@@ -24,9 +25,10 @@ struct Behavior;
 
 namespace mgrl::app {
 
-
-/// The session's options (scenario, --data, --cache, --set, the log) and the terminal's.
+/// The session's options (scenario, --data, --cache, --set, the log, the built-in plug-ins)
+/// and the terminal's.
 struct LearnOptions : SessionOptions {
+  LearnOptions() { plugins = &builtinPlugins(); }
   bool progressBar = false;       ///< draw a progress bar on stderr (a terminal)
 };
 
@@ -66,6 +68,6 @@ struct SimulateOptions : LearnOptions {
 nlohmann::json runSimulate(const SimulateOptions& options);
 std::string simulateText(const nlohmann::json& report);
 
-using mgrl::defaultPolicyDirectory;  // framework/session/policy_source.hpp
+using mgrl::defaultPolicyDirectory;  // framework/include/mgrl/session/policy_source.hpp
 
 }  // namespace mgrl::app

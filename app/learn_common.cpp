@@ -32,6 +32,7 @@ Loaded load(const LearnOptions& options, Scenario scenario, bool motion, std::st
   graphOptions.cacheDir = options.cacheDir;
   graphOptions.log = options.log;
   graphOptions.motion = motion;
+  graphOptions.plugins = options.plugins;
   GraphResult graph = obtainGraph(scenario, graphOptions);
   return {std::move(scenario), std::move(graph)};
 }

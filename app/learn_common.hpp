@@ -16,7 +16,7 @@
 
 namespace mgrl::app {
 
-// Moved to the session stage (framework/session/policy_source.hpp).
+// Moved to the session stage (framework/include/mgrl/session/policy_source.hpp).
 using mgrl::checkedScenario;
 using mgrl::policyParts;
 using mgrl::precheckPolicy;

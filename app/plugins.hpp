@@ -4,8 +4,8 @@
 /// learner the application offers, registered explicitly (DESIGN.md sec. 4).
 #include <string>
 
+#include "builtin_plugins.hpp"
 #include "mgrl/learning/behavior.hpp"
-#include "mgrl/session/plugins.hpp"
 
 namespace mgrl::app {
 

@@ -26,12 +26,10 @@
 
 #include <fmt/format.h>
 
-#include "app/learn_commands.hpp"
-#include "app/learn_common.hpp"
-#include "app/plugins.hpp"
 #include "bench_args.hpp"
 #include "bench_support.hpp"
 #include "boxing_setup.hpp"
+#include "builtin_plugins.hpp"
 #include "mgrl/core/parallel.hpp"
 #include "mgrl/core/random.hpp"
 #include "mgrl/learning/behavior.hpp"
@@ -58,11 +56,11 @@ struct Solution {
 Solution solve(const std::string& name, const mgrl::StateActionModel& model, const mgrl::Reward& reward,
                const std::string& gridYaml, const std::string& learnerYaml, unsigned threads) {
   const mgrl::StaticTarget environment;
-  std::shared_ptr<const mgrl::Discretizer> grid = mgrl::app::plugins().discretizers.create(yaml(gridYaml), model);
+  std::shared_ptr<const mgrl::Discretizer> grid = mgrl::builtinPlugins().discretizers.create(yaml(gridYaml), model);
   const auto start = Clock::now();
   const mgrl::Problem problem{model, *grid, reward, environment};
   const mgrl::GridModel tabulated = mgrl::GridModel::build(problem, threads);
-  const auto learner = mgrl::app::plugins().learners.create(yaml(learnerYaml));
+  const auto learner = mgrl::builtinPlugins().learners.create(yaml(learnerYaml));
   mgrl::TrainResult result = learner->train({problem, tabulated, nullptr, nullptr, threads});
   Solution out;
   out.name = name;
@@ -212,13 +210,12 @@ int main(int argc, char** argv) {
     const std::string kdBase = "type: kd_tree, bounds: hits, split_axes: longest";
     if (error) {
       // The boxing model (graph from the cache of a value-iteration training).
-      const mgrl::app::TrainOptions train = mgrl::bench::trainBoxingByValueIteration("adaptive");
-      mgrl::app::Loaded loaded = mgrl::app::load(train, mgrl::app::checkedScenario(train));
-      fs::remove_all(train.cacheDir);
-      const mgrl::StateActionModel& model = loaded.graph.model;
+      const mgrl::bench::TrainedBoxing train = mgrl::bench::trainBoxing("adaptive");
+      const std::unique_ptr<mgrl::Session> session = mgrl::openSession(train.options, {.motion = false});
+      fs::remove_all(train.options.cacheDir);
+      const mgrl::StateActionModel& model = session->model();
       // The scenario's hit reward.
-      std::vector<mgrl::Behavior> behaviors =
-          mgrl::buildBehaviors(loaded.scenario, mgrl::app::plugins(), model, loaded.graph.key);
+      const std::vector<mgrl::Behavior>& behaviors = session->behaviors;
       const auto hit = std::find_if(behaviors.begin(), behaviors.end(), [](const mgrl::Behavior& b) { return b.name == "hit"; });
       if (hit == behaviors.end()) throw mgrl::Error("boxing.yaml: expected a behaviour 'hit', found none");
       const mgrl::Reward* reward = hit->reward.get();
@@ -293,21 +290,14 @@ int main(int argc, char** argv) {
       namespace fs = std::filesystem;
       const fs::path scratch = fs::temp_directory_path() / fmt::format("mgrl-bench-adaptive-{}", ::getpid());
       auto controllerFor = [&](const std::vector<std::string>& sets, auto&& use) {
-        mgrl::app::TrainOptions train;
-        train.scenario = fs::path(MGRL_SOURCE_DIR) / "scenarios" / "boxing.yaml";
-        train.dataDir = mgrl::dataDirectory("");
-        train.cacheDir = scratch;
-        train.out = scratch / "policy";
-        train.sets = sets;
-        mgrl::app::runTrain(train);
-        mgrl::app::Loaded loaded = mgrl::app::load(train, mgrl::app::checkedScenario(train));
-        std::vector<mgrl::Behavior> behaviors =
-            mgrl::buildBehaviors(loaded.scenario, mgrl::app::plugins(), loaded.graph.model, loaded.graph.key);
-        mgrl::PolicyBundle bundle;
-        const std::vector<mgrl::PolicyPart> parts =
-            mgrl::app::policyParts(train.out, behaviors, loaded.graph, train, bundle);
-        mgrl::PolicyController greedy(loaded.graph.model, parts);
-        use(loaded.graph.model, greedy);
+        const mgrl::bench::TrainedBoxing train = mgrl::bench::trainBoxing("adaptive", sets);
+        mgrl::SessionNeeds needs;
+        needs.policy = mgrl::PolicyNeed::Required;
+        needs.policyDir = train.policy;
+        needs.motion = false;
+        const std::unique_ptr<mgrl::Session> session = mgrl::openSession(train.options, needs);
+        mgrl::PolicyController greedy(session->model(), session->policy);
+        use(session->model(), greedy);
       };
       auto time = [&](const mgrl::StateActionModel& model, mgrl::Controller& c) {
         const std::vector<mgrl::bench::DecisionQuery> queries = mgrl::bench::decisionQueries(model);

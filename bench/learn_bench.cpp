@@ -20,9 +20,9 @@
 
 #include <sys/resource.h>
 
-#include "app/plugins.hpp"
 #include "bench_args.hpp"
 #include "bench_support.hpp"
+#include "builtin_plugins.hpp"
 #include "mgrl/core/parallel.hpp"
 #include "mgrl/core/random.hpp"
 #include "mgrl/learning/problem.hpp"
@@ -52,8 +52,8 @@ struct Setup {
 
 std::unique_ptr<Setup> setup(const mgrl::StateActionModel& m, const std::string& grid, const std::string& reward) {
   auto s = std::make_unique<Setup>();
-  s->grid = mgrl::app::plugins().discretizers.create(yaml(grid), m);
-  s->reward = mgrl::app::plugins().rewards.create(yaml(reward));
+  s->grid = mgrl::builtinPlugins().discretizers.create(yaml(grid), m);
+  s->reward = mgrl::builtinPlugins().rewards.create(yaml(reward));
   const auto start = Clock::now();
   s->tabulated = mgrl::GridModel::build({m, *s->grid, *s->reward, s->environment}, mgrl::defaultThreadCount());
   s->tabulateSeconds = since(start);
@@ -62,7 +62,7 @@ std::unique_ptr<Setup> setup(const mgrl::StateActionModel& m, const std::string&
 
 mgrl::TrainResult qLearning(const mgrl::StateActionModel& m, const Setup& s, std::uint64_t actions,
                             const mgrl::GridModel* model = nullptr) {
-  const auto learner = mgrl::app::plugins().learners.create(
+  const auto learner = mgrl::builtinPlugins().learners.create(
       yaml("{type: q_learning, curve_points: 1, checkpoint_every: 0, budget: " + std::to_string(actions) + "}"));
   return learner->train({{m, *s.grid, *s.reward, s.environment}, model ? *model : s.tabulated, nullptr, nullptr,
                          mgrl::defaultThreadCount()});

@@ -18,9 +18,10 @@
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>
 
-#include "learners/mpi_ranks.hpp"
+#include "builtin_plugins.hpp"
 #include "mgrl/core/error.hpp"
 #include "mgrl/core/parallel.hpp"
+#include "mgrl/learning/partition.hpp"
 #include "mgrl/learning/problem.hpp"
 #include "mgrl/session/session.hpp"
 
@@ -36,7 +37,7 @@ struct Volume {
 // By graph state: a rank receives the new values of the actions leaving its states that
 // other ranks backed up (those ending at their states): V floats per such action.
 Volume byState(const GridModel& g, int ranks) {
-  const std::vector<int> owner = learners::partitionByEndState(g, ranks);
+  const std::vector<int> owner = partitionByEndState(g, ranks);
   std::vector<double> received(static_cast<std::size_t>(ranks), 0);
   const std::size_t states = g.incomingBegin.size() - 1;
   for (std::size_t s = 0; s < states; ++s)
@@ -108,6 +109,7 @@ int main(int argc, char** argv) {
     }
     SessionOptions options;
     options.scenario = argv[1];
+    options.plugins = &builtinPlugins();
     const std::string behaviorName = argv[2];
     std::vector<int> ranks = {2, 4, 16, 64};
     for (int i = 3; i < argc; ++i) {

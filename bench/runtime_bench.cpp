@@ -16,9 +16,6 @@
 
 #include <fmt/format.h>
 
-#include "app/learn_commands.hpp"
-#include "app/learn_common.hpp"
-#include "app/plugins.hpp"
 #include "bench_args.hpp"
 #include "bench_support.hpp"
 #include "boxing_setup.hpp"
@@ -55,12 +52,12 @@ int main(int argc, char** argv) {
   const int runs = args.runs;
   const bool quick = args.quick;
   try {
-    const mgrl::app::TrainOptions train = mgrl::bench::trainBoxingByValueIteration("runtime");
-    const fs::path scratch = train.cacheDir;
+    const mgrl::bench::TrainedBoxing train = mgrl::bench::trainBoxing("runtime");
+    const fs::path scratch = train.options.cacheDir;
     mgrl::SessionNeeds needs;
     needs.policy = mgrl::PolicyNeed::Required;
-    needs.policyDir = train.out;
-    const std::unique_ptr<mgrl::Session> session = mgrl::openSession(train, needs);
+    needs.policyDir = train.policy;
+    const std::unique_ptr<mgrl::Session> session = mgrl::openSession(train.options, needs);
     const mgrl::StateActionModel& model = session->model();
     const std::vector<mgrl::PolicyPart>& parts = session->policy;
     fs::remove_all(scratch);

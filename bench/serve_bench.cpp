@@ -20,7 +20,6 @@
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>
 
-#include "app/learn_commands.hpp"
 #include "bench_args.hpp"
 #include "bench_support.hpp"
 #include "boxing_setup.hpp"
@@ -54,11 +53,11 @@ int main(int argc, char** argv) {
   const int runs = args.runs;
   const int frames = args.quick ? 60 : 150;
   try {
-    const mgrl::app::TrainOptions train = mgrl::bench::trainBoxingByValueIteration("serve");
-    const fs::path scratch = train.cacheDir;
+    const mgrl::bench::TrainedBoxing train = mgrl::bench::trainBoxing("serve");
+    const fs::path scratch = train.options.cacheDir;
     mgrl::serve::ServeOptions options;
-    static_cast<mgrl::app::LearnOptions&>(options) = train;
-    options.policy = train.out;
+    static_cast<mgrl::SessionOptions&>(options) = train.options;
+    options.policy = train.policy;
     const auto assets = mgrl::serve::loadViewerAssets(options);
 
     std::printf("one page's cost per frame (simulate with poses + encode), medians of %d runs of %d frames\n", runs,

@@ -8,14 +8,11 @@
 #include <string>
 #include <vector>
 
+#include "mgrl/learning/partition.hpp"
 #include "mgrl/learning/problem.hpp"
 #include "mgrl/learning/q_table.hpp"
 
 namespace mgrl::learners {
-
-/// Which rank owns each graph state: longest first to the least loaded rank, the load of
-/// a state being the actions that end at it (its backups per vertex). Deterministic.
-std::vector<int> partitionByEndState(const GridModel& g, int ranks);
 
 class Ranks {
  public:

@@ -21,6 +21,7 @@
 #include <fmt/format.h>
 #include <fmt/ranges.h>
 
+#include "builtin_plugins.hpp"
 #include "mgrl/core/config.hpp"
 #include "mgrl/core/error.hpp"
 #include "mgrl/core/parallel.hpp"
@@ -33,7 +34,6 @@
 #include "mgrl/session/compare_tables.hpp"
 #include "mgrl/session/episodes.hpp"
 #include "mgrl/session/evaluate.hpp"
-#include "mgrl/session/plugins.hpp"
 #include "mgrl/session/session.hpp"
 #include "mgrl/session/simulate.hpp"
 #include "support.hpp"
@@ -63,6 +63,7 @@ class PySession {
     if (!cache.is_none()) options.cacheDir = cache.cast<std::filesystem::path>();
     options.sets = setsOf(sets);
     options.log = toStderr;
+    options.plugins = &builtinPlugins();
     SessionNeeds needs;
     needs.motion = false;  // the model is what Python works on; a cached graph starts fast
     py::gil_scoped_release release;
@@ -277,7 +278,7 @@ class PySession {
     const Session& session = *session_;
     const std::filesystem::path dir =
         defaultPolicyDirectory(session.options.cacheDir.empty() ? defaultCacheDirectory() : session.options.cacheDir,
-                               session.scenario, session.graph.key);
+                               session.scenario, session.plugins(), session.graph.key);
     std::string why = "no trained bundle";
     if (std::filesystem::exists(dir / "manifest.json")) {
       try {

@@ -8,7 +8,7 @@ it prints one line: the leaf the point falls in and max_a Q(e, a) over every act
 the table (or Q(e, A) with --action), interpolated multilinearly from the leaf's corners,
 or "outside" when the point is off the tree (future value 0 there, paper sec. 4.2).
 
-It reads only the bundle's arrays (framework/learning/policy_bundle.hpp): the tree
+It reads only the bundle's arrays (framework/include/mgrl/learning/policy_bundle.hpp): the tree
 (`<b>.grid.split_axis/split_value/children/leaf_corners/bounds[/roots].npy`) and the table
 (`<b>.q.npy`, one row per action). It is the worked answer to "can NumPy rebuild the
 tree?" (issue 16), and the reference a test compares mgrl's own interpolation with; see

@@ -1,5 +1,5 @@
 // Conformance per seam (issue 39): every plug-in registered with the built-in registries
-// (mgrl::builtinPlugins(), framework/session/plugins.cpp) is held to its seam's contract,
+// (mgrl::builtinPlugins(), app/builtins/builtin_plugins.cpp) is held to its seam's contract,
 // so registering a plug-in enrols it here without editing this file. A plug-in whose
 // defaults alone do not build gives a working block as its registry entry's `example`.
 #include <catch2/catch.hpp>
@@ -11,13 +11,13 @@
 #include <fmt/format.h>
 #include <fmt/ranges.h>
 
+#include "builtin_plugins.hpp"
 #include "mgrl/core/random.hpp"
 #include "mgrl/learning/discretizer.hpp"
 #include "mgrl/learning/environment_model.hpp"
 #include "mgrl/learning/learner.hpp"
 #include "mgrl/learning/problem.hpp"
 #include "mgrl/learning/reward.hpp"
-#include "mgrl/session/plugins.hpp"
 #include "rewards/term.hpp"
 #include "synthetic_model.hpp"
 

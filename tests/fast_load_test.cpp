@@ -14,6 +14,7 @@
 #include <catch2/catch.hpp>
 #include <nlohmann/json.hpp>
 
+#include "builtin_plugins.hpp"
 #include "graph_command.hpp"
 #include "mgrl/core/bundle.hpp"
 #include "mgrl/core/error.hpp"
@@ -148,6 +149,7 @@ TEST_CASE("a cached graph needs no capture parsed unless poses are wanted, and m
       "    reward: {type: approach}\n    learner: {type: value_iteration}\n",
       fs::path(MGRL_SOURCE_DIR) / "scenarios" / "test.yaml", mgrl::test::mocap());
   mgrl::app::GraphOptions options;
+  options.plugins = &mgrl::builtinPlugins();
   options.cacheDir = tmp.path;
   options.motion = false;
   const mgrl::app::GraphResult built = mgrl::app::obtainGraph(scenario, options);
@@ -259,6 +261,7 @@ TEST_CASE("a cached graph poses avatars from the capture it keeps, exactly as pa
       "sectors: 8}\n    reward: {type: approach}\n    learner: {type: value_iteration}\n",
       fs::path(MGRL_SOURCE_DIR) / "scenarios" / "test.yaml", mgrl::test::mocap());
   mgrl::app::GraphOptions options;
+  options.plugins = &mgrl::builtinPlugins();
   options.cacheDir = tmp.path;
   const mgrl::app::GraphResult built = mgrl::app::obtainGraph(scenario, options);
   REQUIRE_FALSE(built.fromCache);

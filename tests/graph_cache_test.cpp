@@ -18,15 +18,16 @@
 #include <catch2/catch.hpp>
 #include <fmt/format.h>
 
+#include "builtin_plugins.hpp"
 #include "graph_command.hpp"
 #include "mgrl/core/bundle.hpp"
 #include "mgrl/core/error.hpp"
-#include "mgrl/graph/graph_cache.hpp"
 #include "mgrl/core/hash.hpp"
+#include "mgrl/core/npy.hpp"
+#include "mgrl/graph/graph_cache.hpp"
 #include "mgrl/motion/motion_io.hpp"
 #include "mgrl/motion/roles.hpp"
 #include "mgrl/scenario/scenario.hpp"
-#include "mgrl/core/npy.hpp"
 #include "test_support.hpp"
 
 // A namespace of its own: the suite compiles in unity batches (tests/CMakeLists.txt).
@@ -525,6 +526,7 @@ TEST_CASE("a cached graph whose frame time lost a digit is rebuilt with one mess
                                                       mgrl::test::mocap());
   std::vector<std::string> log;
   mgrl::app::GraphOptions options;
+  options.plugins = &mgrl::builtinPlugins();
   options.cacheDir = tmp.path;
   options.log = [&](const std::string& line) { log.push_back(line); };
   const mgrl::app::GraphResult first = mgrl::app::obtainGraph(scenario, options);

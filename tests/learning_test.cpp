@@ -19,7 +19,6 @@
 
 #include "app/plugins.hpp"
 #include "environments/environments.hpp"
-#include "learners/q_learning_steps.hpp"
 #include "mgrl/core/bundle.hpp"
 #include "mgrl/core/data_paths.hpp"
 #include "mgrl/core/files.hpp"
@@ -29,6 +28,7 @@
 #include "mgrl/learning/checkpoint_store.hpp"
 #include "mgrl/learning/policy_evaluation.hpp"
 #include "mgrl/learning/problem.hpp"
+#include "mgrl/learning/q_learning_steps.hpp"
 #include "mgrl/learning/success.hpp"
 #include "mgrl/motion/roles.hpp"
 #include "mgrl/runtime/controller.hpp"
@@ -541,20 +541,20 @@ TEST_CASE("Q-learning taken step by step is q_learning, and each step reports it
   // look-ahead's actions (those leaving a's end state) never include a: every corner's
   // look-ahead reads the table as it was before the step, whatever the corners' order.
   for (std::size_t a = 0; a < m.actionCount(); ++a) REQUIRE(m.actionFrom[a] != m.actionTo[a]);
-  learners::QLearningSteps steps(problem, 2000, 9);
+  QLearningSteps steps(problem, 2000, 9);
   REQUIRE(steps.restarts() == 1);
   QTable previous = steps.table();
   std::size_t restarts = 0, futures = 0;
   while (!steps.done()) {
     const QTable before = steps.table();
-    const learners::QStep step = steps.step();
+    const QStep step = steps.step();
     REQUIRE(step.vertices.size() == 4);  // a 2-D grid's cell
     CHECK(step.alpha == Approx(1.0 - static_cast<double>(step.update - 1) / 2000).epsilon(1e-6));
     REQUIRE(step.action >= setup.model.stateActionBegin[step.state]);
     REQUIRE(step.action < setup.model.stateActionBegin[step.state + 1]);
     CHECK(step.nextState == setup.model.actionTo[step.action]);
     double weights = 0;
-    for (const learners::QStepVertex& v : step.vertices) {
+    for (const QStepVertex& v : step.vertices) {
       weights += v.weight;
       CHECK(v.before == previous.at(step.action, v.vertex));
       CHECK(v.backup == Approx(v.reward + v.discount * v.future).margin(1e-6));
@@ -597,7 +597,7 @@ TEST_CASE("Q-learning taken step by step is q_learning, and each step reports it
   REQUIRE(steps.updates() == 2000);
   REQUIRE_THROWS_WITH(steps.step(), Catch::Contains("budget of 2000 actions is spent"));
   // Another seed walks elsewhere.
-  learners::QLearningSteps other(problem, 2000, 10);
+  QLearningSteps other(problem, 2000, 10);
   while (!other.done()) other.step();
   REQUIRE_FALSE(other.table() == whole.table);
 }
@@ -1957,13 +1957,13 @@ TEST_CASE("trials against an avatar need an opponent environment and an avoid co
   };
   const std::vector<Behavior> still = behaviours(std::make_unique<StaticTarget>());
   const Task stillTask = makeTask(still, "test.yaml");
-  const Trials onStatic(m, still, stillTask, std::nan(""), "test.yaml");
+  const Trials onStatic(m, still, stillTask, std::nan(""), "test.yaml", builtinPlugins().conditions);
   CHECK_FALSE(onStatic.hasAvatarOpponent());
   CHECK_THROWS_WITH(onStatic.runAgainstAvatar(nullptr, 1, 1, 1),
                     "trials against an avatar: expected an opponent environment, found static_target");
   const std::vector<Behavior> unguarded = behaviours(std::make_unique<environments::Opponent>(true, 0.3, 0.7, M_PI));
   const Task unguardedTask = makeTask(unguarded, "test.yaml");
-  const Trials withoutAvoid(m, unguarded, unguardedTask, std::nan(""), "test.yaml");
+  const Trials withoutAvoid(m, unguarded, unguardedTask, std::nan(""), "test.yaml", builtinPlugins().conditions);
   CHECK_FALSE(withoutAvoid.hasAvatarOpponent());
   CHECK_THROWS_WITH(withoutAvoid.runAgainstAvatar(nullptr, 1, 1, 1),
                     "trials against an avatar: expected a success criterion with an avoid condition, found none");

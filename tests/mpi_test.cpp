@@ -284,11 +284,11 @@ TEST_CASE("the MPI split gives each state to one rank, largest first to the leas
   // 2 -> r1 (7, 8); 1 -> r0 (8, 8). States in the order 2, 0, 5, 1, 3, 4 by load, ties kept
   // in state order.
   const std::vector<std::uint32_t> loads = {3, 2, 5, 2, 1, 3};
-  CHECK(learners::partitionByEndState(withLoads(loads), 2) == std::vector<int>{1, 0, 0, 1, 0, 1});
-  CHECK(rankLoads(loads, learners::partitionByEndState(withLoads(loads), 2), 2) == std::vector<std::uint64_t>{8, 8});
+  CHECK(partitionByEndState(withLoads(loads), 2) == std::vector<int>{1, 0, 0, 1, 0, 1});
+  CHECK(rankLoads(loads, partitionByEndState(withLoads(loads), 2), 2) == std::vector<std::uint64_t>{8, 8});
   // One rank holds everything; more ranks than states give each state a rank of its own.
-  CHECK(learners::partitionByEndState(withLoads(loads), 1) == std::vector<int>(6, 0));
-  const std::vector<int> alone = learners::partitionByEndState(withLoads(loads), 8);
+  CHECK(partitionByEndState(withLoads(loads), 1) == std::vector<int>(6, 0));
+  const std::vector<int> alone = partitionByEndState(withLoads(loads), 8);
   CHECK(std::set<int>(alone.begin(), alone.end()).size() == 6);
 
   // Random loads: every state owned by a rank in range, and no rank more than the largest
@@ -298,14 +298,14 @@ TEST_CASE("the MPI split gives each state to one rank, largest first to the leas
     std::vector<std::uint32_t> random(20 + rng.below(200));
     for (auto& load : random) load = static_cast<std::uint32_t>(rng.below(1000));
     const int ranks = 2 + static_cast<int>(rng.below(7));
-    const std::vector<int> owner = learners::partitionByEndState(withLoads(random), ranks);
+    const std::vector<int> owner = partitionByEndState(withLoads(random), ranks);
     REQUIRE(owner.size() == random.size());
     CHECK(std::all_of(owner.begin(), owner.end(), [&](int r) { return r >= 0 && r < ranks; }));
     const std::vector<std::uint64_t> sum = rankLoads(random, owner, ranks);
     const auto [least, most] = std::minmax_element(sum.begin(), sum.end());
     INFO("trial " << trial << ": " << random.size() << " states over " << ranks << " ranks");
     CHECK(*most - *least <= *std::max_element(random.begin(), random.end()));
-    CHECK(learners::partitionByEndState(withLoads(random), ranks) == owner);  // deterministic
+    CHECK(partitionByEndState(withLoads(random), ranks) == owner);  // deterministic
   }
 }
 

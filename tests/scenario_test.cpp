@@ -4,6 +4,7 @@
 
 #include <catch2/catch.hpp>
 
+#include "builtin_plugins.hpp"
 #include "graph_command.hpp"
 #include "mgrl/graph/graph_cache.hpp"
 #include "mgrl/motion/motion_database.hpp"
@@ -141,6 +142,7 @@ TEST_CASE("the graph cache is reused, refreshed when inputs change and rebuilt w
   Scenario s = parse(kGood);
   std::vector<std::string> log;
   app::GraphOptions options;
+  options.plugins = &mgrl::builtinPlugins();
   options.cacheDir = cache;
   options.log = [&](const std::string& m) { log.push_back(m); };
 

@@ -78,7 +78,7 @@ struct BoxingAssets {
       train.out = shared / "policy";
     }
     serve::ServeOptions options;
-    static_cast<app::LearnOptions&>(options) = train;
+    static_cast<SessionOptions&>(options) = train;
     if (withPolicy) options.policy = train.out;
     options.sparringScenario = sparring ? "" : "none";
     assets = serve::loadViewerAssets(options);

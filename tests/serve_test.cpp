@@ -594,7 +594,7 @@ TEST_CASE("serve --partner-policy: the second fighter of each pair plays its own
   app::runTrain(far);
   auto options = [&](const fs::path& partner, int round) {
     serve::ServeOptions o;
-    static_cast<app::LearnOptions&>(o) = spar.train;
+    static_cast<SessionOptions&>(o) = spar.train;
     o.policy = spar.train.out;
     o.sparringScenario = "none";
     o.partnerPolicy = partner;

@@ -42,6 +42,7 @@ fs::path trainedBoxing() {
 
 SessionOptions boxingOptions(const fs::path& cache) {
   SessionOptions options;
+  options.plugins = &builtinPlugins();
   options.scenario = kBoxing;
   options.dataDir = test::mocap();
   options.cacheDir = cache;
@@ -214,6 +215,7 @@ TEST_CASE("mgrl train refuses behaviours that disagree on their world before tra
 TEST_CASE("a scenario's world section reaches the task: kick's target height", "[session][data]") {
   test::TempDir temp("session-kick");
   SessionOptions options;
+  options.plugins = &builtinPlugins();
   options.scenario = kKick;
   options.dataDir = test::mocap();
   options.cacheDir = temp.path;
@@ -313,6 +315,7 @@ TEST_CASE("a hit reads the same in the events file and the viewer's protocol", "
 TEST_CASE("a scenario's stances reach the world and eval's trials: trial i holds stance i mod N", "[session][data]") {
   const test::TempDir cache("session-stances");
   SessionOptions options;
+  options.plugins = &builtinPlugins();
   options.scenario = fs::path(MGRL_SOURCE_DIR) / "scenarios" / "boxing_spar.yaml";
   options.dataDir = test::mocap();
   options.cacheDir = cache.path;
@@ -320,7 +323,8 @@ TEST_CASE("a scenario's stances reach the world and eval's trials: trial i holds
   REQUIRE(session->behaviors.size() == 3);
   for (int k = 0; k < 3; ++k) CHECK(session->behaviors[static_cast<std::size_t>(k)].stance == k);
   CHECK(session->worldSetup(2, 1, {"random"}).stances == 3);
-  const Trials trials(session->model(), session->behaviors, session->task, std::nan(""), "boxing_spar");
+  const Trials trials(session->model(), session->behaviors, session->task, std::nan(""), "boxing_spar",
+                      session->plugins().conditions);
   std::vector<std::int32_t> seen;
   const ChooseAction record = [&](std::uint32_t s, const TargetState& e) -> std::size_t {
     seen.push_back(e.stance);

@@ -95,7 +95,7 @@ export function avatarColour(i, partners, out) {
 }
 
 // Body mode (issue 45): each bone a capsule sized from its length, as the glTF export's
-// body (framework/motion/gltf.hpp): a cylinder of radius kBodyRadiusPerLength x length
+// body (framework/include/mgrl/motion/gltf.hpp): a cylinder of radius kBodyRadiusPerLength x length
 // within [kBodyMinRadius, kBodyMaxRadius], closed by a sphere at each joint as wide as the
 // widest bone meeting there. Gloves and shoes in their own colours.
 const kBodyRadiusPerLength = 0.2;

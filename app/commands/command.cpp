@@ -13,7 +13,7 @@ std::vector<std::unique_ptr<Command>> makeCommands(CLI::App& app, Common& common
   return commands;
 }
 
-void fillSession(LearnOptions& options, const Common& common) {
+void fillSession(SessionOptions& options, const Common& common) {
   options.scenario = common.scenario;
   options.dataDir = common.dataDir;
   options.cacheDir = common.cacheDir;
@@ -24,7 +24,7 @@ SessionCommand::SessionCommand(CLI::App* sub, Common& common, const std::string&
   sub_->add_option("SCENARIO", common.scenario, scenarioHelp)->required();
 }
 
-void SessionCommand::addSessionOptions(LearnOptions& options, Common& common, bool json, const std::string& setHelp) {
+void SessionCommand::addSessionOptions(SessionOptions& options, Common& common, bool json, const std::string& setHelp) {
   session_ = &options;
   sub_->add_option("--set", options.sets, setHelp);
   if (json) sub_->add_flag("--json", common.json, "Print one JSON object on stdout");

@@ -53,12 +53,12 @@ class SessionCommand : public Command {
 
  protected:
   SessionCommand(CLI::App* sub, Common& common, const std::string& scenarioHelp = "Scenario YAML file");
-  void addSessionOptions(LearnOptions& options, Common& common, bool json,
+  void addSessionOptions(SessionOptions& options, Common& common, bool json,
                          const std::string& setHelp = "Override a scenario key (repeatable)");
   virtual void runSession(const Common& common) = 0;
 
  private:
-  LearnOptions* session_ = nullptr;
+  SessionOptions* session_ = nullptr;
 };
 
 /// Every command, in the order `mgrl --help` lists them.
@@ -78,7 +78,7 @@ std::unique_ptr<Command> listCommand(CLI::App& app, Common& common);
 
 /// The session's options (scenario, --data, --cache, the log) from the shared ones, for
 /// every command that opens a session.
-void fillSession(LearnOptions& options, const Common& common);
+void fillSession(SessionOptions& options, const Common& common);
 
 /// --json: the report as one JSON object on stdout; else the text.
 inline void print(const Common& common, const nlohmann::json& report, const std::string& text) {

@@ -90,6 +90,7 @@ class Init final : public Command {
     options_.units = unitsOption(units_);
     options_.roles = parseRoles(roles_);
     options_.log = logLine;
+    options_.plugins = &plugins();
     const nlohmann::json report = runInit(options_);
     print(common, report, common.json ? std::string() : initText(report));
   }
@@ -120,6 +121,7 @@ class Graph final : public Command {
     options.cacheDir = common.cacheDir;
     options.noCache = noCache_;
     options.log = logLine;
+    options.plugins = &plugins();
     GraphResult graph = obtainGraph(scenario, options);
     measurePlayback(graph, scenario.graph.blendFrames);
     print(common, graphJson(graph), common.json ? std::string() : graphText(graph));

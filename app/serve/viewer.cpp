@@ -12,17 +12,15 @@
 #include <fmt/ranges.h>
 #include <nlohmann/json.hpp>
 
-#include "learn_common.hpp"
-#include "learners/q_learning_steps.hpp"
-#include "mgrl/session/trials.hpp"
 #include "mgrl/graph/motion_graph.hpp"
 #include "mgrl/learning/behavior.hpp"
 #include "mgrl/learning/policy_bundle.hpp"
+#include "mgrl/learning/q_learning_steps.hpp"
 #include "mgrl/runtime/controller.hpp"
 #include "mgrl/runtime/world.hpp"
 #include "mgrl/scenario/behaviors.hpp"
 #include "mgrl/session/session.hpp"
-#include "plugins.hpp"
+#include "mgrl/session/trials.hpp"
 
 namespace mgrl::serve {
 

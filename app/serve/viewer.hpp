@@ -12,19 +12,20 @@
 #include <string>
 #include <vector>
 
-#include "learn_commands.hpp"
+#include "builtin_plugins.hpp"
+#include "mgrl/session/policy_source.hpp"
 #include "serve/protocol.hpp"
 
 namespace mgrl {
 class World;
-}
-namespace mgrl::learners {
 struct QStep;
 }
 
 namespace mgrl::serve {
 
-struct ServeOptions : app::LearnOptions {
+/// The session's options (with the built-in plug-ins) and the viewer's.
+struct ServeOptions : SessionOptions {
+  ServeOptions() { plugins = &builtinPlugins(); }
   std::filesystem::path policy;  ///< "" the scenario's default bundle, if trained
   /// The scenario whose behaviours play sparring and crowds (issue 46): "" the scenario's
   /// own `sparring_scenario:` if it names one, "none" the scenario's own behaviours, else
@@ -142,7 +143,7 @@ class ViewerSession {
   void advanceLesson(double frames);
   void collectRetraining();
   std::string lessonMessage() const;
-  std::string stepMessage(const learners::QStep& step, std::size_t taken) const;
+  std::string stepMessage(const QStep& step, std::size_t taken) const;
 
   /// Makes `assets` the ones the page plays (the scenario's, or its sparring scenario's):
   /// weights, policy, controller and teaching views start again from them.

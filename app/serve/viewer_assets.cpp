@@ -33,7 +33,7 @@ std::shared_ptr<ViewerAssets> loadAssets(const ServeOptions& options, const Grap
         "No usable policy bundle ({}), so the online search runs instead. Train one with: "
         "mgrl train {}",
         session.policyNote, options.scenario.string());
-  assets->criteria = trialCriteria(session.behaviors).first;
+  assets->criteria = trialCriteria(session.behaviors, session.plugins().conditions).first;
   std::vector<std::string> texts;
   for (const SuccessCriterion& c : assets->criteria) texts.push_back(c.describe());
   assets->criteriaText = fmt::format("{}", fmt::join(texts, ", or "));

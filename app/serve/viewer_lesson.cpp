@@ -12,17 +12,16 @@
 #include <fmt/ranges.h>
 #include <nlohmann/json.hpp>
 
-#include "learn_common.hpp"
-#include "learners/q_learning_steps.hpp"
-#include "mgrl/session/trials.hpp"
+#include "mgrl/core/numbers.hpp"
 #include "mgrl/graph/motion_graph.hpp"
 #include "mgrl/learning/behavior.hpp"
 #include "mgrl/learning/policy_bundle.hpp"
+#include "mgrl/learning/q_learning_steps.hpp"
 #include "mgrl/runtime/controller.hpp"
 #include "mgrl/runtime/world.hpp"
 #include "mgrl/scenario/behaviors.hpp"
 #include "mgrl/session/session.hpp"
-#include "plugins.hpp"
+#include "mgrl/session/trials.hpp"
 
 namespace mgrl::serve {
 
@@ -45,14 +44,14 @@ void ViewerSession::learn(const Learn& message) {
     lesson->keep = s.retrained[static_cast<std::size_t>(i)];
     const Behavior& b = lesson->keep ? lesson->keep->behavior : a.session->behaviors[static_cast<std::size_t>(i)];
     const Problem problem = b.problem(a.model());
-    const double bytes = learners::QLearningSteps::tableBytes(problem);
+    const double bytes = QLearningSteps::tableBytes(problem);
     if (bytes > Limits::kLessonBytes)
       throw Error(
           fmt::format("learn: expected a lesson table of at most {} for one page, found {} for {} ({} vertices "
                       "x {} actions); choose a behaviour with a smaller grid",
                       humanBytes(Limits::kLessonBytes), humanBytes(bytes), b.name, b.discretizer->vertexCount(),
                       a.model().actionCount()));
-    lesson->steps = std::make_unique<learners::QLearningSteps>(problem, message.budget, message.seed);
+    lesson->steps = std::make_unique<QLearningSteps>(problem, message.budget, message.seed);
     s.lesson = std::move(lesson);
     outbox_.push_back(lessonMessage());
     return;
@@ -73,7 +72,7 @@ void ViewerSession::learn(const Learn& message) {
                               lesson.steps->budget()));
     const std::size_t n =
         std::min<std::uint64_t>(static_cast<std::uint64_t>(message.steps), lesson.steps->budget() - lesson.steps->updates());
-    learners::QStep last;
+    QStep last;
     for (std::size_t k = 0; k < n; ++k) last = lesson.steps->step();
     outbox_.push_back(stepMessage(last, n));
   }
@@ -90,7 +89,7 @@ void ViewerSession::advanceLesson(double frames) {
   lesson.carry = std::min(lesson.carry - static_cast<double>(n), 1.0);
   n = std::min<std::uint64_t>(n, lesson.steps->budget() - lesson.steps->updates());
   if (n == 0) return;
-  learners::QStep last;
+  QStep last;
   for (std::size_t k = 0; k < n; ++k) last = lesson.steps->step();
   if (lesson.steps->done()) lesson.rate = 0;
   outbox_.push_back(stepMessage(last, n));
@@ -100,7 +99,7 @@ std::string ViewerSession::lessonMessage() const {
   const State& s = *state_;
   const ViewerAssets& a = *assets_;
   const State::Lesson& lesson = *s.lesson;
-  const learners::QLearningSteps& steps = *lesson.steps;
+  const QLearningSteps& steps = *lesson.steps;
   const Behavior& b = lesson.keep ? lesson.keep->behavior : a.session->behaviors[static_cast<std::size_t>(lesson.behavior)];
   json vertices = json::array();
   for (std::size_t v = 0; v < b.discretizer->vertexCount(); ++v) vertices.push_back(point3(b.discretizer->vertexPosition(v)));
@@ -122,12 +121,12 @@ std::string ViewerSession::lessonMessage() const {
       .dump();
 }
 
-std::string ViewerSession::stepMessage(const learners::QStep& step, std::size_t taken) const {
+std::string ViewerSession::stepMessage(const QStep& step, std::size_t taken) const {
   const State& s = *state_;
   const StateActionModel& model = assets_->model();
-  const learners::QLearningSteps& steps = *s.lesson->steps;
+  const QLearningSteps& steps = *s.lesson->steps;
   json vertices = json::array();
-  for (const learners::QStepVertex& v : step.vertices)
+  for (const QStepVertex& v : step.vertices)
     vertices.push_back({{"vertex", v.vertex},
                         {"position", point3(v.position)},
                         {"weight", v.weight},

@@ -17,7 +17,7 @@
 
 #include <nlohmann/json.hpp>
 
-#include "learners/q_learning_steps.hpp"
+#include "mgrl/learning/q_learning_steps.hpp"
 #include "mgrl/learning/success.hpp"
 #include "mgrl/runtime/world.hpp"
 #include "mgrl/session/session.hpp"
@@ -160,7 +160,7 @@ struct ViewerSession::State {
   struct Lesson {
     int behavior = -1;
     std::shared_ptr<const Retrained> keep;  ///< the retrained plugins the lesson's problem uses
-    std::unique_ptr<learners::QLearningSteps> steps;
+    std::unique_ptr<QLearningSteps> steps;
     double rate = 0, carry = 0;  ///< steps per second while running
   };
   std::unique_ptr<Lesson> lesson;

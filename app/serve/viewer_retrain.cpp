@@ -15,13 +15,13 @@
 #include <fmt/ranges.h>
 #include <nlohmann/json.hpp>
 
+#include "builtin_plugins.hpp"
 #include "mgrl/graph/motion_graph.hpp"
 #include "mgrl/learning/behavior.hpp"
 #include "mgrl/learning/policy_bundle.hpp"
 #include "mgrl/runtime/controller.hpp"
 #include "mgrl/runtime/world.hpp"
 #include "mgrl/scenario/behaviors.hpp"
-#include "mgrl/session/plugins.hpp"
 #include "mgrl/session/session.hpp"
 #include "mgrl/session/training.hpp"
 #include "mgrl/session/trials.hpp"
@@ -50,9 +50,9 @@ constexpr double kRetrainBytes = 1e9;
 
 // What a retraining trains: value iteration on the tabulated problem, within the server's
 // limit.
-TrainSettings retrainSettings() {
+TrainSettings retrainSettings(const Plugins& plugins) {
   static const std::shared_ptr<const Learner> valueIteration =
-      builtinPlugins().learners.create(ConfigNode::parse("{type: value_iteration}", "retrain"));
+      plugins.learners.create(ConfigNode::parse("{type: value_iteration}", "retrain"));
   TrainSettings settings;
   settings.save = false;
   settings.learner = valueIteration;
@@ -76,7 +76,7 @@ void trainAndEvaluate(std::atomic<bool>& stop, const ViewerAssets& assets, const
   const auto start = Clock::now();
   TrainHooks hooks;
   hooks.stop = &stop;
-  Trained trained = trainBehavior(*assets.session, result.behavior, retrainSettings(), hooks);
+  Trained trained = trainBehavior(*assets.session, result.behavior, retrainSettings(assets.session->plugins()), hooks);
   const std::string& name = result.behavior.name;
   PolicyBehavior& table = trained.bundle.behaviors.at(name);
   result.trainSeconds = std::chrono::duration<double>(Clock::now() - start).count();
@@ -94,7 +94,7 @@ void trainAndEvaluate(std::atomic<bool>& stop, const ViewerAssets& assets, const
   // Targets at the scenario's world.target_height when it gives one, as eval's.
   const double height = assets.session->task.targetHeight(std::numeric_limits<double>::quiet_NaN());
   const Trials trials(model, assets.session->behaviors, assets.session->task, height,
-                      assets.session->scenario.path.string());
+                      assets.session->scenario.path.string(), assets.session->plugins().conditions);
   std::vector<PolicyPart> after = before;
   after[index].grid = &g;
   after[index].table = &result.table;
@@ -160,12 +160,12 @@ void ViewerSession::retrain(const Retrain& message) {
   }
   Scenario scenario = checkedScenario(options);
   std::vector<Behavior> built =
-      buildBehaviors(scenario, builtinPlugins(), a.model(), a.session->graph.key, message.behavior);
+      buildBehaviors(scenario, a.session->plugins(), a.model(), a.session->graph.key, message.behavior);
   auto result = std::make_shared<Retrained>();
   result->behavior = std::move(built.front());
   result->set = set;
   try {  // too large for the server: refused before anything is trained
-    checkTrainingFits(result->behavior, a.model(), retrainSettings());
+    checkTrainingFits(result->behavior, a.model(), retrainSettings(a.session->plugins()));
   } catch (const Error& e) {
     throw Error(fmt::format("retrain: {}", e.what()));
   }

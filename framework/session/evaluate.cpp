@@ -43,7 +43,7 @@ json evaluate(const Session& session, const std::vector<PolicyPart>& policy, con
   // The target's height: the given one, else the scenario's world.target_height, else the
   // hitting points' centroid's.
   const Trials trials(model, session.behaviors, session.task, session.task.targetHeight(settings.targetHeight),
-                      session.scenario.path.string());
+                      session.scenario.path.string(), session.plugins().conditions);
   // Greedy, without the world's variety. The online search moves the target as the
   // behaviours' environment model does (as trials do).
   std::unique_ptr<PolicyController> controller;

@@ -16,7 +16,6 @@
 #include "mgrl/graph/graph_cache.hpp"
 #include "mgrl/graph/motion_graph.hpp"
 #include "mgrl/graph/playback.hpp"
-#include "mgrl/session/plugins.hpp"
 
 namespace mgrl {
 
@@ -109,8 +108,9 @@ bool bundledMotionFits(const std::vector<std::pair<std::string, Motion>>& motion
 
 }  // namespace
 
-CaptureTravel measureTravel(const Scenario& scenario, const MotionDatabase& db, const StateActionModel& model) {
-  return measureTravel(scenario, clipTravel(db), model);
+CaptureTravel measureTravel(const Scenario& scenario, const MotionDatabase& db, const StateActionModel& model,
+                            const Plugins& plugins) {
+  return measureTravel(scenario, clipTravel(db), model, plugins);
 }
 
 CaptureTravel walkTravel(CaptureTravel clips, const StateActionModel& model) {
@@ -152,13 +152,14 @@ CaptureTravel walkTravel(CaptureTravel clips, const StateActionModel& model) {
   return t;
 }
 
-CaptureTravel measureTravel(const Scenario& scenario, CaptureTravel clips, const StateActionModel& model) {
+CaptureTravel measureTravel(const Scenario& scenario, CaptureTravel clips, const StateActionModel& model,
+                            const Plugins& plugins) {
   CaptureTravel t = clips.walked ? std::move(clips) : walkTravel(std::move(clips), model);
   const double travel = std::max(t.clipTravel_m, t.walkTravel_m);
   for (const BehaviorSpec& spec : scenario.behaviors) {
     std::unique_ptr<Discretizer> grid;
     try {
-      grid = builtinPlugins().discretizers.create(spec.discretizer, model);
+      grid = plugins.discretizers.create(spec.discretizer, model);
     } catch (const Error&) {
       continue;  // a bad block is train's to report, with its line
     }
@@ -185,7 +186,17 @@ std::filesystem::path defaultCacheDirectory() {
   return ".mgrl-cache";
 }
 
+const Plugins& requirePlugins(const Plugins* plugins, std::string_view where) {
+  if (!plugins)
+    throw Error(
+        fmt::format("{}: expected the plug-ins to build behaviours with (mgrl::builtinPlugins() for the "
+                    "built-in ones), found none",
+                    where));
+  return *plugins;
+}
+
 GraphResult obtainGraph(const Scenario& scenario, const GraphOptions& options) {
+  const Plugins& plugins = requirePlugins(options.plugins, "GraphOptions::plugins");
   const auto start = std::chrono::steady_clock::now();
   auto log = [&](const std::string& message) {
     if (options.log) options.log(message);
@@ -219,7 +230,8 @@ GraphResult obtainGraph(const Scenario& scenario, const GraphOptions& options) {
       } else if (options.motion || !clips) {
         result.db = loadMotionDatabase(scenario.motion, warn);
       }
-      result.travel = clips ? measureTravel(scenario, *clips, result.model) : measureTravel(scenario, result.db, result.model);
+      result.travel = clips ? measureTravel(scenario, *clips, result.model, plugins)
+                            : measureTravel(scenario, result.db, result.model, plugins);
       result.seconds = since(start);
       for (const std::string& w : result.travel.warnings) log(fmt::format("graph: warning: {}", w));
       return result;
@@ -254,7 +266,7 @@ GraphResult obtainGraph(const Scenario& scenario, const GraphOptions& options) {
     // The graph is good; only reuse is lost. Say so and go on.
     log(fmt::format("graph: warning: could not write the cache ({})", e.what()));
   }
-  result.travel = measureTravel(scenario, clips, result.model);
+  result.travel = measureTravel(scenario, clips, result.model, plugins);
   for (const std::string& w : result.travel.warnings) log(fmt::format("graph: warning: {}", w));
   result.seconds = since(start);
   return result;

@@ -17,7 +17,6 @@
 #include "mgrl/core/hash.hpp"
 #include "mgrl/learning/behavior_spec.hpp"
 #include "mgrl/scenario/behaviors.hpp"
-#include "mgrl/session/plugins.hpp"
 
 namespace mgrl {
 
@@ -37,7 +36,7 @@ Scenario checkedScenario(const SessionOptions& options) {
   if (scenario.behaviors.empty())
     scenario.root.fail("expected a 'behaviors' section naming at least one behaviour (see scenarios/README.md), "
                        "found none");
-  checkBehaviors(scenario, builtinPlugins());
+  checkBehaviors(scenario, requirePlugins(options.plugins, "SessionOptions::plugins"));
   return scenario;
 }
 
@@ -80,7 +79,8 @@ void precheckPolicy(const fs::path& dir, const Scenario& scenario, const Session
       throw Error(fmt::format("{}: expected a trained table for behaviour '{}' that the scenario asks for, found "
                               "none; run mgrl train {} --behavior {}{}",
                               dir.string(), spec.name, options.scenario.string(), spec.name, setFlags(options.sets)));
-    const std::string key = behaviorConfigAndKey(spec, builtinPlugins(), graphKey).second;
+    const std::string key =
+        behaviorConfigAndKey(spec, requirePlugins(options.plugins, "SessionOptions::plugins"), graphKey).second;
     if (entry.is_object() && entry.contains("key") && entry["key"].is_string() && entry["key"] != key)
       throw Error(fmt::format("{}: behaviour '{}' was trained with other settings than the scenario's now (key {} "
                               "vs {}); retrain with mgrl train {} --behavior {}{}",
@@ -109,7 +109,7 @@ struct BundleSettings {
   std::vector<std::string> replaced;     ///< "behaviors.hit.learner." blocks of another type
 };
 
-BundleSettings bundleSettings(const fs::path& dir, const Scenario& scenario) {
+BundleSettings bundleSettings(const fs::path& dir, const Scenario& scenario, const Plugins& plugins) {
   std::vector<std::string> sets, differences, replaced;
   json manifest;
   try {
@@ -126,7 +126,7 @@ BundleSettings bundleSettings(const fs::path& dir, const Scenario& scenario) {
     if (!entry.is_object() || !entry.contains("record") || !entry["record"].is_object()) continue;
     const json trainedConfig = entry["record"].value("config", json());
     if (!trainedConfig.is_object()) continue;
-    const auto [config, key] = behaviorConfigAndKey(spec, builtinPlugins(), graphKey);
+    const auto [config, key] = behaviorConfigAndKey(spec, plugins, graphKey);
     if (entry.value("key", json()) == json(key)) continue;
     for (const char* block : {"discretizer", "reward", "environment", "learner"}) {
       const json trained = trainedConfig.value(block, json());
@@ -166,7 +166,8 @@ fs::path resolvePolicy(const fs::path& policy, Scenario& scenario, const Session
   const fs::path cacheDir = options.cacheDir.empty() ? defaultCacheDirectory() : options.cacheDir;
   std::string key = graphCacheKey(scenario);
   if (policy.empty()) {
-    const fs::path dir = defaultPolicyDirectory(cacheDir, scenario, key);
+    const fs::path dir =
+        defaultPolicyDirectory(cacheDir, scenario, requirePlugins(options.plugins, "SessionOptions::plugins"), key);
     precheckPolicy(dir, scenario, options, key);
     if (graphKey) *graphKey = std::move(key);
     return dir;
@@ -177,7 +178,8 @@ fs::path resolvePolicy(const fs::path& policy, Scenario& scenario, const Session
     return policy;
   } catch (const Error&) {
     const std::exception_ptr refusal = std::current_exception();
-    const BundleSettings adopted = bundleSettings(policy, scenario);
+    const BundleSettings adopted =
+        bundleSettings(policy, scenario, requirePlugins(options.plugins, "SessionOptions::plugins"));
     if (adopted.sets.empty()) throw;
     // The user's own --set flags into a block of another type belong to the scenario's
     // plugin, not the bundle's: they go.
@@ -190,7 +192,7 @@ fs::path resolvePolicy(const fs::path& policy, Scenario& scenario, const Session
     std::optional<Scenario> adjusted;
     try {
       adjusted.emplace(loadScenario(options.scenario, dataDirectory(options.dataDir), again.sets));
-      checkBehaviors(*adjusted, builtinPlugins());
+      checkBehaviors(*adjusted, requirePlugins(options.plugins, "SessionOptions::plugins"));
       precheckPolicy(policy, *adjusted, again);
     } catch (const Error&) {
       std::rethrow_exception(refusal);  // the bundle's settings do not fit either: the first refusal says why
@@ -250,7 +252,8 @@ std::vector<PolicyPart> policyPartsOf(PolicyBundle& bundle, const fs::path& dir,
   return parts;
 }
 
-fs::path defaultPolicyDirectory(const fs::path& cacheDir, const Scenario& scenario, std::string_view knownKey) {
+fs::path defaultPolicyDirectory(const fs::path& cacheDir, const Scenario& scenario, const Plugins& plugins,
+                                std::string_view knownKey) {
   // Everything that trains the tables names the folder: the scenario file, its graph and
   // every behaviour's settings (after --set), so another learner gets another bundle.
   std::error_code ec;
@@ -261,7 +264,7 @@ fs::path defaultPolicyDirectory(const fs::path& cacheDir, const Scenario& scenar
   h.update(std::string_view(graphKey));
   for (const BehaviorSpec& spec : scenario.behaviors) {
     h.update(std::string_view(spec.name));
-    h.update(std::string_view(behaviorConfigAndKey(spec, builtinPlugins(), graphKey).second));
+    h.update(std::string_view(behaviorConfigAndKey(spec, plugins, graphKey).second));
   }
   return cacheDir / "policies" / fmt::format("{}-{}", scenario.name, h.hex().substr(0, 8));
 }

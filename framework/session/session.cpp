@@ -8,7 +8,6 @@
 #include "mgrl/core/error.hpp"
 #include "mgrl/motion/motion_database.hpp"
 #include "mgrl/scenario/behaviors.hpp"
-#include "mgrl/session/plugins.hpp"
 
 namespace mgrl {
 
@@ -153,6 +152,7 @@ std::unique_ptr<Session> openSession(const SessionOptions& options, const Sessio
   graphOptions.cacheDir = options.cacheDir;
   graphOptions.log = options.log;
   graphOptions.motion = needs.motion;
+  graphOptions.plugins = options.plugins;
   if (needs.graphFrom && graphOptions.key.empty()) graphOptions.key = graphCacheKey(scenario);
   GraphResult graph;
   if (needs.graphFrom && needs.graphFrom->key == graphOptions.key && (!needs.motion || needs.graphFrom->db.skeleton)) {
@@ -161,7 +161,7 @@ std::unique_ptr<Session> openSession(const SessionOptions& options, const Sessio
     CaptureTravel clips = graph.travel;
     clips.reaches.clear();
     clips.warnings.clear();
-    graph.travel = measureTravel(scenario, std::move(clips), graph.model);
+    graph.travel = measureTravel(scenario, std::move(clips), graph.model, *options.plugins);
     if (options.log)
       options.log(fmt::format("graph: shared with the scenario already open ({})", graph.bundle.string()));
   } else {
@@ -174,7 +174,7 @@ std::unique_ptr<Session> openSession(const SessionOptions& options, const Sessio
   session->policyDir = std::move(policyDir);
   session->policyNote = std::move(policyNote);
   const Scenario& s = session->scenario;
-  session->behaviors = buildBehaviors(s, builtinPlugins(), session->graph.model, session->graph.key);
+  session->behaviors = buildBehaviors(s, session->plugins(), session->graph.model, session->graph.key);
   session->task = makeTask(s, session->behaviors);
   if (!session->policyDir.empty())
     session->policy = policyParts(session->policyDir, session->behaviors, session->graph, options, session->bundle);

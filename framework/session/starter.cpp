@@ -15,7 +15,7 @@
 #include "mgrl/motion/motion_io.hpp"
 #include "mgrl/scenario/behaviors.hpp"
 #include "mgrl/scenario/scenario.hpp"
-#include "mgrl/session/plugins.hpp"
+#include "mgrl/session/graph_source.hpp"
 
 namespace mgrl {
 namespace {
@@ -206,12 +206,12 @@ std::string behaviorsYaml(const std::string& kind, const GraphTry& chosen, doubl
 
 // Writes the scenario text to `out` only once it loads as a scenario (and its behaviours
 // check out): staged beside it, then renamed into place.
-void writeCheckedScenario(const fs::path& out, const std::string& y, const fs::path& dataDir) {
+void writeCheckedScenario(const fs::path& out, const std::string& y, const fs::path& dataDir, const Plugins& plugins) {
   const fs::path staging = out.parent_path() / (out.filename().string() + ".init-check.yaml");
   writeFileAtomically(staging, y);
   try {
     const Scenario scenario = loadScenario(staging, dataDir);
-    checkBehaviors(scenario, builtinPlugins());
+    checkBehaviors(scenario, plugins);
   } catch (const Error& e) {
     std::error_code ec;
     fs::remove(staging, ec);
@@ -354,7 +354,7 @@ nlohmann::json runInit(const InitOptions& options) {
   y += graphYaml(db, tries, *chosen);
   y += behaviorsYaml(kind, *chosen, approachRadius, goalRadius);
 
-  writeCheckedScenario(out, y, options.dataDir);
+  writeCheckedScenario(out, y, options.dataDir, requirePlugins(options.plugins, "InitOptions::plugins"));
 
   nlohmann::json report;
   report["scenario"] = out.string();

@@ -20,7 +20,6 @@
 #include "mgrl/learning/problem.hpp"
 #include "mgrl/scenario/behaviors.hpp"
 #include "mgrl/session/graph_source.hpp"
-#include "mgrl/session/plugins.hpp"
 #include "mgrl/session/policy_source.hpp"
 #include "mgrl/session/self_play.hpp"
 #include "mgrl/session/train_progress.hpp"
@@ -43,7 +42,10 @@ void removeCheckpoint(const fs::path& dir) {
 
 fs::path bundleFolder(const TrainSettings& settings, const SessionOptions& options, const Scenario& scenario) {
   const fs::path cacheDir = options.cacheDir.empty() ? defaultCacheDirectory() : options.cacheDir;
-  fs::path out = settings.out.empty() ? defaultPolicyDirectory(cacheDir, scenario) : settings.out;
+  fs::path out =
+      settings.out.empty()
+          ? defaultPolicyDirectory(cacheDir, scenario, requirePlugins(options.plugins, "SessionOptions::plugins"))
+          : settings.out;
   if (!out.has_filename()) out = out.parent_path();
   std::error_code ec;
   if (out.has_parent_path()) fs::create_directories(out.parent_path(), ec);
@@ -270,7 +272,7 @@ class TrainRun {
         // Self-play changes the opponent its environment plays round by round: the rounds
         // get a behaviour of their own, and the session's stays as it was opened.
         std::vector<Behavior> own =
-            buildBehaviors(session_.scenario, builtinPlugins(), model_, session_.graph.key, behavior.name);
+            buildBehaviors(session_.scenario, session_.plugins(), model_, session_.graph.key, behavior.name);
         trainBehavior(own.at(0), all);
       } else {
         trainBehavior(behavior, all);

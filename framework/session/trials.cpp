@@ -13,14 +13,13 @@
 #include "mgrl/graph/motion_graph.hpp"
 #include "mgrl/learning/signals.hpp"
 #include "mgrl/runtime/controller.hpp"
-#include "mgrl/session/plugins.hpp"
 
 namespace mgrl {
 
 using json = nlohmann::json;
 
 Trials::Trials(const StateActionModel& model, const std::vector<Behavior>& behaviors, const Task& task,
-               double targetHeight, const std::string& source)
+               double targetHeight, const std::string& source, const ConditionRegistry& conditions)
     : model_(model), behaviors_(behaviors) {
   // The approach region: the first always-active behaviour's grid, sampled uniformly by area.
   const auto region = std::find_if(behaviors.begin(), behaviors.end(),
@@ -48,12 +47,13 @@ Trials::Trials(const StateActionModel& model, const std::vector<Behavior>& behav
   // Success: what the behaviours declare, else what the first contact reward implies, else
   // a punch (what trials counted before success criteria). Returns are discounted with the
   // task's gamma.
-  std::tie(criteria_, criteriaFrom_) = trialCriteria(behaviors);
+  std::tie(criteria_, criteriaFrom_) = trialCriteria(behaviors, conditions);
   environment_ = task.environment;
   gamma_ = task.gamma;
 }
 
-std::pair<std::vector<SuccessCriterion>, std::string> trialCriteria(const std::vector<Behavior>& behaviors) {
+std::pair<std::vector<SuccessCriterion>, std::string> trialCriteria(const std::vector<Behavior>& behaviors,
+                                                                    const ConditionRegistry& conditions) {
   std::vector<SuccessCriterion> criteria;
   // One of each: a scenario's stances (issue 46) declare the same criterion once a stance.
   for (const Behavior& b : behaviors)
@@ -64,7 +64,7 @@ std::pair<std::vector<SuccessCriterion>, std::string> trialCriteria(const std::v
   if (!criteria.empty()) return {std::move(criteria), "declared"};
   for (const Behavior& b : behaviors)
     if (b.success) return {{*b.success}, "implied"};
-  return {{SuccessCriterion::punch(0.15, builtinPlugins().conditions)}, "fallback"};
+  return {{SuccessCriterion::punch(0.15, conditions)}, "fallback"};
 }
 
 // A target uniform by area in the approach region's square of side 2 reach, at the target

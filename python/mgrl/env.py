@@ -1,5 +1,5 @@
 """One behaviour of a scenario as a reinforcement-learning environment with Gymnasium's
-API (issue 41), stepped in C++ (framework/session/episodes.hpp says what a step does).
+API (issue 41), stepped in C++ (framework/include/mgrl/session/episodes.hpp says what a step does).
 
     env = mgrl.MotionGraphEnv("scenarios/boxing.yaml", "hit")
     obs, info = env.reset(seed=1)

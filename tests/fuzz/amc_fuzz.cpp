@@ -1,4 +1,4 @@
-// libFuzzer harness: the AMC reader (framework/motion/asf_amc.hpp) for a fixed skeleton
+// libFuzzer harness: the AMC reader (framework/include/mgrl/motion/asf_amc.hpp) for a fixed skeleton
 // (amc_skeleton.asf, cut down from CMU 02.asf into the fuzz build's seeds/ folder by
 // make_corpus.py, which scripts/fuzz.sh runs first), then units and resampling as
 // loadMotion() does them.

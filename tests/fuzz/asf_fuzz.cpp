@@ -1,4 +1,4 @@
-// libFuzzer harness: the ASF reader (framework/motion/asf_amc.hpp). The input is an ASF,
+// libFuzzer harness: the ASF reader (framework/include/mgrl/motion/asf_amc.hpp). The input is an ASF,
 // optionally followed by `\n@@file x.amc\n` and an AMC to load with it through
 // loadMotion() (units, standing height: issue 19, defect 11).
 #include "fuzz_support.hpp"

@@ -1,4 +1,4 @@
-// libFuzzer harness: the BVH reader (framework/motion/bvh.hpp) as every command meets it,
+// libFuzzer harness: the BVH reader (framework/include/mgrl/motion/bvh.hpp) as every command meets it,
 // through loadMotion(): parsing, units detected from the standing height, resampling to
 // 30 fps (issue 19, defect 1).
 #include "fuzz_support.hpp"

@@ -1,5 +1,5 @@
 // libFuzzer harness: the training checkpoint reader (DirectoryCheckpointer::load(),
-// framework/learning/checkpoint_store.hpp). The input is a checkpoint's files (state.json
+// framework/include/mgrl/learning/checkpoint_store.hpp). The input is a checkpoint's files (state.json
 // first), loaded as they are and resealed. A bad checkpoint is logged and ignored, never
 // thrown.
 #include "bundle_fuzz_support.hpp"

@@ -1,4 +1,4 @@
-// libFuzzer harness: the graph cache reader (loadGraphBundle(), framework/graph/graph_cache.hpp).
+// libFuzzer harness: the graph cache reader (loadGraphBundle(), framework/include/mgrl/graph/graph_cache.hpp).
 // The input is a bundle's files (manifest.json first, see splitFiles()); each is loaded as
 // it is and resealed (fuzz_support.hpp: reseal()), so the checks behind the hashes run too.
 // loadGraphBundle() reports a bad bundle in its status and never throws. The motion the

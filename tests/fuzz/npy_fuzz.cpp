@@ -1,4 +1,4 @@
-// libFuzzer harness: the .npy reader (framework/core/npy.hpp), for every element type the
+// libFuzzer harness: the .npy reader (framework/include/mgrl/core/npy.hpp), for every element type the
 // bundles use.
 #include "fuzz_support.hpp"
 #include "mgrl/core/npy.hpp"

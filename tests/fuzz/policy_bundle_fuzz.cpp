@@ -1,5 +1,5 @@
 // libFuzzer harness: the policy bundle reader (loadPolicyBundle(),
-// framework/learning/policy_bundle.hpp) against a small synthetic graph, and a kd_tree
+// framework/include/mgrl/learning/policy_bundle.hpp) against a small synthetic graph, and a kd_tree
 // rebuilt from a behaviour's saved tree arrays (KdTree::restored(), as eval and serve do).
 // The input is a bundle's files (manifest.json first), loaded as they are and resealed.
 #include "bundle_fuzz_support.hpp"

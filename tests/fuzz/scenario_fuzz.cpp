@@ -1,4 +1,4 @@
-// libFuzzer harness: the YAML scenario reader (framework/scenario/scenario.hpp), with the
+// libFuzzer harness: the YAML scenario reader (framework/include/mgrl/scenario/scenario.hpp), with the
 // real data folder so motion paths resolve (MGRL_FUZZ_DATA, default ../shared/mocap).
 #include "fuzz_support.hpp"
 #include "mgrl/scenario/scenario.hpp"

@@ -1,12 +1,15 @@
-# The include-direction rule of framework/README.md, checked on the sources: a file under
-# framework/<stage>/ may include "mgrl/<other>/..." only for a stage at or below its own,
-# a plug-in folder (discretizers, rewards, environments, learners) only the core and
-# learning stages (the seam headers) and its own folder, never another plug-in folder (a
-# plug-in is reached through its seam and registry; only the session stage, the
-# composition root, names the folders). Run as
+# The layout rules of framework/README.md, checked on the sources:
+# - a file of stage S (framework/S/ or framework/include/mgrl/S/) includes "mgrl/<other>/..."
+#   only for a stage at or below S, and no plug-in folder's header;
+# - a plug-in folder (discretizers, rewards, environments, learners) includes only the core
+#   and learning stages (the seams) and its own folder, never another plug-in folder;
+# - the benchmarks, the Python module and the viewer's server include no header of the
+#   command line's app/ and no plug-in folder's header;
+# - every "mgrl/..." include names a file at that path under framework/include/.
+# Run as
 #   cmake -DROOT=<tree> -P include_direction.cmake
-# and it prints every violation as `file:line: ... includes mgrl/<stage>/...` and fails.
-# tests/layout/bad_tree/ is a small tree that breaks the rule, so the check can be seen
+# and it prints every violation as `file:line: include: what was expected` and fails.
+# tests/layout/bad_tree/ is a small tree that breaks each rule, so the check can be seen
 # to fail (ctest entry layout_include_direction_catches).
 cmake_minimum_required(VERSION 3.22)
 if(NOT DEFINED ROOT)
@@ -39,7 +42,12 @@ function(check_file file)
         set(violations "${violations}" PARENT_SCOPE)
       endif()
     elseif(DEFINED own_folder AND line MATCHES "^[ \t]*#[ \t]*include[ \t]+\"(discretizers|rewards|environments|learners)/")
-      if(NOT CMAKE_MATCH_1 STREQUAL own_folder)
+      if(own_folder STREQUAL "framework")
+        file(RELATIVE_PATH rel "${ROOT}" "${file}")
+        string(STRIP "${line}" text)
+        list(APPEND violations "${rel}:${n}: ${text}: expected no plug-in folder's header in the framework (the built-in plug-ins are listed above it)")
+        set(violations "${violations}" PARENT_SCOPE)
+      elseif(NOT CMAKE_MATCH_1 STREQUAL own_folder)
         file(RELATIVE_PATH rel "${ROOT}" "${file}")
         string(STRIP "${line}" text)
         list(APPEND violations "${rel}:${n}: ${text}: expected no other plug-in folder's header here (plug-ins meet through the seams)")
@@ -56,7 +64,9 @@ endfunction()
 set(below "")
 foreach(stage IN LISTS stages)
   list(APPEND below "${stage}")
-  file(GLOB sources "${ROOT}/framework/${stage}/*.hpp" "${ROOT}/framework/${stage}/*.cpp")
+  file(GLOB sources "${ROOT}/framework/${stage}/*.hpp" "${ROOT}/framework/${stage}/*.cpp"
+       "${ROOT}/framework/include/mgrl/${stage}/*.hpp")
+  set(own_folder "framework")
   foreach(file IN LISTS sources)
     check_file("${file}" ${below})
     math(EXPR checked "${checked} + 1")
@@ -71,12 +81,71 @@ foreach(folder IN LISTS plugin_folders)
   endforeach()
 endforeach()
 
+# The front ends that are not the command line (the benchmarks, the Python module, the
+# viewer's server) reach the pipeline through the session stage and the built-in plug-ins'
+# list, never through a command's header in app/ or a plug-in folder's own header.
+file(GLOB app_headers RELATIVE "${ROOT}/app" "${ROOT}/app/*.hpp")
+file(GLOB_RECURSE front_ends "${ROOT}/bench/*.hpp" "${ROOT}/bench/*.cpp" "${ROOT}/python/*.hpp"
+     "${ROOT}/python/*.cpp" "${ROOT}/app/serve/*.hpp" "${ROOT}/app/serve/*.cpp")
+foreach(file IN LISTS front_ends)
+  get_filename_component(dir "${file}" DIRECTORY)
+  file(STRINGS "${file}" lines)
+  set(n 0)
+  foreach(line IN LISTS lines)
+    math(EXPR n "${n} + 1")
+    set(reason "")
+    if(line MATCHES "^[ \t]*#[ \t]*include[ \t]+\"(discretizers|rewards|environments|learners)/")
+      set(reason "expected no plug-in folder's header here (the session stage and the plug-in list reach them)")
+    elseif(line MATCHES "^[ \t]*#[ \t]*include[ \t]+\"app/[a-z_]+\\.hpp\"")
+      set(reason "expected no header of the command line's app/ here")
+    elseif(line MATCHES "^[ \t]*#[ \t]*include[ \t]+\"([a-z_]+\\.hpp)\"")
+      set(name "${CMAKE_MATCH_1}")
+      list(FIND app_headers "${name}" in_app)
+      if(NOT EXISTS "${dir}/${name}" AND NOT in_app EQUAL -1)
+        set(reason "expected no header of the command line's app/ here")
+      endif()
+    endif()
+    if(reason)
+      file(RELATIVE_PATH rel "${ROOT}" "${file}")
+      string(STRIP "${line}" text)
+      list(APPEND violations "${rel}:${n}: ${text}: ${reason}")
+    endif()
+  endforeach()
+  math(EXPR checked "${checked} + 1")
+endforeach()
+
+# Every "mgrl/..." include names a file at that path under framework/include/, the one
+# include folder of the framework (as the headers are installed): nothing generated, no
+# link tree, so a reader and grep can follow it.
+set(everything "")
+foreach(folder framework app bench python tests docs ${plugin_folders})
+  file(GLOB_RECURSE found "${ROOT}/${folder}/*.hpp" "${ROOT}/${folder}/*.cpp")
+  list(APPEND everything ${found})
+endforeach()
+set(resolved 0)
+foreach(file IN LISTS everything)
+  if(file MATCHES "/tests/layout/bad_tree/" AND NOT ROOT MATCHES "/tests/layout/bad_tree$")
+    continue()
+  endif()
+  file(STRINGS "${file}" lines REGEX "^[ \t]*#[ \t]*include[ \t]+\"mgrl/")
+  foreach(line IN LISTS lines)
+    if(line MATCHES "\"(mgrl/[^\"]+)\"")
+      if(EXISTS "${ROOT}/framework/include/${CMAKE_MATCH_1}")
+        math(EXPR resolved "${resolved} + 1")
+      else()
+        file(RELATIVE_PATH rel "${ROOT}" "${file}")
+        list(APPEND violations "${rel}: #include \"${CMAKE_MATCH_1}\": expected framework/include/${CMAKE_MATCH_1}, found no such file")
+      endif()
+    endif()
+  endforeach()
+endforeach()
+
 if(checked EQUAL 0)
   message(FATAL_ERROR "include_direction: expected sources under ${ROOT}/framework/<stage>/, found none")
 endif()
 list(LENGTH violations count)
 if(count GREATER 0)
   list(JOIN violations "\n" text)
-  message(FATAL_ERROR "include_direction: ${count} includes reach up a stage:\n${text}")
+  message(FATAL_ERROR "include_direction: ${count} includes break the layout:\n${text}")
 endif()
-message(STATUS "include_direction: ${checked} files, every include goes down the stages")
+message(STATUS "include_direction: ${checked} files, every include goes down the stages; ${resolved} mgrl/ includes resolve under framework/include")

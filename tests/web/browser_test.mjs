@@ -626,7 +626,7 @@ async function setCrowdSize(page, avatars) {
 
 // The learn panel (issue 15): Q-learning stepped on the page, each update shown as the
 // paper's Fig. 4 draws it. Each update is recomputed here from the numbers it shows, as
-// learners/q_learning_steps.cpp computes it in float (built with -ffp-contract=off):
+// framework/learning/q_learning_steps.cpp computes it in float (built with -ffp-contract=off):
 //   alpha    = float(1 - (update - 1) / budget)       (alpha_final 0, the panel's lesson)
 //   discount = float(gamma^frames)                    (to an ulp: std::pow and Math.pow)
 //   backup   = r + discount * future, or r off the grid (future 0 there)

@@ -1,0 +1,5 @@
+#include "mgrl/core/version.hpp"
+
+namespace mgrl {
+const char* const kVersion = MGRL_VERSION;
+}  // namespace mgrl

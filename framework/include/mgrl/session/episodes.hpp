@@ -1,0 +1,99 @@
+#pragma once
+/// \file
+/// One behaviour's problem played as episodes, many at once (Python's MotionGraphEnv and
+/// its vectorised form, issue 41): the avatar in a graph state with the target somewhere
+/// in the behaviour's grid, in the avatar's frame. A step plays one of the state's
+/// out-actions; the reward is the behaviour's reward for that action from that target
+/// (paper sec. 4.1, evaluated at the target itself, not at grid vertices), the target then
+/// moves as the behaviour's environment model moves it (sec. 4.2) and the avatar lands in
+/// the action's end state.
+///
+/// An episode starts as Q-learning's walks restart (a uniformly drawn state, a target
+/// uniform in the grid's coordinates and inside it), ends (terminated) when the target
+/// leaves the grid, where the tabulated problem counts no future value, or, with
+/// `endOnSuccess`, when the behaviour's success criterion is met; and is cut (truncated)
+/// once `seconds` of motion have played. Each episode slot has its own random stream.
+#include <cstddef>
+#include <cstdint>
+#include <optional>
+#include <vector>
+
+#include "mgrl/core/random.hpp"
+#include "mgrl/graph/state_action_model.hpp"
+#include "mgrl/learning/behavior.hpp"
+#include "mgrl/learning/success.hpp"
+
+namespace mgrl {
+
+struct EpisodeOptions {
+  double seconds = 10;        ///< motion per episode before it is truncated
+  bool endOnSuccess = false;  ///< a met success criterion terminates the episode
+};
+
+/// What one step did, per slot.
+struct EpisodeStep {
+  float reward = 0;
+  bool terminated = false, truncated = false;
+  bool success = false;  ///< the behaviour's success criterion was met during the action
+};
+
+class Episodes {
+ public:
+  /// `count` slots on `model` for `behavior` (both must outlive this). Throws mgrl::Error
+  /// for a count outside [1, 1000000] or options out of range.
+  Episodes(const StateActionModel& model, const Behavior& behavior, std::size_t count, const EpisodeOptions& options);
+
+  std::size_t count() const { return slots_.size(); }
+  /// The most out-actions any state has: the action space's size.
+  std::size_t maxActions() const { return maxActions_; }
+  /// The behaviour grid's dimension (coordinates per target).
+  int dimension() const { return dimension_; }
+
+  /// Starts slot i's episode, its random stream seeded with `seed` when given.
+  void reset(std::size_t i, std::optional<std::uint64_t> seed = std::nullopt);
+  /// Plays out-action `choice` of slot i's state. Throws mgrl::Error (naming `where`, the
+  /// slot and the state's action count) unless choice < actionsAt(i).
+  EpisodeStep step(std::size_t i, std::size_t choice);
+  /// Steps every slot with `choices[i]`; a slot whose episode ended starts a new one at
+  /// once (its observation is the new episode's). Every choice is checked before any
+  /// slot moves.
+  void stepAll(const std::int64_t* choices, EpisodeStep* out);
+
+  std::uint32_t state(std::size_t i) const { return slots_[i].state; }
+  const TargetState& target(std::size_t i) const { return slots_[i].target; }
+  std::size_t actionsAt(std::size_t i) const {
+    return model_.stateActionBegin[slots_[i].state + 1] - model_.stateActionBegin[slots_[i].state];
+  }
+  /// The global action index of slot i's out-action `choice`.
+  std::size_t action(std::size_t i, std::size_t choice) const {
+    return model_.stateActionBegin[slots_[i].state] + choice;
+  }
+  /// Seconds of motion played in slot i's episode.
+  double seconds(std::size_t i) const { return slots_[i].frames * model_.frameTime; }
+  /// Writes slot i's observation: its state, the target's position (x, y, z, avatar frame,
+  /// m), its grid coordinates (dimension() values), and maxActions() mask bytes (1 for the
+  /// state's out-actions). Any pointer may be null.
+  void observe(std::size_t i, std::int32_t* state, float* position, float* coordinates, std::uint8_t* mask) const;
+
+  const StateActionModel& model() const { return model_; }
+  const Behavior& behavior() const { return behavior_; }
+
+ private:
+  struct Slot {
+    Rng rng;
+    std::uint32_t state = 0;
+    TargetState target;
+    std::uint64_t frames = 0;
+    std::vector<SuccessCriterion::Tracker> trackers;
+  };
+  void start(Slot& slot);
+  const StateActionModel& model_;
+  const Behavior& behavior_;
+  EpisodeOptions options_;
+  double frameLimit_ = 0;
+  std::size_t maxActions_ = 0;
+  int dimension_ = 0;
+  std::vector<Slot> slots_;
+};
+
+}  // namespace mgrl

@@ -1,0 +1,137 @@
+#pragma once
+/// \file
+/// One way into the pipeline (DESIGN.md sec. 2): a Session is a scenario opened with its
+/// graph, behaviours, the task they share and, when asked for, the policy bundle bound to
+/// them. `mgrl eval`, `simulate`, `serve`, the benchmarks and the Python module open one
+/// and go from it, instead of composing the chain scenario -> graph -> behaviours ->
+/// policy -> controllers -> world each on its own.
+///
+///   mgrl::SessionOptions options;
+///   options.scenario = "scenarios/boxing.yaml";
+///   auto session = mgrl::openSession(options, {.policy = mgrl::PolicyNeed::Required});
+///   mgrl::World world(session->worldSetup(2, 1, {.name = "policy"}));
+///   world.run(300);
+#include <filesystem>
+#include <functional>
+#include <memory>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+#include "mgrl/learning/behavior.hpp"
+#include "mgrl/learning/policy_bundle.hpp"
+#include "mgrl/runtime/world.hpp"
+#include "mgrl/scenario/scenario.hpp"
+#include "mgrl/session/controllers.hpp"
+#include "mgrl/session/graph_source.hpp"
+#include "mgrl/session/policy_source.hpp"
+#include "mgrl/session/task.hpp"
+
+namespace mgrl {
+
+enum class PolicyNeed {
+  None,         ///< no bundle is read (training, the online search, random actions)
+  Required,     ///< a bundle must serve: a missing or stale one is an error
+  IfAvailable,  ///< the bundle is used when it serves; else Session::policyNote says why not
+};
+
+/// What a caller needs from the session beyond the scenario itself.
+struct SessionNeeds {
+  PolicyNeed policy = PolicyNeed::None;
+  /// The bundle to use; "" the scenario's default one (defaultPolicyDirectory()).
+  std::filesystem::path policyDir = {};
+  /// Parse the capture even when the graph comes from the cache: poses, bodies and BVH
+  /// need it; trials and training need only the model (a cached graph then starts faster).
+  bool motion = true;
+  /// Called with the final scenario after every check that needs no graph and before the
+  /// graph is loaded (a command's own checks, so that their message is the only one).
+  std::function<void(const Scenario&)> beforeGraph = nullptr;
+  /// A graph another session already holds: copied instead of loaded when it was made from
+  /// the same capture and graph parameters (equal keys) and has what `motion` asks for (the
+  /// viewer's sparring scenario on the paper's boxer's capture). Null: loaded as usual.
+  const GraphResult* graphFrom = nullptr;
+};
+
+class Session {
+ public:
+  explicit Session(Scenario checked) : scenario(std::move(checked)) {}
+  Session(const Session&) = delete;
+  Session& operator=(const Session&) = delete;
+
+  SessionOptions options;
+  Scenario scenario;  ///< checked; with a bundle's own settings if one was adopted
+  GraphResult graph;
+  std::vector<Behavior> behaviors;  ///< the scenario's, in its order
+  Task task;                        ///< what they share, checked once
+  /// The policy bundle and one part per behaviour pointing into it (empty: none read).
+  std::filesystem::path policyDir;
+  PolicyBundle bundle;
+  std::vector<PolicyPart> policy;
+  /// A second bundle for the second avatar of each sparring pair (loadPartnerPolicy()):
+  /// two policies spar (issue 43). Empty: every avatar plays `policy`.
+  std::filesystem::path partnerPolicyDir;
+  PolicyBundle partnerBundle;
+  std::vector<PolicyPart> partnerPolicy;
+  /// PolicyNeed::IfAvailable and no bundle used: why (shown to the user); "" otherwise.
+  std::string policyNote;
+  /// The behaviours as the online search sees them (rewards, weights, activations).
+  std::vector<SearchPart> search;
+  /// The avatars' body capsules (empty without the capture: SessionNeeds::motion false).
+  BodyTable body;
+
+  const StateActionModel& model() const { return graph.model; }
+  /// The registries the session was opened with (SessionOptions::plugins).
+  const Plugins& plugins() const { return *options.plugins; }
+  /// What makeController() needs; `variety` is the policy's choice among near-best actions
+  /// ({}: greedy, as eval measures; task.world.variety: as the world plays).
+  ControllerParts controllerParts(Variety variety = {}) const;
+  /// A world of `avatars` on this session's graph and task (mode, spacing ... from
+  /// `world:`), each avatar run by a controller of `choice` with the world's variety. One
+  /// thread, no poses: set WorldSetup::threads, poses and record as needed. In sparring,
+  /// the second avatar of each pair plays the partner bundle if one is loaded, else the
+  /// scenario's scripted opponent if it has one (partnerName()), else `choice` too.
+  WorldSetup worldSetup(std::size_t avatars, std::uint64_t seed, const ControllerChoice& choice) const {
+    return worldSetup(avatars, seed, choice, policy);
+  }
+  /// The same, the policy controllers playing `parts` (tables that outlive the world, e.g.
+  /// Python's) instead of the session's bundle.
+  WorldSetup worldSetup(std::size_t avatars, std::uint64_t seed, const ControllerChoice& choice,
+                        const std::vector<PolicyPart>& parts) const;
+  /// Parses the capture if the session was opened without it (SessionNeeds::motion false, a
+  /// cached graph) and makes the body capsules: what a world with poses and bodies needs.
+  /// The graph's arrays stay where they are. Nothing to do if the capture is there.
+  void loadMotion();
+  /// Loads `dir`, a bundle trained on this graph with tables for every behaviour (checked
+  /// as the main one is), for the partners: worldSetup() then gives the second avatar of
+  /// each pair a policy controller on it. Throws mgrl::Error naming the bundle's problem.
+  /// `round` > 0: the tables of that self-play round (NAME-roundK) instead of the final ones.
+  void loadPartnerPolicy(const std::filesystem::path& dir, int round = 0);
+  /// The main bundle's avatars play self-play round `round`'s tables (NAME-roundK, kept by
+  /// mgrl train) instead of the final ones, so any two rounds can spar; the round's entries
+  /// leave the bundle. Throws mgrl::Error without a bundle, or naming the bundle and what it
+  /// has when a behaviour lacks that round (the bundle then stays as it was).
+  void playRound(int round);
+  /// Refuses a self-play round without a partner bundle, before anything loads: mgrl::Error
+  /// naming the two settings as the caller calls them (the command line's by default).
+  static void checkPartnerChoice(const std::filesystem::path& dir, int round,
+                                 std::string_view roundName = "--partner-round",
+                                 std::string_view dirName = "--partner-policy DIR");
+  /// What the second avatar of a sparring pair plays, for reports and the viewer: "" (the
+  /// same as the first), "partner_policy" or "pursue" / "stand" (the scripted opponent).
+  std::string partnerName() const;
+};
+
+/// Opens the scenario of `options` for `needs`: the scenario checked, the bundle looked up
+/// (and checked from its manifest) before the graph is loaded, the graph from the cache or
+/// built, the behaviours built, the task checked, the bundle's tables bound. Throws
+/// mgrl::Error (ConfigError with file:line:col for the scenario's mistakes).
+std::unique_ptr<Session> openSession(const SessionOptions& options, const SessionNeeds& needs = {});
+
+/// A hit as the events file and the viewer's protocol carry it: {"time", "attacker",
+/// "target", "part" (head, chest, spine, or target; left_arm or right_arm when blocked),
+/// "hand", "limb", "speed", "blocked", "point"}.
+nlohmann::json hitEventJson(const HitEvent& event);
+
+}  // namespace mgrl

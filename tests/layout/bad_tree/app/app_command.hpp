@@ -1,0 +1,2 @@
+#pragma once
+// A header beside the command line: the benchmark below must not include it.
