@@ -1,48 +1,25 @@
 #pragma once
 /// \file
-/// `mgrl compare` (issue 15): several learners, several seeds, one behaviour, on the same
-/// motion graph and the same evaluation trials, against a value-iteration reference.
-#include <cstdint>
-#include <filesystem>
+/// `mgrl compare`: the session stage's comparison of learners (mgrl/session/compare.hpp)
+/// with the command line's plug-ins, stop signals and text.
 #include <string>
-#include <vector>
 
 #include <nlohmann/json.hpp>
 
-#include "learn_commands.hpp"
+#include "builtin_plugins.hpp"
+#include "mgrl/session/compare.hpp"
 
 namespace mgrl::app {
 
-struct CompareOptions : LearnOptions {
-  std::string behavior;                    ///< the behaviour whose learner varies
-  std::vector<std::string> learners;       ///< registered learner names, no repeats
-  std::vector<std::uint64_t> seeds{1};     ///< for learners with a `seed` parameter
-  std::vector<std::string> learnerSets;    ///< LEARNER:KEY=VALUE
-  std::size_t trials = 100;                ///< evaluation trials (the same starts for every run)
-  double seconds = 10;                     ///< motion per trial
-  std::filesystem::path report;            ///< "" none; else results.json, results.csv, curves.csv, index.html
-  /// Policies evaluated along each run's training, at about this many evenly spaced points
-  /// (TrainObserver::snapshot); 0: none.
-  std::size_t snapshots = 10;
-  /// Trials per snapshot: the first of the same starts as the final evaluation; 0: the
-  /// smaller of kDefaultSnapshotTrials and `trials`.
-  std::size_t snapshotTrials = 0;
-  /// KEY=VALUE: parameters of the behaviour's discretizer for the reference only (value
-  /// iteration on a finer grid, say angles=40); empty: the behaviour's own grid.
-  std::vector<std::string> referenceSets;
+/// The comparison's options with the built-in plug-ins, and the terminal's.
+struct CompareOptions : mgrl::CompareOptions {
+  CompareOptions() { plugins = &builtinPlugins(); }
+  bool progressBar = false;  ///< draw a progress bar on stderr (a terminal)
 };
 
-inline constexpr std::size_t kDefaultSnapshotTrials = 50;
-
-/// Trains (or reuses from <cache>/compare/) and evaluates every learner x seed and returns
-/// {"behavior", "reference", "runs": [...], "learners": {NAME: {"mean": {...}, "sd": {...},
-/// "success_curve": [...]}}, "flags": [...]}; each run carries its residual "curve" and its
-/// "snapshots" (success rate along training). A run's "nonzero_share" is the share of its
-/// Q entries that are not zero (not of those updated). Figures its bundle's record lacks
-/// ("train_seconds", "updates", "final_residual": a bundle written before they were
-/// recorded) are null, as are the learner's mean and sd over them, never 0. Every mistake
-/// in the options is reported before any training.
+/// compareLearners() with Ctrl-C and SIGTERM stopping the training under way.
 nlohmann::json runCompare(const CompareOptions& options);
+/// The report as `mgrl compare` prints it: a line per learner, the flags.
 std::string compareText(const nlohmann::json& report);
 
 }  // namespace mgrl::app

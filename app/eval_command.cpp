@@ -6,10 +6,12 @@
 #include <fmt/format.h>
 #include <fmt/ranges.h>
 
-#include "learn_common.hpp"
+#include "learn_commands.hpp"
+#include "mgrl/core/numbers.hpp"
 #include "mgrl/session/evaluate.hpp"
 #include "mgrl/session/session.hpp"
 #include "plural.hpp"
+#include "startup.hpp"
 
 namespace mgrl::app {
 

@@ -68,6 +68,4 @@ struct SimulateOptions : LearnOptions {
 nlohmann::json runSimulate(const SimulateOptions& options);
 std::string simulateText(const nlohmann::json& report);
 
-using mgrl::defaultPolicyDirectory;  // framework/include/mgrl/session/policy_source.hpp
-
 }  // namespace mgrl::app

@@ -19,10 +19,11 @@
 
 #include <fmt/format.h>
 
-#include "learn_common.hpp"
+#include "learn_commands.hpp"
 #include "mgrl/core/bundle.hpp"
 #include "mgrl/core/files.hpp"
 #include "mgrl/core/hash.hpp"
+#include "mgrl/core/numbers.hpp"
 #include "mgrl/core/parallel.hpp"
 #include "mgrl/core/version.hpp"
 #include "mgrl/learning/behavior.hpp"
@@ -37,6 +38,7 @@
 #include "mgrl/session/simulate.hpp"
 #include "plugins.hpp"
 #include "plural.hpp"
+#include "startup.hpp"
 
 namespace mgrl::app {
 

@@ -70,6 +70,12 @@ TEST_CASE("mgrl compare reports what separate train and eval runs measure, and r
   const json evaluated = box.run("eval " + shellWord(kBoxing) + " --json --trials 20 --seed 1 --policy " +
                                  shellWord(box.path("by-hand")) + " " + sets)
                              .report();
+  // The same table, byte for byte: compare trains as `mgrl train` does.
+  auto hitTableHash = [](const fs::path& bundle) {
+    return json::parse(readText(bundle / "manifest.json"))["behaviors"]["hit"]["table"]["hash"];
+  };
+  CHECK(hitTableHash(q1["policy"].get<std::string>()) == hitTableHash(box.path("by-hand")));
+  CHECK(hitTableHash(report["runs"][1]["policy"].get<std::string>()) != hitTableHash(box.path("by-hand")));  // seed 2
   CHECK(q1["success_rate"] == evaluated["success_rate"]);
   CHECK(q1["mean_time_to_hit_s"] == evaluated["mean_time_to_hit_s"]);
   CHECK(q1["mean_return"] == evaluated["mean_return"]);

@@ -148,24 +148,24 @@ TEST_CASE("a cached graph needs no capture parsed unless poses are wanted, and m
       "behaviors:\n  approach:\n    discretizer: {type: polar2d, radius: 3, rings: 4, sectors: 8}\n"
       "    reward: {type: approach}\n    learner: {type: value_iteration}\n",
       fs::path(MGRL_SOURCE_DIR) / "scenarios" / "test.yaml", mgrl::test::mocap());
-  mgrl::app::GraphOptions options;
+  mgrl::GraphOptions options;
   options.plugins = &mgrl::builtinPlugins();
   options.cacheDir = tmp.path;
   options.motion = false;
-  const mgrl::app::GraphResult built = mgrl::app::obtainGraph(scenario, options);
+  const mgrl::GraphResult built = mgrl::obtainGraph(scenario, options);
   REQUIRE_FALSE(built.fromCache);
   REQUIRE(built.db.skeleton);  // building needs the capture
 
-  const mgrl::app::GraphResult cached = mgrl::app::obtainGraph(scenario, options);
+  const mgrl::GraphResult cached = mgrl::obtainGraph(scenario, options);
   REQUIRE(cached.fromCache);
   CHECK_FALSE(cached.db.skeleton);
   CHECK(cached.db.clips.empty());
   options.motion = true;
-  const mgrl::app::GraphResult posed = mgrl::app::obtainGraph(scenario, options);
+  const mgrl::GraphResult posed = mgrl::obtainGraph(scenario, options);
   REQUIRE(posed.fromCache);
   REQUIRE(posed.db.skeleton);
   CHECK(posed.db.clips.size() == 1);
-  for (const mgrl::app::GraphResult* g : {&cached, &posed}) {
+  for (const mgrl::GraphResult* g : {&cached, &posed}) {
     CHECK(g->travel.clipTravel_m == built.travel.clipTravel_m);
     CHECK(g->travel.clip == built.travel.clip);
     CHECK(g->travel.rootExtent_m == built.travel.rootExtent_m);
@@ -183,7 +183,7 @@ TEST_CASE("a cached graph needs no capture parsed unless poses are wanted, and m
   manifest["hash"] = mgrl::manifestHash(manifest);
   writeBytes(manifestPath, manifest.dump(2));
   options.motion = false;
-  const mgrl::app::GraphResult older = mgrl::app::obtainGraph(scenario, options);
+  const mgrl::GraphResult older = mgrl::obtainGraph(scenario, options);
   REQUIRE(older.fromCache);
   CHECK(older.db.skeleton);
   CHECK(older.travel.clipTravel_m == built.travel.clipTravel_m);
@@ -260,10 +260,10 @@ TEST_CASE("a cached graph poses avatars from the capture it keeps, exactly as pa
       "graph:\n  threshold: 0.4\nbehaviors:\n  approach:\n    discretizer: {type: polar2d, radius: 3, rings: 4, "
       "sectors: 8}\n    reward: {type: approach}\n    learner: {type: value_iteration}\n",
       fs::path(MGRL_SOURCE_DIR) / "scenarios" / "test.yaml", mgrl::test::mocap());
-  mgrl::app::GraphOptions options;
+  mgrl::GraphOptions options;
   options.plugins = &mgrl::builtinPlugins();
   options.cacheDir = tmp.path;
-  const mgrl::app::GraphResult built = mgrl::app::obtainGraph(scenario, options);
+  const mgrl::GraphResult built = mgrl::obtainGraph(scenario, options);
   REQUIRE_FALSE(built.fromCache);
   const nlohmann::json manifest = nlohmann::json::parse(mgrl::readFile(built.bundle / "manifest.json"));
   REQUIRE(manifest.contains("motion"));
@@ -273,7 +273,7 @@ TEST_CASE("a cached graph poses avatars from the capture it keeps, exactly as pa
   CHECK(manifest["provenance"]["capture_travel"]["walk_travel_m"] == built.travel.walkTravel_m);
   CHECK(manifest["provenance"]["capture_travel"]["action_travel_m"] == built.travel.actionTravel_m);
 
-  const mgrl::app::GraphResult cached = mgrl::app::obtainGraph(scenario, options);
+  const mgrl::GraphResult cached = mgrl::obtainGraph(scenario, options);
   REQUIRE(cached.fromCache);
   requireSameDatabase(cached.db, built.db);
   CHECK(cached.travel.walkTravel_m == built.travel.walkTravel_m);
@@ -287,7 +287,7 @@ TEST_CASE("a cached graph poses avatars from the capture it keeps, exactly as pa
     edited["arrays"].erase("motion_translations");
     edited["hash"] = mgrl::manifestHash(edited);
     writeBytes(built.bundle / "manifest.json", edited.dump(2));
-    const mgrl::app::GraphResult parsed = mgrl::app::obtainGraph(scenario, options);
+    const mgrl::GraphResult parsed = mgrl::obtainGraph(scenario, options);
     REQUIRE(parsed.fromCache);
     requireSameDatabase(parsed.db, built.db);
   }
@@ -297,7 +297,7 @@ TEST_CASE("a cached graph poses avatars from the capture it keeps, exactly as pa
     writeBytes(built.bundle / "motion_rotations.npy", bytes);
     std::vector<std::string> log;
     options.log = [&](const std::string& m) { log.push_back(m); };
-    const mgrl::app::GraphResult rebuilt = mgrl::app::obtainGraph(scenario, options);
+    const mgrl::GraphResult rebuilt = mgrl::obtainGraph(scenario, options);
     CHECK_FALSE(rebuilt.fromCache);
     REQUIRE_FALSE(log.empty());
     CHECK_THAT(log.front(), Contains("graph: cache is damaged, rebuilding") && Contains("motion_rotations.npy") &&

@@ -525,11 +525,11 @@ TEST_CASE("a cached graph whose frame time lost a digit is rebuilt with one mess
                                                       fs::path(MGRL_SOURCE_DIR) / "scenarios" / "test.yaml",
                                                       mgrl::test::mocap());
   std::vector<std::string> log;
-  mgrl::app::GraphOptions options;
+  mgrl::GraphOptions options;
   options.plugins = &mgrl::builtinPlugins();
   options.cacheDir = tmp.path;
   options.log = [&](const std::string& line) { log.push_back(line); };
-  const mgrl::app::GraphResult first = mgrl::app::obtainGraph(scenario, options);
+  const mgrl::GraphResult first = mgrl::obtainGraph(scenario, options);
   REQUIRE_FALSE(first.fromCache);
   const fs::path manifestPath = first.bundle / "manifest.json";
   std::string text = mgrl::readFile(manifestPath);
@@ -539,7 +539,7 @@ TEST_CASE("a cached graph whose frame time lost a digit is rebuilt with one mess
   writeBytes(manifestPath, text);
 
   log.clear();
-  const mgrl::app::GraphResult second = mgrl::app::obtainGraph(scenario, options);
+  const mgrl::GraphResult second = mgrl::obtainGraph(scenario, options);
   CHECK_FALSE(second.fromCache);
   CHECK(second.model.frameTime == first.model.frameTime);
   const auto damaged = std::count_if(log.begin(), log.end(), [&](const std::string& line) {
@@ -549,7 +549,7 @@ TEST_CASE("a cached graph whose frame time lost a digit is rebuilt with one mess
   });
   CAPTURE(log);
   CHECK(damaged == 1);
-  CHECK(mgrl::app::obtainGraph(scenario, options).fromCache);
+  CHECK(mgrl::obtainGraph(scenario, options).fromCache);
 }
 
 TEST_CASE("a graph manifest's hash covers every member but itself", "[graph_cache]") {

@@ -141,45 +141,45 @@ TEST_CASE("the graph cache is reused, refreshed when inputs change and rebuilt w
   std::filesystem::remove_all(cache);
   Scenario s = parse(kGood);
   std::vector<std::string> log;
-  app::GraphOptions options;
+  mgrl::GraphOptions options;
   options.plugins = &mgrl::builtinPlugins();
   options.cacheDir = cache;
   options.log = [&](const std::string& m) { log.push_back(m); };
 
-  const app::GraphResult first = app::obtainGraph(s, options);
+  const mgrl::GraphResult first = mgrl::obtainGraph(s, options);
   CHECK_FALSE(first.fromCache);
   REQUIRE(std::filesystem::exists(first.bundle / "manifest.json"));
-  const app::GraphResult second = app::obtainGraph(s, options);
+  const mgrl::GraphResult second = mgrl::obtainGraph(s, options);
   CHECK(second.fromCache);
   CHECK(second.model.actionFrames == first.model.actionFrames);
   CHECK(second.model.frameRoot == first.model.frameRoot);
 
   SECTION("--no-cache rebuilds") {
     options.noCache = true;
-    CHECK_FALSE(app::obtainGraph(s, options).fromCache);
+    CHECK_FALSE(mgrl::obtainGraph(s, options).fromCache);
   }
   SECTION("a changed parameter makes the bundle stale") {
     s.graph.threshold = 0.35;
-    const app::GraphResult third = app::obtainGraph(s, options);
+    const mgrl::GraphResult third = mgrl::obtainGraph(s, options);
     CHECK_FALSE(third.fromCache);
     CHECK(log.back().find("saved") != std::string::npos);
     CHECK(std::any_of(log.begin(), log.end(), [](const std::string& m) { return m.find("stale") != std::string::npos; }));
-    CHECK(app::obtainGraph(s, options).fromCache);
+    CHECK(mgrl::obtainGraph(s, options).fromCache);
   }
   SECTION("a damaged array is detected and rebuilt") {
     const auto file = first.bundle / "action_frames.npy";
     std::string bytes = readFile(file);
     bytes[bytes.size() - 3] ^= 0x5a;
     writeFileAtomically(file, bytes);
-    const app::GraphResult third = app::obtainGraph(s, options);
+    const mgrl::GraphResult third = mgrl::obtainGraph(s, options);
     CHECK_FALSE(third.fromCache);
     CHECK(std::any_of(log.begin(), log.end(), [](const std::string& m) { return m.find("damaged") != std::string::npos; }));
     CHECK(third.model.actionFrames == first.model.actionFrames);
-    CHECK(app::obtainGraph(s, options).fromCache);
+    CHECK(mgrl::obtainGraph(s, options).fromCache);
   }
   SECTION("a garbage manifest is detected and rebuilt") {
     writeFileAtomically(first.bundle / "manifest.json", "{ not json");
-    CHECK_FALSE(app::obtainGraph(s, options).fromCache);
+    CHECK_FALSE(mgrl::obtainGraph(s, options).fromCache);
   }
   std::filesystem::remove_all(cache);
 }

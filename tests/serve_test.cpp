@@ -806,6 +806,11 @@ TEST_CASE("a page's lesson steps Q-learning and a retraining switches the policy
   static_cast<app::LearnOptions&>(eval) = changed;
   eval.policy = changed.out;
   const json evalAfter = app::runEval(eval);
+  // The page's table is the one `mgrl train` writes with the same change, byte for byte.
+  const json manifest = json::parse(readFile(changed.out / "manifest.json"));
+  CHECK(done["table_hash"] == manifest["behaviors"]["hit"]["table"]["hash"]);
+  CHECK(done["table_hash"] !=
+        json::parse(readFile(boxing.train.out / "manifest.json"))["behaviors"]["hit"]["table"]["hash"]);
   INFO("page: " << done["before"].dump() << " -> " << done["after"].dump() << "; eval: " << evalBefore["success_rate"]
                 << " -> " << evalAfter["success_rate"]);
   CHECK(done["before"]["success_rate"].get<double>() == Approx(evalBefore["success_rate"].get<double>()).margin(1e-9));

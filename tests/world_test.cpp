@@ -12,13 +12,14 @@
 
 #include "app/graph_command.hpp"
 #include "app/learn_commands.hpp"
-#include "app/learn_common.hpp"
 #include "app/plugins.hpp"
+#include "builtin_plugins.hpp"
 #include "mgrl/learning/behavior.hpp"
-#include "mgrl/scenario/behaviors.hpp"
 #include "mgrl/motion/bvh.hpp"
 #include "mgrl/motion/kinematics.hpp"
 #include "mgrl/runtime/world.hpp"
+#include "mgrl/scenario/behaviors.hpp"
+#include "mgrl/session/session.hpp"
 #include "test_support.hpp"
 
 namespace mgrl::world_test {
@@ -35,7 +36,7 @@ const std::vector<std::string> kValueIteration = {"behaviors.approach.learner.ty
 // learning tests the training) and loaded once per process.
 struct Boxing {
   fs::path dir = test::sharedResult("boxing-value-iteration", [](const fs::path& d) { app::runTrain(trainOptions(d)); });
-  app::Loaded loaded;
+  std::unique_ptr<Session> session;
   std::vector<Behavior> behaviors;
   PolicyBundle bundle;
   std::vector<PolicyPart> parts;
@@ -52,27 +53,24 @@ struct Boxing {
     train.sets = kValueIteration;
     return train;
   }
-  static app::Loaded load(const fs::path& dir) {
-    const app::TrainOptions train = trainOptions(dir);
-    return app::load(train, app::checkedScenario(train));
-  }
+  static std::unique_ptr<Session> open(const fs::path& dir) { return openSession(trainOptions(dir)); }
 
-  Boxing() : loaded(load(dir)) {
+  Boxing() : session(open(dir)) {
     const app::TrainOptions train = trainOptions(dir);
-    behaviors = buildBehaviors(loaded.scenario, app::plugins(), loaded.graph.model, loaded.graph.key);
-    parts = app::policyParts(train.out, behaviors, loaded.graph, train, bundle);
-    body = makeBodyTable(loaded.graph.db);
+    behaviors = buildBehaviors(session->scenario, builtinPlugins(), session->graph.model, session->graph.key);
+    parts = policyParts(train.out, behaviors, session->graph, train, bundle);
+    body = makeBodyTable(session->graph.db);
     for (const Behavior& b : behaviors) searchParts.push_back({b.discretizer.get(), b.reward.get(), b.weight, b.activation});
   }
-  const StateActionModel& model() const { return loaded.graph.model; }
-  const MotionDatabase& db() const { return loaded.graph.db; }
+  const StateActionModel& model() const { return session->graph.model; }
+  const MotionDatabase& db() const { return session->graph.db; }
 
   WorldSetup setup(std::size_t avatars, const std::string& controller = "policy") const {
     WorldSetup s;
     s.model = &model();
     s.body = &body;
     s.db = &db();
-    s.blendFrames = loaded.scenario.graph.blendFrames;
+    s.blendFrames = session->scenario.graph.blendFrames;
     s.avatars = avatars;
     s.seed = 7;
     s.makeController = [this, controller, variety = s.params.variety]() -> std::unique_ptr<Controller> {

@@ -244,19 +244,21 @@ void ViewerSession::collectRetraining() {
   s.valuesSent.clear();  // the values view shows the new table at once
   applyController();
   outbox_.push_back(scene());
-  outbox_.push_back(json{{"type", "retrain"},
-                         {"behavior", name},
-                         {"status", "done"},
-                         {"set", r->set},
-                         {"learner", "value_iteration"},
-                         {"vertices", r->table.vertexCount()},
-                         {"updates", r->updates},
-                         {"train_seconds", r->trainSeconds},
-                         {"seconds", std::chrono::duration<double>(Clock::now() - job->started).count()},
-                         {"trials", kRetrainTrials},
-                         {"before", r->before},
-                         {"after", r->after}}
-                        .dump());
+  outbox_.push_back(json{
+      {"type", "retrain"},
+      {"behavior", name},
+      {"status", "done"},
+      {"set", r->set},
+      {"learner", "value_iteration"},
+      {"vertices", r->table.vertexCount()},
+      {"table_hash", tableHash(r->table)},
+      {"updates", r->updates},
+      {"train_seconds", r->trainSeconds},
+      {"seconds", std::chrono::duration<double>(Clock::now() - job->started).count()},
+      {"trials", kRetrainTrials},
+      {"before", r->before},
+      {"after",
+       r->after}}.dump());
 }
 
 }  // namespace mgrl::serve

@@ -160,6 +160,11 @@ void savePolicyBundle(const fs::path& dirArgument, const PolicyBundle& bundle) {
   writeBundleDirectory(dir, files, manifestText, kKind);
 }
 
+std::string tableHash(const QTable& table) {
+  const std::vector<float> q = table.actionMajor();
+  return encodeBundleArray<float>("table.npy", q, {table.actionCount(), table.vertexCount()}).entry.at("hash");
+}
+
 PolicyBundle loadPolicyBundle(const fs::path& dirArgument, const StateActionModel& model, std::string_view graphKey) {
   const fs::path dir = dirArgument.has_filename() ? dirArgument : dirArgument.parent_path();
   recoverBundleDirectory(dir, "manifest.json");  // what a killed writer left (issue 19)

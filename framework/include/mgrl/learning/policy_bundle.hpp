@@ -94,6 +94,10 @@ std::vector<double> vertexPositions(const Discretizer& grid);
 /// failure.
 void savePolicyBundle(const std::filesystem::path& dir, const PolicyBundle& bundle);
 
+/// The hash a bundle's manifest records for `table`'s file (behaviors.NAME.table.hash):
+/// two tables with the same hash are the same bytes, however they were trained.
+std::string tableHash(const QTable& table);
+
 /// Loads the bundle at `dir`, trained on the graph `model` whose cache key is `graphKey`.
 /// Every table is checked to be (model.actionCount(), V) with finite values and its
 /// vertices (V, 3), and every file against its size and hash in the manifest.

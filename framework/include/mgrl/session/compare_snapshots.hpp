@@ -1,6 +1,6 @@
 #pragma once
 /// \file
-/// `mgrl compare`'s learning curves of success rate (issue 15): a TrainListener that
+/// Compare's learning curves of success rate: a TrainListener that
 /// evaluates the compared behaviour's table at each snapshot its learner hands out.
 #include <cstddef>
 #include <filesystem>
@@ -9,11 +9,11 @@
 
 #include <nlohmann/json.hpp>
 
-#include "compare_command.hpp"
-#include "learn_common.hpp"
+#include "mgrl/session/compare.hpp"
+#include "mgrl/session/graph_source.hpp"
 #include "mgrl/session/trials.hpp"
 
-namespace mgrl::app {
+namespace mgrl {
 
 /// Evaluates the trained behaviour's table at each snapshot, with the other behaviours'
 /// tables from the bundle at `shared` (as trained once for every run), on the first
@@ -53,4 +53,4 @@ class SnapshotEvaluator final : public TrainListener {
 bool lacksSnapshots(const std::filesystem::path& dir, const std::string& behavior, std::size_t count,
                     std::size_t trials, double seconds);
 
-}  // namespace mgrl::app
+}  // namespace mgrl

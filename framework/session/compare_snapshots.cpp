@@ -1,16 +1,17 @@
-// `mgrl compare`'s snapshot evaluator (compare_snapshots.hpp).
-#include "compare_snapshots.hpp"
+// Compare's snapshot evaluator (mgrl/session/compare_snapshots.hpp).
+#include "mgrl/session/compare_snapshots.hpp"
 
 #include <limits>
 
 #include <fmt/format.h>
 
-#include "mgrl/session/compare_report.hpp"
-#include "learn_common.hpp"
 #include "mgrl/core/files.hpp"
 #include "mgrl/runtime/controller.hpp"
+#include "mgrl/session/compare_report.hpp"
+#include "mgrl/session/policy_source.hpp"
+#include "mgrl/session/task.hpp"
 
-namespace mgrl::app {
+namespace mgrl {
 
 namespace fs = std::filesystem;
 using json = nlohmann::json;
@@ -49,7 +50,7 @@ void SnapshotEvaluator::snapshot(const QTable& table, const CurvePoint& point, c
 }
 
 json SnapshotEvaluator::record() const {
-  return {{"count", count_}, {"trials", trialCount_}, {"seconds_per_trial", seconds_},
+  return {{"count", count_}, {"trials", trialCount_},        {"seconds_per_trial", seconds_},
           {"seed", 1},       {"columns", snapshotColumns()}, {"points", points_}};
 }
 
@@ -70,4 +71,4 @@ bool lacksSnapshots(const fs::path& dir, const std::string& behavior, std::size_
   }
 }
 
-}  // namespace mgrl::app
+}  // namespace mgrl
