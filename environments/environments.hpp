@@ -25,23 +25,24 @@ void registerLearnedOpponent(EnvironmentRegistry& registry);
 /// walked toward the avatar's end position at `speed` (pursue), stopping `stopDistance`
 /// from it, and turned toward it by at most turnRate x the action's duration; all seen
 /// from the action's end. Its facing turns with the avatar frame, so it is a grid's
-/// interpolated heading axis, not a layer.
-class Opponent final : public EnvironmentModel {
+/// interpolated heading axis, not a layer. A FacingOpponent; offers the ScriptedOpponent
+/// the world plays it as.
+class Opponent final : public EnvironmentModel, public FacingOpponent {
  public:
   Opponent(bool pursue, double speed, double stopDistance, double turnRate)
-      : pursue_(pursue), speed_(speed), stopDistance_(stopDistance), turnRate_(turnRate) {}
+      : scripted_{!pursue, stopDistance}, speed_(speed), turnRate_(turnRate) {}
   std::string type() const override { return "opponent"; }
   TargetState next(const StateActionModel& model, std::size_t action, const TargetState& e) const override;
-  bool keepsSpeed() const override { return true; }  // always 0: the layer of a polar_velocity grid with speeds: 1
   TargetState draw(const Eigen::Vector3d& position, Rng&) const override;
-  bool faces() const override { return true; }
-  std::optional<ScriptedOpponent> scriptedOpponent() const override {
-    return ScriptedOpponent{!pursue_, stopDistance_};
+
+ protected:
+  const void* capability(std::type_index type) const override {
+    return offer(type, static_cast<const FacingOpponent*>(this), &scripted_);
   }
 
  private:
-  bool pursue_;
-  double speed_, stopDistance_, turnRate_;  // m/s, m, rad/s
+  ScriptedOpponent scripted_;  // pursue (not stand) to stopDistance, m
+  double speed_, turnRate_;    // m/s, rad/s
 };
 
 /// A number no earlier call returned (from 1), thread-safe.
@@ -50,8 +51,12 @@ std::uint64_t freshGeneration();
 /// `learned_opponent` (issue 43): the target is another avatar of the same graph playing
 /// graph actions (see learned_opponent.cpp for the state and how time is handled). Its
 /// discrete state is TargetState::opponent = s * phases + b: the graph state s its current
-/// action ends at and the phase bucket b of the frames left (0: about to arrive).
-class LearnedOpponent final : public EnvironmentModel {
+/// action ends at and the phase bucket b of the frames left (0: about to arrive). A
+/// FacingOpponent, a TrackedOpponent and a SelfPlayOpponent.
+class LearnedOpponent final : public EnvironmentModel,
+                              public FacingOpponent,
+                              public TrackedOpponent,
+                              public SelfPlayOpponent {
  public:
   LearnedOpponent(std::string policy, int phases, int rounds, bool averageRounds, double stopDistance, double reach,
                   double strikeBonus)
@@ -64,22 +69,24 @@ class LearnedOpponent final : public EnvironmentModel {
         strikeBonus_(strikeBonus) {}
   std::string type() const override { return "learned_opponent"; }
   void bind(const StateActionModel& m) override;
-  std::size_t opponentStates() const override;
   TargetState next(const StateActionModel& model, std::size_t action, const TargetState& e) const override;
-  bool track(const StateActionModel& model, std::size_t action, const TargetState& e,
-             std::vector<OpponentFrame>& out) const override;
-  bool keepsSpeed() const override { return true; }  // always 0
   TargetState draw(const Eigen::Vector3d& position, Rng& rng) const override;
-  bool faces() const override { return true; }
+
+  // TrackedOpponent
+  std::size_t opponentStates() const override;
+  int opponentPhases() const override { return phases_; }
+  void track(const StateActionModel& model, std::size_t action, const TargetState& e,
+             std::vector<OpponentFrame>& out) const override;
+
+  // SelfPlayOpponent
   void playPolicy(const Discretizer* grid, std::shared_ptr<const QTable> table, const std::string& key) override;
   std::string policyKey() const override { return table_ ? key_ : "scripted"; }
   std::string policySource() const override { return policy_ == "scripted" ? "" : policy_; }
+  int rounds() const override { return rounds_; }
+  bool roundsAgainstAverage() const override { return averageRounds_; }
 
   /// `policy` as written: "scripted" or a bundle directory.
   const std::string& policy() const { return policy_; }
-  int opponentPhases() const override { return phases_; }
-  int rounds() const override { return rounds_; }
-  bool roundsAgainstAverage() const override { return averageRounds_; }
   /// The graph state s's representative incoming action (what the opponent is taken to be
   /// playing when only its end state and phase are known).
   std::uint32_t representative(std::uint32_t s) const { return representative_[s]; }
@@ -92,6 +99,12 @@ class LearnedOpponent final : public EnvironmentModel {
   /// avatar at frame t of `avatarAction`: the table's greedy action, or the scripted one.
   std::uint32_t choose(const StateActionModel& m, std::uint32_t s, const GroundMotion& self, std::size_t avatarAction,
                        std::uint32_t t, double height) const;
+
+ protected:
+  const void* capability(std::type_index type) const override {
+    return offer(type, static_cast<const FacingOpponent*>(this), static_cast<const TrackedOpponent*>(this),
+                 static_cast<const SelfPlayOpponent*>(this));
+  }
 
  private:
   TargetState simulate(const StateActionModel& m, std::size_t action, const TargetState& e,

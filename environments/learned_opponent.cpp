@@ -251,12 +251,11 @@ TargetState LearnedOpponent::next(const StateActionModel& m, std::size_t action,
   return simulate(m, action, e, nullptr);
 }
 
-bool LearnedOpponent::track(const StateActionModel& m, std::size_t action, const TargetState& e,
+void LearnedOpponent::track(const StateActionModel& m, std::size_t action, const TargetState& e,
                             std::vector<OpponentFrame>& out) const {
   out.clear();
   const TargetState to = simulate(m, action, e, &out);
   lastTrack = {policyGeneration_, action, e, to};
-  return true;
 }
 
 TargetState LearnedOpponent::draw(const Eigen::Vector3d& position, Rng& rng) const {

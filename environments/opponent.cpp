@@ -27,8 +27,8 @@ TargetState Opponent::next(const StateActionModel& model, std::size_t action, co
   double ox = e.position.x(), oz = e.position.z();
   double tx = d.dx - ox, tz = d.dz - oz;
   const double gap = std::hypot(tx, tz);
-  if (pursue_ && gap > stopDistance_) {
-    const double step = std::min(speed_ * seconds, gap - stopDistance_);
+  if (!scripted_.stand && gap > scripted_.stopDistance) {
+    const double step = std::min(speed_ * seconds, gap - scripted_.stopDistance);
     ox += step * tx / gap;
     oz += step * tz / gap;
     tx = d.dx - ox;

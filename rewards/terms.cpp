@@ -111,7 +111,9 @@ class Terms final : public Reward {
     if (joints_ != 0) joints_ = static_cast<std::int64_t>(m.jointNames.size());
     head_ = headJoint(m);
   }
-  void bindEnvironment(const EnvironmentModel* environment) override { environment_ = environment; }
+  void bindEnvironment(const EnvironmentModel* environment) override {
+    opponent_ = environment ? environment->as<TrackedOpponent>() : nullptr;
+  }
   nlohmann::json terms() const override { return params_; }
 
   double evaluate(const StateActionModel& m, std::size_t a, const TargetState& state) const override {
@@ -123,7 +125,8 @@ class Terms final : public Reward {
     const double start = std::hypot(state.position.x(), state.position.z());  // the pelvis is at the origin at the decision
     // A learned opponent moves and strikes during the action: the terms see it frame by frame.
     thread_local std::vector<OpponentFrame> track;
-    const bool tracked = environment_ && environment_->track(m, a, state, track);
+    const bool tracked = opponent_ != nullptr;
+    if (tracked) opponent_->track(m, a, state, track);
     double result = 0, discount = 1;
     for (std::size_t t = 1; t <= frames; ++t) {
       discount *= gamma_;
@@ -156,7 +159,7 @@ class Terms final : public Reward {
   /// 0 if no term names a joint; else the bound model's joint count, -1 before bind().
   std::int64_t joints_ = 0;
   int head_ = -1;  ///< the bound model's head joint, for a learned opponent's target
-  const EnvironmentModel* environment_ = nullptr;
+  const TrackedOpponent* opponent_ = nullptr;  ///< the environment's learned opponent, if it has one
 };
 
 }  // namespace

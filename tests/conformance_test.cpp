@@ -6,7 +6,12 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstring>
+#include <map>
+#include <memory>
 #include <numeric>
+#include <string>
+#include <vector>
 
 #include <fmt/format.h>
 #include <fmt/ranges.h>
@@ -17,6 +22,7 @@
 #include "mgrl/learning/environment_model.hpp"
 #include "mgrl/learning/learner.hpp"
 #include "mgrl/learning/problem.hpp"
+#include "mgrl/learning/q_table.hpp"
 #include "mgrl/learning/reward.hpp"
 #include "rewards/term.hpp"
 #include "synthetic_model.hpp"
@@ -73,6 +79,27 @@ double linear(const Discretizer& grid, const TargetState& e) {
     if (!grid.axes()[static_cast<std::size_t>(i)].wraps) f += slopes[i] * c[static_cast<std::size_t>(i)];
   if (grid.layerAxis()) f += 0.9 * grid.layerCoordinate(e);
   return f;
+}
+
+// Every registered environment model with its defaults, a turning moving_target
+// and a standing opponent.
+std::vector<ConfigNode> environmentExamples() {
+  std::vector<ConfigNode> examples;
+  for (const auto& entry : builtinPlugins().environments.entries()) examples.push_back(exampleOf(entry));
+  examples.push_back(ConfigNode::parse("{type: moving_target, max_turn_deg_s: 90, turns: 4}", "turning.yaml"));
+  examples.push_back(ConfigNode::parse("{type: opponent, policy: stand}", "stand.yaml"));
+  return examples;
+}
+
+// No environment model offers this.
+struct NoCapability {};
+
+// Bit for bit, as a grid layer needs (-0 is not 0 here).
+bool sameBits(double a, double b) { return std::memcmp(&a, &b, sizeof a) == 0; }
+
+bool sameState(const TargetState& a, const TargetState& b) {
+  return a.position == b.position && sameBits(a.speed, b.speed) && sameBits(a.heading, b.heading) &&
+         sameBits(a.turnRate, b.turnRate) && a.opponent == b.opponent;
 }
 
 }  // namespace
@@ -134,16 +161,10 @@ TEST_CASE("every reward is finite and the same for the same action and state", "
 TEST_CASE("every environment model is deterministic and keeps a still target still, an opponent aside", "[conformance]") {
   const auto& registry = builtinPlugins().environments;
   REQUIRE(registry.entries().size() >= 3);
-  // Every registered model with its defaults, and a turning moving_target (issue 46).
-  std::vector<ConfigNode> examples;
-  for (const auto& entry : registry.entries()) examples.push_back(exampleOf(entry));
-  examples.push_back(ConfigNode::parse("{type: moving_target, max_turn_deg_s: 90, turns: 4}", "turning.yaml"));
-  for (const ConfigNode& example : examples) {
+  for (const ConfigNode& example : environmentExamples()) {
     const std::unique_ptr<EnvironmentModel> environment = registry.create(example);
-    INFO("environment " << environment->type() << " " << environment->turnRates().size() << " turn rates");
-    const std::vector<double> rates = environment->turnRates();
+    INFO("environment " << environment->type() << " (" << example.source() << ")");
     environment->bind(model());
-    const std::size_t opponentStates = environment->opponentStates();
     Rng rng(3);
     for (std::size_t a = 0; a < model().actionCount(); a += 5) {
       const TargetState e = environment->draw(Eigen::Vector3d(rng.uniform() * 2 - 1, 1.2, rng.uniform() * 2), rng);
@@ -155,38 +176,175 @@ TEST_CASE("every environment model is deterministic and keeps a still target sti
       REQUIRE(next.opponent == again.opponent);
       REQUIRE(next.turnRate == again.turnRate);
       REQUIRE(next.position.allFinite());
-      // A turning target draws one of its model's turn rates and keeps it bit for bit (its
-      // grid layer); others never turn.
-      if (rates.empty()) {
-        REQUIRE(e.turnRate == 0);
-      } else {
-        REQUIRE(std::find(rates.begin(), rates.end(), e.turnRate) != rates.end());
-        REQUIRE(next.turnRate == e.turnRate);
-      }
-      // A learned opponent's discrete state stays among its states; what it plays during the
-      // action is one frame per avatar frame. Other models have neither.
-      std::vector<OpponentFrame> track;
-      if (opponentStates > 0) {
-        REQUIRE(e.opponent >= 0);
-        REQUIRE(static_cast<std::size_t>(next.opponent) < opponentStates);
-        REQUIRE(environment->track(model(), a, e, track));
-        REQUIRE(track.size() == model().actionLength(a));
-      } else {
-        REQUIRE(next.opponent == -1);
-        REQUIRE_FALSE(environment->track(model(), a, e, track));
-      }
       // A target standing still stays where it was in the world (in the avatar's new frame:
       // the old position moved by the action's displacement), unless the model is an
-      // opponent with a will of its own (faces(): it steps towards the avatar).
-      if (!environment->faces()) {
+      // opponent with a will of its own (a FacingOpponent: it steps towards the avatar).
+      if (!environment->as<FacingOpponent>()) {
         const TargetState standing(e.position);
         const TargetState after = environment->next(model(), a, standing);
         REQUIRE((after.position - inverseTransformPoint(model().displacement(a), standing.position)).norm() < 1e-9);
         REQUIRE_FALSE(after.moving());
       }
-      if (environment->rigid()) REQUIRE((next.position - inverseTransformPoint(model().displacement(a), e.position)).norm() < 1e-12);
     }
   }
+}
+
+TEST_CASE("every environment model's capabilities keep their contracts, and one it does not offer answers null",
+          "[conformance]") {
+  const auto& registry = builtinPlugins().environments;
+  // How many models offer each capability: every one is checked on some built-in model.
+  std::map<std::string, int> offering;
+  for (const ConfigNode& example : environmentExamples()) {
+    const std::unique_ptr<EnvironmentModel> environment = registry.create(example);
+    INFO("environment " << environment->type() << " (" << example.source() << ")");
+    environment->bind(model());
+    const EnvironmentModel& asked = *environment;
+    REQUIRE(asked.as<NoCapability>() == nullptr);
+    const auto* rigid = asked.as<RigidTarget>();
+    const auto* motion = asked.as<TargetMotion>();
+    const auto* facing = asked.as<FacingOpponent>();
+    const auto* scripted = asked.as<ScriptedOpponent>();
+    const auto* tracked = asked.as<TrackedOpponent>();
+    auto* selfPlay = environment->as<SelfPlayOpponent>();
+    // The same object however asked, for as long as the model lives.
+    REQUIRE(static_cast<const SelfPlayOpponent*>(selfPlay) == asked.as<SelfPlayOpponent>());
+    REQUIRE(motion == environment->as<TargetMotion>());
+    offering["RigidTarget"] += rigid != nullptr;
+    offering["TargetMotion"] += motion != nullptr;
+    offering["FacingOpponent"] += facing != nullptr;
+    offering["ScriptedOpponent"] += scripted != nullptr;
+    offering["TrackedOpponent"] += tracked != nullptr;
+    offering["SelfPlayOpponent"] += selfPlay != nullptr;
+    // What a scripted fighter or a policy-playing opponent is also: a fighter faces the
+    // avatar; an opponent that plays a table plays graph actions.
+    if (scripted) REQUIRE(facing);
+    if (selfPlay) REQUIRE(tracked);
+    if (motion) {
+      REQUIRE(std::isfinite(motion->maxSpeed));
+      REQUIRE(motion->maxSpeed >= 0);
+      REQUIRE(std::is_sorted(motion->turnRates.begin(), motion->turnRates.end()));
+      REQUIRE(std::adjacent_find(motion->turnRates.begin(), motion->turnRates.end()) == motion->turnRates.end());
+    }
+    if (scripted) {
+      REQUIRE(std::isfinite(scripted->stopDistance));
+      REQUIRE(scripted->stopDistance >= 0);
+    }
+    std::size_t opponentStates = 0;
+    if (tracked) {
+      REQUIRE(tracked->opponentPhases() >= 1);
+      opponentStates = tracked->opponentStates();
+      REQUIRE(opponentStates == model().stateCount() * static_cast<std::size_t>(tracked->opponentPhases()));
+    }
+    Rng rng(5);
+    std::vector<OpponentFrame> track;
+    for (std::size_t a = 0; a < model().actionCount(); a += 7) {
+      const TargetState e = environment->draw(Eigen::Vector3d(rng.uniform() * 2 - 1, 1.2, rng.uniform() * 2), rng);
+      const TargetState next = environment->next(model(), a, e);
+      const GroundMotion d = model().displacement(a);
+      // RigidTarget: next() is the inverse of the action's displacement, exactly, speed 0.
+      if (rigid) {
+        REQUIRE((next.position - inverseTransformPoint(d, e.position)).norm() < 1e-12);
+        REQUIRE_FALSE(next.moving());
+      }
+      // TargetMotion: draws at most maxSpeed and one of its turn rates; next() keeps both
+      // bit for bit (its grid layers). Without it, nothing moves or turns.
+      if (motion) {
+        REQUIRE(e.speed >= 0);
+        REQUIRE(e.speed <= motion->maxSpeed);
+        if (motion->turnRates.empty()) {
+          REQUIRE(e.turnRate == 0);
+        } else {
+          REQUIRE(std::find(motion->turnRates.begin(), motion->turnRates.end(), e.turnRate) != motion->turnRates.end());
+        }
+        REQUIRE(sameBits(next.speed, e.speed));
+        REQUIRE(sameBits(next.turnRate, e.turnRate));
+      } else {
+        REQUIRE(e.turnRate == 0);
+        REQUIRE(next.turnRate == 0);
+        REQUIRE_FALSE(e.moving());
+      }
+      // FacingOpponent: the heading is a facing in [-pi, pi], and the opponent stands
+      // (speed 0): it moves by next() alone.
+      if (facing) {
+        REQUIRE(e.speed == 0);
+        REQUIRE(next.speed == 0);
+        REQUIRE(std::abs(next.heading) <= M_PI);
+      }
+      // ScriptedOpponent: next() is the fighter the world plays: it never ends nearer the
+      // avatar than stopDistance unless it started nearer (pursue), and a standing one
+      // stays where it was in the world.
+      if (scripted) {
+        const double before = std::hypot(d.dx - e.position.x(), d.dz - e.position.z());
+        REQUIRE(std::hypot(next.position.x(), next.position.z()) >= std::min(scripted->stopDistance, before) - 1e-9);
+        if (scripted->stand) REQUIRE((next.position - inverseTransformPoint(d, e.position)).norm() < 1e-9);
+      }
+      // TrackedOpponent: its state stays among its states, what it plays is one frame per
+      // avatar frame (of actions it can play), and tracking changes nothing next() says.
+      // Without it, no opponent state.
+      if (tracked) {
+        REQUIRE(e.opponent >= 0);
+        REQUIRE(static_cast<std::size_t>(e.opponent) < opponentStates);
+        REQUIRE(next.opponent >= 0);
+        REQUIRE(static_cast<std::size_t>(next.opponent) < opponentStates);
+        track.assign(3, OpponentFrame{});
+        tracked->track(model(), a, e, track);
+        REQUIRE(track.size() == model().actionLength(a));
+        for (const OpponentFrame& o : track) {
+          REQUIRE(o.action < model().actionCount());
+          REQUIRE(o.offset >= 1);
+          REQUIRE(o.offset <= model().actionLength(o.action));
+        }
+        REQUIRE(sameState(environment->next(model(), a, e), next));
+      } else {
+        REQUIRE(e.opponent == -1);
+        REQUIRE(next.opponent == -1);
+      }
+    }
+    // SelfPlayOpponent: plays a table of the behaviour's grid (its opponent layers added),
+    // refuses one of another shape, and back on its scripted policy moves as before.
+    if (selfPlay) {
+      REQUIRE(selfPlay->rounds() >= 1);
+      REQUIRE_FALSE(selfPlay->policyKey().empty());
+      const std::unique_ptr<Discretizer> grid = builtinPlugins().discretizers.create(
+          ConfigNode::parse("{type: polar_velocity, rings: 2, sectors: 4, headings: 4, speeds: 1}", "c"), model());
+      grid->setOpponentLayers(opponentStates);
+      const TargetState e = environment->draw(Eigen::Vector3d(0.2, 1.2, 0.9), rng);
+      const std::size_t a = model().stateActionBegin[1];
+      const TargetState scriptedNext = environment->next(model(), a, e);
+      const std::string scriptedKey = selfPlay->policyKey();
+      REQUIRE_THROWS_AS(
+          selfPlay->playPolicy(grid.get(), std::make_shared<const QTable>(model(), grid->vertexCount() + 1), "wrong"),
+          Error);
+      selfPlay->playPolicy(grid.get(), std::make_shared<const QTable>(model(), grid->vertexCount()), "zeros");
+      REQUIRE(selfPlay->policyKey() == "zeros");
+      const TargetState played = environment->next(model(), a, e);
+      REQUIRE(sameState(played, environment->next(model(), a, e)));
+      REQUIRE(static_cast<std::size_t>(played.opponent) < opponentStates);
+      selfPlay->playPolicy(grid.get(), nullptr, "");
+      REQUIRE(selfPlay->policyKey() == scriptedKey);
+      REQUIRE(sameState(environment->next(model(), a, e), scriptedNext));
+    }
+  }
+  for (const char* capability :
+       {"RigidTarget", "TargetMotion", "FacingOpponent", "ScriptedOpponent", "TrackedOpponent", "SelfPlayOpponent"}) {
+    INFO("capability " << capability << ": offered by no built-in model, so its contract is checked on none");
+    REQUIRE(offering[capability] > 0);
+  }
+  // A model that offers nothing answers null for every capability.
+  struct Bare final : EnvironmentModel {
+    std::string type() const override { return "bare"; }
+    TargetState next(const StateActionModel& m, std::size_t a, const TargetState& e) const override {
+      return inverseTransformPoint(m.displacement(a), e.position);
+    }
+  } bare;
+  const EnvironmentModel& asked = bare;
+  REQUIRE(asked.as<RigidTarget>() == nullptr);
+  REQUIRE(asked.as<TargetMotion>() == nullptr);
+  REQUIRE(asked.as<FacingOpponent>() == nullptr);
+  REQUIRE(asked.as<ScriptedOpponent>() == nullptr);
+  REQUIRE(asked.as<TrackedOpponent>() == nullptr);
+  REQUIRE(asked.as<SelfPlayOpponent>() == nullptr);
+  REQUIRE(bare.as<SelfPlayOpponent>() == nullptr);
 }
 
 TEST_CASE("every learner trains a finite table of the problem's shape, the same for the same seed", "[conformance]") {

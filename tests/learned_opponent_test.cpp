@@ -117,7 +117,7 @@ TEST_CASE("during one long avatar action the opponent decides several times, eac
   for (std::uint32_t s = 0; s < m.stateCount(); ++s) {
     e.opponent = static_cast<std::int32_t>(2 * s);
     std::vector<OpponentFrame> track;
-    REQUIRE(opponent.track(m, longest, e, track));
+    opponent.track(m, longest, e, track);
     REQUIRE(track.size() == L);
     // The frames it plays are consecutive: within an action offset + 1; at an action's end
     // a new action from its first frame, decided at the root the last one ended at.
@@ -183,7 +183,7 @@ TEST_CASE(
       const std::size_t a = m.stateActionBegin[s] + rng.below(m.stateActionBegin[s + 1] - m.stateActionBegin[s]);
       const auto L = static_cast<std::uint32_t>(m.actionLength(a));
       std::vector<OpponentFrame> track;
-      REQUIRE(environment.track(m, a, e, track));
+      opponent.track(m, a, e, track);
       const TargetState predicted = environment.next(m, a, e);
       // Deterministic: the same call gives the same bits.
       const TargetState again = environment.next(m, a, e);
@@ -343,6 +343,8 @@ TEST_CASE(
   SparFixture& f = fixture();
   const StateActionModel& m = f.model;
   const EnvironmentModel& environment = *f.behaviors.front().environment;
+  const TrackedOpponent* opponent = environment.as<TrackedOpponent>();
+  REQUIRE(opponent);
   const ConditionRegistry& kinds = app::plugins().conditions;
   auto criterion = [&](const char* yaml) {
     SuccessCriterion c = SuccessCriterion::read(ConfigNode::parse(yaml, "c"), nlohmann::json::array(), kinds);
@@ -370,7 +372,7 @@ TEST_CASE(
     const TargetState e = environment.draw(Eigen::Vector3d(r * std::sin(angle), 1.4, r * std::cos(angle)), rng);
     const std::uint32_t s = rng.below(m.stateCount());
     const std::size_t a = m.stateActionBegin[s] + rng.below(m.stateActionBegin[s + 1] - m.stateActionBegin[s]);
-    REQUIRE(environment.track(m, a, e, track));
+    opponent->track(m, a, e, track);
     // The first frame each term says so, read as the reward reads the track.
     std::uint32_t firstHit = 0, firstClear = 0;
     for (std::uint32_t t = 1; t <= m.actionLength(a); ++t) {
@@ -381,9 +383,9 @@ TEST_CASE(
       if (firstClear == 0 && avoidTerm->signal(frame) == 1) firstClear = t;
     }
     SuccessCriterion::Tracker hits(contact, m.frameTime), clears(avoid, m.frameTime);
-    const std::uint32_t hitAt = hits.play(m, a, e, &environment);
+    const std::uint32_t hitAt = hits.play(m, a, e, opponent);
     CHECK(hitAt == firstHit);
-    CHECK(clears.play(m, a, e, &environment) == firstClear);
+    CHECK(clears.play(m, a, e, opponent) == firstClear);
     landed += hitAt > 0;
     cornered += firstClear != 1;
     // Without the environment the head stands where it was at the decision.

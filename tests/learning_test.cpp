@@ -1620,7 +1620,7 @@ TEST_CASE("a turning target runs round its circle, next() keeps its turn rate an
   SECTION("draws only its turn rates, each as often; without them its random stream is the straight line's") {
     Rng rng(5);
     std::array<int, 3> counts{0, 0, 0};
-    const std::vector<double> rates = turning.turnRates();
+    const std::vector<double> rates = turning.as<TargetMotion>()->turnRates;
     for (int i = 0; i < 3000; ++i) {
       const double w = turning.draw(Eigen::Vector3d(0, 1, 1), rng).turnRate;
       const auto found = std::find(rates.begin(), rates.end(), w);
@@ -1838,7 +1838,7 @@ TEST_CASE("opponent: walks toward the avatar until stop_distance, turns to face 
     const Eigen::Vector3d avatar = inOpponentFrame(start, Eigen::Vector3d(0, 1.2, 0));
     CHECK(avatar.x() == Approx(0).margin(1e-12));
     CHECK(avatar.z() == Approx(std::sqrt(2.0)).margin(1e-12));  // straight ahead of it
-    CHECK(pursue.keepsSpeed());
+    CHECK(pursue.next(m, 0, start).speed == start.speed);
     const auto grid = makeGrid("{type: polar_velocity, distance_max: 3, rings: 4, sectors: 6, headings: 8, speeds: 1}", m);
     GridCell cell;
     REQUIRE(grid->locate(pursue.next(m, 0, start), cell));

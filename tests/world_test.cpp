@@ -585,7 +585,6 @@ TEST_CASE("a target of a moving_target scene moves as the model draws it, and co
     std::string type() const override { return "ahead"; }
     TargetState next(const StateActionModel&, std::size_t, const TargetState& e) const override { return e; }
     TargetState draw(const Eigen::Vector3d& position, Rng&) const override { return {position, 0.8, 0.0}; }
-    double maxSpeed() const override { return 0.8; }
   } ahead;
   WorldSetup straight = b.setup(1);
   straight.params.mode = "targets";

@@ -24,7 +24,7 @@ void ViewerSession::followSuccess() {
   const StateActionModel& model = assets_->model();
   // A scripted opponent or a partner bundle plays the second of each pair, not the page's controller.
   const bool partnerApart = !assets_->session->partnerName().empty();
-  const EnvironmentModel* environment = assets_->session->task.environment;
+  const TrackedOpponent* opponent = assets_->session->task.trackedOpponent;
   for (std::size_t i = 0; i < world.avatarCount(); ++i) {
     if (partnerApart && world.partner(i) >= 0 && i % 2 == 1) continue;
     const World::Decision d = world.lastDecision(i);
@@ -35,7 +35,7 @@ void ViewerSession::followSuccess() {
     // action from what the controller saw at the decision (the partner's root, graph state
     // and phase); a target the page drags stands still.
     std::uint32_t first = 0;
-    const EnvironmentModel* tracked = world.partner(i) >= 0 ? environment : nullptr;
+    const TrackedOpponent* tracked = world.partner(i) >= 0 ? opponent : nullptr;
     for (SuccessCriterion::Tracker& tracker : s.trackers[i])
       if (const std::uint32_t t = tracker.play(model, d.action, d.target, tracked); t > 0 && (first == 0 || t < first))
         first = t;

@@ -81,7 +81,7 @@ namespace {
 // An opponent's facing needs a grid axis to live on, and the avoid term and condition need
 // an opponent to read strikes from: refuse either half alone, at the key that asks for it.
 void checkOpponent(const BehaviorSpec& spec, const Behavior& b) {
-  if (b.environment->faces()) {
+  if (b.environment->as<FacingOpponent>()) {
     if (!b.discretizer->axis(AxisRole::Heading))
       spec.environment.child("type").fail(fmt::format(
           "expected a grid with a heading axis to hold the opponent's facing (polar_velocity with speeds: 1), found {}",
@@ -119,7 +119,8 @@ void bindEnvironment(const BehaviorSpec& spec, Behavior& b, const StateActionMod
   } catch (const Error& e) {
     spec.environment.child("type").fail(e.what());
   }
-  if (const std::size_t states = environment.opponentStates()) {
+  if (const TrackedOpponent* opponent = environment.as<TrackedOpponent>()) {
+    const std::size_t states = opponent->opponentStates();
     try {
       b.discretizer->setOpponentLayers(states);
     } catch (const Error& e) {
@@ -129,15 +130,17 @@ void bindEnvironment(const BehaviorSpec& spec, Behavior& b, const StateActionMod
   }
   // A turn rate means something only beside the heading it turns (polar_velocity); on a grid
   // without one the values average over the turns as over the headings it cannot see.
-  if (std::vector<double> rates = environment.turnRates(); !rates.empty() && b.discretizer->axis(AxisRole::Heading)) {
+  if (const TargetMotion* motion = environment.as<TargetMotion>();
+      motion && !motion->turnRates.empty() && b.discretizer->axis(AxisRole::Heading)) {
     try {
-      b.discretizer->setTurnLayers(std::move(rates));
+      b.discretizer->setTurnLayers(motion->turnRates);
     } catch (const Error& e) {
       spec.discretizer.child("type").fail(fmt::format("a turning target's turn rates as grid layers: {}", e.what()));
     }
   }
   b.reward->bindEnvironment(&environment);
-  const std::string source = environment.policySource();
+  SelfPlayOpponent* selfPlay = environment.as<SelfPlayOpponent>();
+  const std::string source = selfPlay ? selfPlay->policySource() : std::string();
   if (source.empty()) return;
   const ConfigNode at = spec.environment.child("policy");
   try {
@@ -152,7 +155,7 @@ void bindEnvironment(const BehaviorSpec& spec, Behavior& b, const StateActionMod
             return names;
           }()));
     auto table = std::make_shared<const QTable>(std::move(found->second.table));
-    environment.playPolicy(b.discretizer.get(), std::move(table), found->second.key);
+    selfPlay->playPolicy(b.discretizer.get(), std::move(table), found->second.key);
   } catch (const ConfigError&) {
     throw;
   } catch (const Error& e) {

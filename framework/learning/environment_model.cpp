@@ -2,10 +2,6 @@
 
 #include <cmath>
 
-#include <fmt/format.h>
-
-#include "mgrl/core/error.hpp"
-
 namespace mgrl {
 
 Eigen::Vector3d inverseTransformPoint(const GroundMotion& motion, const Eigen::Vector3d& point) {
@@ -32,20 +28,12 @@ TargetState MovingTarget::next(const StateActionModel& model, std::size_t action
 }
 
 TargetState MovingTarget::draw(const Eigen::Vector3d& position, Rng& rng) const {
-  const double speed = minSpeed_ + (maxSpeed_ - minSpeed_) * rng.uniform();
+  const double speed = minSpeed_ + (motion_.maxSpeed - minSpeed_) * rng.uniform();
   const double heading = (2 * rng.uniform() - 1) * M_PI;
   TargetState e(position, speed, heading);
   // Only a model with turn rates draws one, so straight-line trials keep their random stream.
-  if (!turnRates_.empty()) e.turnRate = turnRates_[rng.below(turnRates_.size())];
+  if (!motion_.turnRates.empty()) e.turnRate = motion_.turnRates[rng.below(motion_.turnRates.size())];
   return e;
-}
-
-}  // namespace mgrl
-
-namespace mgrl {
-
-void EnvironmentModel::playPolicy(const Discretizer*, std::shared_ptr<const QTable>, const std::string&) {
-  throw Error(fmt::format("environment {}: has no learned opponent to play a policy", type()));
 }
 
 }  // namespace mgrl

@@ -56,7 +56,7 @@ GridModel GridModel::frame(const Problem& problem) {
   for (std::size_t a = 0; a < g.actionCount; ++a)
     g.discount[a] = static_cast<float>(std::pow(gamma, static_cast<double>(m.actionLength(a))));
 
-  if (problem.environment.rigid()) {
+  if (problem.environment.as<RigidTarget>()) {
     g.rigid.resize(4 * g.actionCount);
     for (std::size_t a = 0; a < g.actionCount; ++a) {
       const GroundMotion d = m.displacement(a);

@@ -161,12 +161,13 @@ SuccessCriterion::Tracker::Tracker(const SuccessCriterion& criterion, double fra
       needed_(std::max<std::size_t>(1, static_cast<std::size_t>(std::lround(criterion.hold_s_ / frameTime)))) {}
 
 std::uint32_t SuccessCriterion::Tracker::play(const StateActionModel& m, std::size_t a, const TargetState& e,
-                                              const EnvironmentModel* environment) {
+                                              const TrackedOpponent* opponent) {
   const auto frames = static_cast<std::uint32_t>(m.actionLength(a));
   // A learned opponent moves and strikes during the action: its head is the target at each
   // frame, facing where its root does, and its strikes are the ones it throws (issue 43).
   thread_local std::vector<OpponentFrame> track;
-  if (environment && environment->track(m, a, e, track)) {
+  if (opponent) {
+    opponent->track(m, a, e, track);
     if (head_ == -2) head_ = headJoint(m);
     for (std::uint32_t t = 1; t <= frames; ++t) {
       const OpponentFrame& o = track[t - 1];

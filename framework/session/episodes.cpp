@@ -21,6 +21,7 @@ Episodes::Episodes(const StateActionModel& model, const Behavior& behavior, std:
   for (std::size_t s = 0; s < model.stateCount(); ++s)
     maxActions_ = std::max<std::size_t>(maxActions_, model.stateActionBegin[s + 1] - model.stateActionBegin[s]);
   dimension_ = behavior.discretizer->dimension();
+  opponent_ = behavior.environment->as<TrackedOpponent>();
   slots_.resize(count);
   for (std::size_t i = 0; i < count; ++i) {
     slots_[i].rng = Rng(i + 1);
@@ -58,7 +59,7 @@ EpisodeStep Episodes::step(std::size_t i, std::size_t choice) {
   EpisodeStep out;
   out.reward = static_cast<float>(behavior_.reward->evaluate(model_, a, slot.target));
   for (SuccessCriterion::Tracker& tracker : slot.trackers)
-    out.success |= tracker.play(model_, a, slot.target, behavior_.environment.get()) > 0;
+    out.success |= tracker.play(model_, a, slot.target, opponent_) > 0;
   slot.target = behavior_.environment->next(model_, a, slot.target);
   slot.state = model_.actionTo[a];
   slot.frames += model_.actionLength(a);

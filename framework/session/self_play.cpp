@@ -48,7 +48,8 @@ Play play(const Behavior& b, const StateActionModel& m, const QTable& table, std
   const double gamma = b.reward->gamma();
   const double limit = kSeconds / m.frameTime;
   const int head = headJoint(m);
-  const bool exchanges = head >= 0;
+  const TrackedOpponent* opponent = b.environment->as<TrackedOpponent>();
+  const bool exchanges = head >= 0 && opponent;
   std::vector<OpponentFrame> track;
   double total = 0, landed = 0, taken = 0;
   for (int episode = 0; episode < kEpisodes; ++episode) {
@@ -58,7 +59,8 @@ Play play(const Behavior& b, const StateActionModel& m, const QTable& table, std
     while (elapsed < limit) {
       const std::size_t a = greedyAction(m, *b.discretizer, table, s, e);
       sum += discount * b.reward->evaluate(m, a, e);
-      if (exchanges && b.environment->track(m, a, e, track)) {
+      if (exchanges) {
+        opponent->track(m, a, e, track);
         for (std::uint32_t t = 1; t <= track.size(); ++t) {
           const OpponentFrame& o = track[t - 1];
           const Eigen::Vector3d target = opponentTarget(m, o, head, e.position.y());
@@ -112,7 +114,10 @@ TableGap bestResponseGapOnGrid(const GridModel& grid, const StateActionModel& mo
 nlohmann::json selfPlayRound(const Behavior& behavior, const StateActionModel& model, int round, const QTable& table,
                              const QTable* previous, const std::optional<TableGap>& tableGap,
                              const std::function<void(const std::string&)>& log) {
-  nlohmann::json entry = {{"round", round}, {"opponent", behavior.environment->policyKey()}};
+  // What the opponent plays ("" for a model without a policy to play).
+  const SelfPlayOpponent* selfPlay = behavior.environment->as<SelfPlayOpponent>();
+  const std::string against = selfPlay ? selfPlay->policyKey() : std::string();
+  nlohmann::json entry = {{"round", round}, {"opponent", against}};
   const Play me = play(behavior, model, table, kSelfPlaySeed);
   const double mine = me.meanReturn;
   entry["return"] = mine;
@@ -120,7 +125,7 @@ nlohmann::json selfPlayRound(const Behavior& behavior, const StateActionModel& m
   entry["taken_per_min"] = me.takenPerMinute;
   if (!previous) {
     log(fmt::format("train {}: round {}: return {:.3f}{} against its {} opponent", behavior.name, round, mine,
-                    exchangeText(me), behavior.environment->policyKey()));
+                    exchangeText(me), against));
     return entry;
   }
   const Play them = play(behavior, model, *previous, kSelfPlaySeed);
@@ -137,11 +142,10 @@ nlohmann::json selfPlayRound(const Behavior& behavior, const StateActionModel& m
     log(
         fmt::format("train {}: round {}: best-response gap {:.3f} on the grid against {}'s table (its value less that "
                     "of the opponent's own table played greedily, by policy evaluation: {} sweeps in {:.1f} s{}); {}",
-                    behavior.name, round, tableGap->gap, behavior.environment->policyKey(), tableGap->sweeps,
-                    tableGap->seconds, tableGap->converged ? "" : ", not converged: an estimate", episodes));
+                    behavior.name, round, tableGap->gap, against, tableGap->sweeps, tableGap->seconds,
+                    tableGap->converged ? "" : ", not converged: an estimate", episodes));
   } else {
-    log(fmt::format("train {}: round {}: against {}'s table {}", behavior.name, round,
-                    behavior.environment->policyKey(), episodes));
+    log(fmt::format("train {}: round {}: against {}'s table {}", behavior.name, round, against, episodes));
   }
   return entry;
 }

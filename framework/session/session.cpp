@@ -53,7 +53,7 @@ WorldSetup Session::worldSetup(std::size_t avatars, std::uint64_t seed, const Co
   setup.seed = seed;
   setup.opponent = task.opponent;
   setup.opponentPhases = task.opponentPhases;
-  if (task.environment->maxSpeed() > 0) setup.targetMotion = task.environment;
+  if (task.targetMotion && task.targetMotion->maxSpeed > 0) setup.targetMotion = task.environment;
   setup.stances = stanceCount(behaviors);
   ControllerParts parts = controllerParts(task.world.variety);
   parts.policy = policyParts;

@@ -52,11 +52,14 @@ Disagreement findDisagreement(const std::vector<Behavior>& behaviors) {
 
 Task taskOf(const Behavior& first) {
   Task task;
-  task.environment = first.environment.get();
+  const EnvironmentModel& environment = *first.environment;
+  task.environment = &environment;
   task.gamma = first.reward->gamma();
-  task.opponent = first.environment->faces();
-  task.opponentPhases = first.environment->opponentPhases();
-  task.scriptedOpponent = first.environment->scriptedOpponent();
+  task.opponent = environment.as<FacingOpponent>() != nullptr;
+  task.targetMotion = environment.as<TargetMotion>();
+  task.trackedOpponent = environment.as<TrackedOpponent>();
+  task.opponentPhases = task.trackedOpponent ? task.trackedOpponent->opponentPhases() : 0;
+  task.scriptedOpponent = environment.as<ScriptedOpponent>();
   return task;
 }
 

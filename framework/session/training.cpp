@@ -64,6 +64,13 @@ fs::path bundleFolder(const TrainSettings& settings, const SessionOptions& optio
 
 namespace {
 
+// The self-play rounds a behaviour trains (SelfPlayOpponent::rounds()); 1 for an
+// environment without an opponent that plays policy tables.
+int selfPlayRounds(const Behavior& b) {
+  const SelfPlayOpponent* selfPlay = b.environment->as<SelfPlayOpponent>();
+  return selfPlay ? selfPlay->rounds() : 1;
+}
+
 // A stopped run keeps what had finished: the bundle is saved with the finished tables and
 // the unfinished behaviours named in its provenance (so eval and simulate refuse it,
 // saying to resume, instead of taking it for a whole one), then the run ends with
@@ -116,7 +123,7 @@ std::set<std::string> keepCurrentTables(const fs::path& out, bool resume, const 
       std::string base = name;
       if (const auto cut = name.rfind("-round"); cut != std::string::npos && cut > 0) base = name.substr(0, cut);
       const auto match = std::find_if(all.begin(), all.end(), [&](const Behavior& b) {
-        return b.name == name || (b.name == base && b.environment->rounds() > 1);
+        return b.name == name || (b.name == base && selfPlayRounds(b) > 1);
       });
       if (match != all.end() && match->key == entry.key) {
         bundle.behaviors.emplace(name, std::move(entry));
@@ -159,9 +166,9 @@ bool choosesCompactModel(const Behavior& behavior, const Learner& learner, const
   // average` the mean), and while a round's best-response gap is measured, its own table
   // beside policy evaluation's pair and chosen actions (2.5 tables) where the learner's pair
   // stood: 1.5 more.
-  const int rounds = behavior.environment->rounds();
-  const double selfPlayTables =
-      rounds > 1 ? (rounds - 1) + (behavior.environment->roundsAgainstAverage() ? 2 : 1) + 1.5 : 0;
+  const SelfPlayOpponent* selfPlay = behavior.environment->as<SelfPlayOpponent>();
+  const int rounds = selfPlay ? selfPlay->rounds() : 1;
+  const double selfPlayTables = rounds > 1 ? (rounds - 1) + (selfPlay->roundsAgainstAverage() ? 2 : 1) + 1.5 : 0;
   const double extraTables = static_cast<double>(learner.extraTables()) + selfPlayTables;
   const double extra =
       extraTables * static_cast<double>(vertices) * static_cast<double>(model.actionCount()) * sizeof(float);
@@ -180,7 +187,8 @@ bool choosesCompactModel(const Behavior& behavior, const Learner& learner, const
       options.model == "compact" || (options.model == "auto" && tabulatedBytes > options.maxMemoryBytes && canCompact);
   const double needed = compact ? compactBytes : tabulatedBytes;
   // A learned opponent's states multiply the grid: say by how much.
-  const std::size_t opponentStates = behavior.environment->opponentStates();
+  const TrackedOpponent* tracked = behavior.environment->as<TrackedOpponent>();
+  const std::size_t opponentStates = tracked ? tracked->opponentStates() : 0;
   const std::string opponentNote = opponentStates > 0
                                        ? fmt::format(
                                              " (a learned opponent's {} states times {} positions: fewer phases or a "
@@ -268,7 +276,7 @@ class TrainRun {
         checkpoints_.push_back(checkpointDirectory(out_, behavior.name));
         continue;
       }
-      if (behavior.environment->rounds() > 1) {
+      if (selfPlayRounds(behavior) > 1) {
         // Self-play changes the opponent its environment plays round by round: the rounds
         // get a behaviour of their own, and the session's stays as it was opened.
         std::vector<Behavior> own =
@@ -302,8 +310,9 @@ class TrainRun {
   // transition stays one successor per action and vertex). Each round's table is kept, the
   // last under the behaviour's own name, the others as NAME-roundK.
   void trainBehavior(const Behavior& behavior, const std::vector<Behavior>& all) {
-    const int rounds = behavior.environment->rounds();
-    const bool average = behavior.environment->roundsAgainstAverage();
+    SelfPlayOpponent* selfPlay = behavior.environment->as<SelfPlayOpponent>();
+    const int rounds = selfPlay ? selfPlay->rounds() : 1;
+    const bool average = selfPlay && selfPlay->roundsAgainstAverage();
     std::shared_ptr<const QTable> previous, mean;
     json roundsReport = json::array();
     for (int round = 1; round <= rounds; ++round) {
@@ -312,10 +321,10 @@ class TrainRun {
         const std::string against = !previous              ? ""
                                     : average && round > 2 ? fmt::format("rounds 1-{} mean", round - 1)
                                                            : fmt::format("round {}", round - 1);
-        if (previous) behavior.environment->playPolicy(behavior.discretizer.get(), average ? mean : previous, against);
-        log_(fmt::format("train {}: self-play round {} of {}, against {}", behavior.name, round, rounds,
-                         previous ? fmt::format("{}'s table", against)
-                                  : fmt::format("the {} opponent", behavior.environment->policyKey())));
+        if (previous) selfPlay->playPolicy(behavior.discretizer.get(), average ? mean : previous, against);
+        log_(fmt::format(
+            "train {}: self-play round {} of {}, against {}", behavior.name, round, rounds,
+            previous ? fmt::format("{}'s table", against) : fmt::format("the {} opponent", selfPlay->policyKey())));
       }
       std::optional<TableGap> tableGap;
       auto [result, record] =

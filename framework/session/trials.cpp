@@ -49,6 +49,10 @@ Trials::Trials(const StateActionModel& model, const std::vector<Behavior>& behav
   // task's gamma.
   std::tie(criteria_, criteriaFrom_) = trialCriteria(behaviors, conditions);
   environment_ = task.environment;
+  opponent_ = task.opponent;
+  targetMotion_ = task.targetMotion;
+  trackedOpponent_ = task.trackedOpponent;
+  scriptedOpponent_ = task.scriptedOpponent;
   gamma_ = task.gamma;
 }
 
@@ -94,8 +98,7 @@ TrialStats Trials::run(const ChooseAction& choose, std::size_t count, double sec
   TrialStats stats;
   stats.trials = count;
   const double limit = seconds / model.frameTime;
-  const bool opponent = environment.faces();
-  stats.turnRates = environment.turnRates();
+  if (targetMotion_) stats.turnRates = targetMotion_->turnRates;
   stats.turnTrials.assign(stats.turnRates.size(), 0);
   stats.turnSuccesses.assign(stats.turnRates.size(), 0);
   for (std::size_t trial = 0; trial < count; ++trial) {
@@ -127,13 +130,13 @@ TrialStats Trials::run(const ChooseAction& choose, std::size_t count, double sec
       trialReturn += discount * reward;
       std::uint32_t first = 0;  // the earliest offset any criterion is met at
       for (SuccessCriterion::Tracker& tracker : trackers)
-        if (const std::uint32_t t = tracker.play(model, a, e, &environment); t > 0 && (first == 0 || t < first))
+        if (const std::uint32_t t = tracker.play(model, a, e, trackedOpponent_); t > 0 && (first == 0 || t < first))
           first = t;
       if (first > 0) {
         hit = true;
         stats.hitTimes.push_back((elapsed + first) * model.frameTime);
       }
-      if (opponent) {
+      if (opponent_) {
         const std::size_t begin = model.actionFrameBegin[a], end = begin + model.actionLength(a);
         for (std::size_t f = begin; f < end; ++f) {
           stats.opponentGaps.push_back(static_cast<float>(bodyDistance(model, f, BodyPoint::pelvis(), 2, e.position)));
@@ -162,14 +165,12 @@ std::pair<std::optional<Clearance>, double> Trials::avoidCondition() const {
   return {std::nullopt, 0};
 }
 
-bool Trials::hasAvatarOpponent() const {
-  return environment_->scriptedOpponent() && avoidCondition().first.has_value();
-}
+bool Trials::hasAvatarOpponent() const { return scriptedOpponent_ && avoidCondition().first.has_value(); }
 
 TrialStats Trials::runAgainstAvatar(const ChooseAction& choose, std::size_t count, double seconds,
                                     std::uint64_t seed) const {
   const StateActionModel& model = model_;
-  const std::optional<ScriptedOpponent> opponentModel = environment_->scriptedOpponent();
+  const ScriptedOpponent* opponentModel = scriptedOpponent_;
   if (!opponentModel)
     throw Error(fmt::format("trials against an avatar: expected an opponent environment, found {}", environment_->type()));
   // Not a structured binding: the lambdas below capture it (clang before 16 cannot).

@@ -152,7 +152,7 @@ class Discretizer {
   void setOpponentLayers(std::size_t count);
   bool hasOpponentLayers() const { return opponentLayers_; }
   /// Repeats the (speed-layered) grid once per turn rate of a turning moving target (issue
-  /// 46; `rates` rad/s, ascending, as EnvironmentModel::turnRates() gives them): turn layer k
+  /// 46; `rates` rad/s, ascending, as TargetMotion::turnRates lists them): turn layer k
   /// holds the states whose TargetState::turnRate is nearest rates[k]. A moving_target keeps
   /// its turn rate, so, as with speed, every backup stays in its layer; unlike speed, a state
   /// is never between two turn layers (a model draws only these rates). Throws mgrl::Error

@@ -51,8 +51,8 @@ struct GridModel {
   std::vector<float, HugePageAllocator<float>> reward;  ///< per (a, v), compact models only
   std::vector<TargetState> vertexState;                 ///< per vertex, compact models only
   std::vector<float> discount;                          ///< per action: gamma^(frames of a)
-  /// Per action, if the environment model moves the target rigidly (EnvironmentModel::
-  /// rigidMotion): (cos, sin, dx, dz) of the motion e' = R^T (e - d); else empty.
+  /// Per action, if the environment model moves the target rigidly (it offers RigidTarget):
+  /// (cos, sin, dx, dz) of the motion e' = R^T (e - d); else empty.
   std::vector<double> rigid;
   std::vector<std::uint32_t> actionTo;          ///< per action: its end state
   std::vector<std::uint32_t> stateActionBegin;  ///< the model's: actions by the state they leave

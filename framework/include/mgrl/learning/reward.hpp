@@ -34,8 +34,8 @@ class Reward {
   /// (mgrl::Error without a YAML block) naming the roles and joints the skeleton has.
   virtual void bind(const StateActionModel&) {}
   /// The behaviour's environment model (it outlives the reward), before any evaluate(): a
-  /// reward whose terms read a learned opponent's actual body and strikes asks it for them
-  /// (EnvironmentModel::track).
+  /// reward whose terms read a learned opponent's actual body and strikes asks it for its
+  /// TrackedOpponent, once, and then for them (TrackedOpponent::track).
   virtual void bindEnvironment(const EnvironmentModel*) {}
   /// The reward as reward terms, a JSON list of {"term": NAME, parameters...}: a success
   /// condition takes what it leaves out from the reward's term of its kind (success.hpp).

@@ -33,7 +33,7 @@
 
 namespace mgrl {
 
-class EnvironmentModel;
+class TrackedOpponent;
 
 /// What a condition reads at offset t (1 = the first frame after the decision) of action
 /// `action`.
@@ -118,11 +118,11 @@ class SuccessCriterion {
    public:
     explicit Tracker(const SuccessCriterion& criterion, double frameTime);
     /// Plays action a from a decision in state e (a moving target followed frame by frame;
-    /// a learned opponent of `environment` as its track() has it, so that a condition sees
-    /// the head and the strikes the reward terms see): the offset (1 = the action's first
-    /// frame) at which the criterion is first met, 0 if it is not met in this action.
+    /// a learned `opponent` as its track() has it, so that a condition sees the head and
+    /// the strikes the reward terms see): the offset (1 = the action's first frame) at
+    /// which the criterion is first met, 0 if it is not met in this action.
     std::uint32_t play(const StateActionModel& m, std::size_t a, const TargetState& e,
-                       const EnvironmentModel* environment = nullptr);
+                       const TrackedOpponent* opponent = nullptr);
     const SuccessCriterion* criterion() const { return criterion_; }
 
    private:

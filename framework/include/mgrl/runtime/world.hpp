@@ -173,7 +173,7 @@ struct WorldSetup {
   /// were trained with); a target of the targets mode is taken to be about to arrive at
   /// state 0. 0: no such state.
   int opponentPhases = 0;
-  /// The behaviours' environment moves its targets (a `moving_target`, maxSpeed() > 0):
+  /// The behaviours' environment moves its targets (a `moving_target`, TargetMotion::maxSpeed > 0):
   /// each time a target of the targets mode is placed, its motion (speed, direction, turn
   /// rate) is drawn from this model as eval's trials draw it, the target then moves along
   /// it, and controllers see that motion (TargetState::speed, heading, turnRate). A target

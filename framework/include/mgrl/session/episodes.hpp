@@ -89,6 +89,7 @@ class Episodes {
   void start(Slot& slot);
   const StateActionModel& model_;
   const Behavior& behavior_;
+  const TrackedOpponent* opponent_ = nullptr;  ///< the behaviour's learned opponent, if it has one
   EpisodeOptions options_;
   double frameLimit_ = 0;
   std::size_t maxActions_ = 0;

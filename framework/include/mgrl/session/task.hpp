@@ -1,10 +1,9 @@
 #pragma once
 /// \file
 /// What a whole scenario shares, whatever behaviour is asked: the one world its behaviours
-/// were trained for (the environment model that moves the target, the discount of returns,
-/// whether the target is an opponent that faces the avatar) and the `world:` section's
+/// were trained for (the environment model that moves the target and the capabilities it
+/// offers, asked for once here; the discount of returns) and the `world:` section's
 /// parameters. Built once per session, with one clear error when behaviours disagree.
-#include <optional>
 #include <vector>
 
 #include "mgrl/learning/behavior.hpp"
@@ -19,16 +18,21 @@ struct Task {
   const EnvironmentModel* environment = nullptr;
   /// Returns and the online search discount with it (paper sec. 4: one gamma per scenario).
   double gamma = 0.97;
-  /// The environment is an opponent that turns to face the avatar (TargetState::heading).
+  /// The environment is an opponent that turns to face the avatar (TargetState::heading):
+  /// it offers FacingOpponent.
   bool opponent = false;
-  /// A learned opponent's phases per graph state (EnvironmentModel::opponentPhases()), 0 for none.
+  /// Its targets move (TargetMotion: speeds, turn rates); null for targets that stand.
+  const TargetMotion* targetMotion = nullptr;
+  /// A learned opponent that plays graph actions (TrackedOpponent); null for none.
+  const TrackedOpponent* trackedOpponent = nullptr;
+  /// trackedOpponent's phases per graph state (TrackedOpponent::opponentPhases()), 0 for none.
   int opponentPhases = 0;
   /// The environment's scripted opponent as the world plays it with graph actions (an
   /// `opponent` model): the second avatar of each sparring pair pursues the first
   /// (PursueController) to `stopDistance`, or takes the actions that move it least
-  /// (`stand`). Unset for other models.
+  /// (`stand`). Null for other models.
   using ScriptedOpponent = mgrl::ScriptedOpponent;
-  std::optional<ScriptedOpponent> scriptedOpponent;
+  const ScriptedOpponent* scriptedOpponent = nullptr;
   /// The scenario's `world:` section (defaults where absent), parsed once here.
   WorldParams world;
 

@@ -104,8 +104,12 @@ class Trials {
   /// The first avoid condition's clearance and its criterion's hold_s; none if no criterion has one.
   std::pair<std::optional<Clearance>, double> avoidCondition() const;
   /// The first behaviour's environment model: how trial targets move (all behaviours see
-  /// the same target).
+  /// the same target), and the task's capabilities of it.
   const EnvironmentModel* environment_ = nullptr;
+  bool opponent_ = false;  ///< Task::opponent: it faces the avatar
+  const TargetMotion* targetMotion_ = nullptr;
+  const TrackedOpponent* trackedOpponent_ = nullptr;
+  const ScriptedOpponent* scriptedOpponent_ = nullptr;
   const StateActionModel& model_;
   const std::vector<Behavior>& behaviors_;
   const Discretizer* region_ = nullptr;
