@@ -38,6 +38,7 @@
 #include "learners.hpp"
 #include "mgrl/core/launch.hpp"
 #include "mgrl/core/parallel.hpp"
+#include "mpi_rank_share.hpp"
 #include "mpi_ranks.hpp"
 
 namespace mgrl::learners {
@@ -46,6 +47,134 @@ namespace {
 
 using Clock = std::chrono::steady_clock;
 using nlohmann::json;
+
+using Transitions = std::vector<GridTransition, HugePageAllocator<GridTransition>>;
+
+// The transitions of the actions this rank backs up (`mine`), when the caller did not
+// tabulate the problem. Alone (K == 1), a raised context.stop ends it early and throws
+// TrainInterrupted.
+Transitions tabulateMine(const TrainContext& context, const std::vector<std::uint32_t>& mine, int K, unsigned threads) {
+  const Problem& problem = context.problem;
+  const std::size_t V = context.grid.vertexCount;
+  Transitions local;
+  std::vector<TargetState> vertex(V);
+  for (std::size_t v = 0; v < V; ++v) vertex[v] = problem.grid.vertexState(v);
+  local.resize(mine.size() * V);
+  parallelFor(mine.size(), threads, [&](std::size_t i, unsigned) {
+    if (K == 1 && context.stop && context.stop->load(std::memory_order_relaxed)) return;
+    for (std::size_t v = 0; v < V; ++v) local[i * V + v] = tabulate(problem, mine[i], vertex[v]);
+  });
+  if (K == 1 && context.stop && context.stop->load()) throw TrainInterrupted(0, 0, false);
+  return local;
+}
+
+// One rank's half of a sweep: the backups of the actions ending at its states, into the
+// send buffer, then the exchange (backups()); the received values against its block of
+// the table (settle()). The seconds of each are summed for the report.
+class RankSweeps {
+ public:
+  // `local`: this rank's transitions, used unless `given` (the caller's tabulated or
+  // compact model in `g`).
+  RankSweeps(const GridModel& g, const RankShare& share, const Ranks& ranks, QTable& q, const Transitions& local,
+             bool given, unsigned threads)
+      : g_(g),
+        share_(share),
+        ranks_(ranks),
+        q_(q),
+        local_(local),
+        given_(given),
+        threads_(threads),
+        send_(share.mine.size() * g.vertexCount),
+        received_(ranks.size() > 1 ? share.theirs.size() * g.vertexCount : 0),
+        recv_(ranks.size() > 1 ? received_.data() : send_.data()),
+        tied_(g.hanging.empty() ? 0 : g.vertexCount, 0) {
+    for (std::uint32_t v : g.hanging.vertex) tied_[v] = 1;
+  }
+
+  void backups() {
+    const GridModel& g = g_;
+    const std::size_t V = g.vertexCount;
+    const std::vector<std::uint32_t>& held = share_.held;
+    const std::vector<std::uint32_t>& slot = share_.slot;
+    const bool given = given_;
+    const QTable& q = q_;
+    const auto began = Clock::now();
+    parallelFor(held.size(), threads_, [&](std::size_t i, unsigned) {
+      const std::uint32_t s = held[i];
+      for (std::uint32_t k = g.incomingBegin[s]; k < g.incomingBegin[s + 1]; ++k) {
+        const std::size_t a = g.incoming[k];
+        float* values = &send_[static_cast<std::size_t>(slot[a]) * V];
+        if (!given) {
+          const GridTransition* t = &local_[static_cast<std::size_t>(slot[a]) * V];
+          for (std::size_t v = 0; v < V; ++v) values[v] = backup(q, g, a, t[v]);
+        } else if (g.compact()) {
+          for (std::size_t v = 0; v < V; ++v) values[v] = backup(q, g, a, g.landing(a, v));
+        } else {
+          for (std::size_t v = 0; v < V; ++v) values[v] = backup(q, g, a, g.transition[a * V + v]);
+        }
+        g.hanging.apply(values);
+      }
+    });
+    const auto exchanging = Clock::now();
+    ranks_.exchange(send_.data(), share_.sendCount, recv_, share_.recvCount, V);
+    seconds_[0] += std::chrono::duration<double>(exchanging - began).count();
+    seconds_[1] += std::chrono::duration<double>(Clock::now() - exchanging).count();
+  }
+
+  // The largest change (as value_iteration measures it), written into the block when
+  // `write`; else the Bellman residual (as bellmanResidual() measures it: in double,
+  // hanging vertices skipped).
+  double settle(bool write) {
+    const GridModel& g = g_;
+    const std::size_t V = g.vertexCount;
+    const std::vector<std::uint32_t>& held = share_.held;
+    const std::vector<std::uint32_t>& recvSlot = share_.recvSlot;
+    const std::vector<std::uint8_t>& tied = tied_;
+    const float* recv = recv_;
+    QTable& q = q_;
+    const auto began = Clock::now();
+    std::vector<double> change(held.size(), 0.0);
+    parallelFor(held.size(), threads_, [&](std::size_t i, unsigned) {
+      const std::uint32_t s = held[i];
+      const std::size_t n = q.actionsOf(s), begin = g.stateActionBegin[s];
+      double largest = 0;
+      for (std::size_t v = 0; v < V; ++v) {
+        float* row = q.row(s, v);
+        if (!write && !tied.empty() && tied[v]) continue;
+        for (std::size_t j = 0; j < n; ++j) {
+          const float value = recv[static_cast<std::size_t>(recvSlot[begin + j]) * V + v];
+          if (write) {
+            largest = std::max(largest, static_cast<double>(std::fabs(value - row[j])));
+            row[j] = value;
+          } else {
+            largest = std::max(largest, std::fabs(static_cast<double>(value) - row[j]));
+          }
+        }
+      }
+      change[i] = largest;
+    });
+    double largest = 0;
+    for (double c : change) largest = std::max(largest, c);
+    seconds_[0] += std::chrono::duration<double>(Clock::now() - began).count();
+    return largest;
+  }
+
+  double backupSeconds() const { return seconds_[0]; }    // backups and settling
+  double exchangeSeconds() const { return seconds_[1]; }  // exchanging
+
+ private:
+  const GridModel& g_;
+  const RankShare& share_;
+  const Ranks& ranks_;
+  QTable& q_;
+  const Transitions& local_;
+  bool given_;
+  unsigned threads_;
+  std::vector<float> send_, received_;
+  float* recv_;
+  std::vector<std::uint8_t> tied_;
+  double seconds_[2] = {0, 0};
+};
 
 class MpiValueIteration final : public Learner {
  public:
@@ -88,138 +217,32 @@ class MpiValueIteration final : public Learner {
     const GridModel& g = context.grid;
     const Problem& problem = context.problem;
     const std::size_t V = g.vertexCount, A = g.actionCount;
-    const std::size_t states = g.incomingBegin.size() - 1;
     const int me = ranks.rank(), K = ranks.size();
     // Ranks sharing a machine share its cores.
     const unsigned threads =
         threads_ > 0 ? threads_ : std::max(1u, context.threads / static_cast<unsigned>(std::max(1, ranks.localSize())));
     TrainingClock clock;
 
-    // The split, and the order of the rows each rank sends and receives: by the other
-    // rank, then by action.
-    const std::vector<int> owner = partitionByEndState(g, K);
-    const std::vector<std::uint32_t>& from = problem.model.actionFrom;
-    std::vector<std::uint32_t> mine, theirs;  // backed up here; leaving a state held here
-    for (std::uint32_t a = 0; a < A; ++a) {
-      if (owner[g.actionTo[a]] == me) mine.push_back(a);
-      if (owner[from[a]] == me) theirs.push_back(a);
-    }
-    std::stable_sort(mine.begin(), mine.end(), [&](auto x, auto y) { return owner[from[x]] < owner[from[y]]; });
-    std::stable_sort(theirs.begin(), theirs.end(),
-                     [&](auto x, auto y) { return owner[g.actionTo[x]] < owner[g.actionTo[y]]; });
-    std::vector<int> sendCount(K, 0), recvCount(K, 0);
-    std::vector<std::uint32_t> slot(A, 0), recvSlot(A, 0);
-    for (std::size_t i = 0; i < mine.size(); ++i) {
-      ++sendCount[owner[from[mine[i]]]];
-      slot[mine[i]] = static_cast<std::uint32_t>(i);
-    }
-    for (std::size_t i = 0; i < theirs.size(); ++i) {
-      ++recvCount[owner[g.actionTo[theirs[i]]]];
-      recvSlot[theirs[i]] = static_cast<std::uint32_t>(i);
-    }
-    std::vector<std::uint32_t> held;  // this rank's states
-    for (std::size_t s = 0; s < states; ++s)
-      if (owner[s] == me) held.push_back(static_cast<std::uint32_t>(s));
-    std::uint64_t sentRows = 0;
-    for (int d = 0; d < K; ++d)
-      if (d != me) sentRows += static_cast<std::uint64_t>(sendCount[d]);
-    const double exchanged = static_cast<double>(sentRows) * static_cast<double>(V) * sizeof(float);
-
+    const RankShare share = shareOf(g, problem.model.actionFrom, me, K);
+    const std::vector<int>& owner = share.owner;
     // This rank's transitions, unless the caller tabulated the problem (then its own).
     const bool given = !g.transition.empty() || g.compact();
-    std::vector<GridTransition, HugePageAllocator<GridTransition>> local;
-    if (!given) {
-      std::vector<TargetState> vertex(V);
-      for (std::size_t v = 0; v < V; ++v) vertex[v] = problem.grid.vertexState(v);
-      local.resize(mine.size() * V);
-      parallelFor(mine.size(), threads, [&](std::size_t i, unsigned) {
-        if (K == 1 && context.stop && context.stop->load(std::memory_order_relaxed)) return;
-        for (std::size_t v = 0; v < V; ++v) local[i * V + v] = tabulate(problem, mine[i], vertex[v]);
-      });
-      if (K == 1 && context.stop && context.stop->load()) throw TrainInterrupted(0, 0, false);
-    }
+    const Transitions local = given ? Transitions() : tabulateMine(context, share.mine, K, threads);
     // Training time starts after the tabulation, as for learners given a tabulated model.
     const double tabulateSeconds = clock.seconds();
     clock.leaveOut(tabulateSeconds);
 
-    // The rows of this rank's states only: a table over a model in which the other
-    // states have no actions (QTable keeps each state's block contiguous, so row(s, v) of
-    // an own state is where backups and maxInterpolated() expect it). Rank 0 keeps the
-    // whole table too, for checkpoints and the result, allocated when first needed.
-    StateActionModel heldModel;
-    heldModel.stateFrame.assign(states, 0);
-    heldModel.stateActionBegin.assign(states + 1, 0);
-    for (std::size_t s = 0; s < states; ++s)
-      heldModel.stateActionBegin[s + 1] =
-          heldModel.stateActionBegin[s] + (owner[s] == me ? g.stateActionBegin[s + 1] - g.stateActionBegin[s] : 0);
-    heldModel.actionFrom.assign(heldModel.stateActionBegin.back(), 0);
-    QTable q(heldModel, V);
+    // The rows of this rank's states only (heldModel()). Rank 0 keeps the whole table too,
+    // for checkpoints and the result, allocated when first needed.
+    const StateActionModel model = heldModel(g, owner, me);
+    QTable q(model, V);
     QTable whole;  // K > 1 only: with one rank `q` is the whole table
     auto wholeTable = [&]() -> QTable& {
       if (K == 1) return q;
       if (whole.vertexCount() == 0) whole = QTable(problem.model, V);
       return whole;
     };
-    std::vector<float> send(mine.size() * V), received(K > 1 ? theirs.size() * V : 0);
-    float* recv = K > 1 ? received.data() : send.data();
-    // The backups of the actions ending at this rank's states, into `send`, then the
-    // exchange; the seconds of each are summed for the report.
-    double seconds[2] = {0, 0};  // backups and settling; exchanging
-    auto backups = [&] {
-      const auto began = Clock::now();
-      parallelFor(held.size(), threads, [&](std::size_t i, unsigned) {
-        const std::uint32_t s = held[i];
-        for (std::uint32_t k = g.incomingBegin[s]; k < g.incomingBegin[s + 1]; ++k) {
-          const std::size_t a = g.incoming[k];
-          float* values = &send[static_cast<std::size_t>(slot[a]) * V];
-          if (!given) {
-            const GridTransition* t = &local[static_cast<std::size_t>(slot[a]) * V];
-            for (std::size_t v = 0; v < V; ++v) values[v] = backup(q, g, a, t[v]);
-          } else if (g.compact()) {
-            for (std::size_t v = 0; v < V; ++v) values[v] = backup(q, g, a, g.landing(a, v));
-          } else {
-            for (std::size_t v = 0; v < V; ++v) values[v] = backup(q, g, a, g.transition[a * V + v]);
-          }
-          g.hanging.apply(values);
-        }
-      });
-      const auto exchanging = Clock::now();
-      ranks.exchange(send.data(), sendCount, recv, recvCount, V);
-      seconds[0] += std::chrono::duration<double>(exchanging - began).count();
-      seconds[1] += std::chrono::duration<double>(Clock::now() - exchanging).count();
-    };
-    // The received values against this rank's block: the largest change (as value_iteration
-    // measures it), written into the block when `write`; else the Bellman residual (as
-    // bellmanResidual() measures it: in double, hanging vertices skipped).
-    std::vector<std::uint8_t> tied(g.hanging.empty() ? 0 : V, 0);
-    for (std::uint32_t v : g.hanging.vertex) tied[v] = 1;
-    auto settle = [&](bool write) {
-      const auto began = Clock::now();
-      std::vector<double> change(held.size(), 0.0);
-      parallelFor(held.size(), threads, [&](std::size_t i, unsigned) {
-        const std::uint32_t s = held[i];
-        const std::size_t n = q.actionsOf(s), begin = g.stateActionBegin[s];
-        double largest = 0;
-        for (std::size_t v = 0; v < V; ++v) {
-          float* row = q.row(s, v);
-          if (!write && !tied.empty() && tied[v]) continue;
-          for (std::size_t j = 0; j < n; ++j) {
-            const float value = recv[static_cast<std::size_t>(recvSlot[begin + j]) * V + v];
-            if (write) {
-              largest = std::max(largest, static_cast<double>(std::fabs(value - row[j])));
-              row[j] = value;
-            } else {
-              largest = std::max(largest, std::fabs(static_cast<double>(value) - row[j]));
-            }
-          }
-        }
-        change[i] = largest;
-      });
-      double largest = 0;
-      for (double c : change) largest = std::max(largest, c);
-      seconds[0] += std::chrono::duration<double>(Clock::now() - began).count();
-      return largest;
-    };
+    RankSweeps rank(g, share, ranks, q, local, given, threads);
 
     TrainResult result;
     const std::uint64_t pairs = static_cast<std::uint64_t>(V) * A;
@@ -245,8 +268,8 @@ class MpiValueIteration final : public Learner {
     };
     const int killRank = testKill("rank"), killSweep = testKill("sweep");
     while (sweeps < maxSweeps_) {
-      backups();
-      change = settle(true);
+      rank.backups();
+      change = rank.settle(true);
       ++sweeps;
       double global[2] = {change, context.stop && context.stop->load(std::memory_order_relaxed) ? 1.0 : 0.0};
       ranks.maxAll(global, 2);
@@ -267,8 +290,8 @@ class MpiValueIteration final : public Learner {
       if (global[1] > 0 && !last) throw TrainInterrupted(sweeps * pairs, 0, checkpointing[0] > 0);
     }
     // The Bellman residual of the final table: one more round of backups, measured only.
-    backups();
-    double residual[1] = {settle(false)};
+    rank.backups();
+    double residual[1] = {rank.settle(false)};
     ranks.maxAll(residual, 1);
     // The whole table to rank 0, and to every rank when the caller needs it there (a
     // self-play round's, which the next round's opponent plays); else the other ranks
@@ -277,7 +300,7 @@ class MpiValueIteration final : public Learner {
     QTable& target = ranks.root() || context.wholeTableEverywhere ? wholeTable() : dummy;
     ranks.gather(q, ranks.root() ? target : dummy, g, owner);
     if (context.wholeTableEverywhere) ranks.broadcast(target.values().data(), target.values().size());
-    double busiest[3] = {exchanged, seconds[0], seconds[1]};  // the busiest rank's
+    double busiest[3] = {share.exchanged, rank.backupSeconds(), rank.exchangeSeconds()};  // the busiest rank's
     ranks.maxAll(busiest, 3);
     result.table = K == 1 ? std::move(q) : std::move(whole);
     result.updates = sweeps * pairs;

@@ -49,7 +49,18 @@ std::string encodeCells(const std::vector<std::uint8_t>& seen) {
   return text;
 }
 
-// The inverse of the state train() saves, read through `r` (which names the file) at path
+nlohmann::json savedState(const Walk& w, bool capped, double seconds, const std::vector<CurvePoint>& curve,
+                          const std::vector<std::uint8_t>& cellSeen) {
+  nlohmann::json points = nlohmann::json::array();
+  for (const CurvePoint& p : curve) points.push_back({p.updates, p.seconds, p.residual, p.meanResidual});
+  return {{"updates", w.updates},
+          {"walk", toJson(w, capped)},
+          {"seconds", seconds},
+          {"curve", points},
+          {"cells_seen", encodeCells(cellSeen)}};
+}
+
+// The inverse of savedState(), read through `r` (which names the file) at path
 // "state". Throws mgrl::Error naming the member, what was expected and what was found.
 Saved readSaved(const nlohmann::json& state, const ManifestReader& r, std::size_t states, std::size_t cells,
                 std::uint64_t budget, std::uint64_t curvePoints, std::uint64_t maxEpisode) {

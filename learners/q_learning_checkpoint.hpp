@@ -1,7 +1,8 @@
 #pragma once
 /// \file
 /// What a `q_learning` checkpoint holds beside the table (issue 19's kill-safe training):
-/// the walk that determines the rest of a run, and its reading back, strict in every member.
+/// the walk that determines the rest of a run, its writing, and its reading back, strict in
+/// every member.
 /// Split from q_learning.cpp, which runs the walk: this file changes when the format does.
 #include <cstddef>
 #include <cstdint>
@@ -44,7 +45,13 @@ nlohmann::json toJson(const Walk& w, bool capped);
 /// lowest bit first).
 std::string encodeCells(const std::vector<std::uint8_t>& seen);
 
-/// The inverse of the state train() saves, read through `r` (which names the file) at path
+/// The state train() saves beside the table: the walk's update count, the walk
+/// (toJson(w, capped)), the training seconds so far, the learning curve and the cells seen
+/// (encodeCells()).
+nlohmann::json savedState(const Walk& w, bool capped, double seconds, const std::vector<CurvePoint>& curve,
+                          const std::vector<std::uint8_t>& cellSeen);
+
+/// The inverse of savedState(), read through `r` (which names the file) at path
 /// "state". Throws mgrl::Error naming the member, what was expected and what was found.
 Saved readSaved(const nlohmann::json& state, const ManifestReader& r, std::size_t states, std::size_t cells,
                 std::uint64_t budget, std::uint64_t curvePoints, std::uint64_t maxEpisode);

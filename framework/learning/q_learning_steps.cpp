@@ -1,5 +1,5 @@
 // The paper's Q-learning (sec. 4.2) one action at a time; see q_learning_steps.hpp. The
-// walk consumes random numbers in learners/q_learning.cpp's order and the update is the same
+// walk consumes random numbers in learners/q_learning_walk.cpp's order and the update is the same
 // expression, so the same seed and budget give the same table (tests/learning_test.cpp).
 #include "mgrl/learning/q_learning_steps.hpp"
 
@@ -35,7 +35,8 @@ double QLearningSteps::tableBytes(const Problem& problem) {
   return pairs * (sizeof(float) + 1) + static_cast<double>(problem.grid.vertexCount()) * sizeof(TargetState);
 }
 
-// As learners/q_learning.cpp's restart(): a random pose, then a random target inside the grid.
+// As QLearningWalk::restart() (learners/q_learning_walk.cpp): a random pose, then a random target
+// inside the grid.
 void QLearningSteps::restart() {
   state_ = static_cast<std::uint32_t>(rng_.below(problem_.model.stateCount()));
   do target_ = problem_.grid.sample(rng_);
