@@ -2,8 +2,9 @@
 /// \file
 /// One rank's share of an mpi_value_iteration run: which states it holds, which actions it
 /// backs up, the order of the rows it sends and receives, and the model of its part of the
-/// table. Pure bookkeeping over the grid model (no MPI): mgrl/learning/partition.hpp's partitionByEndState()
-/// decides the owner of each state, this file what follows from it for one rank.
+/// table. Pure bookkeeping over the grid model (no MPI): partitionByEndState()
+/// (mgrl/learning/partition.hpp) decides the owner of each state, this file what follows
+/// from it for one rank.
 #include <cstdint>
 #include <vector>
 
