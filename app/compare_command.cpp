@@ -4,7 +4,10 @@
 
 #include <fmt/format.h>
 
+#include "mgrl/core/error.hpp"
+#include "mgrl/core/files.hpp"
 #include "mgrl/core/numbers.hpp"
+#include "mgrl/reports/compare_report.hpp"
 #include "plural.hpp"
 #include "train_support.hpp"
 
@@ -13,11 +16,24 @@ namespace mgrl::app {
 using json = nlohmann::json;
 
 json runCompare(const CompareOptions& options) {
+  if (!options.report.empty()) {
+    std::error_code ec;
+    std::filesystem::create_directories(options.report, ec);
+    // The probe is `.mgrl-probe-PID`; a killed compare's is removed by the next one.
+    if (ec || !folderTakesNewFiles(options.report, ".mgrl-probe-"))
+      throw Error(fmt::format("--report {}: expected a folder where files can be written, found {}",
+                              options.report.string(), ec ? ec.message() : std::string("it cannot be written")));
+  }
   TrainHooks hooks;
   hooks.progressBar = options.progressBar;
   hooks.stop = &stopRequested;
   const StopSignals signals;  // Ctrl-C and SIGTERM raise stopRequested
-  return compareLearners(options, hooks);
+  json report = compareLearners(options, hooks);
+  if (!options.report.empty()) {
+    writeCompareReport(options.report, report);
+    report["report"] = (options.report / "index.html").string();
+  }
+  return report;
 }
 
 std::string compareText(const json& r) {

@@ -29,7 +29,7 @@ json runEval(const EvalOptions& options) {
   needs.policy = options.controller == "policy" ? PolicyNeed::Required : PolicyNeed::None;
   needs.policyDir = options.policy;
   needs.motion = false;  // trials need no poses
-  const std::unique_ptr<Session> session = openSession(options, needs);
+  const std::unique_ptr<const Session> session = openSession(options, needs);
   const double startup = secondsSinceStart();
   json report = evaluate(*session, session->policy, settings);
   report["startup_seconds"] = startup;

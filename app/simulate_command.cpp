@@ -55,7 +55,7 @@ json runSimulate(const SimulateOptions& options) {
   needs.policy = settings.controller.name == "policy" ? PolicyNeed::Required : PolicyNeed::None;
   needs.policyDir = options.policy;
   needs.beforeGraph = [&](const Scenario& scenario) { out = prepareOutputs(settings.exportRequest(), scenario); };
-  const std::unique_ptr<Session> session = openSession(options, needs);
+  const std::unique_ptr<const Session> session = openSession(options, needs);
   return simulate(*session, settings, out);
 }
 

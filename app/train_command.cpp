@@ -26,7 +26,7 @@ json runTrain(const TrainOptions& given) {
     if (!options.behavior.empty()) requireBehavior(scenario, options.behavior);
     bundleFolder(options, options, scenario);
   };
-  const std::unique_ptr<Session> session = openSession(options, needs);
+  const std::unique_ptr<const Session> session = openSession(options, needs);
   TrainHooks hooks;
   hooks.log = options.log;
   hooks.progressBar = options.progressBar;

@@ -211,7 +211,7 @@ int main(int argc, char** argv) {
     if (error) {
       // The boxing model (graph from the cache of a value-iteration training).
       const mgrl::bench::TrainedBoxing train = mgrl::bench::trainBoxing("adaptive");
-      const std::unique_ptr<mgrl::Session> session = mgrl::openSession(train.options, {.motion = false});
+      const std::unique_ptr<const mgrl::Session> session = mgrl::openSession(train.options, {.motion = false});
       fs::remove_all(train.options.cacheDir);
       const mgrl::StateActionModel& model = session->model();
       // The scenario's hit reward.
@@ -295,7 +295,7 @@ int main(int argc, char** argv) {
         needs.policy = mgrl::PolicyNeed::Required;
         needs.policyDir = train.policy;
         needs.motion = false;
-        const std::unique_ptr<mgrl::Session> session = mgrl::openSession(train.options, needs);
+        const std::unique_ptr<const mgrl::Session> session = mgrl::openSession(train.options, needs);
         mgrl::PolicyController greedy(session->model(), session->policy);
         use(session->model(), greedy);
       };

@@ -37,7 +37,7 @@ inline TrainedBoxing trainBoxing(const std::string& tag,
   trained.options.sets = std::move(sets);
   trained.options.plugins = &builtinPlugins();
   trained.policy = scratch / "policy";
-  const std::unique_ptr<Session> session = openSession(trained.options, {.motion = false});
+  const std::unique_ptr<const Session> session = openSession(trained.options, {.motion = false});
   TrainSettings settings;
   settings.out = trained.policy;
   trainScenario(*session, settings);

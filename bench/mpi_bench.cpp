@@ -123,7 +123,7 @@ int main(int argc, char** argv) {
     }
     SessionNeeds needs;
     needs.motion = false;
-    const std::unique_ptr<Session> session = openSession(options, needs);
+    const std::unique_ptr<const Session> session = openSession(options, needs);
     const auto found = std::find_if(session->behaviors.begin(), session->behaviors.end(),
                                     [&](const Behavior& b) { return b.name == behaviorName; });
     if (found == session->behaviors.end())

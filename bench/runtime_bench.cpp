@@ -57,7 +57,7 @@ int main(int argc, char** argv) {
     mgrl::SessionNeeds needs;
     needs.policy = mgrl::PolicyNeed::Required;
     needs.policyDir = train.policy;
-    const std::unique_ptr<mgrl::Session> session = mgrl::openSession(train.options, needs);
+    const std::unique_ptr<const mgrl::Session> session = mgrl::openSession(train.options, needs);
     const mgrl::StateActionModel& model = session->model();
     const std::vector<mgrl::PolicyPart>& parts = session->policy;
     fs::remove_all(scratch);

@@ -30,7 +30,8 @@
 #include "mgrl/learning/learner.hpp"
 #include "mgrl/learning/policy_bundle.hpp"
 #include "mgrl/learning/problem.hpp"
-#include "mgrl/session/compare_report.hpp"
+#include "mgrl/reports/compare_report.hpp"
+#include "mgrl/session/compare_summary.hpp"
 #include "mgrl/session/compare_tables.hpp"
 #include "mgrl/session/episodes.hpp"
 #include "mgrl/session/evaluate.hpp"
@@ -370,7 +371,9 @@ class PySession {
   }
 
   // The world run headless (mgrl::simulate) on `tables` (as evaluate's); exports as `mgrl
-  // simulate`'s. A session opened on a cached graph parses the capture at the first call.
+  // simulate`'s. The session was opened on the model alone; the first call opens it again
+  // with the capture (poses and bodies need it) and keeps that one for the next calls. The
+  // tables' grids are this session's behaviours', the same grids as the other's.
   py::object simulate(const py::object& tables, long long avatars, double seconds, std::uint64_t seed,
                       const std::string& controller, int horizon, const py::object& bvhOut, const py::object& gltfOut,
                       const py::object& eventsOut, bool poses) {
@@ -394,9 +397,22 @@ class PySession {
     nlohmann::json report;
     {
       py::gil_scoped_release release;
-      report = mgrl::simulate(*session_, settings, outputs, controller == "policy" ? &t.parts : nullptr);
+      if (!captured_) captured_ = withCapture(*session_);
+      report = mgrl::simulate(*captured_, settings, outputs, controller == "policy" ? &t.parts : nullptr);
     }
     return py::module_::import("json").attr("loads")(report.dump());
+  }
+
+  // `session` opened again with the capture; refused if the capture is no longer the one its
+  // graph was made from (the tables index that graph's actions).
+  static std::unique_ptr<const Session> withCapture(const Session& session) {
+    std::unique_ptr<const Session> captured = openSession(session.options, {.motion = true});
+    if (captured->graph.key != session.graph.key)
+      throw Error(fmt::format(
+          "simulate: the capture of {} changed on disk since the session opened (graph {} now, "
+          "{} then); open the session again",
+          session.scenario.path.string(), captured->graph.key.substr(0, 12), session.graph.key.substr(0, 12)));
+    return captured;
   }
 
   void savePolicy(const std::filesystem::path& path, const py::object& tables, const std::string& learnerName) {
@@ -432,7 +448,8 @@ class PySession {
   }
 
  private:
-  std::unique_ptr<Session> session_;
+  std::unique_ptr<const Session> session_;
+  std::unique_ptr<const Session> captured_;  ///< the same scenario with the capture, for simulate
   std::unique_ptr<PolicyBundle> bundle_;  ///< the scenario's trained bundle, once read
   std::map<std::string, std::shared_ptr<PolicyBehavior>> others_;  ///< otherTable()'s, by behaviour
   nlohmann::json lastTrain_;  ///< train()'s figures, for compare

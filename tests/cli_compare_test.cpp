@@ -19,7 +19,7 @@
 #include "compare_command.hpp"
 #include "mgrl/core/bundle.hpp"
 #include "mgrl/core/npy.hpp"
-#include "mgrl/session/compare_report.hpp"
+#include "mgrl/reports/compare_report.hpp"
 #include "test_support.hpp"
 
 // A namespace of its own: the suite compiles in unity batches (tests/CMakeLists.txt).

@@ -83,32 +83,44 @@ TEST_CASE("a session opens the scenario's graph, behaviours, task and policy bun
 }
 
 TEST_CASE(
-    "a session plays a self-play round's tables only when every behaviour has one, and simulate asks for the "
-    "bundle's",
+    "a self-play round's tables are played only when every behaviour has one, as a value: the session keeps its "
+    "own, and simulate asks for the bundle's",
     "[session][data]") {
   const fs::path trained = trainedBoxing();
   const auto bare = openSession(boxingOptions(trained), {.motion = false});
-  CHECK_THROWS_WITH(bare->playRound(1), "self-play round 1: expected a policy bundle, found none");
+  CHECK_THROWS_WITH(bare->roundPolicies(1), "self-play round 1: expected a policy bundle, found none");
+
+  // Bundles with round 1 of approach only, and of both behaviours (approach's changed).
+  test::TempDir temp("session-rounds");
+  const auto opened =
+      openSession(boxingOptions(trained), {.policy = PolicyNeed::Required, .policyDir = trained / "policy"});
+  PolicyBundle rounds = loadPolicyBundle(trained / "policy", opened->model(), opened->graph.key);
+  const QTable approach = rounds.behaviors.at("approach").table, hit = rounds.behaviors.at("hit").table;
+  rounds.behaviors["approach-round1"] = rounds.behaviors.at("approach");
+  rounds.behaviors["approach-round1"].table.at(0, 0) += 1;
+  savePolicyBundle(temp.path / "partial", rounds);
+  rounds.behaviors["hit-round1"] = rounds.behaviors.at("hit");
+  savePolicyBundle(temp.path / "full", rounds);
+
+  const auto partial =
+      openSession(boxingOptions(trained), {.policy = PolicyNeed::Required, .policyDir = temp.path / "partial"});
+  CHECK_THROWS_WITH(partial->roundPolicies(1), Contains("expected self-play round 1's table for behaviour 'hit' "
+                                                        "(hit-round1), found only approach, approach-round1, hit"));
 
   const auto session =
-      openSession(boxingOptions(trained), {.policy = PolicyNeed::Required, .policyDir = trained / "policy"});
-  std::map<std::string, PolicyBehavior>& kept = session->bundle.behaviors;
-  const QTable approach = kept.at("approach").table, hit = kept.at("hit").table;
-  // Round 1 of approach only: refused at hit, and nothing taken.
-  kept["approach-round1"] = kept.at("approach");
-  kept["approach-round1"].table.at(0, 0) += 1;
-  CHECK_THROWS_WITH(session->playRound(1), Contains("expected self-play round 1's table for behaviour 'hit' "
-                                                    "(hit-round1), found only approach, approach-round1, hit"));
-  CHECK(kept.at("approach").table == approach);
-  CHECK(kept.count("approach-round1") == 1);
-  // Both rounds there: the policy plays them, and they leave the bundle.
-  kept["hit-round1"] = kept.at("hit");
-  session->playRound(1);
-  CHECK(kept.at("approach").table.at(0, 0) == approach.at(0, 0) + 1);
-  CHECK(kept.at("hit").table == hit);
-  CHECK(session->policy[0].table == &kept.at("approach").table);
-  CHECK(kept.count("approach-round1") == 0);
-  CHECK(kept.count("hit-round1") == 0);
+      openSession(boxingOptions(trained), {.policy = PolicyNeed::Required, .policyDir = temp.path / "full"});
+  const Policies played = session->roundPolicies(1);
+  REQUIRE(played.main.size() == 2);
+  REQUIRE(played.mainBundle);
+  CHECK(played.main[0].table->at(0, 0) == approach.at(0, 0) + 1);
+  CHECK(*played.main[1].table == hit);
+  CHECK(played.main[0].table == &played.mainBundle->behaviors.at("approach").table);
+  CHECK(played.mainBundle->behaviors.count("approach-round1") == 0);
+  CHECK(played.dir == temp.path / "full");
+  // The session still plays its final tables.
+  CHECK(session->policy[0].table == &session->bundle.behaviors.at("approach").table);
+  CHECK(*session->policy[0].table == approach);
+  CHECK(session->bundle.behaviors.count("approach-round1") == 1);
 
   // simulate's round is the bundle's: with tables of the caller's own it is refused.
   SimulateSettings settings;
@@ -118,39 +130,28 @@ TEST_CASE(
                     "--round: expected the bundle's tables, found tables given by the caller");
 }
 
-TEST_CASE("a session without the capture's poses starts from the cached model alone", "[session][data]") {
+TEST_CASE("a session without the capture's poses starts from the cached model alone, and simulate asks for them",
+          "[session][data]") {
   const fs::path trained = trainedBoxing();
   const auto session = openSession(boxingOptions(trained), {.motion = false});
   CHECK(session->policy.empty());
   CHECK(session->policyDir.empty());
   CHECK(session->graph.fromCache);
-  CHECK_FALSE(session->graph.db.skeleton);  // nothing parsed: the graph came from the cache
+  CHECK_FALSE(session->hasMotion());  // nothing parsed: the graph came from the cache
   CHECK(session->body.points.empty());
-}
+  SimulateSettings settings;
+  settings.controller = {"random"};
+  Outputs outputs;
+  CHECK_THROWS_WITH(simulate(*session, settings, outputs),
+                    Contains("simulate: expected a session opened with the capture"));
 
-TEST_CASE("a session opened on the cached model reads the capture later only if it is still the graph's",
-          "[session][data]") {
-  const fs::path trained = trainedBoxing();
-  SECTION("a capture file gone since: the loader's error, naming it, and nothing loaded") {
-    const auto session = openSession(boxingOptions(trained), {.motion = false});
-    session->scenario.motion.files.front() = trained / "gone.bvh";
-    CHECK_THROWS_WITH(session->loadMotion(), Contains("gone.bvh"));
-    CHECK_FALSE(session->graph.db.skeleton);
-  }
-  SECTION("another capture in its place: refused, not indexed out of range") {
-    const auto session = openSession(boxingOptions(trained), {.motion = false});
-    session->scenario.motion.files = {fs::path(MGRL_SOURCE_DIR) / "tests" / "data" / "boxer21.bvh"};
-    CHECK_THROWS_WITH(session->loadMotion(), Contains("is not the one the cached graph was built from"));
-    CHECK_FALSE(session->graph.db.skeleton);
-    CHECK(session->body.points.empty());
-  }
-  SECTION("the same capture: parsed once, poses and bodies ready") {
-    const auto session = openSession(boxingOptions(trained), {.motion = false});
-    session->loadMotion();
-    REQUIRE(session->graph.db.skeleton);
-    CHECK(session->graph.db.frameCount() == session->graph.model.framesTotal);
-    CHECK_FALSE(session->body.points.empty());
-  }
+  const auto captured = openSession(boxingOptions(trained));
+  REQUIRE(captured->hasMotion());
+  CHECK(captured->graph.db.frameCount() == captured->graph.model.framesTotal);
+  CHECK_FALSE(captured->body.points.empty());
+  settings.seconds = 1;
+  settings.avatars = 2;
+  CHECK(simulate(*captured, settings, outputs)["frames"].get<std::size_t>() > 0);
 }
 
 TEST_CASE("a session refuses a missing bundle when one is required, and says why when it is optional",

@@ -36,7 +36,7 @@ const std::vector<std::string> kValueIteration = {"behaviors.approach.learner.ty
 // learning tests the training) and loaded once per process.
 struct Boxing {
   fs::path dir = test::sharedResult("boxing-value-iteration", [](const fs::path& d) { app::runTrain(trainOptions(d)); });
-  std::unique_ptr<Session> session;
+  std::unique_ptr<const Session> session;
   std::vector<Behavior> behaviors;
   PolicyBundle bundle;
   std::vector<PolicyPart> parts;
@@ -53,7 +53,7 @@ struct Boxing {
     train.sets = kValueIteration;
     return train;
   }
-  static std::unique_ptr<Session> open(const fs::path& dir) { return openSession(trainOptions(dir)); }
+  static std::unique_ptr<const Session> open(const fs::path& dir) { return openSession(trainOptions(dir)); }
 
   Boxing() : session(open(dir)) {
     const app::TrainOptions train = trainOptions(dir);

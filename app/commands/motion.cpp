@@ -8,7 +8,7 @@
 #include "mgrl/core/data_paths.hpp"
 #include "mgrl/core/error.hpp"
 #include "mgrl/scenario/behaviors.hpp"
-#include "mgrl/session/starter.hpp"
+#include "mgrl/starter/starter.hpp"
 #include "plugins.hpp"
 
 namespace mgrl::app::cli {

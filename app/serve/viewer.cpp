@@ -236,8 +236,9 @@ std::string ViewerSession::scene() const {
               {"partners", partners},
               // What the second avatar of each pair plays when it is not the page's
               // controller: the scenario's scripted opponent (a dodge scene), or null.
-              {"opponent", mode_ != Mode::Target && !a.session->partnerName().empty() ? json(a.session->partnerName())
-                                                                                      : json(nullptr)},
+              {"opponent", mode_ != Mode::Target && !a.session->partnerName(a.played).empty()
+                               ? json(a.session->partnerName(a.played))
+                               : json(nullptr)},
               {"controller", s.controller},
               {"controllers", controllers},
               {"horizon", s.horizon},

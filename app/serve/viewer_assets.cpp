@@ -28,6 +28,7 @@ std::shared_ptr<ViewerAssets> loadAssets(const ServeOptions& options, const Grap
   needs.graphFrom = graphFrom;
   assets->session = openSession(options, needs);
   const Session& session = *assets->session;
+  assets->played = session.policies();
   if (!session.policyNote.empty())
     assets->note = fmt::format(
         "No usable policy bundle ({}), so the online search runs instead. Train one with: "
@@ -49,14 +50,14 @@ std::shared_ptr<ViewerAssets> loadAssets(const ServeOptions& options, const Grap
 // --partner-policy` does.
 void loadPartner(ViewerAssets& spar, const ServeOptions& options) {
   if (options.partnerPolicy.empty()) return;
-  Session& session = *spar.session;
+  const Session& session = *spar.session;
   if (!session.partnerName().empty())
     throw Error(
         fmt::format("--partner-policy: expected a scenario whose partners play the page's controller, found "
                     "{}, whose partner is its scripted opponent ({})",
                     session.scenario.path.string(), session.partnerName()));
   try {
-    session.loadPartnerPolicy(options.partnerPolicy, options.partnerRound);
+    spar.played = session.withPartner(spar.played, options.partnerPolicy, options.partnerRound);
   } catch (const Error& e) {
     throw Error(fmt::format("--partner-policy: {}", e.what()));
   }

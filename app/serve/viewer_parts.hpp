@@ -54,7 +54,10 @@ void startWorker(std::function<void()> work);
 struct ViewerAssets {
   /// The scenario opened once for every page: graph, behaviours, task and (when one serves)
   /// the policy bundle; session->policy empty: the policy controller is not offered.
-  std::unique_ptr<Session> session;
+  std::unique_ptr<const Session> session;
+  /// The tables its worlds play: the session's bundle and, with --partner-policy, the
+  /// partners' (Session::withPartner()).
+  Policies played;
   double meanOutDegree = 1;  ///< actions per state, for the online search's cost
   std::string note;          ///< shown on the page (no policy bundle, ...)
   /// Shown in sparring and crowds only: what the partners play (--partner-policy).

@@ -23,7 +23,7 @@ void ViewerSession::followSuccess() {
   const World& world = *s.world;
   const StateActionModel& model = assets_->model();
   // A scripted opponent or a partner bundle plays the second of each pair, not the page's controller.
-  const bool partnerApart = !assets_->session->partnerName().empty();
+  const bool partnerApart = !assets_->session->partnerName(assets_->played).empty();
   const TrackedOpponent* opponent = assets_->session->task.trackedOpponent;
   for (std::size_t i = 0; i < world.avatarCount(); ++i) {
     if (partnerApart && world.partner(i) >= 0 && i % 2 == 1) continue;

@@ -26,7 +26,8 @@ std::atomic<bool> gBuilding{false};
 void ViewerSession::rebuild(Mode mode, int avatars) {
   // Sparring and crowds may play another scenario's behaviours (ViewerAssets::sparring).
   std::shared_ptr<const ViewerAssets> want = mode != Mode::Target && root_->sparring ? root_->sparring : root_;
-  WorldSetup setup = want->session->worldSetup(static_cast<std::size_t>(avatars), 1, {"random"});  // replaced below
+  WorldSetup setup =
+      want->session->worldSetup(static_cast<std::size_t>(avatars), 1, {"random"}, want->played);  // replaced below
   setup.params.mode = mode == Mode::Target ? "targets" : "sparring";
   setup.threads = 1;  // every page on the server's one thread
   setup.poses = true;

@@ -25,8 +25,8 @@
 #include "mgrl/core/files.hpp"
 #include "mgrl/learning/policy_bundle.hpp"
 #include "mgrl/scenario/behaviors.hpp"
-#include "mgrl/session/compare_report.hpp"
 #include "mgrl/session/compare_snapshots.hpp"
+#include "mgrl/session/compare_summary.hpp"
 #include "mgrl/session/compare_tables.hpp"
 #include "mgrl/session/evaluate.hpp"
 #include "mgrl/session/session.hpp"
@@ -260,7 +260,7 @@ void trainWithSets(const CompareOptions& options, const std::vector<std::string>
   SessionNeeds needs;
   needs.motion = false;
   needs.graphFrom = &graph;
-  const std::unique_ptr<Session> opened = openSession(session, needs);
+  const std::unique_ptr<const Session> opened = openSession(session, needs);
   TrainHooks quiet = hooks;
   quiet.log = options.log;
   trainScenario(*opened, settings, quiet);
@@ -308,7 +308,7 @@ json evaluateRun(const CompareOptions& options, const std::vector<std::string>& 
   needs.policyDir = dir;
   needs.motion = false;  // trials need no poses
   needs.graphFrom = &graph;
-  const std::unique_ptr<Session> opened = openSession(session, needs);
+  const std::unique_ptr<const Session> opened = openSession(session, needs);
   EvalSettings settings;
   settings.trials = options.trials;
   settings.seconds = options.seconds;
@@ -349,14 +349,6 @@ json compareLearners(const CompareOptions& options, const TrainHooks& hooks) {
   const fs::path compareCache = cacheDir / "compare";
   std::vector<Run> runs = planRuns(options, learnerSets, compareCache);
   const Run reference = planReference(options, flags, compareCache);
-  if (!options.report.empty()) {
-    std::error_code ec;
-    fs::create_directories(options.report, ec);
-    // The probe is `.mgrl-probe-PID`; a killed compare's is removed by the next one.
-    if (ec || !folderTakesNewFiles(options.report, ".mgrl-probe-"))
-      throw Error(fmt::format("--report {}: expected a folder where files can be written, found {}",
-                              options.report.string(), ec ? ec.message() : std::string("it cannot be written")));
-  }
 
   auto log = [&](const std::string& line) {
     if (options.log) options.log(line);
@@ -368,7 +360,7 @@ json compareLearners(const CompareOptions& options, const TrainHooks& hooks) {
       fmt::format("{}-shared", defaultPolicyDirectory(compareCache, scenario, *options.plugins).filename().string());
   SessionNeeds needs;
   needs.motion = false;  // the model is enough: no poses
-  const std::unique_ptr<Session> opened = openSession(options, needs);
+  const std::unique_ptr<const Session> opened = openSession(options, needs);
   const GraphResult& graph = opened->graph;
   const StateActionModel& model = graph.model;
   // The reference's grid stays: tables on other grids are measured by interpolating on it.
@@ -445,10 +437,6 @@ json compareLearners(const CompareOptions& options, const TrainHooks& hooks) {
     report["runs"].push_back(r);
   }
   report["learners"] = learnerSummaries(report["runs"], options.learners);
-  if (!options.report.empty()) {
-    writeCompareReport(options.report, report);
-    report["report"] = (options.report / "index.html").string();
-  }
   return report;
 }
 

@@ -7,7 +7,7 @@
 
 #include "mgrl/core/files.hpp"
 #include "mgrl/runtime/controller.hpp"
-#include "mgrl/session/compare_report.hpp"
+#include "mgrl/session/compare_summary.hpp"
 #include "mgrl/session/policy_source.hpp"
 #include "mgrl/session/task.hpp"
 

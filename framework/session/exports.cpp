@@ -284,7 +284,7 @@ WrittenFiles writeOutputs(Outputs& out, const ExportRequest& options, const Sess
   const std::size_t avatars = world.avatarCount();
   const Scenario& scenario = session.scenario;
   const GraphResult& graph = session.graph;
-  const WorldParams& params = session.task.world;
+  const WorldParams& params = world.params();
   const fs::path& policyDir = session.policyDir;
   std::string eventsText;
   for (const HitEvent& e : world.events()) eventsText += eventLine(e) + '\n';

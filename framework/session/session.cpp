@@ -22,26 +22,14 @@ ControllerParts Session::controllerParts(Variety variety) const {
   return parts;
 }
 
-void Session::loadMotion() {
-  if (graph.db.skeleton) return;
-  const WarningSink& log = options.log;
-  MotionDatabase db = loadMotionDatabase(scenario.motion, [&log](const std::string& w) {
-    if (log) log(fmt::format("graph: warning: {}", w));
-  });
-  // The graph came from the cache; the capture read now must be the one it was built from
-  // (poses and bodies index its frames).
-  if (db.frameCount() != graph.model.framesTotal || db.skeleton->jointCount() != graph.model.jointNames.size())
-    throw Error(fmt::format(
-        "the capture read now ({} frames, {} joints) is not the one the cached graph was built "
-        "from ({} frames, {} joints): it changed on disk since the session opened; open the "
-        "session again",
-        db.frameCount(), db.skeleton->jointCount(), graph.model.framesTotal, graph.model.jointNames.size()));
-  graph.db = std::move(db);
-  body = makeBodyTable(graph.db);
+Policies Session::policies() const {
+  Policies played(policy);
+  played.dir = policyDir;
+  return played;
 }
 
 WorldSetup Session::worldSetup(std::size_t avatars, std::uint64_t seed, const ControllerChoice& choice,
-                               const std::vector<PolicyPart>& policyParts) const {
+                               const Policies& played, int topK) const {
   checkControllerChoice(choice);
   WorldSetup setup;
   setup.model = &graph.model;
@@ -55,13 +43,16 @@ WorldSetup Session::worldSetup(std::size_t avatars, std::uint64_t seed, const Co
   setup.opponentPhases = task.opponentPhases;
   if (task.targetMotion && task.targetMotion->maxSpeed > 0) setup.targetMotion = task.environment;
   setup.stances = stanceCount(behaviors);
-  ControllerParts parts = controllerParts(task.world.variety);
-  parts.policy = policyParts;
+  Variety variety = task.world.variety;
+  if (topK > 0) variety.topK = topK;
+  setup.params.variety = variety;
+  ControllerParts parts = controllerParts(variety);
+  parts.policy = played.main;
   requireParts(choice, parts);  // now, not at the world's first decision
   setup.makeController = [choice, parts] { return makeController(choice, parts); };
-  if (!partnerPolicy.empty()) {
+  if (!played.partner.empty()) {
     ControllerParts partner = parts;
-    partner.policy = partnerPolicy;
+    partner.policy = played.partner;
     const ControllerChoice greedy{.name = "policy"};
     setup.makePartnerController = [greedy, partner] { return makeController(greedy, partner); };
   } else if (task.scriptedOpponent) {
@@ -76,8 +67,8 @@ WorldSetup Session::worldSetup(std::size_t avatars, std::uint64_t seed, const Co
   return setup;
 }
 
-std::string Session::partnerName() const {
-  if (!partnerPolicy.empty()) return "partner_policy";
+std::string Session::partnerName(const Policies& played) const {
+  if (!played.partner.empty()) return "partner_policy";
   if (task.scriptedOpponent) return task.scriptedOpponent->stand ? "stand" : "pursue";
   return "";
 }
@@ -115,24 +106,31 @@ void takeRound(PolicyBundle& bundle, const std::filesystem::path& dir, const std
 
 }  // namespace
 
-void Session::loadPartnerPolicy(const std::filesystem::path& dir, int round) {
-  partnerBundle = loadPolicyBundle(dir, graph.model, graph.key);
-  if (round > 0) takeRound(partnerBundle, dir, behaviors, round);
-  // A partner may have been trained with other settings (another opponent, other self-play
-  // rounds): its tables need only fit the scenario's graph and grids.
-  partnerPolicy = policyPartsOf(partnerBundle, dir, behaviors, options, {}, false);
-  partnerPolicyDir = dir;
-}
-
-void Session::playRound(int round) {
+Policies Session::roundPolicies(int round) const {
   if (policyDir.empty()) throw Error(fmt::format("self-play round {}: expected a policy bundle, found none", round));
-  takeRound(bundle, policyDir, behaviors, round);
+  auto roundBundle = std::make_shared<PolicyBundle>(loadPolicyBundle(policyDir, graph.model, graph.key));
+  takeRound(*roundBundle, policyDir, behaviors, round);
   // The final tables were checked against the scenario's settings; a round's were trained
   // with them too, against another opponent.
-  policy = policyPartsOf(bundle, policyDir, behaviors, options, {}, false);
+  Policies played;
+  played.main = policyPartsOf(*roundBundle, policyDir, behaviors, options, {}, false);
+  played.dir = policyDir;
+  played.mainBundle = std::move(roundBundle);
+  return played;
 }
 
-std::unique_ptr<Session> openSession(const SessionOptions& options, const SessionNeeds& needs) {
+Policies Session::withPartner(Policies played, const std::filesystem::path& dir, int round) const {
+  auto partnerBundle = std::make_shared<PolicyBundle>(loadPolicyBundle(dir, graph.model, graph.key));
+  if (round > 0) takeRound(*partnerBundle, dir, behaviors, round);
+  // A partner may have been trained with other settings (another opponent, other self-play
+  // rounds): its tables need only fit the scenario's graph and grids.
+  played.partner = policyPartsOf(*partnerBundle, dir, behaviors, options, {}, false);
+  played.partnerDir = dir;
+  played.partnerBundle = std::move(partnerBundle);
+  return played;
+}
+
+std::unique_ptr<const Session> openSession(const SessionOptions& options, const SessionNeeds& needs) {
   Scenario scenario = checkedScenario(options);
   // The bundle first: what its manifest alone refuses is said before the graph is loaded.
   std::string graphKey, policyNote;

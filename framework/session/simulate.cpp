@@ -123,28 +123,31 @@ std::pair<std::size_t, std::size_t> landedBySide(const World& world) {
 
 }  // namespace
 
-json simulate(Session& session, const SimulateSettings& settings, Outputs& outputs,
+json simulate(const Session& session, const SimulateSettings& settings, Outputs& outputs,
               const std::vector<PolicyPart>* policy) {
-  session.loadMotion();  // poses and bodies need the capture
+  if (!session.hasMotion())
+    throw Error(
+        "simulate: expected a session opened with the capture (SessionNeeds::motion), found one opened from the "
+        "cached model alone: poses and bodies need the capture");
   const bool record = settings.records();
   const bool poses = settings.poses || record;
-  if (settings.topK > 0) session.task.world.variety.topK = static_cast<int>(settings.topK);
-  const WorldParams& params = session.task.world;
   const SimulateFields& f = settings.fields;
   Session::checkPartnerChoice(settings.partnerPolicy, settings.partnerRound, f.partnerRound, f.partnerPolicyUsage);
   if (!settings.partnerPolicy.empty()) {
-    if (params.mode != "sparring")
-      throw Error(
-          fmt::format("{}: expected a sparring world (world.mode: sparring), found {}", f.partnerPolicy, params.mode));
+    if (session.task.world.mode != "sparring")
+      throw Error(fmt::format("{}: expected a sparring world (world.mode: sparring), found {}", f.partnerPolicy,
+                              session.task.world.mode));
     if (settings.controller.name != "policy")
       throw Error(fmt::format("{}: expected {} policy (the first avatar of each pair plays {}), found {}",
                               f.partnerPolicy, f.controller.controller, f.policy, settings.controller.name));
-    session.loadPartnerPolicy(settings.partnerPolicy, settings.partnerRound);
   }
-  if (settings.round > 0) {
-    if (policy) throw Error(fmt::format("{}: expected the bundle's tables, found tables given by the caller", f.round));
-    session.playRound(settings.round);
-  }
+  if (settings.round > 0 && policy)
+    throw Error(fmt::format("{}: expected the bundle's tables, found tables given by the caller", f.round));
+  Policies played = policy               ? Policies(*policy)
+                    : settings.round > 0 ? session.roundPolicies(settings.round)
+                                         : session.policies();
+  if (!settings.partnerPolicy.empty())
+    played = session.withPartner(std::move(played), settings.partnerPolicy, settings.partnerRound);
   const fs::path& policyDir = session.policyDir;
   const Scenario& scenario = session.scenario;
   const GraphResult& graph = session.graph;
@@ -162,7 +165,9 @@ json simulate(Session& session, const SimulateSettings& settings, Outputs& outpu
                       settings.bvhOut.empty() ? f.exports.gltfOut : f.exports.bvhOut, avatars, frames, bytes / 1e9,
                       kMaxRecordingBytes / 1e9, f.avatars, f.seconds));
   }
-  WorldSetup setup = session.worldSetup(avatars, settings.seed, settings.controller, policy ? *policy : session.policy);
+  WorldSetup setup =
+      session.worldSetup(avatars, settings.seed, settings.controller, played, static_cast<int>(settings.topK));
+  const WorldParams& params = setup.params;
   setup.threads = settings.threads > 0 ? settings.threads : defaultThreadCount();
   setup.poses = poses;
   setup.record = record;
@@ -205,13 +210,13 @@ json simulate(Session& session, const SimulateSettings& settings, Outputs& outpu
     // Two policies spar: the hits each side landed (the first avatar of each pair plays
     // --policy, the second --partner-policy).
     const auto [first, second] = landedBySide(world);
-    report["partner_policy"] = session.partnerPolicyDir.string();
+    report["partner_policy"] = played.partnerDir.string();
     if (settings.partnerRound > 0) report["partner_round"] = settings.partnerRound;
     report["hits_by_side"] = {{"policy", first}, {"partner_policy", second}};
-  } else if (params.mode == "sparring" && avatars >= 2 && !session.partnerName().empty()) {
+  } else if (params.mode == "sparring" && avatars >= 2 && !session.partnerName(played).empty()) {
     // An `opponent` scene: the second of each pair is the scripted opponent (issue 45).
     const auto [first, second] = landedBySide(world);
-    report["partner"] = session.partnerName();
+    report["partner"] = session.partnerName(played);
     report["hits_by_side"] = {{"avatars", first}, {"opponents", second}};
   }
   if (!written.bvh.empty()) {

@@ -17,7 +17,7 @@ if(NOT DEFINED ROOT)
 endif()
 
 get_filename_component(ROOT "${ROOT}" ABSOLUTE)
-set(stages core motion graph learning runtime scenario session)
+set(stages core motion graph learning runtime scenario session reports starter)
 set(plugin_folders discretizers rewards environments learners)
 set(plugin_allowed core learning)
 

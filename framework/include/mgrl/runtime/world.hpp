@@ -213,6 +213,8 @@ class World {
   void setControllerFactory(std::function<std::unique_ptr<Controller>()> makeController);
 
   std::size_t avatarCount() const;
+  /// The `world:` settings it runs with (WorldSetup::params).
+  const WorldParams& params() const { return setup_.params; }
   std::size_t frame() const { return frame_; }
   double time() const { return static_cast<double>(frame_) * model_.frameTime; }
   /// Landed and blocked strikes in the order they happened (HitEvent::blocked).

@@ -24,7 +24,6 @@ struct CompareOptions : SessionOptions {
   std::vector<std::string> learnerSets;  ///< LEARNER:KEY=VALUE
   std::size_t trials = 100;              ///< evaluation trials (the same starts for every run)
   double seconds = 10;                   ///< motion per trial
-  std::filesystem::path report;          ///< "" none; else results.json, results.csv, curves.csv, index.html
   /// Policies evaluated along each run's training, at about this many evenly spaced points
   /// (TrainObserver::snapshot); 0: none.
   std::size_t snapshots = 10;

@@ -54,6 +54,25 @@ struct SessionNeeds {
   const GraphResult* graphFrom = nullptr;
 };
 
+/// The tables a run plays, as a value passed to the world's set-up, evaluate and simulate
+/// (the session stays as it was opened): the main ones for every avatar and, in sparring, a
+/// partner's for the second avatar of each pair.
+struct Policies {
+  Policies() = default;
+  /// The caller's own tables for every avatar (tables that outlive the world, e.g. Python's).
+  explicit Policies(std::vector<PolicyPart> parts) : main(std::move(parts)) {}
+
+  std::vector<PolicyPart> main;      ///< one per behaviour, in order (empty: no tables)
+  std::vector<PolicyPart> partner;   ///< empty: the second avatar plays `main`, or the scripted opponent
+  std::filesystem::path dir;         ///< the bundle `main` comes from ("": the caller's own tables)
+  std::filesystem::path partnerDir;  ///< the bundle `partner` comes from
+  /// Bundles read for this value that the parts point into (a self-play round's, a
+  /// partner's); the session's own bundle belongs to the session.
+  std::shared_ptr<const PolicyBundle> mainBundle, partnerBundle;
+};
+
+/// An opened scenario. openSession() returns it const: nothing changes it once opened; what
+/// varies from run to run (the tables played) is a Policies value.
 class Session {
  public:
   explicit Session(Scenario checked) : scenario(std::move(checked)) {}
@@ -69,11 +88,6 @@ class Session {
   std::filesystem::path policyDir;
   PolicyBundle bundle;
   std::vector<PolicyPart> policy;
-  /// A second bundle for the second avatar of each sparring pair (loadPartnerPolicy()):
-  /// two policies spar (issue 43). Empty: every avatar plays `policy`.
-  std::filesystem::path partnerPolicyDir;
-  PolicyBundle partnerBundle;
-  std::vector<PolicyPart> partnerPolicy;
   /// PolicyNeed::IfAvailable and no bundle used: why (shown to the user); "" otherwise.
   std::string policyNote;
   /// The behaviours as the online search sees them (rewards, weights, activations).
@@ -84,50 +98,59 @@ class Session {
   const StateActionModel& model() const { return graph.model; }
   /// The registries the session was opened with (SessionOptions::plugins).
   const Plugins& plugins() const { return *options.plugins; }
+  /// True when the capture was parsed (SessionNeeds::motion): poses, bodies and exports.
+  bool hasMotion() const { return graph.db.skeleton != nullptr; }
   /// What makeController() needs; `variety` is the policy's choice among near-best actions
   /// ({}: greedy, as eval measures; task.world.variety: as the world plays).
   ControllerParts controllerParts(Variety variety = {}) const;
-  /// A world of `avatars` on this session's graph and task (mode, spacing ... from
-  /// `world:`), each avatar run by a controller of `choice` with the world's variety. One
-  /// thread, no poses: set WorldSetup::threads, poses and record as needed. In sparring,
-  /// the second avatar of each pair plays the partner bundle if one is loaded, else the
-  /// scenario's scripted opponent if it has one (partnerName()), else `choice` too.
-  WorldSetup worldSetup(std::size_t avatars, std::uint64_t seed, const ControllerChoice& choice) const {
-    return worldSetup(avatars, seed, choice, policy);
-  }
-  /// The same, the policy controllers playing `parts` (tables that outlive the world, e.g.
-  /// Python's) instead of the session's bundle.
-  WorldSetup worldSetup(std::size_t avatars, std::uint64_t seed, const ControllerChoice& choice,
-                        const std::vector<PolicyPart>& parts) const;
-  /// Parses the capture if the session was opened without it (SessionNeeds::motion false, a
-  /// cached graph) and makes the body capsules: what a world with poses and bodies needs.
-  /// The graph's arrays stay where they are. Nothing to do if the capture is there.
-  void loadMotion();
-  /// Loads `dir`, a bundle trained on this graph with tables for every behaviour (checked
-  /// as the main one is), for the partners: worldSetup() then gives the second avatar of
-  /// each pair a policy controller on it. Throws mgrl::Error naming the bundle's problem.
-  /// `round` > 0: the tables of that self-play round (NAME-roundK) instead of the final ones.
-  void loadPartnerPolicy(const std::filesystem::path& dir, int round = 0);
-  /// The main bundle's avatars play self-play round `round`'s tables (NAME-roundK, kept by
-  /// mgrl train) instead of the final ones, so any two rounds can spar; the round's entries
-  /// leave the bundle. Throws mgrl::Error without a bundle, or naming the bundle and what it
-  /// has when a behaviour lacks that round (the bundle then stays as it was).
-  void playRound(int round);
+
+  /// The bundle the session opened with: `policy`, from `policyDir`.
+  Policies policies() const;
+  /// Self-play round `round`'s tables (NAME-roundK, kept by mgrl train) of the session's
+  /// bundle instead of its final ones, read again from `policyDir`, so that any two rounds
+  /// can spar. Throws mgrl::Error without a bundle, or naming the bundle and what it has
+  /// when a behaviour lacks that round.
+  Policies roundPolicies(int round) const;
+  /// `played` with the second avatar of each sparring pair playing `dir`, a bundle trained
+  /// on this graph with tables for every behaviour (checked as the main one is; `round` > 0:
+  /// that self-play round's tables). Throws mgrl::Error naming the bundle's problem.
+  Policies withPartner(Policies played, const std::filesystem::path& dir, int round = 0) const;
   /// Refuses a self-play round without a partner bundle, before anything loads: mgrl::Error
   /// naming the two settings as the caller calls them (the command line's by default).
   static void checkPartnerChoice(const std::filesystem::path& dir, int round,
                                  std::string_view roundName = "--partner-round",
                                  std::string_view dirName = "--partner-policy DIR");
+
+  /// A world of `avatars` on this session's graph and task (mode, spacing ... from
+  /// `world:`), each avatar run by a controller of `choice` with the world's variety
+  /// (`topK` > 0: choosing among that many near-best actions instead). One thread, no poses:
+  /// set WorldSetup::threads, poses and record as needed. In sparring, the second avatar
+  /// of each pair plays `played.partner` if it has tables, else the scenario's scripted
+  /// opponent if it has one (partnerName()), else `choice` too.
+  WorldSetup worldSetup(std::size_t avatars, std::uint64_t seed, const ControllerChoice& choice, const Policies& played,
+                        int topK = 0) const;
+  /// The same with the session's bundle.
+  WorldSetup worldSetup(std::size_t avatars, std::uint64_t seed, const ControllerChoice& choice) const {
+    return worldSetup(avatars, seed, choice, policies());
+  }
+  /// The same, the policy controllers playing `parts` (tables that outlive the world, e.g.
+  /// Python's) instead of the session's bundle.
+  WorldSetup worldSetup(std::size_t avatars, std::uint64_t seed, const ControllerChoice& choice,
+                        const std::vector<PolicyPart>& parts) const {
+    return worldSetup(avatars, seed, choice, Policies(parts));
+  }
   /// What the second avatar of a sparring pair plays, for reports and the viewer: "" (the
   /// same as the first), "partner_policy" or "pursue" / "stand" (the scripted opponent).
-  std::string partnerName() const;
+  std::string partnerName(const Policies& played) const;
+  /// The same with the session's bundle (no partner's): "" or the scripted opponent.
+  std::string partnerName() const { return partnerName(Policies{}); }
 };
 
 /// Opens the scenario of `options` for `needs`: the scenario checked, the bundle looked up
 /// (and checked from its manifest) before the graph is loaded, the graph from the cache or
 /// built, the behaviours built, the task checked, the bundle's tables bound. Throws
 /// mgrl::Error (ConfigError with file:line:col for the scenario's mistakes).
-std::unique_ptr<Session> openSession(const SessionOptions& options, const SessionNeeds& needs = {});
+std::unique_ptr<const Session> openSession(const SessionOptions& options, const SessionNeeds& needs = {});
 
 /// A hit as the events file and the viewer's protocol carry it: {"time", "attacker",
 /// "target", "part" (head, chest, spine, or target; left_arm or right_arm when blocked),

@@ -37,7 +37,7 @@ struct SimulateSettings {
   long long avatars = 2;
   double seconds = 10;  ///< simulated time
   std::uint64_t seed = 1;
-  long long topK = 0;  ///< > 0 overrides world.top_k (in the session's task, for this run and after)
+  long long topK = 0;  ///< > 0 overrides world.top_k for this run
   /// A second bundle the second avatar of each sparring pair plays ("" none: all play the policy).
   std::filesystem::path partnerPolicy;
   int partnerRound = 0;  ///< > 0: the partner plays that self-play round's tables
@@ -65,10 +65,11 @@ void checkSimulateSettings(const SimulateSettings& settings);
 /// (prepareOutputs(settings.exportRequest(), ...), made before the graph so that a bad
 /// output place fails first); returns {"avatars", "frames", "avatar_frames_per_second",
 /// "hits", "hits_per_avatar_minute", "hits_by_part", ...} (docs in README.md).
-/// The capture is parsed first if the session was opened without it (Session::loadMotion).
+/// The session must hold the capture (SessionNeeds::motion, the default): poses, bodies and
+/// exports need it.
 /// `policy`: the tables the policy controllers play instead of the session's bundle (null:
 /// the bundle); the report then names no policy folder.
-nlohmann::json simulate(Session& session, const SimulateSettings& settings, Outputs& outputs,
+nlohmann::json simulate(const Session& session, const SimulateSettings& settings, Outputs& outputs,
                         const std::vector<PolicyPart>* policy = nullptr);
 
 }  // namespace mgrl

@@ -1,23 +1,15 @@
 #pragma once
 /// \file
-/// What `mgrl compare` writes with --report DIR (issue 15): results.json, results.csv (one
+/// What `mgrl compare` writes with --report DIR: results.json, results.csv (one
 /// row per run), curves.csv (every curve point of every run) and index.html, self-contained
 /// (opens from disk, loads nothing), with SVG plots drawn here.
 #include <filesystem>
 #include <string>
 #include <string_view>
-#include <utility>
-#include <vector>
 
 #include <nlohmann/json.hpp>
 
 namespace mgrl {
-
-/// The per-run metrics, in the order they are reported: (JSON key, label).
-const std::vector<std::pair<std::string, std::string>>& compareMetrics();
-
-/// The columns of a run's "snapshots" points.
-const std::vector<std::string>& snapshotColumns();
 
 /// A metric's value as the report shows it to people, three significant digits in the
 /// metric's unit (compareMetrics() keys): shares as percentages ("95.0 %"), seconds
@@ -26,12 +18,6 @@ const std::vector<std::string>& snapshotColumns();
 /// 0.001 or from a million up. `delta` formats a spread (a standard deviation) alike, a
 /// share in percentage points without the sign, a time in seconds however short.
 std::string reportNumber(std::string_view key, double value, bool delta = false);
-
-/// Per learner, the mean and standard deviation of each compareMetrics() figure over its
-/// runs (null where a run lacks it) and its success curve ([[updates, seconds, success
-/// mean, success sd], ...] over its seeds, point by point; empty unless every run has as
-/// many snapshots): the report's "learners", for `mgrl compare` and Python's mgrl.compare.
-nlohmann::json learnerSummaries(const nlohmann::json& runs, const std::vector<std::string>& learners);
 
 /// Writes the four files into `dir` (each atomically). Throws mgrl::Error on I/O failure.
 void writeCompareReport(const std::filesystem::path& dir, const nlohmann::json& report);

@@ -1,4 +1,4 @@
-#include "mgrl/session/starter.hpp"
+#include "mgrl/starter/starter.hpp"
 
 #include <algorithm>
 #include <cctype>

@@ -1,6 +1,6 @@
 // The files `mgrl compare --report DIR` writes (compare_report.hpp). The plots are SVG
 // drawn here, so the report needs no plotting library and opens from disk.
-#include "mgrl/session/compare_report.hpp"
+#include "mgrl/reports/compare_report.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -10,29 +10,12 @@
 #include <fmt/ranges.h>
 
 #include "mgrl/core/files.hpp"
+#include "mgrl/session/compare_summary.hpp"
 
 namespace mgrl {
 
 namespace fs = std::filesystem;
 using json = nlohmann::json;
-
-const std::vector<std::pair<std::string, std::string>>& compareMetrics() {
-  static const std::vector<std::pair<std::string, std::string>> metrics = {
-      {"success_rate", "success"},     {"mean_time_to_hit_s", "time to hit"},
-      {"mean_return", "mean return"},  {"train_seconds", "training time"},
-      {"updates", "updates"},          {"table_bytes", "table size"},
-      {"decision_us", "decision time"}, {"value_rmse", "V RMSE vs reference"},
-      {"greedy_agreement", "greedy agreement"}, {"nonzero_share", "Q entries non-zero"},
-      {"cell_coverage", "grid cells walked"},
-  };
-  return metrics;
-}
-
-const std::vector<std::string>& snapshotColumns() {
-  static const std::vector<std::string> columns = {"updates",      "seconds",            "residual",
-                                                   "success_rate", "mean_time_to_hit_s", "mean_return"};
-  return columns;
-}
 
 namespace {
 
@@ -55,7 +38,8 @@ std::string prefixed(double v, std::string_view unit, bool withSpaceForBare) {
     v /= 1000;
     ++p;
   }
-  if (p == 0 && std::abs(v - std::round(v)) < 1e-9) return fmt::format("{:.0f}{}{}", v, withSpaceForBare ? " " : "", unit);
+  if (p == 0 && std::abs(v - std::round(v)) < 1e-9)
+    return fmt::format("{:.0f}{}{}", v, withSpaceForBare ? " " : "", unit);
   return fmt::format("{} {}{}", plain(v), prefixes[p], unit);
 }
 
@@ -73,7 +57,8 @@ std::string reportNumber(std::string_view key, double value, bool delta) {
     if (!delta && a != 0 && a < 0.1) return fmt::format("{} ms", plain(value * 1e3));
     return fmt::format("{} s", plain(value));
   }
-  if (key == "decision_us") return std::abs(value) >= 1000 ? fmt::format("{} ms", plain(value / 1e3)) : fmt::format("{} us", plain(value));
+  if (key == "decision_us")
+    return std::abs(value) >= 1000 ? fmt::format("{} ms", plain(value / 1e3)) : fmt::format("{} us", plain(value));
   if (key == "updates") return prefixed(value, "", false);
   if (key == "table_bytes") return prefixed(value, "B", true);
   return plain(value);
@@ -91,11 +76,20 @@ std::string escapeHtml(std::string_view text) {
   std::string out;
   for (char c : text) {
     switch (c) {
-      case '<': out += "&lt;"; break;
-      case '>': out += "&gt;"; break;
-      case '&': out += "&amp;"; break;
-      case '"': out += "&quot;"; break;
-      default: out += c;
+      case '<':
+        out += "&lt;";
+        break;
+      case '>':
+        out += "&gt;";
+        break;
+      case '&':
+        out += "&amp;";
+        break;
+      case '"':
+        out += "&quot;";
+        break;
+      default:
+        out += c;
     }
   }
   return out;
@@ -124,8 +118,9 @@ std::string barChart(const json& report, const std::string& metric, const std::s
       const double mean = l["mean"][metric].get<double>(), sd = l["sd"][metric].get<double>();
       const double w = width * mean / top;
       svg += fmt::format("<rect x=\"{}\" y=\"{}\" width=\"{:.1f}\" height=\"18\" fill=\"#4a7bd0\"/>", left, y + 2, w);
-      svg += fmt::format("<line x1=\"{:.1f}\" x2=\"{:.1f}\" y1=\"{}\" y2=\"{}\" stroke=\"#222\"/>",
-                         left + width * std::max(0.0, mean - sd) / top, left + width * (mean + sd) / top, y + 11, y + 11);
+      svg +=
+          fmt::format("<line x1=\"{:.1f}\" x2=\"{:.1f}\" y1=\"{}\" y2=\"{}\" stroke=\"#222\"/>",
+                      left + width * std::max(0.0, mean - sd) / top, left + width * (mean + sd) / top, y + 11, y + 11);
       // The value after the bar and its whisker, never across them.
       svg += fmt::format("<text x=\"{:.1f}\" y=\"{}\" font-size=\"12\">{}</text>",
                          left + std::max(w, width * (mean + sd) / top) + 6, y + 15,
@@ -179,21 +174,23 @@ std::string lineChart(const std::string& label, const std::string& title, const 
                      width - left - right, height - top - bottom);
   // The axis ends in the x quantity's unit (updates: a count, else seconds).
   const std::string xKey = xLabel == "updates" ? "updates" : "seconds";
-  svg += fmt::format("<text x=\"{}\" y=\"{}\" font-size=\"11\">{}</text><text x=\"{}\" y=\"{}\" font-size=\"11\" "
-                     "text-anchor=\"end\">{}</text><text x=\"{}\" y=\"{}\" font-size=\"11\" "
-                     "text-anchor=\"middle\">{}</text>",
-                     left, height - bottom + 14, escapeHtml(reportNumber(xKey, xMin)), width - right, height - bottom + 14,
-                     escapeHtml(reportNumber(xKey, xMax)),
-                     (left + width - right) / 2, height - bottom + 28, escapeHtml(xLabel));
+  svg += fmt::format(
+      "<text x=\"{}\" y=\"{}\" font-size=\"11\">{}</text><text x=\"{}\" y=\"{}\" font-size=\"11\" "
+      "text-anchor=\"end\">{}</text><text x=\"{}\" y=\"{}\" font-size=\"11\" "
+      "text-anchor=\"middle\">{}</text>",
+      left, height - bottom + 14, escapeHtml(reportNumber(xKey, xMin)), width - right, height - bottom + 14,
+      escapeHtml(reportNumber(xKey, xMax)), (left + width - right) / 2, height - bottom + 28, escapeHtml(xLabel));
   if (rate)
     for (double y : {0.0, 0.5, 1.0})
-      svg += fmt::format("<text x=\"4\" y=\"{:.1f}\" font-size=\"11\">{:.0f} %</text><line x1=\"{}\" x2=\"{}\" "
-                         "y1=\"{:.1f}\" y2=\"{:.1f}\" stroke=\"#ddd\"/>",
-                         py(y) + 4, 100 * y, left, width - right, py(y), py(y));
+      svg += fmt::format(
+          "<text x=\"4\" y=\"{:.1f}\" font-size=\"11\">{:.0f} %</text><line x1=\"{}\" x2=\"{}\" "
+          "y1=\"{:.1f}\" y2=\"{:.1f}\" stroke=\"#ddd\"/>",
+          py(y) + 4, 100 * y, left, width - right, py(y), py(y));
   else
-    svg += fmt::format("<text x=\"4\" y=\"{}\" font-size=\"11\">{}</text><text x=\"4\" y=\"{}\" "
-                       "font-size=\"11\">{}</text>",
-                       top + 10, plain(yMax), height - bottom, plain(yMin));
+    svg += fmt::format(
+        "<text x=\"4\" y=\"{}\" font-size=\"11\">{}</text><text x=\"4\" y=\"{}\" "
+        "font-size=\"11\">{}</text>",
+        top + 10, plain(yMax), height - bottom, plain(yMin));
   std::map<std::string, int> colourOf;
   int legendY = top + 14;
   for (const Series& s : series) {
@@ -208,9 +205,11 @@ std::string lineChart(const std::string& label, const std::string& title, const 
     for (const auto& [x, y] : s.points) {
       if (x <= 0 || (!rate && y <= 0)) continue;
       points += fmt::format("{:.1f},{:.1f} ", px(x), py(y));
-      if (rate) dots += fmt::format("<circle cx=\"{:.1f}\" cy=\"{:.1f}\" r=\"2.5\" fill=\"{}\"/>", px(x), py(y), colour);
+      if (rate)
+        dots += fmt::format("<circle cx=\"{:.1f}\" cy=\"{:.1f}\" r=\"2.5\" fill=\"{}\"/>", px(x), py(y), colour);
     }
-    svg += fmt::format("<polyline fill=\"none\" stroke=\"{}\" stroke-width=\"1.5\" points=\"{}\"/>{}", colour, points, dots);
+    svg += fmt::format("<polyline fill=\"none\" stroke=\"{}\" stroke-width=\"1.5\" points=\"{}\"/>{}", colour, points,
+                       dots);
   }
   return svg + "</svg>";
 }
@@ -220,8 +219,8 @@ std::string lineChart(const std::string& label, const std::string& title, const 
 std::vector<Series> seriesOf(const json& report, bool snapshots, std::size_t x, std::size_t y) {
   std::vector<Series> out;
   for (const json& run : report["runs"]) {
-    const json& points = snapshots ? (run["snapshots"].is_object() ? run["snapshots"]["points"] : json::array())
-                                   : run["curve"];
+    const json& points =
+        snapshots ? (run["snapshots"].is_object() ? run["snapshots"]["points"] : json::array()) : run["curve"];
     Series s{run["learner"].get<std::string>(), {}};
     for (const json& p : points)
       if (p[x].is_number() && p[y].is_number()) s.points.emplace_back(p[x].get<double>(), p[y].get<double>());
@@ -272,7 +271,9 @@ void writeCompareReport(const fs::path& dir, const json& report) {
   std::string html = fmt::format(
       "<!doctype html>\n<html lang=\"en\"><head><meta charset=\"utf-8\"><title>mgrl compare: {}</title>"
       "<style>body{{font-family:sans-serif;margin:2em;max-width:80em}}table{{border-collapse:collapse;font-size:90%}}"
-      "td,th{{border:1px solid #ccc;padding:2px 6px;text-align:right}}td{{white-space:nowrap}}.sd{{color:#666;font-size:85%}}th:first-child,td:first-child{{text-align:left}}"
+      "td,th{{border:1px solid #ccc;padding:2px "
+      "6px;text-align:right}}td{{white-space:nowrap}}.sd{{color:#666;font-size:85%}}th:first-child,td:first-child{{"
+      "text-align:left}}"
       ".plots{{display:flex;flex-wrap:wrap}}.plots svg{{margin:0.5em 1.5em 0.5em 0}}</style></head><body>\n"
       "<h1>{} on {}: {}</h1>\n<p>Every policy evaluated on the same {} trials; reference: {}. Results: "
       "<a href=\"results.json\">results.json</a>, <a href=\"results.csv\">results.csv</a>, "
@@ -290,8 +291,9 @@ void writeCompareReport(const fs::path& dir, const json& report) {
       html += l["mean"][key].is_number()
                   ? fmt::format("<td>{}<br><span class=\"sd\">&plusmn; {}</span></td>",
                                 escapeHtml(reportNumber(key, l["mean"][key].get<double>())),
-                                l["sd"][key].get<double>() == 0 ? std::string("0")
-                                                                : escapeHtml(reportNumber(key, l["sd"][key].get<double>(), true)))
+                                l["sd"][key].get<double>() == 0
+                                    ? std::string("0")
+                                    : escapeHtml(reportNumber(key, l["sd"][key].get<double>(), true)))
                   : std::string("<td>n/a</td>");
     html += "</tr>\n";
   }
@@ -304,20 +306,25 @@ void writeCompareReport(const fs::path& dir, const json& report) {
   html += "<h2>Learning curves</h2>\n";
   const std::size_t snapshots = report.value("snapshots", std::size_t{0});
   if (snapshots > 0)
-    html += fmt::format("<p>Success rate along training: each run's table taken at about {} evenly spaced points of "
-                        "its training and evaluated, with the other behaviours as trained, on the first {} of the "
-                        "same trial starts. Bellman residual: as each learner recorded it (value iteration: the "
-                        "largest change of a sweep). Training seconds leave the snapshots' evaluation out.</p>\n",
-                        snapshots, report.value("snapshot_trials", std::size_t{0}));
+    html += fmt::format(
+        "<p>Success rate along training: each run's table taken at about {} evenly spaced points of "
+        "its training and evaluated, with the other behaviours as trained, on the first {} of the "
+        "same trial starts. Bellman residual: as each learner recorded it (value iteration: the "
+        "largest change of a sweep). Training seconds leave the snapshots' evaluation out.</p>\n",
+        snapshots, report.value("snapshot_trials", std::size_t{0}));
   html += "<div class=\"plots\">";
   html += lineChart("Success rate against updates", "Success rate against updates (log x)", "updates",
-                    seriesOf(report, true, 0, 3), true) + "\n";
+                    seriesOf(report, true, 0, 3), true) +
+          "\n";
   html += lineChart("Success rate against training seconds", "Success rate against training seconds (log x)",
-                    "training seconds", seriesOf(report, true, 1, 3), true) + "\n";
+                    "training seconds", seriesOf(report, true, 1, 3), true) +
+          "\n";
   html += lineChart("Bellman residual against updates", "Bellman residual against updates (log-log)", "updates",
-                    seriesOf(report, false, 0, 2), false) + "\n";
+                    seriesOf(report, false, 0, 2), false) +
+          "\n";
   html += lineChart("Bellman residual against training seconds", "Bellman residual against training seconds (log-log)",
-                    "training seconds", seriesOf(report, false, 1, 2), false) + "\n";
+                    "training seconds", seriesOf(report, false, 1, 2), false) +
+          "\n";
   html += "</div>\n<h2>Results per learner</h2>\n<div class=\"plots\">";
   for (const auto& [key, label] : metrics) {
     // A metric no learner has (bundles trained before it was recorded) gets no plot. (The
@@ -328,71 +335,6 @@ void writeCompareReport(const fs::path& dir, const json& report) {
   }
   html += "</div>\n</body></html>\n";
   writeFileAtomically(dir / "index.html", html);
-}
-
-namespace {
-
-double meanOf(const std::vector<double>& xs) {
-  double sum = 0;
-  for (double x : xs) sum += x;
-  return xs.empty() ? 0 : sum / static_cast<double>(xs.size());
-}
-double sdOf(const std::vector<double>& xs) {
-  if (xs.size() < 2) return 0;
-  const double m = meanOf(xs);
-  double sum = 0;
-  for (double x : xs) sum += (x - m) * (x - m);
-  return std::sqrt(sum / static_cast<double>(xs.size() - 1));
-}
-
-// A learner's success rate along training, averaged over its seeds point by point:
-// [[updates, seconds, success mean, success sd], ...]; empty unless every run has the same
-// number of snapshots (q_learning's seeds take them at the same update counts).
-json successCurve(const json& runs, const std::string& learner) {
-  std::vector<const json*> curves;
-  for (const json& r : runs)
-    if (r["learner"] == learner) {
-      if (!r["snapshots"].is_object()) return json::array();
-      curves.push_back(&r["snapshots"]["points"]);
-    }
-  json out = json::array();
-  if (curves.empty()) return out;
-  for (const json* c : curves)
-    if (c->size() != curves.front()->size()) return out;
-  for (std::size_t i = 0; i < curves.front()->size(); ++i) {
-    std::vector<double> updates, seconds, rates;
-    for (const json* c : curves) {
-      updates.push_back((*c)[i][0].get<double>());
-      seconds.push_back((*c)[i][1].get<double>());
-      rates.push_back((*c)[i][3].get<double>());
-    }
-    out.push_back({meanOf(updates), meanOf(seconds), meanOf(rates), sdOf(rates)});
-  }
-  return out;
-}
-
-}  // namespace
-
-json learnerSummaries(const json& runs, const std::vector<std::string>& learners) {
-  json out = json::object();
-  for (const std::string& learner : learners) {
-    json mean = json::object(), sd = json::object();
-    for (const auto& [key, label] : compareMetrics()) {
-      std::vector<double> xs;
-      bool missing = false;
-      for (const json& r : runs)
-        if (r["learner"] == learner) {
-          if (r[key].is_number())
-            xs.push_back(r[key].get<double>());
-          else
-            missing = true;
-        }
-      mean[key] = missing || xs.empty() ? json(nullptr) : json(meanOf(xs));
-      sd[key] = missing || xs.empty() ? json(nullptr) : json(sdOf(xs));
-    }
-    out[learner] = {{"mean", mean}, {"sd", sd}, {"success_curve", successCurve(runs, learner)}};
-  }
-  return out;
 }
 
 }  // namespace mgrl
