@@ -42,7 +42,8 @@ void Session::loadMotion() {
 
 WorldSetup Session::worldSetup(std::size_t avatars, std::uint64_t seed, const ControllerChoice& choice,
                                const std::vector<PolicyPart>& policyParts) const {
-  checkControllerChoice(choice);
+  const ControllerRegistry& controllers = plugins().controllers;
+  checkControllerChoice(controllers, choice);
   WorldSetup setup;
   setup.model = &graph.model;
   setup.body = &body;
@@ -57,13 +58,17 @@ WorldSetup Session::worldSetup(std::size_t avatars, std::uint64_t seed, const Co
   setup.stances = stanceCount(behaviors);
   ControllerParts parts = controllerParts(task.world.variety);
   parts.policy = policyParts;
-  requireParts(choice, parts);  // now, not at the world's first decision
-  setup.makeController = [choice, parts] { return makeController(choice, parts); };
+  requireParts(controllers, choice, parts);  // now, not at the world's first decision
+  // By reference, as the parts hold the model: the caller's registries (SessionOptions::
+  // plugins) outlive the session and so its worlds.
+  setup.makeController = [&controllers, choice, parts] { return makeController(controllers, choice, parts); };
   if (!partnerPolicy.empty()) {
     ControllerParts partner = parts;
     partner.policy = partnerPolicy;
     const ControllerChoice greedy{.name = "policy"};
-    setup.makePartnerController = [greedy, partner] { return makeController(greedy, partner); };
+    setup.makePartnerController = [&controllers, greedy, partner] {
+      return makeController(controllers, greedy, partner);
+    };
   } else if (task.scriptedOpponent) {
     // An `opponent` scene (dodge): the partner is the opponent the tables were trained
     // against, played with graph actions, so that it is a body that moves and strikes.

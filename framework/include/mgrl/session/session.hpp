@@ -26,6 +26,7 @@
 #include "mgrl/scenario/scenario.hpp"
 #include "mgrl/session/controllers.hpp"
 #include "mgrl/session/graph_source.hpp"
+#include "mgrl/session/plugins.hpp"
 #include "mgrl/session/policy_source.hpp"
 #include "mgrl/session/task.hpp"
 
@@ -82,13 +83,15 @@ class Session {
   BodyTable body;
 
   const StateActionModel& model() const { return graph.model; }
-  /// The registries the session was opened with (SessionOptions::plugins).
+  /// The registries the session was opened with (SessionOptions::plugins): the behaviours'
+  /// plug-ins and the controllers its worlds, eval and simulate choose from.
   const Plugins& plugins() const { return *options.plugins; }
   /// What makeController() needs; `variety` is the policy's choice among near-best actions
   /// ({}: greedy, as eval measures; task.world.variety: as the world plays).
   ControllerParts controllerParts(Variety variety = {}) const;
   /// A world of `avatars` on this session's graph and task (mode, spacing ... from
-  /// `world:`), each avatar run by a controller of `choice` with the world's variety. One
+  /// `world:`), each avatar run by a controller of `choice` (a name in plugins().controllers)
+  /// with the world's variety. One
   /// thread, no poses: set WorldSetup::threads, poses and record as needed. In sparring,
   /// the second avatar of each pair plays the partner bundle if one is loaded, else the
   /// scenario's scripted opponent if it has one (partnerName()), else `choice` too.
