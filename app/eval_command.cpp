@@ -24,16 +24,18 @@ json runEval(const EvalOptions& options) {
   settings.seconds = options.seconds;
   settings.seed = options.seed;
   settings.targetHeight = options.targetHeight;
-  checkEvalSettings(settings);
+  const ControllerRegistry& controllers = requirePlugins(options.plugins, "SessionOptions::plugins").controllers;
+  checkEvalSettings(controllers, settings);
+  const bool needsPolicy = controllers.find(options.controller)->needsPolicy;
   SessionNeeds needs;
-  needs.policy = options.controller == "policy" ? PolicyNeed::Required : PolicyNeed::None;
+  needs.policy = needsPolicy ? PolicyNeed::Required : PolicyNeed::None;
   needs.policyDir = options.policy;
   needs.motion = false;  // trials need no poses
   const std::unique_ptr<const Session> session = openSession(options, needs);
   const double startup = secondsSinceStart();
   json report = evaluate(*session, session->policy, settings);
   report["startup_seconds"] = startup;
-  if (options.controller == "policy") report["policy"] = session->policyDir.string();
+  if (needsPolicy) report["policy"] = session->policyDir.string();
   return report;
 }
 

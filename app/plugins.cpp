@@ -59,7 +59,8 @@ std::string listText(const Plugins& p) {
       "  effective punch within 0.15 m.\n";
   describe(text, p.conditions, "success terms (behaviors.NAME.success.term)");
   text += "controllers (mgrl eval / simulate --controller):\n";
-  for (const ControllerSpec& spec : controllerSpecs()) text += fmt::format("  {}: {}\n", spec.name, spec.summary);
+  for (const ControllerRegistry::Entry& entry : p.controllers.entries())
+    text += fmt::format("  {}: {}\n", entry.name, entry.summary);
   text += "\n";
   text += "world (mgrl simulate; scenario section world:):\n";
   text += describeParams(worldParamSpecs(), "      ");
@@ -67,10 +68,14 @@ std::string listText(const Plugins& p) {
 }
 
 nlohmann::json listJson(const Plugins& p) {
-  return {{"discretizers", toJson(p.discretizers)},          {"rewards", toJson(p.rewards)},
-          {"reward_terms", toJson(rewards::termRegistry())}, {"success_terms", toJson(p.conditions)},
-          {"environments", toJson(p.environments)},          {"learners", toJson(p.learners)},
-          {"controllers", mgrl::controllerNames()},          {"world", paramsJson(worldParamSpecs())}};
+  return {{"discretizers", toJson(p.discretizers)},
+          {"rewards", toJson(p.rewards)},
+          {"reward_terms", toJson(rewards::termRegistry())},
+          {"success_terms", toJson(p.conditions)},
+          {"environments", toJson(p.environments)},
+          {"learners", toJson(p.learners)},
+          {"controllers", p.controllers.names()},
+          {"world", paramsJson(worldParamSpecs())}};
 }
 
 }  // namespace mgrl::app

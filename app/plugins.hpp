@@ -1,11 +1,11 @@
 #pragma once
 /// \file
-/// The composition root's plugin list: every discretizer, reward, environment model and
-/// learner the application offers, registered explicitly (DESIGN.md sec. 4).
+/// The composition root's plugin list: every discretizer, reward, environment model,
+/// learner and controller the application offers, registered explicitly (DESIGN.md sec. 4).
 #include <string>
 
 #include "builtin_plugins.hpp"
-#include "mgrl/learning/behavior.hpp"
+#include "mgrl/session/plugins.hpp"
 
 namespace mgrl::app {
 

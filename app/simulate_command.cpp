@@ -49,10 +49,11 @@ json runSimulate(const SimulateOptions& options) {
   SimulateSettings settings = options.run;
   settings.log = options.log;
   settings.startup = secondsSinceStart;
-  checkSimulateSettings(settings);
+  const ControllerRegistry& controllers = requirePlugins(options.plugins, "SessionOptions::plugins").controllers;
+  checkSimulateSettings(controllers, settings);
   Outputs out;
   SessionNeeds needs;
-  needs.policy = settings.controller.name == "policy" ? PolicyNeed::Required : PolicyNeed::None;
+  needs.policy = controllers.find(settings.controller.name)->needsPolicy ? PolicyNeed::Required : PolicyNeed::None;
   needs.policyDir = options.policy;
   needs.beforeGraph = [&](const Scenario& scenario) { out = prepareOutputs(settings.exportRequest(), scenario); };
   const std::unique_ptr<const Session> session = openSession(options, needs);

@@ -359,9 +359,10 @@ class PySession {
     settings.seed = seed;
     settings.trialsField = "trials";
     settings.secondsField = "seconds";
-    checkEvalSettings(settings, {"controller", "horizon", "horizon_seconds"});
+    const ControllerRegistry& controllers = session_->plugins().controllers;
+    checkEvalSettings(controllers, settings, {"controller", "horizon", "horizon_seconds"});
     Tables t;
-    if (controller == "policy") t = tablesFor(tables.is_none() ? py::dict() : tables, "python");
+    if (controllers.find(controller)->needsPolicy) t = tablesFor(tables.is_none() ? py::dict() : tables, "python");
     nlohmann::json report;
     {
       py::gil_scoped_release release;
@@ -390,15 +391,17 @@ class PySession {
     settings.gltfOut = path(gltfOut);
     settings.eventsOut = path(eventsOut);
     settings.fields = SimulateFields::keywords();
-    checkSimulateSettings(settings);
+    const ControllerRegistry& controllers = session_->plugins().controllers;
+    checkSimulateSettings(controllers, settings);
+    const bool needsPolicy = controllers.find(controller)->needsPolicy;
     Tables t;
-    if (controller == "policy") t = tablesFor(tables.is_none() ? py::dict() : tables, "python");
+    if (needsPolicy) t = tablesFor(tables.is_none() ? py::dict() : tables, "python");
     Outputs outputs = prepareOutputs(settings.exportRequest(), session_->scenario);
     nlohmann::json report;
     {
       py::gil_scoped_release release;
       if (!captured_) captured_ = withCapture(*session_);
-      report = mgrl::simulate(*captured_, settings, outputs, controller == "policy" ? &t.parts : nullptr);
+      report = mgrl::simulate(*captured_, settings, outputs, needsPolicy ? &t.parts : nullptr);
     }
     return py::module_::import("json").attr("loads")(report.dump());
   }

@@ -7,12 +7,13 @@
 #include <future>
 #include <mutex>
 
+#include "bench/page_load.hpp"
+#include "builtin_plugins.hpp"
+#include "sanitizer.hpp"
 #include "serve/origin.hpp"
 #include "serve/protocol.hpp"
 #include "serve/serve_command.hpp"
 #include "serve/static_files.hpp"
-#include "bench/page_load.hpp"
-#include "sanitizer.hpp"
 #include "serve_support.hpp"
 
 namespace mgrl::serve_hardening_test {
@@ -490,7 +491,7 @@ TEST_CASE("out of descriptors, the server pauses accepting without spinning and 
 }
 
 TEST_CASE("the small acceptances are refused, each with one error that names the field", "[serve]") {
-  using serve::parseClientMessage;
+  const std::vector<std::string> controllers = builtinPlugins().controllers.names();
   const std::vector<std::pair<std::string, std::string>> refused = {
       {std::string(R"({"type": "pause", "paused": true})") + '\0' + "{\"type\": \"step\"}",
        "message: expected JSON text without NUL bytes, found one at byte 33"},
@@ -500,11 +501,12 @@ TEST_CASE("the small acceptances are refused, each with one error that names the
   };
   for (const auto& [text, message] : refused) {
     INFO(text);
-    REQUIRE_THROWS_WITH(parseClientMessage(text), message);
+    REQUIRE_THROWS_WITH(serve::parseClientMessage(text, controllers), message);
   }
   // A number written with a fraction is kept as written, for whole-number parameters.
-  const auto retrain = std::get<serve::Retrain>(parseClientMessage(
-      R"({"type": "retrain", "behavior": "hit", "set": {"discretizer.angles": 3.0, "reward.sigma": 0.25, "discretizer.heights": 4}})"));
+  const auto retrain = std::get<serve::Retrain>(serve::parseClientMessage(
+      R"({"type": "retrain", "behavior": "hit", "set": {"discretizer.angles": 3.0, "reward.sigma": 0.25, "discretizer.heights": 4}})",
+      controllers));
   CHECK(retrain.fractional.size() == 2);
   CHECK(retrain.fractional.at("discretizer.angles") == "3.0");
   CHECK_FALSE(retrain.fractional.contains("discretizer.heights"));

@@ -29,7 +29,11 @@ namespace {
 
 // fs, beast, http, websocket, net, tcp and json come with the helpers' namespace.
 using namespace test::serving;
-using serve::parseClientMessage;
+
+// A page message as `mgrl serve` parses it: its controllers are the built-in ones.
+serve::ClientMessage parseClientMessage(std::string_view text) {
+  return serve::parseClientMessage(text, builtinPlugins().controllers.names());
+}
 
 // The median ground distance between avatars 0's and 1's pelvises over `seconds` of the
 // page's world (after its first 2 s, from the start's spacing); counts `values` messages.

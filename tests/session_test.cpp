@@ -5,9 +5,12 @@
 #include <catch2/catch.hpp>
 
 #include <algorithm>
+#include <atomic>
 #include <cmath>
 #include <filesystem>
 #include <map>
+#include <span>
+#include <stdexcept>
 
 #include "app/learn_commands.hpp"
 #include "mgrl/core/random.hpp"
@@ -226,26 +229,97 @@ TEST_CASE("a scenario's world section reaches the task: kick's target height", "
   CHECK(session->task.targetHeight(1.0) == 1.0);
 }
 
-TEST_CASE("the controllers are listed, checked and made in one place", "[session]") {
-  REQUIRE(controllerSpecs().size() == 3);
-  CHECK(controllerSpecs()[0].name == "policy");
-  CHECK(controllerSpecs()[0].needsPolicy);
-  CHECK(findController("online_search")->searches);
-  CHECK(findController("sarsa") == nullptr);
-  CHECK_NOTHROW(checkControllerChoice({"random", 3, 0}));
-  CHECK_THROWS_WITH(checkControllerChoice({"sarsa", 3, 0}),
+TEST_CASE("the controllers are listed, checked and made in one place", "[session][controllers]") {
+  const ControllerRegistry& controllers = builtinPlugins().controllers;
+  REQUIRE(controllers.entries().size() == 3);
+  CHECK(controllers.entries()[0].name == "policy");
+  CHECK(controllers.entries()[0].needsPolicy);
+  CHECK(controllers.find("online_search")->searches);
+  CHECK(controllers.find("sarsa") == nullptr);
+  CHECK(controllerAlternatives(controllers) == "policy, online_search or random");
+  CHECK(controllerAlternatives(controllers, true) == "online_search or random");
+  ControllerRegistry more = controllers;
+  CHECK_THROWS_AS(more.add({.name = "random", .summary = "another", .make = nullptr}),
+                  std::logic_error);  // a name is registered once
+  CHECK_NOTHROW(checkControllerChoice(controllers, {"random", 3, 0}));
+  CHECK_THROWS_WITH(checkControllerChoice(controllers, {"sarsa", 3, 0}),
                     "--controller: expected one of: policy, online_search, random, found 'sarsa'");
-  CHECK_THROWS_WITH(checkControllerChoice({"online_search", 9, 0}),
+  CHECK_THROWS_WITH(checkControllerChoice(controllers, {"online_search", 9, 0}),
                     "--horizon: expected a search depth in actions in [1, 8], found 9");
-  CHECK_THROWS_WITH(checkControllerChoice({"online_search", 0, 0}),
+  CHECK_THROWS_WITH(checkControllerChoice(controllers, {"online_search", 0, 0}),
                     "--horizon: expected a search depth in actions in [1, 8], found 0");
-  CHECK_THROWS_WITH(checkControllerChoice({"online_search", 3, 6.5}),
+  CHECK_THROWS_WITH(checkControllerChoice(controllers, {"online_search", 3, 6.5}),
                     "--horizon-seconds: expected seconds of motion to search in [0, 5], found 6.5");
-  CHECK_THROWS_WITH(checkControllerChoice({"online_search", 3, std::nan("")}),
+  CHECK_THROWS_WITH(checkControllerChoice(controllers, {"online_search", 3, std::nan("")}),
                     Contains("--horizon-seconds: expected seconds of motion to search in [0, 5], found nan"));
   // Named as the caller names them (the viewer's protocol has its own field names).
-  CHECK_THROWS_WITH(checkControllerChoice({"x", 3, 0}, {.controller = "controller.controller"}),
+  CHECK_THROWS_WITH(checkControllerChoice(controllers, {"x", 3, 0}, {.controller = "controller.controller"}),
                     Contains("controller.controller: expected one of"));
+}
+
+namespace {
+
+// A controller the framework does not know: the first allowed out-action, every decision
+// counted.
+class FirstActionController final : public Controller {
+ public:
+  FirstActionController(const StateActionModel& model, std::atomic<std::size_t>& decisions)
+      : model_(model), decisions_(decisions) {}
+  std::size_t choose(std::uint32_t s, const TargetState&, Rng&) override {
+    ++decisions_;
+    return model_.stateActionBegin[s];
+  }
+  std::size_t choose(std::uint32_t s, const TargetState&, Rng&, std::span<const std::uint8_t> allowed) override {
+    ++decisions_;
+    const auto j = static_cast<std::size_t>(std::find(allowed.begin(), allowed.end(), 1) - allowed.begin());
+    if (j == allowed.size()) throw std::logic_error("first_action: expected an allowed action, found none");
+    return model_.stateActionBegin[s] + j;
+  }
+
+ private:
+  const StateActionModel& model_;
+  std::atomic<std::size_t>& decisions_;
+};
+
+}  // namespace
+
+TEST_CASE("a controller the caller registers is chosen by name and runs in the session's world",
+          "[session][controllers][data]") {
+  std::atomic<std::size_t> decisions{0};
+  Plugins plugins = builtinPlugins();  // the built-in registries, and one controller more
+  plugins.controllers.add(
+      {.name = "first_action",
+       .summary = "the first allowed out-action",
+       .make = [&decisions](const ControllerChoice&, const ControllerParts& parts) -> std::unique_ptr<Controller> {
+         return std::make_unique<FirstActionController>(*parts.model, decisions);
+       }});
+  plugins.controllers.add(
+      {.name = "own_policy",
+       .summary = "needs the trained tables",
+       .needsPolicy = true,
+       .make = [](const ControllerChoice&, const ControllerParts& parts) -> std::unique_ptr<Controller> {
+         return std::make_unique<RandomController>(*parts.model);
+       }});
+  test::TempDir temp("session-own-controller");
+  SessionOptions options = boxingOptions(temp.path);
+  options.plugins = &plugins;
+  const auto session = openSession(options);
+
+  World world(session->worldSetup(2, 1, {.name = "first_action"}));
+  world.run(300);
+  CHECK(decisions > 0);
+  CHECK(controllerAlternatives(session->plugins().controllers) ==
+        "policy, online_search, random, first_action or own_policy");
+  // What an entry says it needs is asked for when the world is set up (no bundle here).
+  CHECK_THROWS_WITH(
+      session->worldSetup(2, 1, {.name = "own_policy"}),
+      "--controller own_policy: expected a trained policy bundle, found none (train one with mgrl train)");
+  // An unknown name: the message lists the session's controllers, as it lists the built-in ones.
+  CHECK_THROWS_WITH(session->worldSetup(2, 1, {.name = "sarsa"}),
+                    "--controller: expected one of: policy, online_search, random, first_action, own_policy, found "
+                    "'sarsa'");
+  CHECK_THROWS_WITH(checkControllerChoice(builtinPlugins().controllers, {.name = "first_action"}),
+                    "--controller: expected one of: policy, online_search, random, found 'first_action'");
 }
 
 TEST_CASE("a session makes every listed controller, and a world that repeats itself", "[session][data]") {
@@ -253,9 +327,10 @@ TEST_CASE("a session makes every listed controller, and a world that repeats its
   const auto session = openSession(boxingOptions(trained), {.policy = PolicyNeed::Required, .policyDir = trained / "policy"});
   const StateActionModel& model = session->model();
   Rng rng(3);
-  for (const ControllerSpec& spec : controllerSpecs()) {
-    INFO(spec.name);
-    const std::unique_ptr<Controller> c = makeController({spec.name, 2, 0}, session->controllerParts());
+  const ControllerRegistry& controllers = session->plugins().controllers;
+  for (const ControllerRegistry::Entry& entry : controllers.entries()) {
+    INFO(entry.name);
+    const std::unique_ptr<Controller> c = makeController(controllers, {entry.name, 2, 0}, session->controllerParts());
     REQUIRE(c);
     const std::size_t a = c->choose(0, TargetState(0.5, 1.2, 0.4), rng);
     CHECK(a >= model.stateActionBegin[0]);
@@ -264,7 +339,8 @@ TEST_CASE("a session makes every listed controller, and a world that repeats its
   // A policy without tables is refused when it is made, not at the first decision.
   ControllerParts noTables = session->controllerParts();
   noTables.policy.clear();
-  CHECK_THROWS_WITH(makeController({"policy", 3, 0}, noTables), Contains("expected a trained policy bundle"));
+  CHECK_THROWS_WITH(makeController(controllers, {"policy", 3, 0}, noTables),
+                    Contains("expected a trained policy bundle"));
 
   // The session's world: its scenario's world section, its task (no opponent), its body;
   // the same seed gives the same hits.

@@ -1,11 +1,44 @@
 #include "builtin_plugins.hpp"
 
+#include <memory>
+
 #include "discretizers/discretizers.hpp"
 #include "environments/environments.hpp"
 #include "learners/learners.hpp"
+#include "mgrl/runtime/controller.hpp"
 #include "rewards/rewards.hpp"
 
 namespace mgrl {
+
+namespace {
+
+// The runtime's controllers (framework/runtime/controller.cpp), in the order `mgrl list`
+// shows them and a wrong --controller's message names them.
+void registerControllers(ControllerRegistry& controllers) {
+  using Made = std::unique_ptr<Controller>;
+  controllers.add({.name = "policy",
+                   .summary = "the trained behaviours' weighted Q values, with the world's variety in simulate",
+                   .needsPolicy = true,
+                   .make = [](const ControllerChoice&, const ControllerParts& parts) -> Made {
+                     return std::make_unique<PolicyController>(*parts.model, parts.policy, parts.variety);
+                   }});
+  controllers.add(
+      {.name = "online_search",
+       .summary = "depth-limited graph search for the best discounted reward (--horizon, --horizon-seconds)",
+       .searches = true,
+       .make = [](const ControllerChoice& choice, const ControllerParts& parts) -> Made {
+         return std::make_unique<OnlineSearchController>(*parts.model, *parts.environment, parts.search,
+                                                         SearchHorizon{choice.horizon, choice.horizonSeconds},
+                                                         parts.gamma);
+       }});
+  controllers.add({.name = "random",
+                   .summary = "a uniformly random out-action",
+                   .make = [](const ControllerChoice&, const ControllerParts& parts) -> Made {
+                     return std::make_unique<RandomController>(*parts.model);
+                   }});
+}
+
+}  // namespace
 
 const Plugins& builtinPlugins() {
   static const Plugins instance = [] {
@@ -14,6 +47,7 @@ const Plugins& builtinPlugins() {
     rewards::registerAll(p.rewards, p.conditions);
     environments::registerAll(p.environments);
     learners::registerAll(p.learners);
+    registerControllers(p.controllers);
     return p;
   }();
   return instance;

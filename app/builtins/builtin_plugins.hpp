@@ -1,11 +1,11 @@
 #pragma once
 /// \file
-/// The built-in plug-ins: every discretizer, reward, environment model and learner that
-/// ships with mgrl, registered once (DESIGN.md sec. 4). This library is the composition
-/// root: the one place above both the framework and the plug-in folders that names the
-/// folders. The front ends (the command line, the viewer, the Python module, the
+/// The built-in plug-ins: every discretizer, reward, environment model, learner and
+/// controller that ships with mgrl, registered once (DESIGN.md sec. 4). This library is the
+/// composition root: the one place above both the framework and the plug-in folders that
+/// names the folders. The front ends (the command line, the viewer, the Python module, the
 /// benchmarks) hand its registries to the session stage through SessionOptions::plugins.
-#include "mgrl/learning/behavior.hpp"
+#include "mgrl/session/plugins.hpp"
 
 namespace mgrl {
 

@@ -131,7 +131,8 @@ class Simulate final : public SessionCommand {
                      "The policy's avatars play that self-play round's tables instead of the final ones (with "
                      "--partner-round: any two rounds spar)")
         ->check(CLI::Range(1, 1000));
-    sub_->add_option("--controller", options_.run.controller.name, "policy, online_search or random")
+    sub_->add_option("--controller", options_.run.controller.name,
+                     controllerAlternatives(requirePlugins(options_.plugins, "SessionOptions::plugins").controllers))
         ->default_str("policy");
     sub_->add_option("--horizon", options_.run.controller.horizon, "online_search: search depth in actions")
         ->default_val(3);

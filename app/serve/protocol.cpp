@@ -10,7 +10,6 @@
 #include <nlohmann/json.hpp>
 
 #include "mgrl/core/error.hpp"
-#include "mgrl/session/controllers.hpp"
 
 namespace mgrl::serve {
 
@@ -150,7 +149,7 @@ Retrain parseRetrain(Fields& fields) {
 
 }  // namespace
 
-ClientMessage parseClientMessage(std::string_view text) {
+ClientMessage parseClientMessage(std::string_view text, const std::vector<std::string>& controllers) {
   if (text.size() > Limits::kMessageBytes)
     throw Error(fmt::format("message: expected at most {} bytes, found {}", Limits::kMessageBytes, text.size()));
   // The JSON reader would skip a byte order mark and stop at a NUL, ignoring what follows:
@@ -194,7 +193,7 @@ ClientMessage parseClientMessage(std::string_view text) {
     result = m;
   } else if (type == "controller") {
     SetController m;
-    m.controller = fields.word(fields.required("controller"), "controller", controllerNames());
+    m.controller = fields.word(fields.required("controller"), "controller", controllers);
     if (const json* h = fields.optional("horizon")) m.horizon = fields.whole(*h, "horizon", 1, Limits::kHorizonMax);
     result = m;
   } else if (type == "weights") {

@@ -91,8 +91,9 @@ using ClientMessage =
 
 /// Parses and checks one page message. Throws mgrl::Error whose text says which field was
 /// expected to hold what and what it held (the server sends it back as an `error`).
-/// Names (controllers, behaviours) are checked by the session, which knows them.
-ClientMessage parseClientMessage(std::string_view text);
+/// `controllers`: the names a `controller` message may choose (the session's registry's,
+/// ControllerRegistry::names()); behaviour names are checked by the session, which knows them.
+ClientMessage parseClientMessage(std::string_view text, const std::vector<std::string>& controllers);
 
 /// The binary pose frame (docs/viewer-protocol.md), appended to `out` after clearing it.
 struct FrameHeader {

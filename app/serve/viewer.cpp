@@ -131,6 +131,7 @@ void ViewerSession::adopt(std::shared_ptr<const ViewerAssets> assets) {
 ViewerSession::~ViewerSession() = default;
 
 double ViewerSession::frameTime() const { return assets_->model().frameTime; }
+const ControllerRegistry& ViewerSession::controllers() const { return root_->session->plugins().controllers; }
 std::size_t ViewerSession::avatars() const { return state_->world->avatarCount(); }
 
 PageController pageController(const ViewerAssets& a, const PageChoices& page, std::size_t avatars) {
@@ -176,8 +177,9 @@ void ViewerSession::applyController() {
     s.horizon = c.choice.horizon;
   }
   DecisionClock* clock = &s.decisions;
-  s.world->setControllerFactory([c, clock]() -> std::unique_ptr<Controller> {
-    return std::make_unique<TimedController>(makeController(c.choice, c.parts), *clock);
+  const ControllerRegistry* registry = &controllers();  // the server's, outliving its pages
+  s.world->setControllerFactory([c, clock, registry]() -> std::unique_ptr<Controller> {
+    return std::make_unique<TimedController>(makeController(*registry, c.choice, c.parts), *clock);
   });
 }
 
@@ -221,10 +223,9 @@ std::string ViewerSession::scene() const {
     b["success"] = a.session->behaviors[i].success ? json(a.session->behaviors[i].success->describe()) : json(nullptr);
     behaviors.push_back(std::move(b));
   }
-  json controllers = json::array();
-  if (!a.session->policy.empty()) controllers.push_back("policy");
-  controllers.push_back("online_search");
-  controllers.push_back("random");
+  json offered = json::array();  // a controller that needs a policy only with a bundle
+  for (const ControllerRegistry::Entry& entry : controllers().entries())
+    if (!entry.needsPolicy || !a.session->policy.empty()) offered.push_back(entry.name);
   std::string note = a.note;
   if (mode_ != Mode::Target && !a.partnerNote.empty()) note += (note.empty() ? "" : " ") + a.partnerNote;
   if (!s.adjustment.empty()) note += (note.empty() ? "" : " ") + s.adjustment;
@@ -240,7 +241,7 @@ std::string ViewerSession::scene() const {
                                ? json(a.session->partnerName(a.played))
                                : json(nullptr)},
               {"controller", s.controller},
-              {"controllers", controllers},
+              {"controllers", offered},
               {"horizon", s.horizon},
               {"behaviors", behaviors},
               {"policy", a.session->policyDir.empty() ? json(nullptr) : json(a.session->policyDir.string())},
@@ -294,7 +295,7 @@ std::optional<std::pair<MessagePrices::Kind, double>> costOf(const ClientMessage
 
 double ViewerSession::price(std::string_view text) const {
   try {
-    const auto cost = costOf(parseClientMessage(text), avatars(), state_->lesson != nullptr);
+    const auto cost = costOf(parseClientMessage(text, controllers().names()), avatars(), state_->lesson != nullptr);
     // A kind this server has not run yet is taken to cost the most a page may spend at once.
     return cost ? root_->prices.price(cost->first, cost->second, kUnknownPrice) : 0.0;
   } catch (const Error&) {
@@ -304,7 +305,7 @@ double ViewerSession::price(std::string_view text) const {
 
 void ViewerSession::handle(std::string_view text) {
   try {
-    const ClientMessage message = parseClientMessage(text);
+    const ClientMessage message = parseClientMessage(text, controllers().names());
     const auto began = Clock::now();
     const auto cost = costOf(message, avatars(), state_->lesson != nullptr);
     handle(message);
@@ -325,10 +326,10 @@ void ViewerSession::handle(const ClientMessage& message) {
       throw Error(fmt::format("move_target: expected target mode, found {} mode", modeName(mode_)));
     s.world->moveTarget(0, move->position);
   } else if (const auto* choice = std::get_if<SetController>(&message)) {
-    if (choice->controller == "policy" && a.session->policy.empty())
-      throw Error(
-          "controller.controller: expected online_search or random (this server has no policy bundle), "
-          "found \"policy\"");
+    // The protocol took only the registry's names.
+    if (controllers().find(choice->controller)->needsPolicy && a.session->policy.empty())
+      throw Error(fmt::format("controller.controller: expected {} (this server has no policy bundle), found \"{}\"",
+                              controllerAlternatives(controllers(), true), choice->controller));
     const std::string old = s.controller;
     const int oldHorizon = s.horizon;
     s.controller = choice->controller;

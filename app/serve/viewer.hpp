@@ -123,6 +123,9 @@ class ViewerSession {
   void install(std::unique_ptr<World> world, Mode mode, std::shared_ptr<const ViewerAssets> assets,
                bool started = false);
   void applyController();
+  /// The controllers the page may choose: those of the session `mgrl serve` opened
+  /// (ServeOptions::plugins).
+  const ControllerRegistry& controllers() const;
   /// The page's choices now, and what adopting `assets` would make of them.
   PageChoices choices() const;
   PageChoices choicesAfterAdopting(const ViewerAssets& assets) const;

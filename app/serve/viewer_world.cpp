@@ -41,7 +41,8 @@ void ViewerSession::rebuild(Mode mode, int avatars) {
   // 2,000 playing a sparring scenario's policies), runs here too, with the controller the
   // page's choices will make once the world is installed (its messages wait until then).
   const PageController first = pageController(*want, choicesAfterAdopting(*want), static_cast<std::size_t>(avatars));
-  setup.makeController = [first]() { return makeController(first.choice, first.parts); };
+  const ControllerRegistry* registry = &controllers();
+  setup.makeController = [first, registry]() { return makeController(*registry, first.choice, first.parts); };
   auto build = std::make_shared<State::Build>();
   build->mode = mode;
   build->assets = std::move(want);
@@ -65,7 +66,7 @@ bool ViewerSession::ready(std::string_view text) const {
   if (state_->build) return false;
   if (!background_ || !gBuilding) return true;
   try {
-    return !std::holds_alternative<SetMode>(parseClientMessage(text));
+    return !std::holds_alternative<SetMode>(parseClientMessage(text, controllers().names()));
   } catch (const Error&) {
     return true;  // refused at once
   }

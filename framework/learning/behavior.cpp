@@ -23,8 +23,8 @@ nlohmann::json blockJson(const Registry& registry, const ConfigNode& block, cons
 
 }  // namespace
 
-std::pair<nlohmann::json, std::string> behaviorConfigAndKey(const BehaviorSpec& spec, const Plugins& plugins,
-                                                             const std::string& graphKey) {
+std::pair<nlohmann::json, std::string> behaviorConfigAndKey(const BehaviorSpec& spec, const BehaviorPlugins& plugins,
+                                                            const std::string& graphKey) {
   nlohmann::json config = {{"discretizer", blockJson(plugins.discretizers, spec.discretizer, "")},
                            {"reward", blockJson(plugins.rewards, spec.reward, "")},
                            {"environment", blockJson(plugins.environments, spec.environment, "static_target")},
@@ -171,7 +171,7 @@ int stanceCount(const std::vector<Behavior>& behaviors) {
   return count;
 }
 
-Behavior buildBehavior(const BehaviorSpec& spec, const Plugins& plugins, const StateActionModel& model,
+Behavior buildBehavior(const BehaviorSpec& spec, const BehaviorPlugins& plugins, const StateActionModel& model,
                        const std::string& graphKey) {
   Behavior b;
   b.name = spec.name;

@@ -7,7 +7,7 @@
 
 namespace mgrl {
 
-void checkBehaviors(const Scenario& scenario, const Plugins& plugins) {
+void checkBehaviors(const Scenario& scenario, const BehaviorPlugins& plugins) {
   for (const BehaviorSpec& spec : scenario.behaviors) {
     plugins.discretizers.check(spec.discretizer);
     plugins.rewards.check(spec.reward);
@@ -18,8 +18,9 @@ void checkBehaviors(const Scenario& scenario, const Plugins& plugins) {
   }
 }
 
-std::vector<Behavior> buildBehaviors(const Scenario& scenario, const Plugins& plugins, const StateActionModel& model,
-                                     const std::string& graphKey, const std::string& only) {
+std::vector<Behavior> buildBehaviors(const Scenario& scenario, const BehaviorPlugins& plugins,
+                                     const StateActionModel& model, const std::string& graphKey,
+                                     const std::string& only) {
   if (scenario.behaviors.empty())
     scenario.root.fail("expected a 'behaviors' section naming at least one behaviour to train, found none");
   std::vector<std::string> names;

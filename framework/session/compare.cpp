@@ -313,7 +313,7 @@ json evaluateRun(const CompareOptions& options, const std::vector<std::string>& 
   settings.trials = options.trials;
   settings.seconds = options.seconds;
   settings.seed = 1;
-  checkEvalSettings(settings);
+  checkEvalSettings(opened->plugins().controllers, settings);
   return evaluate(*opened, opened->policy, settings);
 }
 

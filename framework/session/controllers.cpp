@@ -1,5 +1,7 @@
 #include "mgrl/session/controllers.hpp"
 
+#include <stdexcept>
+
 #include <fmt/format.h>
 #include <fmt/ranges.h>
 
@@ -7,32 +9,50 @@
 
 namespace mgrl {
 
-const std::vector<ControllerSpec>& controllerSpecs() {
-  static const std::vector<ControllerSpec> specs = {
-      {"policy", "the trained behaviours' weighted Q values, with the world's variety in simulate", true, false},
-      {"online_search",
-       "depth-limited graph search for the best discounted reward (--horizon, --horizon-seconds)", false, true},
-      {"random", "a uniformly random out-action", false, false},
-  };
-  return specs;
+void ControllerRegistry::add(Entry entry) {
+  if (find(entry.name)) throw std::logic_error(fmt::format("controller '{}' registered twice", entry.name));
+  entries_.push_back(std::move(entry));
 }
 
-const ControllerSpec* findController(std::string_view name) {
-  for (const ControllerSpec& spec : controllerSpecs())
-    if (spec.name == name) return &spec;
+const ControllerRegistry::Entry* ControllerRegistry::find(std::string_view name) const {
+  for (const Entry& e : entries_)
+    if (e.name == name) return &e;
   return nullptr;
 }
 
-std::vector<std::string> controllerNames() {
-  std::vector<std::string> names;
-  for (const ControllerSpec& spec : controllerSpecs()) names.push_back(spec.name);
-  return names;
+std::vector<std::string> ControllerRegistry::names() const {
+  std::vector<std::string> out;
+  for (const Entry& e : entries_) out.push_back(e.name);
+  return out;
 }
 
-void checkControllerChoice(const ControllerChoice& choice, const ControllerFields& fields) {
-  if (!findController(choice.name))
-    throw Error(fmt::format("{}: expected one of: {}, found {}", fields.controller, fmt::join(controllerNames(), ", "),
+std::string controllerAlternatives(const ControllerRegistry& controllers, bool withoutPolicy) {
+  std::vector<std::string> names;
+  for (const ControllerRegistry::Entry& e : controllers.entries())
+    if (!(withoutPolicy && e.needsPolicy)) names.push_back(e.name);
+  if (names.size() < 2) return names.empty() ? std::string() : names[0];
+  const std::string last = names.back();
+  names.pop_back();
+  return fmt::format("{} or {}", fmt::join(names, ", "), last);
+}
+
+namespace {
+
+// The entry `choice` names; for an unknown name, the message that lists the known ones.
+const ControllerRegistry::Entry& entryFor(const ControllerRegistry& controllers, const ControllerChoice& choice,
+                                          std::string_view field) {
+  const ControllerRegistry::Entry* entry = controllers.find(choice.name);
+  if (!entry)
+    throw Error(fmt::format("{}: expected one of: {}, found {}", field, fmt::join(controllers.names(), ", "),
                             quoteToken(choice.name)));
+  return *entry;
+}
+
+}  // namespace
+
+void checkControllerChoice(const ControllerRegistry& controllers, const ControllerChoice& choice,
+                           const ControllerFields& fields) {
+  entryFor(controllers, choice, fields.controller);
   if (choice.horizon < 1 || choice.horizon > kMaxHorizon)
     throw Error(fmt::format("{}: expected a search depth in actions in [1, {}], found {}", fields.horizon, kMaxHorizon,
                             choice.horizon));
@@ -41,20 +61,16 @@ void checkControllerChoice(const ControllerChoice& choice, const ControllerField
                             kMaxHorizonSeconds, choice.horizonSeconds));
 }
 
-void requireParts(const ControllerChoice& choice, const ControllerParts& parts) {
-  if (choice.name == "policy" && parts.policy.empty())
-    throw Error("--controller policy: expected a trained policy bundle, found none (train one with mgrl train)");
+void requireParts(const ControllerRegistry& controllers, const ControllerChoice& choice, const ControllerParts& parts) {
+  if (entryFor(controllers, choice, ControllerFields{}.controller).needsPolicy && parts.policy.empty())
+    throw Error(fmt::format("--controller {}: expected a trained policy bundle, found none (train one with mgrl train)",
+                            choice.name));
 }
 
-std::unique_ptr<Controller> makeController(const ControllerChoice& choice, const ControllerParts& parts) {
-  requireParts(choice, parts);
-  if (choice.name == "policy") return std::make_unique<PolicyController>(*parts.model, parts.policy, parts.variety);
-  if (choice.name == "online_search")
-    return std::make_unique<OnlineSearchController>(*parts.model, *parts.environment, parts.search,
-                                                    SearchHorizon{choice.horizon, choice.horizonSeconds}, parts.gamma);
-  if (choice.name == "random") return std::make_unique<RandomController>(*parts.model);
-  checkControllerChoice(choice);  // says what is known
-  throw Error(fmt::format("--controller: no controller {}", quoteToken(choice.name)));
+std::unique_ptr<Controller> makeController(const ControllerRegistry& controllers, const ControllerChoice& choice,
+                                           const ControllerParts& parts) {
+  requireParts(controllers, choice, parts);
+  return entryFor(controllers, choice, ControllerFields{}.controller).make(choice, parts);
 }
 
 }  // namespace mgrl

@@ -23,8 +23,9 @@ void keepResult(std::size_t value) { observed = value; }
 
 }  // namespace
 
-void checkEvalSettings(const EvalSettings& settings, const ControllerFields& fields) {
-  checkControllerChoice(settings.controller, fields);
+void checkEvalSettings(const ControllerRegistry& controllers, const EvalSettings& settings,
+                       const ControllerFields& fields) {
+  checkControllerChoice(controllers, settings.controller, fields);
   if (settings.trials < 1 || settings.trials > 10'000'000)
     throw Error(fmt::format("{}: expected a number of trials in [1, 10000000], found {}", settings.trialsField,
                             settings.trials));
@@ -34,9 +35,16 @@ void checkEvalSettings(const EvalSettings& settings, const ControllerFields& fie
 }
 
 json evaluate(const Session& session, const std::vector<PolicyPart>& policy, const EvalSettings& settings) {
-  checkEvalSettings(settings);
+  checkEvalSettings(session.plugins().controllers, settings);
   const ControllerChoice& choice = settings.controller;
   const std::string& kind = choice.name;
+  // The trials time the search's expansions and draw random actions themselves: eval
+  // measures these three, not every registered controller.
+  if (kind != "policy" && kind != "online_search" && kind != "random")
+    throw Error(
+        fmt::format("controller: expected policy, online_search or random (the controllers eval measures), "
+                    "found {}",
+                    quoteToken(kind)));
   if (kind == "policy" && policy.empty())
     throw Error("controller policy: expected trained tables for the scenario's behaviours, found none");
   const StateActionModel& model = session.model();

@@ -30,7 +30,8 @@ Policies Session::policies() const {
 
 WorldSetup Session::worldSetup(std::size_t avatars, std::uint64_t seed, const ControllerChoice& choice,
                                const Policies& played, int topK) const {
-  checkControllerChoice(choice);
+  const ControllerRegistry& controllers = plugins().controllers;
+  checkControllerChoice(controllers, choice);
   WorldSetup setup;
   setup.model = &graph.model;
   setup.body = &body;
@@ -48,13 +49,17 @@ WorldSetup Session::worldSetup(std::size_t avatars, std::uint64_t seed, const Co
   setup.params.variety = variety;
   ControllerParts parts = controllerParts(variety);
   parts.policy = played.main;
-  requireParts(choice, parts);  // now, not at the world's first decision
-  setup.makeController = [choice, parts] { return makeController(choice, parts); };
+  requireParts(controllers, choice, parts);  // now, not at the world's first decision
+  // By reference, as the parts hold the model: the caller's registries (SessionOptions::
+  // plugins) outlive the session and so its worlds.
+  setup.makeController = [&controllers, choice, parts] { return makeController(controllers, choice, parts); };
   if (!played.partner.empty()) {
     ControllerParts partner = parts;
     partner.policy = played.partner;
     const ControllerChoice greedy{.name = "policy"};
-    setup.makePartnerController = [greedy, partner] { return makeController(greedy, partner); };
+    setup.makePartnerController = [&controllers, greedy, partner] {
+      return makeController(controllers, greedy, partner);
+    };
   } else if (task.scriptedOpponent) {
     // An `opponent` scene (dodge): the partner is the opponent the tables were trained
     // against, played with graph actions, so that it is a body that moves and strikes.

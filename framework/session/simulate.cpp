@@ -50,9 +50,9 @@ SimulateFields SimulateFields::keywords() {
 }
 
 // Every mistake in the settings, found before anything is loaded.
-void checkSimulateSettings(const SimulateSettings& options) {
+void checkSimulateSettings(const ControllerRegistry& controllers, const SimulateSettings& options) {
   const SimulateFields& f = options.fields;
-  checkControllerChoice(options.controller, f.controller);
+  checkControllerChoice(controllers, options.controller, f.controller);
   if (options.round > 0 && options.controller.name != "policy")
     throw Error(fmt::format("{}: expected {} policy (a self-play round's tables), found {}", f.round,
                             f.controller.controller, options.controller.name));

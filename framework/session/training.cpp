@@ -1,20 +1,19 @@
-// Training a scenario's behaviours (training.hpp): the memory plan, self-play rounds,
-// checkpoints and the bundle, for every front end.
+// Training a scenario's behaviours (training.hpp): the memory plan, self-play rounds and
+// checkpoints, for every front end. What goes into the bundle (its folder, provenance and
+// records, the tables kept, a stopped run's partial bundle) is in train_bundle.cpp.
 #include "mgrl/session/training.hpp"
 
 #include <algorithm>
+#include <functional>
 #include <map>
 #include <optional>
 #include <set>
 
 #include <fmt/format.h>
-#include <fmt/ranges.h>
 
-#include "mgrl/core/files.hpp"
 #include "mgrl/core/launch.hpp"
 #include "mgrl/core/numbers.hpp"
 #include "mgrl/core/parallel.hpp"
-#include "mgrl/core/version.hpp"
 #include "mgrl/learning/behavior.hpp"
 #include "mgrl/learning/checkpoint_store.hpp"
 #include "mgrl/learning/problem.hpp"
@@ -22,6 +21,7 @@
 #include "mgrl/session/graph_source.hpp"
 #include "mgrl/session/policy_source.hpp"
 #include "mgrl/session/self_play.hpp"
+#include "mgrl/session/train_bundle.hpp"
 #include "mgrl/session/train_progress.hpp"
 
 namespace mgrl {
@@ -40,104 +40,9 @@ void removeCheckpoint(const fs::path& dir) {
   fs::remove(dir.parent_path(), ec);  // only if empty
 }
 
-fs::path bundleFolder(const TrainSettings& settings, const SessionOptions& options, const Scenario& scenario) {
-  const fs::path cacheDir = options.cacheDir.empty() ? defaultCacheDirectory() : options.cacheDir;
-  fs::path out =
-      settings.out.empty()
-          ? defaultPolicyDirectory(cacheDir, scenario, requirePlugins(options.plugins, "SessionOptions::plugins"))
-          : settings.out;
-  if (!out.has_filename()) out = out.parent_path();
-  std::error_code ec;
-  if (out.has_parent_path()) fs::create_directories(out.parent_path(), ec);
-  if (ec)
-    throw Error(fmt::format("--out {}: cannot create {}: {}", out.string(), out.parent_path().string(), ec.message()));
-  if (fs::exists(out, ec) && !fs::is_directory(out, ec))
-    throw Error(fmt::format("--out {}: expected a policy bundle directory or nothing, found a file", out.string()));
-  // The bundle is written beside `out` and renamed into place: that folder must take a
-  // new file now, not after training. The probe is `.<name>.probe-PID`.
-  const fs::path parent = out.has_parent_path() ? out.parent_path() : fs::path(".");
-  if (!folderTakesNewFiles(parent, fmt::format(".{}.probe-", out.filename().string())))
-    throw Error(fmt::format("--out {}: expected a folder where files can be written, found {} is not writable",
-                            out.string(), parent.string()));
-  return out;
-}
-
 namespace {
 
-// The self-play rounds a behaviour trains (SelfPlayOpponent::rounds()); 1 for an
-// environment without an opponent that plays policy tables.
-int selfPlayRounds(const Behavior& b) {
-  const SelfPlayOpponent* selfPlay = b.environment->as<SelfPlayOpponent>();
-  return selfPlay ? selfPlay->rounds() : 1;
-}
-
-// A stopped run keeps what had finished: the bundle is saved with the finished tables and
-// the unfinished behaviours named in its provenance (so eval and simulate refuse it,
-// saying to resume, instead of taking it for a whole one), then the run ends with
-// Interrupted saying how to continue.
-[[noreturn]] void interrupted(const SessionOptions& options, const TrainSettings& settings, const fs::path& out,
-                              PolicyBundle& bundle, const std::vector<std::string>& wanted, const std::string& current,
-                              const TrainInterrupted& stop, const fs::path& checkpoint) {
-  // A table of the current behaviour from an earlier run is still right (same key).
-  std::vector<std::string> unfinished;
-  for (const std::string& name : wanted)
-    if (bundle.behaviors.count(name) == 0) unfinished.push_back(name);
-  std::vector<std::string> kept;
-  for (const auto& entry : bundle.behaviors) kept.push_back(entry.first);
-  std::string keptText = "nothing had finished";
-  if (!kept.empty()) {
-    bundle.provenance["unfinished"] = unfinished;
-    savePolicyBundle(out, bundle);
-    keptText = fmt::format("kept {} in {}", fmt::join(kept, ", "), out.string());
-  }
-  const std::string where = stop.checkpointed() ? fmt::format("checkpoint at {} of {} actions in {}", stop.updates(),
-                                                              stop.total(), checkpoint.string())
-                                                : std::string("no checkpoint: it starts over");
-  std::string command = fmt::format("mgrl train {}", options.scenario.string());
-  if (!settings.behavior.empty()) command += fmt::format(" --behavior {}", settings.behavior);
-  command += setFlags(options.sets);
-  if (!settings.out.empty()) command += fmt::format(" --out {}", settings.out.string());
-  throw Interrupted(fmt::format("interrupted while training {} ({}); {}; run `{} --resume` to continue", current, where,
-                                keptText, command));
-}
-
 using Log = std::function<void(const std::string&)>;
-
-// Tables already in the bundle at `out` that are still current (same key: the same
-// settings on the same graph, so the same table) go into `bundle`: those of other
-// behaviours when training one, those a stopped run finished when resuming, and all of them
-// until replaced. Returns the behaviours a resumed run has finished.
-std::set<std::string> keepCurrentTables(const fs::path& out, bool resume, const std::vector<Behavior>& all,
-                                        const StateActionModel& model, const std::string& graphKey,
-                                        PolicyBundle& bundle, const Log& log) {
-  std::set<std::string> finished;
-  if (!fs::exists(out / "manifest.json")) return finished;
-  try {
-    PolicyBundle previous = loadPolicyBundle(out, model, graphKey);
-    // A stopped run's bundle holds only finished tables (its unfinished ones are absent).
-    for (auto& item : previous.behaviors) {
-      // Named, not a structured binding: clang before 16 cannot capture one in the lambda.
-      const std::string& name = item.first;
-      auto& entry = item.second;
-      // A self-play round's table (NAME-roundK) belongs to behaviour NAME.
-      std::string base = name;
-      if (const auto cut = name.rfind("-round"); cut != std::string::npos && cut > 0) base = name.substr(0, cut);
-      const auto match = std::find_if(all.begin(), all.end(), [&](const Behavior& b) {
-        return b.name == name || (b.name == base && selfPlayRounds(b) > 1);
-      });
-      if (match != all.end() && match->key == entry.key) {
-        bundle.behaviors.emplace(name, std::move(entry));
-        if (resume && match->name == name) finished.insert(name);
-      } else {
-        log(fmt::format("warning: dropping {}'s table from {}: the scenario {}", name, out.string(),
-                        match == all.end() ? "no longer has this behaviour" : "now asks for other settings"));
-      }
-    }
-  } catch (const Error& e) {
-    log(fmt::format("warning: not keeping the behaviours already in {}: {}", out.string(), e.what()));
-  }
-  return finished;
-}
 
 // ", 2 more tables held", ", 6.5 more tables held by 4 self-play rounds", ", 8.5 more tables
 // held (6.5 by 4 self-play rounds)", or "" for none.
@@ -242,10 +147,7 @@ class TrainRun {
     const std::vector<Behavior>& all = session_.behaviors;
     const GraphResult& graph = session_.graph;
     bundle_.graphKey = graph.key;
-    bundle_.provenance = {{"scenario", session_.scenario.path.string()},
-                          {"scenario_name", session_.scenario.name},
-                          {"tool", fmt::format("mgrl {}", kVersion)},
-                          {"sets", session_.options.sets}};
+    bundle_.provenance = trainingProvenance(session_);
     const std::set<std::string> finished =
         settings_.save && !given ? keepCurrentTables(out_, settings_.resume, all, model_, graph.key, bundle_, log_)
                                  : std::set<std::string>();
@@ -377,8 +279,8 @@ class TrainRun {
                       : GridModel::build(problem, threads_, stop_);
     } catch (const TrainInterrupted& stop) {  // stopped while tabulating
       if (!saves_) throw;
-      interrupted(session_.options, settings_, out_, bundle_, wanted_, behavior.name, stop,
-                  checkpointDirectory(out_, label));
+      trainingInterrupted(session_.options, settings_, out_, bundle_, wanted_, behavior.name, stop,
+                          checkpointDirectory(out_, label));
     }
     const double tabulateSeconds = since(tabulateStart);
     if (itself)
@@ -405,7 +307,8 @@ class TrainRun {
             {problem, grid, &progress, saves_ ? &checkpointer : nullptr, threads_, stop_, round < rounds});
       } catch (const TrainInterrupted& stop) {
         if (!saves_) throw;
-        interrupted(session_.options, settings_, out_, bundle_, wanted_, behavior.name, stop, directory.directory());
+        trainingInterrupted(session_.options, settings_, out_, bundle_, wanted_, behavior.name, stop,
+                            directory.directory());
       }
     }
     if (settings_.resume && saves_ && !checkpointer.resumed())
@@ -419,38 +322,15 @@ class TrainRun {
       tableGap = bestResponseGapOnGrid(grid, model_, result.table, *opponent, threads_);
 
     const Discretizer& tableGrid = result.grid ? *result.grid : *behavior.discretizer;
-    json curve = json::array();
-    for (const CurvePoint& p : result.curve) curve.push_back({p.updates, p.seconds, p.residual, p.meanResidual});
-    const double rate = result.seconds > 0 ? static_cast<double>(result.updates) / result.seconds : 0;
-    json summary = {{"learner", learner.type()},
-                    {"updates", result.updates},
-                    {"seconds", result.seconds},
-                    {"updates_per_second", rate},
-                    {"final_residual", result.finalResidual},
-                    {"table_bytes", result.table.bytes()},
-                    {"vertices", tableGrid.vertexCount()},
-                    {"actions", model_.actionCount()},
-                    {"tabulate_seconds", tabulateSeconds},
-                    {"stats", result.stats}};
+    const json summary = tableSummary(learner, result, tableGrid, model_.actionCount(), tabulateSeconds);
     if (round == rounds) {
       report_["behaviors"][behavior.name] = summary;
       report_["behaviors"][behavior.name]["model"] = compact ? "compact" : "tabulated";
       report_["behaviors"][behavior.name]["model_bytes"] = grid.bytes();
     }
-    json record = summary;
-    record["config"] = behavior.config;
-    record["weight"] = behavior.weight;
-    record["activation"] = std::string(activationName(behavior.activation));
-    if (behavior.stance >= 0) record["stance"] = behavior.stance;  // absent before stances
-    record["grid"] = tableGrid.describe();
-    record["curve_columns"] = {"updates", "seconds", "residual", "mean_residual"};
-    record["curve"] = curve;
-    if (listener) {
-      json snapshots = listener->record();
-      if (!snapshots.is_null()) record["snapshots"] = std::move(snapshots);
-    }
+    json record = tableRecord(summary, behavior, tableGrid, result.curve, listener.get());
     log_(fmt::format("train {}: {} updates in {:.2f} s ({}updates/s), Bellman residual {:.3g}", label, result.updates,
-                     result.seconds, humanCount(rate), result.finalResidual));
+                     result.seconds, humanCount(summary.at("updates_per_second").get<double>()), result.finalResidual));
     return {std::move(result), std::move(record)};
   }
 

@@ -19,9 +19,10 @@
 
 namespace mgrl {
 
-/// One registry per seam; the composition root fills them (app/builtins: the built-in
-/// plug-ins) and hands them to the session stage.
-struct Plugins {
+/// One registry per seam a behaviour is built from; the composition root fills them
+/// (app/builtins: the built-in plug-ins) and hands them to the session stage as part of its
+/// Plugins (mgrl/session/plugins.hpp, which adds the controllers).
+struct BehaviorPlugins {
   DiscretizerRegistry discretizers{"discretizer"};
   RewardRegistry rewards{"reward"};
   EnvironmentRegistry environments{"environment model"};
@@ -54,7 +55,7 @@ struct Behavior {
 
 /// A behaviour's `config` and `key` (see Behavior) without building its plugins: enough to
 /// tell whether a trained table belongs to it. Throws ConfigError like buildBehavior().
-std::pair<nlohmann::json, std::string> behaviorConfigAndKey(const BehaviorSpec& spec, const Plugins& plugins,
+std::pair<nlohmann::json, std::string> behaviorConfigAndKey(const BehaviorSpec& spec, const BehaviorPlugins& plugins,
                                                             const std::string& graphKey);
 
 /// The stances the behaviours number (issue 46): the largest `stance` plus one, 0 for none
@@ -63,7 +64,7 @@ int stanceCount(const std::vector<Behavior>& behaviors);
 
 /// Builds a behaviour's plugins; ConfigError (`file:line:col: behaviors.NAME.reward.type:
 /// unknown reward 'x' (known: approach, hit)`) for unknown types and bad parameters.
-Behavior buildBehavior(const BehaviorSpec& spec, const Plugins& plugins, const StateActionModel& model,
+Behavior buildBehavior(const BehaviorSpec& spec, const BehaviorPlugins& plugins, const StateActionModel& model,
                        const std::string& graphKey);
 
 }  // namespace mgrl

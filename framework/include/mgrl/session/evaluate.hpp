@@ -30,8 +30,10 @@ struct EvalSettings {
 };
 
 /// Throws mgrl::Error ("--trials: expected a number of trials in [1, 10000000], found 0",
-/// the controller's own checks) unless `settings` are in range.
-void checkEvalSettings(const EvalSettings& settings, const ControllerFields& fields = {});
+/// the controller's own checks against `controllers`, those the session is opened with)
+/// unless `settings` are in range.
+void checkEvalSettings(const ControllerRegistry& controllers, const EvalSettings& settings,
+                       const ControllerFields& fields = {});
 
 /// Runs the trials (mgrl/session/trials.hpp) of `session` with `settings`' controller, the
 /// policy controller greedy on `policy` (eval measures the policy's own choice; the

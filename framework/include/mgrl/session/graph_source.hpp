@@ -15,9 +15,9 @@
 #include "mgrl/graph/motion_graph.hpp"
 #include "mgrl/graph/playback.hpp"
 #include "mgrl/graph/state_action_model.hpp"
-#include "mgrl/learning/behavior.hpp"
 #include "mgrl/motion/motion_database.hpp"
 #include "mgrl/scenario/scenario.hpp"
+#include "mgrl/session/plugins.hpp"
 
 namespace mgrl {
 

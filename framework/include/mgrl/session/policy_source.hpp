@@ -10,11 +10,11 @@
 #include <vector>
 
 #include "mgrl/core/error.hpp"
-#include "mgrl/learning/behavior.hpp"
 #include "mgrl/learning/policy_bundle.hpp"
 #include "mgrl/runtime/controller.hpp"
 #include "mgrl/scenario/scenario.hpp"
 #include "mgrl/session/graph_source.hpp"
+#include "mgrl/session/plugins.hpp"
 
 namespace mgrl {
 

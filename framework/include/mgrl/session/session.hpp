@@ -26,6 +26,7 @@
 #include "mgrl/scenario/scenario.hpp"
 #include "mgrl/session/controllers.hpp"
 #include "mgrl/session/graph_source.hpp"
+#include "mgrl/session/plugins.hpp"
 #include "mgrl/session/policy_source.hpp"
 #include "mgrl/session/task.hpp"
 
@@ -96,7 +97,8 @@ class Session {
   BodyTable body;
 
   const StateActionModel& model() const { return graph.model; }
-  /// The registries the session was opened with (SessionOptions::plugins).
+  /// The registries the session was opened with (SessionOptions::plugins): the behaviours'
+  /// plug-ins and the controllers its worlds, eval and simulate choose from.
   const Plugins& plugins() const { return *options.plugins; }
   /// True when the capture was parsed (SessionNeeds::motion): poses, bodies and exports.
   bool hasMotion() const { return graph.db.skeleton != nullptr; }
@@ -122,7 +124,8 @@ class Session {
                                  std::string_view dirName = "--partner-policy DIR");
 
   /// A world of `avatars` on this session's graph and task (mode, spacing ... from
-  /// `world:`), each avatar run by a controller of `choice` with the world's variety
+  /// `world:`), each avatar run by a controller of `choice` (a name in plugins().controllers)
+  /// with the world's variety
   /// (`topK` > 0: choosing among that many near-best actions instead). One thread, no poses:
   /// set WorldSetup::threads, poses and record as needed. In sparring, the second avatar
   /// of each pair plays `played.partner` if it has tables, else the scenario's scripted

@@ -58,8 +58,9 @@ struct SimulateSettings {
 };
 
 /// Every mistake in the settings, found before anything is loaded: mgrl::Error naming the
-/// setting as settings.fields calls it.
-void checkSimulateSettings(const SimulateSettings& settings);
+/// setting as settings.fields calls it. `controllers`: those the session will be opened
+/// with (SessionOptions::plugins).
+void checkSimulateSettings(const ControllerRegistry& controllers, const SimulateSettings& settings);
 
 /// Runs the world on `session` and writes the exports prepared in `outputs`
 /// (prepareOutputs(settings.exportRequest(), ...), made before the graph so that a bad

@@ -14,9 +14,9 @@
 
 #include <nlohmann/json.hpp>
 
-#include "mgrl/learning/behavior.hpp"
 #include "mgrl/motion/roles.hpp"
 #include "mgrl/motion/units.hpp"
+#include "mgrl/session/plugins.hpp"
 
 namespace mgrl {
 
