@@ -60,9 +60,12 @@ class PyEpisodes {
     return py::make_tuple(state, position, coordinates, mask);
   }
 
-  void reset(std::size_t i, const py::object& seed) {
+  // Slot i restarted, seeded when seed is not None, at `state` and `target` when they are
+  // not None (MotionGraphEnv.reset's options; Episodes::reset checks their values).
+  void reset(std::size_t i, const py::object& seed, const py::object& state, const py::object& target) {
     check(i);
-    episodes_->reset(i, seed.is_none() ? std::nullopt : std::optional<std::uint64_t>(seed.cast<std::uint64_t>()));
+    episodes_->reset(i, seed.is_none() ? std::nullopt : std::optional<std::uint64_t>(seed.cast<std::uint64_t>()),
+                     placement(state, target));
   }
 
   // One step of slot i: (reward, terminated, truncated, success, seconds played).
@@ -75,10 +78,13 @@ class PyEpisodes {
     return py::make_tuple(r.reward, r.terminated, r.truncated, r.success, episodes_->seconds(i));
   }
 
-  // Every slot reset (slot i seeded with seed + i when a seed is given).
-  void resetAll(const py::object& seed) {
+  // Every slot reset (slot i seeded with seed + i when a seed is given), each at `state` and
+  // `target` when they are not None.
+  void resetAll(const py::object& seed, const py::object& state, const py::object& target) {
+    const EpisodeStart at = placement(state, target);
     for (std::size_t i = 0; i < count(); ++i)
-      episodes_->reset(i, seed.is_none() ? std::nullopt : std::optional<std::uint64_t>(seed.cast<std::uint64_t>() + i));
+      episodes_->reset(i, seed.is_none() ? std::nullopt : std::optional<std::uint64_t>(seed.cast<std::uint64_t>() + i),
+                       at);
   }
 
   // Observations of every slot as (state (N,), position (N, 3), coordinates (N, D), mask (N, maxActions)).
@@ -133,6 +139,38 @@ class PyEpisodes {
   }
 
  private:
+  // The start reset() places from Python's values: the state an integer (a Python or NumPy
+  // one, not a bool), the target 3 real numbers; their ranges are Episodes::reset's to check.
+  EpisodeStart placement(const py::object& state, const py::object& target) const {
+    EpisodeStart at;
+    if (!state.is_none()) {
+      const std::string expected = fmt::format("options['state']: expected a graph state in [0, {}), found ", states());
+      if (PyBool_Check(state.ptr()) || !PyIndex_Check(state.ptr()))
+        throw Error(expected + fmt::format("{} of type {}", py::repr(state).cast<std::string>(), typeName(state)));
+      int overflow = 0;
+      const auto index = py::reinterpret_steal<py::object>(PyNumber_Index(state.ptr()));
+      if (!index) throw py::error_already_set();
+      const long long value = PyLong_AsLongLongAndOverflow(index.ptr(), &overflow);
+      if (overflow) throw Error(expected + py::repr(state).cast<std::string>());
+      at.state = value;
+    }
+    if (!target.is_none()) {
+      const char* expected =
+          "options['target']: expected 3 numbers (x, y, z in metres, the avatar's frame, as obs['target'])";
+      if (!py::isinstance<py::array>(target) && !py::isinstance<py::sequence>(target))
+        throw Error(fmt::format("{}, found an object of type {}", expected, typeName(target)));
+      const auto given = py::array::ensure(target);
+      if (!given || given.ndim() != 1 || given.shape(0) != 3)
+        throw Error(fmt::format("{}, found shape {}", expected, given ? shapeText(given) : std::string("none")));
+      const char kind = given.dtype().kind();
+      if (kind != 'f' && kind != 'i' && kind != 'u')
+        throw Error(fmt::format("{}, found dtype {}", expected, py::str(given.dtype()).cast<std::string>()));
+      const auto xyz = py::array_t<double, py::array::c_style | py::array::forcecast>::ensure(given);
+      at.target = Eigen::Vector3d(xyz.at(0), xyz.at(1), xyz.at(2));
+    }
+    return at;
+  }
+
   py::object owner_;  // the session, kept alive
   std::unique_ptr<Episodes> episodes_;
   std::vector<EpisodeStep> steps_;
@@ -149,10 +187,12 @@ void bindEpisodes(py::module_& m) {
                Readonly{"dimension", &E::dimension}, Readonly{"states", &E::states}, Readonly{"bounds", &E::bounds},
                Readonly{"axes", &E::axisNames}, Readonly{"reach", &E::reach});
   episodes.def("observe", &E::observe, py::arg("i"))
-      .def("reset", &E::reset, py::arg("i"), py::arg("seed") = py::none())
+      .def("reset", &E::reset, py::arg("i"), py::arg("seed") = py::none(), py::arg("state") = py::none(),
+           py::arg("target") = py::none())
       .def("step", &E::step, py::arg("i"), py::arg("choice"))
       .def("observe_all", &E::observeAll)
-      .def("reset_all", &E::resetAll, py::arg("seed") = py::none())
+      .def("reset_all", &E::resetAll, py::arg("seed") = py::none(), py::arg("state") = py::none(),
+           py::arg("target") = py::none())
       .def("step_all", &E::stepAll, py::arg("actions"));
 }
 

@@ -12,9 +12,12 @@
 #include <span>
 #include <stdexcept>
 
+#include <fmt/format.h>
+
 #include "app/learn_commands.hpp"
 #include "mgrl/core/random.hpp"
 #include "mgrl/runtime/world.hpp"
+#include "mgrl/session/episodes.hpp"
 #include "mgrl/session/session.hpp"
 #include "mgrl/session/simulate.hpp"
 #include "mgrl/session/trials.hpp"
@@ -204,6 +207,36 @@ TEST_CASE("a scenario whose behaviours disagree on the world they share is refus
   const auto session = openSession(boxingOptions(temp.path), {.motion = false});
   CHECK_NOTHROW(makeTask(session->behaviors, "built.yaml"));
   CHECK_THROWS_WITH(makeTask(std::vector<Behavior>{}, "built.yaml"), "built.yaml: expected at least one behaviour, found none");
+}
+
+TEST_CASE("episodes start where reset places them and draw the rest as unplaced ones do", "[session][data]") {
+  test::TempDir temp("session-episodes");
+  const auto session = openSession(boxingOptions(temp.path), {.motion = false});
+  const std::int64_t states = static_cast<std::int64_t>(session->model().stateCount());
+  REQUIRE(session->behaviors[1].name == "hit");  // a static target
+  Episodes episodes(session->model(), session->behaviors[1], 1, {});
+  episodes.reset(0, 7);
+  const std::uint32_t drawnState = episodes.state(0);
+  const Eigen::Vector3d drawnTarget = episodes.target(0).position;
+  const std::int64_t placedState = (drawnState + 1) % states;
+  const Eigen::Vector3d placedTarget(0.1, 1.2, 0.5);
+  // The same seed draws the same numbers, placed or not: what is not placed is as drawn.
+  episodes.reset(0, 7, {.state = placedState});
+  CHECK(episodes.state(0) == placedState);
+  CHECK(episodes.target(0).position == drawnTarget);
+  episodes.reset(0, 7, {.target = placedTarget});
+  CHECK(episodes.state(0) == drawnState);
+  CHECK(episodes.target(0).position == placedTarget);
+  CHECK_FALSE(episodes.target(0).moving());
+  // A bad placement is refused before the slot changes.
+  CHECK_THROWS_WITH(episodes.reset(0, 8, {.state = states}),
+                    fmt::format("options['state']: expected a graph state in [0, {}), found {}", states, states));
+  CHECK_THROWS_WITH(episodes.reset(0, 8, {.state = -1}), Contains("found -1"));
+  CHECK_THROWS_WITH(episodes.reset(0, 8, {.state = 0, .target = Eigen::Vector3d(NAN, 0, 1)}),
+                    "options['target']: expected a finite position (x, y, z in metres, the avatar's frame), found "
+                    "(nan, 0, 1)");
+  CHECK(episodes.state(0) == drawnState);
+  CHECK(episodes.target(0).position == placedTarget);
 }
 
 TEST_CASE("mgrl train refuses behaviours that disagree on their world before training anything", "[session][data]") {

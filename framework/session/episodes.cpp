@@ -30,23 +30,35 @@ Episodes::Episodes(const StateActionModel& model, const Behavior& behavior, std:
 }
 
 // As Q-learning restarts its walk: a state uniformly, a target uniform in the grid's
-// coordinates until one falls inside; a moving target's motion drawn after its place.
-void Episodes::start(Slot& slot) {
+// coordinates until one falls inside; a moving target's motion drawn after its place. What
+// the caller placed replaces what was drawn, and the target's motion is then drawn at the
+// placed position (an opponent's facing depends on it).
+void Episodes::start(Slot& slot, const EpisodeStart& at) {
   const Discretizer& grid = *behavior_.discretizer;
   slot.state = static_cast<std::uint32_t>(slot.rng.below(model_.stateCount()));
+  if (at.state) slot.state = static_cast<std::uint32_t>(*at.state);
   TargetState e;
   do e = grid.sample(slot.rng);
   while (!grid.inside(e));
+  if (at.target) e.position = *at.target;
   slot.target = e.moving() ? e : behavior_.environment->draw(e.position, slot.rng);
   slot.frames = 0;
   slot.trackers.clear();
   if (behavior_.success) slot.trackers.emplace_back(*behavior_.success, model_.frameTime);
 }
 
-void Episodes::reset(std::size_t i, std::optional<std::uint64_t> seed) {
+void Episodes::reset(std::size_t i, std::optional<std::uint64_t> seed, const EpisodeStart& at) {
+  const std::size_t states = model_.stateCount();
+  if (at.state && (*at.state < 0 || static_cast<std::uint64_t>(*at.state) >= states))
+    throw Error(fmt::format("options['state']: expected a graph state in [0, {}), found {}", states, *at.state));
+  if (at.target && !at.target->allFinite())
+    throw Error(
+        fmt::format("options['target']: expected a finite position (x, y, z in metres, the avatar's frame), "
+                    "found ({}, {}, {})",
+                    at.target->x(), at.target->y(), at.target->z()));
   Slot& slot = slots_[i];
   if (seed) slot.rng = Rng(*seed);
-  start(slot);
+  start(slot, at);
 }
 
 EpisodeStep Episodes::step(std::size_t i, std::size_t choice) {

@@ -1,5 +1,5 @@
 """One behaviour of a scenario as a reinforcement-learning environment with Gymnasium's
-API (issue 41), stepped in C++ (framework/include/mgrl/session/episodes.hpp says what a step does).
+API, stepped in C++ (framework/include/mgrl/session/episodes.hpp says what a step does).
 
     env = mgrl.MotionGraphEnv("scenarios/boxing.yaml", "hit")
     obs, info = env.reset(seed=1)
@@ -20,9 +20,21 @@ value beyond it) or, with end_on_success=True, when its success criterion is met
 (info["success"] says when it is met either way); it is truncated after max_seconds of
 motion.
 
+reset(seed=..., options=...) can place the episode's start: options is a dict with
+"state" (a graph state, an int) and/or "target" (the target's position in the avatar's
+frame, x, y, z in metres, as obs["target"]); what it leaves out is drawn as usual (a state
+uniformly, a target uniformly inside the grid) from the same random numbers as without
+options, and so are the target's other fields (a moving target's speed and heading, an
+opponent's facing), at the placed position. A target may be placed outside the grid: the
+first step then terminates. Unknown keys, a state out of range or a target that is not 3
+finite numbers raise mgrl.Error.
+
+    obs, info = env.reset(seed=1, options={"state": 12, "target": [0.1, 1.5, 0.4]})
+
 MotionGraphVectorEnv steps num_envs such environments in one C++ call; an environment
 whose episode ended is reset in the same step (its returned observation is the new
-episode's; info["final"] marks which), as EnvPool does.
+episode's; info["final"] marks which), as EnvPool does. Its reset takes the same options
+and places every environment alike.
 """
 import numpy as np
 
@@ -120,6 +132,22 @@ def _observation_space(episodes):
     })
 
 
+_OPTIONS = ("state", "target")
+
+
+def _placement(options):
+    """(state, target) from reset's options, None for what they leave out."""
+    if options is None:
+        return None, None
+    if not isinstance(options, dict):
+        raise _core.Error(f"options: expected None or a dict with keys {_OPTIONS}, found an object of type "
+                          f"{type(options).__name__}")
+    for key in options:
+        if key not in _OPTIONS:
+            raise _core.Error(f"options[{key!r}]: expected one of the keys {_OPTIONS}, found {key!r}")
+    return options.get("state"), options.get("target")
+
+
 def _session(scenario, data, cache, sets):
     if isinstance(scenario, _core.Session):
         return scenario
@@ -152,9 +180,12 @@ class MotionGraphEnv(_EnvBase):
         return {"state": state, "target": target, "coordinates": coordinates}, mask
 
     def reset(self, *, seed=None, options=None):
+        """A new episode, seeded when seed is given, placed as options says (the module's
+        docstring): {"state": int, "target": (x, y, z)}, either or both."""
+        state, target = _placement(options)
         if _gym is not None:
             super().reset(seed=seed)
-        self._episodes.reset(0, seed)
+        self._episodes.reset(0, seed, state, target)
         obs, mask = self._observation()
         self._last = obs
         return obs, {"action_mask": mask, "success": False, "seconds": 0.0}
@@ -196,8 +227,10 @@ class MotionGraphVectorEnv:
         return {"state": state, "target": target, "coordinates": coordinates}, mask
 
     def reset(self, *, seed=None, options=None):
-        """Every environment restarted; environment i seeded with seed + i when seed is given."""
-        self._episodes.reset_all(seed)
+        """Every environment restarted; environment i seeded with seed + i when seed is given.
+        options places every environment's start alike, as MotionGraphEnv.reset's does."""
+        state, target = _placement(options)
+        self._episodes.reset_all(seed, state, target)
         obs, mask = self._observations()
         return obs, {"action_mask": mask}
 

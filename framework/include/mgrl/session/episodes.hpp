@@ -1,7 +1,7 @@
 #pragma once
 /// \file
 /// One behaviour's problem played as episodes, many at once (Python's MotionGraphEnv and
-/// its vectorised form, issue 41): the avatar in a graph state with the target somewhere
+/// its vectorised form): the avatar in a graph state with the target somewhere
 /// in the behaviour's grid, in the avatar's frame. A step plays one of the state's
 /// out-actions; the reward is the behaviour's reward for that action from that target
 /// (paper sec. 4.1, evaluated at the target itself, not at grid vertices), the target then
@@ -12,11 +12,14 @@
 /// uniform in the grid's coordinates and inside it), ends (terminated) when the target
 /// leaves the grid, where the tabulated problem counts no future value, or, with
 /// `endOnSuccess`, when the behaviour's success criterion is met; and is cut (truncated)
-/// once `seconds` of motion have played. Each episode slot has its own random stream.
+/// once `seconds` of motion have played. Each episode slot has its own random stream. A
+/// caller may place an episode's start (EpisodeStart: the state, the target's position).
 #include <cstddef>
 #include <cstdint>
 #include <optional>
 #include <vector>
+
+#include <Eigen/Core>
 
 #include "mgrl/core/random.hpp"
 #include "mgrl/graph/state_action_model.hpp"
@@ -28,6 +31,18 @@ namespace mgrl {
 struct EpisodeOptions {
   double seconds = 10;        ///< motion per episode before it is truncated
   bool endOnSuccess = false;  ///< a met success criterion terminates the episode
+};
+
+/// Where reset() places an episode (MotionGraphEnv.reset's options); what is left empty
+/// starts as an unplaced episode does. The messages of a bad value name the options.
+struct EpisodeStart {
+  /// The avatar's graph state, in [0, stateCount()).
+  std::optional<std::int64_t> state;
+  /// The target's position in the avatar's frame (x, y, z, m; finite), as observe() writes
+  /// it. It may lie outside the grid (the first step then terminates). The target's other
+  /// fields (a moving target's speed, heading and turn rate, an opponent's facing or
+  /// discrete state) are drawn as for an unplaced start, at this position.
+  std::optional<Eigen::Vector3d> target;
 };
 
 /// What one step did, per slot.
@@ -49,8 +64,12 @@ class Episodes {
   /// The behaviour grid's dimension (coordinates per target).
   int dimension() const { return dimension_; }
 
-  /// Starts slot i's episode, its random stream seeded with `seed` when given.
-  void reset(std::size_t i, std::optional<std::uint64_t> seed = std::nullopt);
+  /// Starts slot i's episode, its random stream seeded with `seed` when given, placed as
+  /// `at` says. A placed start draws the same random numbers as an unplaced one and puts
+  /// what was placed in place of what was drawn, so the slot's stream goes on alike, placed
+  /// or not. Throws mgrl::Error, before changing the slot, for a state out of range or a
+  /// target not finite.
+  void reset(std::size_t i, std::optional<std::uint64_t> seed = std::nullopt, const EpisodeStart& at = {});
   /// Plays out-action `choice` of slot i's state. Throws mgrl::Error (naming `where`, the
   /// slot and the state's action count) unless choice < actionsAt(i).
   EpisodeStep step(std::size_t i, std::size_t choice);
@@ -86,7 +105,7 @@ class Episodes {
     std::uint64_t frames = 0;
     std::vector<SuccessCriterion::Tracker> trackers;
   };
-  void start(Slot& slot);
+  void start(Slot& slot, const EpisodeStart& at = {});
   const StateActionModel& model_;
   const Behavior& behavior_;
   const TrackedOpponent* opponent_ = nullptr;  ///< the behaviour's learned opponent, if it has one
