@@ -37,6 +37,7 @@
 #include "mgrl/session/evaluate.hpp"
 #include "mgrl/session/session.hpp"
 #include "mgrl/session/simulate.hpp"
+#include "mgrl/session/training.hpp"
 #include "support.hpp"
 #include "train_watch.hpp"
 
@@ -329,19 +330,7 @@ class PySession {
     for (const auto& [key, value] : tables.cast<py::dict>()) {
       const std::string name = py::str(key).cast<std::string>();
       const Behavior& b = behavior(name);
-      auto given = std::make_shared<PolicyBehavior>();
-      given->key = b.key;
-      given->record = {{"learner", learnerName},
-                       {"trained_in", "python"},
-                       {"config", b.config},
-                       {"weight", b.weight},
-                       {"activation", std::string(activationName(b.activation))},
-                       {"grid", b.discretizer->describe()}};
-      given->table = tableFrom(b, value);
-      given->vertices = vertexPositions(*b.discretizer);
-      given->gridType = b.discretizer->type();
-      given->grid = b.discretizer->structure();
-      out.behaviors[name] = std::move(given);
+      out.behaviors[name] = std::make_shared<PolicyBehavior>(givenTable(b, tableFrom(b, value), learnerName, "python"));
     }
     for (const Behavior& b : session_->behaviors) {
       if (!out.behaviors.count(b.name)) out.behaviors[b.name] = otherTable(b);
@@ -424,11 +413,9 @@ class PySession {
     bundle.graphKey = session_->graph.key;
     nlohmann::json given = nlohmann::json::object();
     for (const auto& [key, value] : tables.cast<py::dict>()) given[py::str(key).cast<std::string>()] = learnerName;
-    bundle.provenance = {{"scenario", session_->scenario.path.string()},
-                         {"scenario_name", session_->scenario.name},
-                         {"tool", fmt::format("mgrl {} (Python)", kVersion)},
-                         {"sets", session_->options.sets},
-                         {"python_learners", given}};
+    bundle.provenance = trainingProvenance(*session_);
+    bundle.provenance["tool"] = fmt::format("mgrl {} (Python)", kVersion);
+    bundle.provenance["python_learners"] = given;
     for (const auto& [name, table] : t.behaviors) bundle.behaviors[name] = *table;
     py::gil_scoped_release release;
     savePolicyBundle(path, bundle);

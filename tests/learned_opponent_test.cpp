@@ -5,6 +5,7 @@
 #include <cmath>
 #include <cstring>
 #include <memory>
+#include <utility>
 #include <vector>
 
 #include <fmt/format.h>
@@ -23,6 +24,8 @@
 #include "mgrl/scenario/behaviors.hpp"
 #include "mgrl/scenario/scenario.hpp"
 #include "mgrl/session/self_play.hpp"
+#include "mgrl/session/session.hpp"
+#include "mgrl/session/training.hpp"
 #include "rewards/term.hpp"
 #include "test_support.hpp"
 
@@ -578,6 +581,38 @@ TEST_CASE(
   CHECK(targets.status != 0);
   CHECK(targets.lastErrorLine().find("--partner-policy: expected a sparring world (world.mode: sparring), found "
                                      "targets") != std::string::npos);
+}
+
+TEST_CASE(
+    "self-play trains each round after the first on a behaviour of its own: the one given and the session's still "
+    "play the scenario's opponent",
+    "[opponent][learning][data]") {
+  test::TempDir temp("self-play-own-rounds");
+  SessionOptions options;
+  options.plugins = &builtinPlugins();
+  options.scenario = std::string(test::sourceDirectory()) + "/scenarios/spar_learned.yaml";
+  options.dataDir = test::mocap();
+  options.cacheDir = temp.path;
+  options.sets = {"behaviors.spar.discretizer.sectors=2", "behaviors.spar.discretizer.rings=2",
+                  "behaviors.spar.discretizer.headings=2", "behaviors.spar.environment.phases=1",
+                  "behaviors.spar.environment.rounds=2"};
+  const auto session = openSession(options, {.motion = false});
+  const std::vector<Behavior> built =
+      buildBehaviors(session->scenario, session->plugins(), session->model(), session->graph.key, "spar");
+  const Behavior& spar = built.at(0);
+  auto opponentOf = [](const Behavior& b) { return std::as_const(*b.environment).as<SelfPlayOpponent>()->policyKey(); };
+  REQUIRE(opponentOf(spar) == "scripted");
+  TrainSettings settings;
+  settings.save = false;
+  settings.learner = session->plugins().learners.create(ConfigNode::parse("{type: value_iteration}", "test"));
+  const Trained trained = trainBehavior(*session, spar, session->scenario, settings);
+  CHECK(trained.bundle.behaviors.count("spar-round1") == 1);
+  CHECK(trained.bundle.behaviors.count("spar") == 1);
+  REQUIRE(trained.report["behaviors"]["spar"]["rounds"].size() == 2);
+  // Round 2 played round 1's table; neither model that was built before training changed.
+  CHECK(opponentOf(spar) == "scripted");
+  CHECK(opponentOf(session->behaviors.at(0)) == "scripted");
+  CHECK(trained.bundle.behaviors.at("spar").table != trained.bundle.behaviors.at("spar-round1").table);
 }
 
 TEST_CASE("a negative best-response gap is explained in train's round line", "[opponent][learning]") {

@@ -11,6 +11,7 @@
 #include <deque>
 #include <functional>
 #include <memory>
+#include <optional>
 #include <string>
 #include <thread>
 #include <vector>
@@ -89,6 +90,7 @@ struct DecisionClock {
 // A behaviour retrained by one page (live retraining): its plugins built with the page's
 // changed parameters, value iteration's table on them, and what evaluation said.
 struct Retrained {
+  std::optional<Scenario> scenario;  ///< the scenario with the page's changes, which `behavior` was built from
   Behavior behavior;
   std::shared_ptr<const Discretizer> refined;  ///< the learner's own grid, if it refined one
   QTable table;

@@ -76,7 +76,8 @@ void trainAndEvaluate(std::atomic<bool>& stop, const ViewerAssets& assets, const
   const auto start = Clock::now();
   TrainHooks hooks;
   hooks.stop = &stop;
-  Trained trained = trainBehavior(*assets.session, result.behavior, retrainSettings(assets.session->plugins()), hooks);
+  Trained trained = trainBehavior(*assets.session, result.behavior, *result.scenario,
+                                  retrainSettings(assets.session->plugins()), hooks);
   const std::string& name = result.behavior.name;
   PolicyBehavior& table = trained.bundle.behaviors.at(name);
   result.trainSeconds = std::chrono::duration<double>(Clock::now() - start).count();
@@ -163,6 +164,7 @@ void ViewerSession::retrain(const Retrain& message) {
       buildBehaviors(scenario, a.session->plugins(), a.model(), a.session->graph.key, message.behavior);
   auto result = std::make_shared<Retrained>();
   result->behavior = std::move(built.front());
+  result->scenario = std::move(scenario);
   result->set = set;
   try {  // too large for the server: refused before anything is trained
     checkTrainingFits(result->behavior, a.model(), retrainSettings(a.session->plugins()));

@@ -126,16 +126,25 @@ json tableSummary(const Learner& learner, const TrainResult& result, const Discr
           {"stats", result.stats}};
 }
 
-json tableRecord(json summary, const Behavior& behavior, const Discretizer& tableGrid,
-                 const std::vector<CurvePoint>& curve, const TrainListener* listener) {
-  json points = json::array();
-  for (const CurvePoint& p : curve) points.push_back({p.updates, p.seconds, p.residual, p.meanResidual});
-  json record = std::move(summary);
+namespace {
+
+// What every table's record says of its behaviour and grid, after `record`'s own keys.
+json withBehavior(json record, const Behavior& behavior, const Discretizer& tableGrid) {
   record["config"] = behavior.config;
   record["weight"] = behavior.weight;
   record["activation"] = std::string(activationName(behavior.activation));
   if (behavior.stance >= 0) record["stance"] = behavior.stance;  // absent before stances
   record["grid"] = tableGrid.describe();
+  return record;
+}
+
+}  // namespace
+
+json tableRecord(json summary, const Behavior& behavior, const Discretizer& tableGrid,
+                 const std::vector<CurvePoint>& curve, const TrainListener* listener) {
+  json points = json::array();
+  for (const CurvePoint& p : curve) points.push_back({p.updates, p.seconds, p.residual, p.meanResidual});
+  json record = withBehavior(std::move(summary), behavior, tableGrid);
   record["curve_columns"] = {"updates", "seconds", "residual", "mean_residual"};
   record["curve"] = points;
   if (listener) {
@@ -143,6 +152,14 @@ json tableRecord(json summary, const Behavior& behavior, const Discretizer& tabl
     if (!snapshots.is_null()) record["snapshots"] = std::move(snapshots);
   }
   return record;
+}
+
+PolicyBehavior givenTable(const Behavior& behavior, QTable table, const std::string& learner,
+                          const std::string& trainedIn) {
+  const Discretizer& grid = *behavior.discretizer;
+  json record = withBehavior({{"learner", learner}, {"trained_in", trainedIn}}, behavior, grid);
+  return PolicyBehavior{behavior.key, std::move(record), std::move(table), vertexPositions(grid),
+                        grid.type(),  grid.structure(),  nullptr};
 }
 
 }  // namespace mgrl

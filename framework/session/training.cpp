@@ -8,6 +8,7 @@
 #include <map>
 #include <optional>
 #include <set>
+#include <utility>
 
 #include <fmt/format.h>
 
@@ -143,7 +144,8 @@ class TrainRun {
 
   // `given`: a behaviour the caller built (trainBehavior()) to train instead of the
   // session's own of that name.
-  Trained run(const Behavior* given = nullptr) {
+  // `builtFrom`: the scenario it was built from (its self-play rounds are built from it).
+  Trained run(const Behavior* given = nullptr, const Scenario* builtFrom = nullptr) {
     const std::vector<Behavior>& all = session_.behaviors;
     const GraphResult& graph = session_.graph;
     bundle_.graphKey = graph.key;
@@ -158,7 +160,7 @@ class TrainRun {
     if (given) {
       compactModel_[given->name] = choosesCompactModel(*given, learnerOf(*given), model_, settings_, log_);
       wanted_.push_back(given->name);
-      trainBehavior(*given, all);
+      trainBehavior(*given, all, *builtFrom);
       return {std::move(bundle_), std::move(report_), std::move(refined_)};
     }
     for (const Behavior& behavior : all)
@@ -178,15 +180,7 @@ class TrainRun {
         checkpoints_.push_back(checkpointDirectory(out_, behavior.name));
         continue;
       }
-      if (selfPlayRounds(behavior) > 1) {
-        // Self-play changes the opponent its environment plays round by round: the rounds
-        // get a behaviour of their own, and the session's stays as it was opened.
-        std::vector<Behavior> own =
-            buildBehaviors(session_.scenario, session_.plugins(), model_, session_.graph.key, behavior.name);
-        trainBehavior(own.at(0), all);
-      } else {
-        trainBehavior(behavior, all);
-      }
+      trainBehavior(behavior, all, session_.scenario);
     }
     if (bundle_.provenance.contains("unfinished")) bundle_.provenance.erase("unfinished");
     if (saves_) {
@@ -210,12 +204,16 @@ class TrainRun {
   // 1..k - 1's tables (fictitious self-play answers the mixture of every earlier strategy;
   // a greedy player on the mean of their values is its deterministic stand-in, so the
   // transition stays one successor per action and vertex). Each round's table is kept, the
-  // last under the behaviour's own name, the others as NAME-roundK.
-  void trainBehavior(const Behavior& behavior, const std::vector<Behavior>& all) {
-    SelfPlayOpponent* selfPlay = behavior.environment->as<SelfPlayOpponent>();
+  // last under the behaviour's own name, the others as NAME-roundK. Each round trains on an
+  // environment of its own: round 1 on `behavior` as it was built, round k on the behaviour
+  // built again from `builtFrom` whose opponent plays the earlier rounds' table, so that
+  // nothing changes a model once built (`behavior` and the session's stay as they were).
+  void trainBehavior(const Behavior& behavior, const std::vector<Behavior>& all, const Scenario& builtFrom) {
+    const SelfPlayOpponent* selfPlay = std::as_const(*behavior.environment).as<SelfPlayOpponent>();
     const int rounds = selfPlay ? selfPlay->rounds() : 1;
     const bool average = selfPlay && selfPlay->roundsAgainstAverage();
     std::shared_ptr<const QTable> previous, mean;
+    std::vector<Behavior> rebuilt;  // the round's own behaviour, rounds 2 on
     json roundsReport = json::array();
     for (int round = 1; round <= rounds; ++round) {
       const std::string label = round < rounds ? fmt::format("{}-round{}", behavior.name, round) : behavior.name;
@@ -223,21 +221,27 @@ class TrainRun {
         const std::string against = !previous              ? ""
                                     : average && round > 2 ? fmt::format("rounds 1-{} mean", round - 1)
                                                            : fmt::format("round {}", round - 1);
-        if (previous) selfPlay->playPolicy(behavior.discretizer.get(), average ? mean : previous, against);
         log_(fmt::format(
             "train {}: self-play round {} of {}, against {}", behavior.name, round, rounds,
             previous ? fmt::format("{}'s table", against) : fmt::format("the {} opponent", selfPlay->policyKey())));
+        if (previous) {
+          rebuilt = buildBehaviors(builtFrom, session_.plugins(), model_, session_.graph.key, behavior.name);
+          Behavior& fresh = rebuilt.at(0);
+          fresh.environment->as<SelfPlayOpponent>()->playPolicy(fresh.discretizer.get(), average ? mean : previous,
+                                                                against);
+        }
       }
+      const Behavior& playing = previous ? rebuilt.at(0) : behavior;
       std::optional<TableGap> tableGap;
       auto [result, record] =
-          trainRound(behavior, all, label, round, rounds, average ? mean.get() : previous.get(), tableGap);
+          trainRound(playing, all, label, round, rounds, average ? mean.get() : previous.get(), tableGap);
       // An adaptive learner returns the grid it refined: the table's vertices are its.
-      const Discretizer& tableGrid = result.grid ? *result.grid : *behavior.discretizer;
+      const Discretizer& tableGrid = result.grid ? *result.grid : *playing.discretizer;
       if (result.grid) refined_[round == rounds ? behavior.name : label] = result.grid;
       if (rounds > 1) {
         // Scoring the round is reporting: rank 0's.
         if (speaks_)
-          roundsReport.push_back(selfPlayRound(behavior, model_, round, result.table,
+          roundsReport.push_back(selfPlayRound(playing, model_, round, result.table,
                                                average ? mean.get() : previous.get(), tableGap, log_));
         record["round"] = round;
         record["rounds"] = roundsReport;
@@ -372,8 +376,8 @@ Trained trainScenario(const Session& session, const TrainSettings& settings, con
   return run.run();
 }
 
-Trained trainBehavior(const Session& session, const Behavior& behavior, const TrainSettings& settings,
-                      const TrainHooks& given) {
+Trained trainBehavior(const Session& session, const Behavior& behavior, const Scenario& builtFrom,
+                      const TrainSettings& settings, const TrainHooks& given) {
   if (settings.save)
     throw Error(fmt::format("training {} as given: expected its table returned, not saved", behavior.name));
   const bool speaks = launchedProcess().rank == 0;
@@ -381,7 +385,7 @@ Trained trainBehavior(const Session& session, const Behavior& behavior, const Tr
   TrainSettings one = settings;
   one.behavior = behavior.name;
   TrainRun run(one, hooks, session, fs::path(), speaks);
-  return run.run(&behavior);
+  return run.run(&behavior, &builtFrom);
 }
 
 void checkTrainingFits(const Behavior& behavior, const StateActionModel& model, const TrainSettings& settings) {

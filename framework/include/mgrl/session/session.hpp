@@ -125,11 +125,10 @@ class Session {
 
   /// A world of `avatars` on this session's graph and task (mode, spacing ... from
   /// `world:`), each avatar run by a controller of `choice` (a name in plugins().controllers)
-  /// with the world's variety
-  /// (`topK` > 0: choosing among that many near-best actions instead). One thread, no poses:
-  /// set WorldSetup::threads, poses and record as needed. In sparring, the second avatar
-  /// of each pair plays `played.partner` if it has tables, else the scenario's scripted
-  /// opponent if it has one (partnerName()), else `choice` too.
+  /// with the world's variety (`topK` > 0: choosing among that many near-best actions
+  /// instead). One thread, no poses: set WorldSetup::threads, poses and record as needed. In sparring, the second
+  /// avatar of each pair plays `played.partner` if it has tables, else the scenario's scripted opponent if it has one
+  /// (partnerName()), else `choice` too.
   WorldSetup worldSetup(std::size_t avatars, std::uint64_t seed, const ControllerChoice& choice, const Policies& played,
                         int topK = 0) const;
   /// The same with the session's bundle.

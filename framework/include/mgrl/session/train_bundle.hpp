@@ -24,10 +24,6 @@ namespace mgrl {
 /// environment without an opponent that plays policy tables.
 int selfPlayRounds(const Behavior& b);
 
-/// The bundle's provenance for a training on `session`: {"scenario", "scenario_name",
-/// "tool", "sets"}.
-nlohmann::json trainingProvenance(const Session& session);
-
 /// Tables already in the bundle at `out` that are still current (same key: the same
 /// settings on the same graph, so the same table) go into `bundle`: those of other
 /// behaviours when training one, those a stopped run finished when resuming, and all of them

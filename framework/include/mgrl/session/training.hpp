@@ -89,11 +89,22 @@ struct Trained {
 /// what had finished and saying how to resume), mgrl::Error for settings that do not fit.
 Trained trainScenario(const Session& session, const TrainSettings& settings, const TrainHooks& hooks = {});
 
-/// Trains `behavior`, one the caller built on the session's graph (with other settings than
-/// the scenario's, say: the viewer's retraining), as trainScenario() trains the session's;
-/// settings.save must be false. Its self-play rounds change `behavior`'s environment.
-Trained trainBehavior(const Session& session, const Behavior& behavior, const TrainSettings& settings,
-                      const TrainHooks& hooks = {});
+/// Trains `behavior`, one the caller built on the session's graph from `builtFrom` (a
+/// scenario with other settings than the session's, say: the viewer's retraining), as
+/// trainScenario() trains the session's; settings.save must be false. Its self-play rounds
+/// after the first train on the behaviour built again from `builtFrom`, so `behavior` is
+/// not changed.
+Trained trainBehavior(const Session& session, const Behavior& behavior, const Scenario& builtFrom,
+                      const TrainSettings& settings, const TrainHooks& hooks = {});
+
+/// The bundle's provenance for a training on `session`: {"scenario", "scenario_name",
+/// "tool", "sets"}.
+nlohmann::json trainingProvenance(const Session& session);
+/// A table trained elsewhere (a Python learner) as the bundle entry training writes for
+/// `behavior`: its key, its record ({"learner", "trained_in"} and the behaviour's "config",
+/// "weight", "activation", "stance", "grid"), the grid's vertices and structure.
+PolicyBehavior givenTable(const Behavior& behavior, QTable table, const std::string& learner,
+                          const std::string& trainedIn);
 
 /// Throws mgrl::Error, as training would before it starts, when `behavior`'s training with
 /// `settings` (its learner, memory limit and model) does not fit.
