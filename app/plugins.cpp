@@ -4,7 +4,6 @@
 
 #include "mgrl/runtime/world.hpp"
 #include "mgrl/session/controllers.hpp"
-#include "rewards/rewards.hpp"
 
 namespace mgrl::app {
 
@@ -44,7 +43,10 @@ std::string listText(const Plugins& p) {
   describe(text, p.discretizers, "discretizers (behaviors.NAME.discretizer.type)");
   describe(text, p.rewards, "rewards (behaviors.NAME.reward.type)");
   text += "reward terms (behaviors.NAME.reward.terms, with type: terms):\n";
-  text += rewards::describeTerms("  ");
+  for (const TermKind& kind : p.terms.entries()) {
+    text += fmt::format("  term: {}  {}\n", kind.name, kind.summary);
+    text += describeParams(kind.params, "    ");
+  }
   text += "\n";
   describe(text, p.environments, "environment models (behaviors.NAME.environment.type, default static_target)");
   describe(text, p.learners, "learners (behaviors.NAME.learner.type)");
@@ -68,14 +70,10 @@ std::string listText(const Plugins& p) {
 }
 
 nlohmann::json listJson(const Plugins& p) {
-  return {{"discretizers", toJson(p.discretizers)},
-          {"rewards", toJson(p.rewards)},
-          {"reward_terms", toJson(rewards::termRegistry())},
-          {"success_terms", toJson(p.conditions)},
-          {"environments", toJson(p.environments)},
-          {"learners", toJson(p.learners)},
-          {"controllers", p.controllers.names()},
-          {"world", paramsJson(worldParamSpecs())}};
+  return {{"discretizers", toJson(p.discretizers)}, {"rewards", toJson(p.rewards)},
+          {"reward_terms", toJson(p.terms)},        {"success_terms", toJson(p.conditions)},
+          {"environments", toJson(p.environments)}, {"learners", toJson(p.learners)},
+          {"controllers", p.controllers.names()},   {"world", paramsJson(worldParamSpecs())}};
 }
 
 }  // namespace mgrl::app

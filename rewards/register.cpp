@@ -5,28 +5,13 @@
 
 namespace mgrl::rewards {
 
-void registerAll(RewardRegistry& registry, ConditionRegistry& conditions) {
-  registerPaperRewards(registry);
-  registerTerms(registry);
-  for (const ConditionRegistry::Entry& kind : conditionRegistry().entries()) conditions.add(kind);
+void registerAll(BehaviorPlugins& plugins) {
+  Vocabulary vocabulary{plugins.terms, plugins.conditions};
+  for (const auto add : {registerDistance, registerFacing, registerContact, registerTravel, registerEffort,
+                         registerAvoid, registerStruck})
+    add(vocabulary);
+  registerPaperRewards(plugins.rewards);
+  registerTerms(plugins.rewards, plugins.terms);
 }
-
-namespace {
-
-const Vocabulary& vocabulary() {
-  static const Vocabulary v = [] {
-    Vocabulary terms;
-    for (const auto add : {registerDistance, registerFacing, registerContact, registerTravel, registerEffort,
-                           registerAvoid, registerStruck})
-      add(terms);
-    return terms;
-  }();
-  return v;
-}
-
-}  // namespace
-
-const TermRegistry& termRegistry() { return vocabulary().terms; }
-const ConditionRegistry& conditionRegistry() { return vocabulary().conditions; }
 
 }  // namespace mgrl::rewards

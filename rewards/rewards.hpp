@@ -1,25 +1,21 @@
 #pragma once
 /// \file
 /// The reward plugins (paper sec. 4.1, 6.4).
-#include <string>
-#include <string_view>
-#include <vector>
-
+#include "mgrl/learning/behavior.hpp"
 #include "mgrl/learning/reward.hpp"
 #include "term.hpp"
 
 namespace mgrl::rewards {
 
-/// Adds approach, hit (the paper's, as named presets) and terms (the vocabulary), and the
-/// terms' success conditions.
-void registerAll(RewardRegistry& registry, ConditionRegistry& conditions);
+/// Adds the reward terms with their success conditions, then approach, hit (the paper's, as
+/// named presets) and terms (a list of `plugins.terms`).
+void registerAll(BehaviorPlugins& plugins);
 
 /// Adds approach and hit (rewards/rewards.cpp).
 void registerPaperRewards(RewardRegistry& registry);
-/// Adds terms (rewards/terms.cpp).
-void registerTerms(RewardRegistry& registry);
-
-/// Text for `mgrl list`: every term of the vocabulary with its parameters (term.hpp).
-std::string describeTerms(std::string_view indent);
+/// Adds terms (rewards/terms.cpp), a reward whose list names kinds of `terms`. `terms` must
+/// outlive `registry` (both are members of one BehaviorPlugins); a kind added to it later
+/// is found too.
+void registerTerms(RewardRegistry& registry, const TermRegistry& terms);
 
 }  // namespace mgrl::rewards

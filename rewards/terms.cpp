@@ -46,8 +46,6 @@ std::shared_ptr<const StrikeReach> bindReach(const StateActionModel& m, std::uin
   }
 }
 
-const std::vector<TermKind>& termKinds() { return termRegistry().entries(); }
-
 namespace {
 
 using nlohmann::json;
@@ -61,13 +59,12 @@ struct ReadTerm {
 };
 
 // Reads and checks the `terms` list of a block: ConfigError at the first mistake.
-std::vector<ReadTerm> readTerms(const ConfigNode& block) {
+std::vector<ReadTerm> readTerms(const ConfigNode& block, const TermRegistry& registry) {
   if (!block.has("terms"))
     block.fail("expected a 'terms' list, e.g. terms: [{term: distance, point: pelvis, d0: 1.4}]");
   const ConfigNode list = block.child("terms");
   const std::vector<ConfigNode> elements = list.elements();
   if (elements.empty()) list.fail("expected at least one term, found an empty list");
-  const TermRegistry& registry = termRegistry();
   std::vector<ReadTerm> terms;
   for (const ConfigNode& element : elements) {
     if (!element.isMap() || !element.has("term"))
@@ -164,33 +161,23 @@ class Terms final : public Reward {
 
 }  // namespace
 
-void registerTerms(RewardRegistry& registry) {
+void registerTerms(RewardRegistry& registry, const TermRegistry& terms) {
   RewardRegistry::Entry entry{
       "terms",
-      fmt::format("a list of terms ({}), each a signal over the action's frames; "
-                  "combine: max gives max_t gamma^t sum_k w_k s_k(t) (paper sec. 4.1), sum gives the sum over t",
-                  termRegistry().describeKnown()),
+      "a list of reward terms (below), each a signal over the action's frames; "
+      "combine: max gives max_t gamma^t sum_k w_k s_k(t) (paper sec. 4.1), sum gives the sum over t",
       {ParamSpec::choice("combine", "max", {"max", "sum"},
                          "max: the best discounted frame (the paper's); sum: every frame's discounted signal"),
        ParamSpec::number("gamma", 0.97, 1e-6, 1, "per frame", "discount per frame, inside and after the action")},
-      [](const Params& p) { return std::make_unique<Terms>(p, readTerms(*p.block())); }};
+      [kinds = &terms](const Params& p) { return std::make_unique<Terms>(p, readTerms(*p.block(), *kinds)); }};
   entry.blockKeys = {"terms"};
-  entry.readBlock = [](const ConfigNode& block) {
-    nlohmann::json terms = nlohmann::json::array();
-    for (const ReadTerm& t : readTerms(block)) terms.push_back(t.params);
-    return nlohmann::json{{"terms", terms}};
+  entry.readBlock = [kinds = &terms](const ConfigNode& block) {
+    nlohmann::json list = nlohmann::json::array();
+    for (const ReadTerm& t : readTerms(block, *kinds)) list.push_back(t.params);
+    return nlohmann::json{{"terms", list}};
   };
   entry.example = "{type: terms, terms: [{term: distance, point: pelvis, d0: 1.4}]}";
   registry.add(std::move(entry));
-}
-
-std::string describeTerms(std::string_view indent) {
-  std::string out;
-  for (const TermKind& k : termKinds()) {
-    out += fmt::format("{}term: {}  {}\n", indent, k.name, k.summary);
-    out += describeParams(k.params, fmt::format("{}  ", indent));
-  }
-  return out;
 }
 
 }  // namespace mgrl::rewards

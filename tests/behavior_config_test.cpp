@@ -945,4 +945,39 @@ TEST_CASE("a body point names a skeleton role or joint, one the skeleton lacks l
   }
 }
 
+TEST_CASE("a reward term the caller registers in Plugins is read, checked, listed and paid by the terms reward",
+          "[behaviors][plugins]") {
+  // A term that pays a constant: s_k(t) = level at every frame.
+  class Constant final : public Term {
+   public:
+    explicit Constant(double level) : level_(level) {}
+    double signal(const TermFrame&) const override { return level_; }
+
+   private:
+    double level_;
+  };
+  Plugins plugins;
+  registerBuiltins(plugins);
+  plugins.terms.add({"constant",
+                     "a constant level",
+                     {ParamSpec::number("level", 0.5, 0, 1, "", "the signal at every frame"),
+                      ParamSpec::number("weight", 1, 0, 1000, "", "w_k")},
+                     [](const Params& p) { return std::make_unique<Constant>(p.number("level")); }});
+  const char* block = "{type: terms, gamma: 0.9, terms: [{term: constant, level: 0.25, weight: 2}]}";
+  const std::unique_ptr<Reward> reward = plugins.rewards.create(ConfigNode::parse(block, "r"));
+  reward->bind(model());
+  // max over t of gamma^t w s: the first frame's, 0.9 * 2 * 0.25.
+  CHECK(reward->evaluate(model(), 0, TargetState(Eigen::Vector3d(1, 0, 0))) == Approx(0.45));
+  CHECK(reward->terms()[0]["term"] == "constant");
+  // Its parameters are checked like a built-in term's, and the built-in plug-ins do not know it.
+  REQUIRE_THROWS_WITH(
+      plugins.rewards.create(ConfigNode::parse("{type: terms, terms: [{term: constant, level: 2}]}", "r")),
+      Contains("level") && Contains("found 2"));
+  REQUIRE_THROWS_WITH(app::plugins().rewards.create(ConfigNode::parse(block, "r")),
+                      Contains("unknown term 'constant'") && Contains("distance, facing"));
+  CHECK_THAT(app::listText(plugins), Contains("  term: constant  a constant level\n"));
+  CHECK_THAT(app::listText(app::plugins()), !Contains("term: constant"));
+  CHECK(app::listJson(plugins)["reward_terms"].back()["name"] == "constant");
+}
+
 }  // namespace behavior_config_test

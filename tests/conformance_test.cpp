@@ -24,7 +24,7 @@
 #include "mgrl/learning/problem.hpp"
 #include "mgrl/learning/q_table.hpp"
 #include "mgrl/learning/reward.hpp"
-#include "rewards/term.hpp"
+#include "mgrl/learning/reward_term.hpp"
 #include "synthetic_model.hpp"
 
 namespace mgrl::conformance_test {
@@ -396,10 +396,10 @@ TEST_CASE("every learner trains a finite table of the problem's shape, the same 
 }
 
 TEST_CASE("every reward term gives a signal in [0, 1], the same for the same frame and state", "[conformance]") {
-  // Every registered term kind (rewards/term.hpp), built from its defaults. The synthetic
+  // Every registered term kind (mgrl/learning/reward_term.hpp), built from its defaults. The synthetic
   // model has no skeleton: a term that reads joints (avoid, or a joint point) is built and
   // named here, and checked on the capture by the reward-term tests.
-  const auto& kinds = rewards::termKinds();
+  const auto& kinds = builtinPlugins().terms.entries();
   REQUIRE(kinds.size() >= 6);
   const std::unique_ptr<Discretizer> grid = builtinPlugins().discretizers.create(
       ConfigNode::parse("{type: polar2d, radius: 2, rings: 4, sectors: 8}", "c"), model());
@@ -407,7 +407,7 @@ TEST_CASE("every reward term gives a signal in [0, 1], the same for the same fra
   for (const auto& kind : kinds) {
     INFO("term " << kind.name);
     CHECK(std::any_of(kind.params.begin(), kind.params.end(), [](const ParamSpec& p) { return p.name == "weight"; }));
-    std::unique_ptr<rewards::Term> term = kind.make(Params::defaults(kind.params));
+    std::unique_ptr<Term> term = kind.make(Params::defaults(kind.params));
     REQUIRE(term != nullptr);
     if (term->readsJoints()) {
       onCapture.push_back(kind.name);
@@ -420,7 +420,7 @@ TEST_CASE("every reward term gives a signal in [0, 1], the same for the same fra
         const double start = std::hypot(e.position.x(), e.position.z());
         for (std::size_t t = 1; t <= model().actionLength(a); t += 3) {
           const Eigen::Vector3d at = e.at(static_cast<double>(t) * model().frameTime);
-          const rewards::TermFrame f{model(), a, t, model().actionFrameBegin[a] + t - 1, at, e, start};
+          const TermFrame f{model(), a, t, model().actionFrameBegin[a] + t - 1, at, e, start};
           const double s = term->signal(f);
           REQUIRE(s >= 0);
           REQUIRE(s <= 1);
@@ -447,9 +447,9 @@ TEST_CASE(
   std::vector<std::string> onCapture;
   for (const auto& kind : kinds.entries()) {
     INFO("success term " << kind.name);
-    CHECK(rewards::termRegistry().find(kind.name) != nullptr);
+    CHECK(builtinPlugins().terms.find(kind.name) != nullptr);
     for (const std::string& key : kind.inherited) {  // an inherited key is one of the term's own
-      const auto& termParams = rewards::termRegistry().find(kind.name)->params;
+      const auto& termParams = builtinPlugins().terms.find(kind.name)->params;
       const auto own =
           std::find_if(termParams.begin(), termParams.end(), [&](const ParamSpec& p) { return p.name == key; });
       REQUIRE(own != termParams.end());

@@ -265,10 +265,10 @@ TEST_CASE("the struck term costs the frame a learned opponent's strike lands on 
           "[opponent][data]") {
   SparFixture& f = fixture();
   const StateActionModel& m = f.model;
-  const rewards::TermKind* kind = rewards::termRegistry().find("struck");
+  const TermKind* kind = app::plugins().terms.find("struck");
   REQUIRE(kind != nullptr);
   auto make = [&](const char* yaml) {
-    std::unique_ptr<rewards::Term> term = kind->make(Params::read(ConfigNode::parse(yaml, "t"), kind->params, {}));
+    std::unique_ptr<Term> term = kind->make(Params::read(ConfigNode::parse(yaml, "t"), kind->params, {}));
     term->bind(m);
     return term;
   };
@@ -288,8 +288,8 @@ TEST_CASE("the struck term costs the frame a learned opponent's strike lands on 
   OpponentFrame o{GroundMotion{p.x() - h->x, p.z() - h->z, 0}, h->action, h->offset, 1, 0};
   const TargetState e(Eigen::Vector3d(0, 1.4, 1.2), 0, M_PI);
   const Eigen::Vector3d target = o.toAvatar(Eigen::Vector3d(h->x, h->y, h->z));
-  auto at = [&](const rewards::Term& term, const OpponentFrame* opponent) {
-    return term.signal(rewards::TermFrame{m, a, t, frame, target, e, 1.2, opponent});
+  auto at = [&](const Term& term, const OpponentFrame* opponent) {
+    return term.signal(TermFrame{m, a, t, frame, target, e, 1.2, opponent});
   };
   const std::string plain = fmt::format("{{radius: {}, use_speed: false}}", radius);
   const auto struck = make(plain.c_str());
@@ -333,10 +333,10 @@ TEST_CASE("the struck term costs the frame a learned opponent's strike lands on 
   CHECK(costly > 0);
   // The scripted opponent (environment `opponent`) throws every punch at every moment: on
   // top of the avatar it lands, 5 m away it does not.
-  CHECK(struck->signal(rewards::TermFrame{m, a, t, frame, target, TargetState(Eigen::Vector3d(0, 1.4, 0), 0, M_PI), 0,
-                                          nullptr}) == 1);
-  CHECK(struck->signal(rewards::TermFrame{m, a, t, frame, target, TargetState(Eigen::Vector3d(0, 1.4, 5), 0, M_PI), 5,
-                                          nullptr}) == 0);
+  CHECK(struck->signal(
+            TermFrame{m, a, t, frame, target, TargetState(Eigen::Vector3d(0, 1.4, 0), 0, M_PI), 0, nullptr}) == 1);
+  CHECK(struck->signal(
+            TermFrame{m, a, t, frame, target, TargetState(Eigen::Vector3d(0, 1.4, 5), 0, M_PI), 5, nullptr}) == 0);
 }
 
 TEST_CASE(
@@ -357,8 +357,8 @@ TEST_CASE(
   const SuccessCriterion contact = criterion("{term: contact, radius: 0.2}");
   const SuccessCriterion avoid = criterion("{term: avoid, clear: 0.1}");
   auto term = [&](const char* name, const char* yaml) {
-    const rewards::TermKind* kind = rewards::termRegistry().find(name);
-    std::unique_ptr<rewards::Term> t = kind->make(Params::read(ConfigNode::parse(yaml, "t"), kind->params, {}));
+    const TermKind* kind = app::plugins().terms.find(name);
+    std::unique_ptr<Term> t = kind->make(Params::read(ConfigNode::parse(yaml, "t"), kind->params, {}));
     t->bind(m);
     return t;
   };
@@ -381,7 +381,7 @@ TEST_CASE(
     for (std::uint32_t t = 1; t <= m.actionLength(a); ++t) {
       const OpponentFrame& o = track[t - 1];
       const Eigen::Vector3d target = opponentTarget(m, o, head.joint, e.position.y());
-      const rewards::TermFrame frame{m, a, t, m.actionFrameBegin[a] + t - 1, target, e, r, &o};
+      const TermFrame frame{m, a, t, m.actionFrameBegin[a] + t - 1, target, e, r, &o};
       if (firstHit == 0 && contactTerm->signal(frame) > 0) firstHit = t;
       if (firstClear == 0 && avoidTerm->signal(frame) == 1) firstClear = t;
     }

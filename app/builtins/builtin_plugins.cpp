@@ -40,16 +40,21 @@ void registerControllers(ControllerRegistry& controllers) {
 
 }  // namespace
 
+void registerBuiltins(Plugins& plugins) {
+  discretizers::registerAll(plugins.discretizers);
+  rewards::registerAll(plugins);
+  environments::registerAll(plugins.environments);
+  learners::registerAll(plugins.learners);
+  registerControllers(plugins.controllers);
+}
+
 const Plugins& builtinPlugins() {
-  static const Plugins instance = [] {
-    Plugins p;
-    discretizers::registerAll(p.discretizers);
-    rewards::registerAll(p.rewards, p.conditions);
-    environments::registerAll(p.environments);
-    learners::registerAll(p.learners);
-    registerControllers(p.controllers);
-    return p;
-  }();
+  // Built in place: a Plugins is neither copied nor moved (its `terms` reward keeps the
+  // address of its `terms` registry).
+  struct Builtin : Plugins {
+    Builtin() { registerBuiltins(*this); }
+  };
+  static const Builtin instance;
   return instance;
 }
 

@@ -9,6 +9,10 @@
 
 namespace mgrl {
 
+/// Adds every built-in plug-in to `plugins`: a program that adds plug-ins of its own
+/// starts from an empty Plugins, calls this, then adds them.
+void registerBuiltins(Plugins& plugins);
+
 /// The registries with every built-in plug-in (built on first use, then shared).
 const Plugins& builtinPlugins();
 

@@ -15,6 +15,7 @@
 #include "mgrl/learning/environment_model.hpp"
 #include "mgrl/learning/learner.hpp"
 #include "mgrl/learning/reward.hpp"
+#include "mgrl/learning/reward_term.hpp"
 #include "mgrl/learning/success.hpp"
 
 namespace mgrl {
@@ -22,12 +23,20 @@ namespace mgrl {
 /// One registry per seam a behaviour is built from; the composition root fills them
 /// (app/builtins: the built-in plug-ins) and hands them to the session stage as part of its
 /// Plugins (mgrl/session/plugins.hpp, which adds the controllers).
+///
+/// Neither copied nor moved: a reward that reads the other registries (the `terms` reward
+/// reads `terms`) keeps the address of the object it was registered in.
 struct BehaviorPlugins {
+  BehaviorPlugins() = default;
+  BehaviorPlugins(const BehaviorPlugins&) = delete;
+  BehaviorPlugins& operator=(const BehaviorPlugins&) = delete;
+
   DiscretizerRegistry discretizers{"discretizer"};
   RewardRegistry rewards{"reward"};
+  TermRegistry terms{"reward term"};  ///< the terms of the `terms` reward
   EnvironmentRegistry environments{"environment model"};
   LearnerRegistry learners{"learner"};
-  ConditionRegistry conditions{"success term"};  ///< registered by the reward terms (rewards/)
+  ConditionRegistry conditions{"success term"};  ///< registered beside the reward terms of the same name
 };
 
 struct Behavior {

@@ -37,12 +37,12 @@ struct EpisodeOptions {
 /// starts as an unplaced episode does. The messages of a bad value name the options.
 struct EpisodeStart {
   /// The avatar's graph state, in [0, stateCount()).
-  std::optional<std::int64_t> state;
+  std::optional<std::int64_t> state = std::nullopt;
   /// The target's position in the avatar's frame (x, y, z, m; finite), as observe() writes
   /// it. It may lie outside the grid (the first step then terminates). The target's other
   /// fields (a moving target's speed, heading and turn rate, an opponent's facing or
   /// discrete state) are drawn as for an unplaced start, at this position.
-  std::optional<Eigen::Vector3d> target;
+  std::optional<Eigen::Vector3d> target = std::nullopt;
 };
 
 /// What one step did, per slot.
