@@ -30,7 +30,7 @@ struct TermFrame {
   const Eigen::Vector3d& target;  ///< where the target is at t (a moving one has moved)
   const TargetState& state;       ///< the environment state at the decision
   double startDistance;           ///< the pelvis's ground distance to the target at the decision
-  /// A learned opponent (issue 43): what it plays at this frame; `target` is then its head
+  /// A learned opponent: what it plays at this frame; `target` is then its head
   /// (its root at the target's height without a head). Null for other environments.
   const OpponentFrame* opponent = nullptr;
 };
