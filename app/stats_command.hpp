@@ -1,6 +1,6 @@
 #pragma once
 /// \file
-/// `mgrl stats`: a report on bouts, real or synthesized (issue 18; docs/stats.md), built by
+/// `mgrl stats`: a report on bouts, real or synthesized (docs/stats.md), built by
 /// the runtime stage (mgrl/runtime/bout_report.hpp) and printed here.
 #include <string>
 

@@ -1,4 +1,4 @@
-// Adaptive resolution benchmark (issue 16) on the real boxing capture's hit behaviour.
+// Adaptive resolution benchmark on the real boxing capture's hit behaviour.
 //   - Value error: value iteration on a fine uniform cylindrical3d grid is the reference;
 //     uniform grids and adaptive_value_iteration kd_trees at several vertex budgets are
 //     compared with it at random targets inside the hitting volume (uniform in grid

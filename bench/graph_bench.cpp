@@ -1,4 +1,4 @@
-// Graph construction benchmark (issue 3): the sparring scenario (about 12,000 frames at
+// Graph construction benchmark: the sparring scenario (about 12,000 frames at
 // 30 fps) from loaded capture to state-action model, and how time grows with the number of
 // frames (a prefix of the clips) in the scenario's mode and with all pairs compared
 // (contact_event: none). Prints medians over several runs and the peak resident memory.

@@ -1,4 +1,4 @@
-// Learning benchmark (issue 4, DESIGN.md sec. 7): the paper's problem sizes on a
+// Learning benchmark (DESIGN.md sec. 7): the paper's problem sizes on a
 // seed-sized synthetic state-action model (437 states, 27,072 actions of 5-40 frames at
 // 15 fps, motion statistics measured from the boxing capture), with the paper's grids
 // (approach: polar2d 5 x 13 within 2 m; hit: cylindrical3d 10 x 10 x 4 over the effective
@@ -159,7 +159,7 @@ int main(int argc, char** argv) {
                 rowBytes / 1e9, static_cast<double>(g.transition.size() * sizeof(mgrl::GridTransition)) / 1e6);
   }
 
-  // The compact model (issue 20, train --model compact): rewards only, landings found per
+  // The compact model (train --model compact): rewards only, landings found per
   // backup. The same tables (tests/learning_test.cpp); here its memory and speed.
   {
     const auto compactStart = Clock::now();

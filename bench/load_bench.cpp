@@ -52,7 +52,7 @@ int main(int argc, char** argv) {
   }
 
   std::vector<double> loadTimes, parseTimes, fkTimes, annotateTimes, hashTimes;
-  // Hashing from memory (every cache key and bundle check, issue 20): a 64 MB buffer.
+  // Hashing from memory (every cache key and bundle check): a 64 MB buffer.
   const std::string hashInput(std::size_t{64} << 20, 'x');
   std::size_t frames = 0, jointFrames = 0;
   for (int run = 0; run < runs; ++run) {

@@ -1,4 +1,4 @@
-// Memory benchmark (issue 20): what this machine's memory gives a loop like the learners'
+// Memory benchmark: what this machine's memory gives a loop like the learners'
 // hot loops, as a yardstick for docs/performance.md's bounds.
 //   - sequential read bandwidth over a buffer far larger than the caches;
 //   - random cache lines: 64-byte lines at random addresses, read in batches of

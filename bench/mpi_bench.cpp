@@ -1,4 +1,4 @@
-// Issue 44: how much a value-iteration sweep must exchange when the table is split across
+// How much a value-iteration sweep must exchange when the table is split across
 // K ranks, for the split mpi_value_iteration uses (by graph state) and for the obvious
 // alternative (by blocks of grid vertices; on a learned-opponent grid, whose vertices are
 // numbered layer by layer, that is also the split by opponent state). Counted exactly on

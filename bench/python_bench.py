@@ -1,4 +1,4 @@
-"""What the Python module costs (issue 41; DESIGN.md's budget is measured here, not in
+"""What the Python module costs (DESIGN.md's budget is measured here, not in
 tests): building the problem's arrays against the C++ tabulation, a value-iteration sweep
 in NumPy against the C++ one, the environment's single step and the vectorised one, and
 that viewing the graph's arrays copies nothing. Medians of --runs runs.

@@ -1,4 +1,4 @@
-// Runtime benchmark (issue 5, DESIGN.md sec. 7): the world on the real boxing capture with
+// Runtime benchmark (DESIGN.md sec. 7): the world on the real boxing capture with
 // policies trained by value iteration.
 //   - the paper's run (sec. 6.7): 30 sparring avatars for 1,000 frames (paper: 9 s);
 //   - avatar-frames per second for control + collision, and with forward kinematics of

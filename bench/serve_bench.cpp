@@ -1,10 +1,10 @@
-// Viewer benchmark (issue 14): what one page costs the server per frame, on the real boxing
+// Viewer benchmark: what one page costs the server per frame, on the real boxing
 // capture with policies trained by value iteration: simulating a frame with every joint
 // posed and encoding it as the binary pose frame (docs/viewer-protocol.md), for the target
 // mode, sparring and crowds of 60, 1,000 and 2,000; and the bytes on the wire.
 // Medians of several runs (the machine is shared and noisy).
 //
-// With --shared, also the shared time budget (issue 40) on the real server over loopback:
+// With --shared, also the shared time budget on the real server over loopback:
 // what 15 pages of crowds of 2,000 on the online search at speed 4 leave to one light page
 // (frames per second it receives, medians of the runs). With --flood, what 4 pages switching
 // between a crowd of 2,000 and target mode at 150 messages a second leave to one light page

@@ -1,4 +1,4 @@
-# Unity builds (issue 38): a target's .cpp files compiled a few at a time as one translation
+# Unity builds: a target's .cpp files compiled a few at a time as one translation
 # unit each, so that the headers every file parses (Eigen, fmt, nlohmann/json, yaml-cpp,
 # Boost) and the templates it instantiates are compiled once per batch instead of once per
 # file. Measured on the 2-core machine, cold: the libraries and the application compile in

@@ -1,4 +1,4 @@
-// polar_velocity (issue 17): the grid of a moving target. The paper's polar grid (sec. 6.4)
+// polar_velocity: the grid of a moving target. The paper's polar grid (sec. 6.4)
 // over the target's ground position, a third axis for the heading of its velocity in the
 // avatar frame, and the speed as layers: a moving_target keeps its speed, so every backup
 // from a vertex stays in the vertex's layer and learners interpolate in 3-D, as on the

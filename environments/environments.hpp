@@ -48,7 +48,7 @@ class Opponent final : public EnvironmentModel, public FacingOpponent {
 /// A number no earlier call returned (from 1), thread-safe.
 std::uint64_t freshGeneration();
 
-/// `learned_opponent` (issue 43): the target is another avatar of the same graph playing
+/// `learned_opponent`: the target is another avatar of the same graph playing
 /// graph actions (see learned_opponent.cpp for the state and how time is handled). Its
 /// discrete state is TargetState::opponent = s * phases + b: the graph state s its current
 /// action ends at and the phase bucket b of the frames left (0: about to arrive). A

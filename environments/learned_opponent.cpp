@@ -1,4 +1,4 @@
-// learned_opponent (issue 43; Lee & Lee sec. 7's next step, "sparring with a real
+// learned_opponent (Lee & Lee sec. 7's next step, "sparring with a real
 // opponent"): the opponent is another avatar of the same graph that plays graph actions
 // itself, chosen by a policy table (self-play: the same behaviour's previous round) with the
 // runtime controller's greedy rule, or in round 0 by a scripted rule. Its state in the

@@ -1,4 +1,4 @@
-// opponent (issue 17; Lee & Lee sec. 7's next step, "sparring with a real opponent instead
+// opponent (Lee & Lee sec. 7's next step, "sparring with a real opponent instead
 // of a static target"): the target is another avatar of the same graph. Its state in the
 // avatar frame is where it stands and which way it faces (TargetState::position on the
 // ground, ::heading; speed 0). Between decisions it plays a fixed policy:

@@ -1,7 +1,7 @@
 // static_target (Lee & Lee sec. 4.1): the target stays put in the world, so after an
 // action it is seen from the action's end through the inverse of the action's root
-// displacement: exact, no sampling. moving_target (issue 17): a straight line at a constant
-// velocity, or (issue 46) an arc at a constant turn rate, exact like the static one
+// displacement: exact, no sampling. moving_target: a straight line at a constant
+// velocity, or an arc at a constant turn rate, exact like the static one
 // (framework/learning/environment_model.cpp).
 #include <cmath>
 #include <memory>

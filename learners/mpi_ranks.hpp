@@ -1,6 +1,6 @@
 #pragma once
 /// \file
-/// The processes of an mpi_value_iteration run (issue 44) and how the table is split among
+/// The processes of an mpi_value_iteration run and how the table is split among
 /// them. Only learners/mpi_ranks.cpp sees MPI (a private dependency of the learners
 /// library): without MPI, or without a launcher, Ranks is this process alone and makes no
 /// MPI call.

@@ -1,5 +1,5 @@
 // mpi_value_iteration: value_iteration's Jacobi sweeps (paper sec. 4.2's backup at every
-// (vertex, action) pair) across the processes of an MPI job (issue 44), for tables that
+// (vertex, action) pair) across the processes of an MPI job, for tables that
 // outgrow one machine. Without a launcher it runs as one process, the same code.
 //
 // How the work and the table are split: by graph state. Rank r owns a set of states S_r,

@@ -35,7 +35,7 @@ nlohmann::json toJson(const Walk& w, bool capped) {
 
 // The grid cells the walk has been in, for the coverage report, as hex digits: digit i
 // holds cells 4i to 4i + 3, the lowest bit first. A checkpoint keeps them so a resumed run
-// reports the coverage of the whole walk, as an uninterrupted one does (issue 19's kill
+// reports the coverage of the whole walk, as an uninterrupted one does (the kill
 // tests found a resumed run reporting only the cells walked after the resume).
 std::string encodeCells(const std::vector<std::uint8_t>& seen) {
   static constexpr char kDigits[] = "0123456789abcdef";

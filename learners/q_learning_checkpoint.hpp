@@ -1,6 +1,6 @@
 #pragma once
 /// \file
-/// What a `q_learning` checkpoint holds beside the table (issue 19's kill-safe training):
+/// What a `q_learning` checkpoint holds beside the table (training that survives a kill):
 /// the walk that determines the rest of a run, its writing, and its reading back, strict in
 /// every member.
 /// Split from q_learning.cpp, which runs the walk: this file changes when the format does.

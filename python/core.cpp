@@ -1,4 +1,4 @@
-// mgrl._core: the session stage (framework/session) bound to Python with pybind11 (issue 41).
+// mgrl._core: the session stage (framework/session) bound to Python with pybind11.
 // The package mgrl (python/mgrl/__init__.py) re-exports what users call. Arrays are NumPy
 // views of the session's own memory where they can be (the graph's), else arrays made once.
 // The parts: support.hpp (helpers), train_watch (training from Python), session (Session,

@@ -1,4 +1,4 @@
-// term: avoid (issue 17): min(d / clear, 1), d the distance from a body point to the
+// term: avoid: min(d / clear, 1), d the distance from a body point to the
 // nearest tip of the opponent's effective strikes, or the gap between the two bodies if
 // smaller. The opponent (environment `opponent`) is an avatar of the same graph standing
 // at the target and facing its heading, so its strikes are this model's own.
@@ -74,7 +74,7 @@ class AvoidCondition final : public SuccessCondition {
     const Guard& g = guard_;
     if (!g.reach || g.point.joint < 0 || static_cast<std::size_t>(g.point.joint) >= f.model.jointNames.size())
       throw std::logic_error("an avoid success condition used before bind()");
-    // A learned opponent (issue 43): the strikes it throws near this frame, as the term reads them.
+    // A learned opponent: the strikes it throws near this frame, as the term reads them.
     if (f.opponent)
       return !(trackedClearance(f.model, f.frame, g.point.joint, *f.opponent, g.effectors, kStrikeWindow,
                                 g.reach->cap(), g.bodyRadius) < g.clear);

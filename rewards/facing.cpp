@@ -1,6 +1,6 @@
 // term: facing: how the avatar's facing stands to the target's direction. Either
 // exp(-|angle - angle0| / sigma) about a given angle, or a stance learned from capture, a
-// density normalised to 1 at its mode (issue 46): (prefer: hits) how often the source's
+// density normalised to 1 at its mode: (prefer: hits) how often the source's
 // effective strikes land at that signed angle from the facing (a boxer whose punches land
 // 30 degrees to his left stands with his target there, not straight ahead), or (prefer:
 // bouts) how often the real SNU sparring fighters keep that angle to each other. As a
@@ -26,7 +26,7 @@ namespace {
 
 constexpr double kDegree = std::numbers::pi / 180;
 
-// exp(-|angle - angle0| / sigma): angle0 written (angle_deg), or (prefer: stance, issue 46)
+// exp(-|angle - angle0| / sigma): angle0 written (angle_deg), or (prefer: stance)
 // learned at bind from the real SNU sparring bouts: their facing angles (as prefer: bouts
 // reads them) cut into `stances` equally large parts, angle0 the median of part `stance`. A
 // scenario gives each stance its own behaviour (`stance: k`), and the world lets each fighter

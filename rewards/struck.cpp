@@ -1,4 +1,4 @@
-// term: struck (issue 43), a cost: s, the opponent's strike landing on a body point at frame
+// term: struck, a cost: s, the opponent's strike landing on a body point at frame
 // t (its speed weight, or 1), 0 when none lands; the reward subtracts w s. `contact` seen
 // from the other side: with the same weight and radius as the behaviour's contact, a punch
 // landed and a punch taken cancel, so a best response against a fixed opponent (self-play

@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""Adaptive against uniform hit grids on boxing (issue 16), with `mgrl train` and `mgrl eval`.
+"""Adaptive against uniform hit grids on boxing, with `mgrl train` and `mgrl eval`.
 
 Trains the approach behaviour once (the scenario's own learner), then for each
 configuration trains only hit into a copy of that bundle and evaluates the combined policy

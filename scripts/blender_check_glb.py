@@ -1,5 +1,5 @@
 # Imports a .glb written by `mgrl simulate --gltf-out` with Blender's own glTF importer and
-# checks what a Blender user gets (issue 45): one armature with a bone per joint, a skinned
+# checks what a Blender user gets: one armature with a bone per joint, a skinned
 # mesh bound to it, and one action spanning the bout's duration. Run inside Blender:
 #
 #   blender --background --factory-startup --python-exit-code 1 \

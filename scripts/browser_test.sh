@@ -19,11 +19,11 @@ mkdir -p "$work"
 "$mgrl" train "$root/scenarios/boxing.yaml" --set behaviors.approach.learner.type=value_iteration \
   --set behaviors.hit.learner.type=value_iteration --out "$work/policy" --cache "$work/cache" --data "$data" \
   >"$work/train.out" 2>"$work/train.err" || { cat "$work/train.err" >&2; exit 1; }
-# boxing.yaml's sparring and crowds play boxing_spar.yaml (its sparring_scenario, issue 46),
+# boxing.yaml's sparring and crowds play boxing_spar.yaml (its sparring_scenario),
 # whose default bundle in this cache the server finds (value iteration, a few seconds).
 "$mgrl" train "$root/scenarios/boxing_spar.yaml" --cache "$work/cache" --data "$data" \
   >"$work/train-spar.out" 2>"$work/train-spar.err" || { cat "$work/train-spar.err" >&2; exit 1; }
-# The dodge scene's page (issue 45) plays a bundle of scenarios/dodge.yaml (value iteration,
+# The dodge scene's page plays a bundle of scenarios/dodge.yaml (value iteration,
 # a few seconds).
 "$mgrl" train "$root/scenarios/dodge.yaml" --out "$work/dodge-policy" --cache "$work/cache" --data "$data" \
   >"$work/train-dodge.out" 2>"$work/train-dodge.err" || { cat "$work/train-dodge.err" >&2; exit 1; }

@@ -25,7 +25,7 @@ hits="$(sed -nE 's/^hits: ([0-9]+) .*/\1/p' "$stdout" | head -1)"
 [ -n "$hits" ] || fail "expected the two-boxer bout to report its hits, found no 'hits:' line"
 expect "$stdout" '2 avatars x [0-9]+ frames' "the two-boxer bout"
 # The bout is boxing_spar.yaml's: the boxers keep a fighting distance (about 1.2 m between
-# pelvises), where the paper's target behaviours close in to 0.66 m (issue 46). mgrl stats
+# pelvises), where the paper's target behaviours close in to 0.66 m. mgrl stats
 # prints the real capture's column first when it compares.
 distance="$(awk '/^pelvis distance, median \(m\)/ { print (NF == 7 ? $(NF - 1) : $NF); exit }' "$stdout")"
 [ -n "$distance" ] || fail "expected mgrl stats' median pelvis distance of the bout, found none"

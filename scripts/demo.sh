@@ -81,14 +81,14 @@ step "eval: the combined policy against a random controller"
 # The bout: the paper's behaviours, made for a target, close in until the boxers stand
 # chest to chest (pelvises about 0.66 m apart); boxing_spar.yaml's behaviours keep a
 # fighting distance (about 1.2 m), stand in stances learned from real sparring and punch
-# from there, on the same graph (issue 46).
+# from there, on the same graph.
 step "train: boxing_spar's sparring behaviours, one per stance (value iteration, paper sec. 4.2)"
 "$mgrl" train "$root/scenarios/boxing_spar.yaml" --data "$data"
 step "simulate: a two-boxer bout of $bout s at a fighting distance (BVH and hits in $out)"
 "$mgrl" simulate "$root/scenarios/boxing_spar.yaml" --data "$data" --avatars 2 --seconds "$bout" \
   --bvh-out "$out" --events-out "$out/hits.jsonl"
 if [ -d "$data/snu_martial_arts/motion" ]; then
-  step "stats: the bout against the SNU sparring capture (real fighters, issue 46)"
+  step "stats: the bout against the SNU sparring capture (real fighters)"
   "$mgrl" stats --data "$data" --compare --snu -- "$out"
 else
   step "stats: the bout (no SNU capture in $data to compare it with)"

@@ -41,7 +41,7 @@ if [ "${FUZZ_WITH_TESTS:-0}" = 1 ]; then
   tests=ON
   targets=(all)
 fi
-# -O2 (issue 38): at -O1 clang left Eigen's coefficient accessors as calls, each checked
+# -O2: at -O1 clang left Eigen's coefficient accessors as calls, each checked
 # by AddressSanitizer: a third of a learned opponent's tabulation went to them. Measured
 # (2026-11-27, 2 cores, no ccache): the mgrl program compiles in the same time at both
 # levels (970 and 1,005 s of compiler time for the same objects), and spar_learned.yaml's
@@ -91,7 +91,7 @@ fuzz_one() {
   local seeds=() d
   for d in "$root/tests/fuzz/corpus/$r" "$build/seeds/$r"; do [ -d "$d" ] && seeds+=("$d"); done
   # -rss_limit_mb and -malloc_limit_mb: a reader that asks for more than 2 GB for an input
-  # of a few KB is a finding (issue 19, defects 1 and 2). -timeout: one input's wall time,
+  # of a few KB is a finding (the readers once did so). -timeout: one input's wall time,
   # so a loaded machine (CI) wants more than the default.
   local started=$SECONDS
   if nice -n 19 "$build/tests/fuzz/${r}_fuzz" "$corpus" "${seeds[@]}" \

@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""Kill tests (issue 19): SIGKILL `mgrl train`, `mgrl graph` and `mgrl simulate --bvh-out`
+"""Kill tests: SIGKILL `mgrl train`, `mgrl graph` and `mgrl simulate --bvh-out`
 at every rename of their replacing writes and at random moments, and check the rule:
 
   after a kill, each output is the previous complete result, or the new complete result

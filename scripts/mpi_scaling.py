@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""Issue 44: mpi_value_iteration's sweep time and exchange on this machine for 1, 2 and 4
+"""mpi_value_iteration's sweep time and exchange on this machine for 1, 2 and 4
 ranks (real `mpirun`, medians of --repeat runs), the bytes each split of the table would
 exchange (build/bench/mgrl_bench_mpi), and a model of the time per sweep on 16 and 64
 machines and for a table of 100 GB.

@@ -19,7 +19,7 @@ command -v npm >/dev/null 2>&1 || packages+=(npm)
 # it, and recommends are not installed below.
 # clang-format, clang-tidy: the quick tier holds changed lines to .clang-format
 # (scripts/format_check.sh) and changed sources to .clang-tidy (scripts/tidy_check.sh).
-# openmpi-bin, libopenmpi-dev: mpirun and MPI's headers (issue 44; without them the build
+# openmpi-bin, libopenmpi-dev: mpirun and MPI's headers (without them the build
 # still works and mpi_value_iteration runs as one process).
 [ "${1:-}" = "--test" ] && packages+=(chromium clang libclang-rt-dev clang-format clang-tidy openmpi-bin libopenmpi-dev)
 case "${1:-}" in --test | --python) packages+=(python3-matplotlib jupyter-nbconvert python3-ipykernel) ;; esac

@@ -142,7 +142,7 @@ product_checks() {
   return $failed
 }
 
-# Issue 19: each reader's harness for 20 s (30 s until issue 38: the nine harnesses took
+# Each reader's harness for 20 s (at 30 s the nine harnesses took
 # 2.6 minutes of the run; the longer hunt is scripts/fuzz.sh's default), one per core at
 # a time (CI: two), from the
 # seeds only, so that every run does the same work: a corpus left by earlier runs is read

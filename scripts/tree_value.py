@@ -11,7 +11,7 @@ or "outside" when the point is off the tree (future value 0 there, paper sec. 4.
 It reads only the bundle's arrays (framework/include/mgrl/learning/policy_bundle.hpp): the tree
 (`<b>.grid.split_axis/split_value/children/leaf_corners/bounds[/roots].npy`) and the table
 (`<b>.q.npy`, one row per action). It is the worked answer to "can NumPy rebuild the
-tree?" (issue 16), and the reference a test compares mgrl's own interpolation with; see
+tree?", and the reference a test compares mgrl's own interpolation with; see
 discretizers/README.md for what the arrays mean. Needs NumPy (Debian: python3-numpy).
 """
 import argparse

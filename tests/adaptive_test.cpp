@@ -1,4 +1,4 @@
-// Issue 16: the kd_tree discretizer (weights, linear reproduction, continuity across
+// The kd_tree discretizer (weights, linear reproduction, continuity across
 // hanging faces, a wrapping angle, its saved structure) and adaptive_value_iteration on
 // problems whose value function is known by hand (a step in 1-D and a disc in 2-D).
 #include <catch2/catch.hpp>
@@ -426,7 +426,7 @@ TEST_CASE("adaptive_value_iteration is deterministic whatever the thread count",
   REQUIRE(one.result.stats == two.result.stats);
 }
 
-// Issue 15: a snapshot at the end of each refinement round, with the tree its table is on.
+// A snapshot at the end of each refinement round, with the tree its table is on.
 TEST_CASE("adaptive_value_iteration hands out a snapshot per round on its current tree", "[adaptive]") {
   struct Recorder final : TrainObserver {
     std::size_t snapshotCount() const override { return 10; }
@@ -634,7 +634,7 @@ TEST_CASE("adaptive_value_iteration and kd_tree refuse bad parameters with one l
   REQUIRE_THROWS_WITH(app::plugins().learners.create(yamlNode("{type: adaptive_value_iteration, max_vertices: 0}")),
                       Contains("max_vertices"));
   REQUIRE_THROWS_WITH(makeGrid("{type: kd_tree, angle_cells: 0}", m), Contains("angle_cells"));
-  // Issue 19: refused before a node is made (a billion roots).
+  // Refused before a node is made (a billion roots).
   REQUIRE_THROWS_WITH(makeGrid("{type: kd_tree, angle_cells: 1023, distance_cells: 1023, height_cells: 1023}", m),
                       Contains("angle_cells") && Contains("initial cells") && Contains("1072693248 vertices"));  // 1023 x 1024 x 1024: the angle wraps
   REQUIRE_THROWS_WITH(makeGrid("{type: kd_tree, angle_cells: 1000, distance_cells: 1000, height_cells: 20}", m),
@@ -670,7 +670,7 @@ TEST_CASE("adaptive_value_iteration and kd_tree refuse bad parameters with one l
 
 namespace mgrl::adaptive_test {
 
-// Issue 16: initial cells of any count, so that a tree can start from the shape of the uniform
+// Initial cells of any count, so that a tree can start from the shape of the uniform
 // grid it is compared with. n cells are n's odd part as root boxes, split down by its
 // power-of-two part.
 TEST_CASE("kd_tree starts from any number of initial cells: a forest of root boxes", "[kd_tree]") {
@@ -765,8 +765,8 @@ TEST_CASE("a refined forest kd_tree round-trips through a policy bundle, bad roo
 
 namespace mgrl::adaptive_test {
 
-// Issue 16: "the policy bundle stores the tree as .npy arrays ... so that NumPy can rebuild
-// it". scripts/tree_value.py does, from the arrays alone; here it must find the leaf and the
+// The policy bundle stores the tree as .npy arrays so that NumPy can rebuild
+// it. scripts/tree_value.py does, from the arrays alone; here it must find the leaf and the
 // value mgrl finds, at points all over a refined forest (hanging vertices included).
 TEST_CASE("NumPy rebuilds a saved kd_tree forest: scripts/tree_value.py finds mgrl's leaves and values",
           "[kd_tree][python]") {
@@ -838,7 +838,7 @@ constexpr const char* k2dMissesAhead =
 
 }  // namespace
 
-// Issue 16, the start rule: `starts: k` refines from the scenario's initial cells and from
+// The start rule: `starts: k` refines from the scenario's initial cells and from
 // k - 1 smaller ones, and keeps the tree with the lowest backup gap relative to its value.
 // Here only the 4 x 3 start has a vertex straight ahead where the fist lands (the angles of
 // 5 and 3 cells over -90..90 degrees miss 0): the others never see a hit, their value is 0

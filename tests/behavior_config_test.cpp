@@ -287,7 +287,7 @@ TEST_CASE("behaviour mistakes name the file, line, column and key", "[behaviors]
                          at(8, 42,
                             "behaviors.dodge.reward.terms[0].term: expected environment: {type: opponent} or "
                             "learned_opponent (the avoid term reads the opponent's strikes), found static_target"));
-    // The strikes it takes (issue 43) read them too.
+    // The strikes it takes read them too.
     std::string struck = still;
     struck.replace(struck.find("{term: avoid}"), 13, "{term: struck}");
     REQUIRE_CONFIG_ERROR(build(struck),
@@ -423,7 +423,7 @@ TEST_CASE("behaviour mistakes name the file, line, column and key", "[behaviors]
                             "target_inside), found 'sometimes'"));
   }
   SECTION("stances numbered with a gap, or out of range") {
-    // Issue 46: stances number 0..N-1, each held by a behaviour.
+    // Stances number 0..N-1, each held by a behaviour.
     REQUIRE_CONFIG_ERROR(build(approachWith(9, "    stance: 2")),
                          at(9, 13,
                             "behaviors.approach.stance: expected stances numbered 0..2 with a behaviour for each, "
@@ -714,7 +714,7 @@ TEST_CASE("the behaviour key changes with what the table depends on, and only th
     CHECK(keyOf("{term: effort}") != keyOf("{term: effort, point: body}"));
     CHECK(keyOf("{term: effort}") != keyOf("{term: effort, point: LeftHand}"));
   }
-  SECTION("facing's stance and stances count in the key only with prefer: stance (issue 46)") {
+  SECTION("facing's stance and stances count in the key only with prefer: stance") {
     auto keyOf = [&](const std::string& terms) {
       return build("  keep:\n    discretizer: {type: polar2d}\n    reward: {type: terms, terms: [" + terms +
                    "]}\n    learner: {type: value_iteration}\n")
@@ -738,7 +738,7 @@ TEST_CASE("the behaviour key changes with what the table depends on, and only th
     CHECK(stanceKey(0, 2) != stanceKey(1, 2));
     CHECK(stance0 != keyOf("{term: facing}"));
   }
-  SECTION("a learned opponent's against: previous keeps the key self-play rounds had before the choice (issue 43)") {
+  SECTION("a learned opponent's against: previous keeps the key self-play rounds had before the choice") {
     auto keyOf = [&](const std::string& environment) {
       const Scenario scenario = parse(approachInserting(19, "    environment: " + environment));
       return behaviorConfigAndKey(scenario.behaviors.front(), app::plugins(), kGraphKey).second;
@@ -747,7 +747,7 @@ TEST_CASE("the behaviour key changes with what the table depends on, and only th
     CHECK(keyOf(rounds + "}") == keyOf(rounds + ", against: previous}"));
     CHECK(keyOf(rounds + "}") != keyOf(rounds + ", against: average}"));
   }
-  SECTION("a moving_target that does not turn keeps the key it had before turning targets (issue 46)") {
+  SECTION("a moving_target that does not turn keeps the key it had before turning targets") {
     auto keyOf = [&](const std::string& environment) {
       return build(approachInserting(19, "    environment: " + environment)).front().key;
     };
@@ -756,7 +756,7 @@ TEST_CASE("the behaviour key changes with what the table depends on, and only th
     CHECK(keyOf("{type: moving_target, max_turn_deg_s: 90}") !=
           keyOf("{type: moving_target, max_turn_deg_s: 90, turns: 5}"));
   }
-  SECTION("a facing term that learns from the real bouts keys on their samples (issue 46)") {
+  SECTION("a facing term that learns from the real bouts keys on their samples") {
     const Scenario s = parse(
         "  keep:\n    discretizer: {type: polar2d}\n    reward: {type: terms, terms: [{term: facing, prefer: bouts}]}\n"
         "    learner: {type: value_iteration}\n");  // records test::mocap() as the data folder

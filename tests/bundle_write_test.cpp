@@ -1,4 +1,4 @@
-// Issue 19, defects 5 and 8: bundle directories (graph cache, policy bundles, checkpoints)
+// Bundle directories (graph cache, policy bundles, checkpoints)
 // under kills and concurrent writers. A replaced bundle is never missing, two writers of
 // one bundle both succeed, and what a killed writer left is recovered or cleaned on the
 // next run (only a dead process's).
@@ -187,7 +187,7 @@ TEST_CASE("what a killed writer left is recovered or removed, a live writer's is
   }
 }
 
-// Issue 19's kill tests: train and compare check a folder by writing a probe named after
+// Found by the kill tests: train and compare check a folder by writing a probe named after
 // their pid and removing it; a process killed in between left its probe for good.
 TEST_CASE("a writability probe a dead process left is removed, a live process's is kept", "[files][harden]") {
   test::TempDir temp("probes");

@@ -1,4 +1,4 @@
-// `mgrl compare` through the real binary (issue 15): its numbers are those of separate
+// `mgrl compare` through the real binary: its numbers are those of separate
 // `mgrl train` + `mgrl eval` runs with the same settings, a second run reuses the first's
 // bundles, the report folder holds the plots and tables, and mistakes are refused in one
 // line before anything is trained.
@@ -311,7 +311,7 @@ TEST_CASE("mgrl compare measures tables against value iteration on a finer grid"
   CHECK(run["greedy_agreement"].get<double>() < 1.0);
 }
 
-// Issue 19: compare checks --report by writing `.mgrl-probe-PID` there and removing it; a
+// `mgrl compare` checks --report by writing `.mgrl-probe-PID` there and removing it; a
 // compare killed in between left the probe for good. The next run removes those of
 // processes that are gone (a live one may be comparing now), as train does beside --out.
 TEST_CASE("mgrl compare removes the writability probe a killed run left in --report", "[cli][data]") {
@@ -331,7 +331,7 @@ TEST_CASE("mgrl compare removes the writability probe a killed run left in --rep
   CHECK(fs::exists(live));
 }
 
-// Issue 39: the snapshots were evaluated with targets at the hitting points' centroid
+// The snapshots were evaluated with targets at the hitting points' centroid
 // height while the final evaluation (eval's) put them at the scenario's world.target_height:
 // on kick.yaml (0.6 m) the last snapshot, the trained table itself, said 40 % and the
 // final evaluation 55 %. Both now take the session's task.

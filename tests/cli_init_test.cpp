@@ -1,4 +1,4 @@
-// `mgrl init` (issue 42) through the real binary: a starter scenario for capture the
+// `mgrl init` through the real binary: a starter scenario for capture the
 // repository has never seen, which builds, trains and beats random actions; and what it
 // refuses without leaving a file behind.
 #include <filesystem>

@@ -120,7 +120,7 @@ TEST_CASE("mgrl list names every plugin, as text and as JSON", "[cli]") {
   CHECK_THAT(text.out, Contains("success terms (behaviors.NAME.success.term):") && Contains("within_deg"));
   CHECK(list["controllers"] == json::array({"policy", "online_search", "random"}));
   REQUIRE(list["world"].is_array());
-  CHECK(list["world"].size() == 27);  // stance_hold (issue 46) the latest
+  CHECK(list["world"].size() == 27);  // stance_hold the latest
   for (const json& p : list["world"])
     for (const char* key : {"name", "default", "range", "unit", "help"}) CHECK(p.contains(key));
   for (const auto& [seam, names] : seams) {
@@ -264,7 +264,7 @@ TEST_CASE("mgrl train starts over without --resume or from a checkpoint of other
   }
 }
 
-// Issue 19's kill tests (scripts/kill_test.py): a run killed after its bundle was in place
+// Found by the kill tests (scripts/kill_test.py): a run killed after its bundle was in place
 // but before it removed its checkpoints left `<out>.checkpoints/` (22 MB per behaviour at
 // the scenario's budgets), and a killed checkpoint save left `<behaviour>.tmp-PID-N` beside
 // it. The next `--resume` found every behaviour trained, kept them, and never touched the
@@ -294,7 +294,7 @@ TEST_CASE("mgrl train --resume that keeps every behaviour removes the checkpoint
   CHECK_FALSE(fs::exists(checkpoints));
 }
 
-// Issue 19's kill tests: train checks that --out's folder takes a file by writing
+// Found by the kill tests: train checks that --out's folder takes a file by writing
 // `.<out>.probe-PID` and removing it; killed in between, it left the probe for good. The
 // next run removes those of processes that are gone (a live one may be training now).
 TEST_CASE("mgrl train removes the writability probe a killed run left beside --out", "[cli][data]") {
@@ -468,7 +468,7 @@ TEST_CASE("refusals that need no graph print only the reason on stderr", "[cli][
   CHECK(lines(badParameter.err).size() == 1);
 }
 
-// Issue 12: Ctrl-C (here raised by MGRL_STOP_AFTER_CHECKPOINTS, as the signal handler
+// Ctrl-C (here raised by MGRL_STOP_AFTER_CHECKPOINTS, as the signal handler
 // does) keeps the finished behaviours, saves a checkpoint, says how to resume; the bundle
 // is not taken for a whole one; --resume says what it resumed and ends with the table of
 // an uninterrupted run.
@@ -529,7 +529,7 @@ TEST_CASE("SIGINT during mgrl train exits 130 with a checkpoint and the resume c
   requireFile(box.path("bundle.checkpoints") / "hit" / "state.json");
 }
 
-// Issue 12: the default bundle depends on everything that trained it, so training another
+// The default bundle depends on everything that trained it, so training another
 // learner does not overwrite the first; eval with the same --set finds each.
 TEST_CASE("another learner trains into another default bundle", "[cli][data]") {
   Sandbox box("paths");
@@ -553,7 +553,7 @@ TEST_CASE("another learner trains into another default bundle", "[cli][data]") {
   CHECK_THAT(eval.err, Contains("using the settings the bundle was trained with (approach.learner.type=value_iteration)"));
 }
 
-// Issue 19: sizes are checked before anything is allocated or trained: a grid too large
+// Sizes are checked before anything is allocated or trained: a grid too large
 // to exist, and a behaviour whose training would need more memory than --max-memory.
 TEST_CASE("mgrl train refuses a grid or a problem too large before training anything", "[cli][data]") {
   Sandbox box("toolarge");
@@ -564,7 +564,7 @@ TEST_CASE("mgrl train refuses a grid or a problem too large before training anyt
                  "cylindrical3d: expected a grid of at most 20000000 vertices, found 27000000 (300 angle x 300 "
                  "distance x 300 height)");
   CHECK_FALSE(fs::exists(out));
-  // Not even the compact model (issue 20) fits in 30 MB.
+  // Not even the compact model fits in 30 MB.
   const Run refused = box.train(kFast + " --max-memory 0.03 --out " + shellWord(out));
   requireRefusal(refused, "behaviors.hit: training on a cylindrical3d grid of 1920 vertices x ");
   CHECK_THAT(refused.lastErrorLine(), Contains("(compact model and Q tables); expected at most 30.0 MB (--max-memory)"));
@@ -598,7 +598,7 @@ TEST_CASE("mgrl train counts adaptive_value_iteration's vertex budget and starts
   CHECK_FALSE(fs::exists(box.path("b")));
 }
 
-// Issue 20: when the tabulated problem does not fit in --max-memory, train falls back to
+// When the tabulated problem does not fit in --max-memory, train falls back to
 // the compact model (rewards only), which gives the same tables; --model chooses.
 TEST_CASE("mgrl train trains on the compact model when the tabulated one does not fit", "[cli][data][compact]") {
   Sandbox box("compact");
@@ -632,7 +632,7 @@ TEST_CASE("mgrl train trains on the compact model when the tabulated one does no
                  "value_iteration), found adaptive_value_iteration");
 }
 
-// Issue 19: an --out folder that cannot take files is refused before training, not after.
+// An --out folder that cannot take files is refused before training, not after.
 // /proc takes no new files, even from root (CI runs as root, where permissions would not
 // stop the write).
 TEST_CASE("mgrl train refuses an unwritable --out folder before training", "[cli][data]") {
@@ -644,7 +644,7 @@ TEST_CASE("mgrl train refuses an unwritable --out folder before training", "[cli
   CHECK_THAT(r.err, !Contains("train approach:"));
 }
 
-// Issue 19, defect 4, through the binary: a checkpoint whose state the learner rejects
+// Through the binary: a checkpoint whose state the learner rejects
 // (here a state index out of range, with the seal recomputed so that only the learner's
 // own check can catch it) is reported, naming state.json, and ignored; the run trains
 // from the start and ends with the table of a clean run.

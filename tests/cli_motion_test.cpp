@@ -1,4 +1,4 @@
-// The motion side of issue 12 through the real binary: capture from elsewhere (a skeleton
+// Capture from elsewhere through the real binary (a skeleton
 // without finger joints, a boxer knocked down), a mismatched ASF, and how far the capture
 // travels against the behaviours' grids.
 #include <algorithm>

@@ -1,4 +1,4 @@
-# CLI tests of the motion side of issue 12 (label "cli"), on mgrl_cli_test from
+# CLI tests of capture from elsewhere (label "cli"), on mgrl_cli_test from
 # cli_tests.cmake: an AMC and an ASF that disagree are an error naming the line and bone,
 # and a skeleton without finger joints loads.
 

@@ -1,4 +1,4 @@
-// Behaviours written in YAML alone (issue 17): every scenario made of reward terms trains
+// Behaviours written in YAML alone: every scenario made of reward terms trains
 // and meets its own success criterion in `mgrl eval`, far more often than random actions,
 // and the walkthrough in scenarios/README.md ("Add a behaviour in ten lines of YAML") runs
 // exactly as printed.
@@ -73,7 +73,7 @@ TEST_CASE("intercept.yaml trains on a moving target and punches it far more ofte
   Sandbox box;
   const json report = box.trainAndEvaluate(std::string(MGRL_SOURCE_DIR) + "/scenarios/intercept.yaml");
   CHECK(report["success"]["from"] == "declared");
-  // Measured with 300 trials, seeds 1-3: 74.7-82.0 %, random actions 2.3-3.0 % (issue 46's
+  // Measured with 300 trials, seeds 1-3: 74.7-82.0 %, random actions 2.3-3.0 % (with
   // targets that turn; 39-42 % when they all walked straight).
   CHECK(report["success_rate"].get<double>() >= 0.6);
   CHECK(report["random_baseline"]["success_rate"].get<double>() < 0.1);
@@ -124,7 +124,7 @@ TEST_CASE("dodge.yaml trains against a pursuing opponent and keeps out of its pu
   CHECK(avatar["strikes_reached_per_minute"].get<double>() <
         0.3 * avatar["random_baseline"]["strikes_reached_per_minute"].get<double>());
   CHECK(avatar["bodies_overlapping"].get<double>() < avatar["random_baseline"]["bodies_overlapping"].get<double>());
-  // The same opponent as a body in the world (issue 45): in sparring, the second of each pair
+  // The same opponent as a body in the world: in sparring, the second of each pair
   // is the scripted pursuer. Measured over 120 s, seeds 1-3: it lands 0-3 punches on the
   // trained avatar, 22-32 on one playing random actions.
   std::size_t landed[2] = {0, 0};
@@ -232,7 +232,7 @@ TEST_CASE(
     CHECK(apart[apart.size() / 2] <= 1.5);
   }
   const json stats = mgrl::test::runMgrl("stats --json" + bouts, box.dir()).report();
-  // Issue 46: the facing follows the real bouts' (median 64 degrees, quartiles 35-102), each
+  // The facing follows the real bouts' (median 64 degrees, quartiles 35-102), each
   // bout's median within 15 degrees of it; one behaviour facing the partner gave medians of
   // about 20 and quartiles 10-32. Measured: 62, 62 and 64, quartiles 33-97.
   for (const json& one : stats["bouts"]) {
@@ -245,7 +245,7 @@ TEST_CASE(
   }
   // The CMU source's effective punches: 56.4 per fighter-minute; measured 42.1 (0.75x). The
   // real fighters land almost none (0.7 a minute); these land 1.9 and miss or are blocked
-  // with 95.5 % (at least a third, issue 46), but they do land.
+  // with 95.5 % (at least a third), but they do land.
   const double strikes = stats["pooled"]["strikes_per_fighter_minute"].get<double>();
   CHECK(strikes >= 0.5 * 56.4);
   CHECK(strikes <= 2 * 56.4);
@@ -277,7 +277,7 @@ TEST_CASE("sparring.yaml spars like the SNU capture: distance, strike rate, bodi
           .report();
   const json& real = stats["real"]["pooled"];
   const json& synthetic = stats["synthetic"]["pooled"];
-  // Measured (scenarios/README.md, issue 46): W1 0.33 m (medians 1.67 real, 1.29
+  // Measured (scenarios/README.md): W1 0.33 m (medians 1.67 real, 1.29
   // synthesized; an earlier table said 1.49), strikes 57.2 against 48.2 per fighter-minute,
   // no pelvises under 0.35 m.
   CHECK(stats["wasserstein1"]["distance_m"].get<double>() <= 0.35);

@@ -216,7 +216,7 @@ TEST_CASE("mgrl simulate --events-out writes one JSON line per hit", "[cli][data
     const auto hits = r["hits"].get<std::size_t>();
     const auto blocked = r["blocked"].get<std::size_t>();
     REQUIRE(hits > 0);
-    REQUIRE(blocked > 0);  // the boxers' guards meet punches (issue 46)
+    REQUIRE(blocked > 0);  // the boxers' guards meet punches
     const std::vector<json> events = readEvents(file);
     REQUIRE(events.size() == hits + blocked);
     std::vector<long long> blockedBy(2, 0);
@@ -290,7 +290,7 @@ TEST_CASE("mgrl simulate --bvh-out writes one readable BVH per avatar", "[cli][d
   const fs::path dir = box.path("out") / "bvh";  // made, parents and all
   const json r = box.simulate("--json --avatars 3 --seconds 10 --seed 4 --bvh-out " + shellWord(dir)).report();
   {
-    // Issue 19, defect 5: a killed run's scratch folder (its process gone) goes with the
+    // A killed run's scratch folder (its process gone) goes with the
     // next run into the same folder.
     const pid_t child = ::fork();
     if (child == 0) ::_exit(0);
@@ -532,7 +532,7 @@ TEST_CASE("a refused mgrl simulate leaves no --bvh-out folder behind", "[cli][da
   }
 }
 
-// Output folders are handled one way (issue 12): --events-out makes missing folders as
+// Output folders are handled one way: --events-out makes missing folders as
 // --bvh-out does, and the text summary says where each output went.
 TEST_CASE("mgrl simulate makes missing output folders and says where it wrote", "[cli][data][simulate-cli]") {
   Sandbox box("outputs");
@@ -554,7 +554,7 @@ TEST_CASE("mgrl simulate makes missing output folders and says where it wrote", 
 }
 
 // ---------------------------------------------------------------------------------------
-// Issue 19, defect 6: --bvh-out's folder is one unit, all from one run, with a manifest
+// --bvh-out's folder is one unit, all from one run, with a manifest
 // naming the run; a killed run leaves the old folder or the new one, never a mix.
 
 namespace {

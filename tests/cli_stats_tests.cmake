@@ -5,7 +5,7 @@ mgrl_cli_test(stats_json ARGS stats stats/stand --json JSON STDOUT ".*\"distance
 mgrl_cli_test(stats_text ARGS stats stats/stand stats/walk STDOUT "stats: 2 bouts\n.*pooled")
 mgrl_cli_test(stats_pattern ARGS stats stats/punch_near/fighter_*.bvh --punch-min-body-speed 0 --json JSON
   STDOUT ".*\"landed\": 1,")
-# Strikes each way (issue 43): one line per bout, each fighter's thrown, landed and blocked.
+# Strikes each way: one line per bout, each fighter's thrown, landed and blocked.
 mgrl_cli_test(stats_each_way ARGS stats stats/punch_near --punch-min-body-speed 0
   STDOUT ".*landed by the stronger side +100\\.0 %\n.*each way, punch_near: fighter_1\\.bvh 1 thrown, 1 landed, 0 blocked \\| fighter_2\\.bvh 0 thrown, 0 landed, 0 blocked\n")
 # Nothing landed: no stronger side, a dash (not "nan %").

@@ -110,7 +110,7 @@ mgrl_cli_test(graph_unknown_key ARGS graph bad_scenario.yaml
 mgrl_cli_test(graph_missing_scenario ARGS graph no_such.yaml MESSAGE "no_such.yaml: cannot open: No such file or directory")
 mgrl_cli_test(graph_no_scenario ARGS graph EXIT 2 REGEX "SCENARIO is required")
 
-# --- Issue 12: what a new user types -----------------------------------------------------
+# --- What a new user types ---------------------------------------------------------------
 
 # An unknown option gets the nearest known one; --behaviour is --behavior.
 mgrl_cli_test(unknown_option_nearest ARGS eval tiny.bvh --contoller random EXIT 2
@@ -130,7 +130,7 @@ mgrl_cli_test(graph_checks_behaviours ARGS graph "${MGRL_SOURCE_DIR}/scenarios/b
               --set behaviors.hit.learner.type=nope
               REGEX "--set behaviors\\.hit\\.learner\\.type=nope: behaviors\\.hit\\.learner\\.type: unknown learner 'nope'")
 
-# Issue 19: a frame time no capture has (100000 s) is refused at its line, before
+# A frame time no capture has (100000 s) is refused at its line, before
 # resampling could ask for gigabytes.
 mgrl_cli_test(huge_frame_time_bvh ARGS inspect huge_frame_time.bvh --fps 30 EXIT 1
   MESSAGE "huge_frame_time.bvh:13: expected a frame time of at most 1 s (1 fps), found 100000")

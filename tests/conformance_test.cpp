@@ -1,4 +1,4 @@
-// Conformance per seam (issue 39): every plug-in registered with the built-in registries
+// Conformance per seam: every plug-in registered with the built-in registries
 // (mgrl::builtinPlugins(), app/builtins/builtin_plugins.cpp) is held to its seam's contract,
 // so registering a plug-in enrols it here without editing this file. A plug-in whose
 // defaults alone do not build gives a working block as its registry entry's `example`.

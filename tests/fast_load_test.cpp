@@ -1,4 +1,4 @@
-// What makes commands start quickly (issue 20): files hashed a block at a time, bundle
+// What makes commands start quickly: files hashed a block at a time, bundle
 // arrays read in place from a mapping, big tables on huge pages, and a cached graph that
 // needs no capture parsed. Each must give exactly what the slow way gave.
 

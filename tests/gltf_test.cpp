@@ -1,4 +1,4 @@
-// glTF 2.0 export (issue 45): the .glb that writeGlb() makes is read back here by a small
+// glTF 2.0 export: the .glb that writeGlb() makes is read back here by a small
 // independent reader (the container, the accessors, the node tree, the animation), and
 // its joints must stand where mgrl's own forward kinematics puts them, frame by frame.
 

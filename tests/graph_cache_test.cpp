@@ -486,7 +486,7 @@ TEST_CASE("a bundle of another format version is stale", "[graph_cache]") {
                                                  mgrl::kGraphFormatVersion, mgrl::kGraphFormatVersion + 1)));
 }
 
-// Issue 19, defect 3: the scalars were covered by no hash, so one flipped digit of
+// The scalars were covered by no hash, so one flipped digit of
 // frame_time was reused silently and changed every figure computed from the graph.
 TEST_CASE("a bundle whose manifest has one changed digit is damaged", "[graph_cache]") {
   mgrl::test::TempDir tmp("graph-cache-test");

@@ -1,4 +1,4 @@
-// The learned opponent (issue 43): how time is handled when the two fighters' actions end at
+// The learned opponent: how time is handled when the two fighters' actions end at
 // different moments, and that the environment model's transition is exact: replaying both
 // fighters frame by frame in world coordinates lands where next() and track() say.
 #include <algorithm>
@@ -409,7 +409,7 @@ namespace {
 // spar_learned.yaml shrunk for tests: 2 sectors x 2 rings x 2 facings, one phase: 8
 // positions x 117 opponent states, 936 vertices (1.3 M table entries). The checks hold for
 // any grid; with the finer 3 x 2 x 3 (2,106 vertices) the self-play test took 128 s of the
-// Release suite under ctest -j2 on the 2-core machine (issue 38), the longest test there.
+// Release suite under ctest -j2 on the 2-core machine, the longest test there.
 const char* kSmallSpar =
     " --set behaviors.spar.discretizer.sectors=2 --set behaviors.spar.discretizer.rings=2"
     " --set behaviors.spar.discretizer.headings=2 --set behaviors.spar.environment.phases=1";

@@ -423,7 +423,7 @@ constexpr const char* kRingLearner =
 namespace {
 
 // An avatar that stands still, punching in place: two states, four actions, no ground
-// motion, so the target never leaves the grid (issues 15 and 19).
+// motion, so the target never leaves the grid.
 StateActionModel standing() {
   const ActionHit punch{0, 3, 1, 0.0f, 1.0f, 0.5f, 1.0f};
   return handModel(2, {{0, 1, 5, 0, 0, 0, {punch}}, {0, 0, 5, 0, 0, 0, {}}, {1, 0, 5, 0, 0, 0, {}}, {1, 1, 5, 0, 0, 0, {punch}}});
@@ -431,7 +431,7 @@ StateActionModel standing() {
 
 }  // namespace
 
-// Issue 15: the paper restarts Q-learning's walk only when the target leaves the grid. On a
+// The paper restarts Q-learning's walk only when the target leaves the grid. On a
 // capture whose avatar hardly travels the target never leaves, one episode takes the whole
 // budget and the walk stays in the first target's cell. max_episode_actions restarts it
 // anyway; left at 0 it changes nothing (and no behaviour key: tables trained before it
@@ -494,7 +494,7 @@ TEST_CASE("Q-learning is deterministic and a resumed run ends with the uninterru
   REQUIRE(finished.curve.back().residual == whole.curve.back().residual);
 }
 
-// Issue 19's kill tests (scripts/kill_test.py): a run resumed after a kill ended with the
+// Found by the kill tests (scripts/kill_test.py): a run resumed after a kill ended with the
 // uninterrupted table but reported the coverage of the walk after the resume only (boxing's
 // hit: 1422 cells visited of 1425 against 1425), as if the cells walked before the kill had
 // never been. The checkpoint keeps the cells seen; every statistic but `resumed` is the
@@ -524,7 +524,7 @@ TEST_CASE("a resumed Q-learning run reports the whole walk's coverage, as an uni
   }
 }
 
-// Issue 15: the viewer's learn panel steps Q-learning one action at a time. It must be the
+// The viewer's learn panel steps Q-learning one action at a time. It must be the
 // paper's algorithm, not a look-alike: the same seed and budget end with q_learning's
 // table bit for bit, and every step reports the update rule's own numbers. Both share
 // backup() and the grid model, so each update is also recomputed here from the table
@@ -631,7 +631,7 @@ TrainResult trainObserved(const std::string& learnerYaml, const Problem& problem
 
 }  // namespace
 
-// Issue 15: learning curves of success rate need the table along training. Learners hand
+// Learning curves of success rate need the table along training. Learners hand
 // out snapshots at about n evenly spaced points only to an observer that asks, and train
 // the same table either way.
 TEST_CASE("learners hand out snapshots along training and train the same table", "[learning]") {
@@ -682,7 +682,7 @@ TEST_CASE("learners hand out snapshots along training and train the same table",
   }
 }
 
-// Issue 19, defect 4: state.json was trusted as it stood. One changed digit of the update
+// state.json was trusted as it stood. One changed digit of the update
 // count or of the generator resumed a different run without a word, and a missing,
 // mistyped or out-of-range member aborted training. Now the checkpoint's hash and the
 // learner's own reading of its state both reject it, the run says so and starts over.
@@ -832,7 +832,7 @@ TEST_CASE("Q-learning resumes an intact directory checkpoint to the uninterrupte
   CHECK(resumed.curve.size() == clean.curve.size());
 }
 
-// Issue 19's kill tests (scripts/kill_test.py): `train` killed while replacing a checkpoint
+// Found by the kill tests (scripts/kill_test.py): `train` killed while replacing a checkpoint
 // leaves the new one in `<dir>.tmp-PID-N` beside the old. The next run without --resume
 // removed the checkpoint to start over, and the learner's load then put the killed run's
 // temporary back in its place (recovery of a missing bundle) and continued from it:
@@ -1290,7 +1290,7 @@ TEST_CASE("a sampled Bellman residual measures one pair in k, below the whole ta
 
 
 TEST_CASE("a compact model trains the same tables as the tabulated one in a fifth of the memory", "[learning][compact]") {
-  // Issue 20: rewards only, each backup finding where its vertex lands; q_learning (whose
+  // Rewards only, each backup finding where its vertex lands; q_learning (whose
   // walk finds the landings of its steps' corners) and value iteration, 2-D and 3-D grids.
   SyntheticModelSpec spec;
   spec.states = 40;
@@ -1335,7 +1335,7 @@ TEST_CASE("a compact model trains the same tables as the tabulated one in a fift
 
 }  // namespace mgrl::learning_test
 
-// ---- Moving targets (issue 17): moving_target, polar_velocity's speed layers ----
+// ---- Moving targets: moving_target, polar_velocity's speed layers ----
 
 namespace mgrl::learning_test {
 namespace {
@@ -1573,7 +1573,7 @@ TEST_CASE("Q-learning on speed layers: restarts on a layer, checkpoints keep the
                                       "a heading (rad) and a turn rate (rad/s), found '[-1,0]'"));
 }
 
-// ---- Turning targets (issue 46): moving_target's turn rates, a grid's turn layers ----
+// ---- Turning targets: moving_target's turn rates, a grid's turn layers ----
 
 TEST_CASE("a turning target runs round its circle, next() keeps its turn rate and replays exactly over actions",
           "[learning][moving][turning]") {
@@ -1969,7 +1969,7 @@ TEST_CASE("trials against an avatar need an opponent environment and an avoid co
                     "trials against an avatar: expected a success criterion with an avoid condition, found none");
 }
 
-// Policy evaluation (issue 43's best-response gap on the grid): the values of playing
+// Policy evaluation (self-play's best-response gap on the grid): the values of playing
 // greedily on a fixed table, in the problem value iteration solves.
 TEST_CASE(
     "policy evaluation: value iteration's own table is worth its values, another policy the corridor's closed "

@@ -987,7 +987,7 @@ TEST_CASE("amc rejects bone lines before the first frame number", "[loader][erro
   }
 }
 
-// Issue 19: a length unit no skeleton has is refused at its line, instead of a skeleton
+// A length unit no skeleton has is refused at its line, instead of a skeleton
 // nanometres or millions of metres tall (1e-320 gave height null and ground at 1e300 m).
 TEST_CASE("asf rejects an implausible length unit", "[loader][errors]") {
   for (const auto& [unit, shown] : {std::pair{"1e-320", "1e-320"}, std::pair{"1e-9", "1e-09"}, std::pair{"5000", "5000"}}) {

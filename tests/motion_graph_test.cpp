@@ -412,7 +412,7 @@ TEST_CASE("locked feet stay where they landed while planted, with bones of const
   CHECK(median(locked.rest) < 1e-9);
   CHECK(ninetieth(locked.rest) < 1e-6);
   // Every foot joint slides less than the source motion played freely does, and at most
-  // what the SNU sparring capture's feet do (ankles 0.078 m/s, toes 0.029; issue 46).
+  // what the SNU sparring capture's feet do (ankles 0.078 m/s, toes 0.029).
   CHECK(median(locked.ankle) < 0.078);
   CHECK(median(locked.toe) < 0.029);
   CHECK(ninetieth(locked.ankle) < 0.5 * ninetieth(free.ankle));

@@ -56,7 +56,7 @@ TEST_CASE("resampling rejects absurd frame rates", "[motion]") {
   CHECK_THROWS_AS(resample(m, 1e9), Error);
 }
 
-// Issue 19: a long capture at a high rate is refused, with its size, before anything is
+// A long capture at a high rate is refused, with its size, before anything is
 // allocated (1001 s at 10000 fps would be 10.01 M frames).
 TEST_CASE("resampling refuses a result too large for memory before allocating it", "[motion][errors]") {
   const Motion m = spinningChain(1, 1001, 1);

@@ -1,4 +1,4 @@
-// Issue 44: mpi_value_iteration under a real `mpirun` on this machine (oversubscribed):
+// mpi_value_iteration under a real `mpirun` on this machine (oversubscribed):
 // the same table, bit for bit, as value_iteration, alone and across 2 and 3 ranks, on
 // boxing's hit behaviour and on a learned-opponent behaviour; a rank killed mid-run fails
 // the job naming it, and `--resume` ends with the uninterrupted table.
@@ -82,7 +82,7 @@ const std::string kSpar = std::string(" --set behaviors.spar.discretizer.sectors
                           "--set behaviors.spar.environment.phases=1 --set behaviors.spar.environment.rounds=" +
                           (test::kAddressSanitizer ? "1" : "2") + " --set behaviors.spar.learner.type=";
 // Three ranks (an uneven split, one rank more than cores) are covered by the hit behaviour;
-// the learned opponent's rounds run on two (issue 38: the suite's time).
+// the learned opponent's rounds run on two (the suite's time).
 const std::vector<int> kSparRanks = {2};
 std::string sparLearner(const std::string& type) {
   return kSpar + type + " --set behaviors.spar.learner.tolerance=0.01";

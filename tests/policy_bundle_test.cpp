@@ -589,7 +589,7 @@ TEST_CASE("a damaged or foreign checkpoint is reported and ignored", "[policy_bu
     message = fmt::format("expected format 'mgrl.checkpoint' version {}, found format 'mgrl.checkpoint' version '7'",
                           mgrl::kCheckpointFormatVersion);
   }
-  // Issue 19, defect 4: the learner's state was covered by no hash.
+  // The learner's state was covered by no hash.
   SECTION("a changed digit in the learner's state") {
     std::string text = mgrl::readFile(dir / "state.json");
     const std::size_t at = text.find("\"episode\": 3");

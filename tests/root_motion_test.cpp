@@ -1,4 +1,4 @@
-// Capture from other pipelines (issue 42): a root that stays at the origin above the hips,
+// Capture from other pipelines: a root that stays at the origin above the hips,
 // takes that bake their start position into the hips, heads without a head top.
 #include <catch2/catch.hpp>
 

@@ -184,7 +184,7 @@ TEST_CASE("the graph cache is reused, refreshed when inputs change and rebuilt w
   std::filesystem::remove_all(cache);
 }
 
-// Issue 19: a scenario's name becomes a cache folder's name, so it must be a safe word;
+// A scenario's name becomes a cache folder's name, so it must be a safe word;
 // the error shows a bounded excerpt, never the whole name.
 TEST_CASE("a scenario name is a safe word of bounded length", "[scenario][errors]") {
   const std::string body = "motion:\n  files: [cmu/bvh/13_17_boxing.bvh]\ngraph: {}\n";
@@ -201,7 +201,7 @@ TEST_CASE("a scenario name is a safe word of bounded length", "[scenario][errors
       CHECK(what.size() < 200);
     }
   }
-  // Not UTF-8 at all (issue 19: accepted, then the cache was silently not written).
+  // Not UTF-8 at all (accepted, then the cache was silently not written).
   CHECK_THROWS_AS(parse("name: bad\xff\xfe\n" + body), ConfigError);
   CHECK(parse("name: boxing-v2.1\n" + body).name == "boxing-v2.1");
   // Without a name, the file's stem, made safe.

@@ -1,4 +1,4 @@
-// mgrl serve under hostile and heavy use (issue 40): who may connect (Host and Origin), a
+// mgrl serve under hostile and heavy use: who may connect (Host and Origin), a
 // page that leaves during a retraining, a page that never reads, descriptors running out,
 // and the small acceptances the protocol refuses. The real server over real sockets.
 #include <sys/resource.h>

@@ -325,7 +325,7 @@ TEST_CASE("a page's world: the boxer punches the target where it is dragged, wei
   CHECK(json::parse(session.stats(0, 0))["frames_shed"] == 0);
 }
 
-// Issue 17: the HUD counts success by the scenario's criterion, for behaviours that land no
+// The HUD counts success by the scenario's criterion, for behaviours that land no
 // punches too. out_boxing's keeper holds 1.2-1.6 m from the target, facing it, for 1 s.
 TEST_CASE("a page counts successes by the scenario's criterion: out_boxing's keeper keeps its distance",
           "[serve][data]") {
@@ -343,7 +343,7 @@ TEST_CASE("a page counts successes by the scenario's criterion: out_boxing's kee
   CHECK(stats["successes"].get<int>() <= stats["decisions"].get<int>());
 }
 
-// Issue 45: a dodge scene opens on the avatar and the scripted opponent it was trained
+// A dodge scene opens on the avatar and the scripted opponent it was trained
 // against, a body of the same graph (the blue corner), in sparring and crowd modes.
 TEST_CASE("a dodge page opens on the avatar and its scripted opponent, in sparring and crowd modes",
           "[serve][data][opponent]") {
@@ -377,7 +377,7 @@ TEST_CASE("a dodge page opens on the avatar and its scripted opponent, in sparri
   CHECK(scene["opponent"].is_null());
 }
 
-// Issue 43: a learned opponent's scene opens on two fighters, as dodge's does, each playing
+// A learned opponent's scene opens on two fighters, as dodge's does, each playing
 // the bundle and told what the other is doing (it opened on one boxer and a dragged target
 // until 2026-11-29). The success counter sees the partner's head and strikes as the
 // environment tracks them through each action, as eval's trials do.
@@ -406,7 +406,7 @@ TEST_CASE("a learned opponent's page opens on two fighters that spar with the bu
   CHECK(scene["opponent"].is_null());
 }
 
-// Issue 46: a turning target's grid repeats every position per turn rate. The values view
+// A turning target's grid repeats every position per turn rate. The values view
 // shows the positions of the target's motion at the decision: its turn layer, its speed
 // layer and its heading. intercept's targets walk and turn in target mode; one the page
 // drags stands, and then the view shows the straight, speed-0 layers, where every turn layer
@@ -498,7 +498,7 @@ TEST_CASE("an intercept page's values view shows the layers of its target's moti
   }
 }
 
-// Issue 46: boxing.yaml's sparring and crowds play boxing_spar.yaml's behaviour, which keeps
+// boxing.yaml's sparring and crowds play boxing_spar.yaml's behaviour, which keeps
 // a fighting distance; target mode keeps the paper's two behaviours.
 TEST_CASE("boxing's sparring plays boxing_spar's behaviour at a fighting distance and its target mode the paper's",
           "[serve][data][outcome]") {
@@ -571,7 +571,7 @@ TEST_CASE("boxing's sparring plays boxing_spar's behaviour at a fighting distanc
   CHECK(close < spar - 0.2);
 }
 
-// Issue 43: `mgrl serve --partner-policy DIR`: the second fighter of each pair plays a
+// `mgrl serve --partner-policy DIR`: the second fighter of each pair plays a
 // bundle of its own, greedily, as `mgrl simulate --partner-policy` does.
 TEST_CASE("serve --partner-policy: the second fighter of each pair plays its own bundle", "[serve][data]") {
   const BoxingAssets spar(true, "boxing_spar.yaml", {});
@@ -731,7 +731,7 @@ TEST_CASE("with no policy bundle, the page is told and the online search runs", 
         std::string::npos);
 }
 
-// Issue 15: the learn panel steps the paper's Q-learning on a table of the page's own, and
+// The learn panel steps the paper's Q-learning on a table of the page's own, and
 // live retraining swaps a behaviour's table for value iteration's on changed parameters.
 TEST_CASE("a page's lesson steps Q-learning and a retraining switches the policy", "[serve][data][slow]") {
   const BoxingAssets boxing;

@@ -1,4 +1,4 @@
-// The session stage (framework/session/, issue 39): one way into the pipeline for every
+// The session stage (framework/session/): one way into the pipeline for every
 // command, the viewer, the benchmarks and Python. A session opens the scenario, its graph,
 // behaviours, the task they share and the policy bundle; controllers are listed, checked
 // and made in one place; hits become JSON in one place.
@@ -421,7 +421,7 @@ TEST_CASE("a hit reads the same in the events file and the viewer's protocol", "
   CHECK(hitEventJson(e)["hand"] == "left");
 }
 
-// Issue 46: boxing_spar's stances. The session's world holds them, and eval's trial i holds
+// boxing_spar's stances. The session's world holds them, and eval's trial i holds
 // stance i mod 3 through every decision of the trial.
 TEST_CASE("a scenario's stances reach the world and eval's trials: trial i holds stance i mod N", "[session][data]") {
   const test::TempDir cache("session-stances");

@@ -249,7 +249,7 @@ TEST_CASE("a posed avatar's planted feet stay still in the world unless plant_fe
   INFO(held.ankle.size() << " planted frame pairs; median planted ankle speed " << median(held.ankle) << " m/s held, "
                          << median(sliding.ankle) << " m/s with plant_feet off; toe " << median(held.toe) << " and "
                          << median(sliding.toe) << " m/s");
-  // At most the SNU sparring capture's (ankles 0.078 m/s, toes 0.029; issue 46).
+  // At most the SNU sparring capture's (ankles 0.078 m/s, toes 0.029).
   CHECK(median(held.ankle) < 0.078);
   CHECK(median(held.toe) < 0.029);
   CHECK(median(sliding.ankle) > 0.1);  // what the lock removes is there without it
@@ -694,7 +694,7 @@ TEST_CASE("world settings are checked where they are written", "[world][data]") 
 namespace {
 
 // The smallest distance on the floor between the pelvises of any two avatars (the worst
-// pair), over a run of `frames` frames, and the frames under `limit` (issue 18).
+// pair), over a run of `frames` frames, and the frames under `limit`.
 struct Closest {
   double metres = 1e9;
   std::size_t under = 0;
@@ -839,7 +839,7 @@ TEST_CASE("an opponent's facing reaches the controller: a partner's own, a targe
   CHECK(d.target.heading == Approx(partnerFacing).margin(1e-12));
   CHECK(std::abs(d.target.heading) > M_PI - 45 * M_PI / 180);
   // ...and where it stands as the opponent environments' states hold it: its root on the
-  // ground (issue 43), not its head, which stands some centimetres off it (the head, the
+  // ground, not its head, which stands some centimetres off it (the head, the
   // strikes' aim, gave the policies a state they were not trained on).
   const GroundMotion& stands = world.lastDecision(1).frame;
   const Eigen::Vector3d seen = inverseTransformPoint(d.frame, Eigen::Vector3d(stands.dx, 0, stands.dz));
@@ -1009,7 +1009,7 @@ TEST_CASE("a learned opponent's state reaches the controller: what the partner i
   CHECK(other.lastDecision(0).target.opponent == -1);
 }
 
-// Issue 46: stances. Each avatar draws one, holds it an exponential time of mean
+// Stances. Each avatar draws one, holds it an exponential time of mean
 // stance_hold, draws again at the next decision after that; the controller sees it, and a
 // policy part of another stance takes no part.
 TEST_CASE("a world with stances gives each avatar one at a time, held stance_hold on average, and controllers see it",

@@ -94,7 +94,7 @@ export function avatarColour(i, partners, out) {
                      : out.setHSL(0.6 + 0.03 * shade, 0.75, 0.55 + 0.12 * shade);
 }
 
-// Body mode (issue 45): each bone a capsule sized from its length, as the glTF export's
+// Body mode: each bone a capsule sized from its length, as the glTF export's
 // body (framework/include/mgrl/motion/gltf.hpp): a cylinder of radius kBodyRadiusPerLength x length
 // within [kBodyMinRadius, kBodyMaxRadius], closed by a sphere at each joint as wide as the
 // widest bone meeting there. Gloves and shoes in their own colours.

@@ -1,4 +1,4 @@
-// The learn panel and live retraining (issue 15, docs/viewer-protocol.md).
+// The learn panel and live retraining (docs/viewer-protocol.md).
 //
 // Learn: the server runs the paper's Q-learning (sec. 4.2) on one behaviour's problem with
 // a table of this page's own, a step at a time, and sends each step (`learn_step`). This

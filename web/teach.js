@@ -1,4 +1,4 @@
-// The teaching views (issue 15, paper sec. 4 and 5): the panel's "Teach" section, which
+// The teaching views (paper sec. 4 and 5): the panel's "Teach" section, which
 // asks the server for one behaviour's values (`values` messages, docs/viewer-protocol.md),
 // the HUD's read-outs of them (legend, state, chosen action), and the learning-curve
 // overlay drawn from the scene's training curves. The heat map itself is values_view.js.
@@ -167,7 +167,7 @@ export class Teach {
       $('legend-bar').style.background = viridisGradient();
       $('legend-caption').textContent = `colour: V = max over actions of Q; ${marks}`;
     }
-    // A scenario of stances (issue 46): which one avatar 0 holds, and whether the shown
+    // A scenario of stances: which one avatar 0 holds, and whether the shown
     // behaviour (one stance's) played at that decision.
     const stanceText = (v) => {
       if (v.stance === null || v.stance === undefined) return '';

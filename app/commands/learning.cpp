@@ -49,7 +49,7 @@ class Train final : public SessionCommand {
     if (options_.model != "auto" && options_.model != "tabulated" && options_.model != "compact")
       throw Error(fmt::format("--model: expected auto, tabulated or compact, found '{}'", options_.model));
     const nlohmann::json report = runTrain(options_);
-    // Under an MPI launcher, rank 0 speaks for the job (issue 44).
+    // Under an MPI launcher, rank 0 speaks for the job.
     if (launchedProcess().rank > 0) return;
     print(common, report, common.json ? std::string() : trainText(report));
   }

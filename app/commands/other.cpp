@@ -64,11 +64,12 @@ class Stats final : public Command {
  public:
   Stats(CLI::App& app, Common& common)
       : Command(app.add_subcommand(
-            "stats", "Report on bouts, real or synthesized (issue 18, docs/stats.md): pelvis distance and facing "
-                     "distributions, effective and landed strikes per fighter-minute, planted-foot speed, root "
-                     "direction reversals, joint steps, interpenetration. BOUT: a folder of BVH files (one per "
-                     "fighter, one world frame; e.g. simulate --bvh-out's) or a quoted pattern such as "
-                     "'snu_martial_arts/motion/s_005_1_*.bvh'.")) {
+            "stats",
+            "Report on bouts, real or synthesized (docs/stats.md): pelvis distance and facing "
+            "distributions, effective and landed strikes per fighter-minute, planted-foot speed, root "
+            "direction reversals, joint steps, interpenetration. BOUT: a folder of BVH files (one per "
+            "fighter, one world frame; e.g. simulate --bvh-out's) or a quoted pattern such as "
+            "'snu_martial_arts/motion/s_005_1_*.bvh'.")) {
     sub_->add_option("BOUT", options_.bouts,
                      "Bouts: folders or quoted file patterns (relative: the working folder, else the data folder)");
     sub_->add_flag("--snu", options_.snu, "Add every real SNU sparring bout (s_TTT_K_*.bvh grouped by TTT_K)");

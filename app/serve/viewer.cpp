@@ -95,7 +95,7 @@ ViewerSession::ViewerSession(std::shared_ptr<const ViewerAssets> assets)
     : root_(std::move(assets)), state_(std::make_unique<State>()) {
   adopt(root_);
   // An opponent scene opens on the avatar and the opponent it was trained against (dodge's
-  // scripted pursuer; spar_learned's partner playing a table, issue 43); the others on the
+  // scripted pursuer; spar_learned's partner playing a table); the others on the
   // paper's boxer and its target.
   if (!root_->session->task.opponent)
     rebuild(Mode::Target, 1);
@@ -196,7 +196,7 @@ std::string ViewerSession::scene() const {
     json b = {{"name", a.session->behaviors[i].name},
               {"weight", s.weights[i]},
               {"activation", std::string(activationName(a.session->behaviors[i].activation))}};
-    if (a.session->behaviors[i].stance >= 0) b["stance"] = a.session->behaviors[i].stance;  // issue 46
+    if (a.session->behaviors[i].stance >= 0) b["stance"] = a.session->behaviors[i].stance;
     // The bundle's training record: its learner and curve (updates, seconds, residual,
     // mean residual), for the page's learning-curve view.
     const auto trained = a.session->bundle.behaviors.find(a.session->behaviors[i].name);

@@ -27,12 +27,12 @@ namespace mgrl::serve {
 struct ServeOptions : SessionOptions {
   ServeOptions() { plugins = &builtinPlugins(); }
   std::filesystem::path policy;  ///< "" the scenario's default bundle, if trained
-  /// The scenario whose behaviours play sparring and crowds (issue 46): "" the scenario's
+  /// The scenario whose behaviours play sparring and crowds: "" the scenario's
   /// own `sparring_scenario:` if it names one, "none" the scenario's own behaviours, else
   /// a scenario file. Its default bundle is used; of the --set flags only `world.` ones
   /// apply to it.
   std::string sparringScenario;
-  /// Issue 43: the second avatar of each sparring pair plays this bundle's tables
+  /// The second avatar of each sparring pair plays this bundle's tables
   /// (greedily), the first the page's controller ("" both play the page's controller).
   std::filesystem::path partnerPolicy;
   int partnerRound = 0;  ///< > 0: that self-play round's tables of partnerPolicy

@@ -1,5 +1,5 @@
 // What `mgrl serve` loads once for every page (ViewerAssets): the opened scenario's
-// session and, when it names one, the sparring scenario's beside it (issue 46). The pages'
+// session and, when it names one, the sparring scenario's beside it. The pages'
 // worlds are viewer.cpp's.
 #include <fmt/format.h>
 #include <fmt/ranges.h>
@@ -45,7 +45,7 @@ std::shared_ptr<ViewerAssets> loadAssets(const ServeOptions& options, const Grap
   return assets;
 }
 
-// --partner-policy (issue 43): the second avatar of each sparring pair of `spar` (the assets
+// --partner-policy: the second avatar of each sparring pair of `spar` (the assets
 // that play sparring and crowds) plays that bundle greedily, as `mgrl simulate
 // --partner-policy` does.
 void loadPartner(ViewerAssets& spar, const ServeOptions& options) {
@@ -73,7 +73,7 @@ std::shared_ptr<const ViewerAssets> loadViewerAssets(const ServeOptions& options
   Session::checkPartnerChoice(options.partnerPolicy, options.partnerRound);
   std::shared_ptr<ViewerAssets> assets = loadAssets(options, nullptr);
   // Sparring and crowds play another scenario's behaviours when the scenario (or
-  // --sparring-scenario) names one (issue 46: the paper's approach and hit close in to
+  // --sparring-scenario) names one (the paper's approach and hit close in to
   // 0.66 m; boxing_spar.yaml keeps a fighting distance). A scene with a scripted opponent
   // (dodge) spars with its own.
   const Session& main = *assets->session;

@@ -1,4 +1,4 @@
-// The viewer's learn panel (issue 15): Q-learning a step at a time on one behaviour.
+// The viewer's learn panel: Q-learning a step at a time on one behaviour.
 #include "serve/viewer_parts.hpp"
 
 #include <algorithm>
@@ -28,7 +28,7 @@ namespace mgrl::serve {
 namespace fs = std::filesystem;
 using json = nlohmann::json;
 
-// The learn panel (issue 15): the paper's Q-learning (sec. 4.2) on one behaviour's problem
+// The learn panel: the paper's Q-learning (sec. 4.2) on one behaviour's problem
 // with a table of the page's own, all zeros at the start, taken a step at a time so that
 // each update can be looked at as the paper's Fig. 4 draws it.
 void ViewerSession::learn(const Learn& message) {

@@ -140,7 +140,7 @@ struct ViewerSession::State {
   DecisionClock decisions;
   std::size_t eventsSeen = 0;
   std::deque<double> hitTimes;  ///< simulated times of the hits of the last 30 s
-  // Successes as eval counts them (issue 17): each avatar's actions are followed by the
+  // Successes as eval counts them: each avatar's actions are followed by the
   // scenario's criteria from the target it decided on, as one trial that restarts at
   // each success. What the model says the action does, like eval's trials: the world's
   // pushes and foot locks are not seen.

@@ -1,4 +1,4 @@
-// The viewer's live retraining (issue 15): value iteration on a thread of its own.
+// The viewer's live retraining: value iteration on a thread of its own.
 #include "serve/viewer_parts.hpp"
 
 #include <algorithm>
@@ -114,7 +114,7 @@ void trainAndEvaluate(std::atomic<bool>& stop, const ViewerAssets& assets, const
 
 }  // namespace
 
-// Live retraining (issue 15): value iteration on one behaviour with some of its reward's or
+// Live retraining: value iteration on one behaviour with some of its reward's or
 // grid's parameters changed, on a thread of its own; the page's avatar switches to the new
 // table when it is done, and both policies are evaluated on the same trials.
 void ViewerSession::retrain(const Retrain& message) {

@@ -49,7 +49,7 @@ std::string ViewerSession::values() const {
   // heading and speed layer, and per turn layer for a turning target: show the positions at
   // the target's motion as the controller saw it, the turn layer of its turn rate, the
   // speed layer nearest its speed and the heading nearest its heading (a standing target,
-  // one the page dragged: the straight, speed-0 layers; an opponent's facing, issue 17, is
+  // one the page dragged: the straight, speed-0 layers; an opponent's facing is
   // its heading too). A learned opponent's layers show its first state.
   const Discretizer& grid = *s.policy[shown].grid;
   const GridAxis* heading = grid.axis(AxisRole::Heading);
@@ -114,7 +114,7 @@ std::string ViewerSession::values() const {
               {"target_inside", s.policy[shown].grid->inside(seenNow)},
               {"speed", layerSpeed},
               {"turn_deg_s", grid.turnAxis() ? grid.turnAxis()->vertices[turnLayer] * 180 / M_PI : 0.0},
-              // Stances (issue 46): the one avatar 0 held at the decision, and the shown
+              // Stances: the one avatar 0 held at the decision, and the shown
               // behaviour's (it played only if they are the same); null for none.
               {"stance", d.target.stance >= 0 ? json(d.target.stance) : json(nullptr)},
               {"behavior_stance", behavior.stance >= 0 ? json(behavior.stance) : json(nullptr)},

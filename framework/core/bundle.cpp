@@ -173,7 +173,7 @@ void BundleWriter::commit(std::string_view manifestText) {
   try {
     // Last, so a directory with a manifest has all its files.
     writeWholeFile(temporary_ / manifestName_, manifestText);
-    // Issue 19, defects 5 and 8: the destination is never missing (an existing bundle is
+    // The destination is never missing (an existing bundle is
     // swapped with the new one in one step), and another process writing the same bundle
     // at the same time makes neither fail: the last swap wins, each is complete.
     for (int attempt = 0;; ++attempt) {

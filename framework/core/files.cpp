@@ -31,7 +31,7 @@ std::string readFile(const std::filesystem::path& path) {
   if (!file) throw Error(fmt::format("{}: cannot open: {}", path.string(), std::strerror(errno)));
   // Sized once from the file's length (a file that grows meanwhile is read to its end in
   // chunks): growing the string chunk by chunk copied a 10 MB table about twice over and
-  // touched every page of each discarded buffer (issue 20, command start).
+  // touched every page of each discarded buffer, and slowed every command's start.
   std::string text;
   std::error_code sizeError;
   const std::uintmax_t expected = std::filesystem::file_size(path, sizeError);
@@ -145,7 +145,7 @@ bool processAlive(long pid) {
 
 bool folderTakesNewFiles(const std::filesystem::path& folder, std::string_view probePrefix) {
   namespace fs = std::filesystem;
-  // Issue 19's kill tests: a process killed between writing its probe and removing it (a
+  // Found by the kill tests: a process killed between writing its probe and removing it (a
   // few microseconds, but forever after) left the file behind.
   std::error_code ec;
   for (fs::directory_iterator it(folder, ec), end; !ec && it != end; it.increment(ec)) {

@@ -1,5 +1,5 @@
 /// \file
-/// Planted feet for ActionPlayback (issues 18 and 46): ActionPlayback::lockFoot, the whole
+/// Planted feet for ActionPlayback: ActionPlayback::lockFoot, the whole
 /// foot held by two-bone IK while the annotation has it on the ground. Its own file because
 /// it changes for other reasons than playback's blending and posing (motion quality).
 #include "mgrl/graph/playback.hpp"
@@ -25,7 +25,7 @@ const double kMaxHalfTwistSin = std::sin(0.5 * kMaxFootTwist);
 // twist on the floor far more than fighters' do: with all of it, its planted ankles moved
 // 0.13 to 0.16 m/s about the held ball against the SNU sparring capture's 0.078; with half,
 // 0.07 to 0.09, the toes 0.02 to 0.03 (the SNU's: 0.029); with 0.3, 0.05 to 0.07 and 0.01
-// to 0.02. Issue 46, measured with mgrl stats on 120 s bouts. Halfway is slerp at 1/2,
+// to 0.02. Measured with mgrl stats on 120 s bouts. Halfway is slerp at 1/2,
 // which is the normalized sum of the two (no acos or sine in the posing loop).
 Eigen::Quaterniond halfway(const Eigen::Quaterniond& a, const Eigen::Quaterniond& b) {
   const double sign = a.coeffs().dot(b.coeffs()) < 0 ? -1.0 : 1.0;
@@ -56,7 +56,7 @@ Eigen::Vector2d twistAfter(const Eigen::Vector2d& b, const Eigen::Vector2d& a) {
 
 }  // namespace
 
-// Holds foot `side` (issues 18 and 46): the whole foot, not the ankle alone. A foot that
+// Holds foot `side`: the whole foot, not the ankle alone. A foot that
 // comes down is held at its heading (its twist about the vertical) and its pitch and roll
 // move only half of the way the motion's do (halfway()); the point it rests on (the motion's
 // Annotation::footPivot, `pivot`: heel, ball or between) stays where it was on the floor

@@ -318,7 +318,7 @@ void saveGraphBundle(const std::filesystem::path& dirArgument, const StateAction
 GraphBundleLoad loadGraphBundle(const std::filesystem::path& dirArgument, std::string_view expectedKey,
                                 bool withMotion) {
   const fs::path dir = dirArgument.has_filename() ? dirArgument : dirArgument.parent_path();
-  recoverBundleDirectory(dir, "manifest.json");  // what a killed writer left (issue 19)
+  recoverBundleDirectory(dir, "manifest.json");  // what a killed writer left
   std::error_code ec;
   const fs::file_status status = fs::status(dir, ec);
   if (status.type() == fs::file_type::not_found) {

@@ -34,14 +34,14 @@ std::pair<nlohmann::json, std::string> behaviorConfigAndKey(const BehaviorSpec& 
   // A parameter added after tables were trained keeps their keys while it holds the value
   // that reproduces them bit for bit (q_learning's max_episode_actions: 0, the paper's rule).
   if (keyed["learner"].value("max_episode_actions", std::int64_t{0}) == 0) keyed["learner"].erase("max_episode_actions");
-  // Likewise a moving_target that does not turn (max_turn_deg_s: 0, issue 46): turns has no
+  // Likewise a moving_target that does not turn (max_turn_deg_s: 0): turns has no
   // effect then, and neither key was there before.
   if (keyed["environment"].is_object() && keyed["environment"].contains("max_turn_deg_s") &&
       keyed["environment"]["max_turn_deg_s"].is_number() && keyed["environment"]["max_turn_deg_s"].get<double>() == 0) {
     keyed["environment"].erase("max_turn_deg_s");
     keyed["environment"].erase("turns");
   }
-  // Likewise a learned opponent's against: previous (issue 43), what self-play rounds did
+  // Likewise a learned opponent's against: previous, what self-play rounds did
   // before the choice.
   if (keyed["environment"].value("against", "") == "previous") keyed["environment"].erase("against");
   // Likewise effort's point: pelvis (the root's ground speed, all effort measured before).
@@ -50,7 +50,7 @@ std::pair<nlohmann::json, std::string> behaviorConfigAndKey(const BehaviorSpec& 
       if (term.value("term", "") == "effort" && term.value("point", "") == "pelvis") {
         term.erase("point");
       } else if (term.value("term", "") == "facing" && term.value("prefer", "") != "stance") {
-        // And facing's stance and stances, which only prefer: stance reads (issue 46).
+        // And facing's stance and stances, which only prefer: stance reads.
         term.erase("stance");
         term.erase("stances");
       }
@@ -106,7 +106,7 @@ void checkOpponent(const BehaviorSpec& spec, const Behavior& b) {
   if (b.success && b.success->clearance()) spec.success.fail(why);  // only a declared criterion has one
 }
 
-// A learned opponent (issue 43): the model binds to the graph, the grid gets one layer per
+// A learned opponent: the model binds to the graph, the grid gets one layer per
 // opponent state, the reward reads the opponent's track, and a policy bundle the scenario
 // names is loaded for the opponent to play (its table for this behaviour, same grid).
 void bindEnvironment(const BehaviorSpec& spec, Behavior& b, const StateActionModel& model,

@@ -53,7 +53,7 @@ std::optional<json> DirectoryCheckpointer::load(QTable& table) { return loadChec
 std::optional<json> DirectoryCheckpointer::loadChecked(QTable& table, const StateCheck& check) {
   requireTableShape(table);
   std::error_code ec;
-  recoverBundleDirectory(dir_, kCheckpointStateFile);  // what a killed writer left (issue 19)
+  recoverBundleDirectory(dir_, kCheckpointStateFile);  // what a killed writer left
   const fs::file_status status = fs::status(dir_, ec);
   if (status.type() == fs::file_type::not_found) return std::nullopt;
 
@@ -113,7 +113,7 @@ void DirectoryCheckpointer::remove() {
   std::error_code ec;
   // What killed writers left beside it goes too (only a dead process's): a whole checkpoint
   // in a temporary would otherwise be put back by the next load's recovery, and a run that
-  // starts over would continue from it (issue 19's kill tests).
+  // starts over would continue from it (as the kill tests found).
   for (const StaleSibling& stale : staleSiblings(dir_)) fs::remove_all(stale.path, ec);
   if (!fs::is_directory(fs::symlink_status(dir_, ec))) return;
   // Never delete a directory that is not a checkpoint (a mistyped path).

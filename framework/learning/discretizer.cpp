@@ -102,7 +102,7 @@ void Discretizer::setAxes(std::vector<GridAxis> axes) {
     vertexCount_ *= axis.vertices.size();
     cellCount_ *= cellsPerAxis_[i];
   }
-  // Issue 19: the size is checked before the corner table is made (a 10000 x 10000 polar
+  // The size is checked before the corner table is made (a 10000 x 10000 polar
   // grid spent 30 s and 3 GB before anything said no).
   if (vertexCount_ > kMaxGridVertices) {
     std::vector<std::string> sizes;

@@ -167,7 +167,7 @@ std::string tableHash(const QTable& table) {
 
 PolicyBundle loadPolicyBundle(const fs::path& dirArgument, const StateActionModel& model, std::string_view graphKey) {
   const fs::path dir = dirArgument.has_filename() ? dirArgument : dirArgument.parent_path();
-  recoverBundleDirectory(dir, "manifest.json");  // what a killed writer left (issue 19)
+  recoverBundleDirectory(dir, "manifest.json");  // what a killed writer left
   std::error_code ec;
   const fs::file_status status = fs::status(dir, ec);
   if (status.type() == fs::file_type::not_found)

@@ -1,4 +1,4 @@
-// Real bouts to learn from (issue 46): the SNU sparring capture's files grouped into bouts,
+// Real bouts to learn from: the SNU sparring capture's files grouped into bouts,
 // and the facing angle each fighter keeps to the other (as `mgrl stats` measures it).
 #include "mgrl/learning/real_bouts.hpp"
 

@@ -164,7 +164,7 @@ std::uint32_t SuccessCriterion::Tracker::play(const StateActionModel& m, std::si
                                               const TrackedOpponent* opponent) {
   const auto frames = static_cast<std::uint32_t>(m.actionLength(a));
   // A learned opponent moves and strikes during the action: its head is the target at each
-  // frame, facing where its root does, and its strikes are the ones it throws (issue 43).
+  // frame, facing where its root does, and its strikes are the ones it throws.
   thread_local std::vector<OpponentFrame> track;
   if (opponent) {
     opponent->track(m, a, e, track);

@@ -242,7 +242,7 @@ std::vector<double> findContacts(const Tracked& t, const AnnotationParams& param
       contact[f] = on ? 1 : 0;
     }
     // Where the foot rests: on its heel or its ball, by which of ankle and toe stands
-    // higher above its own planted level (issue 46: playback holds that point still).
+    // higher above its own planted level (playback holds that point still).
     auto& pivot = result.footPivot[s];
     pivot.resize(frames);
     const std::size_t ankle = static_cast<std::size_t>(s), toe = 2 + static_cast<std::size_t>(s);

@@ -128,7 +128,7 @@ class AsfReader {
       } else if (token == "length") {
         result_.lengthPerInch = in_.number("a length unit");
         // CMU writes 0.45; a unit far outside [0.001, 1000] makes skeletons of nanometres or
-        // of millions of metres (issue 19), never a person.
+        // of millions of metres, never a person.
         if (!(result_.lengthPerInch >= 1e-3 && result_.lengthPerInch <= 1e3))
           in_.fail("a length unit in [0.001, 1000] (CMU: 0.45)", fmt::format("{}", result_.lengthPerInch));
       } else if (token == "angle") {

@@ -194,7 +194,7 @@ Motion parseBvh(std::string_view text, std::string_view source, const WarningSin
   double frameTime = in.number("a frame time");
   if (!(frameTime > 0)) in.fail("a positive frame time", fmt::format("{}", frameTime));
   // Capture runs at 1 fps or faster; a larger frame time is a broken file, and resampling
-  // it would make duration x fps frames (issue 19: 100000 s per frame asked for gigabytes).
+  // it would make duration x fps frames (100000 s per frame asked for gigabytes).
   if (frameTime > kMaxBvhFrameTime_s)
     in.fail(fmt::format("a frame time of at most {} s (1 fps)", kMaxBvhFrameTime_s), fmt::format("{}", frameTime));
   frameTime = snapFrameTime(frameTime);

@@ -54,7 +54,7 @@ Motion resample(const Motion& motion, double fps) {
   const Skeleton& skeleton = motion.skeleton();
   const std::size_t joints = skeleton.jointCount();
   const std::size_t translated = skeleton.translatedJoints().size();
-  // The size is checked before anything is reserved (issue 19: a long frame time times a
+  // The size is checked before anything is reserved (a long frame time times a
   // high rate asked for gigabytes).
   const double frames = std::max(1.0, std::round(motion.duration() * fps));
   const double bytes = frames * (static_cast<double>(joints) * sizeof(Eigen::Quaterniond) +

@@ -1,5 +1,5 @@
 // The body parts a punch can land on (paper sec. 6.6): capsules on the skeleton's spine,
-// chest and head, and the forearms that block it (issue 46), found once per motion database.
+// chest and head, and the forearms that block it, found once per motion database.
 #include <algorithm>
 #include <cmath>
 

@@ -103,8 +103,8 @@ bool capsulesOverlap(const Fighter& a, const Fighter& b, std::size_t f, const St
 }
 
 // Whether one of a's forearms (elbow to fist tip) runs inside one of b's body capsules at
-// frame f: the forearm's axis closer to the capsule's axis than the capsule's radius (issue
-// 46: a limb through the other fighter's torso or head).
+// frame f: the forearm's axis closer to the capsule's axis than the capsule's radius (a
+// limb through the other fighter's torso or head).
 bool forearmInside(const Fighter& a, const Fighter& b, std::size_t f, const StatsParams& params) {
   const Eigen::Vector3d* pa = a.body.data() + f * kBodyPoints;
   const Eigen::Vector3d* pb = b.body.data() + f * kBodyPoints;

@@ -198,7 +198,7 @@ Eigen::Vector3d World::seen(std::size_t i) const {
   const Avatar& a = avatars_[i];
   if (!setup_.opponent || a.partner < 0) return aim(i);
   // An opponent environment's state (opponent, learned_opponent) holds where the opponent
-  // stands, its root on the ground, as training saw it (issue 43); its head is only what the
+  // stands, its root on the ground, as training saw it; its head is only what the
   // strikes aim at. The head's height stays.
   const auto j = static_cast<std::size_t>(a.partner);
   return {roots_[j].dx, heads_[j].y(), roots_[j].dz};

@@ -1,4 +1,4 @@
-// The world's body collisions (issue 18): torso capsules, decisions that keep bodies apart,
+// The world's body collisions: torso capsules, decisions that keep bodies apart,
 // and pushes for what still overlaps (world.hpp; the rest of the world is in world.cpp).
 #include <algorithm>
 #include <cmath>
@@ -12,7 +12,7 @@ namespace mgrl {
 using namespace world_detail;  // NOLINT: the world's own helpers (world_parts.hpp)
 
 // ---------------------------------------------------------------------------------------
-// Body collisions (issue 18): a torso capsule per avatar, from the pelvis to the head.
+// Body collisions: a torso capsule per avatar, from the pelvis to the head.
 // Decisions rule out actions whose root path would run into another body within the
 // look-ahead, assuming the others finish the actions they are playing and then stand;
 // what still overlaps is pushed apart over the next frames. Neighbours come from a hashed

@@ -19,7 +19,7 @@ namespace {
 // Bump when the graph construction changes what it computes, so old caches go stale.
 // 2: no effective punch while knocked down; the fist falls back to the wrist's end site.
 // 3: effective kicks; 4: kicks by the toe's whole speed; 5: root motion from the pelvis role,
-// punches that drive the fist out from the body, heads in proportion (issue 42)
+// punches that drive the fist out from the body, heads in proportion
 constexpr int kGraphAlgorithmVersion = 5;
 
 bool wildcardMatch(std::string_view pattern, std::string_view text) {
@@ -200,7 +200,7 @@ std::vector<BehaviorSpec> readBehaviors(const ConfigNode& root) {
       spec.environment.fail("expected a map with 'type: static_target' or another environment model");
     result.push_back(std::move(spec));
   }
-  // Stances (issue 46) number 0..N-1, each held by at least one behaviour.
+  // Stances number 0..N-1, each held by at least one behaviour.
   int stances = 0;
   for (const BehaviorSpec& spec : result) stances = std::max(stances, spec.stance + 1);
   for (int k = 0; k < stances; ++k)
@@ -308,7 +308,7 @@ void applyOverride(YAML::Node root, const std::string& text, const std::string& 
 }
 
 // A scenario's name names its cache entries (<cache>/graphs/<name>-<hash>): a safe word
-// (issue 19: `../../x` wrote outside the cache, `a/b` made folders, a 10 MB name failed
+// (`../../x` wrote outside the cache, `a/b` made folders, a 10 MB name failed
 // as a "damaged cache", a name that is not UTF-8 was silently not cached).
 std::string scenarioName(const ConfigNode& root, const std::filesystem::path& source) {
   constexpr std::size_t kMaxName = 64;

@@ -29,7 +29,7 @@ namespace {
 
 std::string scratchName() { return fmt::format(".mgrl-simulate-{}", ::getpid()); }
 
-// Issue 19, defect 5: the scratch folders of runs that were killed (their process is gone)
+// The scratch folders of runs that were killed (their process is gone)
 // are removed; a live run's are left alone.
 void removeStaleScratch(const fs::path& dir) {
   std::error_code ec;
@@ -78,7 +78,7 @@ std::unique_ptr<ScratchDirectory> prepareFolder(const fs::path& dir, std::string
   return guard;
 }
 
-// Issue 19, defect 6: --bvh-out's folder is one unit (a bundle, mgrl/core/bundle.hpp):
+// --bvh-out's folder is one unit (a bundle, mgrl/core/bundle.hpp):
 // written beside it and swapped in whole, with a manifest naming the run. Only simulate's
 // own output is replaced: an empty folder, an earlier run's (its manifest and the files it
 // lists), or what simulate wrote before folders had manifests (avatar_NNN.bvh, *.jsonl);

@@ -86,7 +86,7 @@ void Session::checkPartnerChoice(const std::filesystem::path& dir, int round, st
 
 namespace {
 
-// Self-play rounds are kept as NAME-roundK (mgrl train, issue 43): each behaviour's table
+// Self-play rounds are kept as NAME-roundK (mgrl train): each behaviour's table
 // is replaced by its round's, which leaves the bundle. Every round's table is found before
 // any is taken, so a missing one leaves the bundle as it was.
 void takeRound(PolicyBundle& bundle, const std::filesystem::path& dir, const std::vector<Behavior>& behaviors,

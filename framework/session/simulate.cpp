@@ -214,7 +214,7 @@ json simulate(const Session& session, const SimulateSettings& settings, Outputs&
     if (settings.partnerRound > 0) report["partner_round"] = settings.partnerRound;
     report["hits_by_side"] = {{"policy", first}, {"partner_policy", second}};
   } else if (params.mode == "sparring" && avatars >= 2 && !session.partnerName(played).empty()) {
-    // An `opponent` scene: the second of each pair is the scripted opponent (issue 45).
+    // An `opponent` scene: the second of each pair is the scripted opponent.
     const auto [first, second] = landedBySide(world);
     report["partner"] = session.partnerName(played);
     report["hits_by_side"] = {{"avatars", first}, {"opponents", second}};

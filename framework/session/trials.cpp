@@ -59,7 +59,7 @@ Trials::Trials(const StateActionModel& model, const std::vector<Behavior>& behav
 std::pair<std::vector<SuccessCriterion>, std::string> trialCriteria(const std::vector<Behavior>& behaviors,
                                                                     const ConditionRegistry& conditions) {
   std::vector<SuccessCriterion> criteria;
-  // One of each: a scenario's stances (issue 46) declare the same criterion once a stance.
+  // One of each: a scenario's stances declare the same criterion once a stance.
   for (const Behavior& b : behaviors)
     if (b.successDeclared && b.success &&
         std::none_of(criteria.begin(), criteria.end(),
@@ -104,7 +104,7 @@ TrialStats Trials::run(const ChooseAction& choose, std::size_t count, double sec
   for (std::size_t trial = 0; trial < count; ++trial) {
     auto s = static_cast<std::uint32_t>(starts.below(model.stateCount()));
     TargetState e = placeTarget(starts);
-    // Stances (issue 46) in turn, trial by trial: each held through its trial.
+    // Stances in turn, trial by trial: each held through its trial.
     e.stance = stanceOf(trial);
     const auto turn = static_cast<std::size_t>(std::find(stats.turnRates.begin(), stats.turnRates.end(), e.turnRate) -
                                                stats.turnRates.begin());

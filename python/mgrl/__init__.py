@@ -1,5 +1,5 @@
 """mgrl from Python: the motion-graph learning problem as NumPy arrays, and mgrl's C++
-learners on it (issue 41; a first part).
+learners on it.
 
     import mgrl
     s = mgrl.Session("scenarios/boxing.yaml")          # data, cache, sets as on the command line

@@ -1,5 +1,5 @@
 """mgrl.compare: learners side by side on one behaviour, C++ ones by name and Python ones
-as objects, with `mgrl compare`'s measures, learning curves and report (issue 41).
+as objects, with `mgrl compare`'s measures, learning curves and report.
 
     class MyLearner:
         name = "my_sarsa"

@@ -1,6 +1,6 @@
 // libFuzzer harness: the ASF reader (framework/include/mgrl/motion/asf_amc.hpp). The input is an ASF,
 // optionally followed by `\n@@file x.amc\n` and an AMC to load with it through
-// loadMotion() (units, standing height: issue 19, defect 11).
+// loadMotion() (units, standing height).
 #include "fuzz_support.hpp"
 #include "mgrl/motion/asf_amc.hpp"
 #include "mgrl/motion/motion_io.hpp"

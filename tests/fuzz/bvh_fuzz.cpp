@@ -1,6 +1,6 @@
 // libFuzzer harness: the BVH reader (framework/include/mgrl/motion/bvh.hpp) as every command meets it,
 // through loadMotion(): parsing, units detected from the standing height, resampling to
-// 30 fps (issue 19, defect 1).
+// 30 fps.
 #include "fuzz_support.hpp"
 #include "mgrl/motion/motion_io.hpp"
 

@@ -1,5 +1,5 @@
 #pragma once
-// Shared by the libFuzzer harnesses (tests/fuzz/README.md, issue 19): what counts as a
+// Shared by the libFuzzer harnesses (tests/fuzz/README.md): what counts as a
 // finding, inputs that hold several files, and a scratch folder per process.
 //
 // A reader may refuse any input with mgrl::Error (one clear message); anything else is a

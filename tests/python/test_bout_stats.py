@@ -1,4 +1,4 @@
-"""mgrl.bout_stats (issue 39: the bout report is a library call): the same report as
+"""mgrl.bout_stats (the bout report is a library call): the same report as
 `mgrl stats --json`, a comparison of two groups, and one clear error for a bout that is
 not there. Run by ctest (python_tests)."""
 import json

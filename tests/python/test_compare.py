@@ -1,4 +1,4 @@
-"""mgrl.compare (issue 41): a learner written in Python beside mgrl's C++ learners, with
+"""mgrl.compare: a learner written in Python beside mgrl's C++ learners, with
 mgrl compare's measures, curves and report. Run by ctest (python_tests)."""
 import json
 import pathlib

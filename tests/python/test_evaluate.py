@@ -1,4 +1,4 @@
-"""Tables from Python played by mgrl (issue 41): Session.evaluate reports what `mgrl eval`
+"""Tables from Python played by mgrl: Session.evaluate reports what `mgrl eval`
 does, save_policy writes a bundle the command line accepts as it is, NumPy tables of the
 wrong shape, dtype or values are refused naming both shapes, and training honours a
 progress callback and Ctrl-C. Run by ctest (python_tests)."""

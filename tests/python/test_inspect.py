@@ -1,4 +1,4 @@
-"""mgrl.inspect (issue 39: the capture report is a library call of the motion stage): the
+"""mgrl.inspect (the capture report is a library call of the motion stage): the
 same report as `mgrl inspect --json`, one path or several, and one clear mgrl.Error for a
 malformed file. Run by ctest (python_tests)."""
 import json

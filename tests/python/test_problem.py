@@ -1,4 +1,4 @@
-"""The tabulated problem from Python (issue 41): a value iteration written in NumPy on
+"""The tabulated problem from Python: a value iteration written in NumPy on
 s.problem(...) reproduces mgrl's C++ value iteration; errors cross as mgrl.Error.
 Run by ctest (python_tests) with PYTHONPATH=build-python/python."""
 import os

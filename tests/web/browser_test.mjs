@@ -1,4 +1,4 @@
-// The viewer end to end (issue 14): the real `mgrl serve`, the real page in headless
+// The viewer end to end: the real `mgrl serve`, the real page in headless
 // Chromium, real mouse events. See tests/web/README.md.
 //
 //   MGRL_BINARY=build/app/mgrl node tests/web/browser_test.mjs
@@ -364,7 +364,7 @@ async function targetMode(page) {
   return {stepAfter, hitAfter: hit.time - dragEnd};
 }
 
-// ---- the teaching views (issue 15) ------------------------------------------------
+// ---- the teaching views ------------------------------------------------
 
 /** Simulated time of the newest frame. */
 const frameTime = (page) => page.evaluate(() => mgrl.state.frames.last.time);
@@ -498,7 +498,7 @@ async function teachViews(page) {
 }
 
 // A new world (mode change) while values are shown. boxing.yaml names boxing_spar.yaml as
-// its sparring_scenario (issue 46), so sparring plays that scenario's behaviours (one per
+// its sparring_scenario, so sparring plays that scenario's behaviours (one per
 // stance): the values of approach stop and the select offers them. Between sparring and crowd (the same
 // scenario) the page asks again and the new world's values arrive at once. Target mode
 // brings the paper's two behaviours back.
@@ -624,7 +624,7 @@ async function setCrowdSize(page, avatars) {
 }
 
 
-// The learn panel (issue 15): Q-learning stepped on the page, each update shown as the
+// The learn panel: Q-learning stepped on the page, each update shown as the
 // paper's Fig. 4 draws it. Each update is recomputed here from the numbers it shows, as
 // framework/learning/q_learning_steps.cpp computes it in float (built with -ffp-contract=off):
 //   alpha    = float(1 - (update - 1) / budget)       (alpha_final 0, the panel's lesson)
@@ -781,7 +781,7 @@ async function learnPanel(page) {
   check(await page.evaluate(() => document.getElementById('lesson').hidden), 'learn: stop hides the lesson view');
 }
 
-// Live retraining (issue 15): a reward parameter and a grid resolution changed on the page;
+// Live retraining: a reward parameter and a grid resolution changed on the page;
 // the server retrains with value iteration and the avatar's policy switches.
 async function retrainOnce(page, behaviour, parameter, value) {
   const before = await page.evaluate(() => mgrl.state.learn.retrain.length);
@@ -909,7 +909,7 @@ async function liveRetraining(page) {
   console.log(`#      retraining hit from the page: contact radius ${radius.seconds.toFixed(1)} s, angles ${grid.seconds.toFixed(1)} s (click to new policy)`);
 }
 
-// Issue 45: a dodge scene (scenarios/dodge.yaml, a second server) shows the avatar and the
+// A dodge scene (scenarios/dodge.yaml, a second server) shows the avatar and the
 // scripted opponent it was trained against as two bodies, the opponent closing in.
 async function dodgeScene() {
   await stopServer();
@@ -1008,10 +1008,10 @@ async function main() {
   const oldLines = await page.evaluate(() => [...document.querySelectorAll('#hits li')]
     .map((li) => li.textContent).filter((t) => t.includes(' on target ')));
   check(oldLines.length === 0, 'after the switch to sparring the HUD lists no target-mode hits', oldLines.join(' | '));
-  // Issue 45: a landed punch makes the struck part of the partner flash.
+  // A landed punch makes the struck part of the partner flash.
   await waitInPage(page, () => mgrl.bodies().struck > 0, null, 20000, 'a struck body part flashing in sparring');
   check(true, 'sparring: a landed punch flashes the struck part of the partner\'s body');
-  // Issue 46: a punch that meets the partner's forearm is blocked: its message says so, the
+  // A punch that meets the partner's forearm is blocked: its message says so, the
   // HUD lists it as "blocked ... by avatar N left arm" and counts it apart from the hits.
   await waitInPage(page, () => mgrl.state.hits.some((h) => h.blocked === true), null, 30000, 'a blocked punch in sparring');
   const blockedHit = await page.evaluate(() => mgrl.state.hits.find((h) => h.blocked === true));
@@ -1044,7 +1044,7 @@ async function main() {
   check(crowd100.fps >= kMinFramesPerSecond, `crowd of 100: frames keep arriving (>= ${kMinFramesPerSecond}/s over 3 s)`,
         `${crowd100.fps.toFixed(1)}/s`);
   await screenshot(page, 'viewer-crowd.png');
-  // Issue 45: bodies (capsules, a sphere per joint, gloves and shoes) by default; bones
+  // Bodies (capsules, a sphere per joint, gloves and shoes) by default; bones
   // only as a toggle, for teaching. Its budget for bodies is 20 % more per draw (see the bound below).
   const bodies = await page.evaluate(() => mgrl.bodies());
   check(bodies.look === 'body' && bodies.heads === 100 && bodies.joints >= 10 * bodies.heads,
@@ -1074,7 +1074,7 @@ async function main() {
   const listed = (xs) => xs.map((x) => x.toFixed(1)).join(', ');
   console.log(`# 100 avatars: ${listed(bodyRuns)} ms a draw as bodies (${crowd100.drawn.toFixed(1)} draws/s), ` +
               `${listed(boneRuns)} ms as bones (${bones100.drawn.toFixed(1)} draws/s)`);
-  // A guard against a regression, not issue 45's budget of 20 %: on Chromium's software
+  // A guard against a regression, not the budget of 20 % for bodies over bones: on Chromium's software
   // renderer the ratio measured 1.20 at 0c49a9d and 1.22 to 1.32 later with the same drawing
   // code (quiet machine and under load), so a 20 % bound failed by chance. The budget itself
   // wants a benchmark on a real GPU.

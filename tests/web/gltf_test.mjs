@@ -1,4 +1,4 @@
-// `mgrl simulate --gltf-out` (issue 45) checked by others' code: every .glb of FOLDER passes
+// `mgrl simulate --gltf-out` checked by others' code: every .glb of FOLDER passes
 // the Khronos glTF validator (npm gltf-validator) with no error, and three.js's GLTFLoader
 // in headless Chromium loads it as a skinned figure whose joints, animated by the file's
 // own clip, stand where three.js's BVHLoader puts the same joints of the same run's BVH

@@ -1,4 +1,4 @@
-// The `mgrl compare` report (issue 15) in headless Chromium: it opens from disk with no
+// The `mgrl compare` report in headless Chromium: it opens from disk with no
 // network, and every plot is drawn (each SVG has a size and shapes in it), the learning
 // curves with a line per run, and the table has a row for every learner of results.json.
 //
@@ -17,7 +17,7 @@ if (!reportDir) {
   process.exit(2);
 }
 const kMetrics = 11;  // bar charts, one per metric in app/compare_report.cpp
-// The learning curves, every run on one plot each (issue 15): success rate from the
+// The learning curves, every run on one plot each: success rate from the
 // snapshots along training, Bellman residual as recorded, against updates and seconds.
 const kCurves = ['Success rate against updates', 'Success rate against training seconds',
                  'Bellman residual against updates', 'Bellman residual against training seconds'];

@@ -106,7 +106,7 @@ struct StaleSibling {
 };
 std::vector<StaleSibling> staleSiblings(const std::filesystem::path& dir);
 
-/// Issue 19, defect 5: removes the stale siblings of `dir`; if `dir` is missing, first
+/// Removes the stale siblings of `dir`; if `dir` is missing, first
 /// puts back the newest complete one (a temporary holding `manifestName`, else an old
 /// bundle). Those of live processes (this one included) are left alone. `log` hears what
 /// was done.

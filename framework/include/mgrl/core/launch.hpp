@@ -1,6 +1,6 @@
 #pragma once
 /// \file
-/// Where this process stands in a job started by an MPI launcher (issue 44), read from the
+/// Where this process stands in a job started by an MPI launcher, read from the
 /// launcher's environment before MPI itself is started, so that code without MPI (the
 /// commands deciding who writes the bundle) knows it too. A process started alone is rank
 /// 0 of 1.

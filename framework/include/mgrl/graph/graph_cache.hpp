@@ -33,7 +33,7 @@
 ///
 /// Version 4 may keep the capture the graph was built from, resampled and in metres, so
 /// that posing avatars from a cached graph (simulate, the viewer, `mgrl graph`) does not
-/// parse it again (issue 20, command start): a top-level "motion" member
+/// parse it again, so that commands start quickly: a top-level "motion" member
 ///
 ///     "motion": {"clips": [{"name": "13_17_boxing.bvh", "frames": F, "frame_time": s,
 ///                           "joints": [{"name": "Hips", "parent": -1, "offset": [x, y, z],

@@ -27,7 +27,7 @@ struct Pose {
   /// The Skeleton::id() whose offsets `translations` holds for the joints without
   /// position channels, as ActionPlayback::next() wrote them (it then rewrites only the
   /// others: storing 10,000 poses' constant offsets every frame was a tenth of a posed
-  /// crowd's time, issue 20); 0 for none. An id, not an address, so that a skeleton built
+  /// crowd's time); 0 for none. An id, not an address, so that a skeleton built
   /// where another was freed is not taken for it. Whoever changes those translations
   /// otherwise, or clears and resizes `translations` to the same size, resets it to 0.
   std::uint64_t offsetsOf = 0;
@@ -38,7 +38,7 @@ struct Pose {
 /// with the avatar's yaw removed (the root at the origin, turned by its tilt only), and the
 /// root's tilt, height and offset from the avatar origin. With it, ActionPlayback poses such
 /// a frame by turning these about the vertical and moving them to the root, instead of
-/// forward kinematics (issue 20). frames x joints x 56 bytes (boxing: 3.4 MB); shared by
+/// forward kinematics. frames x joints x 56 bytes (boxing: 3.4 MB); shared by
 /// any number of playbacks, read only.
 struct SourcePoses {
   std::size_t joints = 0;
@@ -83,7 +83,7 @@ class ActionPlayback {
   std::span<Eigen::Quaterniond> globalRotations() { return fkRotations_; }
 
   std::uint32_t state() const { return state_; }
-  /// Planted feet (issues 18 and 46): while the annotation has a foot on the ground, the
+  /// Planted feet: while the annotation has a foot on the ground, the
   /// whole foot is held: the point it rests on (Annotation::footPivot: heel, ball or
   /// between) stays where it landed on the floor (its height follows the motion), the
   /// foot keeps its heading (up to a pivot when the body turns far) and half of the
@@ -131,7 +131,7 @@ class ActionPlayback {
   const SourcePoses* sourcePoses_ = nullptr;
   std::vector<Eigen::Quaterniond> offset_;
   /// Per joint, the offset as an angle and axis, found once per transition: the blended
-  /// rotation of each frame is then one sine and cosine (issue 20), not a full slerp.
+  /// rotation of each frame is then one sine and cosine, not a full slerp.
   std::vector<double> offsetHalfAngle_;
   std::vector<Eigen::Vector3d> offsetAxis_;
   double heightOffset_ = 0;

@@ -67,7 +67,7 @@ struct Behavior {
 std::pair<nlohmann::json, std::string> behaviorConfigAndKey(const BehaviorSpec& spec, const BehaviorPlugins& plugins,
                                                             const std::string& graphKey);
 
-/// The stances the behaviours number (issue 46): the largest `stance` plus one, 0 for none
+/// The stances the behaviours number: the largest `stance` plus one, 0 for none
 /// (the scenario reader has checked that 0..N-1 each have a behaviour).
 int stanceCount(const std::vector<Behavior>& behaviors);
 

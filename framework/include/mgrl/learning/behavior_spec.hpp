@@ -35,7 +35,7 @@ struct BehaviorSpec {
   ConfigNode discretizer, reward, environment, learner;  ///< environment may be absent (static_target)
   ConfigNode success =
       ConfigNode::parse("", "success");  ///< may be absent (mgrl/learning/success.hpp: implied by the reward)
-  /// `stance: k` (issue 46): active only while the fighter holds stance k; -1: always.
+  /// `stance: k`: active only while the fighter holds stance k; -1: always.
   int stance = -1;
 };
 

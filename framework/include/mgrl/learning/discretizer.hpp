@@ -8,7 +8,7 @@
 /// last vertex neighbours its first. A grid may also have a layer axis (the target's speed):
 /// a coordinate no action changes, so every backup from a vertex stays in its layer and
 /// learners see 3-D cells, while a decision between two layers interpolates across them.
-/// A moving target that turns (issue 46) adds turn layers outside those: one copy of the
+/// A moving target that turns adds turn layers outside those: one copy of the
 /// layered grid per turn rate the environment model draws, never interpolated across.
 #include <array>
 #include <cstddef>
@@ -144,15 +144,15 @@ class Discretizer {
   /// The layer coordinate of a state: its speed (the one coordinate a moving_target keeps),
   /// or on a grid with opponent layers the opponent's discrete state.
   double layerCoordinate(const TargetState& e) const { return opponentLayers_ ? e.opponent : e.speed; }
-  /// Repeats the grid once per discrete opponent state (`learned_opponent`, issue 43): layer
+  /// Repeats the grid once per discrete opponent state (`learned_opponent`): layer
   /// l holds the states whose TargetState::opponent is l. Unlike speed layers these are
   /// never interpolated across (a state is exactly at one), and an action may move a state
   /// to another layer. Throws mgrl::Error if the grid already has more than one speed layer
   /// or hanging vertices, or if the layered grid would exceed kMaxGridVertices.
   void setOpponentLayers(std::size_t count);
   bool hasOpponentLayers() const { return opponentLayers_; }
-  /// Repeats the (speed-layered) grid once per turn rate of a turning moving target (issue
-  /// 46; `rates` rad/s, ascending, as TargetMotion::turnRates lists them): turn layer k
+  /// Repeats the (speed-layered) grid once per turn rate of a turning moving target
+  /// (`rates` rad/s, ascending, as TargetMotion::turnRates lists them): turn layer k
   /// holds the states whose TargetState::turnRate is nearest rates[k]. A moving_target keeps
   /// its turn rate, so, as with speed, every backup stays in its layer; unlike speed, a state
   /// is never between two turn layers (a model draws only these rates). Throws mgrl::Error
@@ -194,7 +194,7 @@ class Discretizer {
   /// Vertices whose values are tied to others' (see HangingVertices); none for fixed grids.
   const HangingVertices& hanging() const { return hanging_; }
 
-  // Adaptive resolution (issue 16; Munos & Moore 2002). Fixed grids keep these defaults.
+  // Adaptive resolution (Munos & Moore 2002). Fixed grids keep these defaults.
 
   /// True if refined() can split cells.
   virtual bool refinable() const { return false; }

@@ -1,6 +1,6 @@
 #pragma once
 /// \file
-/// Policy evaluation on a tabulated problem (issue 43's exact best-response gap): the
+/// Policy evaluation on a tabulated problem (the exact best-response gap of self-play rounds): the
 /// values of a fixed greedy policy in the same grid MDP that value iteration solves, so that
 /// a self-play round's table and the table its opponent plays are compared where both were
 /// made, without the sampling noise and the grid's interpolation error of episodes.

@@ -44,7 +44,7 @@ struct GridModel {
   /// their sources' after every backup, and bellmanResidual() skips them.
   HangingVertices hanging;
   std::vector<GridTransition, HugePageAllocator<GridTransition>> transition;  ///< per (a, v); empty if compact
-  /// A compact model (buildCompact(), issue 20: training at the memory limit) keeps only
+  /// A compact model (buildCompact(), for training at the memory limit) keeps only
   /// the rewards per (a, v), 4 bytes like Q itself instead of the 20 of a transition, and
   /// finds where a vertex lands when a backup asks (at()): the same arithmetic as
   /// tabulate(), so the same backups and the same tables, for a grid locate per backup.

@@ -1,6 +1,6 @@
 #pragma once
 /// \file
-/// Real bouts as a source to learn from (issue 46): which files make the SNU sparring
+/// Real bouts as a source to learn from: which files make the SNU sparring
 /// capture's bouts, and the facing angles its fighters keep to each other. `mgrl stats`
 /// (runtime/bout_report) measures bouts; the `facing` reward term's `prefer: bouts` learns
 /// the distribution of the facing angle from them.
@@ -35,7 +35,7 @@ double facingDegrees(const Eigen::Vector2d& facing, const Eigen::Vector2d& toOth
 /// with different frame times.
 std::vector<double> boutFacingDegrees(const std::vector<BoutFiles>& bouts);
 
-/// Stances learned from facing samples (issue 46): the samples sorted and cut into `count`
+/// Stances learned from facing samples: the samples sorted and cut into `count`
 /// equally large parts, the median of each, in increasing order. Throws mgrl::Error for
 /// fewer samples than parts or a count below 1.
 std::vector<double> facingStances(std::vector<double> degrees, int count);

@@ -92,7 +92,7 @@ double rootSpeed(const StateActionModel& m, std::size_t a, std::size_t t);
 double strikeAt(const StateActionModel& m, std::size_t a, std::uint32_t t, std::uint8_t effectors, double radius,
                 bool useSpeed, const Eigen::Vector3d& e);
 
-/// Where a striker's effective strikes reach (issue 17, the `avoid` term and success
+/// Where a striker's effective strikes reach (the `avoid` term and success
 /// condition): every effective strike tip of the `effectors` in `m` (punches from m.hits,
 /// kicks from m.kicks), seen from the striker's own avatar frame at the strike's frame (its
 /// root on the ground, +Z its facing). An opponent that is another avatar of the same
@@ -126,13 +126,13 @@ class StrikeReach {
 Eigen::Vector3d inOpponentFrame(const TargetState& e, const Eigen::Vector3d& p);
 
 /// How far joint `joint` is, at action frame `frame`, from being reached by an opponent
-/// standing at e (issue 17): the smaller of its distance to the opponent's strike tips and
+/// standing at e: the smaller of its distance to the opponent's strike tips and
 /// the ground gap between the two bodies (the avatar's pelvis to the opponent's ground
 /// point, less two `bodyRadius`: bodies overlap below 0). Never below 0, at most reach.cap().
 double opponentClearance(const StateActionModel& m, std::size_t frame, int joint, const StrikeReach& reach,
                          const TargetState& e, double bodyRadius);
 
-/// Where a learned opponent is at one frame of the avatar's action (issue 43), in the
+/// Where a learned opponent is at one frame of the avatar's action, in the
 /// avatar frame of the avatar's decision: it plays frame `offset` (1 = the first after its
 /// decision) of `action`, which it decided on with its root at `decision`.
 struct OpponentFrame {
@@ -156,7 +156,7 @@ struct OpponentFrame {
 /// opponent is aimed at (opponentTarget()).
 int headJoint(const StateActionModel& m);
 
-/// What a learned opponent offers as the target at one frame (issue 43), in the avatar's
+/// What a learned opponent offers as the target at one frame, in the avatar's
 /// decision frame: its head (joint `head` of `m`), or with head < 0 its root's ground point
 /// at `height`. The reward terms and the success conditions read the same point.
 Eigen::Vector3d opponentTarget(const StateActionModel& m, const OpponentFrame& o, int head, double height);
@@ -172,7 +172,7 @@ inline GroundMotion opponentRootAt(const StateActionModel& m, const OpponentFram
   return composeMotion(f.decision, actionFrameMotion(m, f.action, f.offset));
 }
 
-/// A learned opponent's discrete state (TargetState::opponent, issue 43): `endState`, the
+/// A learned opponent's discrete state (TargetState::opponent): `endState`, the
 /// graph state its current action ends at, and the phase bucket of the `framesLeft` (in [1,
 /// length]) of that action's `length` frames, out of `phases` (bucket 0: about to arrive).
 inline std::int32_t opponentStateIndex(std::uint32_t endState, std::uint32_t framesLeft, std::uint32_t length,
@@ -182,14 +182,14 @@ inline std::int32_t opponentStateIndex(std::uint32_t endState, std::uint32_t fra
 }
 
 /// The best effective strike of the `effectors` that a learned opponent at its frame `o`
-/// lands within `radius` of joint `joint` of the avatar at its action frame `frame` (issue
-/// 43; a strike counts at its effective frame only, as the world checks it): its speed
+/// lands within `radius` of joint `joint` of the avatar at its action frame `frame` (a
+/// strike counts at its effective frame only, as the world checks it): its speed
 /// weight (or 1 without use_speed), 0 if none lands. `contact` seen from the other side.
 double trackedStrikeAt(const StateActionModel& m, std::size_t frame, int joint, const OpponentFrame& o,
                        std::uint8_t effectors, double radius, bool useSpeed);
 
 /// How far joint `joint` of the avatar, at its action frame `frame`, is from the opponent's
-/// actual strikes at its frame `o` (issue 43): the distance to the tip of each effective
+/// actual strikes at its frame `o`: the distance to the tip of each effective
 /// strike of the `effectors` that its action throws within `window` frames of o, and the
 /// ground gap between the bodies (pelvis to the opponent's root, less two bodyRadius).
 /// Never below 0, at most cap.

@@ -43,7 +43,7 @@ struct ConditionFrame {
   std::uint32_t t;
   std::size_t frame;          ///< the global action-frame index of t
   const TargetState& target;  ///< the target at t, in the decision's avatar frame (an opponent's facing: heading)
-  /// A learned opponent (issue 43): what it plays at t (`target` is then its head, as the
+  /// A learned opponent: what it plays at t (`target` is then its head, as the
   /// reward terms see it). Null for other environments.
   const OpponentFrame* opponent = nullptr;
 };

@@ -23,7 +23,7 @@ struct TargetState {
   /// A `learned_opponent`'s discrete state (its graph state and phase, a grid layer), -1 for
   /// every other environment model.
   std::int32_t opponent = -1;
-  /// The stance the fighter holds (issue 46: a world with stances draws one per fighter and
+  /// The stance the fighter holds (a world with stances draws one per fighter and
   /// holds it a while; behaviours with `stance: k` are active only while it is k), -1 for
   /// none (every behaviour active). It belongs to the fighter, not to the target's motion:
   /// environment models build their next state without it, and nextHoldingStance() keeps it.

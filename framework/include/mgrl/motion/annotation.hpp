@@ -106,7 +106,7 @@ struct Annotation {
   /// footPivot[side][frame]: where on the foot it rests, 0 on the heel (the ankle), 1 on
   /// the ball (the toe joint), 0.5 flat: 0.5 plus half of how much higher the ankle stands
   /// above its planted level than the toe above its own, in kPivotRise_m, held in [0, 1].
-  /// Every frame, down or not; playback's foot lock holds that point (issue 46).
+  /// Every frame, down or not; playback's foot lock holds that point.
   std::array<std::vector<float>, 2> footPivot;
   /// Effective hitting points in frame order.
   std::vector<EffectiveHit> hits;

@@ -1,6 +1,6 @@
 #pragma once
 /// \file
-/// glTF 2.0 writing (issue 45): a motion as a binary glTF (`.glb`) that game engines,
+/// glTF 2.0 writing: a motion as a binary glTF (`.glb`) that game engines,
 /// three.js and Blender load: the skeleton as a tree of nodes, one animation whose channels
 /// give every joint its rotation (and the joints with position channels their translation)
 /// at each frame, and a skinned body of capsules, one per bone, so that the file shows as

@@ -1,6 +1,6 @@
 #pragma once
 /// \file
-/// Bout reports (issue 18; docs/stats.md): which files make a bout (a folder, a pattern,
+/// Bout reports (docs/stats.md): which files make a bout (a folder, a pattern,
 /// the SNU sparring capture), and the statistics of bouts, real or synthesized, per bout,
 /// pooled and two groups compared, as JSON. `mgrl stats` prints them; Python and the
 /// notebooks read the same report.

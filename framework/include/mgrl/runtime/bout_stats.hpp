@@ -1,6 +1,6 @@
 #pragma once
 /// \file
-/// Measures of bouts, real or synthesized (issue 18; docs/stats.md): a bout is the motions
+/// Measures of bouts, real or synthesized (docs/stats.md): a bout is the motions
 /// of its fighters in one shared world frame. Distances, facing, strikes and landed
 /// strikes, planted-foot speed, root direction reversals, joint steps and
 /// interpenetration, per bout and pooled over bouts, plus the Wasserstein-1 distance that
@@ -104,8 +104,8 @@ struct BoutStats {
   /// Per foot and contact frame: the slower of ankle and toe on the ground plane (m/s).
   std::vector<double> plantedFootSpeed_mps;
   /// The same frames, each foot joint on its own: the ankle's and the toe's ground speed
-  /// (m/s). A foot held by its ankle while its toe sweeps round shows only here (issue 46:
-  /// the world's foot lock pinned the ankle, and the slower of the two read 0).
+  /// (m/s). A foot held by its ankle while its toe sweeps round shows only here (the
+  /// world's foot lock once pinned the ankle, and the slower of the two read 0).
   std::vector<double> plantedAnkleSpeed_mps, plantedToeSpeed_mps;
   /// Per joint and frame-to-frame step: the joint's displacement (m), and that over the
   /// frame time (m/s: comparable across frame rates).
@@ -113,7 +113,7 @@ struct BoutStats {
   /// Per fighter and frame-to-frame step: root ground speed (m/s); reversals among them.
   std::size_t rootSteps = 0, reversals = 0;
   std::size_t punches = 0, kicks = 0, landed = 0, blocked = 0;
-  /// Each fighter's own strikes, in the bout's file order (issue 43: strikes thrown, landed
+  /// Each fighter's own strikes, in the bout's file order (strikes thrown, landed
   /// and blocked each way).
   struct Side {
     std::string source;

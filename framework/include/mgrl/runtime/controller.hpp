@@ -49,9 +49,9 @@ class RandomController final : public Controller {
   const StateActionModel& model_;
 };
 
-/// The `opponent` environment model's scripted pursuer (environments/opponent.cpp, issue 17)
+/// The `opponent` environment model's scripted pursuer (environments/opponent.cpp)
 /// played with the graph's own actions, so that a dodge scene's opponent is a body that
-/// moves and strikes (issue 45). The same rule as eval's trials against an avatar
+/// moves and strikes. The same rule as eval's trials against an avatar
 /// (framework/session/trials.cpp), greedy over the out-actions: with its target (the
 /// avatar it pursues: that avatar's head) at e, the lowest cost
 ///   place + kTurnCost x |facing error at the action's end| - kPunchWeight x punch,

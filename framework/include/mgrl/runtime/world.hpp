@@ -52,7 +52,7 @@ struct WorldParams {
   double headRadius = 0.11, chestRadius = 0.16, spineRadius = 0.14;  ///< m, body capsules
   /// Each forearm and glove is a capsule from the elbow to the fist tip of this radius: a
   /// strike whose fist or toe meets the partner's before it reaches the head or body is
-  /// blocked (issue 46). 0: nothing blocks, every strike that reaches the body lands.
+  /// blocked. 0: nothing blocks, every strike that reaches the body lands.
   double guardRadius = 0.06;  ///< m
   /// Bodies collide: each avatar's torso is a capsule from the pelvis to the head of this
   /// radius; a decision rules out actions whose root path would bring it into another's
@@ -79,7 +79,7 @@ WorldParams readWorldParams(const ConfigNode& node);
 nlohmann::json worldParamsJson(const WorldParams& params);
 
 /// Body parts the opponent's fists collide with (paper sec. 6.6), as capsules, and the arms
-/// that block them (issue 46: a strike meeting a forearm or glove first is blocked).
+/// that block them (a strike meeting a forearm or glove first is blocked).
 enum class BodyPart : std::uint8_t { Spine = 0, Chest = 1, Head = 2, LeftArm = 3, RightArm = 4 };
 inline constexpr std::size_t kBodyParts = 5;
 const char* bodyPartName(BodyPart part);
@@ -162,12 +162,12 @@ struct WorldSetup {
   bool poses = false;
   /// Keep every avatar's poses for export (implies poses).
   bool record = false;
-  /// The behaviours' environment is an `opponent` (issue 17): controllers also see which
+  /// The behaviours' environment is an `opponent`: controllers also see which
   /// way the target faces (TargetState::heading): a partner's own facing (sparring), or,
   /// for a target of the targets mode, straight at the avatar (an opponent that turns to
   /// face it, as the model's does).
   bool opponent = false;
-  /// The behaviours' environment is a `learned_opponent` (issue 43) with this many phases per
+  /// The behaviours' environment is a `learned_opponent` with this many phases per
   /// graph state: controllers also see what a sparring partner is doing (TargetState::
   /// opponent: the state its action ends at and the phase of the frames left, as the tables
   /// were trained with); a target of the targets mode is taken to be about to arrive at
@@ -180,7 +180,7 @@ struct WorldSetup {
   /// the user moves (moveTarget) stands. Sparring's odd one out has such a target too.
   /// Null: targets stand (the paper's). It must outlive the world.
   const EnvironmentModel* targetMotion = nullptr;
-  /// Stances the behaviours number (issue 46, `stance: k`): each avatar draws one uniformly,
+  /// Stances the behaviours number (`stance: k`): each avatar draws one uniformly,
   /// holds it for an exponential time of mean params.stanceHold, then changes to one of the
   /// others, drawn uniformly (at its next decision); controllers see it as
   /// TargetState::stance. 0: no stances.

@@ -23,7 +23,7 @@ struct Scenario {
   std::vector<BehaviorSpec> behaviors;  ///< `behaviors:` in document order (may be empty)
   ConfigNode root;                      ///< the whole document, for sections read elsewhere
   /// `sparring_scenario:` resolved against this file's folder: the scenario whose
-  /// behaviours the viewer's sparring and crowd modes play (issue 46); "" none.
+  /// behaviours the viewer's sparring and crowd modes play; "" none.
   std::filesystem::path sparringScenario = {};
 };
 

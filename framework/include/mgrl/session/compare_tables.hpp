@@ -1,6 +1,6 @@
 #pragma once
 /// \file
-/// `mgrl compare`'s measures of a table against the reference (issue 15): value iteration on
+/// `mgrl compare`'s measures of a table against the reference: value iteration on
 /// the behaviour's grid, or on a finer grid (--reference-set) read at the table's vertices.
 #include <string>
 #include <vector>

@@ -32,7 +32,7 @@ struct GraphOptions {
   WarningSink log;                 ///< progress and cache messages (stderr)
   /// Parse the capture into GraphResult::db even when the graph comes from the cache: what
   /// posing avatars needs (simulate, the viewer, graph's report). Training and eval need
-  /// only the model, and a cached graph then costs no parsing (issue 20, command start).
+  /// only the model, and a cached graph then costs no parsing, so the command starts quickly.
   bool motion = true;
   /// The scenario's graphCacheKey() if the caller has it (it hashes every capture file:
   /// computed once per command); empty: computed here.
@@ -46,7 +46,7 @@ struct GraphOptions {
 const Plugins& requirePlugins(const Plugins* plugins, std::string_view where);
 
 /// How far the capture carries the avatar, against how far the behaviours' grids reach
-/// (issue 12: two standing clips cannot approach a target 2 m away, whatever is learned).
+/// (two standing clips cannot approach a target 2 m away, whatever is learned).
 struct CaptureTravel {
   double clipTravel_m = 0;    ///< largest ground distance of the root from its clip's first frame
   std::string clip;           ///< the clip where it is reached

@@ -16,7 +16,7 @@
 
 namespace mgrl {
 
-/// The best-response gap on the grid (issue 43): in the problem a round was trained in (its
+/// The best-response gap on the grid: in the problem a round was trained in (its
 /// opponent playing `opponent`'s table), the mean over every graph state and grid vertex of
 /// the round's table's value (value iteration's optimum there) minus the value of playing
 /// greedily on `opponent`'s table (policy evaluation in the same problem,

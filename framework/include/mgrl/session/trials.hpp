@@ -38,7 +38,7 @@ struct TrialStats {
   std::size_t trials = 0, successes = 0, decisions = 0;
   std::vector<double> hitTimes;  ///< seconds to success, one per success
   double returns = 0;            ///< sum over trials of the discounted weighted reward
-  /// An opponent's trials (issue 17): the ground distance from the avatar's pelvis to the
+  /// An opponent's trials: the ground distance from the avatar's pelvis to the
   /// opponent's ground point at every frame played (the spacing a viewer would see).
   std::vector<float> opponentGaps;
   /// ... and the angle (deg) between the avatar's facing and the direction to the opponent.
@@ -48,7 +48,7 @@ struct TrialStats {
   /// gap under two body radii), and the seconds played.
   std::size_t strikesReached = 0, framesOverlapping = 0;
   double secondsPlayed = 0;
-  /// With a turning target (issue 46): per turn rate the environment model draws (rad/s,
+  /// With a turning target: per turn rate the environment model draws (rad/s,
   /// ascending), the trials that drew it and how many succeeded; empty otherwise.
   std::vector<double> turnRates;
   std::vector<std::size_t> turnTrials, turnSuccesses;
@@ -76,7 +76,7 @@ class Trials {
   /// True if runAgainstAvatar() can run: an opponent environment and an avoid condition.
   bool hasAvatarOpponent() const;
   /// An opponent scenario's trials against another avatar of the graph instead of the
-  /// environment model's opponent (issue 17): the opponent plays the capture itself, action
+  /// environment model's opponent: the opponent plays the capture itself, action
   /// by action, greedily: an action whose punch lands near the avatar's point first, then
   /// one ending stop_distance from the avatar and facing it (`policy: pursue`; `stand`:
   /// near its start), and throws its effective strikes at the frames they happen. A trial
@@ -115,7 +115,7 @@ class Trials {
   const Discretizer* region_ = nullptr;
   bool insideRegion(const Eigen::Vector3d& position) const;
   double reach_ = 0, targetHeight_ = 0, gamma_ = 0.97;
-  int stances_ = 0;  ///< behaviours' stances (issue 46): trial i holds stance i mod stances_
+  int stances_ = 0;  ///< behaviours' stances: trial i holds stance i mod stances_
   /// Trial i's stance: i mod stances_, -1 without stances.
   std::int32_t stanceOf(std::size_t trial) const {
     return stances_ > 0 ? static_cast<std::int32_t>(trial % static_cast<std::size_t>(stances_)) : -1;

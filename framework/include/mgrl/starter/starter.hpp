@@ -1,6 +1,6 @@
 #pragma once
 /// \file
-/// What `mgrl init FILE... [--out SCENARIO]` does (issue 42): inspects motion files and writes a
+/// What `mgrl init FILE... [--out SCENARIO]` does: inspects motion files and writes a
 /// commented starter scenario for them. It loads and annotates the capture as `graph`
 /// would, tries graph settings until the largest component keeps most frames, sizes the
 /// grids to the capture's travel and hitting points, and picks behaviours the capture can
