@@ -44,7 +44,9 @@ class Serve final : public SessionCommand {
                      "With --partner-policy: the partner plays that self-play round's tables (mgrl train keeps every "
                      "round)")
         ->check(CLI::Range(1, 1000));
-    sub_->add_option("--web", options_.web, "The viewer's folder (default: MGRL_WEB, else the repository's web/)");
+    sub_->add_option("--web", options_.web,
+                     "The viewer's folder (default: MGRL_WEB, else share/mgrl/web beside an installed mgrl, else the "
+                     "repository's web/)");
     addSessionOptions(options_, common, false);
   }
 

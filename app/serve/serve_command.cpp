@@ -18,6 +18,13 @@ namespace fs = std::filesystem;
 fs::path webDirectory(const fs::path& web) {
   if (!web.empty()) return web;
   if (const char* env = std::getenv("MGRL_WEB"); env && *env) return env;
+  // Installed (cmake --install): PREFIX/bin/mgrl serves PREFIX/share/mgrl/web.
+  std::error_code error;
+  const fs::path program = fs::read_symlink("/proc/self/exe", error);
+  if (!error) {
+    const fs::path installed = program.parent_path().parent_path() / "share" / "mgrl" / "web";
+    if (fs::is_regular_file(installed / "index.html", error)) return installed;
+  }
   return MGRL_SOURCE_WEB_DIR;
 }
 

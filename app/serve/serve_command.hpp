@@ -22,7 +22,8 @@ struct ServeCommandOptions : ServeOptions {
   std::function<void(const std::string&)> announce;
 };
 
-/// The viewer's folder: `web` if given, else MGRL_WEB, else the source tree's web/.
+/// The viewer's folder: `web` if given, else MGRL_WEB, else the installed page beside the
+/// program (PREFIX/share/mgrl/web for PREFIX/bin/mgrl), else the source tree's web/.
 std::filesystem::path webDirectory(const std::filesystem::path& web);
 
 /// Serves until SIGINT or SIGTERM. Throws mgrl::Error before serving for a bad option, a
