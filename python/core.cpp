@@ -6,6 +6,7 @@
 #include <pybind11/pybind11.h>
 
 #include "mgrl/core/error.hpp"
+#include "mgrl/core/version.hpp"
 #include "mgrl/graph/state_action_model.hpp"
 #include "session.hpp"
 
@@ -16,6 +17,7 @@ void bindEpisodes(py::module_& m);
 PYBIND11_MODULE(_core, m) {
   using namespace mgrl::python;
   m.doc() = "mgrl's C++ core: sessions, tabulated problems and learners (import mgrl, not this)";
+  m.attr("__version__") = mgrl::kVersion;
   PYBIND11_NUMPY_DTYPE(mgrl::ActionHit, action, offset, hand, x, y, z, weight);
   static py::exception<mgrl::Error> error(m, "Error");
   py::register_exception_translator([](std::exception_ptr p) {

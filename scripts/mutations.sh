@@ -52,6 +52,8 @@ git -C "$tree" checkout --quiet --detach "$(git -C "$root" rev-parse HEAD)"
 git -C "$tree" reset --quiet --hard && git -C "$tree" clean --quiet -fd
 # The tree's ../shared is the checkout's (the README's commands name ../shared/mocap).
 [ -e "$work/shared" ] || ln -s "$(cd "$root/.." && pwd)/shared" "$work/shared"
+# ...and so is the page's web/node_modules (npm ci's three.js, which cmake --install copies).
+[ -e "$tree/web/node_modules" ] || [ ! -d "$root/web/node_modules" ] || ln -s "$root/web/node_modules" "$tree/web/node_modules"
 
 launcher=()
 command -v ccache >/dev/null 2>&1 && launcher=(-DCMAKE_CXX_COMPILER_LAUNCHER=ccache)

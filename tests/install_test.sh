@@ -21,7 +21,8 @@ fail() {
 prefix="$work/prefix"
 
 echo "# cmake --install $build --prefix $prefix"
-cmake --install "$build" --prefix "$prefix" >"$work/install.log" || { cat "$work/install.log" >&2; fail "cmake --install"; }
+cmake --install "$build" --prefix "$prefix" >"$work/install.log" 2>&1 ||
+  { grep -v "^-- " "$work/install.log" >&2; fail "cmake --install"; }
 for f in bin/mgrl lib/cmake/mgrl/mgrlConfig.cmake lib/cmake/mgrl/mgrlConfigVersion.cmake lib/cmake/mgrl/mgrlTargets.cmake \
          lib/libmgrl_session.a lib/libmgrl_builtins.a include/mgrl/session/session.hpp include/mgrl/builtin_plugins.hpp \
          share/mgrl/scenarios/boxing.yaml share/mgrl/web/index.html share/mgrl/web/viewer.js \
@@ -37,6 +38,12 @@ missing=$(cd "$prefix/include" && grep -rhoE '#include "mgrl/[^"]+"' mgrl | sed 
 echo "ok   - every mgrl/ header an installed header includes is installed"
 
 cd "$work"  # outside the repository from here on
+if grep -q "^MGRL_PYTHON:BOOL=ON" "$build/CMakeCache.txt"; then
+  env -u PYTHONPATH PYTHONPATH="$prefix/lib/python3/dist-packages" /usr/bin/python3 -c \
+    "import mgrl, sys; assert mgrl.__file__.startswith(sys.argv[1]), mgrl.__file__; mgrl.scenario_path('boxing')" \
+    "$prefix" || fail "the module installed in lib/python3/dist-packages does not import"
+  echo "ok   - the Python module is installed in lib/python3/dist-packages and imports"
+fi
 "$prefix/bin/mgrl" --version | grep -q "mgrl" || fail "the installed mgrl --version printed no version"
 echo "ok   - the installed mgrl runs: $("$prefix/bin/mgrl" --version)"
 
@@ -46,7 +53,7 @@ cp "$source/docs/examples/CMakeLists.txt" "$source/docs/examples/session_example
 cmake -S "$work/example-src" -B "$work/example" -G Ninja -DCMAKE_BUILD_TYPE=Release -DCMAKE_PREFIX_PATH="$prefix" \
       -DCMAKE_FIND_USE_PACKAGE_REGISTRY=OFF >"$work/configure.log" 2>&1 ||
   { cat "$work/configure.log" >&2; fail "configuring docs/examples against the installed package"; }
-grep -q "mgrl_DIR" "$work/example/CMakeCache.txt" && grep "^mgrl_DIR" "$work/example/CMakeCache.txt" | grep -q "$prefix" ||
+grep "^mgrl_DIR" "$work/example/CMakeCache.txt" | grep -q "$prefix" ||
   fail "find_package(mgrl) found another package than the one installed in $prefix"
 cmake --build "$work/example" >"$work/build.log" 2>&1 || { tail -40 "$work/build.log" >&2; fail "building docs/examples"; }
 echo "ok   - docs/examples builds out of tree with find_package(mgrl CONFIG)"

@@ -55,6 +55,9 @@ Session:
     save_policy(path, tables, learner="python")
                      a complete policy bundle mgrl eval/simulate/serve/compare accept
 
+scenario_path(name) the path of a scenario shipped with the module (boxing.yaml, ...)
+__version__          the version, as `mgrl --version` prints it
+
 inspect(files)       mgrl inspect --json's report on motion files (BVH, ASF/AMC) as a
                      dict: joints, roles, frames, height, contacts, effective punches
                      and kicks; the loader's warnings as Python warnings
@@ -66,14 +69,15 @@ bout_stats(bouts=(), snu=False, against=(), data=None)
 """
 import json as _json
 import os as _os
+import pathlib as _pathlib
 import warnings as _warnings
 from . import _core
-from ._core import Error, Problem, Session  # noqa: F401
+from ._core import Error, Problem, Session, __version__  # noqa: F401
 from .compare import Observer, compare  # noqa: F401
 from .env import MotionGraphEnv, MotionGraphVectorEnv  # noqa: F401
 
 __all__ = ["Error", "Problem", "Session", "MotionGraphEnv", "MotionGraphVectorEnv", "Observer", "compare",
-           "bout_stats"]  # mgrl.inspect too, left out here not to hide the standard library's inspect
+           "bout_stats", "scenario_path"]  # mgrl.inspect too, left out here not to hide the standard library's inspect
 
 
 def inspect(files):
@@ -102,3 +106,20 @@ def bout_stats(bouts=(), snu=False, against=(), data=None):
     for line in result["warnings"]:
         _warnings.warn(line, stacklevel=2)
     return result["report"]
+
+
+def scenario_path(name):
+    """The path of a scenario shipped with the module, from any folder:
+    `mgrl.Session(mgrl.scenario_path("boxing.yaml"))`. `name` is a file name in the
+    repository's scenarios/ ("boxing.yaml", "spar_learned.yaml", ...; ".yaml" may be left
+    out). Raises FileNotFoundError naming the scenarios there."""
+    folder = _pathlib.Path(__file__).resolve().parent / "scenarios"
+    name = _os.fsdecode(name)
+    if _os.sep in name or (_os.altsep and _os.altsep in name):
+        raise ValueError(f"scenario_path: expected a scenario's file name (e.g. 'boxing.yaml'), found a path {name!r}")
+    path = folder / (name if name.endswith(".yaml") else name + ".yaml")
+    if not path.is_file():
+        shipped = sorted(p.name for p in folder.glob("*.yaml"))
+        raise FileNotFoundError(f"scenario_path: expected one of {', '.join(shipped) or 'none'} in {folder}, "
+                                f"found no {path.name}")
+    return str(path)

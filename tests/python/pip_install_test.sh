@@ -1,0 +1,70 @@
+#!/usr/bin/env bash
+# pip install . as a Python user does it, offline, into a fresh venv that sees Debian's NumPy
+# and Jupyter (--system-site-packages): the module imports from outside the repository with
+# its version and metadata, finds its scenarios, runs a notebook copied elsewhere, and
+# pip uninstall removes it.
+# Usage: tests/python/pip_install_test.sh BUILD_DIR SOURCE_DIR
+#   (MGRL_BUILD_DIR=BUILD_DIR: pip builds the module in that build, nothing compiles again)
+set -euo pipefail
+build="$(cd "$1" && pwd)"
+source="$(cd "$2" && pwd)"
+work="$(mktemp -d /tmp/mgrl-pip-test.XXXXXX)"
+trap 'rm -rf "$work"' EXIT
+fail() {
+  echo "pip_install_test: FAIL: $*" >&2
+  exit 1
+}
+version=$(sed -nE 's/^project\(mgrl VERSION ([0-9.]+).*/\1/p' "$source/CMakeLists.txt")
+
+/usr/bin/python3 -m venv --system-site-packages "$work/venv"
+py="$work/venv/bin/python"
+echo "# pip install --no-index --no-build-isolation $source (venv $work/venv)"
+before=$(grep "^Python_EXECUTABLE" "$build/CMakeCache.txt" || true)
+MGRL_BUILD_DIR="$build" "$py" -m pip install --no-index --no-build-isolation "$source" >"$work/pip.log" 2>&1 ||
+  { tail -30 "$work/pip.log" >&2; fail "pip install ."; }
+[ "$(grep "^Python_EXECUTABLE" "$build/CMakeCache.txt" || true)" = "$before" ] ||
+  fail "pip install . changed the build folder's Python ($before) to $(grep "^Python_EXECUTABLE" "$build/CMakeCache.txt")"
+"$py" -m pip show mgrl >"$work/show.txt" || fail "pip show mgrl"
+grep -qx "Version: $version" "$work/show.txt" || fail "pip show mgrl: expected Version: $version, found $(grep Version "$work/show.txt")"
+grep -q "^Requires: numpy" "$work/show.txt" || fail "pip show mgrl: expected Requires: numpy"
+echo "ok   - pip install . into a venv, offline: mgrl $version"
+
+cd "$work"  # outside the repository from here on
+env -u PYTHONPATH -u MGRL_SOURCE "$py" - "$work/venv" "$version" <<'PY' || fail "import mgrl from the venv"
+import pathlib, sys
+import mgrl
+venv, version = pathlib.Path(sys.argv[1]), sys.argv[2]
+where = pathlib.Path(mgrl.__file__).resolve()
+assert venv in where.parents, f"expected mgrl from {venv}, found {where}"
+assert mgrl.__version__ == version, f"expected __version__ {version}, found {mgrl.__version__}"
+scenario = pathlib.Path(mgrl.scenario_path("boxing.yaml"))
+assert venv in scenario.parents and scenario.is_file(), f"expected boxing.yaml in the venv, found {scenario}"
+s = mgrl.Session(mgrl.scenario_path("boxing"))
+print(f"ok   - import mgrl from {where.parent}, version {mgrl.__version__}, {s.problem('approach').rewards.shape} approach problem")
+PY
+
+# A notebook copied out of the repository runs with the installed module.
+# The venv's own Jupyter kernel (the system's python3 kernel would run /usr/bin/python3).
+"$py" -m ipykernel install --sys-prefix --name mgrl-venv >/dev/null 2>&1 || fail "a Jupyter kernel for the venv"
+mkdir "$work/notebooks"
+cp "$source/notebooks/1_q_learning_in_numpy.ipynb" "$work/notebooks/"
+env -u PYTHONPATH -u MGRL_SOURCE -u MPLBACKEND MGRL_NOTEBOOK_QUICK=1 PYDEVD_DISABLE_FILE_VALIDATION=1 \
+  "$py" -m nbconvert --to notebook --execute --ExecutePreprocessor.timeout=900 \
+  --ExecutePreprocessor.kernel_name=mgrl-venv --output-dir "$work/out" "$work/notebooks/1_q_learning_in_numpy.ipynb" \
+  >"$work/nb.log" 2>&1 || { tail -30 "$work/nb.log" >&2; fail "the notebook failed with the installed module"; }
+"$py" - "$work/out/1_q_learning_in_numpy.ipynb" "$work/venv" <<'PY' || fail "the notebook's output"
+import json, sys
+cells = json.load(open(sys.argv[1]))["cells"]
+outputs = [o for c in cells if c["cell_type"] == "code" for o in c.get("outputs", [])]
+assert not [o for o in outputs if o["output_type"] == "error"], "a cell raised an error"
+assert any("image/png" in o.get("data", {}) for o in outputs), "no figure drawn"
+text = "".join("".join(o.get("text", "")) for o in outputs)
+assert sys.argv[2] in text or "saved" in text, "the notebook printed nothing expected"
+print("ok   - notebook 1 runs from outside the repository with the installed module")
+PY
+
+"$py" -m pip uninstall -y mgrl >"$work/uninstall.log" 2>&1 || fail "pip uninstall -y mgrl"
+if env -u PYTHONPATH "$py" -c "import mgrl" 2>/dev/null; then fail "import mgrl still works after pip uninstall"; fi
+[ -z "$(find "$work/venv" -path '*site-packages/mgrl*' -print -quit)" ] || fail "pip uninstall left files of mgrl in the venv"
+echo "ok   - pip uninstall mgrl removes it"
+echo "pip_install_test: all passed"
