@@ -13,7 +13,9 @@ namespace mgrl::app::cli {
 
 // The capture and cache folders, the same two flags on every command that reads a scenario.
 void addData(CLI::App* command, std::string& dataDir) {
-  command->add_option("--data", dataDir, "Motion capture folder (default: MGRL_DATA, else ../shared/mocap)");
+  command->add_option(
+      "--data", dataDir,
+      "Motion capture folder (default: MGRL_DATA, else ~/.local/share/mgrl if it exists, else ../shared/mocap)");
 }
 void addDataAndCache(CLI::App* command, std::string& dataDir, std::string& cacheDir) {
   addData(command, dataDir);

@@ -1,11 +1,16 @@
 // Scenario YAML: strict keys, types, ranges, paths; and the graph cache in use.
+#include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <optional>
+#include <string>
+#include <vector>
 
 #include <catch2/catch.hpp>
 
 #include "builtin_plugins.hpp"
 #include "graph_command.hpp"
+#include "mgrl/core/data_paths.hpp"
 #include "mgrl/graph/graph_cache.hpp"
 #include "mgrl/motion/motion_database.hpp"
 #include "mgrl/scenario/scenario.hpp"
@@ -230,6 +235,43 @@ TEST_CASE("punch_min_speed_mps: auto reaches the annotation and the graph cache 
   at.punchMinSpeed_mps = db.autoPunchSpeed->speed_mps;
   CHECK(db.clips[0].annotation.hits.size() == annotate(db.clips[0].motion, db.roles, at).hits.size());
   CHECK_FALSE(loadMotionDatabase(given.motion).autoPunchSpeed.has_value());
+}
+
+TEST_CASE("the data folder is --data, else MGRL_DATA, else the user's data folder once it exists, else the checkout's",
+          "[scenario][data]") {
+  // The variables this test changes, put back as they were when it ends.
+  struct Saved {
+    std::string name;
+    std::optional<std::string> value;
+  };
+  std::vector<Saved> saved;
+  for (const char* name : {"MGRL_DATA", "XDG_DATA_HOME", "HOME"}) {
+    const char* v = std::getenv(name);
+    saved.push_back({name, v ? std::optional<std::string>(v) : std::nullopt});
+  }
+  struct Restore {
+    std::vector<Saved>& saved;
+    ~Restore() {
+      for (const Saved& s : saved) s.value ? ::setenv(s.name.c_str(), s.value->c_str(), 1) : ::unsetenv(s.name.c_str());
+    }
+  } restore{saved};
+  const std::filesystem::path checkout =
+      std::filesystem::path(test::sourceDirectory()).parent_path() / "shared" / "mocap";
+  test::TempDir temp("data-folder");
+  ::unsetenv("MGRL_DATA");
+  ::setenv("XDG_DATA_HOME", temp.path.c_str(), 1);
+  CHECK(userDataDirectory() == temp.path / "mgrl");
+  CHECK(dataDirectory() == checkout);  // the user's folder does not exist yet
+  std::filesystem::create_directories(temp.path / "mgrl");
+  CHECK(dataDirectory() == temp.path / "mgrl");
+  ::setenv("MGRL_DATA", "/elsewhere", 1);
+  CHECK(dataDirectory() == "/elsewhere");
+  CHECK(dataDirectory("given") == "given");
+  ::unsetenv("MGRL_DATA");
+  ::unsetenv("XDG_DATA_HOME");
+  ::setenv("HOME", temp.path.c_str(), 1);
+  CHECK(userDataDirectory() == temp.path / ".local" / "share" / "mgrl");
+  CHECK(dataDirectory() == checkout);
 }
 
 }  // namespace scenario_test

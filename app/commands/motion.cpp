@@ -75,7 +75,9 @@ class Init final : public Command {
     sub_->add_option("FILE", files_, "Motion files (.bvh, .amc) of one skeleton")->required();
     sub_->add_option("--out", out_, "Scenario to write (default: NAME.yaml in the current folder)");
     sub_->add_option("--name", options_.name, "Scenario name (default: from the first file's name)");
-    sub_->add_option("--data", data_, "Data folder for relative paths (default: MGRL_DATA, else ../shared/mocap)");
+    sub_->add_option("--data", data_,
+                     "Data folder for relative paths (default: MGRL_DATA, else ~/.local/share/mgrl if it exists, else "
+                     "../shared/mocap)");
     sub_->add_option("--fps", options_.fps, "Frame rate of the scenario")->default_val(options_.fps);
     sub_->add_option("--units", units_, "Length units of the files: auto, m, cm, inch, cmu")->default_str("auto");
     sub_->add_option("--role", roles_, "Set a skeleton role, e.g. --role left_fist=LeftHand (repeatable)");

@@ -1,7 +1,9 @@
 #pragma once
 /// \file
 /// Where the motion capture lives: `--data DIR`, else the MGRL_DATA environment variable,
-/// else `../shared/mocap` next to the repository root (DESIGN.md sec. 6).
+/// else the user's data folder (`$XDG_DATA_HOME/mgrl`, default `~/.local/share/mgrl`, where
+/// scripts/fetch_data.sh downloads it) if it exists, else `../shared/mocap` next to the
+/// repository root (DESIGN.md sec. 6).
 
 #include <filesystem>
 
@@ -10,6 +12,9 @@ namespace mgrl {
 /// The data folder. `explicitDir` (from --data) wins when not empty. Does not check that
 /// the folder exists.
 std::filesystem::path dataDirectory(const std::filesystem::path& explicitDir = {});
+
+/// `$XDG_DATA_HOME/mgrl`, else `$HOME/.local/share/mgrl`; "" without either variable.
+std::filesystem::path userDataDirectory();
 
 /// The data folder the last scenario was read with (the scenario reader records it), else
 /// dataDirectory(). For plug-ins that read capture of their own when they bind (the facing

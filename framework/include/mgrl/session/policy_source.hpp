@@ -22,7 +22,7 @@ namespace mgrl {
 /// as the command line's SCENARIO, --data, --cache and --set.
 struct SessionOptions {
   std::filesystem::path scenario;  ///< the scenario's YAML file
-  std::filesystem::path dataDir;   ///< "" MGRL_DATA, else ../shared/mocap
+  std::filesystem::path dataDir;   ///< "": dataDirectory() (MGRL_DATA, ~/.local/share/mgrl, ../shared/mocap)
   std::filesystem::path cacheDir;  ///< "" MGRL_CACHE, else ~/.cache/mgrl
   std::vector<std::string> sets;   ///< --set KEY=VALUE, in order
   WarningSink log;                 ///< progress lines and messages (stderr); null: none
