@@ -23,7 +23,7 @@ std::filesystem::path dataDirectory(const std::filesystem::path& explicitDir) {
   if (!explicitDir.empty()) return explicitDir;
   if (const char* env = std::getenv("MGRL_DATA"); env && *env) return env;
   // Where scripts/fetch_data.sh puts the capture, once it has.
-  const std::filesystem::path user = userDataDirectory();
+  std::filesystem::path user = userDataDirectory();
   std::error_code error;
   if (!user.empty() && std::filesystem::is_directory(user, error)) return user;
   return std::filesystem::path(MGRL_SOURCE_DIR).parent_path() / "shared" / "mocap";
