@@ -55,7 +55,8 @@ Session:
     save_policy(path, tables, learner="python")
                      a complete policy bundle mgrl eval/simulate/serve/compare accept
 
-scenario_path(name) the path of a scenario shipped with the module (boxing.yaml, ...)
+scenarios()          the names of the scenarios shipped with the module
+scenario_path(name) the path of one of them (boxing.yaml, ...), from any folder
 __version__          the version, as `mgrl --version` prints it
 
 inspect(files)       mgrl inspect --json's report on motion files (BVH, ASF/AMC) as a
@@ -77,7 +78,7 @@ from .compare import Observer, compare  # noqa: F401
 from .env import MotionGraphEnv, MotionGraphVectorEnv  # noqa: F401
 
 __all__ = ["Error", "Problem", "Session", "MotionGraphEnv", "MotionGraphVectorEnv", "Observer", "compare",
-           "bout_stats", "scenario_path"]  # mgrl.inspect too, left out here not to hide the standard library's inspect
+           "bout_stats", "scenarios", "scenario_path"]  # mgrl.inspect too, left out here not to hide the standard library's inspect
 
 
 def inspect(files):
@@ -108,18 +109,27 @@ def bout_stats(bouts=(), snu=False, against=(), data=None):
     return result["report"]
 
 
+def _scenario_folder():
+    return _pathlib.Path(__file__).resolve().parent / "scenarios"
+
+
+def scenarios():
+    """The scenarios shipped with the module, by file name ("boxing.yaml", ...), sorted: each
+    opens from any folder as mgrl.Session(mgrl.scenario_path(name))."""
+    return sorted(p.name for p in _scenario_folder().glob("*.yaml"))
+
+
 def scenario_path(name):
     """The path of a scenario shipped with the module, from any folder:
     `mgrl.Session(mgrl.scenario_path("boxing.yaml"))`. `name` is a file name in the
     repository's scenarios/ ("boxing.yaml", "spar_learned.yaml", ...; ".yaml" may be left
     out). Raises FileNotFoundError naming the scenarios there."""
-    folder = _pathlib.Path(__file__).resolve().parent / "scenarios"
+    folder = _scenario_folder()
     name = _os.fsdecode(name)
     if _os.sep in name or (_os.altsep and _os.altsep in name):
         raise ValueError(f"scenario_path: expected a scenario's file name (e.g. 'boxing.yaml'), found a path {name!r}")
     path = folder / (name if name.endswith(".yaml") else name + ".yaml")
     if not path.is_file():
-        shipped = sorted(p.name for p in folder.glob("*.yaml"))
-        raise FileNotFoundError(f"scenario_path: expected one of {', '.join(shipped) or 'none'} in {folder}, "
+        raise FileNotFoundError(f"scenario_path: expected one of {', '.join(scenarios()) or 'none'} in {folder}, "
                                 f"found no {path.name}")
     return str(path)

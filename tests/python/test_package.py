@@ -1,0 +1,41 @@
+"""What the module carries wherever it is installed: its version (mgrl --version's), the
+scenarios of the repository (listed, found by name, the same files), and clear refusals of
+a scenario it does not have. Run by ctest (python_tests)."""
+import os
+import pathlib
+import subprocess
+import unittest
+
+import mgrl
+
+ROOT = pathlib.Path(os.environ.get("MGRL_SOURCE", pathlib.Path(__file__).resolve().parents[2]))
+MGRL = os.environ.get("MGRL_BIN", str(ROOT / "build" / "app" / "mgrl"))
+
+
+class PackageTest(unittest.TestCase):
+    def test_the_version_is_the_command_lines(self):
+        printed = subprocess.run([MGRL, "--version"], check=True, capture_output=True, text=True).stdout.split()
+        self.assertEqual(printed, ["mgrl", mgrl.__version__])
+
+    def test_the_scenarios_travel_with_the_module(self):
+        shipped = mgrl.scenarios()
+        self.assertEqual(shipped, sorted(p.name for p in (ROOT / "scenarios").glob("*.yaml")))
+        self.assertIn("boxing.yaml", shipped)
+        for name in shipped:
+            path = pathlib.Path(mgrl.scenario_path(name))
+            self.assertEqual(path.parent, pathlib.Path(mgrl.__file__).resolve().parent / "scenarios")
+            self.assertEqual(path.read_bytes(), (ROOT / "scenarios" / name).read_bytes(), name)
+        self.assertEqual(mgrl.scenario_path("boxing"), mgrl.scenario_path("boxing.yaml"))
+
+    def test_a_scenario_it_does_not_have_is_refused_with_the_ones_it_has(self):
+        with self.assertRaises(FileNotFoundError) as caught:
+            mgrl.scenario_path("no_such_scenario")
+        self.assertIn("boxing.yaml", str(caught.exception))
+        self.assertIn("no_such_scenario.yaml", str(caught.exception))
+        with self.assertRaises(ValueError) as caught:
+            mgrl.scenario_path("scenarios/boxing.yaml")
+        self.assertIn("a path", str(caught.exception))
+
+
+if __name__ == "__main__":
+    unittest.main()
