@@ -56,11 +56,24 @@ struct ProblemArrays {
   int dimension = 0;
 };
 
+/// `scenario` as given, or for a bare name that is no file here ("boxing", "boxing.yaml"),
+/// the scenario of that name the module carries (mgrl.scenario_path); a name it does not
+/// carry either is left to the session's own message.
+inline std::filesystem::path shippedScenario(const std::filesystem::path& scenario) {
+  std::error_code error;
+  if (scenario.has_parent_path() || std::filesystem::exists(scenario, error)) return scenario;
+  try {
+    return py::module_::import("mgrl").attr("scenario_path")(scenario.string()).cast<std::string>();
+  } catch (const py::error_already_set&) {
+    return scenario;
+  }
+}
+
 class PySession {
  public:
   PySession(const std::filesystem::path& scenario, const py::object& data, const py::object& cache, const py::object& sets) {
     SessionOptions options;
-    options.scenario = scenario;
+    options.scenario = shippedScenario(scenario);
     if (!data.is_none()) options.dataDir = data.cast<std::filesystem::path>();
     if (!cache.is_none()) options.cacheDir = cache.cast<std::filesystem::path>();
     options.sets = setsOf(sets);

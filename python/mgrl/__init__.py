@@ -2,7 +2,8 @@
 learners on it.
 
     import mgrl
-    s = mgrl.Session("scenarios/boxing.yaml")          # data, cache, sets as on the command line
+    s = mgrl.Session("boxing")                          # a scenario the module carries, or a YAML path;
+                                                        # data, cache, sets as on the command line
     p = s.problem("approach")                           # the tabulated problem
     q = s.train("approach", learner="value_iteration")  # (A, V) float32
     r = s.evaluate({"approach": q}, trials=300)         # mgrl eval --json's figures

@@ -4,6 +4,7 @@ a scenario it does not have. Run by ctest (python_tests)."""
 import os
 import pathlib
 import subprocess
+import tempfile
 import unittest
 
 import mgrl
@@ -26,6 +27,22 @@ class PackageTest(unittest.TestCase):
             self.assertEqual(path.parent, pathlib.Path(mgrl.__file__).resolve().parent / "scenarios")
             self.assertEqual(path.read_bytes(), (ROOT / "scenarios" / name).read_bytes(), name)
         self.assertEqual(mgrl.scenario_path("boxing"), mgrl.scenario_path("boxing.yaml"))
+
+    def test_a_session_opens_a_shipped_scenario_by_name_from_any_folder(self):
+        cache = os.environ.get("MGRL_CACHE")
+        here = os.getcwd()
+        with tempfile.TemporaryDirectory(prefix="mgrl-package-") as empty:
+            os.chdir(empty)
+            try:
+                for name in ("boxing", "boxing.yaml"):
+                    s = mgrl.Session(name, cache=cache)
+                    self.assertEqual(pathlib.Path(s.scenario), pathlib.Path(mgrl.scenario_path("boxing.yaml")))
+                    self.assertEqual(s.behaviors, ["approach", "hit"])
+                with self.assertRaises(mgrl.Error) as caught:
+                    mgrl.Session("no_such_scenario", cache=cache)
+                self.assertIn("no_such_scenario", str(caught.exception))
+            finally:
+                os.chdir(here)
 
     def test_a_scenario_it_does_not_have_is_refused_with_the_ones_it_has(self):
         with self.assertRaises(FileNotFoundError) as caught:
