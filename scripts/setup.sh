@@ -22,9 +22,10 @@ command -v npm >/dev/null 2>&1 || packages+=(npm)
 # openmpi-bin, libopenmpi-dev: mpirun and MPI's headers (without them the build
 # still works and mpi_value_iteration runs as one process).
 # dpkg-dev: dpkg-shlibdeps, which cpack -G DEB runs to declare the package's libraries;
-# mkdocs: the documentation site (mkdocs.yml), built with --strict by the tests.
+# mkdocs: the documentation site (mkdocs.yml), built with --strict by the tests; curl:
+# scripts/fetch_data.sh and the installed viewer's test.
 [ "${1:-}" = "--test" ] && packages+=(chromium clang libclang-rt-dev clang-format clang-tidy openmpi-bin libopenmpi-dev
-                                      dpkg-dev mkdocs)
+                                      dpkg-dev mkdocs curl)
 # pip, setuptools, wheel and venv: pip install . (pyproject.toml), offline, with Debian's tools.
 case "${1:-}" in --test | --python) packages+=(python3-matplotlib jupyter-nbconvert python3-ipykernel python3-pip
                                                python3-setuptools python3-wheel python3-venv) ;; esac
