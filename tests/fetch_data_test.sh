@@ -68,4 +68,21 @@ cp "$work/mirror/cmu/asfamc/13.asf" "$work/user/mgrl/cmu/asfamc/13.asf"
 if bash "$fetch" --check "$work/user/mgrl" >"$work/recheck.log" 2>&1; then fail "--check passed a corrupted folder"; fi
 grep -q "13.asf: expected SHA-256" "$work/recheck.log" || fail "--check names no file: $(cat "$work/recheck.log")"
 echo "ok   - --check names a corrupted file"
+# Wrong arguments: one line each, saying what was expected.
+status=0
+bash "$fetch" --check "$work/no-such-folder" >"$work/args.log" 2>&1 || status=$?
+if ! { [ "$status" -eq 2 ] && grep -q "expected a data folder, found no folder" "$work/args.log"; }; then
+  fail "--check on a missing folder: status $status, $(cat "$work/args.log")"
+fi
+status=0
+bash "$fetch" --bogus >"$work/args.log" 2>&1 || status=$?
+if ! { [ "$status" -eq 2 ] && grep -q "unknown option --bogus (expected" "$work/args.log"; }; then
+  fail "an unknown option: status $status, $(cat "$work/args.log")"
+fi
+status=0
+MGRL_FETCH_MANIFEST="$work/none.tsv" bash "$fetch" --check "$data" >"$work/args.log" 2>&1 || status=$?
+if ! { [ "$status" -eq 2 ] && grep -q "expected the list of files and sums in $work/none.tsv, found none" "$work/args.log"; }; then
+  fail "a missing manifest: status $status, $(cat "$work/args.log")"
+fi
+echo "ok   - a missing folder, an unknown option and a missing manifest are refused with what was expected"
 echo "fetch_data_test: all passed"

@@ -67,4 +67,16 @@ PY
 if env -u PYTHONPATH "$py" -c "import mgrl" 2>/dev/null; then fail "import mgrl still works after pip uninstall"; fi
 [ -z "$(find "$work/venv" -path '*site-packages/mgrl*' -print -quit)" ] || fail "pip uninstall left files of mgrl in the venv"
 echo "ok   - pip uninstall mgrl removes it"
+
+# A build folder configured without the module is refused, saying so, and nothing is installed.
+mkdir "$work/no-module-build"
+echo "MGRL_PYTHON:BOOL=OFF" >"$work/no-module-build/CMakeCache.txt"
+if MGRL_BUILD_DIR="$work/no-module-build" "$py" -m pip install --no-index --no-build-isolation "$source" \
+  >"$work/refused.log" 2>&1; then
+  fail "pip install . built from a folder configured without the Python module"
+fi
+grep -q "configured with the Python module (MGRL_PYTHON=ON), found it without" "$work/refused.log" ||
+  { tail -20 "$work/refused.log" >&2; fail "the refusal does not say what was expected"; }
+if env -u PYTHONPATH "$py" -c "import mgrl" 2>/dev/null; then fail "a refused install left mgrl importable"; fi
+echo "ok   - a build folder without the Python module is refused with what was expected"
 echo "pip_install_test: all passed"
