@@ -20,6 +20,11 @@ PYBIND11_MODULE(_core, m) {
   m.attr("__version__") = mgrl::kVersion;
   PYBIND11_NUMPY_DTYPE(mgrl::ActionHit, action, offset, hand, x, y, z, weight);
   static py::exception<mgrl::Error> error(m, "Error");
+  // Printed and pickled as mgrl.Error, the name users import it by, not the extension's.
+  error.attr("__module__") = "mgrl";
+  error.attr("__doc__") =
+      "What mgrl refuses: bad input (a scenario, a table's shape, an option) or a state it cannot reach, "
+      "with a message that says where, what was expected and what was found.";
   py::register_exception_translator([](std::exception_ptr p) {
     try {
       if (p) std::rethrow_exception(p);

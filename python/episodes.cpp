@@ -1,4 +1,6 @@
 // Episodes of one behaviour for MotionGraphEnv (python/mgrl/env.py) and its registration.
+#include <limits>
+
 #include "session.hpp"
 
 namespace mgrl::python {
@@ -29,6 +31,41 @@ class PyEpisodes {
     }
     return out;
   }
+  // Per coordinate (lowest, highest) of the values an observation's coordinates can take,
+  // the grid's edge and beyond (a terminal observation's target has left the grid, a placed
+  // one may start outside it): angles their whole turn, a distance from 0, a height
+  // unbounded; layer axes (speed, opponent, turn) hold their layers' values.
+  py::array_t<double> domain() const {
+    const auto& axes = episodes_->behavior().discretizer->axes();
+    const double inf = std::numeric_limits<double>::infinity();
+    py::array_t<double> out({axes.size(), std::size_t{2}});
+    for (std::size_t k = 0; k < axes.size(); ++k) {
+      const GridAxis& a = axes[k];
+      double lo = a.vertices.front(), hi = a.wraps ? a.vertices.front() + 2 * M_PI : a.vertices.back();
+      switch (a.role) {
+        case AxisRole::Angle:
+        case AxisRole::Heading:  // atan2's range, or the axis' own turn
+          lo = std::min(lo, -M_PI);
+          hi = std::max(hi, M_PI);
+          break;
+        case AxisRole::Distance:
+          lo = 0;
+          hi = inf;
+          break;
+        case AxisRole::Height:
+          lo = -inf;
+          hi = inf;
+          break;
+        case AxisRole::Speed:
+        case AxisRole::Opponent:
+        case AxisRole::Turn:
+          break;
+      }
+      out.mutable_at(k, 0) = lo;
+      out.mutable_at(k, 1) = hi;
+    }
+    return out;
+  }
   // The largest ground distance of a grid vertex from the avatar, m.
   double reach() const {
     const Discretizer& grid = *episodes_->behavior().discretizer;
@@ -49,12 +86,13 @@ class PyEpisodes {
     if (i >= count()) throw Error(fmt::format("env: expected an index in [0, {}), found {}", count(), i));
   }
 
-  // (state, position (3,), coordinates (D,), mask (maxActions,) bool) of slot i, fresh arrays.
+  // (state, position (3,), coordinates (D,), mask (maxActions,) int8: 1 where legal) of
+  // slot i, fresh arrays. The mask is int8 as Gymnasium's Discrete.sample(mask=) takes it.
   py::tuple observe(std::size_t i) const {
     check(i);
     std::int32_t state = 0;
     py::array_t<float> position(3), coordinates(dimension());
-    py::array_t<bool> mask(static_cast<py::ssize_t>(maxActions()));
+    py::array_t<std::int8_t> mask(static_cast<py::ssize_t>(maxActions()));
     episodes_->observe(i, &state, position.mutable_data(), coordinates.mutable_data(),
                        reinterpret_cast<std::uint8_t*>(mask.mutable_data()));
     return py::make_tuple(state, position, coordinates, mask);
@@ -92,7 +130,7 @@ class PyEpisodes {
     const std::size_t N = count(), D = static_cast<std::size_t>(dimension()), M = maxActions();
     py::array_t<std::int32_t> state(static_cast<py::ssize_t>(N));
     py::array_t<float> position({N, std::size_t{3}}), coordinates({N, D});
-    py::array_t<bool> mask({N, M});
+    py::array_t<std::int8_t> mask({N, M});
     std::int32_t* st = state.mutable_data();
     float* p = position.mutable_data();
     float* c = coordinates.mutable_data();
@@ -104,9 +142,11 @@ class PyEpisodes {
     return py::make_tuple(state, position, coordinates, mask);
   }
 
-  // Steps every slot: actions int (N,); returns (reward (N,), terminated, truncated, success).
+  // Steps every slot: actions int (N,); returns (reward (N,), terminated, truncated, success,
+  // state (N,), position (N, 3), coordinates (N, D)), the last three where each step led:
+  // for a slot whose episode ended, where it ended, before the slot started anew.
   py::tuple stepAll(const py::object& actions) {
-    const std::size_t N = count();
+    const std::size_t N = count(), D = static_cast<std::size_t>(dimension());
     if (!py::isinstance<py::array>(actions) && !py::isinstance<py::sequence>(actions))
       throw Error(fmt::format("actions: expected an integer array of shape ({},), found an object of type {}", N,
                               typeName(actions)));
@@ -120,22 +160,34 @@ class PyEpisodes {
     py::array_t<float> reward(static_cast<py::ssize_t>(N));
     py::array_t<bool> terminated(static_cast<py::ssize_t>(N)), truncated(static_cast<py::ssize_t>(N)),
         success(static_cast<py::ssize_t>(N));
+    py::array_t<std::int32_t> endState(static_cast<py::ssize_t>(N));
+    py::array_t<float> endPosition({N, std::size_t{3}}), endCoordinates({N, D});
     steps_.resize(N);
+    ends_.resize(N);
     {
       py::gil_scoped_release release;
-      episodes_->stepAll(choices.data(), steps_.data());
+      episodes_->stepAll(choices.data(), steps_.data(), ends_.data());
+      for (std::size_t i = 0; i < N; ++i)  // where the episodes that go on are now
+        if (!steps_[i].terminated && !steps_[i].truncated)
+          episodes_->observe(i, &ends_[i].state, ends_[i].position, ends_[i].coordinates, nullptr);
     }
     float* r = reward.mutable_data();
     bool* te = terminated.mutable_data();
     bool* tr = truncated.mutable_data();
     bool* su = success.mutable_data();
+    std::int32_t* es = endState.mutable_data();
+    float* ep = endPosition.mutable_data();
+    float* ec = endCoordinates.mutable_data();
     for (std::size_t i = 0; i < N; ++i) {
       r[i] = steps_[i].reward;
       te[i] = steps_[i].terminated;
       tr[i] = steps_[i].truncated;
       su[i] = steps_[i].success;
+      es[i] = ends_[i].state;
+      std::copy_n(ends_[i].position, 3, ep + 3 * i);
+      std::copy_n(ends_[i].coordinates, D, ec + D * i);
     }
-    return py::make_tuple(reward, terminated, truncated, success);
+    return py::make_tuple(reward, terminated, truncated, success, endState, endPosition, endCoordinates);
   }
 
  private:
@@ -174,6 +226,7 @@ class PyEpisodes {
   py::object owner_;  // the session, kept alive
   std::unique_ptr<Episodes> episodes_;
   std::vector<EpisodeStep> steps_;
+  std::vector<EpisodeEnd> ends_;
 };
 
 }  // namespace
@@ -185,7 +238,7 @@ void bindEpisodes(py::module_& m) {
                py::arg("behavior"), py::arg("count") = 1, py::arg("seconds") = 10.0, py::arg("end_on_success") = false);
   bindReadonly(episodes, Readonly{"count", &E::count}, Readonly{"max_actions", &E::maxActions},
                Readonly{"dimension", &E::dimension}, Readonly{"states", &E::states}, Readonly{"bounds", &E::bounds},
-               Readonly{"axes", &E::axisNames}, Readonly{"reach", &E::reach});
+               Readonly{"domain", &E::domain}, Readonly{"axes", &E::axisNames}, Readonly{"reach", &E::reach});
   episodes.def("observe", &E::observe, py::arg("i"))
       .def("reset", &E::reset, py::arg("i"), py::arg("seed") = py::none(), py::arg("state") = py::none(),
            py::arg("target") = py::none())

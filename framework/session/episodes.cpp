@@ -80,7 +80,7 @@ EpisodeStep Episodes::step(std::size_t i, std::size_t choice) {
   return out;
 }
 
-void Episodes::stepAll(const std::int64_t* choices, EpisodeStep* out) {
+void Episodes::stepAll(const std::int64_t* choices, EpisodeStep* out, EpisodeEnd* ends) {
   for (std::size_t i = 0; i < slots_.size(); ++i)
     if (choices[i] < 0 || static_cast<std::size_t>(choices[i]) >= actionsAt(i))
       throw Error(fmt::format("actions[{}]: expected an index into state {}'s {} out-actions (info['action_mask'][{}]), "
@@ -88,7 +88,9 @@ void Episodes::stepAll(const std::int64_t* choices, EpisodeStep* out) {
                               i, slots_[i].state, actionsAt(i), i, choices[i]));
   for (std::size_t i = 0; i < slots_.size(); ++i) {
     out[i] = step(i, static_cast<std::size_t>(choices[i]));
-    if (out[i].terminated || out[i].truncated) start(slots_[i]);
+    if (!out[i].terminated && !out[i].truncated) continue;
+    if (ends) observe(i, &ends[i].state, ends[i].position, ends[i].coordinates, nullptr);
+    start(slots_[i]);
   }
 }
 

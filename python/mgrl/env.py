@@ -1,7 +1,8 @@
 """One behaviour of a scenario as a reinforcement-learning environment with Gymnasium's
-API, stepped in C++ (framework/include/mgrl/session/episodes.hpp says what a step does).
+API (its Env and, batched, its VectorEnv), stepped in C++
+(framework/include/mgrl/session/episodes.hpp says what a step does).
 
-    env = mgrl.MotionGraphEnv("scenarios/boxing.yaml", "hit")
+    env = mgrl.MotionGraphEnv("boxing", "hit")
     obs, info = env.reset(seed=1)
     while True:
         a = agent(obs, info["action_mask"])     # an index into the state's out-actions
@@ -9,15 +10,29 @@ API, stepped in C++ (framework/include/mgrl/session/episodes.hpp says what a ste
         if terminated or truncated:
             break
 
-An observation is a dict: "state" (the graph state, int), "target" (the target's
-position in the avatar's frame, x, y, z in metres, float32) and "coordinates" (the same
-target in the behaviour's grid coordinates, e.g. angle, distance, height; float32). The
-action space is Discrete(the most out-actions any state has); only the first
-len(out-actions) indices are legal in a state, as info["action_mask"] says, and an
-illegal one raises mgrl.Error. The reward is the behaviour's; an episode is terminated
-when the target leaves the behaviour's grid (the tabulated problem's edge: no future
-value beyond it) or, with end_on_success=True, when its success criterion is met
-(info["success"] says when it is met either way); it is truncated after max_seconds of
+Observation: a dict, "state" (the graph state, int), "target" (the target's position in
+the avatar's frame, x, y, z in metres, float32) and "coordinates" (the same target in the
+behaviour's grid coordinates, e.g. angle, distance, height; float32). The observation
+space holds every observation, terminal ones included: a target that has left the grid
+has a distance beyond the grid's reach, so the coordinates' space is each axis' whole
+range (angles a whole turn, distances from 0, heights unbounded; speed, opponent and turn
+layers their layers' values). `grid_axes` names the coordinates' axes ("angle",
+"distance", ...) and `grid_bounds` gives the grid's own range on each, (D, 2).
+
+Actions: Discrete(the most out-actions any state has). In a state with n out-actions,
+indices 0..n-1 are its actions and info["action_mask"] (int8, as
+Discrete.sample(mask=) takes it) marks them. Every index of the action space is valid, as
+Gymnasium requires: one past n plays out-action index % n (illegal_actions="wrap", the
+default), or raises mgrl.Error with illegal_actions="raise".
+
+Reward: the behaviour's reward of the action from where the target is, computed at the
+target itself. The tabulated problem (Session.problem) holds the same reward at the grid's
+vertices; between vertices the environment's is exact where the table's is interpolated, so
+it may exceed every tabulated value (a punch landing between two vertices).
+
+Episodes: terminated when the target leaves the behaviour's grid (the tabulated problem's
+edge: no future value beyond it) or, with end_on_success=True, when its success criterion
+is met (info["success"] says when it is met either way); truncated after max_seconds of
 motion.
 
 reset(seed=..., options=...) can place the episode's start: options is a dict with
@@ -31,11 +46,20 @@ finite numbers raise mgrl.Error.
 
     obs, info = env.reset(seed=1, options={"state": 12, "target": [0.1, 1.5, 0.4]})
 
-MotionGraphVectorEnv steps num_envs such environments in one C++ call; an environment
-whose episode ended is reset in the same step (its returned observation is the new
-episode's; info["final"] marks which), as EnvPool does. Its reset takes the same options
-and places every environment alike.
+MotionGraphVectorEnv steps num_envs such environments in one C++ call, with Gymnasium's
+same-step autoreset (metadata["autoreset_mode"] is AutoresetMode.SAME_STEP): an
+environment whose episode ended is reset within the step that ended it, so the returned
+observation is the new episode's, and info["final_obs"] holds where each step led (for
+an ended episode, its last observation; info["_final_obs"] marks those), which is what a
+learner bootstraps a truncated episode from. Its reset takes the same options and places
+every environment alike.
+
+With Gymnasium installed the classes are gymnasium.Env and gymnasium.vector.VectorEnv and
+the spaces Gymnasium's; without it, the module's own classes of the same names and fields.
 """
+import enum
+import numbers
+
 import numpy as np
 
 from . import _core
@@ -43,96 +67,283 @@ from . import _core
 try:  # Gymnasium is not in Debian 12: the same API without it
     import gymnasium as _gym
     from gymnasium import spaces as _spaces
+    from gymnasium.vector import VectorEnv as _VectorEnvBase
+    from gymnasium.vector.utils import batch_space as _batch_space
 
     _EnvBase = _gym.Env
-except ImportError:  # pragma: no cover - depends on the machine
+except ImportError:
     _gym = None
     _spaces = None
-    _EnvBase = object
+
+try:
+    from gymnasium.vector import AutoresetMode
+except ImportError:
+
+    class AutoresetMode(enum.Enum):
+        """When a vector environment resets an ended episode: gymnasium.vector.AutoresetMode's
+        values (Gymnasium 1.1)."""
+
+        NEXT_STEP = "NextStep"
+        SAME_STEP = "SameStep"
+        DISABLED = "Disabled"
 
 
-class Discrete:
-    """{0, ..., n - 1}: gymnasium.spaces.Discrete's fields when Gymnasium is absent."""
+def _rng(seed=None):
+    """A NumPy generator as Gymnasium's seeding.np_random makes it: PCG64 from the seed."""
+    if seed is not None and not (isinstance(seed, numbers.Integral) and seed >= 0):
+        raise _core.Error(f"seed: expected None or a non-negative integer, found {seed!r}")
+    return np.random.Generator(np.random.PCG64(seed))
 
-    def __init__(self, n, seed=None):
-        self.n = int(n)
-        self.shape = ()
-        self.dtype = np.dtype(np.int64)
-        self._rng = np.random.default_rng(seed)
 
-    def sample(self, mask=None):
-        if mask is None:
-            return int(self._rng.integers(self.n))
-        legal = np.flatnonzero(mask)
-        return int(self._rng.choice(legal))
+class Space:
+    """A set of values with a random generator: gymnasium.spaces.Space's fields when
+    Gymnasium is absent."""
 
-    def contains(self, x):
-        return isinstance(x, (int, np.integer)) and 0 <= int(x) < self.n
+    def __init__(self, shape, dtype, seed=None):
+        self.shape = None if shape is None else tuple(shape)
+        self.dtype = None if dtype is None else np.dtype(dtype)
+        self._np_random = None if seed is None else _rng(seed)
+
+    @property
+    def np_random(self):
+        """The space's generator (sample() draws from it), made on first use."""
+        if self._np_random is None:
+            self._np_random = _rng()
+        return self._np_random
 
     def seed(self, seed=None):
-        self._rng = np.random.default_rng(seed)
+        """Seeds the generator; returns [seed]."""
+        self._np_random = _rng(seed)
+        return [seed]
+
+    def __contains__(self, x):
+        return self.contains(x)
+
+
+class Discrete(Space):
+    """{start, ..., start + n - 1}: gymnasium.spaces.Discrete when Gymnasium is absent."""
+
+    def __init__(self, n, seed=None, start=0):
+        super().__init__((), np.int64, seed)
+        self.n = np.int64(n)
+        self.start = np.int64(start)
+
+    def sample(self, mask=None):
+        """A uniformly random element; with mask (int8, shape (n,), 1 where allowed) one of
+        the allowed ones, or start if none is."""
+        if mask is None:
+            return self.start + self.np_random.integers(self.n)
+        mask = np.asarray(mask)
+        if mask.dtype != np.int8 or mask.shape != (self.n,):
+            raise ValueError(f"mask: expected an int8 array of shape ({self.n},), found {mask.dtype} {mask.shape}")
+        legal = np.flatnonzero(mask)
+        return self.start + (self.np_random.choice(legal) if len(legal) else np.int64(0))
+
+    def contains(self, x):
+        if isinstance(x, (numbers.Integral, np.integer)):
+            value = int(x)
+        elif isinstance(x, np.ndarray) and x.shape == () and x.dtype.kind in "iu":
+            value = int(x)
+        else:
+            return False
+        return bool(self.start <= value < self.start + self.n)
+
+    def __eq__(self, other):
+        return isinstance(other, Discrete) and self.n == other.n and self.start == other.start
 
     def __repr__(self):
         return f"Discrete({self.n})"
 
 
-class Box:
-    """Real vectors between low and high: gymnasium.spaces.Box's fields when absent."""
+class MultiDiscrete(Space):
+    """Integer arrays whose element i lies in [0, nvec[i]): gymnasium.spaces.MultiDiscrete
+    when Gymnasium is absent (a batch of Discrete spaces)."""
 
-    def __init__(self, low, high, shape, dtype=np.float32):
-        self.shape = tuple(shape)
-        self.dtype = np.dtype(dtype)
+    def __init__(self, nvec, seed=None):
+        self.nvec = np.asarray(nvec, dtype=np.int64)
+        super().__init__(self.nvec.shape, np.int64, seed)
+
+    def sample(self, mask=None):
+        """Uniformly random elements; with mask (a tuple of int8 arrays, one per element) one
+        allowed value each."""
+        if mask is None:
+            return (self.np_random.random(self.shape) * self.nvec).astype(np.int64)
+        out = np.zeros(self.shape, dtype=np.int64)
+        for i, (n, m) in enumerate(zip(self.nvec, mask)):
+            legal = np.flatnonzero(np.asarray(m)[:n])
+            out[i] = self.np_random.choice(legal) if len(legal) else 0
+        return out
+
+    def contains(self, x):
+        x = np.asarray(x) if isinstance(x, (list, tuple)) else x
+        return (isinstance(x, np.ndarray) and x.shape == self.shape and x.dtype.kind in "iu"
+                and bool(np.all((0 <= x) & (x < self.nvec))))
+
+    def __eq__(self, other):
+        return isinstance(other, MultiDiscrete) and np.array_equal(self.nvec, other.nvec)
+
+    def __repr__(self):
+        return f"MultiDiscrete({self.nvec})"
+
+
+class Box(Space):
+    """Real arrays between low and high, bounds included: gymnasium.spaces.Box when
+    Gymnasium is absent."""
+
+    def __init__(self, low, high, shape, dtype=np.float32, seed=None):
+        super().__init__(shape, dtype, seed)
         self.low = np.broadcast_to(np.asarray(low, dtype=self.dtype), self.shape).copy()
         self.high = np.broadcast_to(np.asarray(high, dtype=self.dtype), self.shape).copy()
 
+    def sample(self, mask=None):
+        """Uniform where both bounds are finite, normal where neither is, and exponential
+        from the finite bound where only one is, as Gymnasium's."""
+        low, high = self.low.astype(np.float64), self.high.astype(np.float64)
+        bounded_low, bounded_high = np.isfinite(low), np.isfinite(high)
+        out = self.np_random.normal(size=self.shape)
+        both = bounded_low & bounded_high
+        out[both] = self.np_random.uniform(low[both], high[both])
+        only_low = bounded_low & ~bounded_high
+        out[only_low] = low[only_low] + self.np_random.exponential(size=only_low.sum())
+        only_high = bounded_high & ~bounded_low
+        out[only_high] = high[only_high] - self.np_random.exponential(size=only_high.sum())
+        return out.astype(self.dtype)
+
     def contains(self, x):
-        x = np.asarray(x)
-        return x.shape == self.shape and bool(np.all(x >= self.low) and np.all(x <= self.high))
+        if not isinstance(x, np.ndarray):
+            x = np.asarray(x, dtype=self.dtype)
+        return (x.shape == self.shape and np.can_cast(x.dtype, self.dtype)
+                and bool(np.all(x >= self.low) and np.all(x <= self.high)))
+
+    def __eq__(self, other):
+        return (isinstance(other, Box) and self.shape == other.shape and self.dtype == other.dtype
+                and np.array_equal(self.low, other.low) and np.array_equal(self.high, other.high))
 
     def __repr__(self):
         return f"Box({self.low.min()}, {self.high.max()}, {self.shape}, {self.dtype})"
 
 
-class Dict:
-    """Named spaces: gymnasium.spaces.Dict's fields when absent."""
+class Dict(Space):
+    """Named spaces: gymnasium.spaces.Dict when Gymnasium is absent."""
 
-    def __init__(self, spaces):
+    def __init__(self, spaces, seed=None):
+        super().__init__(None, None, seed)
         self.spaces = dict(spaces)
 
     def __getitem__(self, key):
         return self.spaces[key]
 
+    def keys(self):
+        return self.spaces.keys()
+
+    def seed(self, seed=None):
+        """Seeds each space from seed, in key order; returns their seeds."""
+        super().seed(seed)
+        seeds = [int(s) for s in self._np_random.integers(2 ** 31, size=len(self.spaces))]
+        return [seed] + [space.seed(s)[0] for space, s in zip(self.spaces.values(), seeds)]
+
+    def sample(self, mask=None):
+        return {k: space.sample() for k, space in self.spaces.items()}
+
     def contains(self, x):
         return isinstance(x, dict) and x.keys() == self.spaces.keys() and all(
             self.spaces[k].contains(v) for k, v in x.items())
 
+    def __eq__(self, other):
+        return isinstance(other, Dict) and self.spaces == other.spaces
+
     def __repr__(self):
-        return "Dict(" + ", ".join(f"{k}: {v!r}" for k, v in self.spaces.items()) + ")"
+        return "Dict(" + ", ".join(f"{k!r}: {v!r}" for k, v in self.spaces.items()) + ")"
 
 
-def _discrete(n):
-    return _spaces.Discrete(n) if _spaces else Discrete(n)
+def batch_space(space, n):
+    """n of `space` as one space (gymnasium.vector.utils.batch_space when Gymnasium is
+    absent): Discrete becomes MultiDiscrete, Box gains a leading axis, Dict batches each."""
+    if isinstance(space, Discrete):
+        return MultiDiscrete(np.full(n, space.n))
+    if isinstance(space, Box):
+        return Box(np.repeat(space.low[None], n, axis=0), np.repeat(space.high[None], n, axis=0),
+                   (n,) + space.shape, space.dtype)
+    if isinstance(space, Dict):
+        return Dict({k: batch_space(s, n) for k, s in space.spaces.items()})
+    raise TypeError(f"batch_space: expected a Discrete, Box or Dict space, found {type(space).__name__}")
 
 
-def _box(low, high, shape):
-    return _spaces.Box(low=low, high=high, shape=shape, dtype=np.float32) if _spaces else Box(low, high, shape)
+class _Seeded:
+    """What Gymnasium's Env and VectorEnv have beside step and reset, when it is absent:
+    np_random (seeded by reset(seed=...)), np_random_seed, spec, unwrapped, render_mode,
+    metadata, close and use in a with statement."""
+
+    metadata = {"render_modes": []}
+    render_mode = None
+    spec = None
+    _np_random = None
+    _np_random_seed = None
+
+    @property
+    def np_random(self):
+        """The environment's NumPy generator: seeded by reset(seed=...), else made on first use."""
+        if self._np_random is None:
+            self._np_random = _rng()
+            self._np_random_seed = -1
+        return self._np_random
+
+    @np_random.setter
+    def np_random(self, value):
+        self._np_random = value
+        self._np_random_seed = -1
+
+    @property
+    def np_random_seed(self):
+        """The seed np_random was made from; -1 when it was not made from a seed given."""
+        if self._np_random is None:
+            self.np_random  # noqa: B018 - made on first use
+        return self._np_random_seed
+
+    @property
+    def unwrapped(self):
+        """The environment itself (no wrappers here)."""
+        return self
+
+    def reset(self, *, seed=None, options=None):
+        if seed is not None:
+            self._np_random = _rng(seed)
+            self._np_random_seed = seed
+
+    def close(self):
+        """Nothing to release: the C++ episodes go with the object."""
+
+    def get_wrapper_attr(self, name):
+        return getattr(self, name)
+
+    def __enter__(self):
+        return self
+
+    def __exit__(self, *args):
+        self.close()
+        return False
 
 
-def _dict(spaces):
-    return _spaces.Dict(spaces) if _spaces else Dict(spaces)
+if _gym is None:
+    _EnvBase = _Seeded
+    _VectorEnvBase = _Seeded
+    _batch_space = batch_space
+else:  # pragma: no cover - depends on the machine
+    Discrete, MultiDiscrete, Box, Dict = (_spaces.Discrete, _spaces.MultiDiscrete, _spaces.Box,  # noqa: F811
+                                          _spaces.Dict)
 
 
 def _observation_space(episodes):
-    # Coordinates inside the grid lie within its vertices' range, axis by axis.
-    bounds = episodes.bounds.astype(np.float32)
-    return _dict({
-        "state": _discrete(episodes.states),
-        "target": _box(-np.inf, np.inf, (3,)),
-        "coordinates": _box(bounds[:, 0], bounds[:, 1], (episodes.dimension,)),
+    domain = episodes.domain.astype(np.float32)
+    return Dict({
+        "state": Discrete(episodes.states),
+        "target": Box(-np.inf, np.inf, (3,), np.float32),
+        "coordinates": Box(domain[:, 0], domain[:, 1], (episodes.dimension,), np.float32),
     })
 
 
 _OPTIONS = ("state", "target")
+_ILLEGAL = ("wrap", "raise")
 
 
 def _placement(options):
@@ -154,23 +365,51 @@ def _session(scenario, data, cache, sets):
     return _core.Session(scenario, data=data, cache=cache, sets=sets)
 
 
-class MotionGraphEnv(_EnvBase):
-    """One avatar and one target: Gymnasium's Env API on a behaviour of a scenario.
+def _illegal(illegal_actions):
+    if illegal_actions not in _ILLEGAL:
+        raise _core.Error(f"illegal_actions: expected 'wrap' or 'raise', found {illegal_actions!r}")
+    return illegal_actions
 
-    scenario may be a path (opened with data, cache and sets as on the command line) or an
-    mgrl.Session already open (its graph is shared, not loaded again)."""
+
+class MotionGraphEnv(_EnvBase):
+    """One avatar and one target: Gymnasium's Env on a behaviour of a scenario (the module's
+    docstring says what observations, actions, rewards and episodes are).
+
+    Parameters
+    ----------
+    scenario : str, os.PathLike or mgrl.Session
+        A scenario's path or shipped name, opened with data, cache and sets as on the
+        command line, or a Session already open (its graph is shared, not loaded again).
+    behavior : str
+        The behaviour to play ("approach", "hit", ...).
+    max_seconds : float
+        Seconds of motion after which an episode is truncated.
+    end_on_success : bool
+        Whether meeting the behaviour's success criterion terminates the episode.
+    render_mode : None or "rgb_array"
+        "rgb_array": render() returns a top-down picture.
+    render_size : int
+        The picture's side in pixels.
+    illegal_actions : "wrap" or "raise"
+        What an index past the state's out-actions does: play index % out-actions, or raise
+        mgrl.Error.
+    """
 
     metadata = {"render_modes": ["rgb_array"], "render_fps": 30}
 
     def __init__(self, scenario, behavior, data=None, cache=None, sets=None, max_seconds=10.0,
-                 end_on_success=False, render_mode=None, render_size=160):
+                 end_on_success=False, render_mode=None, render_size=160, illegal_actions="wrap"):
         if render_mode not in (None, "rgb_array"):
             raise _core.Error(f"render_mode: expected None or 'rgb_array', found {render_mode!r}")
+        self._illegal = _illegal(illegal_actions)
         self.session = _session(scenario, data, cache, sets)
         self.behavior = behavior
         self._episodes = _core.Episodes(self.session, behavior, 1, float(max_seconds), bool(end_on_success))
-        self.action_space = _discrete(self._episodes.max_actions)
+        self._degree = np.diff(self.session.graph["state_action_begin"]).astype(np.int64)
+        self.action_space = Discrete(self._episodes.max_actions)
         self.observation_space = _observation_space(self._episodes)
+        self.grid_axes = tuple(self._episodes.axes)
+        self.grid_bounds = self._episodes.bounds
         self.render_mode = render_mode
         self.render_size = int(render_size)
         self._last = None
@@ -180,68 +419,174 @@ class MotionGraphEnv(_EnvBase):
         return {"state": state, "target": target, "coordinates": coordinates}, mask
 
     def reset(self, *, seed=None, options=None):
-        """A new episode, seeded when seed is given, placed as options says (the module's
-        docstring): {"state": int, "target": (x, y, z)}, either or both."""
+        """Starts a new episode.
+
+        Parameters
+        ----------
+        seed : int, optional
+            Seeds the episode's random numbers (and np_random); None goes on from the last.
+        options : dict, optional
+            {"state": int, "target": (x, y, z)}, either or both: the episode's start (the
+            module's docstring).
+
+        Returns
+        -------
+        (observation, info) : info has "action_mask" (int8), "success" (False) and
+        "seconds" (0.0).
+        """
         state, target = _placement(options)
-        if _gym is not None:
-            super().reset(seed=seed)
+        super().reset(seed=seed)
         self._episodes.reset(0, seed, state, target)
         obs, mask = self._observation()
         self._last = obs
         return obs, {"action_mask": mask, "success": False, "seconds": 0.0}
 
     def step(self, action):
-        reward, terminated, truncated, success, seconds = self._episodes.step(0, int(action))
+        """Plays one action of the current state.
+
+        Parameters
+        ----------
+        action : int
+            An element of action_space: an index into the state's out-actions (past them,
+            as illegal_actions says).
+
+        Returns
+        -------
+        (observation, reward, terminated, truncated, info) : reward a float, info with
+        "action_mask" (int8, for the new state), "success" (the criterion met during
+        this action) and "seconds" (of motion played in the episode).
+        """
+        choice = self._choice(action)
+        reward, terminated, truncated, success, seconds = self._episodes.step(0, choice)
         obs, mask = self._observation()
         self._last = obs
         return obs, float(reward), bool(terminated), bool(truncated), {
             "action_mask": mask, "success": bool(success), "seconds": seconds}
 
+    def _choice(self, action):
+        if isinstance(action, (bool, np.bool_)) or not isinstance(action, (numbers.Integral, np.integer)):
+            if not (isinstance(action, np.ndarray) and action.shape == () and action.dtype.kind in "iu"):
+                raise _core.Error(f"action: expected an integer in [0, {self.action_space.n}), found {action!r}")
+        choice = int(action)
+        if self._illegal == "wrap" and 0 <= choice < self.action_space.n:
+            state = self._last["state"] if self._last is not None else self._episodes.observe(0)[0]
+            choice %= int(self._degree[state])
+        return choice
+
     def render(self):
         """A top-down picture (render_size pixels square, uint8 RGB): the avatar at the
-        centre facing up, the behaviour's grid as grey dots, the target in red."""
+        centre facing up, the behaviour's grid as grey dots, the target in red; None unless
+        render_mode is "rgb_array"."""
         if self.render_mode != "rgb_array":
             return None
         return draw_top_down(self._episodes, self._last, self.render_size)
 
     def close(self):
-        pass
+        """Nothing to release: the C++ episodes go with the object."""
 
 
-class MotionGraphVectorEnv:
-    """num_envs MotionGraphEnv episodes stepped in one C++ call (EnvPool-style autoreset:
-    an ended episode restarts within the same step; info["final"] marks those)."""
+class MotionGraphVectorEnv(_VectorEnvBase):
+    """num_envs MotionGraphEnv episodes stepped in one C++ call: Gymnasium's VectorEnv with
+    same-step autoreset (the module's docstring).
+
+    Parameters are MotionGraphEnv's, and num_envs, the number of environments.
+
+    Spaces: single_action_space and single_observation_space are one environment's;
+    action_space (MultiDiscrete) and observation_space (a Dict of arrays with a leading
+    num_envs axis) are the batch's.
+
+    Info, as Gymnasium's vector environments give it: each key an array over the
+    environments with a boolean "_key" beside it saying which hold a value:
+    "action_mask" (int8, (num_envs, max actions)), "success", and at the ends of
+    episodes "final_obs" and "final_info".
+    """
+
+    metadata = {"render_modes": [], "autoreset_mode": AutoresetMode.SAME_STEP}
 
     def __init__(self, scenario, behavior, num_envs, data=None, cache=None, sets=None, max_seconds=10.0,
-                 end_on_success=False):
+                 end_on_success=False, illegal_actions="wrap"):
+        self._illegal = _illegal(illegal_actions)
         self.session = _session(scenario, data, cache, sets)
         self.behavior = behavior
         self._episodes = _core.Episodes(self.session, behavior, int(num_envs), float(max_seconds),
                                         bool(end_on_success))
+        self._degree = np.diff(self.session.graph["state_action_begin"]).astype(np.int64)
         self.num_envs = self._episodes.count
-        self.single_action_space = _discrete(self._episodes.max_actions)
+        self.single_action_space = Discrete(self._episodes.max_actions)
         self.single_observation_space = _observation_space(self._episodes)
+        self.action_space = _batch_space(self.single_action_space, self.num_envs)
+        self.observation_space = _batch_space(self.single_observation_space, self.num_envs)
+        self.grid_axes = tuple(self._episodes.axes)
+        self.grid_bounds = self._episodes.bounds
+        self._state = None
 
     def _observations(self):
         state, target, coordinates, mask = self._episodes.observe_all()
-        return {"state": state, "target": target, "coordinates": coordinates}, mask
+        self._state = state
+        return {"state": state.astype(np.int64), "target": target, "coordinates": coordinates}, mask
+
+    def _masks(self, states):
+        width = int(self.single_action_space.n)
+        return (np.arange(width)[None, :] < self._degree[states][:, None]).astype(np.int8)
 
     def reset(self, *, seed=None, options=None):
-        """Every environment restarted; environment i seeded with seed + i when seed is given.
-        options places every environment's start alike, as MotionGraphEnv.reset's does."""
+        """Restarts every environment; environment i seeded with seed + i when seed is given.
+        options places every environment's start alike, as MotionGraphEnv.reset's does.
+
+        Returns
+        -------
+        (observations, info) : batched as observation_space; info["action_mask"] int8
+        (num_envs, max actions).
+        """
         state, target = _placement(options)
+        super().reset(seed=seed)
         self._episodes.reset_all(seed, state, target)
         obs, mask = self._observations()
-        return obs, {"action_mask": mask}
+        every = np.ones(self.num_envs, dtype=bool)
+        return obs, {"action_mask": mask, "_action_mask": every}
 
     def step(self, actions):
-        reward, terminated, truncated, success = self._episodes.step_all(actions)
-        obs, mask = self._observations()
-        return obs, reward, terminated, truncated, {
-            "action_mask": mask, "success": success, "final": terminated | truncated}
+        """Plays one action in every environment.
 
-    def close(self):
-        pass
+        Parameters
+        ----------
+        actions : int array (num_envs,)
+            An element of action_space.
+
+        Returns
+        -------
+        (observations, rewards, terminations, truncations, info) : arrays over the
+        environments; an ended environment's observation is its new episode's, its last
+        one in info["final_obs"] (a batch like the observations, each row where that
+        environment's step led; info["_final_obs"] marks the ended ones) and that step's
+        info in info["final_info"] ("action_mask" of the last state, "success").
+        """
+        actions = self._choices(actions)
+        reward, terminated, truncated, success, end_state, end_target, end_coordinates = \
+            self._episodes.step_all(actions)
+        obs, mask = self._observations()
+        ended = terminated | truncated
+        every = np.ones(self.num_envs, dtype=bool)
+        final_obs = {"state": end_state.astype(np.int64), "target": end_target, "coordinates": end_coordinates}
+        final_info = {"action_mask": self._masks(end_state), "_action_mask": ended.copy(),
+                      "success": success.copy(), "_success": ended.copy()}
+        return obs, reward, terminated, truncated, {
+            "action_mask": mask, "_action_mask": every, "success": success, "_success": every,
+            "final_obs": final_obs, "_final_obs": ended, "final_info": final_info, "_final_info": ended.copy()}
+
+    def _choices(self, actions):
+        if self._illegal == "raise" or self._state is None:
+            return actions
+        given = np.asarray(actions)
+        if given.shape != (self.num_envs,) or given.dtype.kind not in "iu":
+            return actions  # refused with the exact reason by the C++ step
+        given = given.astype(np.int64)
+        inside = (given >= 0) & (given < self.single_action_space.n)
+        degree = self._degree[self._state]
+        return np.where(inside, given % degree, given)
+
+    def close(self, **kwargs):
+        """Nothing to release: the C++ episodes go with the object."""
 
 
 def draw_top_down(episodes, obs, size):

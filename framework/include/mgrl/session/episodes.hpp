@@ -52,6 +52,14 @@ struct EpisodeStep {
   bool success = false;  ///< the behaviour's success criterion was met during the action
 };
 
+/// Where an episode ended, as observe() writes it, before stepAll() started its slot anew:
+/// what a learner bootstraps from at a truncated end.
+struct EpisodeEnd {
+  std::int32_t state = 0;
+  float position[3] = {0, 0, 0};
+  float coordinates[3] = {0, 0, 0};  ///< the first dimension() are set
+};
+
 class Episodes {
  public:
   /// `count` slots on `model` for `behavior` (both must outlive this). Throws mgrl::Error
@@ -74,9 +82,10 @@ class Episodes {
   /// slot and the state's action count) unless choice < actionsAt(i).
   EpisodeStep step(std::size_t i, std::size_t choice);
   /// Steps every slot with `choices[i]`; a slot whose episode ended starts a new one at
-  /// once (its observation is the new episode's). Every choice is checked before any
-  /// slot moves.
-  void stepAll(const std::int64_t* choices, EpisodeStep* out);
+  /// once (its observation is the new episode's), and where it ended goes to `ends[i]`
+  /// when `ends` is given (slots whose episode goes on leave theirs as it was). Every
+  /// choice is checked before any slot moves.
+  void stepAll(const std::int64_t* choices, EpisodeStep* out, EpisodeEnd* ends = nullptr);
 
   std::uint32_t state(std::size_t i) const { return slots_[i].state; }
   const TargetState& target(std::size_t i) const { return slots_[i].target; }
