@@ -52,9 +52,10 @@ void bindSession(py::module_& m) {
   problem.def_property_readonly("out_actions", [](const P& p) { return py::make_tuple(p.outIndptr, p.outIndices); });
 
   py::class_<PySession>(m, "Session")
-      .def(py::init<const std::filesystem::path&, const py::object&, const py::object&, const py::object&>(),
+      .def(py::init<const std::filesystem::path&, const py::object&, const py::object&, const py::object&,
+                    const py::object&>(),
            py::arg("scenario"), py::arg("data") = py::none(), py::arg("cache") = py::none(),
-           py::arg("sets") = py::none())
+           py::arg("sets") = py::none(), py::arg("policy") = py::none())
       .def_property_readonly("behaviors", &PySession::behaviorNames)
       .def_property_readonly("scenario", [](const PySession& s) { return s.session().scenario.path; })
       .def_property_readonly("graph", &graphArrays)
@@ -65,12 +66,15 @@ void bindSession(py::module_& m) {
       .def_property_readonly("last_train", &PySession::lastTrain)
       .def("compare_tables", &PySession::compareTables, py::arg("behavior"), py::arg("table"), py::arg("reference"))
       .def("evaluate", &PySession::evaluate, py::arg("tables") = py::none(), py::arg("trials") = 300,
-           py::arg("seed") = 1, py::arg("controller") = "policy", py::arg("seconds") = 10.0, py::arg("horizon") = 3)
+           py::arg("seed") = 1, py::arg("controller") = "policy", py::arg("seconds") = 10.0, py::arg("horizon") = 3,
+           py::arg("train_missing") = false)
       .def("simulate", &PySession::simulate, py::arg("tables") = py::none(), py::arg("avatars") = 2,
            py::arg("seconds") = 10.0, py::arg("seed") = 1, py::arg("controller") = "policy", py::arg("horizon") = 3,
            py::arg("bvh_out") = py::none(), py::arg("gltf_out") = py::none(), py::arg("events_out") = py::none(),
-           py::arg("poses") = false)
-      .def("save_policy", &PySession::savePolicy, py::arg("path"), py::arg("tables"), py::arg("learner") = "python");
+           py::arg("poses") = false, py::arg("train_missing") = false)
+      .def("save_policy", &PySession::savePolicy, py::arg("path"), py::arg("tables"), py::arg("learner") = "python",
+           py::arg("train_missing") = false)
+      .def("load_policy", &PySession::loadPolicy, py::arg("path"));
 
   m.def(
       "write_compare_report",

@@ -71,7 +71,10 @@ inline std::filesystem::path shippedScenario(const std::filesystem::path& scenar
 
 class PySession {
  public:
-  PySession(const std::filesystem::path& scenario, const py::object& data, const py::object& cache, const py::object& sets) {
+  // `policy`: None or a policy bundle's folder (mgrl train's or save_policy's), whose tables
+  // evaluate and simulate play for the behaviours they are not given.
+  PySession(const std::filesystem::path& scenario, const py::object& data, const py::object& cache,
+            const py::object& sets, const py::object& policy) {
     SessionOptions options;
     options.scenario = shippedScenario(scenario);
     if (!data.is_none()) options.dataDir = data.cast<std::filesystem::path>();
@@ -81,8 +84,14 @@ class PySession {
     options.plugins = &builtinPlugins();
     SessionNeeds needs;
     needs.motion = false;  // the model is what Python works on; a cached graph starts fast
+    std::filesystem::path policyDir;
+    if (!policy.is_none()) policyDir = policy.cast<std::filesystem::path>();
     py::gil_scoped_release release;
     session_ = openSession(options, needs);
+    if (!policyDir.empty()) {
+      bundle_ = std::make_unique<PolicyBundle>(readBundle(policyDir, "policy"));
+      policyDir_ = policyDir;
+    }
   }
 
   const Session& session() const { return *session_; }
@@ -286,36 +295,67 @@ class PySession {
     return q;
   }
 
-  // A behaviour's table from the scenario's trained bundle when it holds a current one,
-  // else trained here with the scenario's learner (once per session; said on stderr).
-  std::shared_ptr<PolicyBehavior> otherTable(const Behavior& b) {
+  // A policy bundle read for this session's graph; a bundle that does not fit (another
+  // graph, a damaged file) is refused naming `where` and the folder.
+  PolicyBundle readBundle(const std::filesystem::path& dir, std::string_view where) const {
+    if (!std::filesystem::exists(dir / "manifest.json"))
+      throw Error(fmt::format(
+          "{}: expected a policy bundle's folder (with a manifest.json, as mgrl train or "
+          "save_policy writes), found {}",
+          where,
+          std::filesystem::exists(dir) ? "a folder without one: " + dir.string() : "nothing at " + dir.string()));
+    try {
+      return loadPolicyBundle(dir, session_->model(), session_->graph.key);
+    } catch (const Error& e) {
+      throw Error(fmt::format("{}: {}", where, e.what()));
+    }
+  }
+
+  // A behaviour's table for evaluate, simulate and save_policy (`where`) when they are not
+  // given one: from the bundle the session was opened with (policy=), else from the
+  // scenario's trained bundle when it holds a current one, else, with `trainMissing`,
+  // trained here with the scenario's learner (once per session; said on stderr). Without
+  // it a missing table is an error saying how to get one from Python.
+  std::shared_ptr<PolicyBehavior> otherTable(const Behavior& b, bool trainMissing, std::string_view where) {
     if (const auto found = others_.find(b.name); found != others_.end()) return found->second;
     const Session& session = *session_;
     const std::filesystem::path dir =
-        defaultPolicyDirectory(session.options.cacheDir.empty() ? defaultCacheDirectory() : session.options.cacheDir,
-                               session.scenario, session.plugins(), session.graph.key);
-    std::string why = "no trained bundle";
-    if (std::filesystem::exists(dir / "manifest.json")) {
+        !policyDir_.empty() ? policyDir_
+                            : defaultPolicyDirectory(
+                                  session.options.cacheDir.empty() ? defaultCacheDirectory() : session.options.cacheDir,
+                                  session.scenario, session.plugins(), session.graph.key);
+    const std::string bundleName =
+        policyDir_.empty() ? "the scenario's trained bundle" : fmt::format("the policy bundle {}", policyDir_.string());
+    std::string why = policyDir_.empty() ? "no trained bundle" : "";
+    if (!policyDir_.empty() || std::filesystem::exists(dir / "manifest.json")) {
       try {
         if (!bundle_) bundle_ = std::make_unique<PolicyBundle>(loadPolicyBundle(dir, session.model(), session.graph.key));
         const auto found = bundle_->behaviors.find(b.name);
         if (found == bundle_->behaviors.end()) {
-          why = "no table for it in the trained bundle";
+          why = fmt::format("no table for it in {}", bundleName);
         } else if (found->second.key != b.key) {
-          why = "the trained bundle's table has other settings";
+          why = fmt::format("{}'s table was trained with other settings", bundleName);
         } else if (!found->second.grid.empty()) {
-          why = "the trained bundle's table is on a refined grid";
+          why = fmt::format("{}'s table is on a refined grid", bundleName);
         } else {
           auto table = std::make_shared<PolicyBehavior>(found->second);
           others_[b.name] = table;
           return table;
         }
       } catch (const Error& e) {
-        why = fmt::format("the trained bundle is unusable: {}", e.what());
+        why = fmt::format("{} is unusable: {}", bundleName, e.what());
       }
     }
-    toStderr(fmt::format("mgrl: {} ({}): training {} with {} first; `mgrl train {} --behavior {}` keeps one", b.name,
-                         why, b.name, b.learner->type(), session.scenario.path.string(), b.name));
+    if (!trainMissing)
+      throw Error(fmt::format(
+          "{}: expected a table for behaviour '{}' ({}), found none to play; pass one in tables "
+          "(tables={{'{}': s.train('{}')}}), open the session with policy=FOLDER (a bundle mgrl train or save_policy "
+          "wrote), or pass train_missing=True to train it here with {}",
+          where, b.name, why, b.name, b.name, b.learner->type()));
+    toStderr(
+        fmt::format("mgrl: {} ({}): training {} with {} first (train_missing=True); "
+                    "s.save_policy(FOLDER, tables) keeps tables for Session(..., policy=FOLDER)",
+                    b.name, why, b.name, b.learner->type()));
     TrainSettings settings;
     settings.behavior = b.name;
     settings.save = false;
@@ -328,13 +368,29 @@ class PySession {
     return table;
   }
 
+  // A policy bundle's tables as {behaviour: (A, V) float32}, for this session's graph.
+  py::dict loadPolicy(const std::filesystem::path& dir) const {
+    const PolicyBundle bundle = readBundle(dir, "load_policy");
+    py::dict out;
+    for (const auto& [name, table] : bundle.behaviors) {
+      if (!table.grid.empty())
+        throw Error(
+            fmt::format("load_policy: {}'s table in {} is on a refined grid ({} vertices); tables on refined "
+                        "grids are not offered to Python yet",
+                        name, dir.string(), table.table.vertexCount()));
+      out[py::str(name)] = tableArray(table.table);
+    }
+    return out;
+  }
+
   // The scenario's behaviours, in its order: `tables` (a dict of NumPy arrays) for those it
   // names, otherTable() for the rest. `learnerName` goes into the given ones' records.
   struct Tables {
     std::map<std::string, std::shared_ptr<PolicyBehavior>> behaviors;
     std::vector<PolicyPart> parts;
   };
-  Tables tablesFor(const py::object& tables, const std::string& learnerName) {
+  Tables tablesFor(const py::object& tables, const std::string& learnerName, bool trainMissing,
+                   std::string_view where) {
     if (!py::isinstance<py::dict>(tables))
       throw Error(fmt::format("tables: expected a dict {{behaviour name: NumPy (A, V) float32 table}}, found an object "
                               "of type {}",
@@ -346,14 +402,14 @@ class PySession {
       out.behaviors[name] = std::make_shared<PolicyBehavior>(givenTable(b, tableFrom(b, value), learnerName, "python"));
     }
     for (const Behavior& b : session_->behaviors) {
-      if (!out.behaviors.count(b.name)) out.behaviors[b.name] = otherTable(b);
+      if (!out.behaviors.count(b.name)) out.behaviors[b.name] = otherTable(b, trainMissing, where);
       out.parts.push_back({b.discretizer.get(), &out.behaviors[b.name]->table, b.weight, b.activation, b.stance});
     }
     return out;
   }
 
   py::object evaluate(const py::object& tables, std::size_t trials, std::uint64_t seed, const std::string& controller,
-                      double seconds, int horizon) {
+                      double seconds, int horizon, bool trainMissing) {
     EvalSettings settings;
     settings.controller = {controller, horizon, 0};
     settings.trials = trials;
@@ -364,7 +420,8 @@ class PySession {
     const ControllerRegistry& controllers = session_->plugins().controllers;
     checkEvalSettings(controllers, settings, {"controller", "horizon", "horizon_seconds"});
     Tables t;
-    if (controllers.find(controller)->needsPolicy) t = tablesFor(tables.is_none() ? py::dict() : tables, "python");
+    if (controllers.find(controller)->needsPolicy)
+      t = tablesFor(tables.is_none() ? py::dict() : tables, "python", trainMissing, "evaluate");
     nlohmann::json report;
     {
       py::gil_scoped_release release;
@@ -379,7 +436,7 @@ class PySession {
   // tables' grids are this session's behaviours', the same grids as the other's.
   py::object simulate(const py::object& tables, long long avatars, double seconds, std::uint64_t seed,
                       const std::string& controller, int horizon, const py::object& bvhOut, const py::object& gltfOut,
-                      const py::object& eventsOut, bool poses) {
+                      const py::object& eventsOut, bool poses, bool trainMissing) {
     SimulateSettings settings;
     settings.controller = {controller, horizon, 0};
     settings.avatars = avatars;
@@ -397,7 +454,7 @@ class PySession {
     checkSimulateSettings(controllers, settings);
     const bool needsPolicy = controllers.find(controller)->needsPolicy;
     Tables t;
-    if (needsPolicy) t = tablesFor(tables.is_none() ? py::dict() : tables, "python");
+    if (needsPolicy) t = tablesFor(tables.is_none() ? py::dict() : tables, "python", trainMissing, "simulate");
     Outputs outputs = prepareOutputs(settings.exportRequest(), session_->scenario);
     nlohmann::json report;
     {
@@ -420,8 +477,9 @@ class PySession {
     return captured;
   }
 
-  void savePolicy(const std::filesystem::path& path, const py::object& tables, const std::string& learnerName) {
-    Tables t = tablesFor(tables, learnerName);
+  void savePolicy(const std::filesystem::path& path, const py::object& tables, const std::string& learnerName,
+                  bool trainMissing) {
+    Tables t = tablesFor(tables, learnerName, trainMissing, "save_policy");
     PolicyBundle bundle;
     bundle.graphKey = session_->graph.key;
     nlohmann::json given = nlohmann::json::object();
@@ -453,7 +511,8 @@ class PySession {
  private:
   std::unique_ptr<const Session> session_;
   std::unique_ptr<const Session> captured_;  ///< the same scenario with the capture, for simulate
-  std::unique_ptr<PolicyBundle> bundle_;  ///< the scenario's trained bundle, once read
+  std::unique_ptr<PolicyBundle> bundle_;     ///< policy='s bundle, else the scenario's trained one once read
+  std::filesystem::path policyDir_;          ///< policy= (empty: the scenario's trained bundle)
   std::map<std::string, std::shared_ptr<PolicyBehavior>> others_;  ///< otherTable()'s, by behaviour
   nlohmann::json lastTrain_;  ///< train()'s figures, for compare
 };

@@ -3,7 +3,8 @@ learners on it.
 
     import mgrl
     s = mgrl.Session("boxing")                          # a scenario the module carries, or a YAML path;
-                                                        # data, cache, sets as on the command line
+                                                        # data, cache, sets as on the command line;
+                                                        # policy=FOLDER: a saved bundle's tables
     p = s.problem("approach")                           # the tabulated problem
     q = s.train("approach", learner="value_iteration")  # (A, V) float32
     r = s.evaluate({"approach": q}, trials=300)         # mgrl eval --json's figures
@@ -45,17 +46,25 @@ Session:
                      any registered C++ learner (the scenario's by default; sets are its
                      parameters); progress(dict) about ten times a second; Ctrl-C raises
                      KeyboardInterrupt
-    evaluate(tables=None, trials=300, seed=1, controller="policy", seconds=10, horizon=3)
+    evaluate(tables=None, trials=300, seed=1, controller="policy", seconds=10, horizon=3,
+             train_missing=False)
                      mgrl eval's trials: tables {behaviour: float32 (A, V)}; the other
-                     behaviours from the scenario's trained bundle, else trained first
+                     behaviours from the session's policy bundle (Session(..., policy=)),
+                     else the scenario's trained bundle; a behaviour in neither is an
+                     error saying how to get its table, or with train_missing=True is
+                     trained first (said on stderr)
     simulate(tables=None, avatars=2, seconds=10, seed=1, controller="policy", horizon=3,
-             bvh_out=None, gltf_out=None, events_out=None, poses=False)
+             bvh_out=None, gltf_out=None, events_out=None, poses=False, train_missing=False)
                      mgrl simulate --json's report as a dict: the world run headless on
                      the tables (as evaluate's), hits by part and side; BVH, glTF and
                      hit events written as the command line writes them
-    save_policy(path, tables, learner="python")
+    save_policy(path, tables, learner="python", train_missing=False)
                      a complete policy bundle mgrl eval/simulate/serve/compare accept
+                     (the other behaviours' tables as evaluate finds them)
+    load_policy(path) a policy bundle's tables, {behaviour: float32 (A, V)}
 
+load_policy(path, session)
+                     a policy bundle's tables for session's graph, as Session.load_policy
 scenarios()          the names of the scenarios shipped with the module
 scenario_path(name) the path of one of them (boxing.yaml, ...), from any folder
 __version__          the version, as `mgrl --version` prints it
@@ -79,7 +88,7 @@ from .compare import Observer, compare  # noqa: F401
 from .env import MotionGraphEnv, MotionGraphVectorEnv  # noqa: F401
 
 __all__ = ["Error", "Problem", "Session", "MotionGraphEnv", "MotionGraphVectorEnv", "Observer", "compare",
-           "bout_stats", "scenarios", "scenario_path"]  # mgrl.inspect too, left out here not to hide the standard library's inspect
+           "bout_stats", "load_policy", "scenarios", "scenario_path"]  # mgrl.inspect too, left out here not to hide the standard library's inspect
 
 
 def inspect(files):
@@ -108,6 +117,13 @@ def bout_stats(bouts=(), snu=False, against=(), data=None):
     for line in result["warnings"]:
         _warnings.warn(line, stacklevel=2)
     return result["report"]
+
+
+def load_policy(path, session):
+    """A policy bundle's tables (mgrl train's or Session.save_policy's folder) as
+    {behaviour: float32 (A, V)} for `session`'s graph, ready for session.evaluate(tables).
+    Raises mgrl.Error when the folder holds no bundle or one made on another graph."""
+    return session.load_policy(_os.fspath(path))
 
 
 def _scenario_folder():

@@ -108,7 +108,8 @@ def compare(session, behavior, learners, seeds=(1,), trials=100, seconds=10.0, s
     runs = []
 
     def evaluate(table, count):
-        return session.evaluate({behavior: table}, trials=count, seed=1, seconds=seconds)
+        # The other behaviours' tables: the session's bundle, else trained once (said on stderr).
+        return session.evaluate({behavior: table}, trials=count, seed=1, seconds=seconds, train_missing=True)
 
     def curve_of(points):
         out = []

@@ -23,12 +23,86 @@ MGRL = os.environ.get("MGRL_BIN", str(pathlib.Path(__file__).resolve().parents[2
 SETS = {"behaviors.hit.learner.budget": 300000, "behaviors.approach.learner.budget": 300000}
 
 
+class PolicyTest(unittest.TestCase):
+    """Saved policy bundles in Python: Session(policy=), load_policy, and evaluate, simulate
+    and save_policy never training a missing behaviour unless asked."""
+
+    @classmethod
+    def setUpClass(cls):
+        cls.cache = tempfile.mkdtemp(prefix="mgrl-python-policy-")
+        cls.session = mgrl.Session(BOXING, cache=cls.cache, sets=SETS)
+        problem = cls.session.problem("approach")
+        cls.approach = numpy_value_iteration(problem).astype(np.float32)
+        cls.hit = cls.session.train("hit")
+        cls.bundle = pathlib.Path(tempfile.mkdtemp(prefix="mgrl-python-policy-")) / "saved"
+        cls.session.save_policy(cls.bundle, {"approach": cls.approach, "hit": cls.hit}, learner="numpy_vi")
+
+    def fresh(self, **kwargs):
+        """A session with a cache of its own: no trained bundle there."""
+        return mgrl.Session(BOXING, cache=tempfile.mkdtemp(prefix="mgrl-python-policy-"), sets=SETS, **kwargs)
+
+    def test_a_missing_table_is_an_error_that_says_how_to_get_one(self):
+        s = self.fresh()
+        expected = (r"expected a table for behaviour 'hit' \(no trained bundle\), found none to play; pass one in "
+                    r"tables \(tables=\{'hit': s.train\('hit'\)\}\), open the session with policy=FOLDER .*, or "
+                    r"pass train_missing=True to train it here with q_learning")
+        with self.assertRaisesRegex(mgrl.Error, "evaluate: " + expected):
+            s.evaluate({"approach": self.approach}, trials=5)
+        with self.assertRaisesRegex(mgrl.Error, "simulate: " + expected):
+            s.simulate({"approach": self.approach}, seconds=1)
+        folder = pathlib.Path(tempfile.mkdtemp(prefix="mgrl-python-policy-")) / "p"
+        with self.assertRaisesRegex(mgrl.Error, "save_policy: " + expected):
+            s.save_policy(folder, {"approach": self.approach})
+        self.assertFalse(folder.exists())
+        # Given every table, nothing is missing.
+        r = s.evaluate({"approach": self.approach, "hit": self.hit}, trials=5)
+        self.assertEqual(r["trials"], 5)
+
+    def test_a_saved_policy_plays_without_training_anything(self):
+        s = self.fresh(policy=self.bundle)
+        code = textwrap.dedent(f"""
+            import sys, mgrl
+            s = mgrl.Session({str(BOXING)!r}, cache={tempfile.mkdtemp()!r}, sets={SETS!r}, policy={str(self.bundle)!r})
+            r = s.evaluate(trials=40, seed=2)
+            print(r["success_rate"])
+            """)
+        run = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=False)
+        self.assertEqual(run.returncode, 0, run.stderr)
+        self.assertNotIn("training", run.stderr)  # nothing trained: the bundle's tables played
+        given = self.session.evaluate({"approach": self.approach, "hit": self.hit}, trials=40, seed=2)
+        self.assertEqual(float(run.stdout.split()[-1]), given["success_rate"])
+        # The bundle gives what it lacks: its hit beside a table given for approach.
+        r = s.evaluate({"approach": self.approach}, trials=40, seed=2)
+        self.assertEqual(r["success_rate"], given["success_rate"])
+        loaded = mgrl.load_policy(self.bundle, s)
+        self.assertEqual(set(loaded), {"approach", "hit"})
+        np.testing.assert_array_equal(loaded["approach"], self.approach)
+        np.testing.assert_array_equal(loaded["hit"], self.hit)
+        self.assertEqual(loaded["hit"].dtype, np.float32)
+
+    def test_a_folder_without_a_bundle_is_refused_saying_so(self):
+        missing = pathlib.Path(tempfile.mkdtemp(prefix="mgrl-python-policy-")) / "none"
+        with self.assertRaisesRegex(mgrl.Error, r"policy: expected a policy bundle's folder \(with a manifest.json, as "
+                                                rf"mgrl train or save_policy writes\), found nothing at {missing}"):
+            self.fresh(policy=missing)
+        empty = missing.parent
+        with self.assertRaisesRegex(mgrl.Error, rf"load_policy: expected .*found a folder without one: {empty}"):
+            mgrl.load_policy(empty, self.session)
+        # A bundle made on another graph (another threshold) is refused, naming the folder.
+        other = mgrl.Session(BOXING, cache=tempfile.mkdtemp(prefix="mgrl-python-policy-"),
+                             sets={"graph.threshold": 0.5, **SETS})
+        with self.assertRaisesRegex(mgrl.Error, r"load_policy: .*graph"):
+            mgrl.load_policy(self.bundle, other)
+
+
 class EvaluateTest(unittest.TestCase):
     @classmethod
     def setUpClass(cls):
         cls.cache = tempfile.mkdtemp(prefix="mgrl-python-eval-")
         cls.session = mgrl.Session(BOXING, cache=cls.cache, sets=SETS)
         cls.approach = numpy_value_iteration(cls.session.problem("approach")).astype(np.float32)
+        # hit's table, trained once here (a small budget): the tests below find it.
+        cls.session.evaluate({"approach": cls.approach}, trials=1, train_missing=True)
 
     def test_a_python_table_saved_gives_the_same_figures_in_mgrl_eval(self):
         mine = self.session.evaluate({"approach": self.approach}, trials=120, seed=3)
@@ -67,8 +141,9 @@ class EvaluateTest(unittest.TestCase):
             self.assertEqual(ours[key], theirs[key], key)
         self.assertNotIn("policy", ours)  # the tables came from Python, not from a bundle folder
         # A session on the graph cached by now is opened without the capture: its first
-        # simulate parses it (poses and bodies need it) and plays the same run.
-        warm = mgrl.Session(BOXING, cache=self.cache, sets=SETS)
+        # simulate parses it (poses and bodies need it) and plays the same run (hit's table
+        # from the bundle saved above).
+        warm = mgrl.Session(BOXING, cache=self.cache, sets=SETS, policy=bundle)
         again = warm.simulate({"approach": self.approach}, seconds=2)
         for key in ("avatars", "frames", "hits", "blocked", "decisions", "hits_by_part", "hits_by_avatar", "bodies"):
             self.assertEqual(again[key], theirs[key], key)
