@@ -82,6 +82,7 @@ setup(
     version=version(),
     packages=["mgrl"],
     package_dir={"": "python"},
+    package_data={"mgrl": ["*.pyi", "py.typed"]},  # the type stubs (PEP 561)
     ext_modules=[Extension("mgrl._core", sources=[])],
     cmdclass={"build_ext": CMakeBuild, "build_py": BuildPy},
     options={"build": {"build_base": str(SETUPTOOLS_BUILD)}, "egg_info": {"egg_base": str(SETUPTOOLS_BUILD)}},

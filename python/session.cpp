@@ -1,6 +1,8 @@
 // mgrl.Session's graph views and its registration with the module (session.hpp).
 #include "session.hpp"
 
+#include "docstrings.hpp"
+
 #include "mgrl/core/data_paths.hpp"
 #include "mgrl/motion/capture_report.hpp"
 #include "mgrl/runtime/bout_report.hpp"
@@ -42,39 +44,45 @@ py::dict graphArrays(py::object self) {
 
 void bindSession(py::module_& m) {
   using P = ProblemArrays;
-  py::class_<P> problem(m, "Problem");
-  bindReadonly(problem, Readonly{"behavior", &P::behavior}, Readonly{"rewards", &P::rewards},
-               Readonly{"corners", &P::corners}, Readonly{"weights", &P::weights}, Readonly{"discount", &P::discount},
-               Readonly{"next_state", &P::nextState}, Readonly{"vertices", &P::vertices},
-               Readonly{"states", &P::states}, Readonly{"actions", &P::actions}, Readonly{"dimension", &P::dimension},
-               Readonly{"tabulate_seconds", &P::tabulateSeconds}, Readonly{"arrays_seconds", &P::arraysSeconds},
-               Readonly{"vertex_count", &P::vertexCount});
-  problem.def_property_readonly("out_actions", [](const P& p) { return py::make_tuple(p.outIndptr, p.outIndices); });
+  py::class_<P> problem(m, "Problem", doc::kProblemClass);
+  bindReadonly(problem, Readonly{"behavior", &P::behavior, doc::kBehavior},
+               Readonly{"rewards", &P::rewards, doc::kRewards}, Readonly{"corners", &P::corners, doc::kCorners},
+               Readonly{"weights", &P::weights, doc::kWeights}, Readonly{"discount", &P::discount, doc::kDiscount},
+               Readonly{"next_state", &P::nextState, doc::kNextState},
+               Readonly{"vertices", &P::vertices, doc::kVertices}, Readonly{"states", &P::states, doc::kStates},
+               Readonly{"actions", &P::actions, doc::kActions}, Readonly{"dimension", &P::dimension, doc::kDimension},
+               Readonly{"tabulate_seconds", &P::tabulateSeconds, doc::kTabulateSeconds},
+               Readonly{"arrays_seconds", &P::arraysSeconds, doc::kArraysSeconds},
+               Readonly{"vertex_count", &P::vertexCount, doc::kVertexCount});
+  problem.def_property_readonly(
+      "out_actions", [](const P& p) { return py::make_tuple(p.outIndptr, p.outIndices); }, doc::kOutActions);
 
-  py::class_<PySession>(m, "Session")
+  py::class_<PySession>(m, "Session", doc::kSession)
       .def(py::init<const std::filesystem::path&, const py::object&, const py::object&, const py::object&,
                     const py::object&>(),
            py::arg("scenario"), py::arg("data") = py::none(), py::arg("cache") = py::none(),
            py::arg("sets") = py::none(), py::arg("policy") = py::none())
-      .def_property_readonly("behaviors", &PySession::behaviorNames)
-      .def_property_readonly("scenario", [](const PySession& s) { return s.session().scenario.path; })
-      .def_property_readonly("graph", &graphArrays)
-      .def("problem", &PySession::problem, py::arg("behavior"))
+      .def_property_readonly("behaviors", &PySession::behaviorNames, doc::kBehaviors)
+      .def_property_readonly(
+          "scenario", [](const PySession& s) { return s.session().scenario.path; }, doc::kScenario)
+      .def_property_readonly("graph", &graphArrays, doc::kGraph)
+      .def("problem", &PySession::problem, py::arg("behavior"), doc::kProblem)
       .def("train", &PySession::train, py::arg("behavior"), py::arg("learner") = py::none(),
            py::arg("sets") = py::none(), py::arg("progress") = py::none(), py::arg("snapshots") = 0,
-           py::arg("on_snapshot") = py::none())
-      .def_property_readonly("last_train", &PySession::lastTrain)
-      .def("compare_tables", &PySession::compareTables, py::arg("behavior"), py::arg("table"), py::arg("reference"))
+           py::arg("on_snapshot") = py::none(), doc::kTrain)
+      .def_property_readonly("last_train", &PySession::lastTrain, doc::kLastTrain)
+      .def("compare_tables", &PySession::compareTables, py::arg("behavior"), py::arg("table"), py::arg("reference"),
+           doc::kCompareTables)
       .def("evaluate", &PySession::evaluate, py::arg("tables") = py::none(), py::arg("trials") = 300,
            py::arg("seed") = 1, py::arg("controller") = "policy", py::arg("seconds") = 10.0, py::arg("horizon") = 3,
-           py::arg("train_missing") = false)
+           py::arg("train_missing") = false, doc::kEvaluate)
       .def("simulate", &PySession::simulate, py::arg("tables") = py::none(), py::arg("avatars") = 2,
            py::arg("seconds") = 10.0, py::arg("seed") = 1, py::arg("controller") = "policy", py::arg("horizon") = 3,
            py::arg("bvh_out") = py::none(), py::arg("gltf_out") = py::none(), py::arg("events_out") = py::none(),
-           py::arg("poses") = false, py::arg("train_missing") = false)
+           py::arg("poses") = false, py::arg("train_missing") = false, doc::kSimulate)
       .def("save_policy", &PySession::savePolicy, py::arg("path"), py::arg("tables"), py::arg("learner") = "python",
-           py::arg("train_missing") = false)
-      .def("load_policy", &PySession::loadPolicy, py::arg("path"));
+           py::arg("train_missing") = false, doc::kSavePolicy)
+      .def("load_policy", &PySession::loadPolicy, py::arg("path"), doc::kLoadPolicy);
 
   m.def(
       "write_compare_report",

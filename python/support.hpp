@@ -33,21 +33,24 @@ template <class Member>
 struct Readonly {
   const char* name;
   Member member;
+  const char* doc = "";  ///< its docstring (python/docstrings.hpp)
 };
 template <class Member>
 Readonly(const char*, Member) -> Readonly<Member>;  // clang 14 deduces no aggregate's arguments
+template <class Member>
+Readonly(const char*, Member, const char*) -> Readonly<Member>;
 
 // Binds each of `attributes` to `cls`: data members by def_readonly (NumPy arrays stay the
 // member's own), member functions as properties.
 template <class Class, class... Members>
 Class& bindReadonly(Class& cls, Readonly<Members>... attributes) {
-  const auto bindOne = [&cls](const char* name, auto member) {
+  const auto bindOne = [&cls](const char* name, auto member, const char* doc) {
     if constexpr (std::is_member_object_pointer_v<decltype(member)>)
-      cls.def_readonly(name, member);
+      cls.def_readonly(name, member, doc);
     else
-      cls.def_property_readonly(name, member);
+      cls.def_property_readonly(name, member, doc);
   };
-  (bindOne(attributes.name, attributes.member), ...);
+  (bindOne(attributes.name, attributes.member, attributes.doc), ...);
   return cls;
 }
 

@@ -18,6 +18,9 @@
 namespace mgrl::python {
 namespace {
 
+// A residual for Python: None where the learner reports -1 (none measured yet).
+py::object residualOrNone(double residual) { return residual < 0 ? py::object(py::none()) : py::float_(residual); }
+
 // Training run off the Python thread: its progress handed to a Python callback about ten
 // times a second, what it says printed on Python's stderr, Ctrl-C turned into the learner's
 // stop request (as the command line's handler does), the callback's own exception stopping
@@ -152,7 +155,7 @@ Trained trainWatched(const Session& session, const TrainSettings& settings, cons
       py::dict d;
       d["updates"] = t.point.updates;
       d["seconds"] = t.point.seconds;
-      d["residual"] = t.point.residual;
+      d["residual"] = residualOrNone(t.point.residual);
       d["table"] = table;
       call(onSnapshot, d);
     }
@@ -161,7 +164,7 @@ Trained trainWatched(const Session& session, const TrainSettings& settings, cons
       d["updates"] = p->updates;
       d["total"] = p->total;
       d["seconds"] = p->seconds;
-      d["residual"] = p->residual;
+      d["residual"] = residualOrNone(p->residual);  // None until the learner has measured one
       call(progress, d);
     }
     if (over) break;

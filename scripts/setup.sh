@@ -2,9 +2,11 @@
 # Installs what mgrl needs to build and test, from Debian 12 packages, if missing, and the
 # viewer's three.js (web/, from npm, exactly as web/package-lock.json says).
 #   scripts/setup.sh          what building, the demo and `mgrl serve` need
-#   scripts/setup.sh --python also matplotlib, nbconvert and a Jupyter kernel for Debian's
-#                             python3: the notebooks (notebooks/) and their plots
-#   scripts/setup.sh --test   all of the above, Chromium, for the browser test (tests/web/),
+#   scripts/setup.sh --python also matplotlib, nbconvert, a Jupyter kernel and Jupyter's
+#                             notebook server for Debian's python3: the notebooks
+#                             (notebooks/) and their plots
+#   scripts/setup.sh --test   all of the above but the notebook server, Chromium, for the
+#                             browser test (tests/web/),
 #                             clang with its runtime libraries, for the fuzz smoke (libFuzzer),
 #                             and Open MPI, for mpi_value_iteration's tests under mpirun
 # Building installs pybind11 and NumPy too: `import mgrl` (python/) is part of the build.
@@ -29,6 +31,9 @@ command -v npm >/dev/null 2>&1 || packages+=(npm)
 # pip, setuptools, wheel and venv: pip install . (pyproject.toml), offline, with Debian's tools.
 case "${1:-}" in --test | --python) packages+=(python3-matplotlib jupyter-nbconvert python3-ipykernel python3-pip
                                                python3-setuptools python3-wheel python3-venv) ;; esac
+# Jupyter's notebook server (`jupyter notebook notebooks/`) for the Python set-up; the tests
+# execute the notebooks with nbconvert alone.
+[ "${1:-}" = "--python" ] && packages+=(jupyter-notebook)
 
 missing=()
 for p in "${packages[@]}"; do

@@ -92,10 +92,25 @@ __all__ = ["Error", "Problem", "Session", "MotionGraphEnv", "MotionGraphVectorEn
 
 
 def inspect(files):
-    """What is in motion files, as `mgrl inspect --json` reports it with its defaults:
-    {"files": [{"path", "joints", "joint_names", "roles", "frames", "fps", "height_m",
-    "punches", "kicks", ...}]}. `files` is one path or a list; every file is read before
-    any is reported. Raises mgrl.Error naming the file, line and what was expected."""
+    """What is in motion files, as mgrl inspect --json reports it with its defaults; the
+    loader's warnings as Python warnings.
+
+    Parameters
+    ----------
+    files : str | os.PathLike[str] | collections.abc.Sequence[str | os.PathLike[str]]
+        One BVH or ASF/AMC file, or several; every file is read before any is reported.
+
+    Returns
+    -------
+    dict[str, typing.Any]
+        {"files": [{"path", "joints", "joint_names", "roles", "frames", "fps", "height_m",
+        "punches", "kicks", ...}]}.
+
+    Raises
+    ------
+    mgrl.Error
+        A file that cannot be read, naming it, the line and what was expected.
+    """
     if isinstance(files, (str, bytes)) or hasattr(files, "__fspath__"):
         files = [files]
     result = _json.loads(_core._inspect([_os.fsdecode(f) for f in files]))
@@ -106,9 +121,31 @@ def inspect(files):
 
 def bout_stats(bouts=(), snu=False, against=(), data=None):
     """Distance, facing, strikes, foot skate and more of bouts, real or synthesized, as
-    `mgrl stats --json` reports them (docs/stats.md): {"params", "bouts", "pooled"}, or with
-    `against` {"params", "real", "synthetic", "wasserstein1"}. Raises mgrl.Error naming the
-    bout at fault."""
+    mgrl stats --json reports them (docs/stats.md).
+
+    Parameters
+    ----------
+    bouts : collections.abc.Sequence[str | os.PathLike[str]]
+        Folders of BVH files (one per fighter) or quoted patterns, looked up in the working
+        folder, then in data.
+    snu : bool
+        Add the SNU sparring capture.
+    against : collections.abc.Sequence[str | os.PathLike[str]]
+        Bouts to compare the first group with.
+    data : str | os.PathLike[str] | None
+        The motion-capture folder; None as Session's.
+
+    Returns
+    -------
+    dict[str, typing.Any]
+        {"params", "bouts", "pooled"}, or with against {"params", "real", "synthetic",
+        "wasserstein1"}.
+
+    Raises
+    ------
+    mgrl.Error
+        A bout that cannot be read, naming it.
+    """
     if isinstance(bouts, (str, bytes)) or isinstance(against, (str, bytes)):
         raise TypeError("bout_stats: expected bouts and against as lists of folders or patterns, found a string")
     bouts = [_os.fsdecode(b) for b in bouts]
@@ -120,9 +157,25 @@ def bout_stats(bouts=(), snu=False, against=(), data=None):
 
 
 def load_policy(path, session):
-    """A policy bundle's tables (mgrl train's or Session.save_policy's folder) as
-    {behaviour: float32 (A, V)} for `session`'s graph, ready for session.evaluate(tables).
-    Raises mgrl.Error when the folder holds no bundle or one made on another graph."""
+    """A policy bundle's tables, ready for session.evaluate(tables).
+
+    Parameters
+    ----------
+    path : str | os.PathLike[str]
+        The bundle's folder (mgrl train's or Session.save_policy's).
+    session : Session
+        A session on the graph the bundle was made on.
+
+    Returns
+    -------
+    dict[str, numpy.typing.NDArray[numpy.float32]]
+        {behaviour: Q of shape (A, V)}.
+
+    Raises
+    ------
+    mgrl.Error
+        The folder holds no bundle, or one made on another graph.
+    """
     return session.load_policy(_os.fspath(path))
 
 
@@ -131,16 +184,38 @@ def _scenario_folder():
 
 
 def scenarios():
-    """The scenarios shipped with the module, by file name ("boxing.yaml", ...), sorted: each
-    opens from any folder as mgrl.Session(mgrl.scenario_path(name))."""
+    """The scenarios shipped with the module: each opens from any folder as
+    mgrl.Session(name).
+
+    Returns
+    -------
+    list[str]
+        Their file names ("boxing.yaml", ...), sorted.
+    """
     return sorted(p.name for p in _scenario_folder().glob("*.yaml"))
 
 
 def scenario_path(name):
     """The path of a scenario shipped with the module, from any folder:
-    `mgrl.Session(mgrl.scenario_path("boxing.yaml"))`. `name` is a file name in the
-    repository's scenarios/ ("boxing.yaml", "spar_learned.yaml", ...; ".yaml" may be left
-    out). Raises FileNotFoundError naming the scenarios there."""
+    mgrl.Session(mgrl.scenario_path("boxing.yaml")).
+
+    Parameters
+    ----------
+    name : str | os.PathLike[str]
+        A scenario's file name ("boxing.yaml", "spar_learned.yaml", ...; ".yaml" may be
+        left out).
+
+    Returns
+    -------
+    str
+
+    Raises
+    ------
+    FileNotFoundError
+        No such scenario, naming those there.
+    ValueError
+        A path, not a file name.
+    """
     folder = _scenario_folder()
     name = _os.fsdecode(name)
     if _os.sep in name or (_os.altsep and _os.altsep in name):

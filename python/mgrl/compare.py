@@ -30,7 +30,26 @@ from . import _core
 
 class Observer:
     """What a Python learner reports through: snapshots of its table along training (for
-    the learning curve) and, optionally, progress."""
+    the learning curve) and, optionally, progress.
+
+    Parameters
+    ----------
+    budget : int
+        The learner's number of updates.
+    count : int
+        How many snapshots compare wants, evenly spaced over the budget.
+
+    Attributes
+    ----------
+    budget : int
+        The learner's number of updates.
+    snapshot_count : int
+        How many snapshots compare wants.
+    snapshot_points : list[int]
+        The updates at which to take them: budget * i // count for i = 1..count.
+    snapshots : list[dict[str, typing.Any]]
+        Those taken: {"updates", "seconds", "residual", "table"}.
+    """
 
     def __init__(self, budget, count):
         self.budget = int(budget)
@@ -42,13 +61,41 @@ class Observer:
         self.started = time.perf_counter()
 
     def snapshot(self, table, updates, residual=None):
+        """Takes a copy of the table for the learning curve (the time it takes is left out
+        of the training time).
+
+        Parameters
+        ----------
+        table : numpy.typing.ArrayLike
+            Q, shape (A, V).
+        updates : int
+            The updates made so far.
+        residual : float | None
+            The Bellman residual, if the learner measured one.
+
+        Returns
+        -------
+        None
+        """
         started = time.perf_counter()
         self.snapshots.append({"updates": int(updates), "seconds": started - self.started - self.spent,
                                "residual": residual, "table": np.array(table, dtype=np.float32, copy=True)})
         self.spent += time.perf_counter() - started
 
     def progress(self, updates, total=None):
-        pass
+        """Where training is; compare does not show it.
+
+        Parameters
+        ----------
+        updates : int
+            The updates made so far.
+        total : int | None
+            Of how many.
+
+        Returns
+        -------
+        None
+        """
 
 
 def _name(learner):
@@ -66,10 +113,49 @@ def _plain(x):
 
 def compare(session, behavior, learners, seeds=(1,), trials=100, seconds=10.0, snapshots=10, snapshot_trials=None,
             budget=1_000_000, report=None, log=print):
-    """C++ learner names and Python learner objects (train(problem, budget, rng, observer)
-    returning a float32 (A, V) table) on `behavior` of `session`, each with every seed (a
-    C++ learner without a seed parameter runs once). `budget` is the Python learners'
-    number of updates. Returns mgrl compare's report as a dict."""
+    """Learners side by side on one behaviour, as mgrl compare runs them: C++ learners by
+    name and Python learner objects, each with every seed (a C++ learner without a seed
+    parameter runs once), measured against value iteration and evaluated on the same trial
+    starts.
+
+    Parameters
+    ----------
+    session : Session
+        The scenario.
+    behavior : str
+        One of its behaviours.
+    learners : collections.abc.Sequence[typing.Any]
+        Registered C++ learner names and objects with train(problem, budget, rng,
+        observer) returning a float32 (A, V) table.
+    seeds : collections.abc.Iterable[int]
+        The seeds each learner runs with.
+    trials : int
+        Trials per run, on the same starts (seed 1).
+    seconds : float
+        Each trial's length.
+    snapshots : int
+        Snapshots per run for the learning curves.
+    snapshot_trials : int | None
+        Trials per snapshot (the first of the starts); None: min(50, trials).
+    budget : int
+        The Python learners' number of updates.
+    report : str | os.PathLike[str] | None
+        A folder to write results.json, results.csv, curves.csv and index.html to.
+    log : collections.abc.Callable[..., object] | None
+        Where progress lines go (print); None: nowhere.
+
+    Returns
+    -------
+    dict[str, typing.Any]
+        mgrl compare's report: "runs", "learners" (mean and sd of each measure),
+        "reference", ...
+
+    Raises
+    ------
+    mgrl.Error
+        Unknown learners, no seeds, or a report folder that cannot be written; an
+        exception a Python learner raises propagates.
+    """
     if isinstance(learners, (str, bytes)) or not learners:
         raise _core.Error("learners: expected a list of C++ learner names and Python learner objects, found "
                           f"{learners!r}")
@@ -218,7 +304,17 @@ def _count(x):
 
 
 def text(result):
-    """The table `mgrl compare` prints, for a report from compare()."""
+    """The table mgrl compare prints, for a report from compare().
+
+    Parameters
+    ----------
+    result : dict[str, typing.Any]
+        compare()'s report.
+
+    Returns
+    -------
+    str
+    """
     lines = [f"compare {result['behavior']} on {result['scenario_name']}: {len(result['runs'])} "
              f"run{'s' if len(result['runs']) != 1 else ''}, {result['trials']} trials each on the same starts; "
              f"reference: {result['reference']['description']}",

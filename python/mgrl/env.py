@@ -80,8 +80,8 @@ try:
 except ImportError:
 
     class AutoresetMode(enum.Enum):
-        """When a vector environment resets an ended episode: gymnasium.vector.AutoresetMode's
-        values (Gymnasium 1.1)."""
+        """When a vector environment resets an ended episode, as gymnasium.vector.AutoresetMode
+        (Gymnasium 1.1) names it: NEXT_STEP, SAME_STEP (MotionGraphVectorEnv's) or DISABLED."""
 
         NEXT_STEP = "NextStep"
         SAME_STEP = "SameStep"
@@ -97,7 +97,24 @@ def _rng(seed=None):
 
 class Space:
     """A set of values with a random generator: gymnasium.spaces.Space's fields when
-    Gymnasium is absent."""
+    Gymnasium is absent.
+
+    Parameters
+    ----------
+    shape : tuple[int, ...] | None
+        The shape of its values (None for a Dict).
+    dtype : numpy.typing.DTypeLike
+        Their NumPy dtype (None for a Dict).
+    seed : int | None
+        Seeds np_random.
+
+    Attributes
+    ----------
+    shape : tuple[int, ...] | None
+        The shape of its values.
+    dtype : numpy.dtype[typing.Any] | None
+        Their dtype.
+    """
 
     def __init__(self, shape, dtype, seed=None):
         self.shape = None if shape is None else tuple(shape)
@@ -106,22 +123,94 @@ class Space:
 
     @property
     def np_random(self):
-        """The space's generator (sample() draws from it), made on first use."""
+        """The space's generator: sample() draws from it. Made on first use.
+
+        Returns
+        -------
+        numpy.random.Generator
+        """
         if self._np_random is None:
             self._np_random = _rng()
         return self._np_random
 
     def seed(self, seed=None):
-        """Seeds the generator; returns [seed]."""
+        """Seeds the generator.
+
+        Parameters
+        ----------
+        seed : int | None
+            The seed; None draws one from the system.
+
+        Returns
+        -------
+        list[int | None]
+            [seed], as Gymnasium's.
+        """
         self._np_random = _rng(seed)
         return [seed]
 
+    def sample(self, mask=None):
+        """A random element.
+
+        Parameters
+        ----------
+        mask : typing.Any
+            What the space allows (per kind of space), or None.
+
+        Returns
+        -------
+        typing.Any
+        """
+        raise NotImplementedError
+
+    def contains(self, x):
+        """Whether x is an element.
+
+        Parameters
+        ----------
+        x : typing.Any
+            A value.
+
+        Returns
+        -------
+        bool
+        """
+        raise NotImplementedError
+
     def __contains__(self, x):
+        """x in space: contains(x).
+
+        Parameters
+        ----------
+        x : typing.Any
+            A value.
+
+        Returns
+        -------
+        bool
+        """
         return self.contains(x)
 
 
 class Discrete(Space):
-    """{start, ..., start + n - 1}: gymnasium.spaces.Discrete when Gymnasium is absent."""
+    """{start, ..., start + n - 1}: gymnasium.spaces.Discrete when Gymnasium is absent.
+
+    Parameters
+    ----------
+    n : int
+        How many elements.
+    seed : int | None
+        Seeds np_random.
+    start : int
+        The smallest element.
+
+    Attributes
+    ----------
+    n : numpy.int64
+        How many elements.
+    start : numpy.int64
+        The smallest.
+    """
 
     def __init__(self, n, seed=None, start=0):
         super().__init__((), np.int64, seed)
@@ -129,8 +218,18 @@ class Discrete(Space):
         self.start = np.int64(start)
 
     def sample(self, mask=None):
-        """A uniformly random element; with mask (int8, shape (n,), 1 where allowed) one of
-        the allowed ones, or start if none is."""
+        """A uniformly random element, or one of those a mask allows.
+
+        Parameters
+        ----------
+        mask : numpy.typing.NDArray[numpy.int8] | None
+            Shape (n,), 1 where allowed (MotionGraphEnv's info["action_mask"]).
+
+        Returns
+        -------
+        numpy.int64
+            The element; start if the mask allows none.
+        """
         if mask is None:
             return self.start + self.np_random.integers(self.n)
         mask = np.asarray(mask)
@@ -140,6 +239,17 @@ class Discrete(Space):
         return self.start + (self.np_random.choice(legal) if len(legal) else np.int64(0))
 
     def contains(self, x):
+        """Whether x is an integer in [start, start + n).
+
+        Parameters
+        ----------
+        x : typing.Any
+            A value.
+
+        Returns
+        -------
+        bool
+        """
         if isinstance(x, (numbers.Integral, np.integer)):
             value = int(x)
         elif isinstance(x, np.ndarray) and x.shape == () and x.dtype.kind in "iu":
@@ -157,15 +267,37 @@ class Discrete(Space):
 
 class MultiDiscrete(Space):
     """Integer arrays whose element i lies in [0, nvec[i]): gymnasium.spaces.MultiDiscrete
-    when Gymnasium is absent (a batch of Discrete spaces)."""
+    when Gymnasium is absent (a batch of Discrete spaces).
+
+    Parameters
+    ----------
+    nvec : numpy.typing.ArrayLike
+        Each element's count of values.
+    seed : int | None
+        Seeds np_random.
+
+    Attributes
+    ----------
+    nvec : numpy.typing.NDArray[numpy.int64]
+        Each element's count of values.
+    """
 
     def __init__(self, nvec, seed=None):
         self.nvec = np.asarray(nvec, dtype=np.int64)
         super().__init__(self.nvec.shape, np.int64, seed)
 
     def sample(self, mask=None):
-        """Uniformly random elements; with mask (a tuple of int8 arrays, one per element) one
-        allowed value each."""
+        """Uniformly random values, or one value each mask allows.
+
+        Parameters
+        ----------
+        mask : collections.abc.Sequence[numpy.typing.NDArray[numpy.int8]] | None
+            One int8 mask per element (MotionGraphVectorEnv's info["action_mask"] rows).
+
+        Returns
+        -------
+        numpy.typing.NDArray[numpy.int64]
+        """
         if mask is None:
             return (self.np_random.random(self.shape) * self.nvec).astype(np.int64)
         out = np.zeros(self.shape, dtype=np.int64)
@@ -175,6 +307,17 @@ class MultiDiscrete(Space):
         return out
 
     def contains(self, x):
+        """Whether x is an integer array of the shape with each value in range.
+
+        Parameters
+        ----------
+        x : typing.Any
+            A value.
+
+        Returns
+        -------
+        bool
+        """
         x = np.asarray(x) if isinstance(x, (list, tuple)) else x
         return (isinstance(x, np.ndarray) and x.shape == self.shape and x.dtype.kind in "iu"
                 and bool(np.all((0 <= x) & (x < self.nvec))))
@@ -188,7 +331,28 @@ class MultiDiscrete(Space):
 
 class Box(Space):
     """Real arrays between low and high, bounds included: gymnasium.spaces.Box when
-    Gymnasium is absent."""
+    Gymnasium is absent.
+
+    Parameters
+    ----------
+    low : numpy.typing.ArrayLike
+        The lower bounds (broadcast to shape; -inf for none).
+    high : numpy.typing.ArrayLike
+        The upper bounds (inf for none).
+    shape : tuple[int, ...]
+        The values' shape.
+    dtype : numpy.typing.DTypeLike
+        Their dtype.
+    seed : int | None
+        Seeds np_random.
+
+    Attributes
+    ----------
+    low : numpy.typing.NDArray[typing.Any]
+        The lower bounds, of the shape.
+    high : numpy.typing.NDArray[typing.Any]
+        The upper bounds.
+    """
 
     def __init__(self, low, high, shape, dtype=np.float32, seed=None):
         super().__init__(shape, dtype, seed)
@@ -196,8 +360,18 @@ class Box(Space):
         self.high = np.broadcast_to(np.asarray(high, dtype=self.dtype), self.shape).copy()
 
     def sample(self, mask=None):
-        """Uniform where both bounds are finite, normal where neither is, and exponential
-        from the finite bound where only one is, as Gymnasium's."""
+        """A random array: uniform where both bounds are finite, normal where neither is,
+        and exponential from the finite bound where only one is, as Gymnasium's.
+
+        Parameters
+        ----------
+        mask : None
+            Not used (Gymnasium's Box takes none).
+
+        Returns
+        -------
+        numpy.typing.NDArray[typing.Any]
+        """
         low, high = self.low.astype(np.float64), self.high.astype(np.float64)
         bounded_low, bounded_high = np.isfinite(low), np.isfinite(high)
         out = self.np_random.normal(size=self.shape)
@@ -210,6 +384,17 @@ class Box(Space):
         return out.astype(self.dtype)
 
     def contains(self, x):
+        """Whether x is an array of the shape, a dtype that casts safely, within the bounds.
+
+        Parameters
+        ----------
+        x : typing.Any
+            A value.
+
+        Returns
+        -------
+        bool
+        """
         if not isinstance(x, np.ndarray):
             x = np.asarray(x, dtype=self.dtype)
         return (x.shape == self.shape and np.can_cast(x.dtype, self.dtype)
@@ -224,28 +409,91 @@ class Box(Space):
 
 
 class Dict(Space):
-    """Named spaces: gymnasium.spaces.Dict when Gymnasium is absent."""
+    """Named spaces: gymnasium.spaces.Dict when Gymnasium is absent.
+
+    Parameters
+    ----------
+    spaces : collections.abc.Mapping[str, Space]
+        The spaces by name.
+    seed : int | None
+        Seeds np_random.
+
+    Attributes
+    ----------
+    spaces : dict[str, Space]
+        The spaces by name.
+    """
 
     def __init__(self, spaces, seed=None):
         super().__init__(None, None, seed)
         self.spaces = dict(spaces)
 
     def __getitem__(self, key):
+        """The space of that name.
+
+        Parameters
+        ----------
+        key : str
+            A name.
+
+        Returns
+        -------
+        Space
+        """
         return self.spaces[key]
 
     def keys(self):
+        """The names.
+
+        Returns
+        -------
+        collections.abc.KeysView[str]
+        """
         return self.spaces.keys()
 
     def seed(self, seed=None):
-        """Seeds each space from seed, in key order; returns their seeds."""
+        """Seeds this space, then each of its spaces from seeds it draws, in key order.
+
+        Parameters
+        ----------
+        seed : int | None
+            The seed.
+
+        Returns
+        -------
+        list[int | None]
+            seed, then each space's.
+        """
         super().seed(seed)
         seeds = [int(s) for s in self._np_random.integers(2 ** 31, size=len(self.spaces))]
         return [seed] + [space.seed(s)[0] for space, s in zip(self.spaces.values(), seeds)]
 
     def sample(self, mask=None):
+        """A random element of each space.
+
+        Parameters
+        ----------
+        mask : None
+            Not used.
+
+        Returns
+        -------
+        dict[str, typing.Any]
+        """
         return {k: space.sample() for k, space in self.spaces.items()}
 
     def contains(self, x):
+        """Whether x is a dict with the same names, each value in its space.
+
+        Parameters
+        ----------
+        x : typing.Any
+            A value.
+
+        Returns
+        -------
+        bool
+        """
         return isinstance(x, dict) and x.keys() == self.spaces.keys() and all(
             self.spaces[k].contains(v) for k, v in x.items())
 
@@ -257,8 +505,20 @@ class Dict(Space):
 
 
 def batch_space(space, n):
-    """n of `space` as one space (gymnasium.vector.utils.batch_space when Gymnasium is
-    absent): Discrete becomes MultiDiscrete, Box gains a leading axis, Dict batches each."""
+    """n of a space as one space (gymnasium.vector.utils.batch_space when Gymnasium is
+    absent): Discrete becomes MultiDiscrete, Box gains a leading axis, Dict batches each.
+
+    Parameters
+    ----------
+    space : Space
+        A Discrete, Box or Dict space.
+    n : int
+        How many.
+
+    Returns
+    -------
+    Space
+    """
     if isinstance(space, Discrete):
         return MultiDiscrete(np.full(n, space.n))
     if isinstance(space, Box):
@@ -282,7 +542,12 @@ class _Seeded:
 
     @property
     def np_random(self):
-        """The environment's NumPy generator: seeded by reset(seed=...), else made on first use."""
+        """The environment's NumPy generator: seeded by reset(seed=...), else made on first use.
+
+        Returns
+        -------
+        numpy.random.Generator
+        """
         if self._np_random is None:
             self._np_random = _rng()
             self._np_random_seed = -1
@@ -295,14 +560,25 @@ class _Seeded:
 
     @property
     def np_random_seed(self):
-        """The seed np_random was made from; -1 when it was not made from a seed given."""
+        """The seed np_random was made from.
+
+        Returns
+        -------
+        int
+            The seed reset() was last given; -1 when np_random was not made from one.
+        """
         if self._np_random is None:
             self.np_random  # noqa: B018 - made on first use
         return self._np_random_seed
 
     @property
     def unwrapped(self):
-        """The environment itself (no wrappers here)."""
+        """The environment under any wrappers: here, itself.
+
+        Returns
+        -------
+        typing.Self
+        """
         return self
 
     def reset(self, *, seed=None, options=None):
@@ -311,15 +587,49 @@ class _Seeded:
             self._np_random_seed = seed
 
     def close(self):
-        """Nothing to release: the C++ episodes go with the object."""
+        """Nothing to release: the C++ episodes go with the object.
+
+        Returns
+        -------
+        None
+        """
 
     def get_wrapper_attr(self, name):
+        """An attribute of the environment, as Gymnasium's wrappers look one up.
+
+        Parameters
+        ----------
+        name : str
+            Its name.
+
+        Returns
+        -------
+        typing.Any
+        """
         return getattr(self, name)
 
     def __enter__(self):
+        """The environment, for a with statement (closed at its end).
+
+        Returns
+        -------
+        typing.Self
+        """
         return self
 
     def __exit__(self, *args):
+        """Closes the environment.
+
+        Parameters
+        ----------
+        args : object
+            The exception's type, value and traceback, if any.
+
+        Returns
+        -------
+        bool
+            False: an exception goes on.
+        """
         self.close()
         return False
 
@@ -377,22 +687,51 @@ class MotionGraphEnv(_EnvBase):
 
     Parameters
     ----------
-    scenario : str, os.PathLike or mgrl.Session
+    scenario : str | os.PathLike[str] | Session
         A scenario's path or shipped name, opened with data, cache and sets as on the
         command line, or a Session already open (its graph is shared, not loaded again).
     behavior : str
         The behaviour to play ("approach", "hit", ...).
+    data : str | os.PathLike[str] | None
+        As Session's.
+    cache : str | os.PathLike[str] | None
+        As Session's.
+    sets : dict[str, object] | list[str] | None
+        As Session's.
     max_seconds : float
         Seconds of motion after which an episode is truncated.
     end_on_success : bool
         Whether meeting the behaviour's success criterion terminates the episode.
-    render_mode : None or "rgb_array"
-        "rgb_array": render() returns a top-down picture.
+    render_mode : str | None
+        "rgb_array": render() returns a top-down picture; None: it returns None.
     render_size : int
         The picture's side in pixels.
-    illegal_actions : "wrap" or "raise"
-        What an index past the state's out-actions does: play index % out-actions, or raise
-        mgrl.Error.
+    illegal_actions : str
+        What an index past the state's out-actions does: "wrap" plays index % out-actions,
+        "raise" raises mgrl.Error.
+
+    Attributes
+    ----------
+    action_space : Discrete
+        Discrete(the most out-actions any state has).
+    observation_space : Dict
+        "state" Discrete(S), "target" Box (3,), "coordinates" Box (D,).
+    session : Session
+        The session the episodes are played on.
+    behavior : str
+        The behaviour played.
+    grid_axes : tuple[str, ...]
+        The coordinates' axes ("angle", "distance", ...).
+    grid_bounds : numpy.typing.NDArray[numpy.float64]
+        (D, 2): the grid's own range on each axis.
+    metadata : dict[str, typing.Any]
+        "render_modes" and "render_fps", as Gymnasium's.
+    render_mode : str | None
+        As given.
+    render_size : int
+        As given.
+    spec : None
+        No registration spec (Gymnasium's gymnasium.make sets one).
     """
 
     metadata = {"render_modes": ["rgb_array"], "render_fps": 30}
@@ -423,16 +762,22 @@ class MotionGraphEnv(_EnvBase):
 
         Parameters
         ----------
-        seed : int, optional
+        seed : int | None
             Seeds the episode's random numbers (and np_random); None goes on from the last.
-        options : dict, optional
+        options : dict[str, typing.Any] | None
             {"state": int, "target": (x, y, z)}, either or both: the episode's start (the
             module's docstring).
 
         Returns
         -------
-        (observation, info) : info has "action_mask" (int8), "success" (False) and
-        "seconds" (0.0).
+        tuple[dict[str, typing.Any], dict[str, typing.Any]]
+            (observation, info): info has "action_mask" (int8), "success" (False) and
+            "seconds" (0.0).
+
+        Raises
+        ------
+        mgrl.Error
+            Unknown options, a state out of range or a target not 3 finite numbers.
         """
         state, target = _placement(options)
         super().reset(seed=seed)
@@ -446,15 +791,22 @@ class MotionGraphEnv(_EnvBase):
 
         Parameters
         ----------
-        action : int
+        action : int | numpy.integer[typing.Any]
             An element of action_space: an index into the state's out-actions (past them,
             as illegal_actions says).
 
         Returns
         -------
-        (observation, reward, terminated, truncated, info) : reward a float, info with
-        "action_mask" (int8, for the new state), "success" (the criterion met during
-        this action) and "seconds" (of motion played in the episode).
+        tuple[dict[str, typing.Any], float, bool, bool, dict[str, typing.Any]]
+            (observation, reward, terminated, truncated, info): info has "action_mask"
+            (int8, for the new state), "success" (the criterion met during this action) and
+            "seconds" (of motion played in the episode).
+
+        Raises
+        ------
+        mgrl.Error
+            An action outside the action space (or past the out-actions with
+            illegal_actions="raise").
         """
         choice = self._choice(action)
         reward, terminated, truncated, success, seconds = self._episodes.step(0, choice)
@@ -474,31 +826,83 @@ class MotionGraphEnv(_EnvBase):
         return choice
 
     def render(self):
-        """A top-down picture (render_size pixels square, uint8 RGB): the avatar at the
-        centre facing up, the behaviour's grid as grey dots, the target in red; None unless
-        render_mode is "rgb_array"."""
+        """A top-down picture: the avatar at the centre facing up, the behaviour's grid as
+        grey dots, the target in red.
+
+        Returns
+        -------
+        numpy.typing.NDArray[numpy.uint8] | None
+            (render_size, render_size, 3) RGB; None unless render_mode is "rgb_array".
+        """
         if self.render_mode != "rgb_array":
             return None
         return draw_top_down(self._episodes, self._last, self.render_size)
 
     def close(self):
-        """Nothing to release: the C++ episodes go with the object."""
+        """Nothing to release: the C++ episodes go with the object.
+
+        Returns
+        -------
+        None
+        """
 
 
 class MotionGraphVectorEnv(_VectorEnvBase):
     """num_envs MotionGraphEnv episodes stepped in one C++ call: Gymnasium's VectorEnv with
     same-step autoreset (the module's docstring).
 
-    Parameters are MotionGraphEnv's, and num_envs, the number of environments.
-
-    Spaces: single_action_space and single_observation_space are one environment's;
-    action_space (MultiDiscrete) and observation_space (a Dict of arrays with a leading
-    num_envs axis) are the batch's.
-
     Info, as Gymnasium's vector environments give it: each key an array over the
     environments with a boolean "_key" beside it saying which hold a value:
     "action_mask" (int8, (num_envs, max actions)), "success", and at the ends of
     episodes "final_obs" and "final_info".
+
+    Parameters
+    ----------
+    scenario : str | os.PathLike[str] | Session
+        As MotionGraphEnv's.
+    behavior : str
+        As MotionGraphEnv's.
+    num_envs : int
+        How many environments, in [1, 1000000].
+    data : str | os.PathLike[str] | None
+        As Session's.
+    cache : str | os.PathLike[str] | None
+        As Session's.
+    sets : dict[str, object] | list[str] | None
+        As Session's.
+    max_seconds : float
+        As MotionGraphEnv's.
+    end_on_success : bool
+        As MotionGraphEnv's.
+    illegal_actions : str
+        As MotionGraphEnv's.
+
+    Attributes
+    ----------
+    num_envs : int
+        How many environments.
+    single_action_space : Discrete
+        One environment's.
+    single_observation_space : Dict
+        One environment's.
+    action_space : MultiDiscrete
+        The batch's: one action per environment.
+    observation_space : Dict
+        The batch's: each of one environment's spaces with a leading num_envs axis.
+    session : Session
+        As MotionGraphEnv's.
+    behavior : str
+        As MotionGraphEnv's.
+    grid_axes : tuple[str, ...]
+        As MotionGraphEnv's.
+    grid_bounds : numpy.typing.NDArray[numpy.float64]
+        As MotionGraphEnv's.
+    metadata : dict[str, typing.Any]
+        "render_modes" (none) and "autoreset_mode" (AutoresetMode.SAME_STEP).
+    render_mode : None
+        No rendering.
+    spec : None
+        No registration spec.
     """
 
     metadata = {"render_modes": [], "autoreset_mode": AutoresetMode.SAME_STEP}
@@ -530,13 +934,20 @@ class MotionGraphVectorEnv(_VectorEnvBase):
         return (np.arange(width)[None, :] < self._degree[states][:, None]).astype(np.int8)
 
     def reset(self, *, seed=None, options=None):
-        """Restarts every environment; environment i seeded with seed + i when seed is given.
-        options places every environment's start alike, as MotionGraphEnv.reset's does.
+        """Restarts every environment.
+
+        Parameters
+        ----------
+        seed : int | None
+            Environment i is seeded with seed + i (and np_random with seed).
+        options : dict[str, typing.Any] | None
+            Places every environment's start alike, as MotionGraphEnv.reset's.
 
         Returns
         -------
-        (observations, info) : batched as observation_space; info["action_mask"] int8
-        (num_envs, max actions).
+        tuple[dict[str, numpy.typing.NDArray[typing.Any]], dict[str, typing.Any]]
+            (observations, info): batched as observation_space; info["action_mask"] int8
+            (num_envs, max actions).
         """
         state, target = _placement(options)
         super().reset(seed=seed)
@@ -550,16 +961,23 @@ class MotionGraphVectorEnv(_VectorEnvBase):
 
         Parameters
         ----------
-        actions : int array (num_envs,)
-            An element of action_space.
+        actions : numpy.typing.ArrayLike
+            Integers, shape (num_envs,): an element of action_space.
 
         Returns
         -------
-        (observations, rewards, terminations, truncations, info) : arrays over the
-        environments; an ended environment's observation is its new episode's, its last
-        one in info["final_obs"] (a batch like the observations, each row where that
-        environment's step led; info["_final_obs"] marks the ended ones) and that step's
-        info in info["final_info"] ("action_mask" of the last state, "success").
+        tuple[dict[str, numpy.typing.NDArray[typing.Any]], numpy.typing.NDArray[numpy.float32], numpy.typing.NDArray[numpy.bool_], numpy.typing.NDArray[numpy.bool_], dict[str, typing.Any]]
+            (observations, rewards, terminations, truncations, info), arrays over the
+            environments. An ended environment's observation is its new episode's; its last
+            one is in info["final_obs"] (a batch like the observations, each row where that
+            environment's step led; info["_final_obs"] marks the ended ones) and that
+            step's info in info["final_info"] ("action_mask" of the state it led to,
+            "success").
+
+        Raises
+        ------
+        mgrl.Error
+            Actions of the wrong shape or dtype, or outside the action space.
         """
         actions = self._choices(actions)
         reward, terminated, truncated, success, end_state, end_target, end_coordinates = \
@@ -586,11 +1004,36 @@ class MotionGraphVectorEnv(_VectorEnvBase):
         return np.where(inside, given % degree, given)
 
     def close(self, **kwargs):
-        """Nothing to release: the C++ episodes go with the object."""
+        """Nothing to release: the C++ episodes go with the object.
+
+        Parameters
+        ----------
+        kwargs : object
+            Accepted as Gymnasium's VectorEnv.close accepts them; not used.
+
+        Returns
+        -------
+        None
+        """
 
 
 def draw_top_down(episodes, obs, size):
-    """The picture MotionGraphEnv.render() returns."""
+    """The picture MotionGraphEnv.render() returns.
+
+    Parameters
+    ----------
+    episodes : typing.Any
+        The environment's C++ episodes (their grid's reach sets the scale).
+    obs : dict[str, typing.Any] | None
+        The observation to draw the target of.
+    size : int
+        The picture's side in pixels.
+
+    Returns
+    -------
+    numpy.typing.NDArray[numpy.uint8]
+        (size, size, 3) RGB.
+    """
     image = np.full((size, size, 3), 255, dtype=np.uint8)
     # The grid's reach sets the scale: its farthest vertex at 45 % of the picture.
     reach = episodes.reach

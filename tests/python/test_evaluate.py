@@ -219,6 +219,10 @@ class EvaluateTest(unittest.TestCase):
         self.assertTrue(seen)
         self.assertEqual(seen[-1]["behavior"], "approach")
         self.assertTrue(all(a["updates"] <= b["updates"] for a, b in zip(seen, seen[1:])))
+        # No placeholders: a residual is None until one is measured, then a non-negative float.
+        for d in seen:
+            self.assertTrue(d["residual"] is None or (isinstance(d["residual"], float) and d["residual"] >= 0), d)
+        self.assertIsInstance(seen[-1]["residual"], float)
 
         class Enough(Exception):
             pass
