@@ -61,6 +61,8 @@ class KdTree final : public Discretizer {
   bool locate(const TargetState& e, GridCell& out) const override;
   GridCell locateClamped(const TargetState& e) const override;
   TargetState vertexState(std::size_t v) const override;
+  /// A tree's vertices lie on no product of axes: their coordinates are their states'.
+  std::array<double, 3> vertexCoordinates(std::size_t v) const override { return coordinates(vertexState(v)); }
 
   nlohmann::json describe() const override;
 

@@ -69,6 +69,41 @@ inline std::filesystem::path shippedScenario(const std::filesystem::path& scenar
   }
 }
 
+/// A scenario error as Python names its cause: the command line's "--set KEY=VALUE: ..."
+/// becomes "sets['KEY'] (= VALUE): ...", the override given in Session(sets=...).
+inline std::string setsMessage(const std::string& what) {
+  constexpr std::string_view flag = "--set ";
+  const std::size_t colon = what.find(": ");
+  if (what.rfind(flag, 0) != 0 || colon == std::string::npos) return what;
+  const std::string set = what.substr(flag.size(), colon - flag.size());
+  const std::size_t eq = set.find('=');
+  if (eq == std::string::npos) return what;
+  return fmt::format("sets['{}'] (= {}){}", set.substr(0, eq), set.substr(eq + 1), what.substr(colon));
+}
+
+/// The learner train(learner=, sets=) asks for, made from its block `config` (the
+/// scenario's, or a new one of the named type, with the sets applied). Its errors name
+/// train's arguments, not a position in the block (which the user never wrote).
+inline std::unique_ptr<Learner> learnerFrom(const nlohmann::json& config, const std::string& behavior) {
+  const std::string type = config.value("type", std::string());
+  if (!type.empty() && !builtinPlugins().learners.find(type))
+    throw Error(fmt::format("learner: expected a registered learner ({}), found '{}'",
+                            builtinPlugins().learners.describeKnown(), type));
+  const std::string source = fmt::format("{} learner", behavior);
+  try {
+    return builtinPlugins().learners.create(ConfigNode::parse(config.dump(), source));
+  } catch (const Error& e) {
+    // "SOURCE:LINE:COLUMN: KEY: problem" -> "sets['KEY']: problem"
+    const std::string what = e.what();
+    const std::size_t at = what.rfind(source, 0) == 0 ? what.find(": ") : std::string::npos;
+    if (at == std::string::npos) throw;
+    const std::string rest = what.substr(at + 2);
+    const std::size_t key = rest.find(": ");
+    if (key == std::string::npos) throw Error(fmt::format("sets: {}", rest));
+    throw Error(fmt::format("sets['{}']: {}", rest.substr(0, key), rest.substr(key + 2)));
+  }
+}
+
 class PySession {
  public:
   // `policy`: None or a policy bundle's folder (mgrl train's or save_policy's), whose tables
@@ -87,7 +122,11 @@ class PySession {
     std::filesystem::path policyDir;
     if (!policy.is_none()) policyDir = policy.cast<std::filesystem::path>();
     py::gil_scoped_release release;
-    session_ = openSession(options, needs);
+    try {
+      session_ = openSession(options, needs);
+    } catch (const Error& e) {
+      throw Error(setsMessage(e.what()));
+    }
     if (!policyDir.empty()) {
       bundle_ = std::make_unique<PolicyBundle>(readBundle(policyDir, "policy"));
       policyDir_ = policyDir;
@@ -174,7 +213,8 @@ class PySession {
     // The model numbers each state's out-actions contiguously: indices are 0 .. A-1.
     p.outIndices = py::array_t<std::int32_t>(A);
     for (std::size_t a = 0; a < A; ++a) p.outIndices.mutable_data()[a] = static_cast<std::int32_t>(a);
-    // Each vertex as the grid's coordinates (angle, distance, height, ... as its axes say),
+    // Each vertex as the grid's coordinates (angle, distance, height, ... as its axes say;
+    // a vertex at the avatar itself keeps its angle axis' value),
     // then on a grid with speed layers its layer's speed (with a learned opponent's layers,
     // its discrete state: graph state x phases + phase), and with turn layers the turn rate
     // (rad/s) last.
@@ -183,7 +223,7 @@ class PySession {
     p.vertices = py::array_t<double>({V, static_cast<std::size_t>(columns)});
     for (std::size_t v = 0; v < V; ++v) {
       const TargetState e = grid.vertexState(v);
-      const auto coordinates = grid.coordinates(e);
+      const auto coordinates = grid.vertexCoordinates(v);
       double* row = p.vertices.mutable_data() + v * static_cast<std::size_t>(columns);
       for (int d = 0; d < D; ++d) row[d] = coordinates[static_cast<std::size_t>(d)];
       if (grid.layerAxis()) row[D] = grid.layerCoordinate(e);
@@ -221,9 +261,7 @@ class PySession {
     TrainSettings settings;
     settings.behavior = name;
     settings.save = false;
-    if (!learner.is_none() || !given.empty())
-      settings.learner =
-          builtinPlugins().learners.create(ConfigNode::parse(config.dump(), fmt::format("{} learner", name)));
+    if (!learner.is_none() || !given.empty()) settings.learner = learnerFrom(config, name);
     // The one way every front end trains: its self-play rounds, memory plan and record.
     Trained trained = trainWatched(*session_, settings, progress, snapshots, onSnapshot);
     PolicyBehavior& table = trained.bundle.behaviors.at(name);
@@ -274,10 +312,21 @@ class PySession {
     const StateActionModel& model = session_->model();
     const std::size_t A = model.actionCount(), V = b.discretizer->vertexCount();
     const std::string where = fmt::format("tables['{}']", b.name);
-    if (!py::isinstance<py::array>(value))
-      throw Error(fmt::format("{}: expected a NumPy float32 array of shape ({}, {}), found an object of type {}", where,
-                              A, V, typeName(value)));
-    const auto a = py::reinterpret_borrow<py::array>(value);
+    py::array a;
+    if (py::isinstance<py::array>(value)) {
+      a = py::reinterpret_borrow<py::array>(value);
+    } else {
+      // A nested list (or another array-like) converts as numpy.asarray would, to float32:
+      // it has no dtype of its own to keep.
+      try {
+        a = py::module_::import("numpy").attr("asarray")(value, "float32");
+      } catch (const py::error_already_set&) {
+        throw Error(
+            fmt::format("{}: expected a NumPy float32 array of shape ({}, {}), found an object of type {} "
+                        "that NumPy does not convert to one",
+                        where, A, V, typeName(value)));
+      }
+    }
     if (a.ndim() != 2 || static_cast<std::size_t>(a.shape(0)) != A || static_cast<std::size_t>(a.shape(1)) != V)
       throw Error(fmt::format("{}: expected shape ({}, {}) ({} actions of the graph x {} vertices of {}'s {} grid), "
                               "found shape {}",

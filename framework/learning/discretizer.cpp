@@ -326,18 +326,22 @@ Stencil Discretizer::stencil(const GridCell& cell) const {
   return s;
 }
 
-TargetState Discretizer::vertexState(std::size_t v) const {
+std::array<double, 3> Discretizer::vertexCoordinates(std::size_t v) const {
   std::array<double, 3> c{0, 0, 0};
-  const std::size_t turn = v / turnVertices_;
-  v %= turnVertices_;
-  const std::size_t layer = v / layerVertices_;
+  v %= turnVertices_;  // the axes repeat in every turn and speed layer
   v %= layerVertices_;
   for (int i = 0; i < dimension(); ++i) {
     const std::size_t n = axes_[i].vertices.size();
     c[i] = axes_[i].vertices[v % n];
     v /= n;
   }
-  TargetState e = state(c);
+  return c;
+}
+
+TargetState Discretizer::vertexState(std::size_t v) const {
+  const std::size_t turn = v / turnVertices_;
+  const std::size_t layer = (v % turnVertices_) / layerVertices_;
+  TargetState e = state(Discretizer::vertexCoordinates(v));
   if (opponentLayers_)
     e.opponent = static_cast<std::int32_t>(layer);
   else if (!layers_.vertices.empty())

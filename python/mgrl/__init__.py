@@ -81,8 +81,22 @@ bout_stats(bouts=(), snu=False, against=(), data=None)
 import json as _json
 import os as _os
 import pathlib as _pathlib
+import sys as _sys
 import warnings as _warnings
-from . import _core
+
+try:  # the C++ core hands out NumPy arrays: without NumPy it cannot start
+    import numpy as _numpy  # noqa: F401
+except ImportError as _error:
+    raise ImportError(f"mgrl: expected NumPy importable by this Python ({_sys.executable}), found none ({_error}); "
+                      "install it for this Python, or use Debian's /usr/bin/python3 with python3-numpy") from None
+try:
+    from . import _core
+except ImportError as _error:
+    _built = sorted(p.name for p in _pathlib.Path(__file__).resolve().parent.glob("_core*"))
+    raise ImportError(f"mgrl: expected the C++ core built for this Python ({_sys.executable}, "
+                      f"{_sys.implementation.cache_tag}), found {', '.join(_built) or 'none'} ({_error}); build or "
+                      "install mgrl with this Python, or use the one it was built for (Debian's /usr/bin/python3)"
+                      ) from None
 from ._core import Error, Problem, Session, __version__  # noqa: F401
 from .compare import Observer, compare  # noqa: F401
 from .env import MotionGraphEnv, MotionGraphVectorEnv  # noqa: F401

@@ -188,16 +188,8 @@ def vertex_position(p, v):
 
 
 def grid_coordinates(p):
-    """Each vertex's coordinates on the grid's axes, (V, dimension). p.vertices has them but
-    for a vertex at the avatar itself (distance 0), whose angle is the one its position
-    gives, atan2(0, 0); the cells' interpolation uses the angle axis' own, found on the next
-    ring (the angle varies fastest in the vertex numbering)."""
-    c = p.vertices[:, :p.dimension].copy()
-    centre = np.flatnonzero(c[:, 1] == 0)
-    if len(centre):
-        per_ring = int(np.argmax(np.abs(c[:, 1] - c[0, 1]) > 1e-9))  # the angles per distance
-        c[centre, 0] = c[per_ring + centre % per_ring, 0]
-    return c
+    """Each vertex's coordinates on the grid's axes, (V, dimension)."""
+    return p.vertices[:, :p.dimension].copy()
 
 
 def same_angle(a, b):

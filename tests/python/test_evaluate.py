@@ -186,7 +186,9 @@ class EvaluateTest(unittest.TestCase):
                        rf"grid\), found shape \({A}, 5\)"),
             (q.T, rf"expected shape \({A}, {V}\) .* found shape \({V}, {A}\)"),
             (q[0], rf"found shape \({V},\)"),
-            ([[0.0]], r"expected a NumPy float32 array of shape .* found an object of type list"),
+            ([[0.0]], rf"expected shape \({A}, {V}\) .* found shape \(1, 1\)"),  # a list converts, then is checked
+            ([[0.0], [1.0, 2.0]], r"expected a NumPy float32 array of shape .* found an object of type list that "
+                                  r"NumPy does not convert to one"),
             (np.where(np.arange(V) == 7, np.inf, q).astype(np.float32), r"expected finite values, found inf at \[0, 7\]"),
         ]
         for table, message in cases:
@@ -201,10 +203,23 @@ class EvaluateTest(unittest.TestCase):
             self.session.evaluate({"approach": q}, trials=0)
         with self.assertRaisesRegex(mgrl.Error, r"controller: expected one of: policy, online_search, random, found 'best'"):
             self.session.evaluate(controller="best")
+        # A nested list converts as numpy.asarray(x, float32) would: the same table.
+        self.assertEqual(self.session.evaluate({"approach": q.tolist()}, trials=20, seed=4)["success_rate"],
+                         self.session.evaluate({"approach": q}, trials=20, seed=4)["success_rate"])
         # A strided view is fine (copied once), the same table as the contiguous one.
         strided = np.asfortranarray(q)
         self.assertEqual(self.session.evaluate({"approach": strided}, trials=20, seed=4)["success_rate"],
                          self.session.evaluate({"approach": q}, trials=20, seed=4)["success_rate"])
+
+    def test_bad_sets_and_learners_are_named_as_python_gives_them(self):
+        with self.assertRaisesRegex(mgrl.Error, r"^sets\['behaviors.hit.nope'\] \(= 1\): behaviors.hit.nope: unknown key"):
+            mgrl.Session(BOXING, cache=self.cache, sets={"behaviors.hit.nope": 1})
+        with self.assertRaisesRegex(mgrl.Error, r"^learner: expected a registered learner \(q_learning, .*\), found 'nope'$"):
+            self.session.train("approach", learner="nope")
+        with self.assertRaisesRegex(mgrl.Error, r"^sets\['budgt'\]: unknown key \(expected one of: type, tolerance, "):
+            self.session.train("approach", learner="value_iteration", sets={"budgt": 3})
+        with self.assertRaisesRegex(mgrl.Error, r"^sets\['budget'\]: expected a whole number in \[1, \d+\], found 'x'$"):
+            self.session.train("approach", sets={"budget": "x"})
 
     def test_a_refused_save_leaves_nothing_behind(self):
         folder = pathlib.Path(tempfile.mkdtemp(prefix="mgrl-python-refused-"))

@@ -4,6 +4,7 @@ a scenario it does not have. Run by ctest (python_tests)."""
 import os
 import pathlib
 import subprocess
+import sys
 import tempfile
 import unittest
 
@@ -53,6 +54,32 @@ class PackageTest(unittest.TestCase):
             mgrl.scenario_path("scenarios/boxing.yaml")
         self.assertIn("a path", str(caught.exception))
 
+
+
+class ImportTest(unittest.TestCase):
+    """An import that cannot work says why, not "initialization failed"."""
+
+    def run_python(self, *args, path):
+        return subprocess.run([sys.executable, *args], capture_output=True, text=True, cwd=tempfile.mkdtemp(),
+                              env={**os.environ, "PYTHONPATH": str(path)})
+
+    def test_a_python_without_numpy_is_told_so(self):
+        # -S: no site packages, so Debian's NumPy is out of reach, as in a bare pyenv or conda.
+        package = pathlib.Path(mgrl.__file__).resolve().parent.parent
+        run = self.run_python("-S", "-c", "import mgrl", path=package)
+        self.assertNotEqual(run.returncode, 0)
+        self.assertIn(f"mgrl: expected NumPy importable by this Python ({sys.executable}), found none", run.stderr)
+
+    def test_a_core_built_for_another_python_is_told_so(self):
+        copy = pathlib.Path(tempfile.mkdtemp()) / "mgrl"
+        copy.mkdir()
+        for source in pathlib.Path(mgrl.__file__).resolve().parent.glob("*.py"):
+            (copy / source.name).write_bytes(source.read_bytes())
+        (copy / "_core.cpython-399-x86_64-linux-gnu.so").write_bytes(b"")  # not this Python's
+        run = self.run_python("-c", "import mgrl", path=copy.parent)
+        self.assertNotEqual(run.returncode, 0)
+        self.assertIn("mgrl: expected the C++ core built for this Python", run.stderr)
+        self.assertIn("found _core.cpython-399-x86_64-linux-gnu.so", run.stderr)
 
 if __name__ == "__main__":
     unittest.main()

@@ -72,6 +72,12 @@ class ProblemTest(unittest.TestCase):
         self.assertEqual(indptr[-1], A)
         self.assertEqual(indices.shape, (A,))
         self.assertEqual(p.vertices.shape, (V, p.dimension))
+        # Each vertex sits on its axes' values: the angle varies fastest, the same sectors
+        # on every ring, the centre ring (distance 0) included, whose position has no angle.
+        angles = p.vertices[:, 0].reshape(-1, 13)  # approach's 13 sectors a ring
+        np.testing.assert_array_equal(angles, np.tile(angles[0], (len(angles), 1)))
+        self.assertEqual(p.vertices[0, 1], 0.0)
+        np.testing.assert_allclose(np.diff(angles[0]), angles[0, 1] - angles[0, 0])
         self.assertEqual(p.rewards.dtype, np.float32)
         self.assertEqual(p.corners.dtype, np.int32)
         inside = p.corners >= 0

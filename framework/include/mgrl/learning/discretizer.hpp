@@ -178,6 +178,10 @@ class Discretizer {
   Stencil stencil(const GridCell& cell) const;
   /// The state at vertex v.
   virtual TargetState vertexState(std::size_t v) const;
+  /// Vertex v's coordinates on the grid's own axes (the first dimension() are set): a
+  /// product grid's axis values, so that a vertex at the avatar itself (distance 0) keeps
+  /// its angle axis' value where coordinates(vertexState(v)) would give atan2(0, 0).
+  virtual std::array<double, 3> vertexCoordinates(std::size_t v) const;
   /// The target position at vertex v.
   Eigen::Vector3d vertexPosition(std::size_t v) const { return vertexState(v).position; }
   /// A state uniform in grid coordinates, from u uniform in [0, 1)^4; on a layered grid
