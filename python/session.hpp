@@ -62,10 +62,19 @@ struct ProblemArrays {
 inline std::filesystem::path shippedScenario(const std::filesystem::path& scenario) {
   std::error_code error;
   if (scenario.has_parent_path() || std::filesystem::exists(scenario, error)) return scenario;
+  const py::module_ mgrl = py::module_::import("mgrl");
   try {
-    return py::module_::import("mgrl").attr("scenario_path")(scenario.string()).cast<std::string>();
+    return mgrl.attr("scenario_path")(scenario.string()).cast<std::string>();
   } catch (const py::error_already_set&) {
-    return scenario;
+    std::vector<std::string> names;
+    for (const py::handle name : mgrl.attr("scenarios")()) {
+      const std::string file = name.cast<std::string>();
+      names.push_back(file.substr(0, file.size() - std::string_view(".yaml").size()));
+    }
+    throw Error(
+        fmt::format("scenario: expected a scenario file or the name of one the module carries ({}), found "
+                    "'{}': no such file in {} and no such name",
+                    fmt::join(names, ", "), scenario.string(), std::filesystem::current_path(error).string()));
   }
 }
 

@@ -53,6 +53,11 @@ class PackageTest(unittest.TestCase):
         with self.assertRaises(ValueError) as caught:
             mgrl.scenario_path("scenarios/boxing.yaml")
         self.assertIn("a path", str(caught.exception))
+        # A Session of a name that is neither a file here nor shipped says both.
+        with self.assertRaisesRegex(mgrl.Error, r"scenario: expected a scenario file or the name of one the module "
+                                                r"carries \(boxing, .*walk_to\), found 'no_such_scenario': no such "
+                                                r"file in .* and no such name"):
+            mgrl.Session("no_such_scenario")
 
 
 
