@@ -70,12 +70,20 @@ QLearningUpdate::QLearningUpdate(const GridModel& g, QTable& q, std::uint64_t to
 // Compiled once per kind of model, so the tabulated loop carries no test of the model's
 // kind. A compact model stores no transitions: the walk found where each step's corners
 // land (`landed`, in order), and the rewards, like Q, come from the model's table.
+//
+// The record comes as spans and the prefetch stamps as a pointer, held here: the backups
+// call out of this file, after which anything read through a vector (its data pointer,
+// its size) would be read again, once a backup. Those vectors sit in train()'s frame right
+// beside the ones the walk is filling on the other thread, which stores to theirs at
+// every step; whenever the stack's alignment put both on one cache line, the line went
+// back and forth between the cores and approach's Q-learning took 1.2 to 1.6 times as
+// long on two threads (a run's stack alignment is random, so about every other run).
 template <bool kCompact>
-void QLearningUpdate::update(const std::vector<WalkStep>& steps, const std::vector<GridTransition>& landed,
+void QLearningUpdate::update(std::span<const WalkStep> steps, std::span<const GridTransition> landed,
                              std::uint64_t from) {
   const GridModel& g = g_;
   QTable& q = q_;
-  std::vector<std::uint64_t>& seen = seen_;  // rows prefetched for the step at `stamp`
+  std::uint64_t* const seen = seen_.data();  // rows prefetched for the step at `stamp`
   std::uint64_t stamp = stamp_;
   const double alphaSlope = alphaSlope_;
   const int d = g.dimension;
@@ -89,8 +97,6 @@ void QLearningUpdate::update(const std::vector<WalkStep>& steps, const std::vect
     else
       return g.transition[steps[i].action * g.vertexCount + c[j]];
   };
-  // The step count in a local: the backups call out of this file, after which a size read
-  // from `steps` would have to be read again.
   const std::size_t count = steps.size();
   for (std::size_t i = 0; i < count; ++i) {
     if (i + kTransitionAhead < count) {

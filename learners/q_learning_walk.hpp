@@ -6,6 +6,7 @@
 /// depend on Q, so train() walks a chunk ahead (on a thread of its own when it has two)
 /// and updates from the record. Private to learners/.
 #include <cstdint>
+#include <span>
 #include <vector>
 
 #include "mgrl/learning/learner.hpp"
@@ -56,8 +57,9 @@ class QLearningUpdate {
   void update(const std::vector<WalkStep>& steps, const std::vector<GridTransition>& landed, std::uint64_t from);
 
  private:
+  // The record by value (spans), not through the vectors: see q_learning_walk.cpp.
   template <bool kCompact>
-  void update(const std::vector<WalkStep>& steps, const std::vector<GridTransition>& landed, std::uint64_t from);
+  void update(std::span<const WalkStep> steps, std::span<const GridTransition> landed, std::uint64_t from);
 
   const GridModel& g_;
   QTable& q_;
