@@ -54,6 +54,25 @@ nlohmann::json travelJson(const CaptureTravel& t) {
           {"warnings", t.warnings}};
 }
 
+// Each clip's share of frames in the component, in file order.
+nlohmann::json clipShares(const GraphResult& g) {
+  const StateActionModel& m = g.model;
+  nlohmann::json list = nlohmann::json::array();
+  if (g.db.clips.size() + 1 != m.clipOffset.size()) return list;
+  std::vector<std::size_t> inside(g.db.clips.size(), 0);
+  std::size_t c = 0;
+  for (std::uint32_t f : m.componentFrames) {  // ascending
+    while (f >= m.clipOffset[c + 1]) ++c;
+    ++inside[c];
+  }
+  for (std::size_t k = 0; k < g.db.clips.size(); ++k)
+    list.push_back({{"clip", g.db.clips[k].name},
+                    {"frames", m.clipOffset[k + 1] - m.clipOffset[k]},
+                    {"in_scc", round3(static_cast<double>(inside[k]) /
+                                      std::max<std::uint32_t>(1, m.clipOffset[k + 1] - m.clipOffset[k]))}});
+  return list;
+}
+
 }  // namespace
 
 nlohmann::json graphJson(const GraphResult& g) {
@@ -62,7 +81,13 @@ nlohmann::json graphJson(const GraphResult& g) {
   return {{"frames_total", m.framesTotal},
           {"frames_in_scc", m.componentFrames.size()},
           {"scc_fraction", round3(m.framesTotal ? static_cast<double>(m.componentFrames.size()) / m.framesTotal : 0)},
+          {"clips", clipShares(g)},
           {"transitions", m.transitionDistance.size()},
+          {"library", g.fromCache ? nlohmann::json()
+                                  : nlohmann::json{{"max_out_degree", g.report.outDegreeBound},
+                                                   {"transitions_pruned", g.report.transitionsPruned},
+                                                   {"transitions_restored", g.report.transitionsRestored},
+                                                   {"standing_cut_frames", g.report.search.standingCutFrames}}},
           {"states", m.stateCount()},
           {"actions", m.actionCount()},
           {"mean_action_frames", round3(l.mean)},
@@ -85,7 +110,8 @@ nlohmann::json graphJson(const GraphResult& g) {
             {"worst_joint_step_ratio", round3(g.playback.worstJointStepRatio)}}},
           {"travel", travelJson(g.travel)},
           {"root_motion_joint", g.db.clips.empty() ? nlohmann::json() : nlohmann::json(g.db.rootMotion.jointName)},
-          {"punch_min_speed_auto_mps", g.db.autoPunchSpeed ? nlohmann::json(round3(g.db.autoPunchSpeed->speed_mps)) : nlohmann::json()},
+          {"punch_min_speed_auto_mps",
+           g.db.autoPunchSpeed ? nlohmann::json(round3(g.db.autoPunchSpeed->speed_mps)) : nlohmann::json()},
           {"seconds", round3(g.seconds)},
           {"cached", g.fromCache},
           {"cache", g.bundle.string()}};
@@ -102,6 +128,18 @@ std::string graphText(const GraphResult& g) {
   out += fmt::format("component       {} frames ({:.1f} % of the data)\n", m.componentFrames.size(),
                      m.framesTotal ? 100.0 * static_cast<double>(m.componentFrames.size()) / m.framesTotal : 0.0);
   out += fmt::format("transitions     {}\n", m.transitionDistance.size());
+  const GraphBuildReport& built = g.report;
+  if (!g.fromCache && (built.outDegreeBound > 0 || built.search.standingCutFrames > 0)) {
+    std::string bound =
+        built.outDegreeBound > 0
+            ? fmt::format(
+                  "at most {} actions a state: {} transitions left out, {} of "
+                  "them put back to keep the component whole",
+                  built.outDegreeBound, built.transitionsPruned + built.transitionsRestored, built.transitionsRestored)
+            : std::string("no bound on actions a state");
+    out += fmt::format("library         {}; {} cut points where the performer stands still\n", bound,
+                       built.search.standingCutFrames);
+  }
   out += fmt::format("states          {}\n", m.stateCount());
   out += fmt::format("actions         {} ({:.1f} per state)\n", m.actionCount(),
                      m.stateCount() ? static_cast<double>(m.actionCount()) / m.stateCount() : 0.0);

@@ -3,6 +3,7 @@
 // refuses without leaving a file behind.
 #include <filesystem>
 #include <fstream>
+#include <map>
 #include <string>
 
 #include <catch2/catch.hpp>
@@ -64,6 +65,51 @@ TEST_CASE("mgrl init reports in JSON what it found and chose", "[cli][data]") {
   CHECK(r["effective_punches"].get<int>() > 20);  // punches, not frames
   CHECK(r["behaviors"] == nlohmann::json{"approach", "hit"});
   CHECK(r["next"].size() == 4);
+}
+
+TEST_CASE(
+    "mgrl init on a game studio's library: locomotion swings are no punches, and the graph keeps most of "
+    "the clips, gestures included, in bounded states",
+    "[cli][data]") {
+  CliSandbox box("cli-init-library");
+  const std::filesystem::path out = box.path("library.yaml");
+  const Run run = runMgrl("init " + shellWord(mocap() / "bandai_namco_1" / "data") + "/*.bvh --out " + shellWord(out) +
+                              " --json --data " + shellWord(mocap()),
+                          box.dir());
+  const nlohmann::json r = run.report();
+  CHECK(r["frames"] == 31914);
+  // 18 minutes: a library. Any contact change first, and 80 % of the frames kept.
+  CHECK(r["graph"]["contact_event"] == "any_contact_change");
+  CHECK(r["graph"]["usable"] == true);
+  CHECK(r["graph"]["kept_share"].get<double>() >= 0.8);
+  // Its walks, runs and dashes swing their arms: 231 punches without the swing rule, and
+  // about 40 with it (the punch, kick, slash and dance clips, a wave).
+  CHECK(r["effective_punches"].get<int>() < 60);
+  const std::string yaml = readText(out);
+  CHECK_THAT(yaml, Contains("swing_travel_mps: 0.9"));
+  CHECK_THAT(yaml, Contains("# A library (18 minutes of capture, more than 10)"));
+
+  const Run graph = runMgrl("graph " + shellWord(out) + box.where() + " --json", box.dir());
+  const nlohmann::json g = graph.report();
+  CHECK(g["library"]["max_out_degree"] == 32);
+  CHECK(g["library"]["standing_cut_frames"].get<int>() > 100);
+  CHECK(g["scc_fraction"].get<double>() >= 0.8);
+  const double perState = g["actions"].get<double>() / g["states"].get<double>();
+  CAPTURE(perState);
+  CHECK(perState <= 32);
+  // Every kind of clip is in the graph, the standing gestures too.
+  std::map<std::string, std::pair<double, double>> kinds;  // frames in, frames
+  for (const nlohmann::json& clip : g["clips"]) {
+    const std::string name = clip["clip"];
+    const std::string kind = name.substr(10, name.find('_', 10) - 10);
+    kinds[kind].first += clip["in_scc"].get<double>() * clip["frames"].get<double>();
+    kinds[kind].second += clip["frames"].get<double>();
+  }
+  CHECK(kinds.size() == 16);
+  for (const auto& [kind, share] : kinds) {
+    CAPTURE(kind);
+    CHECK(share.first / share.second >= 0.7);
+  }
 }
 
 TEST_CASE("mgrl init refuses what it cannot use and leaves no file behind", "[cli]") {

@@ -106,7 +106,7 @@ mgrl_cli_test(role_unknown_joint ARGS inspect tiny.bvh --role left_fist=Nope EXI
 
 # --- mgrl graph ------------------------------------------------------------------------
 mgrl_cli_test(graph_unknown_key ARGS graph bad_scenario.yaml
-              MESSAGE "bad_scenario.yaml:5:13: graph.treshold: unknown key (expected one of: threshold, velocity_weight, root_height_weight, contact_event, local_minimum, blend_frames, min_states, joint_weights, threads)")
+              MESSAGE "bad_scenario.yaml:5:13: graph.treshold: unknown key (expected one of: threshold, velocity_weight, root_height_weight, contact_event, local_minimum, blend_frames, min_states, joint_weights, threads, max_out_degree, standing_cuts)")
 mgrl_cli_test(graph_missing_scenario ARGS graph no_such.yaml MESSAGE "no_such.yaml: cannot open: No such file or directory")
 mgrl_cli_test(graph_no_scenario ARGS graph EXIT 2 REGEX "SCENARIO is required")
 

@@ -2,6 +2,7 @@
 #include <algorithm>
 #include <cmath>
 #include <filesystem>
+#include <map>
 #include <optional>
 #include <queue>
 #include <tuple>
@@ -11,11 +12,12 @@
 
 #include "mgrl/core/data_paths.hpp"
 #include "mgrl/core/random.hpp"
+#include "mgrl/graph/frame_distance.hpp"
 #include "mgrl/graph/graph_cache.hpp"
-#include "mgrl/motion/kinematics.hpp"
 #include "mgrl/graph/motion_graph.hpp"
 #include "mgrl/graph/playback.hpp"
 #include "mgrl/learning/signals.hpp"
+#include "mgrl/motion/kinematics.hpp"
 #include "mgrl/motion/roles.hpp"
 #include "mgrl/scenario/scenario.hpp"
 #include "test_support.hpp"
@@ -662,6 +664,143 @@ TEST_CASE("graph parameters out of range name their YAML key", "[graph]") {
   params.jointWeights["Spine"] = -1;
   REQUIRE_THROWS_WITH(params.validate(),
                       Catch::Contains("graph.joint_weights.Spine: expected a weight in [0, 100], found -1"));
+}
+
+namespace {
+
+// The Bandai Namco library (18 minutes in 174 clips) whose names start with one of `prefixes`
+// (all when empty), loaded as a scenario loads them.
+MotionDatabase library(const std::vector<std::string>& prefixes = {}) {
+  const std::filesystem::path folder = test::mocap() / "bandai_namco_1" / "data";
+  MotionSpec spec;
+  for (const auto& entry : std::filesystem::directory_iterator(folder)) {
+    const std::string name = entry.path().filename().string();
+    const bool wanted = prefixes.empty() || std::any_of(prefixes.begin(), prefixes.end(), [&](const std::string& p) {
+                          return name.rfind("dataset-1_" + p + "_", 0) == 0;
+                        });
+    if (wanted && entry.path().extension() == ".bvh") spec.files.push_back(entry.path());
+  }
+  std::sort(spec.files.begin(), spec.files.end());
+  REQUIRE_FALSE(spec.files.empty());
+  return loadMotionDatabase(spec);
+}
+
+// Out-edges (actions) per state.
+std::vector<std::uint32_t> outDegrees(const StateActionModel& m) {
+  std::vector<std::uint32_t> degree;
+  for (std::size_t s = 0; s < m.stateCount(); ++s) degree.push_back(m.stateActionBegin[s + 1] - m.stateActionBegin[s]);
+  return degree;
+}
+
+}  // namespace
+
+TEST_CASE("max_out_degree keeps each frame's nearest transitions and the whole component", "[graph][data]") {
+  const MotionDatabase db = library();
+  GraphParams params;
+  params.threshold = 0.6;
+  params.contactEvent = ContactEvent::AnyContactChange;
+  params.standingCuts = false;
+  params.maxOutDegree = 0;
+  const StateActionModel all = buildStateActionModel(db, params);
+  params.maxOutDegree = 12;
+  GraphBuildReport report;
+  const StateActionModel bounded = buildStateActionModel(db, params, &report);
+  INFO(fmt::format("{} actions in {} states unbounded, {} in {} bounded; {} left out, {} put back in {} rounds",
+                   all.actionCount(), all.stateCount(), bounded.actionCount(), bounded.stateCount(),
+                   report.transitionsPruned + report.transitionsRestored, report.transitionsRestored,
+                   report.repairRounds));
+  // The same frames in the component: the bound never costs the graph a clip.
+  CHECK(bounded.componentFrames == all.componentFrames);
+  CHECK(report.outDegreeBound == 12);
+  CHECK(report.transitionsPruned > 0);
+  CHECK(bounded.actionCount() < all.actionCount() / 2);
+  CHECK(bounded.transitionDistance.size() + report.transitionsPruned == all.transitionDistance.size());
+  // Only frames that needed a transition back exceed the bound, each by the few put back.
+  const std::vector<std::uint32_t> degree = outDegrees(bounded);
+  std::size_t over = 0;
+  for (std::uint32_t d : degree) over += d > 12 ? d - 12 : 0;
+  CHECK(over <= report.transitionsRestored);
+  // A frame within its bound kept its smallest-distance transitions of the unbounded graph.
+  auto transitionsOf = [](const StateActionModel& m) {
+    std::map<std::uint32_t, std::vector<float>> byFrame;
+    for (std::size_t t = 0; t < m.transitionDistance.size(); ++t)
+      byFrame[m.transitions[2 * t]].push_back(m.transitionDistance[t]);
+    for (auto& [frame, list] : byFrame) std::sort(list.begin(), list.end());
+    return byFrame;
+  };
+  const auto before = transitionsOf(all), after = transitionsOf(bounded);
+  std::size_t checked = 0;
+  for (const auto& [frame, kept] : after) {
+    if (kept.size() >= 12) continue;  // possibly repaired
+    const std::vector<float>& candidates = before.at(frame);
+    REQUIRE(kept.size() <= candidates.size());
+    CHECK(std::equal(kept.begin(), kept.end(), candidates.begin()));
+    ++checked;
+  }
+  CHECK(checked > 100);
+  REQUIRE_NOTHROW(checkModel(bounded, "bounded"));
+}
+
+TEST_CASE("standing cuts join the clips where the performer stands still", "[graph][data]") {
+  // Gestures (bows, waves, guiding) stand in place: no foot lifts off to cut them at.
+  const MotionDatabase db = library({"bow", "bye", "guide", "walk"});
+  FrameFeatures features = computeFrameFeatures(db, GraphParams{});
+  const std::vector<std::uint32_t> cuts = standingCutFrames(db, features);
+  REQUIRE(cuts.size() > 50);
+  const auto half = static_cast<std::uint32_t>(std::lround(GraphParams::kStandingCutSpacing_s / db.frameTime));
+  for (std::size_t i = 0; i < cuts.size(); ++i) {
+    const std::size_t c = db.clipOf(cuts[i]);
+    const std::uint32_t k = cuts[i] - db.offsets[c];
+    CHECK(db.clips[c].annotation.contact[0][k]);
+    CHECK(db.clips[c].annotation.contact[1][k]);
+    if (i > 0 && db.clipOf(cuts[i - 1]) == c) CHECK(cuts[i] - cuts[i - 1] > half);
+  }
+  GraphParams params;
+  params.threshold = 0.6;
+  params.contactEvent = ContactEvent::AnyContactChange;
+  params.minStates = 1;
+  auto gestureShare = [&](bool standing) {
+    params.standingCuts = standing;
+    GraphBuildReport report;
+    const StateActionModel m = buildStateActionModel(db, params, &report);
+    CHECK(report.search.standingCutFrames == (standing ? report.search.standingCutFrames : 0));
+    std::size_t inside = 0, total = 0;
+    std::vector<std::uint8_t> in(db.frameCount(), 0);
+    for (std::uint32_t f : m.componentFrames) in[f] = 1;
+    for (std::size_t c = 0; c < db.clips.size(); ++c) {
+      if (db.clips[c].name.find("_walk") != std::string::npos) continue;
+      for (std::uint32_t f = db.offsets[c]; f < db.offsets[c + 1]; ++f) inside += in[f];
+      total += db.offsets[c + 1] - db.offsets[c];
+    }
+    return static_cast<double>(inside) / static_cast<double>(total);
+  };
+  const double without = gestureShare(false), with = gestureShare(true);
+  WARN(fmt::format("gesture frames in the component: {:.0f} % without standing cuts, {:.0f} % with", 100 * without,
+                   100 * with));
+  CHECK(with >= without + 0.2);
+  CHECK(with >= 0.8);
+}
+
+TEST_CASE("auto bounds and cuts only a library: the paper's scenarios are built as before", "[graph][data]") {
+  GraphParams params;
+  CHECK(params.outDegreeFor(65) == 0);
+  CHECK_FALSE(params.standingCutsFor(65));
+  CHECK(params.outDegreeFor(GraphParams::kLibrarySeconds + 1) == GraphParams::kLibraryOutDegree);
+  CHECK(params.standingCutsFor(GraphParams::kLibrarySeconds + 1));
+  params.maxOutDegree = 0;
+  params.standingCuts = false;
+  CHECK(params.outDegreeFor(1e6) == 0);
+  CHECK_FALSE(params.standingCutsFor(1e6));
+  const Boxing& b = boxing();
+  CHECK(b.report.outDegreeBound == 0);
+  CHECK(b.report.search.standingCutFrames == 0);
+  GraphParams on = b.scenario.graph;
+  on.maxOutDegree = 4;
+  on.standingCuts = true;
+  GraphBuildReport report;
+  const StateActionModel m = buildStateActionModel(b.db, on, &report);
+  CHECK(report.search.standingCutFrames > 0);
+  CHECK(m.actionCount() < b.model.actionCount());
 }
 
 TEST_CASE("the sparring scenario builds a graph over all SNU sparring tracks", "[graph][data]") {

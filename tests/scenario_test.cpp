@@ -93,6 +93,27 @@ TEST_CASE("scenario mistakes name the file, line, column and key", "[scenario]")
                         Contains("test.yaml:2:11: motion.files[0]: expected a motion file or pattern matching files, "
                                  "found none for 'cmu/bvh/nothing_*.bvh'"));
   }
+  SECTION("a library's graph settings") {
+    CHECK_FALSE(parse(kGood).graph.maxOutDegree);
+    CHECK_FALSE(parse(kGood).graph.standingCuts);
+    CHECK_FALSE(parse(std::string(kGood) + "  max_out_degree: auto\n  standing_cuts: auto\n").graph.maxOutDegree);
+    const Scenario set = parse(std::string(kGood) + "  max_out_degree: 24\n  standing_cuts: true\n");
+    CHECK(set.graph.maxOutDegree == 24);
+    CHECK(set.graph.standingCuts == true);
+    CHECK(parse(std::string(kGood) + "  max_out_degree: 0\n").graph.maxOutDegree == 0);
+    REQUIRE_THROWS_WITH(parse(std::string(kGood) + "  max_out_degree: 1\n"),
+                        Contains("test.yaml:7:19: graph.max_out_degree: expected auto, 0 (no bound) or an action count "
+                                 "in [2, 100000], found '1'"));
+    REQUIRE_THROWS_WITH(parse(std::string(kGood) + "  max_out_degree: many\n"),
+                        Contains("graph.max_out_degree: expected auto, 0 (no bound) or an action count in [2, 100000], "
+                                 "found 'many'"));
+    REQUIRE_THROWS_WITH(parse(std::string(kGood) + "  standing_cuts: sometimes\n"),
+                        Contains("graph.standing_cuts: expected"));
+    // Set, they are part of the graph's cache key; `auto` is not (the capture decides it).
+    CHECK(graphCacheKey(parse(std::string(kGood) + "  max_out_degree: auto\n")) == graphCacheKey(parse(kGood)));
+    CHECK(graphCacheKey(parse(std::string(kGood) + "  max_out_degree: 24\n")) != graphCacheKey(parse(kGood)));
+    CHECK(graphCacheKey(parse(std::string(kGood) + "  standing_cuts: false\n")) != graphCacheKey(parse(kGood)));
+  }
   SECTION("bad enumerations") {
     REQUIRE_THROWS_WITH(parse(std::string(kGood) + "  contact_event: right_foot\n"),
                         Contains("graph.contact_event: expected one of left_foot_liftoff, any_contact_change, none, "

@@ -41,6 +41,10 @@ class Inspect final : public Command {
                      "Effective punch: the fist drives out from the body at this speed along the forearm, relative "
                      "to the pelvis, at one frame at least (m/s; 0: arm swings count too)")
         ->default_val(options_.annotation.punchMinBodySpeed_mps);
+    sub_->add_option("--swing-travel", options_.annotation.swingTravel_mps,
+                     "Effective punch: not thrown while the body travels this fast over 3 s (walking or running arms), "
+                     "unless the fist drives away from its shoulder (m/s; 0: off; mgrl init uses 0.9)")
+        ->default_val(options_.annotation.swingTravel_mps);
   }
 
   void run(const Common& common) override {

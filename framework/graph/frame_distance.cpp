@@ -181,6 +181,47 @@ std::vector<std::int8_t> contactEvents(const MotionDatabase& db, ContactEvent ev
   return result;
 }
 
+std::vector<std::uint32_t> standingCutFrames(const MotionDatabase& db, const FrameFeatures& f) {
+  const std::size_t n = f.frames;
+  // Angular motion from each frame to the next (a clip's last frame: none, never a cut).
+  std::vector<double> motion(n, std::numeric_limits<double>::infinity());
+  for (std::size_t c = 0; c < db.clips.size(); ++c)
+    for (std::uint32_t g = db.offsets[c]; g + 1 < db.offsets[c + 1]; ++g) {
+      double sum = 0;
+      for (std::size_t s = 0; s < f.joints.size(); ++s) {
+        double dot = 0;
+        for (int i = 0; i < 4; ++i)
+          dot +=
+              static_cast<double>(f.quat[(s * 4 + i) * n + g]) * static_cast<double>(f.quat[(s * 4 + i) * n + g + 1]);
+        const double theta = 2 * std::acos(std::min(1.0, std::abs(dot)));
+        sum += f.weight[s] * theta * theta;
+      }
+      motion[g] = sum;
+    }
+  std::vector<std::uint32_t> cuts;
+  for (std::size_t c = 0; c < db.clips.size(); ++c) {
+    const Annotation& a = db.clips[c].annotation;
+    const auto count = static_cast<std::ptrdiff_t>(db.clips[c].motion.frameCount());
+    const auto half = static_cast<std::ptrdiff_t>(std::lround(GraphParams::kStandingCutSpacing_s / db.frameTime));
+    const std::uint32_t offset = db.offsets[c];
+    for (std::ptrdiff_t k = 0; k + 1 < count; ++k) {
+      bool planted = true, least = true;
+      const double own = motion[offset + static_cast<std::size_t>(k)];
+      // The window ends with the clip: a clip's first and last still moments are where it
+      // is entered and left.
+      for (std::ptrdiff_t j = std::max<std::ptrdiff_t>(0, k - half);
+           j <= std::min(count - 1, k + half) && planted && least; ++j) {
+        const auto u = static_cast<std::size_t>(j);
+        planted = a.contact[0][u] && a.contact[1][u];
+        const double other = motion[offset + u];
+        least = j < k ? own < other : own <= other;
+      }
+      if (planted && least && std::isfinite(own)) cuts.push_back(offset + static_cast<std::uint32_t>(k));
+    }
+  }
+  return cuts;
+}
+
 namespace {
 
 // One contact-event class: its frames gathered so that the kernels stream contiguous memory.
@@ -243,13 +284,22 @@ void distanceRows(const EventGroup& g, const FrameFeatures& f, std::size_t first
 std::vector<TransitionCandidate> findTransitions(const MotionDatabase& db, const FrameFeatures& features,
                                                  const GraphParams& params, TransitionSearchStats* stats) {
   params.validate();
-  const std::vector<std::int8_t> events = contactEvents(db, params.contactEvent);
+  std::vector<std::int8_t> events = contactEvents(db, params.contactEvent);
   std::int8_t classes = 0;
   for (std::int8_t e : events) classes = std::max<std::int8_t>(classes, static_cast<std::int8_t>(e + 1));
+  TransitionSearchStats local;
+  if (params.standingCutsFor(db.frameCount() * db.frameTime)) {
+    const std::int8_t standing = classes;
+    for (std::uint32_t g : standingCutFrames(db, features))
+      if (events[g] < 0) {
+        events[g] = standing;
+        classes = static_cast<std::int8_t>(standing + 1);
+        ++local.standingCutFrames;
+      }
+  }
   const unsigned threads = params.threads ? params.threads : defaultThreadCount();
   const float limit2 = static_cast<float>(params.threshold * params.threshold);
 
-  TransitionSearchStats local;
   std::vector<TransitionCandidate> result;
   for (std::int8_t cls = 0; cls < classes; ++cls) {
     std::vector<std::uint32_t> members;

@@ -33,9 +33,22 @@ void GraphParams::validate() const {
   check(blendFrames >= 0 && blendFrames <= 120, "blend_frames", "a frame count in [0, 120]", blendFrames);
   check(minStates >= 1 && minStates <= 1000000, "min_states", "a count in [1, 1000000]", minStates);
   check(threads <= 256, "threads", "a thread count in [0, 256]", threads);
+  if (maxOutDegree)
+    check(*maxOutDegree == 0 || (*maxOutDegree >= 2 && *maxOutDegree <= 100000), "max_out_degree",
+          "auto, 0 (no bound) or an action count in [2, 100000]", *maxOutDegree);
   for (const auto& [name, weight] : jointWeights)
     if (!std::isfinite(weight) || weight < 0 || weight > 100)
       throw Error(fmt::format("graph.joint_weights.{}: expected a weight in [0, 100], found {}", name, weight));
+}
+
+int GraphParams::outDegreeFor(double captureSeconds) const {
+  if (maxOutDegree) return *maxOutDegree;
+  return captureSeconds > kLibrarySeconds ? kLibraryOutDegree : 0;
+}
+
+bool GraphParams::standingCutsFor(double captureSeconds) const {
+  if (standingCuts) return *standingCuts;
+  return captureSeconds > kLibrarySeconds;
 }
 
 double defaultJointWeight(std::string_view jointName) {

@@ -175,6 +175,87 @@ void addStrikes(const StrikeIndex& index, std::uint32_t v, const GroundMotion& r
   }
 }
 
+// The largest strongly connected component (on a tie, the one holding the earliest frame,
+// so the choice is stable): a flag per frame, and its size.
+std::size_t largestComponent(const MotionDatabase& db, const std::vector<TransitionCandidate>& transitions,
+                             std::vector<std::uint8_t>& inside, std::size_t* components = nullptr) {
+  const std::uint32_t n = db.frameCount();
+  std::size_t count = 0;
+  const std::vector<std::uint32_t> component = stronglyConnected(frameGraph(db, transitions), &count);
+  std::vector<std::uint32_t> size(count, 0);
+  for (std::uint32_t c : component) ++size[c];
+  std::uint32_t best = component[0];
+  for (std::uint32_t f = 0; f < n; ++f)
+    if (size[component[f]] > size[best]) best = component[f];
+  inside.assign(n, 0);
+  for (std::uint32_t f = 0; f < n; ++f) inside[f] = component[f] == best ? 1 : 0;
+  if (components) *components = count;
+  return size[best];
+}
+
+// GraphParams::maxOutDegree: every frame keeps, of its transitions inside the largest
+// component, the `degree` (less its natural successor) of smallest distance. A frame the
+// pruned graph would lose from the component gets its dropped transitions back, smallest
+// distance first, one per frame and round, until the component is whole again (every
+// frame a dropped transition touches, in either direction, counts as touched).
+std::vector<TransitionCandidate> boundOutDegree(const MotionDatabase& db, const std::vector<TransitionCandidate>& all,
+                                                int degree, GraphBuildReport& report) {
+  const std::uint32_t n = db.frameCount();
+  std::vector<std::uint8_t> inside;
+  const std::size_t whole = largestComponent(db, all, inside);
+  std::vector<std::uint8_t> natural(n, 0);
+  for (std::size_t c = 0; c < db.clips.size(); ++c)
+    for (std::uint32_t f = db.offsets[c]; f + 1 < db.offsets[c + 1]; ++f) natural[f] = inside[f + 1];
+
+  // The candidates inside, grouped by frame (`all` is sorted by frame), each group by
+  // distance then target: the first `budget` of a group are kept.
+  std::vector<TransitionCandidate> candidates;
+  for (const TransitionCandidate& t : all)
+    if (inside[t.from] && inside[t.to]) candidates.push_back(t);
+  std::vector<std::uint8_t> kept(candidates.size(), 0);
+  std::vector<std::size_t> groupBegin;
+  for (std::size_t i = 0; i < candidates.size(); ++i)
+    if (i == 0 || candidates[i].from != candidates[i - 1].from) groupBegin.push_back(i);
+  groupBegin.push_back(candidates.size());
+  for (std::size_t g = 0; g + 1 < groupBegin.size(); ++g) {
+    const auto first = candidates.begin() + static_cast<std::ptrdiff_t>(groupBegin[g]);
+    const auto last = candidates.begin() + static_cast<std::ptrdiff_t>(groupBegin[g + 1]);
+    std::sort(first, last, [](const TransitionCandidate& a, const TransitionCandidate& b) {
+      return a.distance != b.distance ? a.distance < b.distance : a.to < b.to;
+    });
+    const std::size_t budget = static_cast<std::size_t>(degree) - natural[first->from];
+    for (std::size_t i = groupBegin[g]; i < std::min(groupBegin[g + 1], groupBegin[g] + budget); ++i) kept[i] = 1;
+  }
+  auto keptList = [&] {
+    std::vector<TransitionCandidate> list;
+    for (std::size_t i = 0; i < candidates.size(); ++i)
+      if (kept[i]) list.push_back(candidates[i]);
+    std::sort(list.begin(), list.end(), [](const TransitionCandidate& a, const TransitionCandidate& b) {
+      return a.from != b.from ? a.from < b.from : a.to < b.to;
+    });
+    return list;
+  };
+  std::vector<TransitionCandidate> result = keptList();
+  std::vector<std::uint8_t> now;
+  while (largestComponent(db, result, now) < whole) {
+    ++report.repairRounds;
+    std::size_t restored = 0;
+    for (std::size_t g = 0; g + 1 < groupBegin.size(); ++g)
+      for (std::size_t i = groupBegin[g]; i < groupBegin[g + 1]; ++i)
+        if (!kept[i] && (!now[candidates[i].from] || !now[candidates[i].to])) {
+          kept[i] = 1;
+          ++restored;
+          break;
+        }
+    report.transitionsRestored += restored;
+    result = keptList();
+    if (restored == 0) break;  // cannot happen: with every transition back the component is whole
+  }
+  report.outDegreeBound = degree;
+  report.transitionsPruned = candidates.size() - result.size();
+  return result;
+}
+
 }  // namespace
 
 StateActionModel buildStateActionModel(const MotionDatabase& db, const GraphParams& params, GraphBuildReport* report) {
@@ -183,27 +264,20 @@ StateActionModel buildStateActionModel(const MotionDatabase& db, const GraphPara
   const FrameFeatures features = computeFrameFeatures(db, params);
   std::vector<TransitionCandidate> transitions = findTransitions(db, features, params, &local.search);
   local.transitionsFound = transitions.size();
+  if (const int degree = params.outDegreeFor(db.frameCount() * db.frameTime); degree > 0)
+    transitions = boundOutDegree(db, transitions, degree, local);
 
   const std::uint32_t n = db.frameCount();
   const FrameGraph graph = frameGraph(db, transitions);
-  const std::vector<std::uint32_t> component = stronglyConnected(graph, &local.components);
-  std::vector<std::uint32_t> size(local.components, 0);
-  for (std::uint32_t c : component) ++size[c];
-  // Largest component; on a tie the one holding the earliest frame, so the choice is stable.
-  std::uint32_t best = component[0];
-  for (std::uint32_t f = 0; f < n; ++f)
-    if (size[component[f]] > size[best]) best = component[f];
+  std::vector<std::uint8_t> inside;
+  largestComponent(db, transitions, inside, &local.components);
 
   StateActionModel m;
   m.frameTime = db.frameTime;
   m.framesTotal = n;
   m.clipOffset = db.offsets;
-  std::vector<std::uint8_t> inside(n, 0);
   for (std::uint32_t f = 0; f < n; ++f)
-    if (component[f] == best) {
-      inside[f] = 1;
-      m.componentFrames.push_back(f);
-    }
+    if (inside[f]) m.componentFrames.push_back(f);
   for (std::size_t t = 0; t < transitions.size(); ++t) {
     const auto& c = transitions[t];
     if (inside[c.from] && inside[c.to]) {

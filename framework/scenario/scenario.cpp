@@ -110,10 +110,10 @@ MotionSpec readMotion(const ConfigNode& motion, const std::filesystem::path& sce
   }
   if (motion.has("annotation")) {
     const ConfigNode a = motion.child("annotation");
-    a.allowOnly({"contact_height_enter_m", "contact_height_exit_m", "contact_speed_enter_mps",
-                 "contact_speed_exit_mps", "punch_min_speed_mps", "punch_min_alignment", "punch_max_speed_mps",
-                 "punch_min_body_speed_mps", "knockdown_head_ratio", "kick_min_speed_mps", "kick_min_alignment", "kick_min_height_m",
-                 "kick_max_speed_mps"});
+    a.allowOnly({"contact_height_enter_m", "contact_height_exit_m", "contact_speed_enter_mps", "contact_speed_exit_mps",
+                 "punch_min_speed_mps", "punch_min_alignment", "punch_max_speed_mps", "punch_min_body_speed_mps",
+                 "swing_travel_mps", "swing_max_reach_mps", "knockdown_head_ratio", "kick_min_speed_mps",
+                 "kick_min_alignment", "kick_min_height_m", "kick_max_speed_mps"});
     AnnotationParams& p = spec.annotation;
     p.contactHeightEnter_m = a.number("contact_height_enter_m", p.contactHeightEnter_m, 0, 1);
     p.contactHeightExit_m = a.number("contact_height_exit_m", p.contactHeightExit_m, 0, 1);
@@ -136,6 +136,8 @@ MotionSpec readMotion(const ConfigNode& motion, const std::filesystem::path& sce
     p.punchMinAlignment = a.number("punch_min_alignment", p.punchMinAlignment, -1, 1);
     p.punchMaxSpeed_mps = a.number("punch_max_speed_mps", p.punchMaxSpeed_mps, 0, 1000);
     p.punchMinBodySpeed_mps = a.number("punch_min_body_speed_mps", p.punchMinBodySpeed_mps, 0, 100);
+    p.swingTravel_mps = a.number("swing_travel_mps", p.swingTravel_mps, 0, 20);
+    p.swingMaxReach_mps = a.number("swing_max_reach_mps", p.swingMaxReach_mps, 0, 100);
     p.knockdownHeadRatio = a.number("knockdown_head_ratio", p.knockdownHeadRatio, 0, 0.99);
     p.kickMinSpeed_mps = a.number("kick_min_speed_mps", p.kickMinSpeed_mps, 0, 100);
     p.kickMinAlignment = a.number("kick_min_alignment", p.kickMinAlignment, -1, 1);
@@ -148,7 +150,7 @@ MotionSpec readMotion(const ConfigNode& motion, const std::filesystem::path& sce
 
 GraphParams readGraph(const ConfigNode& graph) {
   graph.allowOnly({"threshold", "velocity_weight", "root_height_weight", "contact_event", "local_minimum",
-                   "blend_frames", "min_states", "joint_weights", "threads"});
+                   "blend_frames", "min_states", "joint_weights", "threads", "max_out_degree", "standing_cuts"});
   GraphParams p;
   p.threshold = graph.number("threshold", p.threshold, 1e-6, 10);
   p.velocityWeight = graph.number("velocity_weight", p.velocityWeight, 0, 10);
@@ -161,6 +163,21 @@ GraphParams readGraph(const ConfigNode& graph) {
   p.blendFrames = static_cast<int>(graph.integer("blend_frames", p.blendFrames, 0, 120));
   p.minStates = static_cast<int>(graph.integer("min_states", p.minStates, 1, 1000000));
   p.threads = static_cast<unsigned>(graph.integer("threads", 0, 0, 256));
+  // `auto` (the default) leaves them unset: decided by the capture's length.
+  auto isAuto = [](const ConfigNode& node) { return node.yaml().IsScalar() && node.yaml().Scalar() == "auto"; };
+  if (graph.has("max_out_degree") && !isAuto(graph.child("max_out_degree"))) {
+    const ConfigNode degree = graph.child("max_out_degree");
+    const std::string found = degree.yaml().IsScalar() ? degree.yaml().Scalar() : std::string("a list or map");
+    try {
+      p.maxOutDegree = static_cast<int>(degree.asInteger(0, 100000));
+    } catch (const ConfigError&) {
+      p.maxOutDegree = 1;
+    }
+    if (*p.maxOutDegree == 1)
+      degree.fail(fmt::format("expected auto, 0 (no bound) or an action count in [2, 100000], found '{}'", found));
+  }
+  if (graph.has("standing_cuts") && !isAuto(graph.child("standing_cuts")))
+    p.standingCuts = graph.boolean("standing_cuts", false);
   if (graph.has("joint_weights")) {
     const ConfigNode weights = graph.child("joint_weights");
     for (const std::string& joint : weights.keys()) p.jointWeights[joint] = weights.child(joint).asNumber(0, 100);
@@ -421,6 +438,11 @@ std::string graphCacheKey(const Scenario& s) {
     h.update(v);
   // Only when set, so that every other scenario keeps its key.
   if (a.punchMinSpeedAuto) h.update(std::string_view("punch_min_speed_mps=auto"));
+  if (a.swingTravel_mps > 0) {
+    h.update(std::string_view("swing_travel_mps"));
+    h.update(a.swingTravel_mps);
+    h.update(a.swingMaxReach_mps);
+  }
   const GraphParams& g = s.graph;
   for (double v : {g.threshold, g.velocityWeight, g.rootHeightWeight}) h.update(v);
   h.update(std::int64_t(g.contactEvent));
@@ -431,6 +453,15 @@ std::string graphCacheKey(const Scenario& s) {
   for (const auto& [joint, weight] : g.jointWeights) {
     h.update(std::string_view(joint));
     h.update(weight);
+  }
+  // Only when set (`auto` follows from the capture, which is hashed above).
+  if (g.maxOutDegree) {
+    h.update(std::string_view("max_out_degree"));
+    h.update(std::int64_t(*g.maxOutDegree));
+  }
+  if (g.standingCuts) {
+    h.update(std::string_view("standing_cuts"));
+    h.update(std::int64_t(*g.standingCuts));
   }
   return h.hex();
 }

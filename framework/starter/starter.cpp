@@ -4,6 +4,7 @@
 #include <cctype>
 #include <cmath>
 #include <functional>
+#include <span>
 
 #include <fmt/format.h>
 #include <fmt/ranges.h>
@@ -25,14 +26,24 @@ namespace fs = std::filesystem;
 // The graph settings init tries, in order: the paper's contact event first, then any
 // contact change (more transition points), each from the paper's threshold up. The first
 // that keeps kKeepShare of the frames in at least kMinStates states wins: lower
-// thresholds blend more alike poses.
+// thresholds blend more alike poses. A library (longer than GraphParams::kLibrarySeconds,
+// whose graph is bounded and cut where the performer stands still) tries any contact change
+// first, for actions a fraction of a second long, and must keep kLibraryKeepShare.
 constexpr double kThresholds[] = {0.45, 0.6, 0.75, 0.9, 1.2};
 constexpr ContactEvent kEvents[] = {ContactEvent::LeftFootLiftoff, ContactEvent::AnyContactChange};
+constexpr ContactEvent kLibraryEvents[] = {ContactEvent::AnyContactChange, ContactEvent::LeftFootLiftoff};
 constexpr double kKeepShare = 0.6;
+constexpr double kLibraryKeepShare = 0.8;
+
+bool isLibrary(const MotionDatabase& db) { return db.frameCount() * db.frameTime > GraphParams::kLibrarySeconds; }
+double keepShare(const MotionDatabase& db) { return isLibrary(db) ? kLibraryKeepShare : kKeepShare; }
 constexpr int kMinStates = 10;
 // Fewer effective strikes inside the graph's actions than this, and the capture has nothing
 // to learn to hit with.
 constexpr std::size_t kMinStrikes = 5;
+// Arms swinging while the body walks or runs this fast are not punches
+// (AnnotationParams::swingTravel_mps): a starter scenario may hold a library's locomotion.
+constexpr double kSwingTravel_mps = 0.9;
 
 struct GraphTry {
   double threshold = 0;
@@ -42,8 +53,8 @@ struct GraphTry {
   std::string failure;         ///< why the build failed, if it did
 
   double share(std::size_t frames) const { return frames ? static_cast<double>(keptFrames) / frames : 0; }
-  bool usable(std::size_t frames) const {
-    return failure.empty() && share(frames) >= kKeepShare && states >= static_cast<std::size_t>(kMinStates);
+  bool usable(const MotionDatabase& db) const {
+    return failure.empty() && share(db.frameCount()) >= keepShare(db) && states >= static_cast<std::size_t>(kMinStates);
   }
 };
 
@@ -114,13 +125,14 @@ double roundUpTo(double value, double step) { return std::ceil(value / step - 1e
 // The graphs tried, from the paper's threshold and contact event up, until one is usable.
 std::vector<GraphTry> tryGraphs(const MotionDatabase& db, const std::function<void(const std::string&)>& log) {
   std::vector<GraphTry> tries;
-  for (const ContactEvent event : kEvents) {
+  for (const ContactEvent event :
+       isLibrary(db) ? std::span<const ContactEvent>(kLibraryEvents) : std::span<const ContactEvent>(kEvents)) {
     for (const double threshold : kThresholds) {
       tries.push_back(tryGraph(db, threshold, event));
       const GraphTry& t = tries.back();
       log(fmt::format("init: graph at threshold {:g}, {}: {:.0f} % of frames kept, {} states, {} actions", threshold,
                       contactEventName(event), 100 * t.share(db.frameCount()), t.states, t.actions));
-      if (t.usable(db.frameCount())) return tries;
+      if (t.usable(db)) return tries;
     }
   }
   return tries;
@@ -129,7 +141,7 @@ std::vector<GraphTry> tryGraphs(const MotionDatabase& db, const std::function<vo
 // The usable graph tried last, else the one that kept most frames; throws when none has
 // two states.
 const GraphTry* chooseGraph(const MotionDatabase& db, const std::vector<GraphTry>& tries) {
-  if (tries.back().usable(db.frameCount())) return &tries.back();
+  if (tries.back().usable(db)) return &tries.back();
   const auto best = std::max_element(tries.begin(), tries.end(), [&](const GraphTry& a, const GraphTry& b) {
     return a.share(db.frameCount()) < b.share(db.frameCount());
   });
@@ -248,9 +260,19 @@ std::string rolesYaml(const MotionDatabase& db, const RoleOverrides& setRoles) {
 // The graph section, with the settings tried as comments.
 std::string graphYaml(const MotionDatabase& db, const std::vector<GraphTry>& tries, const GraphTry& chosen) {
   std::string y;
-  y += "# Chosen by trying thresholds from the paper's 0.45 up, with the paper's contact event\n";
-  y += fmt::format("# first, until the largest component kept {:.0f} % of the frames in {} states or more:\n",
-                   100 * kKeepShare, kMinStates);
+  if (isLibrary(db)) {
+    y += fmt::format("# A library ({:.0f} minutes of capture, more than {:g}): its graph keeps at most {} actions a\n",
+                     db.frameCount() * db.frameTime / 60, GraphParams::kLibrarySeconds / 60,
+                     GraphParams::kLibraryOutDegree);
+    y += "# state and is also cut where the performer stands still (max_out_degree: auto and\n";
+    y += "# standing_cuts: auto; `mgrl graph` reports what they did). Chosen by trying thresholds from\n";
+    y += "# the paper's 0.45 up, any contact change first (short actions),";
+  } else {
+    y += "# Chosen by trying thresholds from the paper's 0.45 up, with the paper's contact event\n";
+    y += "# first,";
+  }
+  y += fmt::format(" until the largest component kept {:.0f} % of the frames in {} states or more:\n",
+                   100 * keepShare(db), kMinStates);
   for (const GraphTry& t : tries)
     y += fmt::format("#   threshold {:<4g} {:<18} {}\n", t.threshold, contactEventName(t.event),
                      t.failure.empty() ? fmt::format("{:3.0f} % kept, {} states, {} actions",
@@ -289,6 +311,7 @@ nlohmann::json runInit(const InitOptions& options) {
   spec.fps = options.fps;
   spec.units = options.units;
   spec.roles = options.roles;
+  spec.annotation.swingTravel_mps = kSwingTravel_mps;
   std::vector<std::pair<std::string, Motion>> motions;
   std::vector<std::string> units;
   for (const fs::path& file : options.files) {
@@ -350,6 +373,10 @@ nlohmann::json runInit(const InitOptions& options) {
                                         : std::string(lengthUnitName(options.units)));
   y += fmt::format("  # {}.\n", db.rootMotion.sentence);
   y += rolesYaml(db, options.roles);
+  y += "  annotation:\n";
+  y += "    # Arms that swing while the body walks or runs this fast (m/s, over 3 s) are not punches\n";
+  y += "    # unless the fist drives away from the shoulder; 0 counts them (docs/own-capture.md).\n";
+  y += fmt::format("    swing_travel_mps: {:g}\n", kSwingTravel_mps);
   y += "\n";
   y += graphYaml(db, tries, *chosen);
   y += behaviorsYaml(kind, *chosen, approachRadius, goalRadius);
@@ -374,7 +401,7 @@ nlohmann::json runInit(const InitOptions& options) {
                      {"actions", chosen->actions},
                      {"punches_in_actions", chosen->hits},
                      {"kicks_in_actions", chosen->kicks},
-                     {"usable", chosen->usable(db.frameCount())}};
+                     {"usable", chosen->usable(db)}};
   report["behaviors"] = kind == "punch"  ? nlohmann::json{"approach", "hit"}
                         : kind == "kick" ? nlohmann::json{"kick"}
                                          : nlohmann::json{"goal"};

@@ -53,14 +53,23 @@ struct TransitionSearchStats {
   std::size_t eventFrames = 0;  ///< frames at a contact event
   std::size_t pairs = 0;        ///< distances computed
   std::size_t belowThreshold = 0;
+  std::size_t standingCutFrames = 0;  ///< cut points added where the performer stands still
 };
+
+/// The frames where the performer stands still enough to cut the graph at
+/// (GraphParams::standingCuts): both feet planted over the kStandingCutSpacing_s either side
+/// (inside the clip: the window ends where the clip does), and the whole body's angular
+/// motion to the next frame (weighted as in the distance) no larger there than anywhere in
+/// that window, the first of equal ones. Never a clip's last frame. Ascending global frames.
+std::vector<std::uint32_t> standingCutFrames(const MotionDatabase& db, const FrameFeatures& features);
 
 /// Every transition i -> j with frames i and j - 1 in the same contact-event class, their
 /// distance below params.threshold and (if params.localMinimum) not larger than at any
 /// neighbouring candidate pair: the previous and next event frames of the same clip, in
 /// either frame. With ContactEvent::None these are the 8 neighbours in the distance matrix,
-/// as in Lee et al. 2002. The pairs are computed in bands of rows on params.threads
-/// threads, never stored as a whole matrix. Sorted by (from, to); deterministic.
+/// as in Lee et al. 2002. With standing cuts (GraphParams::standingCutsFor() the capture's
+/// length), standingCutFrames() not at a contact event form one more class. The pairs are computed in bands of rows on
+/// params.threads threads, never stored as a whole matrix. Sorted by (from, to); deterministic.
 std::vector<TransitionCandidate> findTransitions(const MotionDatabase& db, const FrameFeatures& features,
                                                  const GraphParams& params, TransitionSearchStats* stats = nullptr);
 

@@ -3,6 +3,7 @@
 /// Parameters of motion-graph construction: a scenario's `graph:` section
 /// (scenarios/README.md explains each key and its default).
 #include <map>
+#include <optional>
 #include <string>
 #include <string_view>
 
@@ -41,6 +42,24 @@ struct GraphParams {
   std::map<std::string, double, std::less<>> jointWeights;
   /// Worker threads for the distance computation; 0: all cores.
   unsigned threads = 0;
+  /// At most this many actions leave a state: each frame keeps its transitions of smallest
+  /// distance, and transitions dropped this way come back where the component would
+  /// otherwise lose frames. 0: no bound. Unset (`auto`): kLibraryOutDegree for a capture
+  /// longer than kLibrarySeconds, none for a shorter one (the paper's scenarios).
+  std::optional<int> maxOutDegree;
+  /// Cut points also where the performer stands still: inside stretches of both feet
+  /// planted, the frames where the whole body moves least (local minima of the joints'
+  /// angular speed, at least kStandingCutSpacing_s apart) may join each other, so clips of
+  /// gestures and standing, without a foot lift-off, join the graph. Unset (`auto`): on for
+  /// a capture longer than kLibrarySeconds.
+  std::optional<bool> standingCuts;
+
+  static constexpr double kLibrarySeconds = 600;
+  static constexpr int kLibraryOutDegree = 32;
+  static constexpr double kStandingCutSpacing_s = 0.5;
+  /// maxOutDegree and standingCuts for a capture of this many seconds (`auto` resolved).
+  int outDegreeFor(double captureSeconds) const;
+  bool standingCutsFor(double captureSeconds) const;
 
   /// Throws mgrl::Error naming the first out-of-range value (as its YAML key).
   void validate() const;

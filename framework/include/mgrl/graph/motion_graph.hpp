@@ -17,6 +17,10 @@ struct GraphBuildReport {
   TransitionSearchStats search;
   std::size_t transitionsFound = 0;  ///< candidates passing threshold, contact and local-minimum tests
   std::size_t components = 0;        ///< strongly connected components of the frame graph
+  int outDegreeBound = 0;            ///< GraphParams::maxOutDegree as applied (0: none)
+  std::size_t transitionsPruned = 0;    ///< inside the component, left out by the bound
+  std::size_t transitionsRestored = 0;  ///< left out, then put back to keep the component whole
+  std::size_t repairRounds = 0;
 };
 
 /// Builds the model. Throws mgrl::Error when the largest component has fewer than
