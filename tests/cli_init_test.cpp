@@ -85,6 +85,9 @@ TEST_CASE(
   // Its walks, runs and dashes swing their arms: 231 punches without the swing rule, and
   // about 40 with it (the punch, kick, slash and dance clips, a wave).
   CHECK(r["effective_punches"].get<int>() < 60);
+  // The body travels half of the time: a library of locomotion walks to a goal.
+  CHECK(r["locomotion_share"].get<double>() > 0.4);
+  CHECK(r["behaviors"] == nlohmann::json{"goal"});
   const std::string yaml = readText(out);
   CHECK_THAT(yaml, Contains("swing_travel_mps: 0.9"));
   CHECK_THAT(yaml, Contains("# A library (18 minutes of capture, more than 10)"));

@@ -69,6 +69,15 @@ TEST_CASE("scenarios made of reward terms train and meet their success criteria 
   }
 }
 
+TEST_CASE("library.yaml: a game studio's 18-minute library trains to walk to a goal", "[cli][data][slow][outcome]") {
+  Sandbox box;
+  const json report = box.trainAndEvaluate(std::string(MGRL_SOURCE_DIR) + "/scenarios/library.yaml");
+  CHECK(report["success"]["from"] == "declared");
+  // Measured with 300 trials, seeds 1-3: 98.7-99.0 %, random actions 0-0.7 %.
+  CHECK(report["success_rate"].get<double>() >= 0.9);
+  CHECK(report["random_baseline"]["success_rate"].get<double>() < 0.05);
+}
+
 TEST_CASE("intercept.yaml trains on a moving target and punches it far more often than random actions", "[cli][data][slow][outcome]") {
   Sandbox box;
   const json report = box.trainAndEvaluate(std::string(MGRL_SOURCE_DIR) + "/scenarios/intercept.yaml");

@@ -19,8 +19,9 @@ namespace {
 // Bump when the graph construction changes what it computes, so old caches go stale.
 // 2: no effective punch while knocked down; the fist falls back to the wrist's end site.
 // 3: effective kicks; 4: kicks by the toe's whole speed; 5: root motion from the pelvis role,
-// punches that drive the fist out from the body, heads in proportion
-constexpr int kGraphAlgorithmVersion = 5;
+// punches that drive the fist out from the body, heads in proportion; 6: a capture past
+// GraphParams::kLibrarySeconds is bounded and cut where the performer stands still
+constexpr int kGraphAlgorithmVersion = 6;
 
 bool wildcardMatch(std::string_view pattern, std::string_view text) {
   // Iterative '*' / '?' matching with backtracking to the last star.

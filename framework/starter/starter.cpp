@@ -35,6 +35,28 @@ constexpr ContactEvent kLibraryEvents[] = {ContactEvent::AnyContactChange, Conta
 constexpr double kKeepShare = 0.6;
 constexpr double kLibraryKeepShare = 0.8;
 
+// A library whose frames travel at least this fast (net, over 3 s) this often holds
+// locomotion first: its behaviour is walking to a goal, whatever strikes it also holds.
+constexpr double kLocomotion_mps = 0.5;
+constexpr double kLocomotionShare = 0.25;
+
+// The share of frames at which the body travels kLocomotion_mps or faster: the root's net
+// ground displacement over the 3 s around the frame (inside its clip), per second.
+double locomotionShare(const MotionDatabase& db) {
+  const auto half = static_cast<std::size_t>(std::lround(1.5 / db.frameTime));
+  std::size_t moving = 0;
+  for (const Clip& clip : db.clips) {
+    const std::vector<AvatarFrame>& frames = clip.annotation.frames;
+    for (std::size_t f = 0; f < frames.size(); ++f) {
+      const std::size_t a = f > half ? f - half : 0, b = std::min(frames.size() - 1, f + half);
+      if (b <= a) continue;
+      const Eigen::Vector3d d = frames[b].origin - frames[a].origin;
+      moving += std::hypot(d.x(), d.z()) / (static_cast<double>(b - a) * db.frameTime) >= kLocomotion_mps ? 1 : 0;
+    }
+  }
+  return db.frameCount() ? static_cast<double>(moving) / db.frameCount() : 0;
+}
+
 bool isLibrary(const MotionDatabase& db) { return db.frameCount() * db.frameTime > GraphParams::kLibrarySeconds; }
 double keepShare(const MotionDatabase& db) { return isLibrary(db) ? kLibraryKeepShare : kKeepShare; }
 constexpr int kMinStates = 10;
@@ -156,8 +178,10 @@ const GraphTry* chooseGraph(const MotionDatabase& db, const std::vector<GraphTry
 }
 
 // The behaviours section for what the capture can do: the paper's two behaviours for
-// punches, a kick, or walking to a goal.
-std::string behaviorsYaml(const std::string& kind, const GraphTry& chosen, double approachRadius, double goalRadius) {
+// punches, a kick, or walking to a goal (for a library of locomotion, whose share of
+// travelling frames is locomotionShare; -1 for other capture).
+std::string behaviorsYaml(const std::string& kind, const GraphTry& chosen, double approachRadius, double goalRadius,
+                          double locomotionShare) {
   std::string y;
   y += "behaviors:\n";
   if (kind == "punch") {
@@ -200,7 +224,13 @@ std::string behaviorsYaml(const std::string& kind, const GraphTry& chosen, doubl
          "  mode: targets\n"
          "  target_height: 0.6\n";
   } else {
-    y += "  # The capture has too few effective punches or kicks to learn striking: walk to a goal.\n";
+    if (locomotionShare >= 0)
+      y += fmt::format(
+          "  # A library of locomotion: the body travels {:.0f} % of the time. Its {} effective hitting\n"
+          "  # points could train the paper's approach and hit too (docs/own-capture.md).\n",
+          100 * locomotionShare, chosen.hits);
+    else
+      y += "  # The capture has too few effective punches or kicks to learn striking: walk to a goal.\n";
     y += "  goal:\n"
          "    description: pelvis on the goal point, then stay\n";
     y += fmt::format("    discretizer: {{type: polar2d, radius: {:g}, rings: 9, sectors: 13}}\n", goalRadius);
@@ -342,7 +372,12 @@ nlohmann::json runInit(const InitOptions& options) {
   const GraphTry* chosen = chooseGraph(db, tries);
 
   // Behaviours the capture can do.
-  const std::string kind = chosen->hits >= kMinStrikes ? "punch" : chosen->kicks >= kMinStrikes ? "kick" : "goal";
+  const double travelling = locomotionShare(db);
+  const bool locomotion = isLibrary(db) && travelling >= kLocomotionShare;
+  const std::string kind = locomotion                     ? "goal"
+                           : chosen->hits >= kMinStrikes  ? "punch"
+                           : chosen->kicks >= kMinStrikes ? "kick"
+                                                          : "goal";
   // Approach's grid: three of the longer actions (their 90th percentile), 2 to 4 m (the paper's is 2 m).
   const double approachRadius = std::clamp(roundUpTo(3 * chosen->p90ActionTravel, 0.5), 2.0, 4.0);
   const double goalRadius = std::clamp(roundUpTo(6 * chosen->p90ActionTravel, 0.5), 2.0, 6.0);
@@ -379,7 +414,7 @@ nlohmann::json runInit(const InitOptions& options) {
   y += fmt::format("    swing_travel_mps: {:g}\n", kSwingTravel_mps);
   y += "\n";
   y += graphYaml(db, tries, *chosen);
-  y += behaviorsYaml(kind, *chosen, approachRadius, goalRadius);
+  y += behaviorsYaml(kind, *chosen, approachRadius, goalRadius, locomotion ? travelling : -1);
 
   writeCheckedScenario(out, y, options.dataDir, requirePlugins(options.plugins, "InitOptions::plugins"));
 
@@ -405,6 +440,7 @@ nlohmann::json runInit(const InitOptions& options) {
   report["behaviors"] = kind == "punch"  ? nlohmann::json{"approach", "hit"}
                         : kind == "kick" ? nlohmann::json{"kick"}
                                          : nlohmann::json{"goal"};
+  report["locomotion_share"] = std::round(1000 * travelling) / 1000;
   report["warnings"] = warnings;
   const std::string file = out.string();
   report["next"] = {fmt::format("mgrl graph {}", file), fmt::format("mgrl train {}", file),
