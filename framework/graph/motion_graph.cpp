@@ -177,11 +177,11 @@ void addStrikes(const StrikeIndex& index, std::uint32_t v, const GroundMotion& r
 
 // The largest strongly connected component (on a tie, the one holding the earliest frame,
 // so the choice is stable): a flag per frame, and its size.
-std::size_t largestComponent(const MotionDatabase& db, const std::vector<TransitionCandidate>& transitions,
-                             std::vector<std::uint8_t>& inside, std::size_t* components = nullptr) {
-  const std::uint32_t n = db.frameCount();
+std::size_t largestComponent(const FrameGraph& graph, std::vector<std::uint8_t>& inside,
+                             std::size_t* components = nullptr) {
+  const auto n = static_cast<std::uint32_t>(graph.begin.size() - 1);
   std::size_t count = 0;
-  const std::vector<std::uint32_t> component = stronglyConnected(frameGraph(db, transitions), &count);
+  const std::vector<std::uint32_t> component = stronglyConnected(graph, &count);
   std::vector<std::uint32_t> size(count, 0);
   for (std::uint32_t c : component) ++size[c];
   std::uint32_t best = component[0];
@@ -202,7 +202,7 @@ std::vector<TransitionCandidate> boundOutDegree(const MotionDatabase& db, const 
                                                 int degree, GraphBuildReport& report) {
   const std::uint32_t n = db.frameCount();
   std::vector<std::uint8_t> inside;
-  const std::size_t whole = largestComponent(db, all, inside);
+  const std::size_t whole = largestComponent(frameGraph(db, all), inside);
   std::vector<std::uint8_t> natural(n, 0);
   for (std::size_t c = 0; c < db.clips.size(); ++c)
     for (std::uint32_t f = db.offsets[c]; f + 1 < db.offsets[c + 1]; ++f) natural[f] = inside[f + 1];
@@ -237,7 +237,7 @@ std::vector<TransitionCandidate> boundOutDegree(const MotionDatabase& db, const 
   };
   std::vector<TransitionCandidate> result = keptList();
   std::vector<std::uint8_t> now;
-  while (largestComponent(db, result, now) < whole) {
+  while (largestComponent(frameGraph(db, result), now) < whole) {
     ++report.repairRounds;
     std::size_t restored = 0;
     for (std::size_t g = 0; g + 1 < groupBegin.size(); ++g)
@@ -270,7 +270,7 @@ StateActionModel buildStateActionModel(const MotionDatabase& db, const GraphPara
   const std::uint32_t n = db.frameCount();
   const FrameGraph graph = frameGraph(db, transitions);
   std::vector<std::uint8_t> inside;
-  largestComponent(db, transitions, inside, &local.components);
+  largestComponent(graph, inside, &local.components);
 
   StateActionModel m;
   m.frameTime = db.frameTime;

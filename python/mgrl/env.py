@@ -63,27 +63,8 @@ import numpy as np
 
 from . import _core
 
-try:  # Gymnasium is not in Debian 12: the same API without it
-    import gymnasium as _gym
-    from gymnasium import spaces as _spaces
-    from gymnasium.vector import VectorEnv as _VectorEnvBase
-    from gymnasium.vector.utils import batch_space as _batch_space
-
-    _EnvBase = _gym.Env
-except ImportError:
-    _gym = None
-    _spaces = None
-
-from .spaces import AutoresetMode, Box, Dict, Discrete, MultiDiscrete, Space, _Seeded, batch_space  # noqa: F401 - mgrl.env's names too
-
-
-if _gym is None:
-    _EnvBase = _Seeded
-    _VectorEnvBase = _Seeded
-    _batch_space = batch_space
-else:  # pragma: no cover - depends on the machine
-    Discrete, MultiDiscrete, Box, Dict = (_spaces.Discrete, _spaces.MultiDiscrete, _spaces.Box,  # noqa: F811
-                                          _spaces.Dict)
+from .env_base import (AutoresetMode, Box, Dict, Discrete, MultiDiscrete, Space, _Seeded,  # noqa: F401 - mgrl.env's names
+                       batch_space, _EnvBase, _VectorEnvBase, _batch_space, _gym)
 
 
 def _observation_space(episodes):
