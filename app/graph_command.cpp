@@ -11,34 +11,6 @@ namespace mgrl::app {
 
 namespace {
 
-// What both reports show beyond the model's own sizes.
-struct Summary {
-  std::size_t min = 0, max = 0;  // action frames
-  double mean = 0;
-  std::size_t hitFrames = 0;     // effective hitting points in the data
-  std::size_t kickFrames = 0;    // effective kick frames in the data
-};
-
-Summary summarise(const GraphResult& g) {
-  const StateActionModel& m = g.model;
-  Summary s;
-  for (const Clip& c : g.db.clips) {
-    s.hitFrames += c.annotation.hits.size();
-    s.kickFrames += c.annotation.kicks.size();
-  }
-  if (m.actionCount() == 0) return s;
-  s.min = SIZE_MAX;
-  double sum = 0;
-  for (std::size_t a = 0; a < m.actionCount(); ++a) {
-    const std::size_t l = m.actionLength(a);
-    s.min = std::min(s.min, l);
-    s.max = std::max(s.max, l);
-    sum += static_cast<double>(l);
-  }
-  s.mean = sum / static_cast<double>(m.actionCount());
-  return s;
-}
-
 double round3(double v) { return std::round(v * 1000) / 1000; }
 
 nlohmann::json travelJson(const CaptureTravel& t) {
@@ -57,19 +29,14 @@ nlohmann::json travelJson(const CaptureTravel& t) {
 // Each clip's share of frames in the component, in file order.
 nlohmann::json clipShares(const GraphResult& g) {
   const StateActionModel& m = g.model;
+  const std::vector<std::size_t> inside = componentFramesByClip(m, g.db.clips.size());
   nlohmann::json list = nlohmann::json::array();
-  if (g.db.clips.size() + 1 != m.clipOffset.size()) return list;
-  std::vector<std::size_t> inside(g.db.clips.size(), 0);
-  std::size_t c = 0;
-  for (std::uint32_t f : m.componentFrames) {  // ascending
-    while (f >= m.clipOffset[c + 1]) ++c;
-    ++inside[c];
-  }
-  for (std::size_t k = 0; k < g.db.clips.size(); ++k)
+  for (std::size_t k = 0; k < inside.size(); ++k) {
+    const std::uint32_t frames = m.clipOffset[k + 1] - m.clipOffset[k];
     list.push_back({{"clip", g.db.clips[k].name},
-                    {"frames", m.clipOffset[k + 1] - m.clipOffset[k]},
-                    {"in_scc", round3(static_cast<double>(inside[k]) /
-                                      std::max<std::uint32_t>(1, m.clipOffset[k + 1] - m.clipOffset[k]))}});
+                    {"frames", frames},
+                    {"in_scc", round3(static_cast<double>(inside[k]) / std::max<std::uint32_t>(1, frames))}});
+  }
   return list;
 }
 
@@ -77,7 +44,7 @@ nlohmann::json clipShares(const GraphResult& g) {
 
 nlohmann::json graphJson(const GraphResult& g) {
   const StateActionModel& m = g.model;
-  const Summary l = summarise(g);
+  const ActionFrameStats l = actionFrameStats(m);
   return {{"frames_total", m.framesTotal},
           {"frames_in_scc", m.componentFrames.size()},
           {"scc_fraction", round3(m.framesTotal ? static_cast<double>(m.componentFrames.size()) / m.framesTotal : 0)},
@@ -93,9 +60,9 @@ nlohmann::json graphJson(const GraphResult& g) {
           {"mean_action_frames", round3(l.mean)},
           {"min_action_frames", l.min},
           {"max_action_frames", l.max},
-          {"effective_hits", l.hitFrames},
+          {"effective_hits", g.db.hitCount()},
           {"action_hits", m.hits.size()},
-          {"effective_kicks", l.kickFrames},
+          {"effective_kicks", g.db.kickCount()},
           {"action_kicks", m.kicks.size()},
           {"fps", round3(1.0 / m.frameTime)},
           {"build_seconds", round3(g.buildSeconds)},
@@ -119,46 +86,39 @@ nlohmann::json graphJson(const GraphResult& g) {
 
 std::string graphText(const GraphResult& g) {
   const StateActionModel& m = g.model;
-  const Summary l = summarise(g);
+  const ActionFrameStats l = actionFrameStats(m);
   std::string out;
-  out += fmt::format("frames          {} in {} at {:g} fps ({:.1f} s)\n", m.framesTotal, counted(g.db.clips.size(), "file"),
-                     1.0 / m.frameTime, m.framesTotal * m.frameTime);
+  out += fmt::format("frames          {} in {} at {:g} fps ({:.1f} s)\n", m.framesTotal,
+                     counted(g.db.clips.size(), "file"), 1.0 / m.frameTime, m.framesTotal * m.frameTime);
   if (g.db.rootMotion.joint != 0) out += fmt::format("root motion     {}\n", g.db.rootMotion.sentence);
   if (g.db.autoPunchSpeed) out += fmt::format("punches         {}\n", g.db.autoPunchSpeed->sentence());
   out += fmt::format("component       {} frames ({:.1f} % of the data)\n", m.componentFrames.size(),
                      m.framesTotal ? 100.0 * static_cast<double>(m.componentFrames.size()) / m.framesTotal : 0.0);
   out += fmt::format("transitions     {}\n", m.transitionDistance.size());
-  const GraphBuildReport& built = g.report;
-  if (!g.fromCache && (built.outDegreeBound > 0 || built.search.standingCutFrames > 0)) {
-    std::string bound =
-        built.outDegreeBound > 0
-            ? fmt::format(
-                  "at most {} actions a state: {} transitions left out, {} of "
-                  "them put back to keep the component whole",
-                  built.outDegreeBound, built.transitionsPruned + built.transitionsRestored, built.transitionsRestored)
-            : std::string("no bound on actions a state");
-    out += fmt::format("library         {}; {} cut points where the performer stands still\n", bound,
-                       built.search.standingCutFrames);
-  }
+  if (const std::string library = librarySentence(g.report); !g.fromCache && !library.empty())
+    out += fmt::format("library         {}\n", library);
   out += fmt::format("states          {}\n", m.stateCount());
   out += fmt::format("actions         {} ({:.1f} per state)\n", m.actionCount(),
                      m.stateCount() ? static_cast<double>(m.actionCount()) / m.stateCount() : 0.0);
   out += fmt::format("action frames   min {}, mean {:.1f}, max {} ({:.2f} s mean)\n", l.min, l.mean, l.max,
                      l.mean * m.frameTime);
-  out += fmt::format("effective hits  {} in the data, {} inside actions\n", l.hitFrames, m.hits.size());
-  if (l.kickFrames > 0)
-    out += fmt::format("effective kicks {} in the data, {} inside actions\n", l.kickFrames, m.kicks.size());
+  out += fmt::format("effective hits  {} in the data, {} inside actions\n", g.db.hitCount(), m.hits.size());
+  if (g.db.kickCount() > 0)
+    out += fmt::format("effective kicks {} in the data, {} inside actions\n", g.db.kickCount(), m.kicks.size());
   const CaptureTravel& t = g.travel;
   std::string reaches;
-  for (const auto& r : t.reaches) reaches += fmt::format("{}{} {:.2f} m", reaches.empty() ? "; grids reach " : ", ", r.behavior, r.reach_m);
-  out += fmt::format("travel          root up to {:.2f} m from a clip's start ({}), clip extent up to {:.2f} m, "
-                     "largest action {:.2f} m, {:g} s graph walk {:.2f} m{}\n",
-                     t.clipTravel_m, t.clip.empty() ? "-" : t.clip, t.rootExtent_m, t.actionTravel_m,
-                     kTravelWalkSeconds, t.walkTravel_m, reaches);
-  out += fmt::format("playback check  {} frames, {} transitions blended over {} frames: foot sliding {:.3f} m/s "
-                     "(same frames in the capture: {:.3f}), largest joint step {:.3f} m (capture: {:.3f})\n",
-                     g.playback.frames, g.playback.transitions, g.blendFrames, g.playback.slide.meanSpeed_mps,
-                     g.playback.sourceSlideSameFrames_mps, g.playback.maxJointStep_m, g.playback.sourceMaxJointStep_m);
+  for (const auto& r : t.reaches)
+    reaches += fmt::format("{}{} {:.2f} m", reaches.empty() ? "; grids reach " : ", ", r.behavior, r.reach_m);
+  out += fmt::format(
+      "travel          root up to {:.2f} m from a clip's start ({}), clip extent up to {:.2f} m, "
+      "largest action {:.2f} m, {:g} s graph walk {:.2f} m{}\n",
+      t.clipTravel_m, t.clip.empty() ? "-" : t.clip, t.rootExtent_m, t.actionTravel_m, kTravelWalkSeconds,
+      t.walkTravel_m, reaches);
+  out += fmt::format(
+      "playback check  {} frames, {} transitions blended over {} frames: foot sliding {:.3f} m/s "
+      "(same frames in the capture: {:.3f}), largest joint step {:.3f} m (capture: {:.3f})\n",
+      g.playback.frames, g.playback.transitions, g.blendFrames, g.playback.slide.meanSpeed_mps,
+      g.playback.sourceSlideSameFrames_mps, g.playback.maxJointStep_m, g.playback.sourceMaxJointStep_m);
   out += fmt::format("build           {:.3f} s{}\n", g.buildSeconds,
                      g.fromCache ? fmt::format(" (reused from {})", g.bundle.string()) : std::string());
   return out;

@@ -8,6 +8,7 @@
 #   BENCH  a benchmark target of bench/: learn, runtime, graph, load, memory, adaptive, serve
 #   ARGS   passed to both, e.g. --approach-actions 10000000 --hit-actions 10000000 --runs 1 --no-growth
 # Environment: BENCH_ROUNDS=N alternations (default 3); MGRL_DATA as for the benchmarks;
+#   GLIBC_TUNABLES (default glibc.malloc.hugetlb=1: the heap on huge pages, see below);
 #   BENCH_CMAKE_ARGS="-DMGRL_UNITY=OFF ..." configure options for both builds (this checkout is
 #   then built in a scratch folder, so build/ keeps its own configuration): code layout
 #   apart from unity batches, say, to tell a real slowdown from a moved one.
@@ -29,6 +30,15 @@ target="mgrl_bench_$bench"
 commit="$(git -C "$root" rev-parse --verify --quiet "$rev^{commit}")" ||
   { echo "bench_compare.sh: expected a revision of this repository, found '$rev'" >&2; exit 2; }
 
+# The heap on transparent huge pages for both builds (glibc's malloc tunable; an explicit
+# GLIBC_TUNABLES is kept). On this 2-core VM a loop streaming tens of megabytes (forward
+# kinematics over the capture, a Q table) ran 7-10x slower in some processes than in others
+# of the same binary: which depended on where its 4 KiB pages fell (ASLR and the
+# environment's size moved it, ASLR off fixed it), so two builds differing in an unrelated
+# file could read 0.1x. With huge pages every run of either build was fast
+# (docs/development.md).
+export GLIBC_TUNABLES="${GLIBC_TUNABLES:-glibc.malloc.hugetlb=1}"
+
 # The capture this checkout reads by default (../shared/mocap beside it), for both builds:
 # the other revision's worktree lives elsewhere.
 export MGRL_DATA="${MGRL_DATA:-$(cd "$root/.." && pwd)/shared/mocap}"
@@ -36,7 +46,7 @@ scratch="$(mktemp -d "${TMPDIR:-/tmp}/mgrl-bench-compare.XXXXXX")"
 worktree="$scratch/rev"
 cleanup() {
   git -C "$root" worktree remove --force "$worktree" >/dev/null 2>&1 || true
-  rm -rf "$worktree"
+  rm -rf "$scratch"
 }
 trap cleanup EXIT
 git -C "$root" worktree add --detach --quiet "$worktree" "$commit"

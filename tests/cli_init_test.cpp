@@ -4,7 +4,9 @@
 #include <filesystem>
 #include <fstream>
 #include <map>
+#include <sstream>
 #include <string>
+#include <vector>
 
 #include <catch2/catch.hpp>
 
@@ -113,6 +115,69 @@ TEST_CASE(
     CAPTURE(kind);
     CHECK(share.first / share.second >= 0.7);
   }
+}
+
+// The graph settings tried, in order, from the starter's comment lines: "threshold event".
+std::vector<std::string> triesOf(const std::string& yaml) {
+  std::vector<std::string> tries;
+  std::istringstream lines(yaml);
+  for (std::string line; std::getline(lines, line);) {
+    std::istringstream words(line);
+    std::string hash, word, threshold, event;
+    if (words >> hash >> word >> threshold >> event && hash == "#" && word == "threshold")
+      tries.push_back(threshold + " " + event);
+  }
+  return tries;
+}
+
+TEST_CASE(
+    "mgrl init tries the paper's contact event at every threshold before any contact change, keeps the best try "
+    "when none is enough, and reads SNU's centimetres",
+    "[cli][data]") {
+  CliSandbox box("cli-init-tries");
+  const std::vector<std::string> liftoff = {"0.45 left_foot_liftoff", "0.6 left_foot_liftoff", "0.75 left_foot_liftoff",
+                                            "0.9 left_foot_liftoff", "1.2 left_foot_liftoff"};
+
+  // CMU's martial arts (815 frames): no threshold with the left foot's lift-off keeps 60 %
+  // of the frames, any contact change does at the paper's threshold.
+  const std::filesystem::path arts = box.path("arts.yaml");
+  const Run first = runMgrl("init " + shellWord(mocap() / "cmu/bvh/135_06_martial_arts.bvh") + " --out " +
+                                shellWord(arts) + " --json --data " + shellWord(mocap()),
+                            box.dir());
+  const nlohmann::json a = first.report();
+  CHECK(a["units"] == nlohmann::json{"cmu"});
+  CHECK(a["graph"]["contact_event"] == "any_contact_change");
+  CHECK(a["graph"]["threshold"] == 0.45);
+  CHECK(a["graph"]["usable"] == true);
+  std::vector<std::string> expected = liftoff;
+  expected.push_back("0.45 any_contact_change");
+  CHECK(triesOf(readText(arts)) == expected);
+
+  // Three short SNU clips (213 frames, centimetres): nothing keeps 60 %; the try that kept
+  // most frames (the first of three that keep 37 %) is written, and said to be the best found.
+  const std::filesystem::path snu = box.path("snu.yaml");
+  const std::filesystem::path clips = mocap() / "snu_martial_arts/motion";
+  const Run best =
+      runMgrl("init " + shellWord(clips / "16_08_1.bvh") + " " + shellWord(clips / "16_21_1.bvh") + " " +
+                  shellWord(clips / "16_24_1.bvh") + " --out " + shellWord(snu) + " --data " + shellWord(mocap()),
+              box.dir());
+  INFO(best.err);
+  REQUIRE(best.status == 0);
+  CHECK_THAT(best.out, Contains("units cm"));
+  CHECK_THAT(best.out, Contains("graph: threshold 0.75, any_contact_change: 37 % of frames kept, 2 states, 4 actions "
+                                "(the best found; more capture would help)"));
+  const std::string yaml = readText(snu);
+  CHECK_THAT(yaml, Contains("units: cm"));
+  CHECK_THAT(yaml, Contains("  threshold: 0.75\n  contact_event: any_contact_change\n  min_states: 2\n"));
+  expected = liftoff;
+  for (const char* t : {"0.45", "0.6", "0.75", "0.9", "1.2"})
+    expected.push_back(std::string(t) + " any_contact_change");
+  CHECK(triesOf(yaml) == expected);
+  // What it wrote builds: the best graph's two states.
+  const Run graph = runMgrl("graph " + shellWord(snu) + box.where() + " --json", box.dir());
+  INFO(graph.err);
+  REQUIRE(graph.status == 0);
+  CHECK(graph.report()["states"] == 2);
 }
 
 TEST_CASE("mgrl init refuses what it cannot use and leaves no file behind", "[cli]") {

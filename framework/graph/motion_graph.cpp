@@ -303,9 +303,9 @@ StateActionModel buildStateActionModel(const MotionDatabase& db, const GraphPara
   }
   if (m.stateFrame.size() < static_cast<std::size_t>(params.minStates)) {
     // Advise only the looser contact events than the one in use.
-    const char* looser = params.contactEvent == ContactEvent::LeftFootLiftoff ? "any_contact_change or none"
+    const char* looser = params.contactEvent == ContactEvent::LeftFootLiftoff    ? "any_contact_change or none"
                          : params.contactEvent == ContactEvent::AnyContactChange ? "none"
-                                                                                  : nullptr;
+                                                                                 : nullptr;
     throw Error(fmt::format(
         "graph: the largest strongly connected component keeps {} of {} frames ({:.0f} %) with {} states, expected at "
         "least graph.min_states = {}; {} transitions passed the tests ({} frames at a '{}' contact event): raise "
@@ -367,6 +367,19 @@ StateActionModel buildStateActionModel(const MotionDatabase& db, const GraphPara
   addSourceJoints(db, m);
   if (report) *report = local;
   return m;
+}
+
+std::string librarySentence(const GraphBuildReport& report) {
+  if (report.outDegreeBound == 0 && report.search.standingCutFrames == 0) return {};
+  const std::string bound =
+      report.outDegreeBound > 0
+          ? fmt::format(
+                "at most {} actions a state: {} transitions left out, {} of them put back to keep the "
+                "component whole",
+                report.outDegreeBound, report.transitionsPruned + report.transitionsRestored,
+                report.transitionsRestored)
+          : std::string("no bound on actions a state");
+  return fmt::format("{}; {} cut points where the performer stands still", bound, report.search.standingCutFrames);
 }
 
 }  // namespace mgrl

@@ -48,9 +48,8 @@ void requireBelow(std::string_view source, std::string_view field, const std::ve
 void requireAscending(std::string_view source, std::string_view field, const std::vector<std::uint32_t>& v) {
   for (std::size_t i = 1; i < v.size(); ++i)
     if (v[i] <= v[i - 1])
-      fail(source, fmt::format("{}[{}]", field, i), fmt::format("above {}[{}] = {} (strictly ascending)", field,
-                                                                 i - 1, v[i - 1]),
-           fmt::format("{}", v[i]));
+      fail(source, fmt::format("{}[{}]", field, i),
+           fmt::format("above {}[{}] = {} (strictly ascending)", field, i - 1, v[i - 1]), fmt::format("{}", v[i]));
 }
 
 template <class T>
@@ -213,6 +212,32 @@ void checkStrikes(const StateActionModel& m, std::string_view source, std::strin
 }
 
 }  // namespace
+
+ActionFrameStats actionFrameStats(const StateActionModel& m) {
+  ActionFrameStats s;
+  if (m.actionCount() == 0) return s;
+  s.min = SIZE_MAX;
+  double sum = 0;
+  for (std::size_t a = 0; a < m.actionCount(); ++a) {
+    const std::size_t l = m.actionLength(a);
+    s.min = std::min(s.min, l);
+    s.max = std::max(s.max, l);
+    sum += static_cast<double>(l);
+  }
+  s.mean = sum / static_cast<double>(m.actionCount());
+  return s;
+}
+
+std::vector<std::size_t> componentFramesByClip(const StateActionModel& m, std::size_t clips) {
+  if (clips + 1 != m.clipOffset.size()) return {};
+  std::vector<std::size_t> inside(clips, 0);
+  std::size_t c = 0;
+  for (const std::uint32_t f : m.componentFrames) {  // ascending
+    while (f >= m.clipOffset[c + 1]) ++c;
+    ++inside[c];
+  }
+  return inside;
+}
 
 void checkModel(const StateActionModel& m, std::string_view source) {
   checkScalars(m, source);

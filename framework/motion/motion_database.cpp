@@ -39,17 +39,19 @@ void requireSameSkeleton(const Motion& ma, std::string_view nameA, const Motion&
     const Joint& ja = a.joint(j);
     const Joint& jb = b.joint(j);
     if (ja.name != jb.name || ja.parent != jb.parent)
-      throw Error(fmt::format("{} and {} have different skeletons: joint {} is '{}' (parent {}) in the first, "
-                              "'{}' (parent {}) in the second",
-                              nameA, nameB, j, ja.name, ja.parent, jb.name, jb.parent));
+      throw Error(
+          fmt::format("{} and {} have different skeletons: joint {} is '{}' (parent {}) in the first, "
+                      "'{}' (parent {}) in the second",
+                      nameA, nameB, j, ja.name, ja.parent, jb.name, jb.parent));
     if (j == 0) continue;  // the root's offset is replaced by its position channels
     const std::optional<Eigen::Vector3d> boneA = fixedBone(ma, j), boneB = fixedBone(mb, j);
     if (!boneA || !boneB) continue;
     const double la = boneA->norm(), lb = boneB->norm();
     if (std::abs(la - lb) > 0.01 + 0.05 * std::max(la, lb))
-      throw Error(fmt::format("{} and {} have different skeletons: bone '{}' is {:.3f} m in the first, {:.3f} m in "
-                              "the second (more than 5 % apart)",
-                              nameA, nameB, ja.name, la, lb));
+      throw Error(
+          fmt::format("{} and {} have different skeletons: bone '{}' is {:.3f} m in the first, {:.3f} m in "
+                      "the second (more than 5 % apart)",
+                      nameA, nameB, ja.name, la, lb));
   }
 }
 
@@ -58,6 +60,18 @@ void requireSameSkeleton(const Motion& ma, std::string_view nameA, const Motion&
 std::size_t MotionDatabase::clipOf(std::uint32_t frame) const {
   const auto it = std::upper_bound(offsets.begin(), offsets.end(), frame);
   return static_cast<std::size_t>(it - offsets.begin()) - 1;
+}
+
+std::size_t MotionDatabase::hitCount() const {
+  std::size_t n = 0;
+  for (const Clip& c : clips) n += c.annotation.hits.size();
+  return n;
+}
+
+std::size_t MotionDatabase::kickCount() const {
+  std::size_t n = 0;
+  for (const Clip& c : clips) n += c.annotation.kicks.size();
+  return n;
 }
 
 MotionDatabase makeMotionDatabase(std::vector<std::pair<std::string, Motion>> motions, const RoleOverrides& roles,
@@ -97,7 +111,8 @@ MotionDatabase makeMotionDatabase(std::vector<std::pair<std::string, Motion>> mo
   }
   for (Clip& clip : db.clips) {
     clip.annotation = annotate(clip.motion, db.roles, params);
-    if (const std::string unusual = unusualHeightWarning(clip.annotation, clip.name); !unusual.empty() && warn) warn(unusual);
+    if (const std::string unusual = unusualHeightWarning(clip.annotation, clip.name); !unusual.empty() && warn)
+      warn(unusual);
   }
   return db;
 }
@@ -121,8 +136,8 @@ MotionDatabase loadMotionDatabase(const MotionSpec& spec, const WarningSink& war
 MotionDatabase makeMotionDatabase(std::vector<std::pair<std::string, Motion>> motions, const MotionSpec& spec,
                                   const WarningSink& warn) {
   if (motions.size() != spec.files.size())
-    throw Error(fmt::format("motion.files: expected one motion per file ({}), found {}", spec.files.size(),
-                            motions.size()));
+    throw Error(
+        fmt::format("motion.files: expected one motion per file ({}), found {}", spec.files.size(), motions.size()));
   MotionDatabase db = makeMotionDatabase(std::move(motions), spec.roles, spec.annotation, warn);
   for (std::size_t c = 0; c < db.clips.size(); ++c) db.clips[c].path = spec.files[c];
   return db;

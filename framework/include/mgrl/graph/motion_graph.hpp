@@ -5,6 +5,7 @@
 /// the largest strongly connected component, then frames with several out-edges become
 /// states and the paths between them actions.
 #include <cstdint>
+#include <string>
 
 #include "mgrl/graph/frame_distance.hpp"
 #include "mgrl/graph/graph_params.hpp"
@@ -22,6 +23,10 @@ struct GraphBuildReport {
   std::size_t transitionsRestored = 0;  ///< left out, then put back to keep the component whole
   std::size_t repairRounds = 0;
 };
+
+/// What a library's graph options did, in a sentence ("at most 32 actions a state: ...;
+/// 330 cut points where the performer stands still"), or "" when neither was on.
+std::string librarySentence(const GraphBuildReport& report);
 
 /// Builds the model. Throws mgrl::Error when the largest component has fewer than
 /// params.minStates states, with the numbers and the parameters to relax.

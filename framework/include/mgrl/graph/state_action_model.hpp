@@ -110,6 +110,17 @@ struct StateActionModel {
   }
 };
 
+/// How long the model's actions are, in frames (all 0 for a model without actions).
+struct ActionFrameStats {
+  std::size_t min = 0, max = 0;
+  double mean = 0;
+};
+ActionFrameStats actionFrameStats(const StateActionModel& m);
+
+/// How many of each clip's frames are in the component, in clip order (empty when
+/// clipOffset does not hold `clips` clips).
+std::vector<std::size_t> componentFramesByClip(const StateActionModel& m, std::size_t clips);
+
 /// Checks every structural invariant of `m` that code indexing its arrays relies on:
 /// array sizes agree with each other; offset arrays (clipOffset, actionFrameBegin,
 /// stateActionBegin, actionHitBegin) start at 0, do not decrease and end at the size of

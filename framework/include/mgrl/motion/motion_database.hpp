@@ -53,6 +53,9 @@ struct MotionDatabase {
   const Clip& clipAt(std::uint32_t frame) const { return clips[clipOf(frame)]; }
   /// Frame index within its clip.
   std::size_t localFrame(std::uint32_t frame) const { return frame - offsets[clipOf(frame)]; }
+  /// Effective hitting points and kick frames in every clip's annotation.
+  std::size_t hitCount() const;
+  std::size_t kickCount() const;
 };
 
 /// Loads, resamples and annotates every file of `spec`. Throws mgrl::Error when there is

@@ -1,0 +1,58 @@
+# Files a reader can hold in mind: no product source (framework/, the plug-in folders, app/,
+# python/; C++ and Python) longer than MAX_LINES lines, and the command-line front end
+# (app/ without app/serve/) at most APP_LINES lines in all, its work being in the framework.
+# Run as
+#   cmake -DROOT=<tree> [-DMAX_LINES=500] [-DAPP_LINES=2000] -P file_sizes.cmake
+# it prints each file over the limit (and app/'s total when over) and fails. The ctest entry
+# layout_file_sizes_catches runs it with limits the tree exceeds, to see it fail.
+cmake_minimum_required(VERSION 3.22)
+if(NOT DEFINED ROOT)
+  message(FATAL_ERROR "file_sizes.cmake: expected -DROOT=<source tree>, found none")
+endif()
+if(NOT DEFINED MAX_LINES)
+  set(MAX_LINES 500)
+endif()
+if(NOT DEFINED APP_LINES)
+  set(APP_LINES 2000)
+endif()
+get_filename_component(ROOT "${ROOT}" ABSOLUTE)
+
+# Lines as an editor counts them: newlines, plus a last line without one.
+function(count_lines file out)
+  file(READ "${file}" text)
+  string(REGEX MATCHALL "\n" newlines "${text}")
+  list(LENGTH newlines n)
+  if(NOT text STREQUAL "" AND NOT text MATCHES "\n$")
+    math(EXPR n "${n} + 1")
+  endif()
+  set(${out} ${n} PARENT_SCOPE)
+endfunction()
+
+set(bad 0)
+set(folders framework learners rewards discretizers environments app python)
+set(patterns)
+foreach(folder IN LISTS folders)
+  list(APPEND patterns "${ROOT}/${folder}/*.cpp" "${ROOT}/${folder}/*.hpp" "${ROOT}/${folder}/*.py")
+endforeach()
+file(GLOB_RECURSE files ${patterns})
+set(app_total 0)
+foreach(file IN LISTS files)
+  file(RELATIVE_PATH shown "${ROOT}" "${file}")
+  count_lines("${file}" n)
+  if(n GREATER MAX_LINES)
+    message("${shown}: expected at most ${MAX_LINES} lines, found ${n}")
+    math(EXPR bad "${bad} + 1")
+  endif()
+  if(shown MATCHES "^app/" AND NOT shown MATCHES "^app/serve/" AND NOT shown MATCHES "\\.py$")
+    math(EXPR app_total "${app_total} + ${n}")
+  endif()
+endforeach()
+if(app_total GREATER APP_LINES)
+  message("app/ without app/serve/: expected at most ${APP_LINES} lines of C++, found ${app_total}")
+  math(EXPR bad "${bad} + 1")
+endif()
+list(LENGTH files checked)
+if(bad GREATER 0)
+  message(FATAL_ERROR "file_sizes: ${bad} of the limits broken")
+endif()
+message("file_sizes: ${checked} product files within ${MAX_LINES} lines, app/ without app/serve/ ${app_total} of ${APP_LINES}")
