@@ -50,11 +50,12 @@ nlohmann::json graphJson(const GraphResult& g) {
           {"scc_fraction", round3(m.framesTotal ? static_cast<double>(m.componentFrames.size()) / m.framesTotal : 0)},
           {"clips", clipShares(g)},
           {"transitions", m.transitionDistance.size()},
-          {"library", g.fromCache ? nlohmann::json()
-                                  : nlohmann::json{{"max_out_degree", g.report.outDegreeBound},
-                                                   {"transitions_pruned", g.report.transitionsPruned},
-                                                   {"transitions_restored", g.report.transitionsRestored},
-                                                   {"standing_cut_frames", g.report.search.standingCutFrames}}},
+          {"library", librarySentence(g.report).empty()
+                          ? nlohmann::json()
+                          : nlohmann::json{{"max_out_degree", g.report.outDegreeBound},
+                                           {"transitions_pruned", g.report.transitionsPruned},
+                                           {"transitions_restored", g.report.transitionsRestored},
+                                           {"standing_cut_frames", g.report.search.standingCutFrames}}},
           {"states", m.stateCount()},
           {"actions", m.actionCount()},
           {"mean_action_frames", round3(l.mean)},
@@ -95,7 +96,7 @@ std::string graphText(const GraphResult& g) {
   out += fmt::format("component       {} frames ({:.1f} % of the data)\n", m.componentFrames.size(),
                      m.framesTotal ? 100.0 * static_cast<double>(m.componentFrames.size()) / m.framesTotal : 0.0);
   out += fmt::format("transitions     {}\n", m.transitionDistance.size());
-  if (const std::string library = librarySentence(g.report); !g.fromCache && !library.empty())
+  if (const std::string library = librarySentence(g.report); !library.empty())
     out += fmt::format("library         {}\n", library);
   out += fmt::format("states          {}\n", m.stateCount());
   out += fmt::format("actions         {} ({:.1f} per state)\n", m.actionCount(),

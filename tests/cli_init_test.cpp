@@ -99,6 +99,12 @@ TEST_CASE(
   CHECK(g["library"]["max_out_degree"] == 32);
   CHECK(g["library"]["standing_cut_frames"].get<int>() > 100);
   CHECK(g["scc_fraction"].get<double>() >= 0.8);
+  // Reused from the cache, the graph says what the build did.
+  const Run again = runMgrl("graph " + shellWord(out) + box.where() + " --json", box.dir());
+  CHECK(again.report()["cached"] == true);
+  CHECK(again.report()["library"] == g["library"]);
+  const Run text = runMgrl("graph " + shellWord(out) + box.where(), box.dir());
+  CHECK_THAT(text.out, Contains("library         at most 32 actions a state: "));
   const double perState = g["actions"].get<double>() / g["states"].get<double>();
   CAPTURE(perState);
   CHECK(perState <= 32);

@@ -76,6 +76,8 @@ TEST_CASE("mgrl graph reports how far the capture travels and warns about grids 
   CHECK(travel["grid_reach_m"]["approach"].get<double>() == Approx(2.0));
   CHECK(travel["warnings"].empty());
   CHECK(countLines(boxing.err, "warning") == 0);
+  // A minute of capture: no library options, nothing said of them.
+  CHECK(boxing.report()["library"].is_null());
 
   // The same capture with a 30 m approach grid: far beyond anything it travels.
   std::string yaml = readText(kBoxing);

@@ -97,6 +97,37 @@ std::optional<CaptureTravel> clipTravelFrom(const nlohmann::json& manifest) {
   return t;
 }
 
+// What a library's graph options did (GraphBuildReport), kept in a graph bundle's
+// provenance when either was on, so that a reused graph reports it too.
+nlohmann::json libraryJson(const GraphBuildReport& r) {
+  if (r.outDegreeBound == 0 && r.search.standingCutFrames == 0) return nullptr;
+  return {{"max_out_degree", r.outDegreeBound},
+          {"transitions_pruned", r.transitionsPruned},
+          {"transitions_restored", r.transitionsRestored},
+          {"repair_rounds", r.repairRounds},
+          {"standing_cut_frames", r.search.standingCutFrames}};
+}
+
+// The same read back; left at zeros when absent or not five whole numbers >= 0 (a bundle
+// from before it was kept, or without the options).
+void libraryFrom(const nlohmann::json& manifest, GraphBuildReport& r) {
+  const nlohmann::json* library = nullptr;
+  if (manifest.is_object() && manifest.contains("provenance") && manifest["provenance"].is_object() &&
+      manifest["provenance"].contains("library"))
+    library = &manifest["provenance"]["library"];
+  if (!library || !library->is_object()) return;
+  const char* keys[] = {"max_out_degree", "transitions_pruned", "transitions_restored", "repair_rounds",
+                        "standing_cut_frames"};
+  for (const char* key : keys)
+    if (!library->contains(key) || !(*library)[key].is_number_unsigned()) return;
+  if ((*library)["max_out_degree"].get<std::uint64_t>() > 1'000'000) return;
+  r.outDegreeBound = (*library)["max_out_degree"].get<int>();
+  r.transitionsPruned = (*library)["transitions_pruned"].get<std::size_t>();
+  r.transitionsRestored = (*library)["transitions_restored"].get<std::size_t>();
+  r.repairRounds = (*library)["repair_rounds"].get<std::size_t>();
+  r.search.standingCutFrames = (*library)["standing_cut_frames"].get<std::size_t>();
+}
+
 // True if a bundle's clips are the scenario's files, in order: always so for a bundle
 // whose key matched, unless it was saved without them (then the capture is parsed).
 bool bundledMotionFits(const std::vector<std::pair<std::string, Motion>>& motions, const MotionSpec& spec) {
@@ -219,6 +250,7 @@ GraphResult obtainGraph(const Scenario& scenario, const GraphOptions& options) {
       result.model = std::move(cached.model);
       result.fromCache = true;
       result.buildSeconds = cached.manifest["provenance"].value("build_seconds", 0.0);
+      libraryFrom(cached.manifest, result.report);
       log(fmt::format("graph: reused {}", result.bundle.string()));
       // The key covers the capture's bytes, so what was measured on it when the bundle was
       // made still holds; parse it only where poses are wanted.
@@ -258,6 +290,8 @@ GraphResult obtainGraph(const Scenario& scenario, const GraphOptions& options) {
                                {"states", result.model.stateCount()},
                                {"actions", result.model.actionCount()},
                                {"capture_travel", clipTravelJson(clips)}};
+  if (nlohmann::json library = libraryJson(result.report); !library.is_null())
+    provenance["library"] = std::move(library);
   try {
     std::filesystem::create_directories(result.bundle.parent_path());
     saveGraphBundle(result.bundle, result.model, provenance, result.db.clips);

@@ -79,7 +79,10 @@ struct GraphResult {
   /// and the graph came from the cache.
   MotionDatabase db;
   StateActionModel model;
-  GraphBuildReport report;  ///< zeros when loaded from the cache
+  /// Zeros when loaded from the cache, but for what a library's options did (outDegreeBound,
+  /// transitionsPruned, transitionsRestored, repairRounds, search.standingCutFrames), which
+  /// the bundle keeps.
+  GraphBuildReport report;
   bool fromCache = false;
   double buildSeconds = 0;  ///< of the build that made the model (the cached one's if reused)
   double seconds = 0;       ///< this call, loading included
