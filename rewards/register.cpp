@@ -8,7 +8,7 @@ namespace mgrl::rewards {
 void registerAll(BehaviorPlugins& plugins) {
   Vocabulary vocabulary{plugins.terms, plugins.conditions};
   for (const auto add : {registerDistance, registerFacing, registerContact, registerTravel, registerEffort,
-                         registerAvoid, registerStruck})
+                         registerAvoid, registerStruck, registerReversal})
     add(vocabulary);
   registerPaperRewards(plugins.rewards);
   registerTerms(plugins.rewards, plugins.terms);

@@ -38,6 +38,7 @@ void registerTravel(Vocabulary& v);
 void registerEffort(Vocabulary& v);
 void registerAvoid(Vocabulary& v);
 void registerStruck(Vocabulary& v);
+void registerReversal(Vocabulary& v);
 
 /// Binds `point` to `m`, or throws TermError at "point" saying which roles and joints `m` has.
 void bindPoint(const StateActionModel& m, BodyPoint& point);

@@ -1123,6 +1123,35 @@ TEST_CASE("each reward term gives its hand-computed value", "[learning][terms]")
           Approx(g * std::exp(-1.0)));
     CHECK(termsReward(m, "{type: terms, gamma: 0.9, terms: [{term: effort, speed_mps: 3}]}", 1, {0, 0, 2}) == Approx(g));
   }
+  SECTION("reversal: a cost at each frame that steps against the direction of travel") {
+    const std::string cost = "{type: terms, gamma: 0.9, combine: sum, terms: [{term: reversal}]}";
+    const auto reward = [&](const StateActionModel& model, std::size_t a) {
+      const auto r = app::plugins().rewards.create(yaml(cost));
+      r->bind(model);
+      return r->evaluate(model, a, TargetState{Eigen::Vector3d(0, 0, 2)});
+    };
+    // Walking on in the direction it arrived with (action 0 ends on the state it leaves),
+    // or standing: nothing to pay.
+    CHECK(reward(m, 0) == 0);
+    CHECK(reward(m, 1) == 0);
+    // Two steps forward, two back: the third frame turns back (the fourth goes on the new
+    // way), and the first now turns back on the arrival, which ends going back.
+    StateActionModel back = m;
+    back.frameRoot[3 * 2 + 1] = 0.1;
+    back.frameRoot[3 * 3 + 1] = 0.0;
+    CHECK(reward(back, 0) == Approx(-(g + g * g * g)));
+    // Steps slower than min_speed_mps neither pay nor turn: 0.1 m a frame is 3 m/s.
+    const auto slow = app::plugins().rewards.create(
+        yaml("{type: terms, gamma: 0.9, combine: sum, terms: [{term: reversal, min_speed_mps: 4}]}"));
+    slow->bind(back);
+    CHECK(slow->evaluate(back, 0, TargetState{Eigen::Vector3d(0, 0, 2)}) == 0);
+    // Bound to one model, evaluated on another: refused, not read past its frames.
+    const auto bound = app::plugins().rewards.create(yaml(cost));
+    bound->bind(m);
+    StateActionModel longer = m;
+    longer.actionFrames.push_back(0);
+    CHECK_THROWS_AS(bound->evaluate(longer, 0, TargetState{Eigen::Vector3d(0, 0, 2)}), std::logic_error);
+  }
   SECTION("weights add the terms' signals frame by frame") {
     const std::string both =
         "{type: terms, gamma: 0.9, terms: [{term: distance, point: pelvis, d0: 1, sigma: 0.2, weight: 2}, "
@@ -1140,7 +1169,8 @@ TEST_CASE("reward terms refuse bad YAML with the line, column and key", "[learni
   CHECK_THROWS_WITH(
       build("{type: terms, terms: [{term: dist}]}"),
       Catch::StartsWith("test.yaml:1:30: terms[0].term: ") &&
-          Catch::Contains("unknown term 'dist' (known: distance, facing, contact, travel, effort, avoid, struck)"));
+          Catch::Contains("unknown term 'dist' (known: distance, facing, contact, travel, effort, avoid, struck, "
+                          "reversal)"));
   CHECK_THROWS_WITH(build("{type: terms, terms: [{term: distance, sigma: 0}]}"),
                     Catch::StartsWith("test.yaml:1:47: terms[0].sigma: "));
   CHECK_THROWS_WITH(build("{type: terms, terms: [{term: distance, point: pelvis, dims: 3}]}"),
@@ -1153,7 +1183,8 @@ TEST_CASE("reward terms refuse bad YAML with the line, column and key", "[learni
                     Catch::Contains("combine: ") && Catch::Contains("max, sum"));
   CHECK_THROWS_WITH(
       build("{type: terms, terms: [facing]}"),
-      Catch::Contains("terms[0]: expected a map with 'term: <distance|facing|contact|travel|effort|avoid|struck>'"));
+      Catch::Contains(
+          "terms[0]: expected a map with 'term: <distance|facing|contact|travel|effort|avoid|struck|reversal>'"));
   CHECK_NOTHROW(build("{type: terms, terms: [{term: facing}]}"));
 }
 
