@@ -111,7 +111,8 @@ TEST_CASE("mgrl list names every plugin, as text and as JSON", "[cli]") {
   REQUIRE(list["reward_terms"].is_array());
   std::vector<std::string> terms;
   for (const json& term : list["reward_terms"]) terms.push_back(term["name"]);
-  CHECK(terms == std::vector<std::string>{"distance", "facing", "contact", "travel", "effort", "avoid", "struck"});
+  CHECK(terms ==
+        std::vector<std::string>{"distance", "facing", "contact", "travel", "effort", "avoid", "struck", "reversal"});
   CHECK_THAT(text.out, Contains("  term: contact  ") && Contains("success (behaviors.NAME.success"));
   // The success terms are the reward terms that register a condition, with its threshold.
   std::vector<std::string> conditions;
