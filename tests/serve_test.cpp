@@ -579,7 +579,7 @@ TEST_CASE("serve --partner-policy: the second fighter of each pair plays its own
   // not to punch nor to mind its facing (its reward without the contact and facing terms).
   test::TempDir dir("serve-partner");
   std::string text = readFile(fs::path(MGRL_SOURCE_DIR) / "scenarios" / "boxing_spar.yaml");
-  const std::string contact = "        - {term: contact, effector: fists, radius: 0.7, weight: 1}\n";
+  const std::string contact = "        - {term: contact, effector: fists, radius: 0.7, weight: 3}\n";
   REQUIRE(text.find("d0: 1.15, sigma: 0.2") != std::string::npos);
   REQUIRE(text.find(contact) != std::string::npos);
   const std::string distance = "d0: 1.15, sigma: 0.2";  // every stance's
